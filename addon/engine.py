@@ -1,0 +1,84 @@
+"""The ``SHADING_LAB`` render engine: final renders (F12, ``blender -b``, ``bpy``).
+
+Thin by design: ``extract`` reads the scene, ``renderer`` draws it; this class moves pixels into
+the render result and reports progress and errors through Blender.
+"""
+
+from __future__ import annotations
+
+import time
+
+import bpy
+
+from . import extract
+from .renderer import Renderer, ShaderCompileError
+
+ENGINE_ID = "SHADING_LAB"
+
+
+def background_color(snap, scene) -> tuple[float, float, float, float]:
+    if scene.render.film_transparent:
+        return (0.0, 0.0, 0.0, 0.0)
+    r, g, b = snap.world_color
+    if snap.settings.model != "PBR":  # the LDR models clamp everything they output
+        r, g, b = (min(max(c, 0.0), 1.0) for c in (r, g, b))
+    return (r, g, b, 1.0)
+
+
+class ShadingLabRenderEngine(bpy.types.RenderEngine):
+    bl_idname = ENGINE_ID
+    bl_label = "Shading Lab"
+    bl_use_gpu_context = True
+    bl_use_preview = False
+    bl_use_shading_nodes_custom = False
+
+    def render(self, depsgraph):
+        scene = depsgraph.scene
+        width, height = extract.render_size(scene)
+        start = time.perf_counter()
+        self.update_stats("", "Shading Lab | Reading scene")
+        try:
+            snap = extract.snapshot(depsgraph, width, height)
+        except extract.ExtractError as exc:
+            self._fail(str(exc))
+            return
+        except Exception as exc:  # never let a scene we did not foresee take Blender down
+            self._fail(f"Shading Lab could not read the scene: {type(exc).__name__}: {exc}")
+            return
+        for warning in snap.warnings:
+            self.report({"WARNING"}, warning)
+        if self.test_break():
+            return
+        self.update_progress(0.25)
+        label = f"{snap.settings.model} | {snap.triangle_count:,} triangles | {len(snap.lights)} lights"
+        self.update_stats("", f"Shading Lab | {label} | Drawing")
+        renderer = Renderer()
+        try:
+            image = renderer.render(snap, background_color(snap, scene), should_stop=self.test_break)
+        except ShaderCompileError as exc:
+            self._fail(str(exc))
+            return
+        except Exception as exc:
+            self._fail(f"Shading Lab failed to draw: {type(exc).__name__}: {exc}")
+            return
+        finally:
+            renderer.free()
+        if self.test_break():
+            return
+        self.update_progress(0.9)
+        result = self.begin_result(0, 0, width, height, layer=depsgraph.view_layer.name)
+        try:
+            result.layers[0].passes["Combined"].rect.foreach_set(image.reshape(-1))
+        finally:
+            self.end_result(result)
+        self.update_progress(1.0)
+        ms = (time.perf_counter() - start) * 1000.0
+        self.update_stats("", f"Shading Lab | {label} | {ms:.0f} ms")
+
+    def _fail(self, message: str) -> None:
+        self.report({"ERROR"}, message)
+        self.error_set(message)
+        print(f"Shading Lab: {message}")
+
+
+classes = (ShadingLabRenderEngine,)

@@ -1,0 +1,296 @@
+"""Reads a Blender depsgraph into a ``Snapshot``: the only module that reads scene data for
+rendering. Arrays come out through ``foreach_get``; there is no per-vertex Python loop.
+"""
+
+from __future__ import annotations
+
+import math
+
+import bpy
+import numpy as np
+
+from . import snapshot as S
+
+MESH_LIKE = {"MESH", "CURVE", "SURFACE", "META", "FONT", "CURVES", "POINTCLOUD", "VOLUME"}
+LIGHT_KIND = {"POINT": "POINT", "SPOT": "SPOT", "SUN": "SUN", "AREA": "AREA"}
+
+
+class ExtractError(RuntimeError):
+    """The scene cannot be rendered as it is (no camera, say); the message is for the user."""
+
+
+def render_size(scene: bpy.types.Scene) -> tuple[int, int]:
+    r = scene.render
+    scale = r.resolution_percentage / 100.0
+    return max(int(r.resolution_x * scale), 1), max(int(r.resolution_y * scale), 1)
+
+
+# --- materials ---------------------------------------------------------------------------------
+
+def _linked_surface_node(material: bpy.types.Material):
+    tree = material.node_tree if material.use_nodes else None
+    if tree is None:
+        return None
+    outputs = [n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"]
+    active = [n for n in outputs if n.is_active_output] or outputs
+    for out in active:
+        surface = out.inputs.get("Surface")
+        if surface is not None and surface.is_linked:
+            return surface.links[0].from_node
+    return None
+
+
+def _rgb(value) -> tuple[float, float, float]:
+    return (float(value[0]), float(value[1]), float(value[2]))
+
+
+def _input(node, name, default):
+    socket = node.inputs.get(name)
+    return default if socket is None else socket.default_value
+
+
+def material_params(material: bpy.types.Material | None) -> S.MaterialParams:
+    """Explicit Shading Lab values where the user set them, else the surface shader's values
+    (Principled, Diffuse or Glossy BSDF), else the material's viewport display values."""
+    if material is None:
+        return S.DEFAULT_MATERIAL
+    base = _rgb(material.diffuse_color)
+    metal = float(material.metallic)
+    rough = float(material.roughness)
+    f0 = S.DEFAULT_F0
+    node = _linked_surface_node(material)
+    kind = node.bl_idname if node is not None else ""
+    if kind == "ShaderNodeBsdfPrincipled":
+        base = _rgb(_input(node, "Base Color", base))
+        metal = float(_input(node, "Metallic", metal))
+        rough = float(_input(node, "Roughness", rough))
+        level = float(_input(node, "Specular IOR Level", 0.5))
+        f0 = min(S.f0_from_ior(float(_input(node, "IOR", 1.5))) * 2.0 * level, 1.0)
+    elif kind == "ShaderNodeBsdfDiffuse":
+        base, metal, f0 = _rgb(_input(node, "Color", base)), 0.0, 0.0
+    elif kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"):
+        base, metal = _rgb(_input(node, "Color", base)), 1.0
+        rough = float(_input(node, "Roughness", rough))
+    props = getattr(material, "shading_lab", None)
+    spec = (1.0, 1.0, 1.0)
+    shininess = S.shininess_from_roughness(rough)
+    ambient = base
+    if props is not None:
+        if props.use_base_color:
+            base = _rgb(props.base_color)
+        if props.use_metalness:
+            metal = float(props.metalness)
+        if props.use_roughness:
+            rough = float(props.roughness)
+            shininess = S.shininess_from_roughness(rough)
+        if props.use_f0:
+            f0 = float(props.f0)
+        if props.use_shininess:
+            shininess = float(props.shininess)
+        if props.use_specular_color:
+            spec = _rgb(props.specular_color)
+        ambient = _rgb(props.ambient_color) if props.use_ambient_color else base
+    return S.MaterialParams(
+        name=material.name,
+        base_color=base,
+        specular_color=spec,
+        ambient_color=ambient,
+        roughness=min(max(rough, 0.0), 1.0),
+        metalness=min(max(metal, 0.0), 1.0),
+        shininess=max(shininess, 0.0),
+        f0=min(max(f0, 0.0), 1.0),
+    )
+
+
+# --- geometry ----------------------------------------------------------------------------------
+
+def mesh_geometry(key: str, mesh: bpy.types.Mesh) -> S.MeshGeometry | None:
+    """Unindexed triangles with corner normals, grouped by material slot; None when empty."""
+    mesh.calc_loop_triangles()
+    n_tri = len(mesh.loop_triangles)
+    if n_tri == 0:
+        return None
+    co = np.empty(len(mesh.vertices) * 3, np.float32)
+    mesh.vertices.foreach_get("co", co)
+    tri_verts = np.empty(n_tri * 3, np.int32)
+    mesh.loop_triangles.foreach_get("vertices", tri_verts)
+    tri_loops = np.empty(n_tri * 3, np.int32)
+    mesh.loop_triangles.foreach_get("loops", tri_loops)
+    tri_mat = np.empty(n_tri, np.int32)
+    mesh.loop_triangles.foreach_get("material_index", tri_mat)
+    corner_normals = np.empty(len(mesh.loops) * 3, np.float32)
+    mesh.corner_normals.foreach_get("vector", corner_normals)
+
+    order = np.argsort(tri_mat, kind="stable")
+    corners = (order[:, None] * 3 + np.arange(3)).reshape(-1)
+    positions = co.reshape(-1, 3)[tri_verts[corners]]
+    normals = corner_normals.reshape(-1, 3)[tri_loops[corners]]
+    slots, starts, counts = np.unique(tri_mat[order], return_index=True, return_counts=True)
+    ranges = [(int(s), int(a) * 3, int(c) * 3) for s, a, c in zip(slots, starts, counts)]
+    return S.MeshGeometry(key, np.ascontiguousarray(positions), np.ascontiguousarray(normals), ranges)
+
+
+def _geometry_key(obj: bpy.types.Object) -> str:
+    data = obj.data
+    if obj.type == "MESH" and data is not None:
+        return f"mesh:{data.name_full}:{data.as_pointer():x}"
+    return f"object:{obj.name_full}:{obj.as_pointer():x}"
+
+
+def _matrix(m) -> np.ndarray:
+    return np.array(m, np.float32)
+
+
+# --- lights ------------------------------------------------------------------------------------
+
+def light_strength(light: bpy.types.Light) -> np.ndarray:
+    """Linear rgb colour x energy x 2^exposure (x blackbody colour when temperature is used)."""
+    color = np.array(light.color, np.float64)
+    if getattr(light, "use_temperature", False):
+        color = color * np.array(light.temperature_color, np.float64)
+    return color * float(light.energy) * 2.0 ** float(getattr(light, "exposure", 0.0))
+
+
+def make_light(light: bpy.types.Light, matrix) -> S.Light:
+    m = np.array(matrix, np.float64)
+    position = tuple(float(x) for x in m[:3, 3])
+    axis = -m[:3, 2]
+    norm = np.linalg.norm(axis)
+    direction = tuple(float(x) for x in (axis / norm if norm > 0 else np.array([0.0, 0.0, -1.0])))
+    strength = light_strength(light)
+    kind = LIGHT_KIND[light.type]
+    extra = {}
+    normalized = getattr(light, "normalize", True)
+    # Cycles (scene/light.cpp): eval_fac = (normalize ? 1 / area : 1) / pi, with area = 4 for a
+    # radius-0 point or spot, 1 for a zero-angle sun, and the light's surface for an area light.
+    if kind in ("POINT", "SPOT"):
+        intensity = strength / (4.0 * math.pi if normalized else math.pi)  # I = P / 4 pi W/sr
+    elif kind == "SUN":
+        intensity = strength  # W/m^2 at any angle when normalized
+        half = 0.5 * float(light.angle)
+        if not normalized and half > 0.0:
+            intensity = strength * math.pi * math.sin(half) ** 2
+    else:  # AREA: a Lambertian emitter of radiance P / (pi A) gives I = P / pi along its normal
+        intensity = strength / math.pi
+        if not normalized:
+            intensity = intensity * _area(light)
+    if kind == "SPOT":
+        extra = dict(
+            spot_cos_half=math.cos(0.5 * light.spot_size),
+            spot_smooth=S.spot_smooth(light.spot_size, light.spot_blend),
+        )
+    return S.Light(
+        kind=kind,
+        position=position,
+        direction=direction,
+        intensity=tuple(float(x) for x in intensity),
+        diffuse_factor=float(light.diffuse_factor),
+        specular_factor=float(light.specular_factor),
+        **extra,
+    )
+
+
+def _area(light) -> float:
+    sx = light.size
+    sy = light.size_y if light.shape in ("RECTANGLE", "ELLIPSE") else light.size
+    return sx * sy * (math.pi / 4.0 if light.shape in ("DISK", "ELLIPSE") else 1.0)
+
+
+# --- camera and world --------------------------------------------------------------------------
+
+def make_camera(depsgraph, camera_obj, width: int, height: int) -> S.Camera:
+    r = depsgraph.scene.render
+    cam_eval = camera_obj.evaluated_get(depsgraph)
+    projection = cam_eval.calc_matrix_camera(
+        depsgraph, x=width, y=height, scale_x=r.pixel_aspect_x, scale_y=r.pixel_aspect_y
+    )
+    world = np.array(cam_eval.matrix_world, np.float64)
+    forward = -world[:3, 2] / max(np.linalg.norm(world[:3, 2]), 1e-30)
+    return S.Camera(
+        view=np.linalg.inv(world).astype(np.float32),
+        projection=_matrix(projection),
+        is_perspective=cam_eval.data.type != "ORTHO",
+        position=tuple(float(x) for x in world[:3, 3]),
+        forward=tuple(float(x) for x in forward),
+    )
+
+
+def world_color(world) -> tuple[float, float, float]:
+    """The world's uniform background radiance: Background colour x strength, or world.color."""
+    if world is None:
+        return (0.0, 0.0, 0.0)
+    tree = world.node_tree if world.use_nodes else None
+    if tree is not None:
+        for node in tree.nodes:
+            if node.bl_idname == "ShaderNodeOutputWorld" and node.inputs["Surface"].is_linked:
+                bg = node.inputs["Surface"].links[0].from_node
+                if bg.bl_idname == "ShaderNodeBackground":
+                    c = bg.inputs["Color"].default_value
+                    s = float(bg.inputs["Strength"].default_value)
+                    return (c[0] * s, c[1] * s, c[2] * s)
+                return (0.0, 0.0, 0.0)
+    return _rgb(world.color)
+
+
+# --- the snapshot ------------------------------------------------------------------------------
+
+def scene_settings(scene) -> S.Settings:
+    props = getattr(scene, "shading_lab", None)
+    if props is None:
+        return S.Settings()
+    return S.Settings(model=props.model, ambient=float(props.ambient))
+
+
+def snapshot(depsgraph, width: int | None = None, height: int | None = None,
+             camera: S.Camera | None = None, settings: S.Settings | None = None) -> S.Snapshot:
+    """Everything the renderer draws, read from the evaluated scene.
+
+    ``camera`` may be given (the viewport passes its own); otherwise the scene camera is used
+    and its absence raises ``ExtractError``.
+    """
+    scene = depsgraph.scene
+    if width is None or height is None:
+        width, height = render_size(scene)
+    if camera is None:
+        if scene.camera is None:
+            raise ExtractError("The scene has no active camera: add one or set Scene > Camera")
+        camera = make_camera(depsgraph, scene.camera, width, height)
+    snap = S.Snapshot(
+        camera=camera,
+        width=width,
+        height=height,
+        settings=settings or scene_settings(scene),
+        world_color=world_color(scene.world),
+    )
+    snap.materials[""] = S.DEFAULT_MATERIAL
+    skipped_empty: set[str] = set()
+    for inst in depsgraph.object_instances:
+        obj = inst.object
+        if obj.type == "LIGHT":
+            if obj.data.type in LIGHT_KIND:
+                snap.lights.append(make_light(obj.data, inst.matrix_world))
+            continue
+        if obj.type not in MESH_LIKE:
+            continue
+        key = _geometry_key(obj)
+        if key in skipped_empty:
+            continue
+        if key not in snap.geometries:
+            mesh = obj.to_mesh()
+            try:
+                geometry = mesh_geometry(key, mesh) if mesh is not None else None
+            finally:
+                obj.to_mesh_clear()
+            if geometry is None:
+                skipped_empty.add(key)
+                continue
+            snap.geometries[key] = geometry
+        slots = []
+        for slot in obj.material_slots:
+            mat = slot.material
+            mkey = mat.name_full if mat is not None else ""
+            if mkey not in snap.materials:
+                snap.materials[mkey] = material_params(mat)
+            slots.append(mkey)
+        snap.items.append(S.DrawItem(key, _matrix(inst.matrix_world), slots or [""]))
+    return snap

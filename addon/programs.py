@@ -1,0 +1,141 @@
+"""Shader programs specialised to a scene: feature set -> defines -> GLSL source, and the
+uniform-buffer packers. Pure Python (no ``bpy``/``gpu``): the renderer feeds the results to
+``gpu.types.GPUShaderCreateInfo``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from .snapshot import LIGHT_KINDS, MODELS, MaterialParams, Snapshot
+
+MODEL_FILES = {
+    "BLINN_PHONG": "model_blinn_phong.glsl",
+    "PHONG": "model_phong.glsl",
+    "PBR": "model_pbr.glsl",
+}
+FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl")
+
+
+def glsl_dir() -> Path:
+    """``glsl/`` beside the package when installed as an extension, else at the repository root."""
+    here = Path(__file__).resolve().parent
+    for candidate in (here / "glsl", here.parent / "glsl"):
+        if (candidate / "brdf.glsl").is_file():
+            return candidate
+    raise FileNotFoundError(f"Shading Lab's GLSL sources are missing (looked beside {here})")
+
+
+@lru_cache(maxsize=None)
+def read_glsl(name: str) -> str:
+    return (glsl_dir() / name).read_text(encoding="utf-8")
+
+
+def _bucket(count: int) -> int:
+    """Round a light count up to a power of two so adding one light rarely recompiles."""
+    size = 1
+    while size < count:
+        size *= 2
+    return size
+
+
+@dataclass(frozen=True)
+class Features:
+    """What a scene needs from the shading program; its defines key the program cache."""
+
+    model: str = "PBR"
+    max_lights: int = 1
+    light_kinds: frozenset[str] = frozenset()
+
+    def __post_init__(self):
+        if self.model not in MODELS:
+            raise ValueError(f"unknown shading model {self.model!r}; expected one of {MODELS}")
+        unknown = set(self.light_kinds) - set(LIGHT_KINDS)
+        if unknown:
+            raise ValueError(f"unknown light kinds {sorted(unknown)}")
+
+    @classmethod
+    def from_snapshot(cls, snapshot: Snapshot) -> Features:
+        return cls(
+            model=snapshot.settings.model,
+            max_lights=_bucket(len(snapshot.lights)),
+            light_kinds=frozenset(light.kind for light in snapshot.lights),
+        )
+
+    def defines(self) -> tuple[tuple[str, str], ...]:
+        out = [("SL_MAX_LIGHTS", str(self.max_lights)), ("SL_MODEL_" + self.model, "1")]
+        out += [("SL_HAS_" + kind, "1") for kind in sorted(self.light_kinds)]
+        return tuple(sorted(out))
+
+
+@dataclass(frozen=True)
+class ProgramSource:
+    typedefs: str
+    vertex: str
+    fragment: str
+    defines: tuple[tuple[str, str], ...]
+
+
+def program_source(features: Features) -> ProgramSource:
+    fragment = [read_glsl(name) for name in FRAGMENT_LIBRARY]
+    fragment.append(read_glsl(MODEL_FILES[features.model]))
+    fragment.append(read_glsl("mesh.frag.glsl"))
+    return ProgramSource(
+        typedefs=read_glsl("uniforms.glsl"),
+        vertex=read_glsl("mesh.vert.glsl"),
+        fragment="\n".join(fragment),
+        defines=features.defines(),
+    )
+
+
+# --- uniform-buffer packing (std140, vec4/mat4 members only; matrices column-major) ---------
+
+LIGHT_KIND_IDS = {kind: float(i) for i, kind in enumerate(LIGHT_KINDS)}
+
+
+def _mat(m: np.ndarray) -> np.ndarray:
+    return np.asarray(m, np.float32).T.reshape(-1)
+
+
+def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None) -> bytes:
+    cam = snapshot.camera
+    vp = cam.view_projection if view_projection is None else view_projection
+    ambient = snapshot.settings.ambient
+    rows = [
+        _mat(vp),
+        [*cam.position, 1.0 if cam.is_perspective else 0.0],
+        [*cam.forward, 0.0],
+        [ambient, ambient, ambient, 0.0],
+        [float(len(snapshot.lights)), 0.0, 0.0, 0.0],
+    ]
+    return np.concatenate([np.asarray(r, np.float32) for r in rows]).tobytes()
+
+
+def pack_lights(snapshot: Snapshot, max_lights: int) -> bytes:
+    data = np.zeros((max_lights, 16), np.float32)
+    for i, light in enumerate(snapshot.lights[:max_lights]):
+        data[i] = [
+            *light.position, LIGHT_KIND_IDS[light.kind],
+            *light.direction, light.spot_cos_half,
+            *light.intensity, light.spot_smooth,
+            light.diffuse_factor, light.specular_factor, 0.0, 0.0,
+        ]
+    return data.tobytes()
+
+
+def pack_material(m: MaterialParams) -> bytes:
+    rows = [
+        [*m.base_color, 1.0],
+        [*m.specular_color, 1.0],
+        [*m.ambient_color, 1.0],
+        [m.roughness, m.metalness, max(m.shininess, 1e-4), m.f0],
+    ]
+    return np.asarray(rows, np.float32).tobytes()
+
+
+def pack_object(matrix: np.ndarray, normal_matrix: np.ndarray) -> bytes:
+    return np.concatenate([_mat(matrix), _mat(normal_matrix)]).tobytes()

@@ -1,0 +1,77 @@
+"""Scene and material settings (``scene.shading_lab``, ``material.shading_lab``)."""
+
+from __future__ import annotations
+
+import bpy
+from bpy.props import BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty, PointerProperty
+
+MODEL_ITEMS = (
+    ("BLINN_PHONG", "Blinn-Phong", "Empirical Blinn-Phong model (eq. 1.7), LDR, clamped to [0, 1]"),
+    ("PHONG", "Phong", "Original Phong model (eqs. 1.2-1.3), LDR, clamped to [0, 1]"),
+    ("PBR", "Physically Based", "Cook-Torrance GGX specular + Lambert diffuse, HDR"),
+)
+
+
+def _redraw(self, context):
+    """Add-on properties alone do not tag the depsgraph: tag the owner so renders update."""
+    owner = self.id_data
+    if owner is not None:
+        owner.update_tag()
+
+
+class ShadingLabSceneSettings(bpy.types.PropertyGroup):
+    model: EnumProperty(name="Model", items=MODEL_ITEMS, default="PBR", update=_redraw,
+                        description="Shading model used for the whole scene")
+    ambient: FloatProperty(
+        name="Ambient", default=0.2, min=0.0, soft_max=1.0, update=_redraw,
+        description="Ambient constant x of the Blinn-Phong and Phong models (eq. 1.4); 0.2 is the "
+                    "commonly used value")
+
+    @classmethod
+    def register(cls):
+        bpy.types.Scene.shading_lab = PointerProperty(type=cls)
+
+    @classmethod
+    def unregister(cls):
+        del bpy.types.Scene.shading_lab
+
+
+def _override(name: str, description: str):
+    return BoolProperty(name=f"Set {name}", default=False, update=_redraw,
+                        description=f"Use this {description} instead of the surface shader's value")
+
+
+class ShadingLabMaterialSettings(bpy.types.PropertyGroup):
+    use_base_color: _override("Base Color", "base colour")
+    base_color: FloatVectorProperty(name="Base Color", subtype="COLOR", size=3, min=0.0, max=1.0,
+                                    default=(0.8, 0.8, 0.8), update=_redraw)
+    use_metalness: _override("Metalness", "metalness")
+    metalness: FloatProperty(name="Metalness", default=0.0, min=0.0, max=1.0, update=_redraw)
+    use_roughness: _override("Roughness", "roughness")
+    roughness: FloatProperty(name="Roughness", default=0.5, min=0.0, max=1.0, update=_redraw,
+                             description="Perceptual roughness r; the GGX width is alpha = r^2")
+    use_f0: _override("F0", "dielectric reflectance at normal incidence")
+    f0: FloatProperty(name="Dielectric F0", default=0.04, min=0.0, max=1.0, update=_redraw,
+                      description="Fresnel reflectance at normal incidence of the dielectric part "
+                              "(0.04 for IOR 1.5; 0 removes the specular lobe)")
+    use_shininess: _override("Shininess", "Blinn-Phong exponent")
+    shininess: FloatProperty(name="Shininess", default=30.0, min=0.0, soft_max=1000.0, update=_redraw,
+                             description="Blinn-Phong/Phong specular exponent (otherwise derived "
+                                     "from roughness: 2 / r^4 - 2)")
+    use_specular_color: _override("Specular Color", "Blinn-Phong specular colour")
+    specular_color: FloatVectorProperty(name="Specular Color", subtype="COLOR", size=3, min=0.0,
+                                        default=(1.0, 1.0, 1.0), update=_redraw)
+    use_ambient_color: _override("Ambient Color", "Blinn-Phong ambient colour")
+    ambient_color: FloatVectorProperty(name="Ambient Color", subtype="COLOR", size=3, min=0.0,
+                                       default=(0.8, 0.8, 0.8), update=_redraw)
+
+    @classmethod
+    def register(cls):
+        bpy.types.Material.shading_lab = PointerProperty(type=cls)
+
+    @classmethod
+    def unregister(cls):
+        del bpy.types.Material.shading_lab
+
+
+classes = (ShadingLabSceneSettings, ShadingLabMaterialSettings)

@@ -1,0 +1,151 @@
+"""The scene snapshot: plain data (numpy arrays and dataclasses) that the renderer draws.
+
+Nothing here imports ``bpy`` or ``gpu``: ``extract.py`` fills these types from a depsgraph, the
+renderer and the numpy reference read them, and tests can build them by hand.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+MODELS = ("BLINN_PHONG", "PHONG", "PBR")
+LIGHT_KINDS = ("POINT", "SPOT", "SUN", "AREA")
+
+#: Fresnel reflectance at normal incidence of a dielectric with IOR 1.5 (most plastics, glass).
+DEFAULT_F0 = 0.04
+
+
+def f0_from_ior(ior: float) -> float:
+    """Normal-incidence Fresnel reflectance from air into a medium of index ``ior``."""
+    ior = max(float(ior), 1.0)
+    return ((ior - 1.0) / (ior + 1.0)) ** 2
+
+
+def shininess_from_roughness(roughness: float) -> float:
+    """Blinn-Phong exponent matching a Beckmann/GGX surface of perceptual roughness ``r``.
+
+    Walter et al. 2007, section 5.2: alpha_p = 2 / alpha_b^2 - 2, with alpha_b = r^2. Clamped to
+    [1, 1e4]: below 1 the lobe is wider than a hemisphere cosine, above 1e4 it is a mirror.
+    """
+    alpha = max(float(roughness), 0.045) ** 2
+    return float(min(max(2.0 / (alpha * alpha) - 2.0, 1.0), 1e4))
+
+
+@dataclass(frozen=True)
+class MaterialParams:
+    """Resolved shading inputs of one material (explicit values or the Principled fallback)."""
+
+    name: str = "Default"
+    base_color: tuple[float, float, float] = (0.8, 0.8, 0.8)
+    specular_color: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    ambient_color: tuple[float, float, float] = (0.8, 0.8, 0.8)
+    roughness: float = 0.5
+    metalness: float = 0.0
+    shininess: float = 30.0
+    f0: float = DEFAULT_F0
+
+
+#: Objects without a material render with this: Blender's default surface (grey 0.8,
+#: roughness 0.5, dielectric F0 0.04), white Blinn-Phong highlights of shininess 30.
+DEFAULT_MATERIAL = MaterialParams()
+
+
+@dataclass
+class MeshGeometry:
+    """Triangles of one evaluated mesh, unindexed (three corners per triangle), object space.
+
+    ``ranges`` lists ``(material_slot, first_corner, corner_count)``, sorted by slot.
+    """
+
+    key: str
+    positions: np.ndarray  # (N, 3) float32
+    normals: np.ndarray  # (N, 3) float32, corner normals
+    ranges: list[tuple[int, int, int]]
+
+    @property
+    def triangle_count(self) -> int:
+        return len(self.positions) // 3
+
+
+@dataclass
+class DrawItem:
+    """One instance of a geometry: its world matrix and a material per slot."""
+
+    geometry: str
+    matrix: np.ndarray  # (4, 4) float32, object -> world
+    materials: list[str]  # material key per slot
+
+    @property
+    def normal_matrix(self) -> np.ndarray:
+        """Inverse transpose of the upper 3x3, embedded in a 4x4 (zero for degenerate scale)."""
+        m3 = self.matrix[:3, :3].astype(np.float64)
+        out = np.zeros((4, 4), np.float32)
+        if abs(np.linalg.det(m3)) > 1e-30:
+            out[:3, :3] = np.linalg.inv(m3).T
+        out[3, 3] = 1.0
+        return out
+
+
+@dataclass(frozen=True)
+class Light:
+    """A light in Blender's units, reduced to what the shaders need.
+
+    ``intensity`` is rgb radiant intensity in W/sr for point, spot and area lights (I = P / 4 pi
+    for point and spot, P / pi along the normal for area) and irradiance in W/m^2 for a sun.
+    """
+
+    kind: str
+    position: tuple[float, float, float]
+    direction: tuple[float, float, float]  # unit vector the light faces (its -Z axis)
+    intensity: tuple[float, float, float]
+    spot_cos_half: float = -1.0
+    spot_smooth: float = 1e20
+    diffuse_factor: float = 1.0
+    specular_factor: float = 1.0
+
+
+@dataclass
+class Camera:
+    view: np.ndarray  # (4, 4) world -> camera
+    projection: np.ndarray  # (4, 4) camera -> clip
+    is_perspective: bool
+    position: tuple[float, float, float]
+    forward: tuple[float, float, float]
+
+    @property
+    def view_projection(self) -> np.ndarray:
+        return (self.projection.astype(np.float64) @ self.view.astype(np.float64)).astype(np.float32)
+
+
+@dataclass
+class Settings:
+    model: str = "PBR"
+    ambient: float = 0.2  # the seed's "commonly used" ambient constant x (eq. 1.4)
+
+
+@dataclass
+class Snapshot:
+    camera: Camera
+    width: int
+    height: int
+    settings: Settings = field(default_factory=Settings)
+    geometries: dict[str, MeshGeometry] = field(default_factory=dict)
+    items: list[DrawItem] = field(default_factory=list)
+    materials: dict[str, MaterialParams] = field(default_factory=dict)
+    lights: list[Light] = field(default_factory=list)
+    world_color: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    warnings: list[str] = field(default_factory=list)
+
+    @property
+    def triangle_count(self) -> int:
+        return sum(self.geometries[i.geometry].triangle_count for i in self.items)
+
+
+def spot_smooth(spot_size: float, spot_blend: float) -> float:
+    """Cycles' spot smoothstep scale 1 / ((1 - cos(size / 2)) * blend); 1e20 for a hard edge."""
+    one_minus_cos = 1.0 - math.cos(0.5 * spot_size)
+    denom = one_minus_cos * spot_blend
+    return 1.0 / denom if denom > 1e-20 else 1e20

@@ -1,0 +1,117 @@
+"""Panels for the Render and Material tabs, and Blender's own panels opened to this engine."""
+
+from __future__ import annotations
+
+import bpy
+
+from .engine import ENGINE_ID
+
+# Blender's panels that make sense for this engine: light, camera, world, object, output.
+_BUILTIN_PREFIXES = ("DATA_PT_", "OBJECT_PT_", "RENDER_PT_format", "RENDER_PT_output",
+                     "RENDER_PT_color_management", "WORLD_PT_", "VIEWLAYER_PT_", "MATERIAL_PT_preview",
+                     "EEVEE_MATERIAL_PT_context_material", "MATERIAL_PT_viewport")
+_EXCLUDED = {"DATA_PT_light", "DATA_PT_EEVEE_light"}
+
+
+def builtin_panels():
+    for panel in bpy.types.Panel.__subclasses__():
+        engines = getattr(panel, "COMPAT_ENGINES", None)
+        if engines is None or panel.__name__ in _EXCLUDED:
+            continue
+        if panel.__name__.startswith(_BUILTIN_PREFIXES) and (
+                "BLENDER_RENDER" in engines or "BLENDER_EEVEE" in engines or "BLENDER_EEVEE_NEXT" in engines):
+            yield panel
+
+
+class ShadingLabPanel:
+    bl_space_type = "PROPERTIES"
+    bl_region_type = "WINDOW"
+    COMPAT_ENGINES = {ENGINE_ID}
+
+    @classmethod
+    def poll(cls, context):
+        return context.engine in cls.COMPAT_ENGINES
+
+
+class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
+    bl_label = "Shading Lab"
+    bl_context = "render"
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        props = context.scene.shading_lab
+        layout.prop(props, "model")
+        row = layout.row()
+        row.active = props.model != "PBR"
+        row.prop(props, "ambient")
+
+
+class SHADINGLAB_PT_light(ShadingLabPanel, bpy.types.Panel):
+    bl_label = "Light"
+    bl_context = "data"
+
+    @classmethod
+    def poll(cls, context):
+        return super().poll(context) and context.light is not None
+
+    def draw(self, context):
+        layout = self.layout
+        layout.use_property_split = True
+        light = context.light
+        layout.prop(light, "type", expand=True)
+        layout.prop(light, "color")
+        layout.prop(light, "energy")
+        layout.prop(light, "exposure")
+        if light.type == "SPOT":
+            layout.prop(light, "spot_size")
+            layout.prop(light, "spot_blend")
+        layout.prop(light, "diffuse_factor", text="Diffuse")
+        layout.prop(light, "specular_factor", text="Specular")
+
+
+def _material_row(layout, props, flag, value, fallback_label):
+    row = layout.row(align=True)
+    row.prop(props, flag, text="")
+    sub = row.row()
+    sub.active = getattr(props, flag)
+    sub.prop(props, value)
+    if not getattr(props, flag):
+        row.label(text=fallback_label)
+
+
+class SHADINGLAB_PT_material(ShadingLabPanel, bpy.types.Panel):
+    bl_label = "Shading Lab Surface"
+    bl_context = "material"
+
+    @classmethod
+    def poll(cls, context):
+        return super().poll(context) and context.material is not None
+
+    def draw(self, context):
+        props = context.material.shading_lab
+        layout = self.layout
+        layout.label(text="Unticked values come from the surface shader (Principled BSDF)")
+        col = layout.column()
+        col.label(text="Physically based")
+        for flag, value in (("use_base_color", "base_color"), ("use_metalness", "metalness"),
+                            ("use_roughness", "roughness"), ("use_f0", "f0")):
+            _material_row(col, props, flag, value, "from shader")
+        col.separator()
+        col.label(text="Blinn-Phong / Phong")
+        _material_row(col, props, "use_shininess", "shininess", "from roughness")
+        _material_row(col, props, "use_specular_color", "specular_color", "white")
+        _material_row(col, props, "use_ambient_color", "ambient_color", "base colour")
+
+
+classes = (SHADINGLAB_PT_render, SHADINGLAB_PT_light, SHADINGLAB_PT_material)
+
+
+def register():
+    for panel in builtin_panels():
+        panel.COMPAT_ENGINES.add(ENGINE_ID)
+
+
+def unregister():
+    for panel in builtin_panels():
+        panel.COMPAT_ENGINES.discard(ENGINE_ID)

@@ -1,0 +1,24 @@
+/* Constants and small helpers shared by every term. */
+
+#define PI 3.14159265358979323846
+#define INV_PI 0.31830988618379067154
+
+float saturate(float x)
+{
+  return clamp(x, 0.0, 1.0);
+}
+
+/* x^5 by multiplication: cheaper than pow() and exact at x = 0 (pow(0, 5) is defined, but the
+ * multiplication keeps the GLSL and numpy twins bit-for-bit comparable). */
+float pow5(float x)
+{
+  float x2 = x * x;
+  return x2 * x2 * x;
+}
+
+/* Smallest perceptual roughness: alpha = r^2 must stay above zero or D_GGX is 0/0 at n = h.
+ * 0.045 (alpha ~ 2e-3) is Filament's float32 floor; GGX peaks at 1/(pi alpha^2) ~ 8e4 there. */
+#define MIN_PERCEPTUAL_ROUGHNESS 0.045
+
+/* Smallest cosine used in a division (n.v, n.l at grazing angles). */
+#define MIN_COS 1e-4

@@ -1,0 +1,25 @@
+/* The shading point: geometry and material inputs every model reads. */
+
+struct Surface {
+  vec3 p;             /* world position */
+  vec3 n;             /* unit shading normal, flipped towards the viewer on back faces */
+  vec3 v;             /* unit direction towards the viewer */
+  float NoV;          /* n.v floored at MIN_COS (grazing and silhouette fragments) */
+  vec3 base_color;
+  vec3 specular_color;
+  vec3 ambient_color;
+  float roughness;    /* perceptual roughness r, floored at MIN_PERCEPTUAL_ROUGHNESS */
+  float alpha;        /* GGX alpha = r^2 (Burley 2012) */
+  float metalness;
+  float shininess;
+  float f0_dielectric;
+};
+
+/* Unit half vector of eq. 1.6; l + v = 0 only when the light is exactly behind the viewer's
+ * line of sight, where any unit vector serves: fall back to n. */
+vec3 half_vector(vec3 l, vec3 v, vec3 n)
+{
+  vec3 s = l + v;
+  float len2 = dot(s, s);
+  return len2 > 1e-12 ? s * inversesqrt(len2) : n;
+}

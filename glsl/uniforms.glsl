@@ -1,0 +1,34 @@
+/* Uniform-buffer layouts (std140: every member is a vec4 or mat4, so the numpy packers in
+ * addon/programs.py can write them as flat float32 arrays without padding rules). Lights and
+ * materials live in uniform buffers because push constants are capped at 128 bytes. */
+
+struct FrameData {
+  mat4 view_proj;
+  vec4 camera_position;  /* xyz: camera origin in world space; w: 1 perspective, 0 orthographic */
+  vec4 camera_forward;   /* xyz: unit view axis (camera -Z) in world space */
+  vec4 ambient;          /* rgb: Blinn-Phong/Phong ambient constant x (eq. 1.4) */
+  vec4 counts;           /* x: number of lights in use */
+};
+
+struct LightData {
+  vec4 position_kind;    /* xyz: position; w: LIGHT_POINT / LIGHT_SPOT / LIGHT_SUN / LIGHT_AREA */
+  vec4 direction_cone;   /* xyz: unit direction the light faces (its -Z); w: cos(spot_size / 2) */
+  vec4 intensity_blend;  /* rgb: W/sr (point, spot, area) or W/m^2 (sun); w: spot smoothstep scale */
+  vec4 factors;          /* x: diffuse factor; y: specular factor */
+};
+
+struct LightBlock {
+  LightData light[SL_MAX_LIGHTS];
+};
+
+struct MaterialData {
+  vec4 base_color;       /* rgb: base colour (PBR) = diffuse colour (Blinn-Phong, Phong) */
+  vec4 specular_color;   /* rgb: Blinn-Phong/Phong specular colour */
+  vec4 ambient_color;    /* rgb: Blinn-Phong/Phong ambient colour */
+  vec4 params;           /* x: perceptual roughness r; y: metalness; z: shininess; w: dielectric F0 */
+};
+
+struct ObjectData {
+  mat4 model;
+  mat4 normal_matrix;    /* inverse transpose of the model matrix's upper 3x3 */
+};
