@@ -7,23 +7,32 @@ Blender-facing layer. Installed as an extension the package is ``bl_ext.<repo>.s
 so every import inside it is relative.
 """
 
-import bpy
 
-from . import engine, properties, ui
 
-_CLASSES = (*properties.classes, *engine.classes, *ui.classes)
+def _classes():
+    # Imported here, not at the top: the pure modules (snapshot, programs, shading) must stay
+    # importable without Blender, and importing this package runs this file first.
+    from . import engine, properties, ui
+
+    return (*properties.classes, *engine.classes, *ui.classes), ui
 
 
 def register():
-    for cls in _CLASSES:
+    import bpy
+
+    classes, ui = _classes()
+    for cls in classes:
         bpy.utils.register_class(cls)
     ui.register()
 
 
 def unregister():
-    ui.unregister()
-    for cls in reversed(_CLASSES):
-        bpy.utils.unregister_class(cls)
+    import bpy
+
     from . import renderer
 
+    classes, ui = _classes()
+    ui.unregister()
+    for cls in reversed(classes):
+        bpy.utils.unregister_class(cls)
     renderer.clear_program_cache()

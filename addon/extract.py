@@ -28,7 +28,7 @@ def render_size(scene: bpy.types.Scene) -> tuple[int, int]:
 # --- materials ---------------------------------------------------------------------------------
 
 def _linked_surface_node(material: bpy.types.Material):
-    tree = material.node_tree if material.use_nodes else None
+    tree = material.node_tree
     if tree is None:
         return None
     outputs = [n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial"]
@@ -219,7 +219,7 @@ def world_color(world) -> tuple[float, float, float]:
     """The world's uniform background radiance: Background colour x strength, or world.color."""
     if world is None:
         return (0.0, 0.0, 0.0)
-    tree = world.node_tree if world.use_nodes else None
+    tree = world.node_tree
     if tree is not None:
         for node in tree.nodes:
             if node.bl_idname == "ShaderNodeOutputWorld" and node.inputs["Surface"].is_linked:

@@ -1,0 +1,139 @@
+"""Scene builders and pixel helpers shared by the tests (bpy only, no add-on internals)."""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import bpy
+import numpy as np
+import OpenEXR
+
+
+def reset(engine: str = "SHADING_LAB", size: int = 64) -> bpy.types.Scene:
+    """An empty scene with a black world, rendering at ``size`` x ``size``."""
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.engine = engine
+    scene.render.resolution_x = size
+    scene.render.resolution_y = size
+    scene.render.resolution_percentage = 100
+    world = bpy.data.worlds.new("Black")
+    world.color = (0.0, 0.0, 0.0)
+    if world.node_tree is not None:  # Blender 5 worlds are node-based: a 0.05 grey by default
+        for node in world.node_tree.nodes:
+            if node.bl_idname == "ShaderNodeBackground":
+                node.inputs["Strength"].default_value = 0.0
+    scene.world = world
+    scene.view_settings.view_transform = "Standard"
+    return scene
+
+
+def ortho_camera(scene, location=(0.0, 0.0, 5.0), rotation=(0.0, 0.0, 0.0), scale=2.0):
+    data = bpy.data.cameras.new("Camera")
+    data.type = "ORTHO"
+    data.ortho_scale = scale
+    data.clip_start = 0.01
+    data.clip_end = 1000.0
+    cam = bpy.data.objects.new("Camera", data)
+    cam.location = location
+    cam.rotation_euler = rotation
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    return cam
+
+
+def plane(scene, size=2.0, location=(0.0, 0.0, 0.0), rotation=(0.0, 0.0, 0.0), material=None):
+    half = size / 2.0
+    mesh = bpy.data.meshes.new("Plane")
+    mesh.from_pydata([(-half, -half, 0), (half, -half, 0), (half, half, 0), (-half, half, 0)], [],
+                     [(0, 1, 2, 3)])
+    obj = bpy.data.objects.new("Plane", mesh)
+    obj.location = location
+    obj.rotation_euler = rotation
+    if material is not None:
+        mesh.materials.append(material)
+    scene.collection.objects.link(obj)
+    return obj
+
+
+def light(scene, kind="POINT", energy=100.0, location=(0.0, 0.0, 1.0), rotation=(0.0, 0.0, 0.0),
+          color=(1.0, 1.0, 1.0), **props):
+    data = bpy.data.lights.new(kind.title(), kind)
+    data.energy = energy
+    data.color = color
+    data.use_shadow = False
+    if kind != "SUN":
+        data.shadow_soft_size = 0.0
+        if hasattr(data, "use_soft_falloff"):
+            data.use_soft_falloff = False
+    else:
+        data.angle = 0.0
+    for key, value in props.items():
+        setattr(data, key, value)
+    obj = bpy.data.objects.new(kind.title(), data)
+    obj.location = location
+    obj.rotation_euler = rotation
+    scene.collection.objects.link(obj)
+    return obj
+
+
+def material(name="Material", **overrides) -> bpy.types.Material:
+    """A material whose Shading Lab values are set explicitly: ``base_color=(…)`` ticks
+    ``use_base_color`` and sets the value, and so on for every property."""
+    mat = bpy.data.materials.new(name)
+    for key, value in overrides.items():
+        setattr(mat.shading_lab, "use_" + key, True)
+        setattr(mat.shading_lab, key, value)
+    return mat
+
+
+def render(scene, path: Path) -> np.ndarray:
+    """Render to a 32-bit OpenEXR and read it back: (height, width, 4) float32, top row first."""
+    settings = scene.render.image_settings
+    settings.file_format = "OPEN_EXR"
+    settings.color_depth = "32"
+    settings.exr_codec = "ZIP"
+    scene.render.filepath = str(path)
+    bpy.ops.render.render(write_still=True)
+    return read_exr(path)
+
+
+def read_exr(path: Path) -> np.ndarray:
+    with OpenEXR.File(str(path)) as f:
+        channels = f.channels()
+        if "RGBA" in channels:
+            return np.asarray(channels["RGBA"].pixels, np.float32)
+        if "RGB" in channels:
+            rgb = np.asarray(channels["RGB"].pixels, np.float32)
+            return np.concatenate([rgb, np.ones(rgb.shape[:2] + (1,), np.float32)], axis=-1)
+        return np.stack([np.asarray(channels[c].pixels, np.float32) for c in "RGBA"], axis=-1)
+
+
+def ortho_pixel_rays(size: int, scale: float, cam_matrix: np.ndarray):
+    """World-space origins (size, size, 3) of an orthographic camera's pixel-centre rays, top row
+    first, and the common ray direction."""
+    centres = (np.arange(size) + 0.5) / size - 0.5
+    x = centres[None, :] * scale
+    y = -centres[:, None] * scale  # top row first
+    local = np.stack([np.broadcast_to(x, (size, size)), np.broadcast_to(y, (size, size)),
+                      np.zeros((size, size)), np.ones((size, size))], axis=-1)
+    origins = local @ np.asarray(cam_matrix, np.float64).T
+    direction = -np.asarray(cam_matrix, np.float64)[:3, 2]
+    return origins[..., :3], direction / np.linalg.norm(direction)
+
+
+def intersect_plane(origins, direction, point, normal):
+    """Points where parallel rays meet the plane through ``point`` with ``normal``."""
+    t = np.sum((np.asarray(point) - origins) * normal, axis=-1) / float(np.dot(direction, normal))
+    return origins + t[..., None] * direction
+
+
+def euler_matrix(rotation) -> np.ndarray:
+    rx, ry, rz = rotation
+    cx, sx, cy, sy, cz, sz = (math.cos(rx), math.sin(rx), math.cos(ry), math.sin(ry),
+                              math.cos(rz), math.sin(rz))
+    X = np.array([[1, 0, 0], [0, cx, -sx], [0, sx, cx]])
+    Y = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
+    Z = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
+    return Z @ Y @ X  # Blender's XYZ Euler order

@@ -1,0 +1,93 @@
+"""The same scene rendered by Cycles and by Shading Lab, for point, spot and sun lights.
+
+Cycles is set up to compute what the engine computes: direct light only (max bounces 0), shadows
+off (the engine has none yet), point and spot radius 0 (a true point light), soft falloff off,
+pixel-centre sampling (a Gaussian filter of width 0.01 px; Cycles' Box filter would average the
+whole pixel), a black world. One light per render, so Cycles' light selection adds no noise.
+(a) a Diffuse BSDF plane: Shading Lab reads it as F0 = 0 (pure Lambert);
+(b) a Glossy BSDF plane with GGX: read as a white metal, F0 = 1 so F = 1, alpha = roughness^2.
+"""
+
+from __future__ import annotations
+
+import math
+
+import bpy
+import numpy as np
+import pytest
+import scenes
+
+SIZE = 64
+LIGHTS = {
+    "POINT": dict(energy=200.0, location=(0.25, 0.1, 0.8)),
+    "SPOT": dict(energy=400.0, location=(-0.1, 0.2, 1.2), rotation=(math.radians(15.0), 0.0, 0.0),
+                 spot_size=math.radians(50.0), spot_blend=0.4),
+    "SUN": dict(energy=4.0, rotation=(math.radians(35.0), math.radians(10.0), 0.0)),
+}
+
+
+def _material(kind: str) -> bpy.types.Material:
+    mat = bpy.data.materials.new(kind)
+    tree = mat.node_tree if mat.node_tree is not None else None
+    if tree is None:
+        mat.use_nodes = True
+        tree = mat.node_tree
+    tree.nodes.clear()
+    out = tree.nodes.new("ShaderNodeOutputMaterial")
+    if kind == "diffuse":
+        bsdf = tree.nodes.new("ShaderNodeBsdfDiffuse")
+        bsdf.inputs["Color"].default_value = (0.8, 0.7, 0.6, 1.0)
+        bsdf.inputs["Roughness"].default_value = 0.0
+    else:
+        bsdf = tree.nodes.new("ShaderNodeBsdfGlossy")
+        bsdf.distribution = "GGX"
+        bsdf.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+        bsdf.inputs["Roughness"].default_value = 0.45
+    tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    return mat
+
+
+def _scene(material_kind: str, light_kind: str):
+    scene = scenes.reset(size=SIZE)
+    scene.shading_lab.model = "PBR"
+    scenes.ortho_camera(scene, location=(0.0, 0.0, 3.0), scale=2.0)
+    scenes.plane(scene, size=4.0, rotation=(math.radians(10.0), 0.0, 0.0), material=_material(material_kind))
+    scenes.light(scene, light_kind, **LIGHTS[light_kind])
+    return scene
+
+
+def _cycles(scene, path):
+    scene.render.engine = "CYCLES"
+    c = scene.cycles
+    c.device = "CPU"
+    c.samples = 4
+    c.use_adaptive_sampling = False
+    c.use_denoising = False
+    c.max_bounces = 0
+    c.pixel_filter_type = "GAUSSIAN"
+    c.filter_width = 0.01
+    c.use_light_tree = False
+    c.seed = 1
+    return scenes.render(scene, path)
+
+
+@pytest.mark.parametrize("light_kind", ["POINT", "SPOT", "SUN"])
+@pytest.mark.parametrize("material_kind", ["diffuse", "glossy"])
+def test_matches_cycles(material_kind, light_kind, tmp_path):
+    scene = _scene(material_kind, light_kind)
+    ours = scenes.render(scene, tmp_path / "ours.exr")[..., :3].astype(np.float64)
+    ref = _cycles(scene, tmp_path / "cycles.exr")[..., :3].astype(np.float64)
+
+    lum_ref, lum_ours = ref.mean(-1), ours.mean(-1)
+    lit = lum_ref > 0.02 * lum_ref.max()
+    assert lit.mean() > 0.2, "most of the frame must be lit for the comparison to mean anything"
+    rel = np.abs(lum_ours[lit] - lum_ref[lit]) / lum_ref[lit]
+    print(f"{material_kind}/{light_kind}: mean relative error {rel.mean():.4%}, "
+          f"max {rel.max():.4%}, over {lit.sum()} lit pixels")
+    assert rel.mean() <= 0.02
+    assert rel.max() <= 0.05
+    # colour: each channel agrees too, not only the mean
+    chan = np.abs(ours[lit] - ref[lit]) / np.maximum(ref[lit], 1e-6)
+    assert np.median(chan) <= 0.02
+    # unlit pixels stay unlit (the spot's cone, the plane's back side)
+    assert np.all(lum_ours[lum_ref == 0.0] < 0.01 * lum_ref.max())
