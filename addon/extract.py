@@ -72,31 +72,32 @@ def material_params(material: bpy.types.Material | None) -> S.MaterialParams:
         base, metal = _rgb(_input(node, "Color", base)), 1.0
         rough = float(_input(node, "Roughness", rough))
     props = getattr(material, "shading_lab", None)
-    spec = (1.0, 1.0, 1.0)
-    shininess = S.shininess_from_roughness(rough)
-    ambient = base
     if props is not None:
-        if props.use_base_color:
-            base = _rgb(props.base_color)
-        if props.use_metalness:
-            metal = float(props.metalness)
-        if props.use_roughness:
-            rough = float(props.roughness)
-            shininess = S.shininess_from_roughness(rough)
-        if props.use_f0:
-            f0 = float(props.f0)
-        if props.use_shininess:
-            shininess = float(props.shininess)
-        if props.use_specular_color:
-            spec = _rgb(props.specular_color)
-        ambient = _rgb(props.ambient_color) if props.use_ambient_color else base
+        base = _rgb(props.base_color) if props.use_base_color else base
+        metal = float(props.metalness) if props.use_metalness else metal
+        rough = float(props.roughness) if props.use_roughness else rough
+        f0 = float(props.f0) if props.use_f0 else f0
+    metal = min(max(metal, 0.0), 1.0)
+    rough = min(max(rough, 0.0), 1.0)
+    # Blinn-Phong/Phong fallbacks from the physically based values: a metal's colour goes to its
+    # highlight and none to its diffuse term; a dielectric keeps a white highlight; the ambient
+    # colour is the diffuse colour (the seed's "typically"); shininess from roughness.
+    diffuse = tuple(c * (1.0 - metal) for c in base)
+    spec = tuple(1.0 - metal + metal * c for c in base)
+    shininess = S.shininess_from_roughness(rough)
+    ambient = diffuse
+    if props is not None:
+        spec = _rgb(props.specular_color) if props.use_specular_color else spec
+        shininess = float(props.shininess) if props.use_shininess else shininess
+        ambient = _rgb(props.ambient_color) if props.use_ambient_color else ambient
     return S.MaterialParams(
         name=material.name,
         base_color=base,
+        diffuse_color=diffuse,
         specular_color=spec,
         ambient_color=ambient,
-        roughness=min(max(rough, 0.0), 1.0),
-        metalness=min(max(metal, 0.0), 1.0),
+        roughness=rough,
+        metalness=metal,
         shininess=max(shininess, 0.0),
         f0=min(max(f0, 0.0), 1.0),
     )

@@ -130,6 +130,7 @@ def pack_lights(snapshot: Snapshot, max_lights: int) -> bytes:
 def pack_material(m: MaterialParams) -> bytes:
     rows = [
         [*m.base_color, 1.0],
+        [*m.diffuse_color, 1.0],
         [*m.specular_color, 1.0],
         [*m.ambient_color, 1.0],
         [m.roughness, m.metalness, max(m.shininess, 1e-4), m.f0],

@@ -117,6 +117,7 @@ class Surface:
         self.v = np.asarray(v, np.float64)
         self.NoV = np.maximum(_dot(self.n, self.v), MIN_COS)
         self.base_color = np.asarray(material.base_color, np.float64)
+        self.diffuse_color = np.asarray(material.diffuse_color, np.float64)
         self.specular_color = np.asarray(material.specular_color, np.float64)
         self.ambient_color = np.asarray(material.ambient_color, np.float64)
         self.roughness = max(material.roughness, MIN_PERCEPTUAL_ROUGHNESS)
@@ -130,7 +131,7 @@ def blinn_phong_direct(s: Surface, l, E, factors):
     NoL = _dot(s.n, l)
     c_light = E * INV_PI
     h = half_vector(l, s.v, s.n)
-    diffuse = s.base_color * c_light * factors[0] * NoL[..., None]
+    diffuse = s.diffuse_color * c_light * factors[0] * NoL[..., None]
     specular = s.specular_color * c_light * factors[1] * S_BlinnPhong(_dot(s.n, h), s.shininess)[..., None]
     return np.where((NoL > 0.0)[..., None], diffuse + specular, 0.0)
 
@@ -138,7 +139,7 @@ def blinn_phong_direct(s: Surface, l, E, factors):
 def phong_direct(s: Surface, l, E, factors):
     NoL = _dot(s.n, l)
     c_light = E * INV_PI
-    diffuse = s.base_color * c_light * factors[0] * NoL[..., None]
+    diffuse = s.diffuse_color * c_light * factors[0] * NoL[..., None]
     specular = s.specular_color * c_light * factors[1] * S_Phong(s.n, l, s.v, s.shininess)[..., None]
     return np.where((NoL > 0.0)[..., None], diffuse + specular, 0.0)
 

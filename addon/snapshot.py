@@ -40,6 +40,7 @@ class MaterialParams:
 
     name: str = "Default"
     base_color: tuple[float, float, float] = (0.8, 0.8, 0.8)
+    diffuse_color: tuple[float, float, float] = (0.8, 0.8, 0.8)  # Blinn-Phong/Phong c_surface_diff
     specular_color: tuple[float, float, float] = (1.0, 1.0, 1.0)
     ambient_color: tuple[float, float, float] = (0.8, 0.8, 0.8)
     roughness: float = 0.5

@@ -32,6 +32,7 @@ void main()
   s.n = gl_FrontFacing ? n : -n;
   s.NoV = max(dot(s.n, s.v), MIN_COS);
   s.base_color = material.base_color.rgb;
+  s.diffuse_color = material.diffuse_color.rgb;
   s.specular_color = material.specular_color.rgb;
   s.ambient_color = material.ambient_color.rgb;
   s.roughness = max(material.params.x, MIN_PERCEPTUAL_ROUGHNESS);

@@ -12,7 +12,7 @@ vec3 shade_direct(Surface s, vec3 l, vec3 E, vec4 factors)
   }
   vec3 c_light = E * INV_PI;
   vec3 h = half_vector(l, s.v, s.n);
-  vec3 diffuse = s.base_color * c_light * factors.x * NoL;
+  vec3 diffuse = s.diffuse_color * c_light * factors.x * NoL;
   vec3 specular = s.specular_color * c_light * factors.y * S_BlinnPhong(dot(s.n, h), s.shininess);
   return diffuse + specular;
 }

@@ -8,7 +8,7 @@ vec3 shade_direct(Surface s, vec3 l, vec3 E, vec4 factors)
     return vec3(0.0);
   }
   vec3 c_light = E * INV_PI;
-  vec3 diffuse = s.base_color * c_light * factors.x * NoL;                             /* eq. 1.1 */
+  vec3 diffuse = s.diffuse_color * c_light * factors.x * NoL;                             /* eq. 1.1 */
   vec3 specular = s.specular_color * c_light * factors.y * S_Phong(s.n, l, s.v, s.shininess); /* eq. 1.2 */
   return diffuse + specular;
 }

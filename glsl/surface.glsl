@@ -6,6 +6,7 @@ struct Surface {
   vec3 v;             /* unit direction towards the viewer */
   float NoV;          /* n.v floored at MIN_COS (grazing and silhouette fragments) */
   vec3 base_color;
+  vec3 diffuse_color;
   vec3 specular_color;
   vec3 ambient_color;
   float roughness;    /* perceptual roughness r, floored at MIN_PERCEPTUAL_ROUGHNESS */

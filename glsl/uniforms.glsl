@@ -22,7 +22,8 @@ struct LightBlock {
 };
 
 struct MaterialData {
-  vec4 base_color;       /* rgb: base colour (PBR) = diffuse colour (Blinn-Phong, Phong) */
+  vec4 base_color;       /* rgb: PBR base colour */
+  vec4 diffuse_color;    /* rgb: Blinn-Phong/Phong diffuse colour */
   vec4 specular_color;   /* rgb: Blinn-Phong/Phong specular colour */
   vec4 ambient_color;    /* rgb: Blinn-Phong/Phong ambient colour */
   vec4 params;           /* x: perceptual roughness r; y: metalness; z: shininess; w: dielectric F0 */

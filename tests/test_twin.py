@@ -85,7 +85,9 @@ def test_gpu_matches_numpy_twin(model, seed, tmp_path):
     p = scenes.intersect_plane(origins, direction, np.zeros(3), normal)
     v = np.broadcast_to(-direction, p.shape)
     n = np.broadcast_to(normal if normal @ -direction > 0 else -normal, p.shape)  # back face flip
-    surface = shading.Surface(p, n, v, S.MaterialParams(**mat))
+    # Blinn-Phong's diffuse colour falls back to base x (1 - metalness) (addon/extract.py)
+    diffuse = tuple(c * (1.0 - mat["metalness"]) for c in mat["base_color"])
+    surface = shading.Surface(p, n, v, S.MaterialParams(**mat, diffuse_color=diffuse))
     want = shading.shade(model, surface, [_twin_light(dict(props)) for props in lights], ambient=0.05)
 
     assert np.all(np.isfinite(got))

@@ -1,0 +1,411 @@
+"""extract.snapshot: what the renderer is given for a scene, checked against numbers derived by
+hand (triangle counts, matrices set in the test, closed-form light and camera values)."""
+
+from __future__ import annotations
+
+import math
+
+import bpy
+import numpy as np
+import pytest
+
+import scenes
+from addon import extract
+from addon import snapshot as S
+
+SIZE = 32
+
+
+def snap_of(scene=None) -> S.Snapshot:
+    return extract.snapshot(bpy.context.evaluated_depsgraph_get(), SIZE, SIZE)
+
+
+def new_scene():
+    scene = scenes.reset(size=SIZE)
+    scenes.ortho_camera(scene)
+    return scene
+
+
+def mesh_object(scene, name, verts, faces, location=(0.0, 0.0, 0.0)):
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata(verts, [], faces)
+    obj = bpy.data.objects.new(name, mesh)
+    obj.location = location
+    scene.collection.objects.link(obj)
+    return obj
+
+
+CUBE_VERTS = [(x, y, z) for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)]
+CUBE_FACES = [(0, 1, 3, 2), (4, 6, 7, 5), (0, 4, 5, 1), (2, 3, 7, 6), (0, 2, 6, 4), (1, 5, 7, 3)]
+
+
+def cube(scene, name="Cube", location=(0.0, 0.0, 0.0)):
+    return mesh_object(scene, name, CUBE_VERTS, CUBE_FACES, location)
+
+
+def only_item(snap):
+    assert len(snap.items) == 1
+    item = snap.items[0]
+    return item, snap.geometries[item.geometry]
+
+
+# --- 1. modifiers ------------------------------------------------------------------------------
+
+def test_cube_without_modifier_has_12_triangles():
+    scene = new_scene()
+    cube(scene)
+    snap = snap_of()
+    assert snap.triangle_count == 12
+    assert len(snap.geometries) == 1
+
+
+def test_subdivision_surface_is_evaluated():
+    scene = new_scene()
+    obj = cube(scene)
+    mod = obj.modifiers.new("Subsurf", "SUBSURF")
+    mod.levels = mod.render_levels = 2
+    snap = snap_of()
+    assert snap.triangle_count == 2 * 6 * 4**2  # 96 quads
+
+
+def test_shared_mesh_with_and_without_modifier_gives_two_geometries():
+    scene = new_scene()
+    a = cube(scene, "A")
+    b = bpy.data.objects.new("B", a.data)
+    b.location = (4.0, 0.0, 0.0)
+    scene.collection.objects.link(b)
+    mod = a.modifiers.new("Subsurf", "SUBSURF")
+    mod.levels = mod.render_levels = 2
+    snap = snap_of()
+    assert len(snap.items) == 2
+    counts = sorted(snap.geometries[i.geometry].triangle_count for i in snap.items)
+    assert counts == [12, 192]
+
+
+# --- 2. instances ------------------------------------------------------------------------------
+
+def test_array_modifier_is_one_geometry_of_three_planes():
+    scene = new_scene()
+    obj = scenes.plane(scene, size=2.0)
+    mod = obj.modifiers.new("Array", "ARRAY")
+    mod.count = 3  # relative offset (1, 0, 0): copies at x + 0, 2, 4
+    item, geo = only_item(snap_of())
+    assert len(snap_of().geometries) == 1
+    assert geo.triangle_count == 6
+    np.testing.assert_allclose(geo.positions.min(axis=0), [-1, -1, 0], atol=1e-6)
+    np.testing.assert_allclose(geo.positions.max(axis=0), [5, 1, 0], atol=1e-6)
+
+
+def test_collection_instance_shares_one_geometry():
+    scene = new_scene()
+    coll = bpy.data.collections.new("Source")
+    scene.collection.children.link(coll)
+    mesh = bpy.data.meshes.new("Quad")
+    mesh.from_pydata([(-1, -1, 0), (1, -1, 0), (1, 1, 0), (-1, 1, 0)], [], [(0, 1, 2, 3)])
+    obj = bpy.data.objects.new("Quad", mesh)
+    obj.location = (1.0, 2.0, 0.0)
+    coll.objects.link(obj)
+    empty = bpy.data.objects.new("Instancer", None)
+    empty.instance_type = "COLLECTION"
+    empty.instance_collection = coll
+    empty.location = (10.0, 0.0, 3.0)
+    scene.collection.objects.link(empty)
+
+    snap = snap_of()
+    assert len(snap.items) == 2
+    assert len(snap.geometries) == 1
+    assert snap.items[0].geometry == snap.items[1].geometry
+    translations = sorted(tuple(float(x) for x in i.matrix[:3, 3]) for i in snap.items)
+    np.testing.assert_allclose(translations, [(1, 2, 0), (11, 2, 3)], atol=1e-6)
+    assert snap.triangle_count == 4
+
+
+# --- 3. material slots -------------------------------------------------------------------------
+
+def test_two_material_slots_give_sorted_ranges_and_params():
+    scene = new_scene()
+    # Face 0 (x in [-1, 0]) uses slot 1, face 1 (x in [0, 1]) uses slot 0: ranges must sort.
+    obj = mesh_object(scene, "Two", [(-1, -1, 0), (0, -1, 0), (0, 1, 0), (-1, 1, 0),
+                                     (1, -1, 0), (1, 1, 0)], [(0, 1, 2, 3), (1, 4, 5, 2)])
+    red = scenes.material("Red", base_color=(1.0, 0.0, 0.0))
+    blue = scenes.material("Blue", base_color=(0.0, 0.0, 1.0))
+    obj.data.materials.append(red)
+    obj.data.materials.append(blue)
+    obj.data.polygons[0].material_index = 1
+    obj.data.polygons[1].material_index = 0
+
+    item, geo = only_item(snap_of())
+    assert geo.ranges == [(0, 0, 6), (1, 6, 6)]  # two quads, two triangles (six corners) each
+    assert (geo.positions[0:6, 0] >= 0).all()  # slot 0 = the right-hand face
+    assert (geo.positions[6:12, 0] <= 0).all()
+    assert item.materials == [red.name_full, blue.name_full]
+    snap = snap_of()
+    assert snap.materials[red.name_full].base_color == pytest.approx((1.0, 0.0, 0.0))
+    assert snap.materials[blue.name_full].base_color == pytest.approx((0.0, 0.0, 1.0))
+
+
+# --- 4. normals --------------------------------------------------------------------------------
+
+def test_flat_cube_normals_are_face_normals():
+    scene = new_scene()
+    cube(scene)
+    _, geo = only_item(snap_of())
+    n = geo.normals.astype(np.float64)
+    axes = np.concatenate([np.eye(3), -np.eye(3)])
+    assert np.abs(n @ axes.T).max(axis=1) == pytest.approx(np.ones(len(n)), abs=1e-6)
+    p = geo.positions.reshape(-1, 3, 3).astype(np.float64)
+    face = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
+    face /= np.linalg.norm(face, axis=1, keepdims=True)
+    np.testing.assert_allclose(n.reshape(-1, 3, 3), np.repeat(face[:, None], 3, axis=1),
+                               atol=1e-6)
+
+
+def test_smooth_sphere_normals_are_radial():
+    new_scene()
+    bpy.ops.mesh.primitive_uv_sphere_add(radius=1.5, segments=32, ring_count=16,
+                                         location=(0.0, 0.0, 0.0))
+    bpy.context.active_object.data.shade_smooth()
+    _, geo = only_item(snap_of())
+    radial = geo.positions / np.linalg.norm(geo.positions, axis=1, keepdims=True)
+    dots = np.sum(radial * geo.normals, axis=1)
+    assert dots.min() > 0.999
+    # Flat shading would not pass: its corner normals are face normals, off-radial at corners.
+    bpy.context.active_object.data.shade_flat()
+    _, flat = only_item(snap_of())
+    flat_radial = flat.positions / np.linalg.norm(flat.positions, axis=1, keepdims=True)
+    assert np.sum(flat_radial * flat.normals, axis=1).min() < 0.999
+
+
+def test_custom_normals_override_geometry():
+    scene = new_scene()
+    # A plane tilted in object space: face normal (0, -1, 1) / sqrt 2.
+    obj = mesh_object(scene, "Tilted", [(-1, -1, -1), (1, -1, -1), (1, 1, 1), (-1, 1, 1)],
+                      [(0, 1, 2, 3)])
+    obj.data.normals_split_custom_set_from_vertices([(0.0, 0.0, 1.0)] * 4)
+    _, geo = only_item(snap_of())
+    np.testing.assert_allclose(geo.normals, np.tile([0.0, 0.0, 1.0], (6, 1)), atol=1e-4)
+
+
+# --- 5. cameras --------------------------------------------------------------------------------
+
+def test_perspective_camera():
+    scene = scenes.reset(size=SIZE)
+    data = bpy.data.cameras.new("Persp")
+    data.type = "PERSP"
+    data.lens = 50.0
+    data.sensor_width = 36.0
+    data.sensor_fit = "AUTO"
+    cam = bpy.data.objects.new("Persp", data)
+    location, rotation = (1.0, -2.0, 3.0), (0.4, -0.3, 0.7)
+    cam.location, cam.rotation_euler = location, rotation
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    c = snap_of().camera
+
+    assert c.is_perspective
+    assert c.position == pytest.approx(location, abs=1e-5)
+    forward = -scenes.euler_matrix(rotation)[:, 2]
+    assert c.forward == pytest.approx(tuple(forward), abs=1e-5)
+    point = np.append(np.array(location) + 7.0 * forward, 1.0)
+    clip = c.view_projection.astype(np.float64) @ point
+    assert clip[3] > 0
+    assert clip[:2] / clip[3] == pytest.approx((0.0, 0.0), abs=1e-5)
+    # A point one unit to the camera's right at depth d lands at x_ndc = focal scale / d.
+    right = scenes.euler_matrix(rotation)[:, 0]
+    clip = c.view_projection.astype(np.float64) @ np.append(point[:3] + right, 1.0)
+    assert clip[0] / clip[3] == pytest.approx(2.0 * 50.0 / 36.0 / 7.0, rel=1e-4)
+    assert c.projection[0, 0] == pytest.approx(2.0 * 50.0 / 36.0, rel=1e-5)
+
+
+def test_orthographic_camera_scale():
+    scene = scenes.reset(size=SIZE)
+    cam = scenes.ortho_camera(scene, location=(0.0, 0.0, 5.0), scale=3.0)
+    c = snap_of().camera
+    assert not c.is_perspective
+    assert c.projection[0, 0] == pytest.approx(2.0 / 3.0, rel=1e-6)
+    assert c.projection[1, 1] == pytest.approx(2.0 / 3.0, rel=1e-6)
+    assert c.forward == pytest.approx((0.0, 0.0, -1.0), abs=1e-6)
+    assert cam.name  # the scene camera is the one made here
+
+
+def test_missing_camera_raises():
+    scenes.reset(size=SIZE)
+    with pytest.raises(extract.ExtractError):
+        snap_of()
+
+
+# --- 6. lights ---------------------------------------------------------------------------------
+
+def only_light(snap):
+    assert len(snap.lights) == 1
+    return snap.lights[0]
+
+
+def test_point_light_intensity():
+    scene = new_scene()
+    color, power = (1.0, 0.5, 0.25), 80.0
+    scenes.light(scene, "POINT", energy=power, color=color, location=(1.0, 2.0, 3.0),
+                 diffuse_factor=0.25, specular_factor=0.5)
+    light = only_light(snap_of())
+    assert light.kind == "POINT"
+    assert light.position == pytest.approx((1.0, 2.0, 3.0))
+    assert light.intensity == pytest.approx(tuple(c * power / (4 * math.pi) for c in color))
+    assert light.diffuse_factor == pytest.approx(0.25)
+    assert light.specular_factor == pytest.approx(0.5)
+
+
+def test_light_exposure_doubles_per_stop():
+    scene = new_scene()
+    scenes.light(scene, "POINT", energy=10.0, exposure=2.0)
+    light = only_light(snap_of())
+    assert light.intensity == pytest.approx((10.0 * 4.0 / (4 * math.pi),) * 3)
+
+
+def test_spot_light_cone():
+    scene = new_scene()
+    size, blend = math.radians(50.0), 0.2
+    rotation = (0.5, 0.0, 0.0)
+    scenes.light(scene, "SPOT", energy=40.0, rotation=rotation, spot_size=size, spot_blend=blend)
+    light = only_light(snap_of())
+    assert light.kind == "SPOT"
+    assert light.spot_cos_half == pytest.approx(math.cos(size / 2))
+    assert light.spot_smooth == pytest.approx(1.0 / ((1.0 - math.cos(size / 2)) * blend), rel=1e-5)
+    assert light.intensity == pytest.approx((40.0 / (4 * math.pi),) * 3)
+    assert light.direction == pytest.approx(tuple(-scenes.euler_matrix(rotation)[:, 2]), abs=1e-6)
+
+
+def test_sun_light_irradiance_and_direction():
+    scene = new_scene()
+    rotation = (0.3, 0.6, -1.1)
+    scenes.light(scene, "SUN", energy=3.0, color=(0.5, 1.0, 0.2), rotation=rotation)
+    light = only_light(snap_of())
+    assert light.kind == "SUN"
+    assert light.intensity == pytest.approx((1.5, 3.0, 0.6))
+    assert light.direction == pytest.approx(tuple(-scenes.euler_matrix(rotation)[:, 2]), abs=1e-6)
+
+
+def test_area_light_intensity():
+    scene = new_scene()
+    scenes.light(scene, "AREA", energy=50.0, color=(0.2, 0.4, 1.0), size=0.5)
+    light = only_light(snap_of())
+    assert light.kind == "AREA"
+    assert light.intensity == pytest.approx(tuple(c * 50.0 / math.pi for c in (0.2, 0.4, 1.0)))
+
+
+# --- 7. materials ------------------------------------------------------------------------------
+
+def test_object_without_material_uses_default():
+    scene = new_scene()
+    scenes.plane(scene)
+    snap = snap_of()
+    item, _ = only_item(snap)
+    assert item.materials == [""]
+    assert snap.materials[""] == S.DEFAULT_MATERIAL
+
+
+def principled(mat):
+    tree = mat.node_tree
+    if tree is None:  # pragma: no cover - Blender 5 materials are node-based from the start
+        mat.use_nodes = True
+        tree = mat.node_tree
+    return next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+
+
+def test_principled_fallback():
+    scene = new_scene()
+    mat = bpy.data.materials.new("Painted")
+    node = principled(mat)
+    node.inputs["Base Color"].default_value = (0.2, 0.4, 0.6, 1.0)
+    node.inputs["Metallic"].default_value = 0.7
+    node.inputs["Roughness"].default_value = 0.3
+    node.inputs["IOR"].default_value = 2.0
+    assert node.inputs["Specular IOR Level"].default_value == pytest.approx(0.5)
+    scenes.plane(scene, material=mat)
+    snap = snap_of()
+    params = snap.materials[mat.name_full]
+    assert params.base_color == pytest.approx((0.2, 0.4, 0.6), abs=1e-6)
+    assert params.metalness == pytest.approx(0.7, abs=1e-6)
+    assert params.roughness == pytest.approx(0.3, abs=1e-6)
+    assert params.f0 == pytest.approx(((2.0 - 1.0) / (2.0 + 1.0)) ** 2, rel=1e-6)
+
+    node.inputs["Specular IOR Level"].default_value = 0.0
+    assert snap_of().materials[mat.name_full].f0 == 0.0
+
+
+# --- 8. empty and degenerate meshes ------------------------------------------------------------
+
+def test_meshes_without_faces_are_skipped():
+    scene = new_scene()
+    mesh_object(scene, "Loose", [(0, 0, 0), (1, 0, 0), (0, 1, 0)], [])
+    mesh_object(scene, "Nothing", [], [])
+    snap = snap_of()
+    assert snap.items == []
+    assert snap.geometries == {}
+    assert snap.triangle_count == 0
+
+
+def test_degenerate_triangle_is_kept_finite():
+    scene = new_scene()
+    mesh_object(scene, "Sliver", [(0, 0, 0), (1, 0, 0), (2, 0, 0)], [(0, 1, 2)])
+    _, geo = only_item(snap_of())
+    assert geo.triangle_count == 1
+    assert np.isfinite(geo.positions).all()
+    assert np.isfinite(geo.normals).all()
+
+
+# --- 9. curves and text ------------------------------------------------------------------------
+
+def test_text_object_evaluates_to_triangles():
+    scene = new_scene()
+    data = bpy.data.curves.new("Text", type="FONT")
+    data.body = "Hi"
+    scene.collection.objects.link(bpy.data.objects.new("Text", data))
+    snap = snap_of()
+    assert len(snap.items) == 1
+    assert snap.triangle_count > 0
+
+
+@pytest.mark.parametrize("shape", ["bevel", "extrude"])
+def test_bezier_curve_evaluates_to_triangles(shape):
+    scene = new_scene()
+    data = bpy.data.curves.new("Curve", type="CURVE")
+    data.dimensions = "3D"
+    spline = data.splines.new("BEZIER")
+    spline.bezier_points.add(1)
+    for point, co in zip(spline.bezier_points, [(-1.0, 0.0, 0.0), (1.0, 0.0, 0.0)]):
+        point.co = co
+        point.handle_left_type = point.handle_right_type = "AUTO"
+    if shape == "bevel":
+        data.bevel_depth = 0.1
+    else:
+        data.extrude = 0.2
+    scene.collection.objects.link(bpy.data.objects.new("Curve", data))
+    snap = snap_of()
+    assert len(snap.items) == 1
+    assert snap.triangle_count > 0
+
+
+# --- 10. world ---------------------------------------------------------------------------------
+
+def test_world_background_colour_times_strength():
+    scene = new_scene()
+    bg = next(n for n in scene.world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
+    bg.inputs["Color"].default_value = (0.1, 0.2, 0.3, 1.0)
+    bg.inputs["Strength"].default_value = 2.0
+    assert snap_of().world_color == pytest.approx((0.2, 0.4, 0.6), abs=1e-6)
+
+
+# --- 11. a large mesh --------------------------------------------------------------------------
+
+def test_large_grid_arrays():
+    new_scene()
+    bpy.ops.mesh.primitive_grid_add(x_subdivisions=200, y_subdivisions=200, size=2.0)
+    assert len(bpy.context.active_object.data.polygons) == 200 * 200
+    _, geo = only_item(snap_of())
+    triangles = 2 * 200 * 200
+    assert geo.triangle_count == triangles
+    for array in (geo.positions, geo.normals):
+        assert array.dtype == np.float32
+        assert array.shape == (3 * triangles, 3)
+        assert array.flags.c_contiguous
+    assert geo.ranges == [(0, 0, 3 * triangles)]
