@@ -11,7 +11,6 @@ import numpy as np
 
 from . import snapshot as S
 
-MESH_LIKE = {"MESH", "CURVE", "SURFACE", "META", "FONT", "CURVES", "POINTCLOUD", "VOLUME"}
 LIGHT_KIND = {"POINT": "POINT", "SPOT": "SPOT", "SUN": "SUN", "AREA": "AREA"}
 
 
@@ -132,10 +131,8 @@ def mesh_geometry(key: str, mesh: bpy.types.Mesh) -> S.MeshGeometry | None:
 
 
 def _geometry_key(obj: bpy.types.Object) -> str:
-    data = obj.data
-    if obj.type == "MESH" and data is not None:
-        return f"mesh:{data.name_full}:{data.as_pointer():x}"
-    return f"object:{obj.name_full}:{obj.as_pointer():x}"
+    """The evaluated mesh's identity: instances of one mesh share it, modifiers make a new one."""
+    return f"mesh:{obj.data.name_full}:{obj.data.as_pointer():x}"
 
 
 def _matrix(m) -> np.ndarray:
@@ -271,7 +268,10 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
             if obj.data.type in LIGHT_KIND:
                 snap.lights.append(make_light(obj.data, inst.matrix_world))
             continue
-        if obj.type not in MESH_LIKE:
+        # Curves, surfaces, text, metaballs and geometry-node output reach the depsgraph as mesh
+        # instances of their own, beside the source object: take geometry from meshes only, or
+        # they are drawn twice (Cycles' BlenderSync::object_is_geometry does the same).
+        if obj.type != "MESH":
             continue
         key = _geometry_key(obj)
         if key in skipped_empty:

@@ -16,7 +16,7 @@ from addon import snapshot as S
 SIZE = 32
 
 
-def snap_of(scene=None) -> S.Snapshot:
+def snap_of() -> S.Snapshot:
     return extract.snapshot(bpy.context.evaluated_depsgraph_get(), SIZE, SIZE)
 
 
@@ -89,8 +89,9 @@ def test_array_modifier_is_one_geometry_of_three_planes():
     obj = scenes.plane(scene, size=2.0)
     mod = obj.modifiers.new("Array", "ARRAY")
     mod.count = 3  # relative offset (1, 0, 0): copies at x + 0, 2, 4
-    item, geo = only_item(snap_of())
-    assert len(snap_of().geometries) == 1
+    snap = snap_of()
+    _, geo = only_item(snap)
+    assert len(snap.geometries) == 1
     assert geo.triangle_count == 6
     np.testing.assert_allclose(geo.positions.min(axis=0), [-1, -1, 0], atol=1e-6)
     np.testing.assert_allclose(geo.positions.max(axis=0), [5, 1, 0], atol=1e-6)
@@ -134,12 +135,12 @@ def test_two_material_slots_give_sorted_ranges_and_params():
     obj.data.polygons[0].material_index = 1
     obj.data.polygons[1].material_index = 0
 
-    item, geo = only_item(snap_of())
+    snap = snap_of()
+    item, geo = only_item(snap)
     assert geo.ranges == [(0, 0, 6), (1, 6, 6)]  # two quads, two triangles (six corners) each
     assert (geo.positions[0:6, 0] >= 0).all()  # slot 0 = the right-hand face
     assert (geo.positions[6:12, 0] <= 0).all()
     assert item.materials == [red.name_full, blue.name_full]
-    snap = snap_of()
     assert snap.materials[red.name_full].base_color == pytest.approx((1.0, 0.0, 0.0))
     assert snap.materials[blue.name_full].base_color == pytest.approx((0.0, 0.0, 1.0))
 
@@ -219,13 +220,12 @@ def test_perspective_camera():
 
 def test_orthographic_camera_scale():
     scene = scenes.reset(size=SIZE)
-    cam = scenes.ortho_camera(scene, location=(0.0, 0.0, 5.0), scale=3.0)
+    scenes.ortho_camera(scene, location=(0.0, 0.0, 5.0), scale=3.0)
     c = snap_of().camera
     assert not c.is_perspective
     assert c.projection[0, 0] == pytest.approx(2.0 / 3.0, rel=1e-6)
     assert c.projection[1, 1] == pytest.approx(2.0 / 3.0, rel=1e-6)
     assert c.forward == pytest.approx((0.0, 0.0, -1.0), abs=1e-6)
-    assert cam.name  # the scene camera is the one made here
 
 
 def test_missing_camera_raises():
@@ -353,16 +353,35 @@ def test_degenerate_triangle_is_kept_finite():
     assert np.isfinite(geo.normals).all()
 
 
-# --- 9. curves and text ------------------------------------------------------------------------
+# --- 9. curves, text and metaballs ---------------------------------------------------------------
+
+def reference_triangles(obj) -> int:
+    """Triangles of the object's evaluated mesh, read by Blender itself (not by extract)."""
+    evaluated = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    mesh = bpy.data.meshes.new_from_object(evaluated)
+    mesh.calc_loop_triangles()
+    count = len(mesh.loop_triangles)
+    bpy.data.meshes.remove(mesh)
+    return count
+
+
+def assert_drawn_once(obj):
+    snap = snap_of()
+    expected = reference_triangles(obj)
+    assert expected > 0
+    assert snap.triangle_count > 0
+    # One object, one surface: drawing it twice doubles the triangles (and the work).
+    assert len(snap.items) == 1
+    assert snap.triangle_count == expected
+
 
 def test_text_object_evaluates_to_triangles():
     scene = new_scene()
     data = bpy.data.curves.new("Text", type="FONT")
     data.body = "Hi"
-    scene.collection.objects.link(bpy.data.objects.new("Text", data))
-    snap = snap_of()
-    assert len(snap.items) == 1
-    assert snap.triangle_count > 0
+    obj = bpy.data.objects.new("Text", data)
+    scene.collection.objects.link(obj)
+    assert_drawn_once(obj)
 
 
 @pytest.mark.parametrize("shape", ["bevel", "extrude"])
@@ -379,10 +398,18 @@ def test_bezier_curve_evaluates_to_triangles(shape):
         data.bevel_depth = 0.1
     else:
         data.extrude = 0.2
-    scene.collection.objects.link(bpy.data.objects.new("Curve", data))
-    snap = snap_of()
-    assert len(snap.items) == 1
-    assert snap.triangle_count > 0
+    obj = bpy.data.objects.new("Curve", data)
+    scene.collection.objects.link(obj)
+    assert_drawn_once(obj)
+
+
+def test_metaball_evaluates_to_triangles():
+    scene = new_scene()
+    data = bpy.data.metaballs.new("Ball")
+    data.elements.new()
+    obj = bpy.data.objects.new("Ball", data)
+    scene.collection.objects.link(obj)
+    assert_drawn_once(obj)
 
 
 # --- 10. world ---------------------------------------------------------------------------------

@@ -1,0 +1,45 @@
+"""Run a function inside a render engine's GPU context.
+
+In background mode Blender's ``gpu`` module draws only inside ``RenderEngine.render()`` of an
+engine with ``bl_use_gpu_context``; this test-only engine runs a given job there and hands its
+return value (or exception) back, so the renderer can be tested without the product's engine.
+"""
+
+from __future__ import annotations
+
+import bpy
+
+
+class _HarnessEngine(bpy.types.RenderEngine):
+    bl_idname = "SHADING_LAB_TEST_HARNESS"
+    bl_label = "Shading Lab test harness"
+    bl_use_gpu_context = True
+
+    job = None
+    outcome = None
+
+    def render(self, depsgraph):
+        cls = type(self)
+        try:
+            cls.outcome = ("ok", cls.job(depsgraph))
+        except BaseException as exc:  # handed back to the test
+            cls.outcome = ("error", exc)
+
+
+def run_on_gpu(job):
+    """``job(depsgraph)`` runs inside a GPU context; returns its result or re-raises its error."""
+    if not _HarnessEngine.is_registered:
+        bpy.utils.register_class(_HarnessEngine)
+    scene = bpy.context.scene
+    previous = scene.render.engine
+    scene.render.engine = _HarnessEngine.bl_idname
+    _HarnessEngine.job, _HarnessEngine.outcome = job, None
+    try:
+        bpy.ops.render.render()
+    finally:
+        scene.render.engine = previous
+        _HarnessEngine.job = None
+    status, value = _HarnessEngine.outcome or ("error", RuntimeError("the harness engine did not run"))
+    if status == "error":
+        raise value
+    return value

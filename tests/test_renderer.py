@@ -1,0 +1,101 @@
+"""The GPU renderer and program cache, driven directly inside a GPU context."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import scenes
+from gpu_harness import run_on_gpu
+
+from addon import extract, programs, renderer
+
+
+def _lit_scene(kinds=("POINT",)):
+    scene = scenes.reset(size=16)
+    scenes.ortho_camera(scene)
+    scenes.plane(scene, size=4.0)
+    for kind in kinds:
+        scenes.light(scene, kind, energy=50.0 if kind != "SUN" else 2.0)
+    return scene
+
+
+def test_cancel_draws_nothing():
+    _lit_scene()
+
+    def job(depsgraph):
+        snap = extract.snapshot(depsgraph, 16, 16)
+        r = renderer.Renderer()
+        try:
+            drawn = r.render(snap, background=(0.25, 0.5, 0.75, 1.0))
+            cancelled = r.render(snap, background=(0.25, 0.5, 0.75, 1.0), should_stop=lambda: True)
+        finally:
+            r.free()
+        return drawn, cancelled
+
+    drawn, cancelled = run_on_gpu(job)
+    assert drawn[..., 0].max() > 0.25 + 1e-3  # the lit plane was drawn over the background
+    np.testing.assert_array_equal(cancelled[..., :3], np.broadcast_to([0.25, 0.5, 0.75], (16, 16, 3)))
+
+
+def test_same_scene_compiles_once_and_uploads_once():
+    _lit_scene()
+
+    def job(depsgraph):
+        snap = extract.snapshot(depsgraph, 16, 16)
+        r = renderer.Renderer()
+        try:
+            r.render(snap)
+            before = renderer.compiled_program_count()
+            first_upload = r.uploaded_geometry
+            r.render(snap)
+            return before, renderer.compiled_program_count(), first_upload, r.uploaded_geometry
+        finally:
+            r.free()
+
+    before, after, first_upload, second_upload = run_on_gpu(job)
+    assert after == before, "rendering the same scene again must not compile a new program"
+    assert (first_upload, second_upload) == (1, 0), "unchanged geometry must not be uploaded again"
+
+
+def test_light_kinds_specialise_the_program():
+    point = programs.Features(model="PBR", max_lights=1, light_kinds=frozenset({"POINT"}))
+    spot = programs.Features(model="PBR", max_lights=1, light_kinds=frozenset({"SPOT"}))
+    assert ("SL_HAS_POINT", "1") in point.defines() and ("SL_HAS_SPOT", "1") not in point.defines()
+    assert point.defines() != spot.defines()
+    _lit_scene(("POINT",))
+    run_on_gpu(lambda d: renderer.Renderer().render(extract.snapshot(d, 16, 16)))
+    count = renderer.compiled_program_count()
+    _lit_scene(("SPOT",))
+    run_on_gpu(lambda d: renderer.Renderer().render(extract.snapshot(d, 16, 16)))
+    assert renderer.compiled_program_count() == count + 1
+
+
+def test_viewport_matrices_give_the_camera_image():
+    """The viewport passes its own view-projection: the camera's one must reproduce render()."""
+    _lit_scene(("SUN", "POINT"))
+
+    def job(depsgraph):
+        import gpu
+
+        snap = extract.snapshot(depsgraph, 16, 16)
+        r = renderer.Renderer()
+        try:
+            reference = r.render(snap)
+            offscreen = gpu.types.GPUOffScreen(16, 16, format="RGBA32F")
+            try:
+                with offscreen.bind():
+                    fb = gpu.state.active_framebuffer_get()
+                    fb.clear(color=(0, 0, 0, 1), depth=1.0)
+                    r.draw(snap, view_projection=snap.camera.view_projection)
+                    buf = fb.read_color(0, 0, 16, 16, 4, 0, "FLOAT")
+            finally:
+                offscreen.free()
+        finally:
+            r.free()
+        buf.dimensions = 16 * 16 * 4
+        return reference, np.asarray(buf, np.float32).reshape(16, 16, 4)
+
+    reference, viewport = run_on_gpu(job)
+    assert reference[..., 0].max() > 0.0
+    np.testing.assert_array_equal(viewport, reference)
