@@ -15,6 +15,9 @@ from .renderer import Renderer, ShaderCompileError
 
 ENGINE_ID = "SHADING_LAB"
 
+#: Phase times of the last final render in milliseconds (read by scripts/frame_time.py).
+last_timings: dict[str, float] = {}
+
 
 def background_color(snap, scene) -> tuple[float, float, float, float]:
     if scene.render.film_transparent:
@@ -49,6 +52,7 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
             self.report({"WARNING"}, warning)
         if self.test_break():
             return
+        extracted = time.perf_counter()
         self.update_progress(0.25)
         label = f"{snap.settings.model} | {snap.triangle_count:,} triangles | {len(snap.lights)} lights"
         self.update_stats("", f"Shading Lab | {label} | Drawing")
@@ -65,6 +69,7 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
             renderer.free()
         if self.test_break():
             return
+        drawn = time.perf_counter()
         self.update_progress(0.9)
         result = self.begin_result(0, 0, width, height, layer=depsgraph.view_layer.name)
         try:
@@ -72,8 +77,11 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         finally:
             self.end_result(result)
         self.update_progress(1.0)
-        ms = (time.perf_counter() - start) * 1000.0
-        self.update_stats("", f"Shading Lab | {label} | {ms:.0f} ms")
+        done = time.perf_counter()
+        last_timings.clear()
+        last_timings.update(extract_ms=1e3 * (extracted - start), draw_ms=1e3 * (drawn - extracted),
+                            result_ms=1e3 * (done - drawn), total_ms=1e3 * (done - start))
+        self.update_stats("", f"Shading Lab | {label} | {last_timings['total_ms']:.0f} ms")
 
     def _fail(self, message: str) -> None:
         self.report({"ERROR"}, message)

@@ -7,6 +7,7 @@ viewport share it; the viewport passes its own view-projection matrix.
 
 from __future__ import annotations
 
+import atexit
 from collections.abc import Callable
 
 import gpu
@@ -64,6 +65,11 @@ def get_program(features: programs.Features) -> gpu.types.GPUShader:
 
 def clear_program_cache() -> None:
     _PROGRAMS.clear()
+
+
+# Compiled programs outlive renders; free them before Blender tears its GPU module down, or it
+# reports them as leaked blocks at exit.
+atexit.register(clear_program_cache)
 
 
 def _vertex_format() -> gpu.types.GPUVertFormat:

@@ -1,0 +1,76 @@
+"""scripts/render.py as a user runs it: a separate process, a saved .blend, files on disk."""
+
+from __future__ import annotations
+
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import bpy
+import numpy as np
+import scenes
+
+ROOT = Path(__file__).resolve().parent.parent
+SCRIPT = ROOT / "scripts" / "render.py"
+
+
+def _run(*args, cwd=ROOT):
+    return subprocess.run([sys.executable, str(SCRIPT), *map(str, args)], cwd=cwd, capture_output=True,
+                          text=True, timeout=300, stdin=subprocess.DEVNULL)
+
+
+def test_renders_a_saved_blend_with_every_model(tmp_path):
+    scene = scenes.reset(size=8)
+    scenes.ortho_camera(scene)
+    mat = scenes.material(base_color=(0.5, 0.5, 0.5), f0=0.0, metalness=0.0, shininess=10.0,
+                          specular_color=(0.0, 0.0, 0.0))
+    scenes.plane(scene, size=4.0, material=mat)
+    scenes.light(scene, "SUN", energy=2.0, rotation=(math.radians(45.0), 0.0, 0.0))
+    scene.shading_lab.ambient = 0.0
+    blend = tmp_path / "plane scene.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+
+    out = tmp_path / "out"
+    proc = _run(blend, "--model", "all", "--resolution", "24x12", "--out", out)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    stem = "plane scene"
+    for model in ("blinn-phong", "phong", "pbr"):
+        exr = scenes.read_exr(out / f"{stem}_{model}.exr")
+        assert exr.shape == (12, 24, 4)
+        # pure Lambert in every model here: rho / pi * E * cos 45
+        np.testing.assert_allclose(exr[..., :3], 0.5 / math.pi * 2.0 * math.cos(math.radians(45.0)),
+                                   rtol=1e-4)
+        assert (out / f"{stem}_{model}.png").stat().st_size > 0
+    assert (out / f"{stem}_comparison.png").is_file()
+
+
+def test_missing_blend_is_one_clear_line(tmp_path):
+    proc = _run(tmp_path / "nope.blend", "--out", tmp_path / "out")
+    assert proc.returncode == 2
+    assert "no such .blend file" in proc.stderr
+    assert not (tmp_path / "out" / "nope_pbr.exr").exists()
+
+
+def test_unwritable_output_directory(tmp_path):
+    blocker = tmp_path / "file"
+    blocker.write_text("not a directory")
+    proc = _run("demo", "--model", "pbr", "--resolution", "8x8", "--out", blocker / "sub")
+    assert proc.returncode == 2
+    assert "cannot create output directory" in proc.stderr
+
+
+def test_bad_resolution(tmp_path):
+    proc = _run("demo", "--resolution", "wide", "--out", tmp_path)
+    assert proc.returncode == 2 and "--resolution must look like 1280x720" in proc.stderr
+
+
+def test_usage_inside_blender_argv_convention(tmp_path):
+    """``blender -b --python render.py -- ARGS``: everything before ``--`` belongs to Blender."""
+    sys.path.insert(0, str(ROOT / "scripts"))
+    import render
+
+    args = render.parse_args(["blender", "-b", "--python", "render.py", "--", "demo", "--model", "pbr"])
+    assert (args.scene, args.model) == ("demo", "pbr")
+    assert os.fspath(args.out) == "out"
