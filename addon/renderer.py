@@ -159,7 +159,7 @@ class Renderer:
         finally:
             offscreen.free()
         buffer.dimensions = w * h * 4
-        return np.asarray(buffer, np.float32).reshape(h, w, 4)
+        return np.array(buffer, np.float32).reshape(h, w, 4)  # a copy: a view would pin the GPU buffer
 
     def free(self) -> None:
         self._batches.clear()

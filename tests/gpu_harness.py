@@ -40,6 +40,7 @@ def run_on_gpu(job):
         scene.render.engine = previous
         _HarnessEngine.job = None
     status, value = _HarnessEngine.outcome or ("error", RuntimeError("the harness engine did not run"))
+    _HarnessEngine.outcome = None
     if status == "error":
         raise value
     return value

@@ -94,7 +94,7 @@ def test_viewport_matrices_give_the_camera_image():
         finally:
             r.free()
         buf.dimensions = 16 * 16 * 4
-        return reference, np.asarray(buf, np.float32).reshape(16, 16, 4)
+        return reference, np.array(buf, np.float32).reshape(16, 16, 4)
 
     reference, viewport = run_on_gpu(job)
     assert reference[..., 0].max() > 0.0
