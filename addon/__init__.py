@@ -14,16 +14,17 @@ def _classes():
     # importable without Blender, and importing this package runs this file first.
     from . import engine, properties, ui
 
-    return (*properties.classes, *engine.classes, *ui.classes), ui
+    return (*properties.classes, *engine.classes, *ui.classes), (properties, ui)
 
 
 def register():
     import bpy
 
-    classes, ui = _classes()
+    classes, modules = _classes()
     for cls in classes:
         bpy.utils.register_class(cls)
-    ui.register()
+    for module in modules:
+        module.register()
 
 
 def unregister():
@@ -31,8 +32,9 @@ def unregister():
 
     from . import renderer
 
-    classes, ui = _classes()
-    ui.unregister()
+    classes, modules = _classes()
+    for module in reversed(modules):
+        module.unregister()
     for cls in reversed(classes):
         bpy.utils.unregister_class(cls)
     renderer.clear_program_cache()

@@ -27,14 +27,6 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
         description="Ambient constant x of the Blinn-Phong and Phong models (eq. 1.4); 0.2 is the "
                     "commonly used value")
 
-    @classmethod
-    def register(cls):
-        bpy.types.Scene.shading_lab = PointerProperty(type=cls)
-
-    @classmethod
-    def unregister(cls):
-        del bpy.types.Scene.shading_lab
-
 
 def _override(name: str, description: str):
     return BoolProperty(name=f"Set {name}", default=False, update=_redraw,
@@ -65,13 +57,17 @@ class ShadingLabMaterialSettings(bpy.types.PropertyGroup):
     ambient_color: FloatVectorProperty(name="Ambient Color", subtype="COLOR", size=3, min=0.0,
                                        default=(0.8, 0.8, 0.8), update=_redraw)
 
-    @classmethod
-    def register(cls):
-        bpy.types.Material.shading_lab = PointerProperty(type=cls)
-
-    @classmethod
-    def unregister(cls):
-        del bpy.types.Material.shading_lab
-
 
 classes = (ShadingLabSceneSettings, ShadingLabMaterialSettings)
+_OWNERS = ((bpy.types.Scene, ShadingLabSceneSettings), (bpy.types.Material, ShadingLabMaterialSettings))
+
+
+def register():
+    """Attach the settings as ``scene.shading_lab`` and ``material.shading_lab``."""
+    for owner, group in _OWNERS:
+        owner.shading_lab = PointerProperty(type=group)
+
+
+def unregister():
+    for owner, _group in _OWNERS:
+        del owner.shading_lab

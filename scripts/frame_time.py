@@ -28,9 +28,9 @@ def main() -> int:
     w, h = (int(x) for x in args.resolution.split("x"))
 
     import bpy
+    import demo_scene
 
     import addon
-    import demo_scene
     from addon import engine
 
     addon.register()

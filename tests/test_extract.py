@@ -8,8 +8,8 @@ import math
 import bpy
 import numpy as np
 import pytest
-
 import scenes
+
 from addon import extract
 from addon import snapshot as S
 
