@@ -10,10 +10,11 @@ import time
 
 import bpy
 
-from . import extract
+from . import extract, programs
 from .renderer import Renderer, ShaderCompileError
 
 ENGINE_ID = "SHADING_LAB"
+RADIANCE_PASS = "Radiance"  # raw HDR radiance when the engine's own tone mapper fills Combined
 
 #: Phase times of the last final render in milliseconds (read by scripts/frame_time.py).
 last_timings: dict[str, float] = {}
@@ -56,9 +57,16 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         self.update_progress(0.25)
         label = f"{snap.settings.model} | {snap.triangle_count:,} triangles | {len(snap.lights)} lights"
         self.update_stats("", f"Shading Lab | {label} | Drawing")
+        settings = snap.settings
+        display = None
+        if settings.tone_mapper != "BLENDER":
+            display = programs.PostFeatures(settings.samples, settings.tone_mapper, settings.transfer)
+            self.add_pass(RADIANCE_PASS, 4, "RGBA", layer=depsgraph.view_layer.name)
         renderer = Renderer()
         try:
-            image = renderer.render(snap, background_color(snap, scene), should_stop=self.test_break)
+            radiance, shown = renderer.render_passes(
+                snap, background_color(snap, scene), should_stop=self.test_break,
+                samples=settings.samples, display=display, exposure_ev=settings.exposure)
         except ShaderCompileError as exc:
             self._fail(str(exc))
             return
@@ -73,7 +81,12 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         self.update_progress(0.9)
         result = self.begin_result(0, 0, width, height, layer=depsgraph.view_layer.name)
         try:
-            result.layers[0].passes["Combined"].rect.foreach_set(image.reshape(-1))
+            passes = result.layers[0].passes
+            if shown is None:
+                passes["Combined"].rect.foreach_set(radiance.reshape(-1))
+            else:
+                passes["Combined"].rect.foreach_set(shown.reshape(-1))
+                passes[RADIANCE_PASS].rect.foreach_set(radiance.reshape(-1))
         finally:
             self.end_result(result)
         self.update_progress(1.0)
@@ -82,6 +95,13 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         last_timings.update(extract_ms=1e3 * (extracted - start), draw_ms=1e3 * (drawn - extracted),
                             result_ms=1e3 * (done - drawn), total_ms=1e3 * (done - start))
         self.update_stats("", f"Shading Lab | {label} | {last_timings['total_ms']:.0f} ms")
+
+    def update_render_passes(self, scene=None, renderlayer=None):
+        """Announce the passes to the compositor and multilayer EXR output."""
+        self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", "COLOR")
+        props = getattr(scene, "shading_lab", None)
+        if props is not None and props.tone_mapper != "BLENDER":
+            self.register_pass(scene, renderlayer, RADIANCE_PASS, 4, "RGBA", "COLOR")
 
     def _fail(self, message: str) -> None:
         self.report({"ERROR"}, message)

@@ -202,15 +202,8 @@ def make_camera(depsgraph, camera_obj, width: int, height: int) -> S.Camera:
     projection = cam_eval.calc_matrix_camera(
         depsgraph, x=width, y=height, scale_x=r.pixel_aspect_x, scale_y=r.pixel_aspect_y
     )
-    world = np.array(cam_eval.matrix_world, np.float64)
-    forward = -world[:3, 2] / max(np.linalg.norm(world[:3, 2]), 1e-30)
-    return S.Camera(
-        view=np.linalg.inv(world).astype(np.float32),
-        projection=_matrix(projection),
-        is_perspective=cam_eval.data.type != "ORTHO",
-        position=tuple(float(x) for x in world[:3, 3]),
-        forward=tuple(float(x) for x in forward),
-    )
+    view = np.linalg.inv(np.array(cam_eval.matrix_world, np.float64))
+    return S.Camera.from_matrices(view, np.array(projection), cam_eval.data.type != "ORTHO")
 
 
 def world_color(world) -> tuple[float, float, float]:
@@ -236,15 +229,44 @@ def scene_settings(scene) -> S.Settings:
     props = getattr(scene, "shading_lab", None)
     if props is None:
         return S.Settings()
-    return S.Settings(model=props.model, ambient=float(props.ambient))
+    return S.Settings(model=props.model, ambient=float(props.ambient), tone_mapper=props.tone_mapper,
+                      exposure=float(props.exposure), transfer=props.transfer, samples=int(props.samples))
+
+
+def geometry_updates(depsgraph) -> set[str]:
+    """Names of the original objects and meshes whose geometry this depsgraph update changed.
+
+    A transform-only edit sets ``is_updated_transform`` alone and adds nothing here.
+    """
+    dirty: set[str] = set()
+    for update in depsgraph.updates:
+        idb = update.id
+        if isinstance(idb, bpy.types.Object) and update.is_updated_geometry:
+            dirty.add(idb.original.name_full)
+        elif isinstance(idb, bpy.types.Mesh):
+            dirty.add(idb.original.name_full)
+    return dirty
+
+
+def _is_dirty(obj, dirty: set[str] | None) -> bool:
+    if dirty is None:
+        return True
+    if obj.original.name_full in dirty:
+        return True
+    data = obj.data
+    return data is not None and data.original is not None and data.original.name_full in dirty
 
 
 def snapshot(depsgraph, width: int | None = None, height: int | None = None,
-             camera: S.Camera | None = None, settings: S.Settings | None = None) -> S.Snapshot:
+             camera: S.Camera | None = None, settings: S.Settings | None = None,
+             previous: S.Snapshot | None = None, dirty: set[str] | None = None) -> S.Snapshot:
     """Everything the renderer draws, read from the evaluated scene.
 
     ``camera`` may be given (the viewport passes its own); otherwise the scene camera is used
-    and its absence raises ``ExtractError``.
+    and its absence raises ``ExtractError``. With ``previous`` and ``dirty`` (from
+    ``geometry_updates``), geometry of objects not named in ``dirty`` is reused from
+    ``previous`` instead of read again; ``Snapshot.fresh`` lists the geometry keys read anew.
+    Lights, materials, matrices and the world are cheap and always read.
     """
     scene = depsgraph.scene
     if width is None or height is None:
@@ -261,6 +283,7 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
         world_color=world_color(scene.world),
     )
     snap.materials[""] = S.DEFAULT_MATERIAL
+    reusable = previous.geometries if previous is not None else {}
     skipped_empty: set[str] = set()
     for inst in depsgraph.object_instances:
         obj = inst.object
@@ -277,14 +300,17 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
         if key in skipped_empty:
             continue
         if key not in snap.geometries:
-            mesh = obj.to_mesh()
-            try:
-                geometry = mesh_geometry(key, mesh) if mesh is not None else None
-            finally:
-                obj.to_mesh_clear()
-            if geometry is None:
-                skipped_empty.add(key)
-                continue
+            geometry = reusable.get(key)
+            if geometry is None or _is_dirty(obj, dirty):
+                mesh = obj.to_mesh()
+                try:
+                    geometry = mesh_geometry(key, mesh) if mesh is not None else None
+                finally:
+                    obj.to_mesh_clear()
+                if geometry is None:
+                    skipped_empty.add(key)
+                    continue
+                snap.fresh.add(key)
             snap.geometries[key] = geometry
         slots = []
         for slot in obj.material_slots:

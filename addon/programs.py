@@ -92,6 +92,32 @@ def program_source(features: Features) -> ProgramSource:
     )
 
 
+@dataclass(frozen=True)
+class PostFeatures:
+    """The resolve/display pass: supersampling grid, and the tone curve when it displays."""
+
+    samples: int = 1
+    tone_mapper: str | None = None  # None: resolve radiance only
+    transfer: str = "SRGB"
+
+    def defines(self) -> tuple[tuple[str, str], ...]:
+        out = [("SL_SAMPLES", str(self.samples))]
+        if self.tone_mapper is not None:
+            out += [("SL_DISPLAY", "1"), ("SL_TONEMAP_" + self.tone_mapper, "1")]
+            if self.transfer == "GAMMA22":
+                out.append(("SL_TRANSFER_GAMMA22", "1"))
+        return tuple(sorted(out))
+
+
+def post_source(features: PostFeatures) -> ProgramSource:
+    return ProgramSource(
+        typedefs="",
+        vertex=read_glsl("post.vert.glsl"),
+        fragment="\n".join([read_glsl("tonemap.glsl"), read_glsl("post.frag.glsl")]),
+        defines=features.defines(),
+    )
+
+
 # --- uniform-buffer packing (std140, vec4/mat4 members only; matrices column-major) ---------
 
 LIGHT_KIND_IDS = {kind: float(i) for i, kind in enumerate(LIGHT_KINDS)}

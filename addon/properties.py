@@ -3,7 +3,14 @@
 from __future__ import annotations
 
 import bpy
-from bpy.props import BoolProperty, EnumProperty, FloatProperty, FloatVectorProperty, PointerProperty
+from bpy.props import (
+    BoolProperty,
+    EnumProperty,
+    FloatProperty,
+    FloatVectorProperty,
+    IntProperty,
+    PointerProperty,
+)
 
 MODEL_ITEMS = (
     ("BLINN_PHONG", "Blinn-Phong", "Empirical Blinn-Phong model (eq. 1.7), LDR, clamped to [0, 1]"),
@@ -26,6 +33,31 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
         name="Ambient", default=0.2, min=0.0, soft_max=1.0, update=_redraw,
         description="Ambient constant x of the Blinn-Phong and Phong models (eq. 1.4); 0.2 is the "
                     "commonly used value")
+    tone_mapper: EnumProperty(
+        name="Tone Mapper", default="BLENDER", update=_redraw, items=(
+            ("BLENDER", "Blender", "Combined holds scene-linear radiance; Blender's view transform "
+                                   "(AgX, Filmic, Standard ...) displays it, as for Cycles and EEVEE"),
+            ("CLAMP", "Clamp", "Clip to [0, 1], the seed's LDR pipeline"),
+            ("REINHARD", "Reinhard", "Reinhard et al. 2002, L / (1 + L) per channel"),
+            ("HABLE", "Hable Filmic", "Hable 2010, the Uncharted 2 filmic curve"),
+            ("ACES", "ACES Fitted", "Hill's fit of the ACES RRT + sRGB ODT"),
+        ),
+        description="Who turns radiance into display values. The engine's own tone mappers write "
+                    "display-linear Combined (and raw radiance to a Radiance pass) and expect the "
+                    "Standard view transform")
+    exposure: FloatProperty(name="Exposure", default=0.0, soft_min=-10.0, soft_max=10.0, update=_redraw,
+                            description="Exposure in stops (radiance x 2^EV) before the tone mapper")
+    transfer: EnumProperty(
+        name="Transfer", default="SRGB", update=_redraw, items=(
+            ("SRGB", "sRGB (exact)", "The exact sRGB transfer function (Blender's Standard view)"),
+            ("GAMMA22", "Gamma 2.2", "The power-law approximation: display value = y^(1/2.2)"),
+        ),
+        description="Transfer function from display-linear to display values")
+    samples: IntProperty(
+        name="Anti-Aliasing", default=1, min=1, max=8, update=_redraw,
+        description="Supersampling grid per axis for final renders: N x N sub-pixel samples averaged "
+                    "with equal weights (a box filter over the pixel). 1 samples pixel centres only, "
+                    "as the comparisons against Cycles expect")
 
 
 def _override(name: str, description: str):

@@ -28,6 +28,16 @@ def compiled_program_count() -> int:
     return len(_PROGRAMS)
 
 
+def _compile(info, label: str, key) -> gpu.types.GPUShader:
+    try:
+        return gpu.shader.create_from_info(info)
+    except Exception as exc:  # Blender raises a bare Exception with the driver log on stderr
+        raise ShaderCompileError(
+            f"Shading Lab could not compile its {label} program "
+            f"({', '.join(f'{n}={v}' for n, v in key)}): {exc}"
+        ) from exc
+
+
 def get_program(features: programs.Features) -> gpu.types.GPUShader:
     """The program for ``features``, compiled once and cached by its sorted defines."""
     key = features.defines()
@@ -52,13 +62,28 @@ def get_program(features: programs.Features) -> gpu.types.GPUShader:
     info.fragment_out(0, "VEC4", "frag_color")
     info.vertex_source(src.vertex)
     info.fragment_source(src.fragment)
-    try:
-        shader = gpu.shader.create_from_info(info)
-    except Exception as exc:  # Blender raises a bare Exception with the driver log on stderr
-        raise ShaderCompileError(
-            f"Shading Lab could not compile its {features.model} program "
-            f"({', '.join(f'{n}={v}' for n, v in key)}): {exc}"
-        ) from exc
+    shader = _compile(info, features.model, key)
+    _PROGRAMS[key] = shader
+    return shader
+
+
+def get_post_program(features: programs.PostFeatures) -> gpu.types.GPUShader:
+    """The resolve/display pass for ``features``, cached like the shading programs."""
+    key = ("post",) + features.defines()
+    shader = _PROGRAMS.get(key)
+    if shader is not None:
+        return shader
+    src = programs.post_source(features)
+    info = gpu.types.GPUShaderCreateInfo()
+    for name, value in src.defines:
+        info.define(name, value)
+    info.vertex_in(0, "VEC2", "pos")
+    info.sampler(0, "FLOAT_2D", "hdr_image")
+    info.push_constant("FLOAT", "exposure_scale")
+    info.fragment_out(0, "VEC4", "frag_color")
+    info.vertex_source(src.vertex)
+    info.fragment_source(src.fragment)
+    shader = _compile(info, "display", features.defines())
     _PROGRAMS[key] = shader
     return shader
 
@@ -91,6 +116,45 @@ def upload_geometry(geometry: MeshGeometry) -> list[tuple[int, gpu.types.GPUBatc
         vbo.attr_fill("nor", np.ascontiguousarray(geometry.normals[first:first + count], np.float32))
         batches.append((slot, gpu.types.GPUBatch(type="TRIS", buf=vbo)))
     return batches
+
+
+def _read(fb, w: int, h: int) -> np.ndarray:
+    buffer = fb.read_color(0, 0, w, h, 4, 0, "FLOAT")
+    buffer.dimensions = w * h * 4
+    return np.array(buffer, np.float32).reshape(h, w, 4)  # a copy: a view would pin the GPU buffer
+
+
+_FULL_SCREEN = ((-1.0, -1.0), (3.0, -1.0), (-1.0, 3.0))
+
+
+def post_pass(texture, w: int, h: int, features: programs.PostFeatures, exposure_ev: float = 0.0,
+              target=None) -> np.ndarray | None:
+    """Run the resolve/display pass over ``texture`` into a w x h float target and read it back,
+    or into ``target`` (an offscreen the caller owns, e.g. the viewport's) without reading back."""
+    shader = get_post_program(features)
+    fmt = gpu.types.GPUVertFormat()
+    fmt.attr_add(id="pos", comp_type="F32", len=2, fetch_mode="FLOAT")
+    vbo = gpu.types.GPUVertBuf(fmt, 3)
+    vbo.attr_fill("pos", _FULL_SCREEN)
+    batch = gpu.types.GPUBatch(type="TRIS", buf=vbo)
+    own = target is None
+    if own:
+        target = gpu.types.GPUOffScreen(w, h, format="RGBA32F")
+    try:
+        with target.bind():
+            fb = gpu.state.active_framebuffer_get()
+            fb.clear(color=(0.0, 0.0, 0.0, 0.0))
+            gpu.state.depth_test_set("NONE")
+            gpu.state.blend_set("NONE")
+            shader.bind()
+            shader.uniform_sampler("hdr_image", texture)
+            if features.tone_mapper is not None:  # the resolve-only pass has no such uniform
+                shader.uniform_float("exposure_scale", 2.0 ** exposure_ev)
+            batch.draw(shader)
+            return _read(fb, w, h) if own else None
+    finally:
+        if own:
+            target.free()
 
 
 class Renderer:
@@ -146,20 +210,37 @@ class Renderer:
 
     def render(self, snapshot: Snapshot, background: tuple[float, float, float, float] = (0, 0, 0, 1),
                should_stop: Callable[[], bool] | None = None) -> np.ndarray:
-        """Draw into an RGBA32F target; returns (height, width, 4) float32, bottom row first."""
+        """Draw into an RGBA32F target; returns (height, width, 4) float32, bottom row first.
+
+        Shorthand for ``render_passes`` without supersampling or display output.
+        """
+        return self.render_passes(snapshot, background, should_stop)[0]
+
+    def render_passes(self, snapshot: Snapshot, background=(0, 0, 0, 1),
+                      should_stop: Callable[[], bool] | None = None, samples: int = 1,
+                      display: programs.PostFeatures | None = None, exposure_ev: float = 0.0):
+        """Radiance (averaged over ``samples`` x ``samples`` sub-pixels) and, when ``display`` names
+        a tone mapper, the display-linear image; each (height, width, 4) float32, bottom row first."""
         w, h = snapshot.width, snapshot.height
+        samples = max(int(samples), 1)
         self.sync(snapshot)
-        offscreen = gpu.types.GPUOffScreen(w, h, format="RGBA32F")
+        scene_target = gpu.types.GPUOffScreen(w * samples, h * samples, format="RGBA32F")
         try:
-            with offscreen.bind():
+            with scene_target.bind():
                 fb = gpu.state.active_framebuffer_get()
                 fb.clear(color=background, depth=1.0)
                 self.draw(snapshot, should_stop=should_stop)
-                buffer = fb.read_color(0, 0, w, h, 4, 0, "FLOAT")
+                if samples == 1 and display is None:
+                    return _read(fb, w, h), None
+            texture = scene_target.texture_color
+            radiance = post_pass(texture, w, h, programs.PostFeatures(samples=samples))
+            shown = None
+            if display is not None:
+                shown = post_pass(texture, w, h, programs.PostFeatures(samples, display.tone_mapper,
+                                                                       display.transfer), exposure_ev)
+            return radiance, shown
         finally:
-            offscreen.free()
-        buffer.dimensions = w * h * 4
-        return np.array(buffer, np.float32).reshape(h, w, 4)  # a copy: a view would pin the GPU buffer
+            scene_target.free()
 
     def free(self) -> None:
         self._batches.clear()

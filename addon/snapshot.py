@@ -116,6 +116,16 @@ class Camera:
     position: tuple[float, float, float]
     forward: tuple[float, float, float]
 
+    @classmethod
+    def from_matrices(cls, view, projection, is_perspective: bool) -> Camera:
+        """A camera from a view matrix and a projection (what a 3D viewport region passes)."""
+        view = np.asarray(view, np.float64)
+        world = np.linalg.inv(view)
+        axis = world[:3, 2]
+        forward = -axis / max(np.linalg.norm(axis), 1e-30)
+        return cls(view.astype(np.float32), np.asarray(projection, np.float32), bool(is_perspective),
+                   tuple(float(x) for x in world[:3, 3]), tuple(float(x) for x in forward))
+
     @property
     def view_projection(self) -> np.ndarray:
         return (self.projection.astype(np.float64) @ self.view.astype(np.float64)).astype(np.float32)
@@ -125,6 +135,10 @@ class Camera:
 class Settings:
     model: str = "PBR"
     ambient: float = 0.2  # the seed's "commonly used" ambient constant x (eq. 1.4)
+    tone_mapper: str = "BLENDER"  # BLENDER: Combined is scene-linear, Blender's view transform displays
+    exposure: float = 0.0  # EV, for the engine's own tone mappers
+    transfer: str = "SRGB"  # SRGB (exact) or GAMMA22, for the engine's own tone mappers
+    samples: int = 1  # supersampling grid per axis for final renders (1 = pixel centres)
 
 
 @dataclass
@@ -139,6 +153,7 @@ class Snapshot:
     lights: list[Light] = field(default_factory=list)
     world_color: tuple[float, float, float] = (0.0, 0.0, 0.0)
     warnings: list[str] = field(default_factory=list)
+    fresh: set[str] = field(default_factory=set)  # geometry keys read anew (not reused)
 
     @property
     def triangle_count(self) -> int:

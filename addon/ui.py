@@ -45,6 +45,16 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
         row = layout.row()
         row.active = props.model != "PBR"
         row.prop(props, "ambient")
+        layout.separator()
+        layout.prop(props, "tone_mapper")
+        if props.tone_mapper != "BLENDER":
+            layout.prop(props, "exposure")
+            layout.prop(props, "transfer")
+            if context.scene.view_settings.view_transform != "Standard":
+                box = layout.box()
+                box.label(text="Set Color Management > View Transform to Standard:", icon="ERROR")
+                box.label(text="this tone mapper already maps to display values")
+        layout.prop(props, "samples")
 
 
 class SHADINGLAB_PT_light(ShadingLabPanel, bpy.types.Panel):

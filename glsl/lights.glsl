@@ -11,7 +11,9 @@
  * distance 0 gives a large finite irradiance instead of Inf (Filament does the same). */
 #define MIN_DIST2 1e-4
 
-/* Point light: radiant intensity I = P / (4 pi) W/sr (packed on the CPU), inverse-square falloff. */
+#if defined(SL_HAS_POINT) || defined(SL_HAS_SPOT) || defined(SL_HAS_AREA)
+/* Point light: radiant intensity I = P / (4 pi) W/sr (packed on the CPU), inverse-square falloff.
+ * Spot and area lights build on it. */
 vec3 E_Point(LightData light, vec3 p, out vec3 l)
 {
   vec3 d = light.position_kind.xyz - p;
@@ -19,7 +21,9 @@ vec3 E_Point(LightData light, vec3 p, out vec3 l)
   l = d * inversesqrt(d2);
   return light.intensity_blend.rgb / d2;
 }
+#endif
 
+#ifdef SL_HAS_SPOT
 /* Spot light: a point light (same I = P / 4 pi: the cone does not concentrate it) times Cycles'
  * cone attenuation, smoothstep((cos(theta) - cos(size / 2)) * smooth) with
  * smooth = 1 / ((1 - cos(size / 2)) * blend) packed on the CPU. */
@@ -30,14 +34,18 @@ vec3 E_Spot(LightData light, vec3 p, out vec3 l)
   float t = saturate((cos_theta - light.direction_cone.w) * light.intensity_blend.w);
   return E * (t * t * (3.0 - 2.0 * t));
 }
+#endif
 
+#ifdef SL_HAS_SUN
 /* Sun light: constant irradiance E = strength (W/m^2), arriving against the light's direction. */
 vec3 E_Sun(LightData light, out vec3 l)
 {
   l = -light.direction_cone.xyz;
   return light.intensity_blend.rgb;
 }
+#endif
 
+#ifdef SL_HAS_AREA
 /* Area light, approximated as a one-sided Lambertian point emitter at its centre: intensity
  * I(theta) = (P / pi) cos(theta) towards the light's -Z, zero behind it. Exact in the far field;
  * ignores the light's extent (no soft highlights, no horizon clipping). */
@@ -46,6 +54,7 @@ vec3 E_Area(LightData light, vec3 p, out vec3 l)
   vec3 E = E_Point(light, p, l);
   return E * max(dot(-l, light.direction_cone.xyz), 0.0);
 }
+#endif
 
 /* Dispatch on the light kind; only the kinds the scene has are compiled in. */
 vec3 light_irradiance(LightData light, vec3 p, out vec3 l)

@@ -99,6 +99,49 @@ def render(scene, path: Path) -> np.ndarray:
     return read_exr(path)
 
 
+def save_result(scene, path: Path, kind: str) -> Path:
+    """Save the last render result as ``kind``: EXR (32-bit), MULTILAYER (32-bit EXR with every
+    pass) or PNG (8-bit through the view transform, no dither)."""
+    settings = scene.render.image_settings
+    multilayer = kind == "MULTILAYER"
+    if hasattr(settings, "media_type"):  # Blender 5.0 groups formats by media type
+        settings.media_type = "MULTI_LAYER_IMAGE" if multilayer else "IMAGE"
+    if kind == "PNG":
+        settings.file_format = "PNG"
+        settings.color_mode = "RGBA"
+        settings.color_depth = "8"
+        scene.render.dither_intensity = 0.0
+    else:
+        settings.file_format = "OPEN_EXR_MULTILAYER" if multilayer else "OPEN_EXR"
+        settings.color_depth = "32"
+        settings.exr_codec = "ZIP"
+    bpy.data.images["Render Result"].save_render(filepath=str(path), scene=scene)
+    return path
+
+
+def read_png(path: Path) -> np.ndarray:
+    """8-bit PNG as stored: (height, width, 4) integers 0..255, top row first."""
+    img = bpy.data.images.load(str(path))
+    try:
+        img.colorspace_settings.name = "Non-Color"  # no conversion: the stored code values
+        w, h = img.size
+        px = np.empty(w * h * 4, np.float32)
+        img.pixels.foreach_get(px)
+    finally:
+        bpy.data.images.remove(img)
+    return np.rint(px.reshape(h, w, 4)[::-1] * 255.0).astype(np.int32)
+
+
+def read_exr_layers(path: Path) -> dict[str, np.ndarray]:
+    """Every RGBA pass of a multilayer EXR by pass name, (height, width, 4), top row first."""
+    out = {}
+    with OpenEXR.File(str(path)) as f:
+        for part in f.parts:
+            for name, channel in part.channels.items():
+                out[name.split(".")[-1]] = np.asarray(channel.pixels, np.float32)
+    return out
+
+
 def read_exr(path: Path) -> np.ndarray:
     with OpenEXR.File(str(path)) as f:
         channels = f.channels()

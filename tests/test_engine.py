@@ -89,3 +89,24 @@ def test_register_unregister_register():
     assert hasattr(bpy.types.Material, "shading_lab")
     scene = scenes.reset(size=8)
     assert scene.render.engine == "SHADING_LAB"
+
+
+@pytest.mark.parametrize("samples,edge_value", [(1, 0.0), (2, 0.5), (4, 0.25)])
+def test_supersampling_is_a_box_filter_over_the_pixel(samples, edge_value, tmp_path):
+    """A flat-lit plane whose edge covers 30 % of one pixel column: an N x N ordered grid
+    sees the covered fraction of its sub-pixel centres (1: the centre 0.5, uncovered; 2: 0.25 of
+    0.25 and 0.75; 4: 0.125 of four), and fully covered pixels keep their exact value."""
+    scene = scenes.reset(size=8)
+    scene.shading_lab.model = "BLINN_PHONG"
+    scene.shading_lab.ambient = 1.0
+    scene.shading_lab.samples = samples
+    scenes.ortho_camera(scene, scale=8.0)  # 1 m per pixel; column c spans x in [c - 4, c - 3]
+    mat = scenes.material(base_color=(0.5, 0.5, 0.5), ambient_color=(0.5, 0.5, 0.5))
+    mesh = bpy.data.meshes.new("Strip")
+    mesh.from_pydata([(-5, -5, 0), (0.3, -5, 0), (0.3, 5, 0), (-5, 5, 0)], [], [(0, 1, 2, 3)])
+    mesh.materials.append(mat)
+    scene.collection.objects.link(bpy.data.objects.new("Strip", mesh))
+    image = scenes.render(scene, tmp_path / "aa.exr")
+    np.testing.assert_allclose(image[:, :4, 0], 0.5, rtol=1e-6)  # fully covered columns
+    np.testing.assert_allclose(image[:, 4, 0], 0.5 * edge_value, atol=1e-6)  # the edge column
+    np.testing.assert_allclose(image[:, 5:, 0], 0.0, atol=1e-6)  # background (black world)
