@@ -9,6 +9,7 @@ from __future__ import annotations
 import time
 
 import bpy
+import gpu
 
 from . import extract, programs
 from .renderer import Renderer, ShaderCompileError
@@ -35,6 +36,52 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
     bl_use_gpu_context = True
     bl_use_preview = False
     bl_use_shading_nodes_custom = False
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self._viewport = None
+
+    def __del__(self):
+        viewport = getattr(self, "_viewport", None)
+        if viewport is not None:
+            viewport.free()
+        parent_del = getattr(super(), "__del__", None)
+        if parent_del is not None:
+            parent_del()
+
+    # --- interactive viewport -------------------------------------------------------------------
+
+    def view_update(self, context, depsgraph):
+        from .viewport import ViewportSession
+
+        if self._viewport is None:
+            self._viewport = ViewportSession()
+        try:
+            self._viewport.update(depsgraph)
+        except Exception as exc:
+            self.report({"ERROR"}, f"Shading Lab could not read the scene: {type(exc).__name__}: {exc}")
+
+    def view_draw(self, context, depsgraph):
+        from gpu_extras.presets import draw_texture_2d
+
+        session = self._viewport
+        if session is None or session.snapshot is None:
+            return
+        scene = depsgraph.scene
+        region, rv3d = context.region, context.region_data
+        try:
+            texture = session.draw(region.width, region.height, rv3d.view_matrix, rv3d.window_matrix,
+                                   rv3d.is_perspective, background_color(session.snapshot, scene))
+        except Exception as exc:
+            self.report({"ERROR"}, f"Shading Lab failed to draw: {type(exc).__name__}: {exc}")
+            return
+        gpu.state.blend_set("ALPHA_PREMULT")
+        self.bind_display_space_shader(scene)
+        draw_texture_2d(texture, (0, 0), region.width, region.height)
+        self.unbind_display_space_shader()
+        gpu.state.blend_set("NONE")
+
+    # --- final renders ------------------------------------------------------------------------
 
     def render(self, depsgraph):
         scene = depsgraph.scene

@@ -44,3 +44,12 @@ def run_on_gpu(job):
     if status == "error":
         raise value
     return value
+
+
+def read_texture(texture, size: int):
+    """A square GPU texture as (size, size, 4) float32, bottom row first (call on the GPU)."""
+    import numpy as np
+
+    buffer = texture.read()
+    buffer.dimensions = size * size * 4
+    return np.array(buffer, np.float32).reshape(size, size, 4)
