@@ -12,7 +12,7 @@ import bpy
 import gpu
 
 from . import extract, programs
-from .renderer import Renderer, ShaderCompileError
+from .renderer import Renderer, ShaderCompileError, clear_compile_error
 
 ENGINE_ID = "SHADING_LAB"
 RADIANCE_PASS = "Radiance"  # raw HDR radiance when the engine's own tone mapper fills Combined
@@ -110,6 +110,7 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
             display = programs.PostFeatures(settings.samples, settings.tone_mapper, settings.transfer)
             self.add_pass(RADIANCE_PASS, 4, "RGBA", layer=depsgraph.view_layer.name)
         renderer = Renderer()
+        clear_compile_error()
         try:
             radiance, shown = renderer.render_passes(
                 snap, background_color(snap, scene), should_stop=self.test_break,

@@ -99,6 +99,7 @@ def material_params(material: bpy.types.Material | None) -> S.MaterialParams:
         metalness=metal,
         shininess=max(shininess, 0.0),
         f0=min(max(f0, 0.0), 1.0),
+        model="" if props is None or props.model == "SCENE" else props.model,
     )
 
 

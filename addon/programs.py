@@ -59,9 +59,9 @@ class Features:
             raise ValueError(f"unknown light kinds {sorted(unknown)}")
 
     @classmethod
-    def from_snapshot(cls, snapshot: Snapshot) -> Features:
+    def from_snapshot(cls, snapshot: Snapshot, model: str | None = None) -> Features:
         return cls(
-            model=snapshot.settings.model,
+            model=model or snapshot.settings.model,
             max_lights=_bucket(len(snapshot.lights)),
             light_kinds=frozenset(light.kind for light in snapshot.lights),
         )

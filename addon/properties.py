@@ -66,6 +66,10 @@ def _override(name: str, description: str):
 
 
 class ShadingLabMaterialSettings(bpy.types.PropertyGroup):
+    model: EnumProperty(
+        name="Model", default="SCENE", update=_redraw,
+        items=(("SCENE", "Scene's", "Use the model chosen in the Render properties"), *MODEL_ITEMS),
+        description="Shading model for this material, overriding the scene's")
     use_base_color: _override("Base Color", "base colour")
     base_color: FloatVectorProperty(name="Base Color", subtype="COLOR", size=3, min=0.0, max=1.0,
                                     default=(0.8, 0.8, 0.8), update=_redraw)

@@ -22,6 +22,16 @@ class ShaderCompileError(RuntimeError):
 
 
 _PROGRAMS: dict[tuple[tuple[str, str], ...], gpu.types.GPUShader] = {}
+_LAST_COMPILE_ERROR = [""]  # shown in the Render panel until a render compiles cleanly
+
+
+def compile_error() -> str:
+    """The message of the last program that failed to compile ("" when the last render was clean)."""
+    return _LAST_COMPILE_ERROR[0]
+
+
+def clear_compile_error() -> None:
+    _LAST_COMPILE_ERROR[0] = ""
 
 
 def compiled_program_count() -> int:
@@ -32,10 +42,10 @@ def _compile(info, label: str, key) -> gpu.types.GPUShader:
     try:
         return gpu.shader.create_from_info(info)
     except Exception as exc:  # Blender raises a bare Exception with the driver log on stderr
-        raise ShaderCompileError(
-            f"Shading Lab could not compile its {label} program "
-            f"({', '.join(f'{n}={v}' for n, v in key)}): {exc}"
-        ) from exc
+        message = (f"Shading Lab could not compile its {label} program "
+                   f"({', '.join(f'{n}={v}' for n, v in key)}): {exc} (the driver's log is on the console)")
+        _LAST_COMPILE_ERROR[0] = message
+        raise ShaderCompileError(message) from exc
 
 
 def get_program(features: programs.Features) -> gpu.types.GPUShader:
@@ -181,32 +191,44 @@ class Renderer:
 
     def draw(self, snapshot: Snapshot, view_projection: np.ndarray | None = None,
              should_stop: Callable[[], bool] | None = None) -> None:
-        features = programs.Features.from_snapshot(snapshot)
-        shader = get_program(features)
+        """Draw every item into the bound framebuffer, one program per shading model in use
+        (the scene's, and any material's own override)."""
+        lights = programs.Features.from_snapshot(snapshot)
         frame_ubo = gpu.types.GPUUniformBuf(programs.pack_frame(snapshot, view_projection))
-        light_ubo = gpu.types.GPUUniformBuf(programs.pack_lights(snapshot, features.max_lights))
+        light_ubo = gpu.types.GPUUniformBuf(programs.pack_lights(snapshot, lights.max_lights))
         material_ubos = {
             key: gpu.types.GPUUniformBuf(programs.pack_material(m))
             for key, m in snapshot.materials.items()
         }
+        by_model: dict[str, list] = {}
+        for index, item in enumerate(snapshot.items):
+            batches = self._batches.get(item.geometry)
+            if not batches:
+                continue
+            object_ubo = gpu.types.GPUUniformBuf(programs.pack_object(item.matrix, item.normal_matrix))
+            for slot, batch in batches:
+                key = item.materials[slot] if slot < len(item.materials) else item.materials[-1]
+                model = snapshot.materials[key].model or snapshot.settings.model
+                by_model.setdefault(model, []).append((index, object_ubo, material_ubos[key], batch))
         gpu.state.depth_test_set("LESS_EQUAL")
         gpu.state.depth_mask_set(True)
         gpu.state.face_culling_set("NONE")
         gpu.state.blend_set("NONE")
-        shader.bind()
-        shader.uniform_block("frame", frame_ubo)
-        shader.uniform_block("lights", light_ubo)
-        for index, item in enumerate(snapshot.items):
-            if should_stop is not None and index % 64 == 0 and should_stop():
-                break
-            object_ubo = gpu.types.GPUUniformBuf(programs.pack_object(item.matrix, item.normal_matrix))
-            shader.uniform_block("object", object_ubo)
-            for slot, batch in self._batches.get(item.geometry, ()):
-                key = item.materials[slot] if slot < len(item.materials) else item.materials[-1]
-                shader.uniform_block("material", material_ubos[key])
-                batch.draw(shader)
-        gpu.state.depth_test_set("NONE")
-        gpu.state.depth_mask_set(False)
+        try:
+            for model, draws in sorted(by_model.items()):
+                shader = get_program(programs.Features.from_snapshot(snapshot, model))
+                shader.bind()
+                shader.uniform_block("frame", frame_ubo)
+                shader.uniform_block("lights", light_ubo)
+                for index, object_ubo, material_ubo, batch in draws:
+                    if should_stop is not None and index % 64 == 0 and should_stop():
+                        return
+                    shader.uniform_block("object", object_ubo)
+                    shader.uniform_block("material", material_ubo)
+                    batch.draw(shader)
+        finally:
+            gpu.state.depth_test_set("NONE")
+            gpu.state.depth_mask_set(False)
 
     def render(self, snapshot: Snapshot, background: tuple[float, float, float, float] = (0, 0, 0, 1),
                should_stop: Callable[[], bool] | None = None) -> np.ndarray:

@@ -47,6 +47,7 @@ class MaterialParams:
     metalness: float = 0.0
     shininess: float = 30.0
     f0: float = DEFAULT_F0
+    model: str = ""  # a shading model for this material only; "" follows the scene
 
 
 #: Objects without a material render with this: Blender's default surface (grey 0.8,

@@ -23,6 +23,12 @@ def builtin_panels():
             yield panel
 
 
+def _wrap(text: str, width: int) -> list[str]:
+    import textwrap
+
+    return textwrap.wrap(text, width)[:8]
+
+
 class ShadingLabPanel:
     bl_space_type = "PROPERTIES"
     bl_region_type = "WINDOW"
@@ -38,9 +44,17 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
     bl_context = "render"
 
     def draw(self, context):
+        from .renderer import compile_error
+
         layout = self.layout
         layout.use_property_split = True
         props = context.scene.shading_lab
+        error = compile_error()
+        if error:
+            box = layout.box()
+            box.label(text="Shader compilation failed (nothing was drawn):", icon="ERROR")
+            for line in _wrap(error, 60):
+                box.label(text=line)
         layout.prop(props, "model")
         row = layout.row()
         row.active = props.model != "PBR"
@@ -101,6 +115,7 @@ class SHADINGLAB_PT_material(ShadingLabPanel, bpy.types.Panel):
     def draw(self, context):
         props = context.material.shading_lab
         layout = self.layout
+        layout.prop(props, "model")
         layout.label(text="Unticked values come from the surface shader (Principled BSDF)")
         col = layout.column()
         col.label(text="Physically based")

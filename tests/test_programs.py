@@ -1,0 +1,98 @@
+"""Scene-specialised programs: what the defines compile in, and compile errors reaching the user."""
+
+from __future__ import annotations
+
+import re
+
+import bpy
+import pytest
+import scenes
+
+from addon import programs, renderer
+
+
+def preprocess(source: str, defines: dict[str, str]) -> str:
+    """The conditional part of the GLSL preprocessor (#ifdef/#ifndef/#if defined/#elif/#else/
+    #endif), enough to see which lines a compiler receives for these defines."""
+    out, stack = [], []  # stack of (taking, any_branch_taken)
+
+    def holds(expr: str) -> bool:  # "defined(A) || defined(B)", the only form glsl/ uses
+        names = re.findall(r"defined\s*\(\s*(\w+)\s*\)", expr)
+        assert names and "&&" not in expr and "!" not in expr, f"unsupported #if: {expr}"
+        return any(name in defines for name in names)
+
+    for line in source.splitlines():
+        s = line.strip()
+        live = all(t for t, _ in stack)
+        if s.startswith("#ifdef") or s.startswith("#ifndef") or s.startswith("#if "):
+            if s.startswith("#ifdef"):
+                cond = s.split()[1] in defines
+            elif s.startswith("#ifndef"):
+                cond = s.split()[1] not in defines
+            else:
+                cond = holds(s[3:])
+            stack.append((cond, cond))
+        elif s.startswith("#elif"):
+            taken = stack[-1][1]
+            cond = not taken and holds(s[5:])
+            stack[-1] = (cond, taken or cond)
+        elif s.startswith("#else"):
+            stack[-1] = (not stack[-1][1], True)
+        elif s.startswith("#endif"):
+            stack.pop()
+        elif live:
+            out.append(line)
+    assert not stack, "unbalanced #if/#endif"
+    return "\n".join(out)
+
+
+def _compiled(features: programs.Features) -> str:
+    src = programs.program_source(features)
+    return preprocess(src.fragment, dict(src.defines))
+
+
+def test_a_scene_without_spot_lights_compiles_no_spot_code():
+    code = _compiled(programs.Features("PBR", 2, frozenset({"POINT", "SUN"})))
+    assert "E_Point(" in code and "E_Sun(" in code
+    assert "E_Spot(" not in code and "E_Area(" not in code
+    spot_only = _compiled(programs.Features("PBR", 1, frozenset({"SPOT"})))
+    assert "E_Spot(" in spot_only and "E_Sun(" not in spot_only
+    assert "E_Point(" in spot_only  # the spot builds on the point light's falloff
+
+
+def test_models_compile_only_their_own_lobes():
+    assert "shade_direct" in _compiled(programs.Features("PBR"))
+    assert "D_GGX(NoH" in _compiled(programs.Features("PBR"))
+    assert "S_BlinnPhong(dot" not in _compiled(programs.Features("PBR"))
+    assert "D_GGX(NoH" not in _compiled(programs.Features("BLINN_PHONG"))
+
+
+def test_feature_keys():
+    a = programs.Features("PBR", 4, frozenset({"POINT"}))
+    assert a.defines() == (("SL_HAS_POINT", "1"), ("SL_MAX_LIGHTS", "4"), ("SL_MODEL_PBR", "1"))
+    assert programs.Features("PBR", 4, frozenset({"POINT"})).defines() == a.defines()
+    assert [programs._bucket(n) for n in (0, 1, 2, 3, 5, 64)] == [1, 1, 2, 4, 8, 64]
+    with pytest.raises(ValueError, match="unknown shading model"):
+        programs.Features("TOON")
+
+
+def test_compile_error_reaches_the_user_and_clears(tmp_path, monkeypatch):
+    scene = scenes.reset(size=8)
+    scenes.ortho_camera(scene)
+    scenes.plane(scene)
+    scenes.light(scene, "SUN")
+    real = programs.read_glsl
+
+    def broken(name):
+        text = real(name)
+        return text + "\nthis is not GLSL;\n" if name == "model_pbr.glsl" else text
+
+    renderer.clear_program_cache()
+    monkeypatch.setattr(programs, "read_glsl", broken)
+    with pytest.raises(RuntimeError, match="could not compile its PBR program"):
+        bpy.ops.render.render()
+    assert "could not compile" in renderer.compile_error()
+    monkeypatch.setattr(programs, "read_glsl", real)
+    renderer.clear_program_cache()
+    assert scenes.render(scene, tmp_path / "ok.exr")[..., 0].max() > 0
+    assert renderer.compile_error() == ""
