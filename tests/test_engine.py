@@ -110,3 +110,22 @@ def test_supersampling_is_a_box_filter_over_the_pixel(samples, edge_value, tmp_p
     np.testing.assert_allclose(image[:, :4, 0], 0.5, rtol=1e-6)  # fully covered columns
     np.testing.assert_allclose(image[:, 4, 0], 0.5 * edge_value, atol=1e-6)  # the edge column
     np.testing.assert_allclose(image[:, 5:, 0], 0.0, atol=1e-6)  # background (black world)
+
+
+def test_material_model_override(tmp_path):
+    """A Blinn-Phong material in a physically based scene: two programs in one frame."""
+    scene = scenes.reset(size=16)
+    scene.shading_lab.model = "PBR"
+    scene.shading_lab.ambient = 0.0
+    scenes.ortho_camera(scene, scale=4.0)
+    lambert = dict(base_color=(0.8, 0.8, 0.8), f0=0.0, metalness=0.0, specular_color=(0, 0, 0))
+    left = scenes.material("PBR", **lambert)
+    right = scenes.material("BP", **lambert)
+    right.shading_lab.model = "BLINN_PHONG"
+    scenes.plane(scene, size=2.0, location=(-1.0, 0.0, 0.0), material=left)
+    scenes.plane(scene, size=2.0, location=(1.0, 0.0, 0.0), material=right)
+    scenes.light(scene, "SUN", energy=10.0)
+    image = scenes.render(scene, tmp_path / "mixed.exr")[4:12, :, 0]  # rows the 2 m planes cover
+    hdr = 0.8 / math.pi * 10.0  # 2.55: the same Lambert radiance on both halves before clamping
+    np.testing.assert_allclose(image[:, :8], hdr, rtol=1e-5)
+    np.testing.assert_allclose(image[:, 8:], 1.0, rtol=1e-6)  # Blinn-Phong's LDR clamp

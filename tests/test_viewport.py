@@ -101,3 +101,20 @@ def test_viewport_image_equals_final_render_image(session_with_handler):
     reference = run_on_gpu(job)
     assert reference[..., 0].max() > 0.1
     np.testing.assert_allclose(shown[..., :3], reference[..., :3], rtol=2e-3, atol=1e-3)  # RGBA16F target
+
+
+def test_property_edits_reach_the_viewport(session_with_handler):
+    """Editing a Shading Lab property is a depsgraph update naming the edited ID (which makes
+    Blender call view_update and redraw), and the session picks up the new value."""
+    session, a, _, seen = session_with_handler
+    mat = scenes.material("Edited", roughness=0.2)
+    a.data.materials.append(mat)
+    bpy.context.view_layer.update()
+    seen.clear()
+    mat.shading_lab.roughness = 0.9
+    bpy.context.view_layer.update()  # what Blender's main loop does before the next redraw
+    assert any(mat.name in names for names in seen)
+    assert session.snapshot.materials[mat.name_full].roughness == pytest.approx(0.9)
+    bpy.context.scene.shading_lab.model = "PHONG"
+    bpy.context.view_layer.update()
+    assert session.snapshot.settings.model == "PHONG"
