@@ -28,12 +28,12 @@ def main() -> int:
     args = parser.parse_args()
 
     import bpy
+    import demo_scene
+    from gpu_harness import run_on_gpu
 
     import addon
-    import demo_scene
     from addon import programs, renderer
     from addon.viewport import ViewportSession
-    from gpu_harness import run_on_gpu
 
     addon.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)

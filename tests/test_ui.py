@@ -1,0 +1,88 @@
+"""Panels, drawn into a recording layout (no window is available headless): what a user would
+read in the Render and Material tabs, and which of Blender's panels open to the engine."""
+
+from __future__ import annotations
+
+from types import SimpleNamespace
+
+import bpy
+import scenes
+
+from addon import renderer, ui
+
+
+class Layout:
+    """Records prop() and label() calls of a panel's draw(); every sub-layout records into it."""
+
+    def __init__(self, log=None):
+        self.log = [] if log is None else log
+        self.use_property_split = False
+        self.active = True
+
+    def prop(self, data, name, **kwargs):
+        self.log.append(("prop", name, self.active))
+
+    def label(self, text="", **kwargs):
+        self.log.append(("label", text, self.active))
+
+    def _sub(self, *args, **kwargs):
+        sub = Layout(self.log)
+        sub.active = self.active
+        return sub
+
+    row = column = box = _sub
+
+    def separator(self, **kwargs):
+        pass
+
+    def labels(self):
+        return [text for kind, text, _ in self.log if kind == "label"]
+
+    def props(self):
+        return [name for kind, name, _ in self.log if kind == "prop"]
+
+
+def _draw(panel_cls, context):
+    layout = Layout()
+    panel_cls.draw(SimpleNamespace(layout=layout), context)
+    return layout
+
+
+def test_render_panel_warns_about_the_view_transform_and_shows_compile_errors(monkeypatch):
+    scene = scenes.reset(size=8)
+    context = SimpleNamespace(scene=scene)
+    plain = _draw(ui.SHADINGLAB_PT_render, context)
+    assert {"model", "ambient", "tone_mapper", "samples"} <= set(plain.props())
+    assert "exposure" not in plain.props()  # only for the engine's own tone mappers
+    scene.shading_lab.tone_mapper = "ACES"
+    scene.view_settings.view_transform = "AgX"
+    warned = _draw(ui.SHADINGLAB_PT_render, context)
+    assert {"exposure", "transfer"} <= set(warned.props())
+    assert any("View Transform to Standard" in t for t in warned.labels())
+    scene.view_settings.view_transform = "Standard"
+    assert not any("Standard" in t for t in _draw(ui.SHADINGLAB_PT_render, context).labels())
+    monkeypatch.setattr(renderer, "_LAST_COMPILE_ERROR", ["could not compile its PBR program: 0:1 boom"])
+    failed = _draw(ui.SHADINGLAB_PT_render, context)
+    assert any("compilation failed" in t for t in failed.labels())
+    assert any("boom" in t for t in failed.labels())
+
+
+def test_material_panel_says_where_each_value_comes_from():
+    scenes.reset(size=8)
+    mat = scenes.material("M", roughness=0.3)  # roughness set here, the rest from the shader
+    layout = _draw(ui.SHADINGLAB_PT_material, SimpleNamespace(material=mat))
+    log = layout.log
+    i = log.index(("prop", "roughness", True))
+    assert ("label", "from shader", True) not in log[i:i + 2]
+    j = next(k for k, e in enumerate(log) if e[:2] == ("prop", "metalness"))
+    assert log[j][2] is False and log[j + 1][:2] == ("label", "from shader")
+    assert "model" in layout.props()
+
+
+def test_blenders_panels_open_to_the_engine():
+    for name in ("DATA_PT_context_light", "DATA_PT_lens", "DATA_PT_camera", "WORLD_PT_context_world",
+                 "RENDER_PT_format", "RENDER_PT_color_management"):
+        panel = getattr(bpy.types, name)
+        assert "SHADING_LAB" in panel.COMPAT_ENGINES, name
+    assert ui.SHADINGLAB_PT_render.poll(SimpleNamespace(engine="SHADING_LAB"))
+    assert not ui.SHADINGLAB_PT_render.poll(SimpleNamespace(engine="CYCLES"))
