@@ -80,6 +80,7 @@ class ProgramSource:
     defines: tuple[tuple[str, str], ...]
 
 
+@lru_cache(maxsize=64)
 def program_source(features: Features) -> ProgramSource:
     fragment = [read_glsl(name) for name in FRAGMENT_LIBRARY]
     fragment.append(read_glsl(MODEL_FILES[features.model]))
@@ -109,6 +110,7 @@ class PostFeatures:
         return tuple(sorted(out))
 
 
+@lru_cache(maxsize=64)
 def post_source(features: PostFeatures) -> ProgramSource:
     return ProgramSource(
         typedefs="",

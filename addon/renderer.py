@@ -48,17 +48,24 @@ def _compile(info, label: str, key) -> gpu.types.GPUShader:
         raise ShaderCompileError(message) from exc
 
 
-def get_program(features: programs.Features) -> gpu.types.GPUShader:
-    """The program for ``features``, compiled once and cached by its sorted defines."""
-    key = features.defines()
+def _cached_program(key, label: str, src: programs.ProgramSource, declare) -> gpu.types.GPUShader:
+    """Compile ``src`` once per ``key``: defines, then ``declare(info)`` adds the interface."""
     shader = _PROGRAMS.get(key)
     if shader is not None:
         return shader
-    src = programs.program_source(features)
     info = gpu.types.GPUShaderCreateInfo()
     for name, value in src.defines:
         info.define(name, value)
-    info.typedef_source(src.typedefs)
+    declare(info)
+    info.fragment_out(0, "VEC4", "frag_color")
+    info.vertex_source(src.vertex)
+    info.fragment_source(src.fragment)
+    shader = _PROGRAMS[key] = _compile(info, label, src.defines)
+    return shader
+
+
+def _declare_shading(info, typedefs: str) -> None:
+    info.typedef_source(typedefs)
     info.uniform_buf(0, "FrameData", "frame")
     info.uniform_buf(1, "LightBlock", "lights")
     info.uniform_buf(2, "MaterialData", "material")
@@ -69,37 +76,31 @@ def get_program(features: programs.Features) -> gpu.types.GPUShader:
     iface.smooth("VEC3", "world_position")
     iface.smooth("VEC3", "world_normal")
     info.vertex_out(iface)
-    info.fragment_out(0, "VEC4", "frag_color")
-    info.vertex_source(src.vertex)
-    info.fragment_source(src.fragment)
-    shader = _compile(info, features.model, key)
-    _PROGRAMS[key] = shader
-    return shader
+
+
+def _declare_post(info) -> None:
+    info.vertex_in(0, "VEC2", "pos")
+    info.sampler(0, "FLOAT_2D", "hdr_image")
+    info.push_constant("FLOAT", "exposure_scale")
+
+
+def get_program(features: programs.Features) -> gpu.types.GPUShader:
+    """The shading program for ``features``, compiled once and cached by its sorted defines."""
+    src = programs.program_source(features)
+    return _cached_program(features.defines(), features.model, src,
+                           lambda info: _declare_shading(info, src.typedefs))
 
 
 def get_post_program(features: programs.PostFeatures) -> gpu.types.GPUShader:
     """The resolve/display pass for ``features``, cached like the shading programs."""
-    key = ("post",) + features.defines()
-    shader = _PROGRAMS.get(key)
-    if shader is not None:
-        return shader
-    src = programs.post_source(features)
-    info = gpu.types.GPUShaderCreateInfo()
-    for name, value in src.defines:
-        info.define(name, value)
-    info.vertex_in(0, "VEC2", "pos")
-    info.sampler(0, "FLOAT_2D", "hdr_image")
-    info.push_constant("FLOAT", "exposure_scale")
-    info.fragment_out(0, "VEC4", "frag_color")
-    info.vertex_source(src.vertex)
-    info.fragment_source(src.fragment)
-    shader = _compile(info, "display", features.defines())
-    _PROGRAMS[key] = shader
-    return shader
+    return _cached_program(("post",) + features.defines(), "display", programs.post_source(features),
+                           _declare_post)
 
 
 def clear_program_cache() -> None:
     _PROGRAMS.clear()
+    programs.program_source.cache_clear()
+    programs.post_source.cache_clear()
 
 
 # Compiled programs outlive renders; free them before Blender tears its GPU module down, or it
