@@ -99,8 +99,26 @@ def material_params(material: bpy.types.Material | None) -> S.MaterialParams:
         metalness=metal,
         shininess=max(shininess, 0.0),
         f0=min(max(f0, 0.0), 1.0),
-        model="" if props is None or props.model == "SCENE" else props.model,
+        **_material_extras(props),
     )
+
+
+def _material_extras(props) -> dict:
+    """The per-material model and term choices, and the Fresnel inputs beyond F0."""
+    if props is None:
+        return {}
+
+    def chosen(value):
+        return "" if value == "SCENE" else value
+
+    extras = dict(model=chosen(props.model), fresnel=chosen(props.fresnel), ndf=chosen(props.ndf),
+                  visibility=chosen(props.visibility), diffuse=chosen(props.diffuse),
+                  fresnel_p=float(props.fresnel_p))
+    if props.use_f90:
+        extras["f90"] = float(props.f90)
+    if props.use_complex_ior:
+        extras["ior_n"], extras["ior_k"] = _rgb(props.ior_n), _rgb(props.ior_k)
+    return extras
 
 
 # --- geometry ----------------------------------------------------------------------------------
@@ -230,8 +248,12 @@ def scene_settings(scene) -> S.Settings:
     props = getattr(scene, "shading_lab", None)
     if props is None:
         return S.Settings()
-    return S.Settings(model=props.model, ambient=float(props.ambient), tone_mapper=props.tone_mapper,
-                      exposure=float(props.exposure), transfer=props.transfer, samples=int(props.samples))
+    terms = S.Terms(fresnel=props.fresnel, ndf=props.ndf, visibility=props.visibility, diffuse=props.diffuse,
+                    multiscatter=bool(props.multiscatter),
+                    normalized_blinn_phong=bool(props.normalized_blinn_phong))
+    return S.Settings(model=props.model, terms=terms, ambient=float(props.ambient),
+                      tone_mapper=props.tone_mapper, exposure=float(props.exposure), transfer=props.transfer,
+                      samples=int(props.samples))
 
 
 def geometry_updates(depsgraph) -> set[str]:

@@ -5,13 +5,16 @@ uniform-buffer packers. Pure Python (no ``bpy``/``gpu``): the renderer feeds the
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
-from .snapshot import LIGHT_KINDS, MODELS, MaterialParams, Snapshot
+from .snapshot import LIGHT_KINDS, MODELS, MaterialParams, Snapshot, Terms
+
+#: Side of the multiple-scattering albedo table (addon/multiscatter.py), in texels.
+MS_SIZE = 32
 
 MODEL_FILES = {
     "BLINN_PHONG": "model_blinn_phong.glsl",
@@ -19,6 +22,7 @@ MODEL_FILES = {
     "PBR": "model_pbr.glsl",
 }
 FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl")
+PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl")
 
 
 def glsl_dir() -> Path:
@@ -45,11 +49,13 @@ def _bucket(count: int) -> int:
 
 @dataclass(frozen=True)
 class Features:
-    """What a scene needs from the shading program; its defines key the program cache."""
+    """What a scene (or one material in it) needs from the shading program; its defines key the
+    program cache. Only the terms the model uses are kept, so equivalent choices share a program."""
 
     model: str = "PBR"
     max_lights: int = 1
     light_kinds: frozenset[str] = frozenset()
+    terms: Terms = Terms()
 
     def __post_init__(self):
         if self.model not in MODELS:
@@ -57,18 +63,41 @@ class Features:
         unknown = set(self.light_kinds) - set(LIGHT_KINDS)
         if unknown:
             raise ValueError(f"unknown light kinds {sorted(unknown)}")
+        if self.model == "PBR":
+            canonical = replace(self.terms, normalized_blinn_phong=False)
+        elif self.model == "BLINN_PHONG":
+            canonical = Terms(normalized_blinn_phong=self.terms.normalized_blinn_phong)
+        else:
+            canonical = Terms()
+        object.__setattr__(self, "terms", canonical)
 
     @classmethod
-    def from_snapshot(cls, snapshot: Snapshot, model: str | None = None) -> Features:
+    def from_snapshot(cls, snapshot: Snapshot, model: str | None = None,
+                      material: MaterialParams | None = None) -> Features:
+        """The scene's features, for ``model`` or for ``material`` (its model and term overrides)."""
+        terms = snapshot.settings.terms
+        if material is not None:
+            model = material.model or model
+            terms = terms.override(fresnel=material.fresnel, ndf=material.ndf,
+                                   visibility=material.visibility, diffuse=material.diffuse)
         return cls(
             model=model or snapshot.settings.model,
             max_lights=_bucket(len(snapshot.lights)),
             light_kinds=frozenset(light.kind for light in snapshot.lights),
+            terms=terms,
         )
 
     def defines(self) -> tuple[tuple[str, str], ...]:
         out = [("SL_MAX_LIGHTS", str(self.max_lights)), ("SL_MODEL_" + self.model, "1")]
         out += [("SL_HAS_" + kind, "1") for kind in sorted(self.light_kinds)]
+        t = self.terms
+        if self.model == "PBR":
+            out += [("SL_FRESNEL_" + t.fresnel, "1"), ("SL_NDF_" + t.ndf, "1"),
+                    ("SL_VISIBILITY_" + t.visibility, "1"), ("SL_DIFFUSE_" + t.diffuse, "1")]
+            if t.multiscatter:
+                out += [("SL_MULTISCATTER", "1"), ("SL_MS_SIZE", str(MS_SIZE))]
+        if t.normalized_blinn_phong:
+            out.append(("SL_BLINN_PHONG_NORMALIZED", "1"))
         return tuple(sorted(out))
 
 
@@ -83,6 +112,8 @@ class ProgramSource:
 @lru_cache(maxsize=64)
 def program_source(features: Features) -> ProgramSource:
     fragment = [read_glsl(name) for name in FRAGMENT_LIBRARY]
+    if features.model == "PBR":
+        fragment += [read_glsl(name) for name in PBR_LIBRARY]
     fragment.append(read_glsl(MODEL_FILES[features.model]))
     fragment.append(read_glsl("mesh.frag.glsl"))
     return ProgramSource(
@@ -156,12 +187,16 @@ def pack_lights(snapshot: Snapshot, max_lights: int) -> bytes:
 
 
 def pack_material(m: MaterialParams) -> bytes:
+    complex_ior = m.ior_n is not None and m.ior_k is not None
     rows = [
         [*m.base_color, 1.0],
         [*m.diffuse_color, 1.0],
         [*m.specular_color, 1.0],
         [*m.ambient_color, 1.0],
         [m.roughness, m.metalness, max(m.shininess, 1e-4), m.f0],
+        [m.f90, max(m.fresnel_p, 1e-3), 1.0 if complex_ior else 0.0, 0.0],
+        [*(m.ior_n if complex_ior else (1.0, 1.0, 1.0)), 0.0],
+        [*(m.ior_k if complex_ior else (0.0, 0.0, 0.0)), 0.0],
     ]
     return np.asarray(rows, np.float32).tobytes()
 

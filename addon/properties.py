@@ -19,6 +19,35 @@ MODEL_ITEMS = (
 )
 
 
+TERM_ITEMS = {
+    "fresnel": (
+        ("SCHLICK", "Schlick", "Schlick 1994, eq. 1.11: F0 + (F90 - F0)(1 - l.h)^5"),
+        ("SCHLICK_SG", "Spherical Gaussian", "Lagarde 2012, eq. 1.12: the exponent as a power of 2"),
+        ("SCHLICK_GENERAL", "Generalised Schlick", "Eq. 1.13: the material's F90 and exponent 1/p"),
+        ("EXACT", "Exact", "Fresnel's equations: dielectric from the IOR, metal from its complex IOR"),
+    ),
+    "ndf": (
+        ("GGX", "GGX", "Walter et al. 2007 / Trowbridge-Reitz, eq. 1.15: long-tailed"),
+        ("BECKMANN", "Beckmann", "Beckmann 1963, eq. 1.14: the Cook-Torrance distribution"),
+    ),
+    "visibility": (
+        ("SMITH_CORRELATED", "Smith Height-Correlated", "Heitz 2014, eqs. 1.16-1.17"),
+        ("SMITH_SEPARABLE", "Smith Separable", "G1(v) G1(l), Walter et al. 2007"),
+        ("VCAVITY", "V-Cavity", "Torrance-Sparrow / Cook-Torrance 1982"),
+        ("APPROX", "Fast Approximation", "Hammon 2017 (GGX) or Schlick 1994 (Beckmann)"),
+    ),
+    "diffuse": (
+        ("LAMBERT", "Lambert", "Eq. 1.18: (1 - F) rho / pi"),
+        ("BURLEY", "Burley", "Burley 2012, Disney's retro-reflective diffuse (not energy conserving)"),
+        ("BURLEY_RENORMALIZED", "Burley Renormalised", "Lagarde & de Rousiers 2014 (Frostbite)"),
+        ("OREN_NAYAR", "Oren-Nayar", "Oren & Nayar 1994, the full model, sigma = roughness"),
+        ("GGX_HAMMON", "GGX Rough Diffuse", "Hammon 2017: Lambertian microfacets under GGX + Smith"),
+    ),
+}
+TERM_LABELS = {"fresnel": "Fresnel", "ndf": "Distribution", "visibility": "Masking-Shadowing",
+               "diffuse": "Diffuse"}
+
+
 def _redraw(self, context):
     """Add-on properties alone do not tag the depsgraph: tag the owner so renders update."""
     owner = self.id_data
@@ -53,6 +82,18 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
             ("GAMMA22", "Gamma 2.2", "The power-law approximation: display value = y^(1/2.2)"),
         ),
         description="Transfer function from display-linear to display values")
+    fresnel: EnumProperty(name="Fresnel", items=TERM_ITEMS["fresnel"], default="SCHLICK", update=_redraw)
+    ndf: EnumProperty(name="Distribution", items=TERM_ITEMS["ndf"], default="GGX", update=_redraw)
+    visibility: EnumProperty(name="Masking-Shadowing", items=TERM_ITEMS["visibility"],
+                             default="SMITH_CORRELATED", update=_redraw)
+    diffuse: EnumProperty(name="Diffuse", items=TERM_ITEMS["diffuse"], default="LAMBERT", update=_redraw)
+    multiscatter: BoolProperty(
+        name="Multiple Scattering", default=False, update=_redraw,
+        description="Compensate the energy single-scatter microfacet specular loses at high roughness "
+                    "(Turquin 2019, with a directional-albedo table built by the engine)")
+    normalized_blinn_phong: BoolProperty(
+        name="Energy-Normalised Blinn-Phong", default=False, update=_redraw,
+        description="Blinn-Phong's specular as the normalised lobe (s + 8) / (8 pi) (n.h)^s")
     samples: IntProperty(
         name="Anti-Aliasing", default=1, min=1, max=8, update=_redraw,
         description="Supersampling grid per axis for final renders: N x N sub-pixel samples averaged "
@@ -70,6 +111,14 @@ class ShadingLabMaterialSettings(bpy.types.PropertyGroup):
         name="Model", default="SCENE", update=_redraw,
         items=(("SCENE", "Scene's", "Use the model chosen in the Render properties"), *MODEL_ITEMS),
         description="Shading model for this material, overriding the scene's")
+    fresnel: EnumProperty(name="Fresnel", items=(("SCENE", "Scene's", ""), *TERM_ITEMS["fresnel"]),
+                          default="SCENE", update=_redraw)
+    ndf: EnumProperty(name="Distribution", items=(("SCENE", "Scene's", ""), *TERM_ITEMS["ndf"]),
+                      default="SCENE", update=_redraw)
+    visibility: EnumProperty(name="Masking-Shadowing", default="SCENE", update=_redraw,
+                             items=(("SCENE", "Scene's", ""), *TERM_ITEMS["visibility"]))
+    diffuse: EnumProperty(name="Diffuse", items=(("SCENE", "Scene's", ""), *TERM_ITEMS["diffuse"]),
+                          default="SCENE", update=_redraw)
     use_base_color: _override("Base Color", "base colour")
     base_color: FloatVectorProperty(name="Base Color", subtype="COLOR", size=3, min=0.0, max=1.0,
                                     default=(0.8, 0.8, 0.8), update=_redraw)
@@ -82,6 +131,18 @@ class ShadingLabMaterialSettings(bpy.types.PropertyGroup):
     f0: FloatProperty(name="Dielectric F0", default=0.04, min=0.0, max=1.0, update=_redraw,
                       description="Fresnel reflectance at normal incidence of the dielectric part "
                               "(0.04 for IOR 1.5; 0 removes the specular lobe)")
+    use_f90: _override("F90", "grazing reflectance of the generalised Schlick Fresnel")
+    f90: FloatProperty(name="F90", default=1.0, min=0.0, max=1.0, update=_redraw,
+                       description="Reflectance at grazing incidence (eq. 1.13); otherwise saturate(50 F0)")
+    fresnel_p: FloatProperty(name="Fresnel p", default=0.2, min=0.01, max=10.0, update=_redraw,
+                             description="Eq. 1.13's p: the Fresnel tail is (1 - l.h)^(1/p); "
+                                         "0.2 is Schlick's")
+    use_complex_ior: _override("Complex IOR", "conductor's complex index of refraction")
+    ior_n: FloatVectorProperty(name="IOR n", size=3, min=0.0, default=(0.18, 0.42, 1.37), update=_redraw,
+                               description="Real part of the metal's index of refraction per rgb channel "
+                                           "(exact Fresnel); default: gold")
+    ior_k: FloatVectorProperty(name="IOR k", size=3, min=0.0, default=(3.42, 2.35, 1.77), update=_redraw,
+                               description="Extinction coefficient per rgb channel (exact Fresnel)")
     use_shininess: _override("Shininess", "Blinn-Phong exponent")
     shininess: FloatProperty(name="Shininess", default=30.0, min=0.0, soft_max=1000.0, update=_redraw,
                              description="Blinn-Phong/Phong specular exponent (otherwise derived "

@@ -64,8 +64,10 @@ def _cached_program(key, label: str, src: programs.ProgramSource, declare) -> gp
     return shader
 
 
-def _declare_shading(info, typedefs: str) -> None:
+def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     info.typedef_source(typedefs)
+    if features.terms.multiscatter and features.model == "PBR":
+        info.sampler(0, "FLOAT_2D", "ms_table")
     info.uniform_buf(0, "FrameData", "frame")
     info.uniform_buf(1, "LightBlock", "lights")
     info.uniform_buf(2, "MaterialData", "material")
@@ -88,7 +90,24 @@ def get_program(features: programs.Features) -> gpu.types.GPUShader:
     """The shading program for ``features``, compiled once and cached by its sorted defines."""
     src = programs.program_source(features)
     return _cached_program(features.defines(), features.model, src,
-                           lambda info: _declare_shading(info, src.typedefs))
+                           lambda info: _declare_shading(info, src.typedefs, features))
+
+
+_MS_TEXTURES: dict[tuple[str, str], gpu.types.GPUTexture] = {}
+
+
+def multiscatter_texture(terms) -> gpu.types.GPUTexture:
+    """The directional-albedo table of ``terms``' D and V as an R32F texture (built once)."""
+    from .multiscatter import albedo_table
+
+    key = (terms.ndf, terms.visibility)
+    texture = _MS_TEXTURES.get(key)
+    if texture is None:
+        table = albedo_table(*key)
+        size = table.shape[0]
+        data = gpu.types.Buffer("FLOAT", size * size, table.ravel().tolist())
+        texture = _MS_TEXTURES[key] = gpu.types.GPUTexture((size, size), format="R32F", data=data)
+    return texture
 
 
 def get_post_program(features: programs.PostFeatures) -> gpu.types.GPUShader:
@@ -99,6 +118,7 @@ def get_post_program(features: programs.PostFeatures) -> gpu.types.GPUShader:
 
 def clear_program_cache() -> None:
     _PROGRAMS.clear()
+    _MS_TEXTURES.clear()
     programs.program_source.cache_clear()
     programs.post_source.cache_clear()
 
@@ -201,7 +221,9 @@ class Renderer:
             key: gpu.types.GPUUniformBuf(programs.pack_material(m))
             for key, m in snapshot.materials.items()
         }
-        by_model: dict[str, list] = {}
+        features = {key: programs.Features.from_snapshot(snapshot, material=m)
+                    for key, m in snapshot.materials.items()}
+        groups: dict[programs.Features, list] = {}
         for index, item in enumerate(snapshot.items):
             batches = self._batches.get(item.geometry)
             if not batches:
@@ -209,18 +231,19 @@ class Renderer:
             object_ubo = gpu.types.GPUUniformBuf(programs.pack_object(item.matrix, item.normal_matrix))
             for slot, batch in batches:
                 key = item.materials[slot] if slot < len(item.materials) else item.materials[-1]
-                model = snapshot.materials[key].model or snapshot.settings.model
-                by_model.setdefault(model, []).append((index, object_ubo, material_ubos[key], batch))
+                groups.setdefault(features[key], []).append((index, object_ubo, material_ubos[key], batch))
         gpu.state.depth_test_set("LESS_EQUAL")
         gpu.state.depth_mask_set(True)
         gpu.state.face_culling_set("NONE")
         gpu.state.blend_set("NONE")
         try:
-            for model, draws in sorted(by_model.items()):
-                shader = get_program(programs.Features.from_snapshot(snapshot, model))
+            for feature_set, draws in sorted(groups.items(), key=lambda kv: kv[0].defines()):
+                shader = get_program(feature_set)
                 shader.bind()
                 shader.uniform_block("frame", frame_ubo)
                 shader.uniform_block("lights", light_ubo)
+                if feature_set.model == "PBR" and feature_set.terms.multiscatter:
+                    shader.uniform_sampler("ms_table", multiscatter_texture(feature_set.terms))
                 for index, object_ubo, material_ubo, batch in draws:
                     if should_stop is not None and index % 64 == 0 and should_stop():
                         return

@@ -9,8 +9,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .snapshot import Light, MaterialParams
+from .snapshot import Light, MaterialParams, Terms
 
+DEFAULT_TERMS = Terms()
 PI = np.pi
 INV_PI = 1.0 / np.pi
 MIN_PERCEPTUAL_ROUGHNESS = 0.045
@@ -33,10 +34,59 @@ def pow5(x):
 
 # --- BRDF terms (glsl/brdf.glsl) ---------------------------------------------------------------
 
+def _rgb_scalar(x):
+    return np.asarray(x, np.float64)[..., None]
+
+
 def F_Schlick(f0, f90, LoH):
     """Eq. 1.11 (F90 = 1) / eq. 1.13 with p = 1/5, on l.h."""
     f0 = np.asarray(f0, np.float64)
-    return f0 + (np.asarray(f90)[..., None] - f0) * pow5(1.0 - np.asarray(LoH))[..., None]
+    return f0 + (_rgb_scalar(f90) - f0) * _rgb_scalar(pow5(1.0 - np.asarray(LoH, np.float64)))
+
+
+def F_SchlickSG(f0, f90, LoH):
+    """Eq. 1.12."""
+    LoH = np.asarray(LoH, np.float64)
+    f0 = np.asarray(f0, np.float64)
+    return f0 + (_rgb_scalar(f90) - f0) * _rgb_scalar(np.exp2((-5.55473 * LoH - 6.98316) * LoH))
+
+
+def F_SchlickGeneral(f0, f90, p, LoH):
+    """Eq. 1.13."""
+    f0 = np.asarray(f0, np.float64)
+    base = np.maximum(1.0 - np.asarray(LoH, np.float64), 0.0)
+    return f0 + (_rgb_scalar(f90) - f0) * _rgb_scalar(base ** (1.0 / np.asarray(p, np.float64)))
+
+
+def F_Dielectric(eta, cos_i):
+    """Exact unpolarised dielectric Fresnel (Walter et al. 2007, eq. 22); 1 under total reflection."""
+    c = np.abs(np.asarray(cos_i, np.float64))
+    g2 = np.asarray(eta, np.float64) ** 2 - 1.0 + c * c
+    g = np.sqrt(np.maximum(g2, 0.0))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = (g - c) / (g + c)
+        b = (c * (g + c) - 1.0) / (c * (g - c) + 1.0)
+        f = 0.5 * a * a * (1.0 + b * b)
+    return np.where(g2 <= 0.0, 1.0, f)
+
+
+def F_Conductor(n, k, cos_i):
+    """Exact unpolarised conductor Fresnel per channel (PBRT 3rd ed., FrConductor, from air)."""
+    n = np.asarray(n, np.float64)
+    k = np.asarray(k, np.float64)
+    c = _rgb_scalar(np.clip(cos_i, 0.0, 1.0))
+    c2 = c * c
+    s2 = 1.0 - c2
+    t0 = n * n - k * k - s2
+    a2b2 = np.sqrt(t0 * t0 + 4.0 * n * n * k * k)
+    a = np.sqrt(np.maximum(0.5 * (a2b2 + t0), 0.0))
+    t1 = a2b2 + c2
+    t2 = 2.0 * c * a
+    rs = (t1 - t2) / np.maximum(t1 + t2, 1e-30)
+    t3 = c2 * a2b2 + s2 * s2
+    t4 = t2 * s2
+    rp = rs * (t3 - t4) / np.maximum(t3 + t4, 1e-30)
+    return 0.5 * (rp + rs)
 
 
 def D_GGX(NoH, NxH2, alpha):
@@ -44,6 +94,16 @@ def D_GGX(NoH, NxH2, alpha):
     a = NoH * alpha
     k = alpha / (NxH2 + a * a)
     return k * k * INV_PI
+
+
+def D_Beckmann(NoH, NxH2, alpha):
+    """Eq. 1.14."""
+    NoH = np.asarray(NoH, np.float64)
+    a2 = alpha * alpha
+    c2 = NoH * NoH
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        d = np.exp(-np.asarray(NxH2) / (a2 * c2)) / (PI * a2 * c2 * c2)
+    return np.where(NoH > 0.0, d, 0.0)
 
 
 def V_SmithGGXCorrelated(NoV, NoL, alpha):
@@ -54,8 +114,89 @@ def V_SmithGGXCorrelated(NoV, NoL, alpha):
     return 0.5 / (lambda_v + lambda_l)
 
 
+def V_SmithGGXSeparable(NoV, NoL, alpha):
+    a2 = alpha * alpha
+    gv = NoV + np.sqrt(a2 + (1.0 - a2) * NoV * NoV)
+    gl = NoL + np.sqrt(a2 + (1.0 - a2) * NoL * NoL)
+    return 1.0 / (gv * gl)
+
+
+def Lambda_Beckmann(NoX, alpha):
+    NoX = np.asarray(NoX, np.float64)
+    s2 = np.maximum(1.0 - NoX * NoX, 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = NoX / (alpha * np.sqrt(s2))
+        lam = (1.0 - 1.259 * a + 0.396 * a * a) / (3.535 * a + 2.181 * a * a)
+    return np.where((s2 <= 0.0) | (a >= 1.6), 0.0, lam)
+
+
+def V_SmithBeckmannCorrelated(NoV, NoL, alpha):
+    G = 1.0 / (1.0 + Lambda_Beckmann(NoV, alpha) + Lambda_Beckmann(NoL, alpha))
+    return G / (4.0 * NoV * NoL)
+
+
+def V_SmithBeckmannSeparable(NoV, NoL, alpha):
+    G = 1.0 / ((1.0 + Lambda_Beckmann(NoV, alpha)) * (1.0 + Lambda_Beckmann(NoL, alpha)))
+    return G / (4.0 * NoV * NoL)
+
+
+def V_CookTorrance(NoV, NoL, NoH, VoH):
+    G = np.minimum(1.0, 2.0 * NoH * np.minimum(NoV, NoL) / np.maximum(VoH, MIN_COS))
+    return G / (4.0 * NoV * NoL)
+
+
+def V_SmithGGXHammon(NoV, NoL, alpha):
+    return 0.5 / (2.0 * NoL * NoV + alpha * (NoL + NoV - 2.0 * NoL * NoV))
+
+
+def V_SchlickBeckmann(NoV, NoL, alpha):
+    k = alpha * 0.7978845608
+    return 0.25 / ((NoV * (1.0 - k) + k) * (NoL * (1.0 - k) + k))
+
+
 def Fd_Lambert():
     return INV_PI
+
+
+def Fd_Burley(NoV, NoL, LoH, roughness):
+    f90 = 0.5 + 2.0 * roughness * LoH * LoH
+    return (1.0 + (f90 - 1.0) * pow5(1.0 - NoL)) * (1.0 + (f90 - 1.0) * pow5(1.0 - NoV)) * INV_PI
+
+
+def Fd_BurleyRenormalized(NoV, NoL, LoH, roughness):
+    energy_bias = 0.5 * roughness
+    energy_factor = 1.0 + roughness * (1.0 / 1.51 - 1.0)
+    f90 = energy_bias + 2.0 * LoH * LoH * roughness
+    light = 1.0 + (f90 - 1.0) * pow5(1.0 - NoL)
+    view = 1.0 + (f90 - 1.0) * pow5(1.0 - NoV)
+    return light * view * energy_factor * INV_PI
+
+
+def Fd_OrenNayar(rho, NoV, NoL, cos_phi, roughness):
+    rho = np.asarray(rho, np.float64)
+    s2 = roughness * roughness
+    theta_i = np.arccos(np.clip(NoL, -1.0, 1.0))
+    theta_r = np.arccos(np.clip(NoV, -1.0, 1.0))
+    alpha = np.maximum(theta_i, theta_r)
+    beta = np.minimum(theta_i, theta_r)
+    C1 = 1.0 - 0.5 * s2 / (s2 + 0.33)
+    C2 = 0.45 * s2 / (s2 + 0.09) * np.where(cos_phi >= 0.0, np.sin(alpha),
+                                             np.sin(alpha) - (2.0 * beta / PI) ** 3)
+    C3 = 0.125 * (s2 / (s2 + 0.09)) * (4.0 * alpha * beta / (PI * PI)) ** 2
+    L1 = (C1 + cos_phi * C2 * np.tan(np.minimum(beta, 1.5))
+          + (1.0 - np.abs(cos_phi)) * C3 * np.tan(np.minimum(0.5 * (alpha + beta), 1.5)))
+    L2 = 0.17 * s2 / (s2 + 0.13) * (1.0 - cos_phi * (2.0 * beta / PI) ** 2)
+    return (rho * _rgb_scalar(L1) + rho * rho * _rgb_scalar(L2)) * INV_PI
+
+
+def Fd_GGXHammon(rho, NoV, NoL, NoH, LoV, alpha):
+    rho = np.asarray(rho, np.float64)
+    facing = 0.5 + 0.5 * LoV
+    rough = facing * (0.9 - 0.4 * facing) * ((0.5 + NoH) / np.maximum(NoH, MIN_COS))
+    smooth = 1.05 * (1.0 - pow5(1.0 - NoL)) * (1.0 - pow5(1.0 - NoV))
+    single = smooth + alpha * (rough - smooth)
+    multi = 0.1159 * alpha
+    return rho * (_rgb_scalar(single) + rho * multi) * INV_PI
 
 
 def S_BlinnPhong(NoH, shininess):
@@ -65,6 +206,10 @@ def S_BlinnPhong(NoH, shininess):
 def S_Phong(n, l, v, shininess):
     r = 2.0 * _dot(n, l)[..., None] * n - l
     return np.power(np.maximum(_dot(r, v), 0.0), shininess)
+
+
+def S_BlinnPhongNormalized(NoH, shininess):
+    return (shininess + 8.0) / (8.0 * PI) * np.power(np.maximum(NoH, 0.0), shininess)
 
 
 def half_vector(l, v, n):
@@ -106,7 +251,7 @@ def light_irradiance(light: Light, p):
     return {"POINT": E_Point, "SPOT": E_Spot, "SUN": E_Sun, "AREA": E_Area}[light.kind](light, p)
 
 
-# --- models (glsl/model_*.glsl) ----------------------------------------------------------------
+# --- models (glsl/surface.glsl, pbr_terms.glsl, multiscatter.glsl, model_*.glsl) ----------------
 
 class Surface:
     """The twin of ``struct Surface``: arrays of points, normals, view directions + a material."""
@@ -125,18 +270,31 @@ class Surface:
         self.metalness = material.metalness
         self.shininess = max(material.shininess, 1e-4)
         self.f0_dielectric = material.f0
+        self.f0 = (1.0 - self.metalness) * self.f0_dielectric + self.metalness * self.base_color
+        self.f90 = material.f90 if material.f90 >= 0.0 else float(np.clip(50.0 * np.mean(self.f0), 0.0, 1.0))
+        self.fresnel_p = max(material.fresnel_p, 1e-3)
+        sqrt_f0 = np.sqrt(min(self.f0_dielectric, 0.99))
+        self.eta = (1.0 + sqrt_f0) / (1.0 - sqrt_f0)
+        self.has_complex_ior = material.ior_n is not None and material.ior_k is not None
+        self.ior_n = np.asarray(material.ior_n if self.has_complex_ior else (1.0, 1.0, 1.0), np.float64)
+        self.ior_k = np.asarray(material.ior_k if self.has_complex_ior else (0.0, 0.0, 0.0), np.float64)
 
 
-def blinn_phong_direct(s: Surface, l, E, factors):
+def blinn_phong_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
     NoL = _dot(s.n, l)
     c_light = E * INV_PI
     h = half_vector(l, s.v, s.n)
+    NoH = _dot(s.n, h)
     diffuse = s.diffuse_color * c_light * factors[0] * NoL[..., None]
-    specular = s.specular_color * c_light * factors[1] * S_BlinnPhong(_dot(s.n, h), s.shininess)[..., None]
+    if terms.normalized_blinn_phong:
+        lobe = S_BlinnPhongNormalized(NoH, s.shininess) * NoL
+        specular = s.specular_color * E * factors[1] * lobe[..., None]
+    else:
+        specular = s.specular_color * c_light * factors[1] * S_BlinnPhong(NoH, s.shininess)[..., None]
     return np.where((NoL > 0.0)[..., None], diffuse + specular, 0.0)
 
 
-def phong_direct(s: Surface, l, E, factors):
+def phong_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
     NoL = _dot(s.n, l)
     c_light = E * INV_PI
     diffuse = s.diffuse_color * c_light * factors[0] * NoL[..., None]
@@ -144,27 +302,82 @@ def phong_direct(s: Surface, l, E, factors):
     return np.where((NoL > 0.0)[..., None], diffuse + specular, 0.0)
 
 
-def pbr_f0(s: Surface):
-    return (1.0 - s.metalness) * s.f0_dielectric + s.metalness * s.base_color
+def pbr_fresnel(s: Surface, LoH, terms: Terms):
+    f90 = np.full(np.shape(LoH), s.f90)
+    if terms.fresnel == "SCHLICK_SG":
+        return F_SchlickSG(s.f0, f90, LoH)
+    if terms.fresnel == "SCHLICK_GENERAL":
+        return F_SchlickGeneral(s.f0, f90, s.fresnel_p, LoH)
+    if terms.fresnel == "EXACT":
+        dielectric = _rgb_scalar(F_Dielectric(s.eta, LoH))
+        if s.has_complex_ior:
+            metal = F_Conductor(s.ior_n, s.ior_k, LoH)
+        else:
+            metal = F_Schlick(s.base_color, np.ones(np.shape(LoH)), LoH)
+        return dielectric + s.metalness * (metal - dielectric)
+    return F_Schlick(s.f0, f90, LoH)
 
 
-def pbr_f90(f0):
-    return saturate(50.0 * np.mean(f0))
+def pbr_distribution(NoH, NxH2, alpha, terms: Terms):
+    return (D_Beckmann if terms.ndf == "BECKMANN" else D_GGX)(NoH, NxH2, alpha)
 
 
-def pbr_direct(s: Surface, l, E, factors):
+def pbr_visibility(NoV, NoL, NoH, LoH, alpha, terms: Terms):
+    if terms.visibility == "VCAVITY":
+        return V_CookTorrance(NoV, NoL, NoH, LoH)
+    table = {
+        ("GGX", "SMITH_CORRELATED"): V_SmithGGXCorrelated,
+        ("GGX", "SMITH_SEPARABLE"): V_SmithGGXSeparable,
+        ("GGX", "APPROX"): V_SmithGGXHammon,
+        ("BECKMANN", "SMITH_CORRELATED"): V_SmithBeckmannCorrelated,
+        ("BECKMANN", "SMITH_SEPARABLE"): V_SmithBeckmannSeparable,
+        ("BECKMANN", "APPROX"): V_SchlickBeckmann,
+    }
+    return table[terms.ndf, terms.visibility](NoV, NoL, alpha)
+
+
+def pbr_diffuse(s: Surface, F, NoV, NoL, NoH, LoH, LoV, terms: Terms):
+    rho = s.base_color * (1.0 - s.metalness)
+    if terms.diffuse == "BURLEY":
+        return rho * _rgb_scalar(Fd_Burley(NoV, NoL, LoH, s.roughness))
+    if terms.diffuse == "BURLEY_RENORMALIZED":
+        return rho * _rgb_scalar(Fd_BurleyRenormalized(NoV, NoL, LoH, s.roughness))
+    if terms.diffuse == "OREN_NAYAR":
+        denom = np.sqrt(np.maximum((1.0 - NoL * NoL) * (1.0 - NoV * NoV), 0.0))
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cos_phi = np.where(denom > 1e-6, np.clip((LoV - NoL * NoV) / denom, -1.0, 1.0), 1.0)
+        return Fd_OrenNayar(rho, NoV, NoL, cos_phi, s.roughness)
+    if terms.diffuse == "GGX_HAMMON":
+        return Fd_GGXHammon(rho, NoV, NoL, NoH, LoV, s.alpha)
+    return (1.0 - F) * rho * Fd_Lambert()
+
+
+def specular_energy_compensation(s: Surface, terms: Terms):
+    """Turquin 2019: 1 + F0 (1 / E(mu_o) - 1), E from addon/multiscatter.py's table."""
+    if not terms.multiscatter:
+        return np.ones(np.shape(s.NoV) + (3,))
+    from .multiscatter import albedo_table, interpolate
+
+    table = albedo_table(terms.ndf, terms.visibility)
+    E = np.maximum(interpolate(table, s.NoV, np.full(np.shape(s.NoV), s.roughness)), 1e-3)
+    return 1.0 + s.f0 * _rgb_scalar(1.0 / E - 1.0)
+
+
+def pbr_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
     NoL = _dot(s.n, l)
+    NoL_pos = np.maximum(NoL, 0.0)
     h = half_vector(l, s.v, s.n)
     NoH = saturate(_dot(s.n, h))
     NxH = np.cross(s.n, h)
     LoH = saturate(_dot(l, h))
-    f0 = pbr_f0(s)
-    F = F_Schlick(f0, np.full(np.shape(NoH), pbr_f90(f0)), LoH)
-    D = D_GGX(NoH, _dot(NxH, NxH), s.alpha)
-    V = V_SmithGGXCorrelated(s.NoV, np.maximum(NoL, 0.0), s.alpha)
-    specular = F * (D * V)[..., None]
-    diffuse = (1.0 - F) * s.base_color * (1.0 - s.metalness) * Fd_Lambert()
-    out = (diffuse * factors[0] + specular * factors[1]) * E * NoL[..., None]
+    LoV = _dot(l, s.v)
+    F = pbr_fresnel(s, LoH, terms)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        D = pbr_distribution(NoH, _dot(NxH, NxH), s.alpha, terms)
+        V = pbr_visibility(s.NoV, NoL_pos, NoH, LoH, s.alpha, terms)
+        specular = F * _rgb_scalar(D * V) * specular_energy_compensation(s, terms)
+        diffuse = pbr_diffuse(s, F, s.NoV, NoL_pos, NoH, LoH, LoV, terms)
+        out = (diffuse * factors[0] + specular * factors[1]) * E * NoL_pos[..., None]
     return np.where((NoL > 0.0)[..., None], out, 0.0)
 
 
@@ -175,7 +388,8 @@ MODELS = {
 }
 
 
-def shade(model: str, s: Surface, lights: list[Light], ambient: float = 0.0):
+def shade(model: str, s: Surface, lights: list[Light], ambient: float = 0.0,
+          terms: Terms = DEFAULT_TERMS):
     """Outgoing radiance (rgb) at every point of ``s``: the twin of mesh.frag.glsl's main()."""
     direct, ldr = MODELS[model]
     c = np.zeros(np.shape(s.p), np.float64)
@@ -183,5 +397,5 @@ def shade(model: str, s: Surface, lights: list[Light], ambient: float = 0.0):
         c = c + s.ambient_color * ambient  # eq. 1.4
     for light in lights:
         E, l = light_irradiance(light, s.p)
-        c = c + direct(s, l, E, (light.diffuse_factor, light.specular_factor))
+        c = c + direct(s, l, E, (light.diffuse_factor, light.specular_factor), terms)
     return np.clip(c, 0.0, 1.0) if ldr else c

@@ -7,11 +7,42 @@ renderer and the numpy reference read them, and tests can build them by hand.
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
 MODELS = ("BLINN_PHONG", "PHONG", "PBR")
+
+#: The physically based model's term variants (glsl/pbr_terms.glsl), the first of each the default.
+TERM_CHOICES = {
+    "fresnel": ("SCHLICK", "SCHLICK_SG", "SCHLICK_GENERAL", "EXACT"),
+    "ndf": ("GGX", "BECKMANN"),
+    "visibility": ("SMITH_CORRELATED", "SMITH_SEPARABLE", "VCAVITY", "APPROX"),
+    "diffuse": ("LAMBERT", "BURLEY", "BURLEY_RENORMALIZED", "OREN_NAYAR", "GGX_HAMMON"),
+}
+
+
+@dataclass(frozen=True)
+class Terms:
+    """Which variant of each term the shading programs use."""
+
+    fresnel: str = "SCHLICK"
+    ndf: str = "GGX"
+    visibility: str = "SMITH_CORRELATED"
+    diffuse: str = "LAMBERT"
+    multiscatter: bool = False  # specular energy compensation
+    normalized_blinn_phong: bool = False
+
+    def __post_init__(self):
+        for family, choices in TERM_CHOICES.items():
+            if getattr(self, family) not in choices:
+                raise ValueError(f"unknown {family} term {getattr(self, family)!r}; "
+                                 f"expected one of {choices}")
+
+    def override(self, **families: str) -> Terms:
+        """These terms with the non-empty entries of ``families`` replaced (per-material choices)."""
+        changes = {k: v for k, v in families.items() if v}
+        return replace(self, **changes) if changes else self
 LIGHT_KINDS = ("POINT", "SPOT", "SUN", "AREA")
 
 #: Fresnel reflectance at normal incidence of a dielectric with IOR 1.5 (most plastics, glass).
@@ -48,6 +79,14 @@ class MaterialParams:
     shininess: float = 30.0
     f0: float = DEFAULT_F0
     model: str = ""  # a shading model for this material only; "" follows the scene
+    f90: float = -1.0  # Schlick's grazing reflectance; < 0: saturate(50 F0)
+    fresnel_p: float = 0.2  # eq. 1.13's p; 1/5 is Schlick's fifth power
+    ior_n: tuple[float, float, float] | None = None  # conductor complex IOR n + ik (exact Fresnel)
+    ior_k: tuple[float, float, float] | None = None
+    fresnel: str = ""  # per-material term choices; "" follows the scene
+    ndf: str = ""
+    visibility: str = ""
+    diffuse: str = ""
 
 
 #: Objects without a material render with this: Blender's default surface (grey 0.8,
@@ -135,6 +174,7 @@ class Camera:
 @dataclass
 class Settings:
     model: str = "PBR"
+    terms: Terms = field(default_factory=Terms)
     ambient: float = 0.2  # the seed's "commonly used" ambient constant x (eq. 1.4)
     tone_mapper: str = "BLENDER"  # BLENDER: Combined is scene-linear, Blender's view transform displays
     exposure: float = 0.0  # EV, for the engine's own tone mappers

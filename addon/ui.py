@@ -59,6 +59,13 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
         row = layout.row()
         row.active = props.model != "PBR"
         row.prop(props, "ambient")
+        col = layout.column(heading="Physically Based")
+        col.active = props.model == "PBR"
+        for name in ("fresnel", "ndf", "visibility", "diffuse", "multiscatter"):
+            col.prop(props, name)
+        row = layout.row()
+        row.active = props.model == "BLINN_PHONG"
+        row.prop(props, "normalized_blinn_phong")
         layout.separator()
         layout.prop(props, "tone_mapper")
         if props.tone_mapper != "BLENDER":
@@ -116,12 +123,21 @@ class SHADINGLAB_PT_material(ShadingLabPanel, bpy.types.Panel):
         props = context.material.shading_lab
         layout = self.layout
         layout.prop(props, "model")
+        terms = layout.column(align=True)
+        for name in ("fresnel", "ndf", "visibility", "diffuse"):
+            terms.prop(props, name)
         layout.label(text="Unticked values come from the surface shader (Principled BSDF)")
         col = layout.column()
         col.label(text="Physically based")
         for flag, value in (("use_base_color", "base_color"), ("use_metalness", "metalness"),
                             ("use_roughness", "roughness"), ("use_f0", "f0")):
             _material_row(col, props, flag, value, "from shader")
+        _material_row(col, props, "use_f90", "f90", "saturate(50 F0)")
+        col.prop(props, "fresnel_p")
+        _material_row(col, props, "use_complex_ior", "ior_n", "Schlick from base colour")
+        sub = col.row()
+        sub.active = props.use_complex_ior
+        sub.prop(props, "ior_k")
         col.separator()
         col.label(text="Blinn-Phong / Phong")
         _material_row(col, props, "use_shininess", "shininess", "from roughness")

@@ -40,6 +40,14 @@ void main()
   s.metalness = material.params.y;
   s.shininess = material.params.z;
   s.f0_dielectric = material.params.w;
+  s.f0 = mix(vec3(s.f0_dielectric), s.base_color, s.metalness);
+  s.f90 = material.fresnel.x >= 0.0 ? material.fresnel.x : saturate(50.0 * dot(s.f0, vec3(1.0 / 3.0)));
+  s.fresnel_p = material.fresnel.y;
+  float sqrt_f0 = sqrt(min(s.f0_dielectric, 0.99));
+  s.eta = (1.0 + sqrt_f0) / (1.0 - sqrt_f0);
+  s.has_complex_ior = material.fresnel.z > 0.5;
+  s.ior_n = material.ior_n.rgb;
+  s.ior_k = material.ior_k.rgb;
 
   vec3 c = shade_ambient(s, frame.ambient.rgb);
   int count = int(frame.counts.x);

@@ -13,7 +13,12 @@ vec3 shade_direct(Surface s, vec3 l, vec3 E, vec4 factors)
   vec3 c_light = E * INV_PI;
   vec3 h = half_vector(l, s.v, s.n);
   vec3 diffuse = s.diffuse_color * c_light * factors.x * NoL;
+#ifdef SL_BLINN_PHONG_NORMALIZED
+  /* energy-normalised option: a BRDF lobe, so it takes E and n.l like the diffuse term */
+  vec3 specular = s.specular_color * E * factors.y * S_BlinnPhongNormalized(dot(s.n, h), s.shininess) * NoL;
+#else
   vec3 specular = s.specular_color * c_light * factors.y * S_BlinnPhong(dot(s.n, h), s.shininess);
+#endif
   return diffuse + specular;
 }
 

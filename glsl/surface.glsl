@@ -14,6 +14,13 @@ struct Surface {
   float metalness;
   float shininess;
   float f0_dielectric;
+  vec3 f0;            /* mix(F0 dielectric, base colour, metalness) */
+  float f90;          /* Schlick's grazing reflectance: saturate(50 F0) unless the material sets it */
+  float fresnel_p;    /* eq. 1.13's p (1/5 gives eq. 1.11) */
+  float eta;          /* dielectric IOR from F0: (1 + sqrt F0) / (1 - sqrt F0) */
+  bool has_complex_ior;
+  vec3 ior_n;         /* conductor's complex IOR n + ik per channel (exact Fresnel) */
+  vec3 ior_k;
 };
 
 /* Unit half vector of eq. 1.6; l + v = 0 only when the light is exactly behind the viewer's

@@ -9,6 +9,7 @@ import pytest
 import scenes
 
 from addon import programs, renderer
+from addon import snapshot as S
 
 
 def preprocess(source: str, defines: dict[str, str]) -> str:
@@ -69,7 +70,12 @@ def test_models_compile_only_their_own_lobes():
 
 def test_feature_keys():
     a = programs.Features("PBR", 4, frozenset({"POINT"}))
-    assert a.defines() == (("SL_HAS_POINT", "1"), ("SL_MAX_LIGHTS", "4"), ("SL_MODEL_PBR", "1"))
+    assert a.defines() == (("SL_DIFFUSE_LAMBERT", "1"), ("SL_FRESNEL_SCHLICK", "1"), ("SL_HAS_POINT", "1"),
+                           ("SL_MAX_LIGHTS", "4"), ("SL_MODEL_PBR", "1"), ("SL_NDF_GGX", "1"),
+                           ("SL_VISIBILITY_SMITH_CORRELATED", "1"))
+    # terms a model does not use do not split its programs
+    bp = programs.Features("BLINN_PHONG", 4, frozenset({"POINT"}), S.Terms(ndf="BECKMANN", multiscatter=True))
+    assert bp.defines() == programs.Features("BLINN_PHONG", 4, frozenset({"POINT"})).defines()
     assert programs.Features("PBR", 4, frozenset({"POINT"})).defines() == a.defines()
     assert [programs._bucket(n) for n in (0, 1, 2, 3, 5, 64)] == [1, 1, 2, 4, 8, 64]
     with pytest.raises(ValueError, match="unknown shading model"):

@@ -1,0 +1,34 @@
+/* Specular multiple-scattering energy compensation (Turquin 2019, "Practical multiple scattering
+ * compensation for microfacet models"; Fdez-Aguera 2019): single-scatter microfacet lobes lose
+ * the energy of light that bounces more than once between microfacets, 1 - E(mu) of it for a
+ * white surface. Scaling f_spec by 1 + F0 (1 / E(mu_o) - 1) restores it, with E the directional
+ * albedo of the chosen D and V with F = 1, tabulated by addon/multiscatter.py over
+ * (mu = n.v, perceptual roughness) at texel centres and interpolated bilinearly here (texelFetch,
+ * so that the numpy twin interpolates identically). */
+
+#ifdef SL_MULTISCATTER
+float ms_albedo(float NoV, float roughness)
+{
+  float n = float(SL_MS_SIZE);
+  vec2 x = clamp(vec2(NoV, roughness) * n - 0.5, vec2(0.0), vec2(n - 1.0));
+  ivec2 i0 = ivec2(floor(x));
+  ivec2 i1 = min(i0 + 1, ivec2(SL_MS_SIZE - 1));
+  vec2 t = x - vec2(i0);
+  float e00 = texelFetch(ms_table, ivec2(i0.x, i0.y), 0).r;
+  float e10 = texelFetch(ms_table, ivec2(i1.x, i0.y), 0).r;
+  float e01 = texelFetch(ms_table, ivec2(i0.x, i1.y), 0).r;
+  float e11 = texelFetch(ms_table, ivec2(i1.x, i1.y), 0).r;
+  return mix(mix(e00, e10, t.x), mix(e01, e11, t.x), t.y);
+}
+
+vec3 specular_energy_compensation(Surface s)
+{
+  float E = max(ms_albedo(s.NoV, s.roughness), 1e-3);
+  return 1.0 + s.f0 * (1.0 / E - 1.0);
+}
+#else
+vec3 specular_energy_compensation(Surface s)
+{
+  return vec3(1.0);
+}
+#endif
