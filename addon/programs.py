@@ -56,6 +56,7 @@ class Features:
     max_lights: int = 1
     light_kinds: frozenset[str] = frozenset()
     terms: Terms = Terms()
+    half_target: bool = False  # drawing into RGBA16F: cap radiance at 65504
 
     def __post_init__(self):
         if self.model not in MODELS:
@@ -73,7 +74,7 @@ class Features:
 
     @classmethod
     def from_snapshot(cls, snapshot: Snapshot, model: str | None = None,
-                      material: MaterialParams | None = None) -> Features:
+                      material: MaterialParams | None = None, half_target: bool = False) -> Features:
         """The scene's features, for ``model`` or for ``material`` (its model and term overrides)."""
         terms = snapshot.settings.terms
         if material is not None:
@@ -85,6 +86,7 @@ class Features:
             max_lights=_bucket(len(snapshot.lights)),
             light_kinds=frozenset(light.kind for light in snapshot.lights),
             terms=terms,
+            half_target=half_target,
         )
 
     def defines(self) -> tuple[tuple[str, str], ...]:
@@ -98,6 +100,8 @@ class Features:
                 out += [("SL_MULTISCATTER", "1"), ("SL_MS_SIZE", str(MS_SIZE))]
         if t.normalized_blinn_phong:
             out.append(("SL_BLINN_PHONG_NORMALIZED", "1"))
+        if self.half_target:
+            out.append(("SL_HALF_TARGET", "1"))
         return tuple(sorted(out))
 
 

@@ -211,7 +211,7 @@ class Renderer:
                 self.uploaded_geometry += 1
 
     def draw(self, snapshot: Snapshot, view_projection: np.ndarray | None = None,
-             should_stop: Callable[[], bool] | None = None) -> None:
+             should_stop: Callable[[], bool] | None = None, half_target: bool = False) -> None:
         """Draw every item into the bound framebuffer, one program per shading model in use
         (the scene's, and any material's own override)."""
         lights = programs.Features.from_snapshot(snapshot)
@@ -221,7 +221,7 @@ class Renderer:
             key: gpu.types.GPUUniformBuf(programs.pack_material(m))
             for key, m in snapshot.materials.items()
         }
-        features = {key: programs.Features.from_snapshot(snapshot, material=m)
+        features = {key: programs.Features.from_snapshot(snapshot, material=m, half_target=half_target)
                     for key, m in snapshot.materials.items()}
         groups: dict[programs.Features, list] = {}
         for index, item in enumerate(snapshot.items):

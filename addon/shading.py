@@ -125,7 +125,7 @@ def Lambda_Beckmann(NoX, alpha):
     NoX = np.asarray(NoX, np.float64)
     s2 = np.maximum(1.0 - NoX * NoX, 0.0)
     with np.errstate(divide="ignore", invalid="ignore"):
-        a = NoX / (alpha * np.sqrt(s2))
+        a = np.maximum(NoX / (alpha * np.sqrt(s2)), 1e-7)
         lam = (1.0 - 1.259 * a + 0.396 * a * a) / (3.535 * a + 2.181 * a * a)
     return np.where((s2 <= 0.0) | (a >= 1.6), 0.0, lam)
 
@@ -195,8 +195,8 @@ def Fd_GGXHammon(rho, NoV, NoL, NoH, LoV, alpha):
     rough = facing * (0.9 - 0.4 * facing) * ((0.5 + NoH) / np.maximum(NoH, MIN_COS))
     smooth = 1.05 * (1.0 - pow5(1.0 - NoL)) * (1.0 - pow5(1.0 - NoV))
     single = smooth + alpha * (rough - smooth)
-    multi = 0.1159 * alpha
-    return rho * (_rgb_scalar(single) + rho * multi) * INV_PI
+    multi = 0.1159 * np.asarray(alpha, np.float64)
+    return rho * (_rgb_scalar(single) + rho * _rgb_scalar(multi)) * INV_PI
 
 
 def S_BlinnPhong(NoH, shininess):
@@ -254,30 +254,37 @@ def light_irradiance(light: Light, p):
 # --- models (glsl/surface.glsl, pbr_terms.glsl, multiscatter.glsl, model_*.glsl) ----------------
 
 class Surface:
-    """The twin of ``struct Surface``: arrays of points, normals, view directions + a material."""
+    """The twin of ``struct Surface``: arrays of points, normals, view directions + a material.
+
+    The material's numbers may be scalars or per-point arrays ((N,) for scalars, (N, 3) for
+    colours), so sweeps can vary the material from point to point.
+    """
 
     def __init__(self, p, n, v, material: MaterialParams):
-        self.p = np.asarray(p, np.float64)
-        self.n = np.asarray(n, np.float64)
-        self.v = np.asarray(v, np.float64)
+        f64 = np.float64
+        self.p = np.asarray(p, f64)
+        self.n = np.asarray(n, f64)
+        self.v = np.asarray(v, f64)
         self.NoV = np.maximum(_dot(self.n, self.v), MIN_COS)
-        self.base_color = np.asarray(material.base_color, np.float64)
-        self.diffuse_color = np.asarray(material.diffuse_color, np.float64)
-        self.specular_color = np.asarray(material.specular_color, np.float64)
-        self.ambient_color = np.asarray(material.ambient_color, np.float64)
-        self.roughness = max(material.roughness, MIN_PERCEPTUAL_ROUGHNESS)
+        self.base_color = np.asarray(material.base_color, f64)
+        self.diffuse_color = np.asarray(material.diffuse_color, f64)
+        self.specular_color = np.asarray(material.specular_color, f64)
+        self.ambient_color = np.asarray(material.ambient_color, f64)
+        self.roughness = np.maximum(np.asarray(material.roughness, f64), MIN_PERCEPTUAL_ROUGHNESS)
         self.alpha = self.roughness * self.roughness
-        self.metalness = material.metalness
-        self.shininess = max(material.shininess, 1e-4)
-        self.f0_dielectric = material.f0
-        self.f0 = (1.0 - self.metalness) * self.f0_dielectric + self.metalness * self.base_color
-        self.f90 = material.f90 if material.f90 >= 0.0 else float(np.clip(50.0 * np.mean(self.f0), 0.0, 1.0))
-        self.fresnel_p = max(material.fresnel_p, 1e-3)
-        sqrt_f0 = np.sqrt(min(self.f0_dielectric, 0.99))
+        self.metalness = np.asarray(material.metalness, f64)
+        self.metal3 = self.metalness[..., None]  # for mixing colours
+        self.shininess = np.maximum(np.asarray(material.shininess, f64), 1e-4)
+        self.f0_dielectric = np.asarray(material.f0, f64)
+        self.f0 = (1.0 - self.metal3) * self.f0_dielectric[..., None] + self.metal3 * self.base_color
+        f90 = np.asarray(material.f90, f64)
+        self.f90 = np.where(f90 >= 0.0, f90, np.clip(50.0 * np.mean(self.f0, axis=-1), 0.0, 1.0))
+        self.fresnel_p = np.maximum(np.asarray(material.fresnel_p, f64), 1e-3)
+        sqrt_f0 = np.sqrt(np.minimum(self.f0_dielectric, 0.99))
         self.eta = (1.0 + sqrt_f0) / (1.0 - sqrt_f0)
         self.has_complex_ior = material.ior_n is not None and material.ior_k is not None
-        self.ior_n = np.asarray(material.ior_n if self.has_complex_ior else (1.0, 1.0, 1.0), np.float64)
-        self.ior_k = np.asarray(material.ior_k if self.has_complex_ior else (0.0, 0.0, 0.0), np.float64)
+        self.ior_n = np.asarray(material.ior_n if self.has_complex_ior else (1.0, 1.0, 1.0), f64)
+        self.ior_k = np.asarray(material.ior_k if self.has_complex_ior else (0.0, 0.0, 0.0), f64)
 
 
 def blinn_phong_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
@@ -303,7 +310,7 @@ def phong_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
 
 
 def pbr_fresnel(s: Surface, LoH, terms: Terms):
-    f90 = np.full(np.shape(LoH), s.f90)
+    f90 = np.broadcast_to(s.f90, np.shape(LoH))
     if terms.fresnel == "SCHLICK_SG":
         return F_SchlickSG(s.f0, f90, LoH)
     if terms.fresnel == "SCHLICK_GENERAL":
@@ -314,7 +321,7 @@ def pbr_fresnel(s: Surface, LoH, terms: Terms):
             metal = F_Conductor(s.ior_n, s.ior_k, LoH)
         else:
             metal = F_Schlick(s.base_color, np.ones(np.shape(LoH)), LoH)
-        return dielectric + s.metalness * (metal - dielectric)
+        return dielectric + s.metal3 * (metal - dielectric)
     return F_Schlick(s.f0, f90, LoH)
 
 
@@ -337,7 +344,7 @@ def pbr_visibility(NoV, NoL, NoH, LoH, alpha, terms: Terms):
 
 
 def pbr_diffuse(s: Surface, F, NoV, NoL, NoH, LoH, LoV, terms: Terms):
-    rho = s.base_color * (1.0 - s.metalness)
+    rho = s.base_color * (1.0 - s.metal3)
     if terms.diffuse == "BURLEY":
         return rho * _rgb_scalar(Fd_Burley(NoV, NoL, LoH, s.roughness))
     if terms.diffuse == "BURLEY_RENORMALIZED":
@@ -359,7 +366,7 @@ def specular_energy_compensation(s: Surface, terms: Terms):
     from .multiscatter import albedo_table, interpolate
 
     table = albedo_table(terms.ndf, terms.visibility)
-    E = np.maximum(interpolate(table, s.NoV, np.full(np.shape(s.NoV), s.roughness)), 1e-3)
+    E = np.maximum(interpolate(table, s.NoV, np.broadcast_to(s.roughness, np.shape(s.NoV))), 1e-3)
     return 1.0 + s.f0 * _rgb_scalar(1.0 / E - 1.0)
 
 

@@ -59,7 +59,7 @@ class ViewportSession:
         with scene_target.bind():
             fb = gpu.state.active_framebuffer_get()
             fb.clear(color=background, depth=1.0)
-            self.renderer.draw(snap)
+            self.renderer.draw(snap, half_target=True)
         settings = snap.settings
         if settings.tone_mapper == "BLENDER":
             return scene_target.texture_color

@@ -115,7 +115,8 @@ float Lambda_Beckmann(float NoX, float alpha)
   if (s2 <= 0.0) {
     return 0.0;
   }
-  float a = NoX / (alpha * sqrt(s2));
+  /* a -> 0 at grazing: Lambda -> 1 / (3.535 a) -> Inf; a floor of 1e-7 keeps it finite (G -> 0) */
+  float a = max(NoX / (alpha * sqrt(s2)), 1e-7);
   if (a >= 1.6) {
     return 0.0;
   }
@@ -198,8 +199,8 @@ float Fd_BurleyRenormalized(float NoV, float NoL, float LoH, float roughness)
 vec3 Fd_OrenNayar(vec3 rho, float NoV, float NoL, float cos_phi, float roughness)
 {
   float s2 = roughness * roughness;
-  float theta_i = acos(clamp(NoL, -1.0, 1.0));
-  float theta_r = acos(clamp(NoV, -1.0, 1.0));
+  float theta_i = acos_accurate(NoL);
+  float theta_r = acos_accurate(NoV);
   float alpha = max(theta_i, theta_r);
   float beta = min(theta_i, theta_r);
   float C1 = 1.0 - 0.5 * s2 / (s2 + 0.33);

@@ -24,31 +24,10 @@ vec3 shading_normal(vec3 p)
 
 void main()
 {
-  Surface s;
-  s.p = world_position;
-  s.v = view_direction(s.p);
-  vec3 n = shading_normal(s.p);
+  vec3 n = shading_normal(world_position);
   /* Back faces are shaded with the normal flipped towards the viewer, as Cycles does. */
-  s.n = gl_FrontFacing ? n : -n;
-  s.NoV = max(dot(s.n, s.v), MIN_COS);
-  s.base_color = material.base_color.rgb;
-  s.diffuse_color = material.diffuse_color.rgb;
-  s.specular_color = material.specular_color.rgb;
-  s.ambient_color = material.ambient_color.rgb;
-  s.roughness = max(material.params.x, MIN_PERCEPTUAL_ROUGHNESS);
-  s.alpha = s.roughness * s.roughness;
-  s.metalness = material.params.y;
-  s.shininess = material.params.z;
-  s.f0_dielectric = material.params.w;
-  s.f0 = mix(vec3(s.f0_dielectric), s.base_color, s.metalness);
-  s.f90 = material.fresnel.x >= 0.0 ? material.fresnel.x : saturate(50.0 * dot(s.f0, vec3(1.0 / 3.0)));
-  s.fresnel_p = material.fresnel.y;
-  float sqrt_f0 = sqrt(min(s.f0_dielectric, 0.99));
-  s.eta = (1.0 + sqrt_f0) / (1.0 - sqrt_f0);
-  s.has_complex_ior = material.fresnel.z > 0.5;
-  s.ior_n = material.ior_n.rgb;
-  s.ior_k = material.ior_k.rgb;
-
+  Surface s = make_surface(world_position, gl_FrontFacing ? n : -n, view_direction(world_position),
+                           material);
   vec3 c = shade_ambient(s, frame.ambient.rgb);
   int count = int(frame.counts.x);
   for (int i = 0; i < SL_MAX_LIGHTS; i++) {
@@ -60,5 +39,5 @@ void main()
     vec3 E = light_irradiance(light, s.p, l);
     c += shade_direct(s, l, E, light.factors);
   }
-  frag_color = vec4(shade_finish(c), 1.0);
+  frag_color = vec4(write_target(shade_finish(c)), 1.0);
 }

@@ -31,3 +31,43 @@ vec3 half_vector(vec3 l, vec3 v, vec3 n)
   float len2 = dot(s, s);
   return len2 > 1e-12 ? s * inversesqrt(len2) : n;
 }
+
+/* The shading point from a position, a unit normal facing the viewer, the view direction and
+ * the material's uniform block; shared by the mesh program and the term test harness. */
+Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
+{
+  Surface s;
+  s.p = p;
+  s.n = n;
+  s.v = v;
+  s.NoV = max(dot(n, v), MIN_COS);
+  s.base_color = m.base_color.rgb;
+  s.diffuse_color = m.diffuse_color.rgb;
+  s.specular_color = m.specular_color.rgb;
+  s.ambient_color = m.ambient_color.rgb;
+  s.roughness = max(m.params.x, MIN_PERCEPTUAL_ROUGHNESS);
+  s.alpha = s.roughness * s.roughness;
+  s.metalness = m.params.y;
+  s.shininess = m.params.z;
+  s.f0_dielectric = m.params.w;
+  s.f0 = mix(vec3(s.f0_dielectric), s.base_color, s.metalness);
+  s.f90 = m.fresnel.x >= 0.0 ? m.fresnel.x : saturate(50.0 * dot(s.f0, vec3(1.0 / 3.0)));
+  s.fresnel_p = m.fresnel.y;
+  float sqrt_f0 = sqrt(min(s.f0_dielectric, 0.99));
+  s.eta = (1.0 + sqrt_f0) / (1.0 - sqrt_f0);
+  s.has_complex_ior = m.fresnel.z > 0.5;
+  s.ior_n = m.ior_n.rgb;
+  s.ior_k = m.ior_k.rgb;
+  return s;
+}
+
+/* Half floats top out at 65504: a viewport target (RGBA16F) would store Inf above it, so its
+ * programs cap radiance there (SL_HALF_TARGET); float targets keep the full range. */
+vec3 write_target(vec3 c)
+{
+#ifdef SL_HALF_TARGET
+  return min(c, vec3(65504.0));
+#else
+  return c;
+#endif
+}

@@ -1,0 +1,86 @@
+"""Evaluate GLSL from glsl/ on the GPU over a table of inputs: one input set per pixel of a
+float target, read back. Terms are tested in isolation this way, not only through renders.
+
+    values = evaluate("result = vec4(D_GGX(a.x, a.y, a.z));", {"a": rows})
+
+``rows`` are (N, 4) arrays; each name becomes a ``vec4`` in the body, which assigns the
+``vec4 result``. The shader library (the same files, in the same order, as the product's
+programs) and any defines are compiled in; model files may be added for their shade_direct().
+"""
+
+from __future__ import annotations
+
+import math
+
+import gpu
+import numpy as np
+from gpu_harness import run_on_gpu
+
+from addon import programs, renderer
+
+LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "multiscatter.glsl", "pbr_terms.glsl",
+           "tonemap.glsl")
+WIDTH = 256
+
+
+def _texture(rows: np.ndarray, w: int, h: int) -> gpu.types.GPUTexture:
+    padded = np.zeros((w * h, 4), np.float32)
+    padded[: len(rows)] = rows
+    data = gpu.types.Buffer("FLOAT", w * h * 4, padded.ravel().tolist())
+    return gpu.types.GPUTexture((w, h), format="RGBA32F", data=data)
+
+
+def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] | None = None,
+             extra: tuple[str, ...] = (), terms=None) -> np.ndarray:
+    """(N, 4) float32: ``result`` of ``body`` for each row of the inputs."""
+    arrays = {name: np.asarray(a, np.float32).reshape(-1, 4) for name, a in inputs.items()}
+    n = len(next(iter(arrays.values())))
+    w = min(n, WIDTH)
+    h = math.ceil(n / w)
+    defs = {"SL_MAX_LIGHTS": "1", **(defines or {})}
+    fetch = "\n".join(f"  vec4 {name} = texelFetch(in_{name}, px, 0);" for name in arrays)
+    main = f"void main()\n{{\n  ivec2 px = ivec2(gl_FragCoord.xy);\n{fetch}\n  vec4 result = vec4(0.0);\n" \
+           f"  {body}\n  frag_color = result;\n}}\n"
+    fragment = "\n".join([programs.read_glsl(f) for f in LIBRARY + tuple(extra)] + [main])
+
+    def job(_depsgraph):
+        info = gpu.types.GPUShaderCreateInfo()
+        for name, value in sorted(defs.items()):
+            info.define(name, value)
+        info.typedef_source(programs.read_glsl("uniforms.glsl"))
+        slot = 0
+        if "SL_MULTISCATTER" in defs:
+            info.sampler(slot, "FLOAT_2D", "ms_table")
+            slot += 1
+        for name in arrays:
+            info.sampler(slot, "FLOAT_2D", f"in_{name}")
+            slot += 1
+        info.vertex_in(0, "VEC2", "pos")
+        info.fragment_out(0, "VEC4", "frag_color")
+        info.vertex_source(programs.read_glsl("post.vert.glsl"))
+        info.fragment_source(fragment)
+        shader = gpu.shader.create_from_info(info)
+        textures = {name: _texture(a, w, h) for name, a in arrays.items()}
+        fmt = gpu.types.GPUVertFormat()
+        fmt.attr_add(id="pos", comp_type="F32", len=2, fetch_mode="FLOAT")
+        vbo = gpu.types.GPUVertBuf(fmt, 3)
+        vbo.attr_fill("pos", ((-1.0, -1.0), (3.0, -1.0), (-1.0, 3.0)))
+        batch = gpu.types.GPUBatch(type="TRIS", buf=vbo)
+        target = gpu.types.GPUOffScreen(w, h, format="RGBA32F")
+        try:
+            with target.bind():
+                fb = gpu.state.active_framebuffer_get()
+                fb.clear(color=(0.0, 0.0, 0.0, 0.0))
+                shader.bind()
+                if "SL_MULTISCATTER" in defs:
+                    shader.uniform_sampler("ms_table", renderer.multiscatter_texture(terms))
+                for name, texture in textures.items():
+                    shader.uniform_sampler(f"in_{name}", texture)
+                batch.draw(shader)
+                out = fb.read_color(0, 0, w, h, 4, 0, "FLOAT")
+        finally:
+            target.free()
+        out.dimensions = w * h * 4
+        return np.array(out, np.float32).reshape(-1, 4)[:n]
+
+    return run_on_gpu(job)
