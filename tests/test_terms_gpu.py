@@ -135,10 +135,9 @@ def test_diffuse_terms():
     lov = _u(-1, 1, N)
     cos_phi = _u(-1, 1, N)
     rho = _u(0, 1, (N, 3))
-    for call, twin in [("Fd_Burley(a.x, a.y, a.z, a.w)", S.Fd_Burley(nv, nl, loh, r)),
-                       ("Fd_BurleyRenormalized(a.x, a.y, a.z, a.w)", S.Fd_BurleyRenormalized(nv, nl, loh, r))]:
-        got = evaluate(f"result = vec4({call});", {"a": _rows(nv, nl, loh, r)})[:, 0]
-        _check(got, twin)
+    for name in ("Fd_Burley", "Fd_BurleyRenormalized"):
+        got = evaluate(f"result = vec4({name}(a.x, a.y, a.z, a.w));", {"a": _rows(nv, nl, loh, r)})[:, 0]
+        _check(got, getattr(S, name)(nv, nl, loh, r), label=name)
     got = evaluate("result = vec4(Fd_OrenNayar(c.xyz, a.x, a.y, a.z, a.w), 0.0);",
                    {"a": _rows(nv, nl, cos_phi, r), "c": np.column_stack([rho, np.zeros(N)])})[:, :3]
     _check(got, S.Fd_OrenNayar(rho, nv, nl, cos_phi, r), rtol=3e-4)
