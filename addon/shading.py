@@ -103,7 +103,7 @@ def D_Beckmann(NoH, NxH2, alpha):
     c2 = NoH * NoH
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         d = np.exp(-np.asarray(NxH2) / (a2 * c2)) / (PI * a2 * c2 * c2)
-    return np.where(NoH > 0.0, d, 0.0)
+    return np.where(NoH >= 0.1, d, 0.0)  # see glsl: below 0.1 D < 3e-40
 
 
 def V_SmithGGXCorrelated(NoV, NoL, alpha):
@@ -223,9 +223,9 @@ def half_vector(l, v, n):
 
 def E_Point(light: Light, p):
     d = np.asarray(light.position) - p
-    d2 = np.maximum(_dot(d, d), MIN_DIST2)
-    l = d / np.sqrt(d2)[..., None]
-    return np.asarray(light.intensity) / d2[..., None], l
+    d2 = _dot(d, d)
+    l = d / np.sqrt(np.maximum(d2, 1e-30))[..., None]  # unit, or 0 for a light exactly at p
+    return np.asarray(light.intensity) / np.maximum(d2, MIN_DIST2)[..., None], l
 
 
 def E_Spot(light: Light, p):

@@ -17,9 +17,11 @@
 vec3 E_Point(LightData light, vec3 p, out vec3 l)
 {
   vec3 d = light.position_kind.xyz - p;
-  float d2 = max(dot(d, d), MIN_DIST2);
-  l = d * inversesqrt(d2);
-  return light.intensity_blend.rgb / d2;
+  float d2 = dot(d, d);
+  /* the direction from the true distance (a light exactly at p has none: l = 0, no light),
+   * the falloff from the floored one */
+  l = d * inversesqrt(max(d2, 1e-30));
+  return light.intensity_blend.rgb / max(d2, MIN_DIST2);
 }
 #endif
 
