@@ -1,11 +1,14 @@
 """Render a scene with Shading Lab's models: OpenEXR (scene-linear HDR) and a display PNG each.
 
-    python scripts/render.py SCENE [--model blinn-phong|phong|pbr|all] [--resolution WxH] [--out DIR]
+    python scripts/render.py SCENE [--model blinn-phong|phong|pbr|all] [--resolution WxH]
+                             [--out DIR] [--frames A-B] [--variant NAME] [term options]
     blender -b --python scripts/render.py -- SCENE [options]
 
-SCENE is ``demo`` (the built-in demo scene) or a path to a ``.blend`` file. Writes
-``DIR/<scene>_<model>.exr`` and ``.png`` per model, and ``DIR/<scene>_comparison.png`` (the models
-side by side, in the order given) when there are several. Exits non-zero with one line on error.
+SCENE is ``demo`` (the built-in demo scene), a preset name (``fresnel``, ``long_tail`` ...; see
+``--list``), a preset ``.toml`` file, or a ``.blend`` file. Writes ``DIR/<scene>_<model>.exr``
+and ``.png`` per model (``_<frame>`` appended with ``--frames``), and ``DIR/<scene>_comparison.png``
+with the models side by side when there are several. Files appear only when complete. Any error
+prints one line and exits with status 2.
 """
 
 from __future__ import annotations
@@ -17,23 +20,49 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT))
+
+from addon.snapshot import TERM_CHOICES  # noqa: E402  (pure module: no Blender needed to parse args)
+
 MODELS = {"blinn-phong": "BLINN_PHONG", "phong": "PHONG", "pbr": "PBR"}
+TONE_MAPPERS = ("blender", "clamp", "reinhard", "hable", "aces")
 
 
 class CliError(Exception):
     pass
 
 
+def _flag(value: str) -> str:
+    return value.lower().replace("_", "-")
+
+
 def parse_args(argv: list[str]) -> argparse.Namespace:
     if "--" in argv:  # blender -b ... --python render.py -- ARGS
         argv = argv[argv.index("--") + 1:]
     parser = argparse.ArgumentParser(prog="render.py", description=__doc__.split("\n\n")[0])
-    parser.add_argument("scene", help="'demo' or a path to a .blend file")
+    parser.add_argument("scene", nargs="?", help="demo, a preset name, a preset .toml or a .blend file")
+    parser.add_argument("--list", action="store_true", help="list the shipped scene presets and exit")
     parser.add_argument("--model", default="all", choices=[*MODELS, "all"])
     parser.add_argument("--resolution", default=None, metavar="WxH",
                         help="output size in pixels (default: the scene's; demo: 1280x720)")
     parser.add_argument("--out", default="out", type=Path, help="output directory (default: out)")
-    return parser.parse_args(argv)
+    parser.add_argument("--frames", default=None, metavar="A-B",
+                        help="render frames A to B (default: the current frame only)")
+    parser.add_argument("--variant", default=None, help="a preset's lighting variant")
+    terms = parser.add_argument_group("physically based terms (default: the scene's settings)")
+    for family, choices in TERM_CHOICES.items():
+        terms.add_argument(f"--{family}", choices=[_flag(c) for c in choices])
+    terms.add_argument("--multiscatter", action=argparse.BooleanOptionalAction, default=None,
+                       help="specular multiple-scattering energy compensation")
+    terms.add_argument("--normalized-blinn-phong", action=argparse.BooleanOptionalAction, default=None)
+    display = parser.add_argument_group("display")
+    display.add_argument("--tone-mapper", choices=TONE_MAPPERS)
+    display.add_argument("--exposure", type=float, help="EV, for the engine's own tone mappers")
+    display.add_argument("--samples", type=int, help="N: N x N supersampling per pixel")
+    args = parser.parse_args(argv)
+    if not args.list and not args.scene:
+        parser.error("SCENE is required (or --list)")
+    return args
 
 
 def parse_resolution(text: str) -> tuple[int, int]:
@@ -46,19 +75,35 @@ def parse_resolution(text: str) -> tuple[int, int]:
     return w, h
 
 
+def parse_frames(text: str | None) -> list[int] | None:
+    if text is None:
+        return None
+    try:
+        a, _, b = text.partition("-")
+        first, last = int(a), int(b or a)
+    except ValueError:
+        raise CliError(f"--frames must look like 1-24 (or 7), got {text!r}") from None
+    if last < first:
+        raise CliError(f"--frames: the last frame {last} comes before the first {first}")
+    if last - first >= 100_000:
+        raise CliError("--frames: at most 100000 frames at once")
+    return list(range(first, last + 1))
+
+
 def ensure_addon():
     import bpy
 
     if not hasattr(bpy.types.Scene, "shading_lab"):
-        sys.path.insert(0, str(ROOT))
         import addon
 
         addon.register()
 
 
-def load_scene(name: str):
+def load_scene(name: str, variant: str | None):
+    """(scene, stem): the demo, a preset (name or .toml) or a .blend, loaded into Blender."""
     import bpy
 
+    path = Path(name)
     if name == "demo":
         sys.path.insert(0, str(ROOT / "scripts"))
         import demo_scene
@@ -68,16 +113,46 @@ def load_scene(name: str):
         demo_scene.build(scene)
         scene.render.resolution_x, scene.render.resolution_y = 1280, 720
         return scene, "demo"
-    path = Path(name)
-    if path.suffix.lower() != ".blend":
-        raise CliError(f"SCENE must be 'demo' or a .blend file, got {name!r}")
-    if not path.is_file():
-        raise CliError(f"no such .blend file: {path}")
-    try:
-        bpy.ops.wm.open_mainfile(filepath=str(path.resolve()))
-    except RuntimeError as exc:
-        raise CliError(f"could not open {path}: {exc}") from None
-    return bpy.context.scene, path.stem
+    if path.suffix.lower() == ".blend":
+        if not path.is_file():
+            raise CliError(f"no such .blend file: {path}")
+        try:
+            bpy.ops.wm.open_mainfile(filepath=str(path.resolve()))
+        except RuntimeError as exc:
+            raise CliError(f"could not open {path}: {str(exc).strip()}") from None
+        return bpy.context.scene, path.stem
+    from addon import presets, scene_builder
+
+    if path.suffix.lower() == ".toml" and not path.is_file():
+        raise CliError(f"no such preset file: {path}")
+    if path.suffix.lower() not in ("", ".toml"):
+        raise CliError(f"SCENE must be demo, a preset name, a .toml preset or a .blend file, got {name!r}")
+    preset = presets.load_scene_preset(path if path.suffix else name)  # PresetError names file and key
+    if variant is not None and variant not in preset.variant_names:
+        raise CliError(f"{name}: no lighting variant {variant!r}; it has: "
+                       f"{', '.join(preset.variant_names) or 'none'}")
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene_builder.build_scene(preset, scene, variant=variant)
+    return scene, path.stem + (f"_{variant}" if variant else "")
+
+
+def configure(scene, args) -> None:
+    props = scene.shading_lab
+    for family in TERM_CHOICES:
+        value = getattr(args, family)
+        if value is not None:
+            setattr(props, family, value.upper().replace("-", "_"))
+    for name in ("multiscatter", "normalized_blinn_phong", "exposure", "samples"):
+        value = getattr(args, name)
+        if value is not None:
+            setattr(props, name, value)
+    if args.samples is not None and not 1 <= args.samples <= 8:
+        raise CliError(f"--samples must be between 1 and 8, got {args.samples}")
+    if args.tone_mapper is not None:
+        props.tone_mapper = args.tone_mapper.upper()
+        if props.tone_mapper != "BLENDER":
+            scene.view_settings.view_transform = "Standard"  # the engine's curve already displays
 
 
 def check_output_dir(out: Path) -> None:
@@ -90,7 +165,10 @@ def check_output_dir(out: Path) -> None:
 
 
 def save(image, scene, path: Path, file_format: str) -> None:
+    """Write through Blender to a temporary name, then move into place: no partial files."""
     settings = scene.render.image_settings
+    if hasattr(settings, "media_type"):
+        settings.media_type = "IMAGE"
     settings.file_format = file_format
     if file_format == "OPEN_EXR":
         settings.color_depth = "32"
@@ -98,7 +176,13 @@ def save(image, scene, path: Path, file_format: str) -> None:
     else:
         settings.color_mode = "RGB"
         settings.color_depth = "8"
-    image.save_render(filepath=str(path), scene=scene)
+    partial = path.with_name(f".{path.stem}.partial{path.suffix}")
+    try:
+        image.save_render(filepath=str(partial), scene=scene)
+        os.replace(partial, path)
+    except (RuntimeError, OSError) as exc:
+        partial.unlink(missing_ok=True)
+        raise CliError(f"could not write {path}: {str(exc).strip()}") from None
 
 
 def side_by_side(paths: list[Path], out: Path) -> None:
@@ -117,53 +201,93 @@ def side_by_side(paths: list[Path], out: Path) -> None:
     h, w = strip.shape[:2]
     img = bpy.data.images.new("comparison", w, h, alpha=False)
     img.pixels.foreach_set(strip.ravel())
-    img.filepath_raw = str(out)
+    partial = out.with_name(f".{out.stem}.partial.png")
+    img.filepath_raw = str(partial)
     img.file_format = "PNG"
     img.save()
     bpy.data.images.remove(img)
+    os.replace(partial, out)
+
+
+class Progress:
+    """A one-line progress bar on a terminal, plain lines otherwise (logs, CI)."""
+
+    def __init__(self, total: int):
+        self.total, self.done, self.start = total, 0, time.perf_counter()
+        self.tty = sys.stderr.isatty()
+
+    def step(self, label: str) -> None:
+        self.done += 1
+        width = 24
+        filled = round(width * self.done / self.total)
+        elapsed = time.perf_counter() - self.start
+        line = f"[{'#' * filled}{'.' * (width - filled)}] {self.done}/{self.total} {label} ({elapsed:.1f} s)"
+        print(("\r" + line) if self.tty else line, end="" if self.tty else "\n", file=sys.stderr, flush=True)
+        if self.tty and self.done == self.total:
+            print(file=sys.stderr)
 
 
 def run(args: argparse.Namespace) -> list[Path]:
     models = list(MODELS) if args.model == "all" else [args.model]
+    frames = parse_frames(args.frames)
+    resolution = parse_resolution(args.resolution) if args.resolution else None
     check_output_dir(args.out)
     import bpy
 
     ensure_addon()
-    scene, stem = load_scene(args.scene)
-    if args.resolution:
-        scene.render.resolution_x, scene.render.resolution_y = parse_resolution(args.resolution)
+    scene, stem = load_scene(args.scene, args.variant)
+    if resolution:
+        scene.render.resolution_x, scene.render.resolution_y = resolution
         scene.render.resolution_percentage = 100
     scene.render.engine = "SHADING_LAB"
-    written, pngs = [], []
-    for i, model in enumerate(models, 1):
-        scene.shading_lab.model = MODELS[model]
-        start = time.perf_counter()
-        print(f"[{i}/{len(models)}] {stem}: {model} ...", end="", flush=True)
-        bpy.ops.render.render()
-        result = bpy.data.images.get("Render Result")
-        if result is None:
-            raise CliError(f"rendering {model} produced no image (see the messages above)")
-        exr, png = args.out / f"{stem}_{model}.exr", args.out / f"{stem}_{model}.png"
-        save(result, scene, exr, "OPEN_EXR")
-        save(result, scene, png, "PNG")
-        written += [exr, png]
-        pngs.append(png)
-        print(f" {1000 * (time.perf_counter() - start):.0f} ms -> {exr}, {png.name}")
-    if len(pngs) > 1:
-        comparison = args.out / f"{stem}_comparison.png"
-        side_by_side(pngs, comparison)
-        written.append(comparison)
-        print(f"side by side ({', '.join(models)}): {comparison}")
+    configure(scene, args)
+    if scene.camera is None:
+        raise CliError(f"{args.scene}: the scene has no active camera")
+    written = []
+    progress = Progress(len(models) * len(frames or [None]))
+    for frame in frames or [None]:
+        if frame is not None:
+            scene.frame_set(frame)
+        pngs = []
+        suffix = "" if frame is None else f"_{frame:04d}"
+        for model in models:
+            scene.shading_lab.model = MODELS[model]
+            try:
+                bpy.ops.render.render()
+            except RuntimeError as exc:
+                raise CliError(f"rendering {model}{suffix} failed: {str(exc).strip()}") from None
+            result = bpy.data.images.get("Render Result")
+            if result is None:
+                raise CliError(f"rendering {model}{suffix} produced no image")
+            exr, png = args.out / f"{stem}_{model}{suffix}.exr", args.out / f"{stem}_{model}{suffix}.png"
+            save(result, scene, exr, "OPEN_EXR")
+            save(result, scene, png, "PNG")
+            written += [exr, png]
+            pngs.append(png)
+            progress.step(f"{model}{suffix} -> {exr.name}")
+        if len(pngs) > 1:
+            comparison = args.out / f"{stem}_comparison{suffix}.png"
+            side_by_side(pngs, comparison)
+            written.append(comparison)
+    print(f"wrote {len(written)} files to {args.out}/ (models left to right in the comparison: "
+          f"{', '.join(models)})")
     return written
 
 
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(sys.argv[1:] if argv is None else argv)
     try:
-        if args.resolution:
-            parse_resolution(args.resolution)
+        if args.list:
+            from addon import presets
+
+            for name in presets.scene_preset_names():
+                print(f"{name:18s} {presets.load_scene_preset(name).description}")
+            return 0
         run(args)
     except CliError as exc:
+        print(f"\nrender.py: error: {exc}", file=sys.stderr)
+        return 2
+    except ValueError as exc:  # presets.PresetError: names the file, the key and what was expected
         print(f"\nrender.py: error: {exc}", file=sys.stderr)
         return 2
     except ImportError as exc:

@@ -74,3 +74,27 @@ def test_usage_inside_blender_argv_convention(tmp_path):
     args = render.parse_args(["blender", "-b", "--python", "render.py", "--", "demo", "--model", "pbr"])
     assert (args.scene, args.model) == ("demo", "pbr")
     assert os.fspath(args.out) == "out"
+
+
+def test_preset_frames_and_term_options(tmp_path):
+    out = tmp_path / "out"
+    proc = _run("roughness_sweep", "--model", "pbr", "--resolution", "32x18", "--frames", "1-2",
+                "--ndf", "beckmann", "--visibility", "smith-separable", "--diffuse", "oren-nayar",
+                "--multiscatter", "--tone-mapper", "aces", "--out", out)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    for frame in (1, 2):
+        exr = scenes.read_exr(out / f"roughness_sweep_pbr_{frame:04d}.exr")
+        assert exr.shape == (18, 32, 4) and np.isfinite(exr).all()
+        assert exr[..., :3].max() <= 1.0  # ACES fills Combined with display values in [0, 1]
+    assert not list(out.glob(".*partial*")), "no partial files left behind"
+    assert "2/2" in proc.stderr  # the progress bar reached the end
+
+
+def test_unknown_preset_and_bad_options(tmp_path):
+    proc = _run("fresnell", "--out", tmp_path)
+    assert proc.returncode == 2 and 'did you mean "fresnel"' in proc.stderr
+    proc = _run("fresnel", "--frames", "5-2", "--out", tmp_path)
+    assert proc.returncode == 2 and "comes before" in proc.stderr
+    proc = _run("portability", "--variant", "moonlight", "--out", tmp_path)
+    assert proc.returncode == 2 and "no lighting variant" in proc.stderr
+    assert not any(tmp_path.glob("*.exr"))
