@@ -12,9 +12,9 @@ so every import inside it is relative.
 def _classes():
     # Imported here, not at the top: the pure modules (snapshot, programs, shading) must stay
     # importable without Blender, and importing this package runs this file first.
-    from . import engine, properties, ui
+    from . import engine, operators, properties, ui
 
-    return (*properties.classes, *engine.classes, *ui.classes), (properties, ui)
+    return (*properties.classes, *engine.classes, *operators.classes, *ui.classes), (properties, ui)
 
 
 def register():

@@ -122,6 +122,8 @@ class SHADINGLAB_PT_material(ShadingLabPanel, bpy.types.Panel):
     def draw(self, context):
         props = context.material.shading_lab
         layout = self.layout
+        layout.operator_menu_enum("shading_lab.apply_material_preset", "preset", text="Material Preset",
+                                  icon="PRESET")
         layout.prop(props, "model")
         terms = layout.column(align=True)
         for name in ("fresnel", "ndf", "visibility", "diffuse"):

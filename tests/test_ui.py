@@ -6,6 +6,7 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 import bpy
+import pytest
 import scenes
 
 from addon import renderer, ui
@@ -34,6 +35,9 @@ class Layout:
 
     def separator(self, **kwargs):
         pass
+
+    def operator_menu_enum(self, operator, prop, **kwargs):
+        self.log.append(("operator_menu_enum", prop, self.active))
 
     def labels(self):
         return [text for kind, text, _ in self.log if kind == "label"]
@@ -86,3 +90,25 @@ def test_blenders_panels_open_to_the_engine():
         assert "SHADING_LAB" in panel.COMPAT_ENGINES, name
     assert ui.SHADINGLAB_PT_render.poll(SimpleNamespace(engine="SHADING_LAB"))
     assert not ui.SHADINGLAB_PT_render.poll(SimpleNamespace(engine="CYCLES"))
+
+
+def test_material_preset_operator_applies_measured_values():
+    from addon import presets
+
+    scene = scenes.reset(size=8)
+    mat = scenes.material("Target", roughness=0.9, shininess=5.0)  # explicit values to be replaced
+    obj = scenes.plane(scene, material=mat)
+    gold = presets.load_material_presets()["gold"]
+    from addon.operators import SHADINGLAB_OT_apply_material_preset as op
+    assert "UNDO" in op.bl_options
+    with bpy.context.temp_override(material=mat, object=obj):
+        assert bpy.ops.shading_lab.apply_material_preset(preset="gold") == {"FINISHED"}
+    from addon import extract
+
+    params = extract.material_params(mat)
+    assert params.base_color == pytest.approx(gold.base_color, abs=1e-6)
+    assert params.metalness == pytest.approx(gold.metalness)
+    assert params.roughness == pytest.approx(gold.roughness)
+    assert not mat.shading_lab.use_roughness  # the preset's value now comes from the shader
+    layout = _draw(ui.SHADINGLAB_PT_material, SimpleNamespace(material=mat))
+    assert layout.log[0][:2] == ("operator_menu_enum", "preset")
