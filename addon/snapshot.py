@@ -65,6 +65,12 @@ def shininess_from_roughness(roughness: float) -> float:
     return float(min(max(2.0 / (alpha * alpha) - 2.0, 1.0), 1e4))
 
 
+def roughness_from_shininess(shininess: float) -> float:
+    """The inverse of ``shininess_from_roughness``: alpha = sqrt(2 / (s + 2)), r = sqrt(alpha)."""
+    alpha = math.sqrt(2.0 / (max(float(shininess), 0.0) + 2.0))
+    return float(min(max(math.sqrt(alpha), 0.0), 1.0))
+
+
 @dataclass(frozen=True)
 class MaterialParams:
     """Resolved shading inputs of one material (explicit values or the Principled fallback)."""
