@@ -3,14 +3,14 @@
  * the energy of light that bounces more than once between microfacets, 1 - E(mu) of it for a
  * white surface. Scaling f_spec by 1 + F0 (1 / E(mu_o) - 1) restores it, with E the directional
  * albedo of the chosen D and V with F = 1, tabulated by addon/multiscatter.py over
- * (mu = n.v, perceptual roughness) at texel centres and interpolated bilinearly here (texelFetch,
- * so that the numpy twin interpolates identically). */
+ * (mu = n.v, perceptual roughness) on the grid i / (N - 1), ends included, and interpolated
+ * bilinearly here (texelFetch, so that the numpy twin interpolates identically). */
 
 #ifdef SL_MULTISCATTER
 float ms_albedo(float NoV, float roughness)
 {
   float n = float(SL_MS_SIZE);
-  vec2 x = clamp(vec2(NoV, roughness) * n - 0.5, vec2(0.0), vec2(n - 1.0));
+  vec2 x = clamp(vec2(NoV, roughness) * (n - 1.0), vec2(0.0), vec2(n - 1.0));
   ivec2 i0 = ivec2(floor(x));
   ivec2 i1 = min(i0 + 1, ivec2(SL_MS_SIZE - 1));
   vec2 t = x - vec2(i0);
