@@ -250,7 +250,8 @@ def scene_settings(scene) -> S.Settings:
         return S.Settings()
     terms = S.Terms(fresnel=props.fresnel, ndf=props.ndf, visibility=props.visibility, diffuse=props.diffuse,
                     multiscatter=bool(props.multiscatter),
-                    normalized_blinn_phong=bool(props.normalized_blinn_phong))
+                    normalized_blinn_phong=bool(props.normalized_blinn_phong),
+                    principled=props.term_set == "PRINCIPLED")
     return S.Settings(model=props.model, terms=terms, ambient=float(props.ambient),
                       tone_mapper=props.tone_mapper, exposure=float(props.exposure), transfer=props.transfer,
                       samples=int(props.samples))

@@ -16,7 +16,7 @@ from functools import lru_cache
 import numpy as np
 
 from . import shading
-from .programs import MS_SIZE
+from .programs import MS_SIZE, S_SIZE
 from .snapshot import Terms
 
 
@@ -75,3 +75,102 @@ def interpolate(table: np.ndarray, mu, roughness) -> np.ndarray:
     top = t[j0, i0] * (1 - tx) + t[j0, i1] * tx
     bottom = t[j1, i0] * (1 - tx) + t[j1, i1] * tx
     return top * (1 - ty) + bottom * ty
+
+
+# --- Blender's Principled BSDF (Cycles 5.0) ------------------------------------------------------
+#
+# The "Principled" term set reproduces Cycles' Principled BSDF for opaque materials: per-lobe
+# multiple-scattering compensation M = 1 + Fms (1 - E) / E with Kulla & Conty 2017's
+# Fms = Fss Eavg / (1 - Fss (1 - Eavg)), and the diffuse base weighted by 1 - the dielectric
+# specular layer's estimated albedo E M mix(F0, 1, S). E, Eavg and S are defined as Cycles
+# defines its tables (scene/shader.tables, app/cycles_precompute.cpp) and computed here.
+
+@lru_cache(maxsize=4)
+def average_albedo(size: int = MS_SIZE, samples: int = 64) -> np.ndarray:
+    """Eavg(r) = integral_0^1 2 mu E(mu) dmu for GGX + Smith height-correlated, on r = j / (N - 1)."""
+    grid = np.arange(size) / (size - 1)
+    mu = (np.arange(samples) + 0.5) / samples  # midpoint rule in mu
+    return np.array([np.mean(2.0 * mu * directional_albedo("GGX", "SMITH_CORRELATED", mu, r))
+                     for r in grid], np.float32)
+
+
+def _vndf_half_vectors(alpha: float, mu: float, n: int) -> np.ndarray:
+    """Half vectors distributed as GGX's visible normals for the view (sqrt(1 - mu^2), 0, mu)
+    (Heitz 2018, "Sampling the GGX Distribution of Visible Normals"), on an n x n stratified grid."""
+    u1, u2 = np.meshgrid((np.arange(n) + 0.5) / n, (np.arange(n) + 0.5) / n, indexing="ij")
+    u1, u2 = u1.ravel(), u2.ravel()
+    vh = np.array([alpha * np.sqrt(max(1.0 - mu * mu, 0.0)), 0.0, mu])
+    vh /= np.linalg.norm(vh)
+    lensq = vh[0] ** 2 + vh[1] ** 2
+    t1 = np.array([-vh[1], vh[0], 0.0]) / np.sqrt(lensq) if lensq > 0 else np.array([1.0, 0.0, 0.0])
+    t2 = np.cross(vh, t1)
+    radius, phi = np.sqrt(u1), 2.0 * np.pi * u2
+    p1, p2 = radius * np.cos(phi), radius * np.sin(phi)
+    s = 0.5 * (1.0 + vh[2])
+    p2 = (1.0 - s) * np.sqrt(np.maximum(1.0 - p1 * p1, 0.0)) + s * p2
+    nh = (p1[:, None] * t1 + p2[:, None] * t2
+          + np.sqrt(np.maximum(1.0 - p1 * p1 - p2 * p2, 0.0))[:, None] * vh)
+    ne = np.column_stack([alpha * nh[:, 0], alpha * nh[:, 1], np.maximum(nh[:, 2], 0.0)])
+    return ne / np.linalg.norm(ne, axis=1, keepdims=True)
+
+
+@lru_cache(maxsize=2)
+def principled_s_table(size: int = S_SIZE, strata: int = 48) -> np.ndarray:
+    """S[k, j, i] (z, mu, r): the VNDF expectation of saturate((F(wi.h, ior) - F0) / (1 - F0)) over
+    half vectors whose reflection stays above the surface, with ior = (1 + z^2) / (1 - z^2); grid
+    r, mu = i / (N - 1) clamped to [1e-4, 1], z = k / (N - 1) clamped to [1e-4, 0.99]."""
+    grid = np.arange(size) / (size - 1)
+    out = np.zeros((size, size, size), np.float32)
+    for k, z in enumerate(np.clip(grid, 1e-4, 0.99)):
+        ior = (1.0 + z * z) / (1.0 - z * z)
+        f0 = ((ior - 1.0) / (ior + 1.0)) ** 2
+        for j, mu in enumerate(np.clip(grid, 1e-4, 1.0)):
+            v = np.array([np.sqrt(1.0 - mu * mu), 0.0, mu])
+            for i, r in enumerate(np.clip(grid, 1e-4, 1.0)):
+                h = _vndf_half_vectors(r * r, mu, strata)
+                voh = h @ v
+                l_z = 2.0 * voh * h[:, 2] - mu
+                fresnel = shading.F_Dielectric(ior, voh)
+                s = np.clip((fresnel - f0) / (1.0 - f0), 0.0, 1.0)
+                out[k, j, i] = np.mean(np.where(l_z > 0.0, s, 0.0))
+    return out
+
+
+def principled_fss(eta):
+    """Kulla & Conty 2017's fit of the average dielectric Fresnel, as Cycles uses it (eta >= 1)."""
+    eta = np.asarray(eta, np.float64)
+    return (eta - 1.0) / (4.08567 + 1.00071 * eta)
+
+
+def principled_compensation(fss, E, e_avg):
+    """M = 1 + Fms (1 - E) / E with Fms = Fss Eavg / (1 - Fss (1 - Eavg)) (Kulla & Conty 2017)."""
+    fms = fss * e_avg / (1.0 - fss * (1.0 - e_avg))
+    return 1.0 + fms * (1.0 - E) / E
+
+
+def interpolate_1d(values: np.ndarray, x) -> np.ndarray:
+    n = len(values)
+    t = np.clip(np.asarray(x, np.float64) * (n - 1), 0.0, n - 1.0)
+    i0 = np.floor(t).astype(int)
+    i1 = np.minimum(i0 + 1, n - 1)
+    w = t - i0
+    return values[i0] * (1 - w) + values[i1] * w
+
+
+def interpolate_s(table: np.ndarray, roughness, mu, z) -> np.ndarray:
+    """Trilinear lookup of ``principled_s_table`` (grid i / (N - 1) on each axis)."""
+    n = table.shape[0]
+    coords = [np.clip(np.asarray(c, np.float64) * (n - 1), 0.0, n - 1.0) for c in (z, mu, roughness)]
+    lo = [np.floor(c).astype(int) for c in coords]
+    hi = [np.minimum(i + 1, n - 1) for i in lo]
+    w = [c - i for c, i in zip(coords, lo)]
+    t = table.astype(np.float64)
+    out = 0.0
+    for dz in (0, 1):
+        for dy in (0, 1):
+            for dx in (0, 1):
+                idx = tuple((hi if d else lo)[a] for a, d in enumerate((dz, dy, dx)))
+                weight = ((w[0] if dz else 1 - w[0]) * (w[1] if dy else 1 - w[1])
+                          * (w[2] if dx else 1 - w[2]))
+                out = out + t[idx] * weight
+    return out

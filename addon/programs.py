@@ -15,6 +15,8 @@ from .snapshot import LIGHT_KINDS, MODELS, MaterialParams, Snapshot, Terms
 
 #: Side of the multiple-scattering albedo table (addon/multiscatter.py), in texels.
 MS_SIZE = 32
+#: Side of the Principled set's 3D table S(r, mu, z), as Cycles' (16^3).
+S_SIZE = 16
 
 MODEL_FILES = {
     "BLINN_PHONG": "model_blinn_phong.glsl",
@@ -22,7 +24,7 @@ MODEL_FILES = {
     "PBR": "model_pbr.glsl",
 }
 FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl")
-PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl")
+PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "principled.glsl")
 
 
 def glsl_dir() -> Path:
@@ -64,7 +66,9 @@ class Features:
         unknown = set(self.light_kinds) - set(LIGHT_KINDS)
         if unknown:
             raise ValueError(f"unknown light kinds {sorted(unknown)}")
-        if self.model == "PBR":
+        if self.model == "PBR" and self.terms.principled:
+            canonical = Terms(principled=True)  # one fixed set: exact Fresnel, GGX, Smith, layered
+        elif self.model == "PBR":
             canonical = replace(self.terms, normalized_blinn_phong=False)
         elif self.model == "BLINN_PHONG":
             canonical = Terms(normalized_blinn_phong=self.terms.normalized_blinn_phong)
@@ -89,11 +93,23 @@ class Features:
             half_target=half_target,
         )
 
+    @property
+    def uses_albedo_table(self) -> bool:
+        """The program samples ``ms_table`` (multiple-scattering compensation, Principled set)."""
+        return self.model == "PBR" and (self.terms.multiscatter or self.terms.principled)
+
+    @property
+    def uses_s_table(self) -> bool:
+        """The program samples ``s_table`` (the Principled set's layering estimate)."""
+        return self.model == "PBR" and self.terms.principled
+
     def defines(self) -> tuple[tuple[str, str], ...]:
         out = [("SL_MAX_LIGHTS", str(self.max_lights)), ("SL_MODEL_" + self.model, "1")]
         out += [("SL_HAS_" + kind, "1") for kind in sorted(self.light_kinds)]
         t = self.terms
-        if self.model == "PBR":
+        if self.model == "PBR" and t.principled:
+            out += [("SL_PRINCIPLED", "1"), ("SL_MS_SIZE", str(MS_SIZE)), ("SL_S_SIZE", str(S_SIZE))]
+        elif self.model == "PBR":
             out += [("SL_FRESNEL_" + t.fresnel, "1"), ("SL_NDF_" + t.ndf, "1"),
                     ("SL_VISIBILITY_" + t.visibility, "1"), ("SL_DIFFUSE_" + t.diffuse, "1")]
             if t.multiscatter:

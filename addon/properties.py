@@ -82,6 +82,14 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
             ("GAMMA22", "Gamma 2.2", "The power-law approximation: display value = y^(1/2.2)"),
         ),
         description="Transfer function from display-linear to display values")
+    term_set: EnumProperty(
+        name="Term Set", default="CUSTOM", update=_redraw, items=(
+            ("CUSTOM", "Custom", "The Fresnel, distribution, masking-shadowing and diffuse chosen below"),
+            ("PRINCIPLED", "Principled BSDF", "Blender's Principled BSDF as Cycles evaluates it: exact "
+                                              "Fresnel, GGX, Smith, per-lobe multiple scattering and a "
+                                              "diffuse base under the specular layer's albedo"),
+        ),
+        description="Which physically based terms the engine evaluates")
     fresnel: EnumProperty(name="Fresnel", items=TERM_ITEMS["fresnel"], default="SCHLICK", update=_redraw)
     ndf: EnumProperty(name="Distribution", items=TERM_ITEMS["ndf"], default="GGX", update=_redraw)
     visibility: EnumProperty(name="Masking-Shadowing", items=TERM_ITEMS["visibility"],

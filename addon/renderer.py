@@ -66,8 +66,10 @@ def _cached_program(key, label: str, src: programs.ProgramSource, declare) -> gp
 
 def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     info.typedef_source(typedefs)
-    if features.terms.multiscatter and features.model == "PBR":
+    if features.uses_albedo_table:
         info.sampler(0, "FLOAT_2D", "ms_table")
+    if features.uses_s_table:
+        info.sampler(1, "FLOAT_2D", "s_table")
     info.uniform_buf(0, "FrameData", "frame")
     info.uniform_buf(1, "LightBlock", "lights")
     info.uniform_buf(2, "MaterialData", "material")
@@ -96,17 +98,38 @@ def get_program(features: programs.Features) -> gpu.types.GPUShader:
 _MS_TEXTURES: dict[tuple[str, str], gpu.types.GPUTexture] = {}
 
 
-def multiscatter_texture(terms) -> gpu.types.GPUTexture:
-    """The directional-albedo table of ``terms``' D and V as an R32F texture (built once)."""
-    from .multiscatter import albedo_table
+def _r32f(table: np.ndarray) -> gpu.types.GPUTexture:
+    h, w = table.shape
+    data = gpu.types.Buffer("FLOAT", w * h, np.asarray(table, np.float32).ravel().tolist())
+    return gpu.types.GPUTexture((w, h), format="R32F", data=data)
 
-    key = (terms.ndf, terms.visibility)
+
+def multiscatter_texture(terms) -> gpu.types.GPUTexture:
+    """The directional-albedo table of ``terms``' D and V as an R32F texture (built once); for the
+    Principled set, GGX + Smith's table with Eavg(r) as an extra row."""
+    from . import multiscatter
+
+    key = ("PRINCIPLED",) if terms.principled else (terms.ndf, terms.visibility)
     texture = _MS_TEXTURES.get(key)
     if texture is None:
-        table = albedo_table(*key)
-        size = table.shape[0]
-        data = gpu.types.Buffer("FLOAT", size * size, table.ravel().tolist())
-        texture = _MS_TEXTURES[key] = gpu.types.GPUTexture((size, size), format="R32F", data=data)
+        if terms.principled:
+            table = np.vstack([multiscatter.albedo_table("GGX", "SMITH_CORRELATED"),
+                               multiscatter.average_albedo()[None, :]])
+        else:
+            table = multiscatter.albedo_table(*key)
+        texture = _MS_TEXTURES[key] = _r32f(table)
+    return texture
+
+
+def principled_s_texture() -> gpu.types.GPUTexture:
+    """The Principled set's S(r, mu, z) table as a 16 x 256 R32F atlas (rows: mu + 16 z)."""
+    from . import multiscatter
+
+    texture = _MS_TEXTURES.get(("S",))
+    if texture is None:
+        table = multiscatter.principled_s_table()
+        n = table.shape[0]
+        texture = _MS_TEXTURES[("S",)] = _r32f(table.reshape(n * n, n))
     return texture
 
 
@@ -242,8 +265,10 @@ class Renderer:
                 shader.bind()
                 shader.uniform_block("frame", frame_ubo)
                 shader.uniform_block("lights", light_ubo)
-                if feature_set.model == "PBR" and feature_set.terms.multiscatter:
+                if feature_set.uses_albedo_table:
                     shader.uniform_sampler("ms_table", multiscatter_texture(feature_set.terms))
+                if feature_set.uses_s_table:
+                    shader.uniform_sampler("s_table", principled_s_texture())
                 for index, object_ubo, material_ubo, batch in draws:
                     if should_stop is not None and index % 64 == 0 and should_stop():
                         return

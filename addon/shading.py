@@ -370,6 +370,30 @@ def specular_energy_compensation(s: Surface, terms: Terms):
     return 1.0 + s.f0 * _rgb_scalar(1.0 / E - 1.0)
 
 
+def principled_direct(s: Surface, NoL, NoH, NxH2, LoH):
+    """glsl/principled.glsl's principled_direct without E, NoL and the light factors: (diffuse,
+    specular) f for the Principled set."""
+    from . import multiscatter as M
+
+    D = D_GGX(NoH, NxH2, s.alpha)
+    V = V_SmithGGXCorrelated(s.NoV, NoL, s.alpha)
+    rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
+    E_mu = np.maximum(M.interpolate(M.albedo_table("GGX", "SMITH_CORRELATED"), s.NoV, rough), 1e-3)
+    e_avg = M.interpolate_1d(M.average_albedo(), rough)
+    F0m = np.minimum(s.base_color, 1.0)
+    metal = (M.principled_compensation(F0m + (1.0 - F0m) / 21.0, _rgb_scalar(E_mu), _rgb_scalar(e_avg))
+             * F_Schlick(F0m, np.ones(np.shape(LoH)), LoH))
+    Md = M.principled_compensation(M.principled_fss(s.eta), E_mu, e_avg)
+    dielectric = Md * F_Dielectric(s.eta, LoH)
+    specular = (s.metal3 * metal + (1.0 - s.metal3) * _rgb_scalar(dielectric)) * _rgb_scalar(D * V)
+    ratio = (s.eta - 1.0) / (s.eta + 1.0)
+    S = M.interpolate_s(M.principled_s_table(), rough, s.NoV, np.broadcast_to(np.sqrt(np.abs(ratio)),
+                                                                                np.shape(s.NoV)))
+    layer = np.where(s.eta > 1.0, E_mu * Md * (ratio * ratio + S * (1.0 - ratio * ratio)), 0.0)
+    diffuse = s.base_color * (1.0 - s.metal3) * _rgb_scalar(np.clip(1.0 - layer, 0.0, 1.0)) * INV_PI
+    return diffuse, specular
+
+
 def pbr_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
     NoL = _dot(s.n, l)
     NoL_pos = np.maximum(NoL, 0.0)
@@ -378,6 +402,11 @@ def pbr_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
     NxH = np.cross(s.n, h)
     LoH = saturate(_dot(l, h))
     LoV = _dot(l, s.v)
+    if terms.principled:
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            diffuse, specular = principled_direct(s, NoL_pos, NoH, _dot(NxH, NxH), LoH)
+            out = (diffuse * factors[0] + specular * factors[1]) * E * NoL_pos[..., None]
+        return np.where((NoL > 0.0)[..., None], out, 0.0)
     F = pbr_fresnel(s, LoH, terms)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         D = pbr_distribution(NoH, _dot(NxH, NxH), s.alpha, terms)

@@ -32,6 +32,7 @@ class Terms:
     diffuse: str = "LAMBERT"
     multiscatter: bool = False  # specular energy compensation
     normalized_blinn_phong: bool = False
+    principled: bool = False  # Blender's Principled BSDF as Cycles evaluates it (overrides the rest)
 
     def __post_init__(self):
         for family, choices in TERM_CHOICES.items():

@@ -61,8 +61,11 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
         row.prop(props, "ambient")
         col = layout.column(heading="Physically Based")
         col.active = props.model == "PBR"
+        col.prop(props, "term_set")
+        terms = col.column()
+        terms.active = props.term_set == "CUSTOM"
         for name in ("fresnel", "ndf", "visibility", "diffuse", "multiscatter"):
-            col.prop(props, name)
+            terms.prop(props, name)
         row = layout.row()
         row.active = props.model == "BLINN_PHONG"
         row.prop(props, "normalized_blinn_phong")

@@ -16,6 +16,9 @@ vec3 shade_direct(Surface s, vec3 l, vec3 E, vec4 factors)
   vec3 NxH = cross(s.n, h);
   float LoH = saturate(dot(l, h));
   float LoV = dot(l, s.v);
+#ifdef SL_PRINCIPLED
+  return principled_direct(s, NoL, NoH, dot(NxH, NxH), LoH, E, factors);
+#endif
   vec3 F = pbr_fresnel(s, LoH);
   float D = pbr_distribution(NoH, dot(NxH, NxH), s.alpha);
   float V = pbr_visibility(s.NoV, NoL, NoH, LoH, s.alpha);

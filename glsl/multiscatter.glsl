@@ -6,7 +6,7 @@
  * (mu = n.v, perceptual roughness) on the grid i / (N - 1), ends included, and interpolated
  * bilinearly here (texelFetch, so that the numpy twin interpolates identically). */
 
-#ifdef SL_MULTISCATTER
+#if defined(SL_MULTISCATTER) || defined(SL_PRINCIPLED)
 float ms_albedo(float NoV, float roughness)
 {
   float n = float(SL_MS_SIZE);
@@ -21,6 +21,9 @@ float ms_albedo(float NoV, float roughness)
   return mix(mix(e00, e10, t.x), mix(e01, e11, t.x), t.y);
 }
 
+#endif
+
+#ifdef SL_MULTISCATTER
 vec3 specular_energy_compensation(Surface s)
 {
   float E = max(ms_albedo(s.NoV, s.roughness), 1e-3);

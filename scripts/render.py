@@ -55,6 +55,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     terms.add_argument("--multiscatter", action=argparse.BooleanOptionalAction, default=None,
                        help="specular multiple-scattering energy compensation")
     terms.add_argument("--normalized-blinn-phong", action=argparse.BooleanOptionalAction, default=None)
+    terms.add_argument("--principled", action=argparse.BooleanOptionalAction, default=None,
+                       help="the Principled term set: Blender's Principled BSDF as Cycles evaluates it")
     display = parser.add_argument_group("display")
     display.add_argument("--tone-mapper", choices=TONE_MAPPERS)
     display.add_argument("--exposure", type=float, help="EV, for the engine's own tone mappers")
@@ -147,6 +149,8 @@ def configure(scene, args) -> None:
         value = getattr(args, name)
         if value is not None:
             setattr(props, name, value)
+    if args.principled is not None:
+        props.term_set = "PRINCIPLED" if args.principled else "CUSTOM"
     if args.samples is not None and not 1 <= args.samples <= 8:
         raise CliError(f"--samples must be between 1 and 8, got {args.samples}")
     if args.tone_mapper is not None:

@@ -100,7 +100,8 @@ VARIANTS += [("PBR", S.Terms(fresnel=f)) for f in S.TERM_CHOICES["fresnel"][1:]]
 VARIANTS += [("PBR", S.Terms(ndf=d, visibility=v)) for d in S.TERM_CHOICES["ndf"]
              for v in S.TERM_CHOICES["visibility"] if (d, v) != ("GGX", "SMITH_CORRELATED")]
 VARIANTS += [("PBR", S.Terms(diffuse=d)) for d in S.TERM_CHOICES["diffuse"][1:]]
-VARIANTS += [("PBR", S.Terms(multiscatter=True)), ("PBR", S.Terms(ndf="BECKMANN", multiscatter=True))]
+VARIANTS += [("PBR", S.Terms(multiscatter=True)), ("PBR", S.Terms(ndf="BECKMANN", multiscatter=True)),
+             ("PBR", S.Terms(principled=True))]
 
 
 def _label(variant):
