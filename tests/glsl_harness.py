@@ -18,8 +18,7 @@ from gpu_harness import run_on_gpu
 
 from addon import programs, renderer
 
-LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "multiscatter.glsl", "pbr_terms.glsl",
-           "tonemap.glsl")
+LIBRARY = programs.FRAGMENT_LIBRARY + programs.PBR_LIBRARY + ("tonemap.glsl",)
 WIDTH = 256
 
 
@@ -49,8 +48,12 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
             info.define(name, value)
         info.typedef_source(programs.read_glsl("uniforms.glsl"))
         slot = 0
-        if "SL_MULTISCATTER" in defs:
+        albedo_table = "SL_MULTISCATTER" in defs or "SL_PRINCIPLED" in defs
+        if albedo_table:
             info.sampler(slot, "FLOAT_2D", "ms_table")
+            slot += 1
+        if "SL_PRINCIPLED" in defs:
+            info.sampler(slot, "FLOAT_2D", "s_table")
             slot += 1
         for name in arrays:
             info.sampler(slot, "FLOAT_2D", f"in_{name}")
@@ -72,8 +75,10 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
                 fb = gpu.state.active_framebuffer_get()
                 fb.clear(color=(0.0, 0.0, 0.0, 0.0))
                 shader.bind()
-                if "SL_MULTISCATTER" in defs:
+                if albedo_table:
                     shader.uniform_sampler("ms_table", renderer.multiscatter_texture(terms))
+                if "SL_PRINCIPLED" in defs:
+                    shader.uniform_sampler("s_table", renderer.principled_s_texture())
                 for name, texture in textures.items():
                     shader.uniform_sampler(f"in_{name}", texture)
                 batch.draw(shader)
