@@ -186,6 +186,40 @@ def _load_file_object(scene, obj: P.ObjectPreset, collection, preset: P.ScenePre
     """The objects of a ``.blend`` (one named object, appended) or ``.glb`` (imported; only
     ``object`` and its children when named; imported cameras and lights are dropped)."""
     shown = P._display(preset.path)
+    try:
+        return _read_file_object(scene, obj, collection, shown, where)
+    except P.PresetError:
+        raise
+    except Exception as exc:  # a corrupt or unreadable file: name it, never a traceback
+        lines = [line.strip() for line in str(exc).strip().splitlines() if line.strip()]
+        reason = lines[-1] if lines else type(exc).__name__  # the exception itself, after any traceback
+        raise P.PresetError(shown, f"{where}.file", f"a readable {obj.file.suffix} file",
+                            got=obj.file.name, note=reason) from None
+
+
+def _check_glb(path) -> None:
+    """Refuse a file that is not a glTF 2.0 binary before the importer sees it (the importer
+    prints its own traceback on malformed input): magic, version, length and a JSON chunk."""
+    import json
+    import struct
+
+    data = path.read_bytes()
+    if len(data) < 20:
+        raise ValueError("not a glTF binary: shorter than its 20-byte header")
+    magic, version, length = struct.unpack_from("<4sII", data, 0)
+    if magic != b"glTF" or version != 2:
+        raise ValueError("not a glTF 2.0 binary (bad magic or version)")
+    if length != len(data):
+        raise ValueError(f"truncated glTF binary: header says {length} bytes, file has {len(data)}")
+    chunk_length, chunk_type = struct.unpack_from("<I4s", data, 12)
+    if chunk_type != b"JSON" or 20 + chunk_length > len(data):
+        raise ValueError("glTF binary without a valid JSON chunk")
+    json.loads(data[20:20 + chunk_length])
+
+
+def _read_file_object(scene, obj: P.ObjectPreset, collection, shown: str, where: str) -> list:
+    if obj.file.suffix.lower() == ".glb":
+        _check_glb(obj.file)
     if obj.file.suffix.lower() == ".blend":
         with bpy.data.libraries.load(str(obj.file), link=False) as (src, dst):
             available = list(src.objects)

@@ -1,0 +1,198 @@
+"""Resources over a long session: memory and GPU objects across hundreds of renders and repeated
+add-on register/unregister cycles, the program cache, and Blender's leak report at exit.
+
+Memory is the process's current resident set (VmRSS from /proc/self/status), measured after a
+warm-up (programs compiled, Blender's and Mesa's caches filled) and again after the loop, with
+garbage collected both times. Margins (documented here, printed with the numbers by ``-s``):
+
+* 200 final renders at 16 x 16: growth below RENDER_MARGIN_MB (8 MB, 40 kB per render: a
+  leaked 16 x 16 RGBA32F target with its depth buffer, batch and uniform buffers per render
+  would add several MB);
+* 50 unregister/register cycles, each followed by renders that compile every program again:
+  growth below CYCLE_MARGIN_MB (10 MB).
+"""
+
+from __future__ import annotations
+
+import gc
+import math
+import subprocess
+import sys
+import textwrap
+import weakref
+from pathlib import Path
+
+import bpy
+import numpy as np
+import scenes
+
+import addon
+from addon import engine, renderer
+
+ROOT = Path(__file__).resolve().parent.parent
+RENDER_MARGIN_MB = 8.0
+CYCLE_MARGIN_MB = 10.0
+LAMBERT = 0.5 / math.pi * 2.0 * math.cos(math.radians(45.0))
+
+#: Cycled through so that every kind of GPU object is made and dropped: three shading programs,
+#: supersampling and a tone mapper (post-pass programs, a second target), the multiscatter table.
+CONFIGS = (
+    dict(model="PBR", tone_mapper="BLENDER", samples=1, multiscatter=False),
+    dict(model="BLINN_PHONG", tone_mapper="BLENDER", samples=1, multiscatter=False),
+    dict(model="PHONG", tone_mapper="BLENDER", samples=1, multiscatter=False),
+    dict(model="PBR", tone_mapper="REINHARD", samples=2, multiscatter=True),
+)
+
+
+def _rss_mb() -> float:
+    gc.collect()
+    with open("/proc/self/status") as f:
+        for line in f:
+            if line.startswith("VmRSS:"):
+                return int(line.split()[1]) / 1024.0
+    raise RuntimeError("no VmRSS in /proc/self/status")
+
+
+def _scene(size: int = 16):
+    """An orthographic camera over a Lambert plane (rho 0.5) under a 2 W/m^2 sun at 45 degrees."""
+    scene = scenes.reset(size=size)
+    scene.shading_lab.ambient = 0.0
+    scenes.ortho_camera(scene)
+    mat = scenes.material(base_color=(0.5, 0.5, 0.5), f0=0.0, metalness=0.0, shininess=10.0,
+                          specular_color=(0.0, 0.0, 0.0))
+    scenes.plane(scene, size=4.0, material=mat)
+    scenes.light(scene, "SUN", energy=2.0, rotation=(math.radians(45.0), 0.0, 0.0))
+    return scene
+
+
+def _configure(scene, config: dict) -> None:
+    props = scene.shading_lab
+    for key, value in config.items():
+        setattr(props, key, value)
+
+
+def _check_closed_form(scene, path: Path) -> None:
+    _configure(scene, CONFIGS[0])
+    image = scenes.render(scene, path)
+    np.testing.assert_allclose(image[..., :3], LAMBERT, rtol=1e-4)
+
+
+class _TrackedRenderer(renderer.Renderer):
+    """The engine's renderer, remembered weakly: alive after a render means its GPU batches are
+    still referenced."""
+
+    live: weakref.WeakSet = weakref.WeakSet()
+    made = 0
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        type(self).live.add(self)
+        type(self).made += 1
+
+
+def test_200_renders_keep_memory_programs_and_gpu_objects_flat(tmp_path, monkeypatch):
+    monkeypatch.setattr(engine, "Renderer", _TrackedRenderer)
+    scene = _scene()
+    for i in range(5 * len(CONFIGS)):  # warm-up: every program compiled, every cache filled
+        _configure(scene, CONFIGS[i % len(CONFIGS)])
+        bpy.ops.render.render()
+    programs_before = renderer.compiled_program_count()
+    made_before = _TrackedRenderer.made
+    rss_before = _rss_mb()
+    for i in range(200):
+        _configure(scene, CONFIGS[i % len(CONFIGS)])
+        bpy.ops.render.render()
+    rss_after = _rss_mb()
+    programs_after = renderer.compiled_program_count()
+    print(f"\n200 renders (16x16): RSS {rss_before:.1f} -> {rss_after:.1f} MB "
+          f"({rss_after - rss_before:+.2f} MB, margin {RENDER_MARGIN_MB} MB); "
+          f"programs {programs_before} -> {programs_after}")
+    assert _TrackedRenderer.made - made_before == 200, "every render must go through the engine"
+    assert len(_TrackedRenderer.live) == 0, "a renderer (and its GPU batches) outlived its render"
+    assert programs_after == programs_before, "re-rendering the same scenes compiled new programs"
+    assert rss_after - rss_before < RENDER_MARGIN_MB
+    _check_closed_form(scene, tmp_path / "after.exr")
+
+
+def test_same_scene_compiles_no_new_program():
+    _scene()
+    bpy.ops.render.render()
+    count = renderer.compiled_program_count()
+    for _ in range(10):
+        bpy.ops.render.render()
+        assert renderer.compiled_program_count() == count
+
+
+def test_50_unregister_register_cycles_free_gpu_objects(tmp_path):
+    def cycle(scene) -> list:
+        shaders = list(renderer._PROGRAMS.values()) + list(renderer._MS_TEXTURES.values())
+        addon.unregister()
+        try:
+            assert renderer.compiled_program_count() == 0 and not renderer._MS_TEXTURES
+            assert not hasattr(bpy.types.Scene, "shading_lab")
+            # nothing but this list holds the programs and textures: dropping it frees them
+            held = [sys.getrefcount(s) - 3 for s in shaders]  # minus list, loop name, argument
+        finally:
+            addon.register()
+        scene.render.engine = "SHADING_LAB"
+        for config in CONFIGS:  # compiles every program (and the multiscatter table) again
+            _configure(scene, config)
+            bpy.ops.render.render()
+        return held
+
+    scene = _scene()
+    for _ in range(5):  # warm-up
+        cycle(scene)
+    programs = renderer.compiled_program_count()
+    rss_before = _rss_mb()
+    for k in range(50):
+        held = cycle(scene)
+        assert held and not any(held), f"cycle {k}: a program or texture is still referenced: {held}"
+        assert renderer.compiled_program_count() == programs
+    rss_after = _rss_mb()
+    print(f"\n50 unregister/register cycles ({len(CONFIGS)} renders each): RSS {rss_before:.1f} -> "
+          f"{rss_after:.1f} MB ({rss_after - rss_before:+.2f} MB, margin {CYCLE_MARGIN_MB} MB); "
+          f"{programs} programs recompiled per cycle")
+    assert rss_after - rss_before < CYCLE_MARGIN_MB
+    _check_closed_form(scene, tmp_path / "after.exr")
+
+
+SUBPROCESS = textwrap.dedent("""
+    import math, sys
+    sys.path[:0] = [{root!r}, {tests!r}]
+    import bpy
+    import addon
+    addon.register()
+    import scenes
+    from test_resources import CONFIGS, _configure, _scene
+
+    scene = _scene()
+    for i in range(5):
+        _configure(scene, CONFIGS[i % len(CONFIGS)])
+        bpy.ops.render.render()
+    print("rendered 5 times")
+""")
+
+
+def _no_leak_report(proc) -> None:
+    assert proc.returncode == 0, proc.stderr[-3000:]
+    assert "Not freed memory blocks" not in proc.stderr + proc.stdout, proc.stderr[-3000:]
+    assert "Traceback" not in proc.stderr, proc.stderr[-3000:]
+
+
+def test_no_leaked_blocks_at_exit_after_5_renders(tmp_path):
+    script = tmp_path / "five_renders.py"
+    script.write_text(SUBPROCESS.format(root=str(ROOT), tests=str(ROOT / "tests")))
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=120,
+                          stdin=subprocess.DEVNULL, cwd=tmp_path)
+    _no_leak_report(proc)
+    assert "rendered 5 times" in proc.stdout
+
+
+def test_no_leaked_blocks_at_exit_of_the_cli(tmp_path):
+    proc = subprocess.run([sys.executable, str(ROOT / "scripts" / "render.py"), "fresnel", "--model", "all",
+                           "--resolution", "16x8", "--tone-mapper", "reinhard", "--samples", "2",
+                           "--out", str(tmp_path / "out")],
+                          capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL, cwd=tmp_path)
+    _no_leak_report(proc)
+    assert (tmp_path / "out" / "fresnel_comparison.png").is_file()
