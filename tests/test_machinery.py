@@ -1,0 +1,70 @@
+"""The comparison machinery (scripts/metrics.py, reference.py, compare.py): metrics on known
+images, the multi-layer EXR round trip, and the reference cache."""
+
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import OpenEXR
+import pytest
+import scenes
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent / "scripts"))
+
+import compare  # noqa: E402
+import metrics  # noqa: E402
+import reference  # noqa: E402
+
+
+def _image(value, shape=(16, 24)):
+    return np.full(shape + (3,), value, np.float32)
+
+
+def test_metrics_on_known_images():
+    ref = np.random.default_rng(0).uniform(0.1, 4.0, (32, 48, 3)).astype(np.float32)
+    same = metrics.errors(ref, ref)
+    assert same.flip == pytest.approx(0.0, abs=1e-6) and same.mean_relative == 0.0 and same.max_abs == 0.0
+    scaled = metrics.errors(ref, ref * 1.1)
+    assert scaled.mean_relative == pytest.approx(0.1, rel=1e-5)  # luminance scales linearly
+    assert scaled.max_abs == pytest.approx(float((ref * 0.1).max()), rel=1e-5)
+    assert 0.0 < scaled.flip < metrics.errors(ref, ref * 2.0).flip  # FLIP grows with the error
+    dark = ref.copy()
+    dark[:8] = 0.0  # unlit rows: excluded from the relative error
+    assert metrics.errors(dark, dark * 1.5).lit_pixels == 24 * 48
+    with pytest.raises(ValueError, match="sizes differ"):
+        metrics.errors(ref, ref[:8])
+
+
+def test_multilayer_exr_round_trip(tmp_path):
+    layers = {"reference": np.random.default_rng(1).uniform(0, 50, (9, 7, 3)).astype(np.float32),
+              "pbr": _image(0.25, (9, 7)), "error_pbr": _image(1e-6, (9, 7))}
+    path = tmp_path / "layers.exr"
+    compare.write_multilayer(path, layers)
+    with OpenEXR.File(str(path), separate_channels=True) as f:  # the file's own channel names
+        channels = f.channels()  # valid while the file is open
+        for name, image in layers.items():
+            got = np.stack([np.asarray(channels[f"{name}.{c}"].pixels) for c in "RGB"], axis=-1)
+            np.testing.assert_array_equal(got, image)  # float32 stored exactly
+    assert not list(tmp_path.glob(".*partial*"))
+
+
+def test_reference_cache_and_fingerprint(tmp_path):
+    scene = scenes.reset(size=8)
+    scenes.ortho_camera(scene)
+    scenes.plane(scene, size=4.0)
+    light = scenes.light(scene, "SUN", energy=2.0)
+    light.data.use_shadow = True  # the reference must turn shadows off and restore them
+    first, cached = reference.render_reference(scene, samples=4, cache_dir=tmp_path)
+    assert not cached and first[..., 0].max() > 0
+    assert light.data.use_shadow and scene.render.engine == "SHADING_LAB"
+    again, cached = reference.render_reference(scene, samples=4, cache_dir=tmp_path)
+    assert cached
+    np.testing.assert_array_equal(again, first)
+    key = reference.scene_fingerprint(scene)
+    light.data.energy = 3.0
+    assert reference.scene_fingerprint(scene) != key
+    brighter, cached = reference.render_reference(scene, samples=4, cache_dir=tmp_path)
+    assert not cached
+    np.testing.assert_allclose(brighter[..., :3], first[..., :3] * 1.5, rtol=1e-5)  # Cycles, linear in power
