@@ -103,67 +103,76 @@ def labelled_png(path: Path, panels: list[tuple[str, np.ndarray]], flips: list[t
 def main(argv=None) -> int:
     args = parse_args(sys.argv[1:] if argv is None else argv)
     try:
-        w, h = cli.parse_resolution(args.resolution)
-        cli.check_output_dir(args.out)
-        import metrics
-        import reference
-
-        cli.ensure_addon()
-        scene, stem = cli.load_scene(args.scene, args.variant)
-        scene.render.resolution_x, scene.render.resolution_y = w, h
-        scene.render.resolution_percentage = 100
-        scene.render.engine = "SHADING_LAB"
-        cli.configure(scene, args)
-        if scene.camera is None:
-            raise cli.CliError(f"{args.scene}: the scene has no active camera")
-        progress = cli.Progress(len(MODELS) + 1)
-        images, times = {}, {}
-        with tempfile.TemporaryDirectory() as tmp:
-            for key, model, label in MODELS:
-                scene.shading_lab.model = model
-                start = time.perf_counter()
-                images[key] = reference.render_to_array(scene, Path(tmp) / f"{key}.exr")
-                times[key] = time.perf_counter() - start
-                progress.step(label)
-            start = time.perf_counter()
-            ref, cached = reference.render_reference(scene, samples=args.reference_samples)
-            times["reference"] = time.perf_counter() - start
-            progress.step("Cycles reference" + (" (cached)" if cached else ""))
-        rows, flips, layers = [], [], {"reference": ref}
-        for key, _model, label in MODELS:
-            e = metrics.errors(ref, images[key])
-            rows.append((label, e, times[key]))
-            flips.append((f"{label}: FLIP {e.flip:.3f}", metrics.flip_error(ref, images[key])[1]))
-            layers[key.replace("-", "_")] = images[key]
-            layers["error_" + key.replace("-", "_")] = np.abs(images[key][..., :3] - ref[..., :3])
-        exr = args.out / f"{stem}_compare.exr"
-        write_multilayer(exr, layers)
-        terms = scene.shading_lab
-        term_text = ("Principled BSDF set" if terms.term_set == "PRINCIPLED" else
-                     f"{terms.fresnel.lower()} / {terms.ndf.lower()} / {terms.visibility.lower()} / "
-                     f"{terms.diffuse.lower()}{' + multiscatter' if terms.multiscatter else ''}")
-        title = (f"{stem} — physically based terms: {term_text}. Reference: Cycles, "
-                 f"{args.reference_samples} spp, direct light only, light shadows off")
-        png = args.out / f"{stem}_compare.png"
-        labelled_png(png, [(label, images[key]) for key, _, label in MODELS] + [("Cycles reference", ref)],
-                     flips, title)
-        lines = [f"**{stem}** at {w}×{h}. {title}.", "",
-                 "| model | mean FLIP (HDR) | mean relative error (lit pixels) | max abs error | time s |",
-                 "|---|---:|---:|---:|---:|"]
-        for label, e, seconds in rows:
-            lines.append(f"| {label} | {e.flip:.4f} | {e.mean_relative:.2%} | {e.max_abs:.3g} "
-                         f"| {seconds:.2f} |")
-        lines.append(f"| Cycles reference | – | – | – | {times['reference']:.2f}"
-                     f"{' (cached)' if cached else ''} |")
-        table = "\n".join(lines) + "\n"
-        md = args.out / f"{stem}_metrics.md"
-        md.write_text(table, encoding="utf-8")
-        print(table)
-        print(f"wrote {exr}, {png}, {md}")
+        result = compare(args)
+        print(result["table"])
+        print(f"wrote {result['exr']}, {result['png']}, {result['md']}")
     except (cli.CliError, ValueError) as exc:
         print(f"\ncompare.py: error: {exc}", file=sys.stderr)
         return 2
     return 0
+
+
+def compare(args) -> dict:
+    """Render, measure and write; returns the paths, the table and the errors per model."""
+    w, h = cli.parse_resolution(args.resolution)
+    cli.check_output_dir(args.out)
+    import metrics
+    import reference
+
+    cli.ensure_addon()
+    scene, stem = cli.load_scene(args.scene, args.variant)
+    scene.render.resolution_x, scene.render.resolution_y = w, h
+    scene.render.resolution_percentage = 100
+    scene.render.engine = "SHADING_LAB"
+    cli.configure(scene, args)
+    if scene.camera is None:
+        raise cli.CliError(f"{args.scene}: the scene has no active camera")
+    progress = cli.Progress(len(MODELS) + 1)
+    images, times = {}, {}
+    with tempfile.TemporaryDirectory() as tmp:
+        for key, model, label in MODELS:
+            scene.shading_lab.model = model
+            start = time.perf_counter()
+            images[key] = reference.render_to_array(scene, Path(tmp) / f"{key}.exr")
+            times[key] = time.perf_counter() - start
+            progress.step(label)
+        start = time.perf_counter()
+        ref, cached = reference.render_reference(scene, samples=args.reference_samples)
+        times["reference"] = time.perf_counter() - start
+        progress.step("Cycles reference" + (" (cached)" if cached else ""))
+    rows, flips, layers = [], [], {"reference": ref}
+    for key, _model, label in MODELS:
+        e = metrics.errors(ref, images[key])
+        rows.append((label, e, times[key]))
+        flips.append((f"{label}: FLIP {e.flip:.3f}", metrics.flip_error(ref, images[key])[1]))
+        layers[key.replace("-", "_")] = images[key]
+        layers["error_" + key.replace("-", "_")] = np.abs(images[key][..., :3] - ref[..., :3])
+    exr = args.out / f"{stem}_compare.exr"
+    write_multilayer(exr, layers)
+    terms = scene.shading_lab
+    term_text = ("Principled BSDF set" if terms.term_set == "PRINCIPLED" else
+                 f"{terms.fresnel.lower()} / {terms.ndf.lower()} / {terms.visibility.lower()} / "
+                 f"{terms.diffuse.lower()}{' + multiscatter' if terms.multiscatter else ''}")
+    title = (f"{stem} — physically based terms: {term_text}. Reference: Cycles, "
+             f"{args.reference_samples} spp, direct light only, light shadows off")
+    png = args.out / f"{stem}_compare.png"
+    labelled_png(png, [(label, images[key]) for key, _, label in MODELS] + [("Cycles reference", ref)],
+                 flips, title)
+    lines = [f"**{stem}** at {w}×{h}. {title}.", "",
+             "| model | mean FLIP (HDR) | mean relative error (lit pixels) | max abs error | time s |",
+             "|---|---:|---:|---:|---:|"]
+    for label, e, seconds in rows:
+        lines.append(f"| {label} | {e.flip:.4f} | {e.mean_relative:.2%} | {e.max_abs:.3g} "
+                     f"| {seconds:.2f} |")
+    lines.append(f"| Cycles reference | – | – | – | {times['reference']:.2f}"
+                 f"{' (cached)' if cached else ''} |")
+    table = "\n".join(lines) + "\n"
+    md = args.out / f"{stem}_metrics.md"
+    md.write_text(table, encoding="utf-8")
+    return {"stem": stem, "exr": exr, "png": png, "md": md, "table": table, "title": title,
+            "errors": {label: e for label, e, _ in rows},
+            "times": {label: t for label, _, t in rows}, "reference_time": times["reference"],
+            "cached": cached}
 
 
 if __name__ == "__main__":

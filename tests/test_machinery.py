@@ -68,3 +68,22 @@ def test_reference_cache_and_fingerprint(tmp_path):
     brighter, cached = reference.render_reference(scene, samples=4, cache_dir=tmp_path)
     assert not cached
     np.testing.assert_allclose(brighter[..., :3], first[..., :3] * 1.5, rtol=1e-5)  # Cycles, linear in power
+
+
+def test_compare_command_on_a_preset(tmp_path):
+    """compare.py end to end: the files, and the physically based model closer to Cycles than
+    Blinn-Phong on the long-tail scene (measured with FLIP)."""
+    import subprocess
+
+    script = Path(__file__).resolve().parent.parent / "scripts" / "compare.py"
+    proc = subprocess.run([sys.executable, str(script), "long_tail", "--resolution", "96x54",
+                           "--reference-samples", "16", "--out", str(tmp_path)],
+                          capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    for suffix in ("_compare.exr", "_compare.png", "_metrics.md"):
+        assert (tmp_path / f"long_tail{suffix}").stat().st_size > 0
+    rows = {line.split("|")[1].strip(): line.split("|")[2:] for line in
+            (tmp_path / "long_tail_metrics.md").read_text().splitlines() if line.startswith("| ")}
+    flip = {name: float(cols[0]) for name, cols in rows.items() if name in
+            ("Blinn-Phong", "Phong", "Physically based")}
+    assert flip["Physically based"] < 0.5 * flip["Blinn-Phong"]
