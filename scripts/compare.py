@@ -121,6 +121,7 @@ def compare(args) -> dict:
 
     cli.ensure_addon()
     scene, stem = cli.load_scene(args.scene, args.variant)
+    stem += getattr(args, "tag", "") or ""
     scene.render.resolution_x, scene.render.resolution_y = w, h
     scene.render.resolution_percentage = 100
     scene.render.engine = "SHADING_LAB"
