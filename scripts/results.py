@@ -26,10 +26,11 @@ OUT = DOCS / "results"
 
 
 def run(scene: str, args, variant: str | None = None, tag: str = "", **terms) -> dict:
-    ns = SimpleNamespace(scene=scene, tag=tag, resolution=args.resolution,
-                         reference_samples=args.reference_samples, variant=variant, out=OUT, normalized_blinn_phong=None, tone_mapper=None,
-                         exposure=None, samples=None, multiscatter=None, principled=None,
-                         fresnel=None, ndf=None, visibility=None, diffuse=None)
+    ns = SimpleNamespace(
+        scene=scene, tag=tag, resolution=args.resolution, reference_samples=args.reference_samples,
+        variant=variant, out=OUT, normalized_blinn_phong=None, tone_mapper=None, exposure=None,
+        samples=None, multiscatter=None, principled=None, fresnel=None, ndf=None, visibility=None,
+        diffuse=None)
     for key, value in terms.items():
         setattr(ns, key, value)
     result = compare.compare(ns)
