@@ -108,13 +108,25 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         display = None
         if settings.tone_mapper != "BLENDER":
             display = programs.PostFeatures(settings.samples, settings.tone_mapper, settings.transfer)
-            self.add_pass(RADIANCE_PASS, 4, "RGBA", layer=depsgraph.view_layer.name)
+            if settings.compare_mode == "OFF":
+                self.add_pass(RADIANCE_PASS, 4, "RGBA", layer=depsgraph.view_layer.name)
         renderer = Renderer()
         clear_compile_error()
         try:
-            radiance, shown = renderer.render_passes(
-                snap, background_color(snap, scene), should_stop=self.test_break,
-                samples=settings.samples, display=display, exposure_ev=settings.exposure)
+            if settings.compare_mode != "OFF":
+                # A|B: Combined holds the composite; no Radiance pass (it would hold one model only)
+                shown = renderer.render_compare(
+                    snap, settings.compare_models, programs.CompareFeatures(settings.compare_mode),
+                    lambda s: background_color(s, scene), settings.compare_split, settings.compare_range,
+                    should_stop=self.test_break, samples=settings.samples, display=display,
+                    exposure_ev=settings.exposure)
+                radiance = shown
+                label = (f"{label} | {settings.compare_mode.title()} "
+                         f"A {settings.compare_models[0]} / B {settings.compare_models[1]}")
+            else:
+                radiance, shown = renderer.render_passes(
+                    snap, background_color(snap, scene), should_stop=self.test_break,
+                    samples=settings.samples, display=display, exposure_ev=settings.exposure)
         except ShaderCompileError as exc:
             self._fail(str(exc))
             return
@@ -130,7 +142,7 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         result = self.begin_result(0, 0, width, height, layer=depsgraph.view_layer.name)
         try:
             passes = result.layers[0].passes
-            if shown is None:
+            if shown is None or settings.compare_mode != "OFF":
                 passes["Combined"].rect.foreach_set(radiance.reshape(-1))
             else:
                 passes["Combined"].rect.foreach_set(shown.reshape(-1))
@@ -148,7 +160,7 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         """Announce the passes to the compositor and multilayer EXR output."""
         self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", "COLOR")
         props = getattr(scene, "shading_lab", None)
-        if props is not None and props.tone_mapper != "BLENDER":
+        if props is not None and props.tone_mapper != "BLENDER" and props.compare_mode == "OFF":
             self.register_pass(scene, renderlayer, RADIANCE_PASS, 4, "RGBA", "COLOR")
 
     def _fail(self, message: str) -> None:

@@ -254,7 +254,9 @@ def scene_settings(scene) -> S.Settings:
                     principled=props.term_set == "PRINCIPLED")
     return S.Settings(model=props.model, terms=terms, ambient=float(props.ambient),
                       tone_mapper=props.tone_mapper, exposure=float(props.exposure), transfer=props.transfer,
-                      samples=int(props.samples))
+                      samples=int(props.samples), compare_mode=props.compare_mode,
+                      compare_models=(props.compare_a, props.compare_b),
+                      compare_split=float(props.compare_split), compare_range=float(props.compare_range))
 
 
 def geometry_updates(depsgraph) -> set[str]:

@@ -171,6 +171,24 @@ def post_source(features: PostFeatures) -> ProgramSource:
     )
 
 
+@dataclass(frozen=True)
+class CompareFeatures:
+    """The A|B composite: split view or difference heat map."""
+
+    mode: str = "SPLIT"  # SPLIT or DIFFERENCE
+    legend_rows: int = 8
+
+    def defines(self) -> tuple[tuple[str, str], ...]:
+        return tuple(sorted([("SL_COMPARE_" + self.mode, "1"), ("SL_LEGEND_ROWS", str(self.legend_rows))]))
+
+
+@lru_cache(maxsize=8)
+def compare_source(features: CompareFeatures) -> ProgramSource:
+    return ProgramSource(typedefs="", vertex=read_glsl("post.vert.glsl"),
+                         fragment=read_glsl("tonemap.glsl") + "\n" + read_glsl("compare.frag.glsl"),
+                         defines=features.defines())
+
+
 # --- uniform-buffer packing (std140, vec4/mat4 members only; matrices column-major) ---------
 
 LIGHT_KIND_IDS = {kind: float(i) for i, kind in enumerate(LIGHT_KINDS)}

@@ -102,6 +102,19 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
     normalized_blinn_phong: BoolProperty(
         name="Energy-Normalised Blinn-Phong", default=False, update=_redraw,
         description="Blinn-Phong's specular as the normalised lobe (s + 8) / (8 pi) (n.h)^s")
+    compare_mode: EnumProperty(
+        name="A|B Compare", default="OFF", update=_redraw, items=(
+            ("OFF", "Off", "Render the scene's model"),
+            ("SPLIT", "Split", "Model A left of the split, model B right of it"),
+            ("DIFFERENCE", "Difference", "The luminance difference |A - B| as a heat map (Turbo colours, "
+                                         "0 at the left of the bottom strip, Range at its right)"),
+        ))
+    compare_a: EnumProperty(name="A", items=MODEL_ITEMS, default="BLINN_PHONG", update=_redraw)
+    compare_b: EnumProperty(name="B", items=MODEL_ITEMS, default="PBR", update=_redraw)
+    compare_split: FloatProperty(name="Split", default=0.5, min=0.0, max=1.0, subtype="FACTOR",
+                                 update=_redraw, description="Position of the divider, from the left")
+    compare_range: FloatProperty(name="Range", default=1.0, min=1e-6, soft_max=100.0, update=_redraw,
+                                 description="Radiance difference shown at the hot end of the heat map")
     samples: IntProperty(
         name="Anti-Aliasing", default=1, min=1, max=8, update=_redraw,
         description="Supersampling grid per axis for final renders: N x N sub-pixel samples averaged "

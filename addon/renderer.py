@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import atexit
 from collections.abc import Callable
+from dataclasses import replace
 
 import gpu
 import numpy as np
@@ -100,8 +101,15 @@ _MS_TEXTURES: dict[tuple[str, str], gpu.types.GPUTexture] = {}
 
 def _r32f(table: np.ndarray) -> gpu.types.GPUTexture:
     h, w = table.shape
-    data = gpu.types.Buffer("FLOAT", w * h, np.asarray(table, np.float32).ravel().tolist())
+    data = gpu.types.Buffer("FLOAT", w * h, np.ascontiguousarray(table, np.float32).ravel())
     return gpu.types.GPUTexture((w, h), format="R32F", data=data)
+
+
+def rgba32f_texture(image: np.ndarray) -> gpu.types.GPUTexture:
+    """An (h, w, 4) float image (bottom row first) as a texture."""
+    h, w = image.shape[:2]
+    data = gpu.types.Buffer("FLOAT", w * h * 4, np.ascontiguousarray(image, np.float32).ravel())
+    return gpu.types.GPUTexture((w, h), format="RGBA32F", data=data)
 
 
 def multiscatter_texture(terms) -> gpu.types.GPUTexture:
@@ -131,6 +139,19 @@ def principled_s_texture() -> gpu.types.GPUTexture:
         n = table.shape[0]
         texture = _MS_TEXTURES[("S",)] = _r32f(table.reshape(n * n, n))
     return texture
+
+
+def _declare_compare(info) -> None:
+    info.vertex_in(0, "VEC2", "pos")
+    info.sampler(0, "FLOAT_2D", "image_a")
+    info.sampler(1, "FLOAT_2D", "image_b")
+    info.push_constant("FLOAT", "split")
+    info.push_constant("FLOAT", "range")
+
+
+def get_compare_program(features: programs.CompareFeatures) -> gpu.types.GPUShader:
+    return _cached_program(("compare",) + features.defines(), "compare", programs.compare_source(features),
+                           _declare_compare)
 
 
 def get_post_program(features: programs.PostFeatures) -> gpu.types.GPUShader:
@@ -181,16 +202,49 @@ def _read(fb, w: int, h: int) -> np.ndarray:
 _FULL_SCREEN = ((-1.0, -1.0), (3.0, -1.0), (-1.0, 3.0))
 
 
+def _full_screen_batch() -> gpu.types.GPUBatch:
+    fmt = gpu.types.GPUVertFormat()
+    fmt.attr_add(id="pos", comp_type="F32", len=2, fetch_mode="FLOAT")
+    vbo = gpu.types.GPUVertBuf(fmt, 3)
+    vbo.attr_fill("pos", _FULL_SCREEN)
+    return gpu.types.GPUBatch(type="TRIS", buf=vbo)
+
+
+def compare_pass(texture_a, texture_b, w: int, h: int, features: programs.CompareFeatures,
+                 split: float = 0.5, value_range: float = 1.0, target=None) -> np.ndarray | None:
+    """Composite two same-size renders (split view or difference heat map) into a w x h float
+    target and read it back, or into ``target`` (the viewport's) without reading back."""
+    shader = get_compare_program(features)
+    batch = _full_screen_batch()
+    own = target is None
+    if own:
+        target = gpu.types.GPUOffScreen(w, h, format="RGBA32F")
+    try:
+        with target.bind():
+            fb = gpu.state.active_framebuffer_get()
+            fb.clear(color=(0.0, 0.0, 0.0, 0.0))
+            gpu.state.depth_test_set("NONE")
+            gpu.state.blend_set("NONE")
+            shader.bind()
+            shader.uniform_sampler("image_a", texture_a)
+            shader.uniform_sampler("image_b", texture_b)
+            if features.mode == "SPLIT":
+                shader.uniform_float("split", float(split))
+            else:
+                shader.uniform_float("range", float(value_range))
+            batch.draw(shader)
+            return _read(fb, w, h) if own else None
+    finally:
+        if own:
+            target.free()
+
+
 def post_pass(texture, w: int, h: int, features: programs.PostFeatures, exposure_ev: float = 0.0,
               target=None) -> np.ndarray | None:
     """Run the resolve/display pass over ``texture`` into a w x h float target and read it back,
     or into ``target`` (an offscreen the caller owns, e.g. the viewport's) without reading back."""
     shader = get_post_program(features)
-    fmt = gpu.types.GPUVertFormat()
-    fmt.attr_add(id="pos", comp_type="F32", len=2, fetch_mode="FLOAT")
-    vbo = gpu.types.GPUVertBuf(fmt, 3)
-    vbo.attr_fill("pos", _FULL_SCREEN)
-    batch = gpu.types.GPUBatch(type="TRIS", buf=vbo)
+    batch = _full_screen_batch()
     own = target is None
     if own:
         target = gpu.types.GPUOffScreen(w, h, format="RGBA32F")
@@ -312,6 +366,23 @@ class Renderer:
             return radiance, shown
         finally:
             scene_target.free()
+
+    def render_compare(self, snapshot: Snapshot, models: tuple[str, str], compare: programs.CompareFeatures,
+                       background: Callable[[Snapshot], tuple], split: float = 0.5, value_range: float = 1.0,
+                       should_stop: Callable[[], bool] | None = None, samples: int = 1,
+                       display: programs.PostFeatures | None = None, exposure_ev: float = 0.0) -> np.ndarray:
+        """The frame rendered with two models and composited (split view or difference map).
+        A split composites what Combined would hold (display values under an engine tone
+        mapper); a difference map compares radiance."""
+        images = []
+        for model in models:
+            snap = replace(snapshot, settings=replace(snapshot.settings, model=model))
+            radiance, shown = self.render_passes(snap, background(snap), should_stop, samples, display,
+                                                 exposure_ev)
+            images.append(shown if shown is not None and compare.mode == "SPLIT" else radiance)
+        textures = [rgba32f_texture(image) for image in images]
+        return compare_pass(textures[0], textures[1], snapshot.width, snapshot.height, compare, split,
+                            value_range)
 
     def free(self) -> None:
         self._batches.clear()

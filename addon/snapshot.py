@@ -187,6 +187,10 @@ class Settings:
     exposure: float = 0.0  # EV, for the engine's own tone mappers
     transfer: str = "SRGB"  # SRGB (exact) or GAMMA22, for the engine's own tone mappers
     samples: int = 1  # supersampling grid per axis for final renders (1 = pixel centres)
+    compare_mode: str = "OFF"  # OFF, SPLIT or DIFFERENCE
+    compare_models: tuple[str, str] = ("BLINN_PHONG", "PBR")
+    compare_split: float = 0.5
+    compare_range: float = 1.0
 
 
 @dataclass

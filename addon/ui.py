@@ -79,6 +79,17 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
                 box.label(text="Set Color Management > View Transform to Standard:", icon="ERROR")
                 box.label(text="this tone mapper already maps to display values")
         layout.prop(props, "samples")
+        layout.separator()
+        layout.prop(props, "compare_mode")
+        if props.compare_mode != "OFF":
+            row = layout.row(align=True)
+            row.prop(props, "compare_a")
+            row.prop(props, "compare_b")
+            if props.compare_mode == "SPLIT":
+                layout.prop(props, "compare_split")
+            else:
+                layout.prop(props, "compare_range")
+                layout.label(text=f"Heat map: bottom strip runs 0 (left) to {props.compare_range:g} (right)")
 
 
 class SHADINGLAB_PT_light(ShadingLabPanel, bpy.types.Panel):

@@ -10,13 +10,14 @@ texture for the engine to show through Blender's display transform.
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 
 import gpu
 import numpy as np
 
 from . import extract, programs
 from . import snapshot as S
-from .renderer import Renderer, post_pass
+from .renderer import Renderer, compare_pass, post_pass
 
 _NO_CAMERA = S.Camera(np.eye(4, dtype=np.float32), np.eye(4, dtype=np.float32), True, (0.0, 0.0, 0.0),
                       (0.0, 0.0, -1.0))
@@ -55,15 +56,32 @@ class ViewportSession:
         pending = self.pending
         self.renderer.sync(snap, keep=lambda key: key not in pending)
         self.pending = set()
-        scene_target = self._target("scene", width, height)
+        settings = snap.settings
+        if settings.compare_mode == "OFF":
+            return self._draw_model(snap, "scene", background)
+        compare = programs.CompareFeatures(settings.compare_mode)
+        textures = []
+        for name, model in zip(("a", "b"), settings.compare_models):
+            model_snap = replace(snap, settings=replace(settings, model=model))
+            # a split shows what each model displays; a difference map compares radiance
+            textures.append(self._draw_model(model_snap, name, background, tone_map=compare.mode == "SPLIT"))
+        shown = self._target("compare", width, height)
+        compare_pass(textures[0], textures[1], width, height, compare, settings.compare_split,
+                     settings.compare_range, target=shown)
+        return shown.texture_color
+
+    def _draw_model(self, snap: S.Snapshot, name: str, background, tone_map: bool = True):
+        """Draw ``snap`` into the target ``name``; through the engine's tone mapper if chosen."""
+        width, height = snap.width, snap.height
+        scene_target = self._target(name, width, height)
         with scene_target.bind():
             fb = gpu.state.active_framebuffer_get()
             fb.clear(color=background, depth=1.0)
             self.renderer.draw(snap, half_target=True)
         settings = snap.settings
-        if settings.tone_mapper == "BLENDER":
+        if settings.tone_mapper == "BLENDER" or not tone_map:
             return scene_target.texture_color
-        shown = self._target("display", width, height)
+        shown = self._target(name + "-display", width, height)
         post_pass(scene_target.texture_color, width, height,
                   programs.PostFeatures(1, settings.tone_mapper, settings.transfer), settings.exposure,
                   target=shown)

@@ -1,0 +1,115 @@
+"""A|B compare: split view and difference heat map, in final renders and through the viewport
+session, checked against separate renders of each model."""
+
+from __future__ import annotations
+
+import math
+
+import bpy
+import numpy as np
+import pytest
+import scenes
+from gpu_harness import read_texture, run_on_gpu
+
+from addon.viewport import ViewportSession
+
+SIZE = 32
+
+
+def _scene():
+    scene = scenes.reset(size=SIZE)
+    scene.shading_lab.ambient = 0.0
+    scenes.ortho_camera(scene, scale=4.0)
+    scenes.plane(scene, size=8.0, material=scenes.material(base_color=(0.7, 0.5, 0.3), roughness=0.3))
+    scenes.light(scene, "POINT", energy=300.0, location=(0.3, -0.2, 1.0))
+    return scene
+
+
+def _render(scene, tmp_path, name):
+    return scenes.render(scene, tmp_path / f"{name}.exr")
+
+
+def _model_renders(scene, tmp_path):
+    out = {}
+    for model in ("BLINN_PHONG", "PBR"):
+        scene.shading_lab.model = model
+        out[model] = _render(scene, tmp_path, model)
+    return out
+
+
+def turbo(t):
+    """Mikhailov 2019's polynomial approximation of Turbo (from his published shader code)."""
+    t = np.clip(t, 0.0, 1.0)
+    def poly(c):
+        return sum(k * t ** i for i, k in enumerate(c))
+
+    r = poly((0.13572138, 4.61539260, -42.66032258, 132.13108234, -152.94239396, 59.28637943))
+    g = poly((0.09140261, 2.19418839, 4.84296658, -14.18503333, 4.27729857, 2.82956604))
+    b = poly((0.10667330, 12.64194608, -60.58204836, 110.36276771, -89.90310912, 27.34824973))
+    return np.clip(np.stack([r, g, b], axis=-1), 0.0, 1.0)
+
+
+def srgb_decode(c):
+    return np.where(c <= 0.04045, c / 12.92, ((c + 0.055) / 1.055) ** 2.4)
+
+
+def test_split_view_is_each_model_on_its_side(tmp_path):
+    scene = _scene()
+    separate = _model_renders(scene, tmp_path)
+    props = scene.shading_lab
+    props.compare_mode, props.compare_split = "SPLIT", 0.25
+    props.compare_a, props.compare_b = "BLINN_PHONG", "PBR"
+    split = _render(scene, tmp_path, "split")
+    edge = math.floor(0.25 * SIZE)
+    np.testing.assert_array_equal(split[:, :edge], separate["BLINN_PHONG"][:, :edge])
+    np.testing.assert_array_equal(split[:, edge + 1:], separate["PBR"][:, edge + 1:])
+    np.testing.assert_array_equal(split[:, edge, :3], 1.0)  # the divider
+    assert np.abs(separate["PBR"] - separate["BLINN_PHONG"]).max() > 0.1  # the two sides differ
+
+
+def test_difference_is_a_heat_map_with_its_scale(tmp_path):
+    scene = _scene()
+    separate = _model_renders(scene, tmp_path)
+    props = scene.shading_lab
+    props.compare_mode, props.compare_range = "DIFFERENCE", 2.0
+    props.compare_a, props.compare_b = "BLINN_PHONG", "PBR"
+    heat = _render(scene, tmp_path, "diff")
+    weights = np.array([0.2126, 0.7152, 0.0722])
+    d = np.abs(separate["BLINN_PHONG"][..., :3] @ weights - separate["PBR"][..., :3] @ weights)
+    want = srgb_decode(turbo(d / 2.0))
+    rows = SIZE - 8  # the bottom 8 rows (top-first array: the last 8) are the legend
+    np.testing.assert_allclose(heat[:rows, :, :3], want[:rows], atol=2e-4)
+    legend = heat[rows:, :, :3]
+    ramp = srgb_decode(turbo((np.arange(SIZE) + 0.5) / SIZE))
+    np.testing.assert_allclose(legend, np.broadcast_to(ramp, legend.shape), atol=2e-4)
+
+
+def test_viewport_compare_matches_final_render(tmp_path):
+    scene = _scene()
+    props = scene.shading_lab
+    props.compare_mode, props.compare_split = "SPLIT", 0.5
+    final = _render(scene, tmp_path, "final")[::-1]  # bottom row first, like textures
+    session = ViewportSession()
+    try:
+        session.update(bpy.context.evaluated_depsgraph_get())
+        cam = scene.camera
+        view = np.linalg.inv(np.array(cam.matrix_world))
+        proj = np.array(cam.calc_matrix_camera(bpy.context.evaluated_depsgraph_get(), x=SIZE, y=SIZE))
+        shown = run_on_gpu(lambda d: read_texture(session.draw(SIZE, SIZE, view, proj, False), SIZE))
+    finally:
+        session.free()
+    np.testing.assert_allclose(shown[..., :3], final[..., :3], rtol=2e-3, atol=1e-3)  # half-float targets
+
+
+@pytest.mark.parametrize("mode", ["SPLIT", "DIFFERENCE"])
+def test_compare_with_engine_tone_mapper(mode, tmp_path):
+    """Under an engine tone mapper a split shows each model's display values; a difference map
+    is not tone mapped; neither writes a Radiance pass."""
+    scene = _scene()
+    props = scene.shading_lab
+    props.tone_mapper, props.compare_mode = "REINHARD", mode
+    bpy.ops.render.render()
+    layers = scenes.read_exr_layers(scenes.save_result(scene, tmp_path / "all.exr", "MULTILAYER"))
+    assert "Radiance" not in layers
+    combined = layers["Combined"][..., :3]
+    assert np.isfinite(combined).all() and 0.0 <= combined.min() and combined.max() <= 1.0 + 1e-6
