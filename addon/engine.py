@@ -16,6 +16,16 @@ from .renderer import Renderer, ShaderCompileError, clear_compile_error
 
 ENGINE_ID = "SHADING_LAB"
 RADIANCE_PASS = "Radiance"  # raw HDR radiance when the engine's own tone mapper fills Combined
+#: Light passes, named as EEVEE and Cycles name theirs, switched by the same view-layer toggles:
+#: pass name -> (view-layer property, lobe weights (diffuse, specular, ambient, final clamp)).
+LIGHT_PASSES = {
+    "Diffuse Direct": ("use_pass_diffuse_direct", (1.0, 0.0, 0.0, 0.0)),
+    "Glossy Direct": ("use_pass_glossy_direct", (0.0, 1.0, 0.0, 0.0)),
+}
+
+
+def light_passes(view_layer) -> list[str]:
+    return [name for name, (toggle, _) in LIGHT_PASSES.items() if getattr(view_layer, toggle, False)]
 
 #: Phase times of the last final render in milliseconds (read by scripts/frame_time.py).
 last_timings: dict[str, float] = {}
@@ -110,6 +120,9 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
             display = programs.PostFeatures(settings.samples, settings.tone_mapper, settings.transfer)
             if settings.compare_mode == "OFF":
                 self.add_pass(RADIANCE_PASS, 4, "RGBA", layer=depsgraph.view_layer.name)
+        lobe_passes = light_passes(depsgraph.view_layer) if settings.compare_mode == "OFF" else []
+        for name in lobe_passes:
+            self.add_pass(name, 4, "RGBA", layer=depsgraph.view_layer.name)
         renderer = Renderer()
         clear_compile_error()
         try:
@@ -127,6 +140,8 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
                 radiance, shown = renderer.render_passes(
                     snap, background_color(snap, scene), should_stop=self.test_break,
                     samples=settings.samples, display=display, exposure_ev=settings.exposure)
+            lobes = {name: renderer.render_lobe(snap, LIGHT_PASSES[name][1], settings.samples)
+                     for name in lobe_passes if not self.test_break()}
         except ShaderCompileError as exc:
             self._fail(str(exc))
             return
@@ -147,6 +162,8 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
             else:
                 passes["Combined"].rect.foreach_set(shown.reshape(-1))
                 passes[RADIANCE_PASS].rect.foreach_set(radiance.reshape(-1))
+            for name, image in lobes.items():
+                passes[name].rect.foreach_set(image.reshape(-1))
         finally:
             self.end_result(result)
         self.update_progress(1.0)
@@ -162,6 +179,8 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         props = getattr(scene, "shading_lab", None)
         if props is not None and props.tone_mapper != "BLENDER" and props.compare_mode == "OFF":
             self.register_pass(scene, renderlayer, RADIANCE_PASS, 4, "RGBA", "COLOR")
+        for name in light_passes(renderlayer):
+            self.register_pass(scene, renderlayer, name, 4, "RGBA", "COLOR")
 
     def _fail(self, message: str) -> None:
         self.report({"ERROR"}, message)

@@ -198,7 +198,12 @@ def _mat(m: np.ndarray) -> np.ndarray:
     return np.asarray(m, np.float32).T.reshape(-1)
 
 
-def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None) -> bytes:
+#: Lobe weights of a normal draw: everything, through the model's final clamp.
+ALL_LOBES = (1.0, 1.0, 1.0, 1.0)
+
+
+def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None,
+               lobes: tuple[float, float, float, float] = ALL_LOBES) -> bytes:
     cam = snapshot.camera
     vp = cam.view_projection if view_projection is None else view_projection
     ambient = snapshot.settings.ambient
@@ -208,6 +213,7 @@ def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None) ->
         [*cam.forward, 0.0],
         [ambient, ambient, ambient, 0.0],
         [float(len(snapshot.lights)), 0.0, 0.0, 0.0],
+        list(lobes),
     ]
     return np.concatenate([np.asarray(r, np.float32) for r in rows]).tobytes()
 

@@ -288,11 +288,12 @@ class Renderer:
                 self.uploaded_geometry += 1
 
     def draw(self, snapshot: Snapshot, view_projection: np.ndarray | None = None,
-             should_stop: Callable[[], bool] | None = None, half_target: bool = False) -> None:
+             should_stop: Callable[[], bool] | None = None, half_target: bool = False,
+             lobes: tuple[float, float, float, float] = programs.ALL_LOBES) -> None:
         """Draw every item into the bound framebuffer, one program per shading model in use
         (the scene's, and any material's own override)."""
         lights = programs.Features.from_snapshot(snapshot)
-        frame_ubo = gpu.types.GPUUniformBuf(programs.pack_frame(snapshot, view_projection))
+        frame_ubo = gpu.types.GPUUniformBuf(programs.pack_frame(snapshot, view_projection, lobes))
         light_ubo = gpu.types.GPUUniformBuf(programs.pack_lights(snapshot, lights.max_lights))
         material_ubos = {
             key: gpu.types.GPUUniformBuf(programs.pack_material(m))
@@ -341,9 +342,16 @@ class Renderer:
         """
         return self.render_passes(snapshot, background, should_stop)[0]
 
+    def render_lobe(self, snapshot: Snapshot, lobes: tuple[float, float, float, float],
+                    samples: int = 1) -> np.ndarray:
+        """One lobe's radiance (e.g. (1, 0, 0, 0): diffuse light only, unclamped), black
+        background, averaged over the same supersampling grid as Combined."""
+        return self.render_passes(snapshot, (0.0, 0.0, 0.0, 0.0), samples=samples, lobes=lobes)[0]
+
     def render_passes(self, snapshot: Snapshot, background=(0, 0, 0, 1),
                       should_stop: Callable[[], bool] | None = None, samples: int = 1,
-                      display: programs.PostFeatures | None = None, exposure_ev: float = 0.0):
+                      display: programs.PostFeatures | None = None, exposure_ev: float = 0.0,
+                      lobes: tuple[float, float, float, float] = programs.ALL_LOBES):
         """Radiance (averaged over ``samples`` x ``samples`` sub-pixels) and, when ``display`` names
         a tone mapper, the display-linear image; each (height, width, 4) float32, bottom row first."""
         w, h = snapshot.width, snapshot.height
@@ -354,7 +362,7 @@ class Renderer:
             with scene_target.bind():
                 fb = gpu.state.active_framebuffer_get()
                 fb.clear(color=background, depth=1.0)
-                self.draw(snapshot, should_stop=should_stop)
+                self.draw(snapshot, should_stop=should_stop, lobes=lobes)
                 if samples == 1 and display is None:
                     return _read(fb, w, h), None
             texture = scene_target.texture_color

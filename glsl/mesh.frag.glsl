@@ -28,7 +28,7 @@ void main()
   /* Back faces are shaded with the normal flipped towards the viewer, as Cycles does. */
   Surface s = make_surface(world_position, gl_FrontFacing ? n : -n, view_direction(world_position),
                            material);
-  vec3 c = shade_ambient(s, frame.ambient.rgb);
+  vec3 c = shade_ambient(s, frame.ambient.rgb) * frame.lobes.z;
   int count = int(frame.counts.x);
   for (int i = 0; i < SL_MAX_LIGHTS; i++) {
     if (i >= count) {
@@ -37,7 +37,7 @@ void main()
     LightData light = lights.light[i];
     vec3 l;
     vec3 E = light_irradiance(light, s.p, l);
-    c += shade_direct(s, l, E, light.factors);
+    c += shade_direct(s, l, E, light.factors * vec4(frame.lobes.xy, 1.0, 1.0));
   }
-  frag_color = vec4(write_target(shade_finish(c)), 1.0);
+  frag_color = vec4(write_target(frame.lobes.w > 0.5 ? shade_finish(c) : c), 1.0);
 }

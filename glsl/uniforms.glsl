@@ -8,6 +8,8 @@ struct FrameData {
   vec4 camera_forward;   /* xyz: unit view axis (camera -Z) in world space */
   vec4 ambient;          /* rgb: Blinn-Phong/Phong ambient constant x (eq. 1.4) */
   vec4 counts;           /* x: number of lights in use */
+  vec4 lobes;            /* x: diffuse, y: specular, z: ambient weight; w: 1 applies the model's
+                          * final clamp (Combined), 0 leaves a lobe pass raw */
 };
 
 struct LightData {

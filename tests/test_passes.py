@@ -1,0 +1,57 @@
+"""Light passes named as EEVEE names them ("Diffuse Direct", "Glossy Direct"), switched by the
+view layer's toggles: each lobe's radiance, Combined their sum (plus the ambient term, through
+the model's clamp for Blinn-Phong)."""
+
+from __future__ import annotations
+
+import math
+
+import bpy
+import numpy as np
+import pytest
+import scenes
+
+
+def _scene(model):
+    scene = scenes.reset(size=32)
+    scene.shading_lab.model = model
+    scene.shading_lab.ambient = 0.1
+    scenes.ortho_camera(scene, scale=4.0)
+    scenes.plane(scene, size=8.0, material=scenes.material(base_color=(0.6, 0.4, 0.2), roughness=0.35,
+                                                           ambient_color=(0.6, 0.4, 0.2)))
+    scenes.light(scene, "POINT", energy=40.0, location=(0.4, 0.2, 1.0))
+    scenes.light(scene, "SUN", energy=0.5, rotation=(math.radians(30), 0, 0))
+    vl = scene.view_layers[0]
+    vl.use_pass_diffuse_direct = True
+    vl.use_pass_glossy_direct = True
+    return scene
+
+
+@pytest.mark.parametrize("model", ["PBR", "BLINN_PHONG"])
+def test_light_passes_sum_to_combined(model, tmp_path):
+    scene = _scene(model)
+    bpy.ops.render.render()
+    layers = scenes.read_exr_layers(scenes.save_result(scene, tmp_path / "passes.exr", "MULTILAYER"))
+    assert {"Diffuse Direct", "Glossy Direct"} <= set(layers)
+    diffuse, glossy = layers["Diffuse Direct"][..., :3], layers["Glossy Direct"][..., :3]
+    combined = layers["Combined"][..., :3].astype(np.float64)
+    assert diffuse.max() > 0.05 and glossy.max() > 0.05, "both lobes contribute in this scene"
+    total = diffuse.astype(np.float64) + glossy
+    if model == "PBR":
+        np.testing.assert_allclose(combined, total, rtol=1e-5, atol=1e-6)  # no ambient term in PBR
+    else:
+        ambient = 0.1 * np.array([0.6, 0.4, 0.2])
+        np.testing.assert_allclose(combined, np.clip(total + ambient, 0.0, 1.0), rtol=1e-5, atol=1e-6)
+        assert (total + ambient).max() > 1.0, "the Blinn-Phong passes stay unclamped"
+
+
+def test_pass_names_are_eevees(tmp_path):
+    """The same strings EEVEE writes for the same view-layer toggles in this Blender."""
+    from addon.engine import LIGHT_PASSES
+
+    scene = _scene("PBR")
+    scene.render.engine = "BLENDER_EEVEE" if bpy.app.version >= (5, 0, 0) else "BLENDER_EEVEE_NEXT"
+    scene.render.resolution_x = scene.render.resolution_y = 8
+    bpy.ops.render.render()
+    eevee = set(scenes.read_exr_layers(scenes.save_result(scene, tmp_path / "eevee.exr", "MULTILAYER")))
+    assert set(LIGHT_PASSES) <= eevee, f"EEVEE wrote {sorted(eevee)}"
