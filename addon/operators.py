@@ -1,4 +1,6 @@
-"""Operators: applying a material preset from the shipped library (with undo)."""
+"""Operators (all undoable): applying a material preset from the shipped library, copying the
+surface shader's values into Shading Lab's explicit settings, and converting between roughness
+and shininess."""
 
 from __future__ import annotations
 
@@ -49,4 +51,86 @@ class SHADINGLAB_OT_apply_material_preset(bpy.types.Operator):
         return {"FINISHED"}
 
 
-classes = (SHADINGLAB_OT_apply_material_preset,)
+def _target_materials(context, scope: str):
+    if scope == "ACTIVE":
+        return [context.material] if getattr(context, "material", None) is not None else []
+    seen = []
+    for obj in getattr(context, "selected_objects", None) or []:
+        for slot in getattr(obj, "material_slots", ()):
+            if slot.material is not None and slot.material not in seen:
+                seen.append(slot.material)
+    return seen
+
+
+_SCOPE = EnumProperty(name="Materials", default="ACTIVE", items=(
+    ("ACTIVE", "Active Material", "Only the active material"),
+    ("SELECTED", "All Selected", "Every material of the selected objects"),
+))
+
+
+class SHADINGLAB_OT_principled_to_explicit(bpy.types.Operator):
+    """Copy the values read from the surface shader into Shading Lab's explicit settings (ticked),
+    so they stay when the shader changes"""
+
+    bl_idname = "shading_lab.principled_to_explicit"
+    bl_label = "Principled to Shading Lab"
+    bl_options = {"REGISTER", "UNDO"}
+
+    scope: _SCOPE
+
+    def execute(self, context):
+        from .extract import material_params
+
+        materials = _target_materials(context, self.scope)
+        if not materials:
+            self.report({"WARNING"}, "No material to convert")
+            return {"CANCELLED"}
+        for mat in materials:
+            p = material_params(mat)
+            props = mat.shading_lab
+            for name, value in (("base_color", p.base_color), ("metalness", p.metalness),
+                                ("roughness", p.roughness), ("f0", p.f0), ("shininess", p.shininess),
+                                ("specular_color", p.specular_color), ("ambient_color", p.ambient_color)):
+                setattr(props, name, value)
+                setattr(props, "use_" + name, True)
+            mat.update_tag()
+        self.report({"INFO"}, f"Converted {len(materials)} material(s)")
+        return {"FINISHED"}
+
+
+class SHADINGLAB_OT_convert_roughness(bpy.types.Operator):
+    """Set shininess from roughness, or roughness from shininess, with the documented mapping
+    s = 2 / r^4 - 2 (Walter et al. 2007, alpha = r^2)"""
+
+    bl_idname = "shading_lab.convert_roughness"
+    bl_label = "Convert Roughness / Shininess"
+    bl_options = {"REGISTER", "UNDO"}
+
+    direction: EnumProperty(name="Direction", default="TO_SHININESS", items=(
+        ("TO_SHININESS", "Roughness to Shininess", "Blinn-Phong shininess matching the roughness"),
+        ("TO_ROUGHNESS", "Shininess to Roughness", "Roughness matching the Blinn-Phong shininess"),
+    ))
+    scope: _SCOPE
+
+    def execute(self, context):
+        from .extract import material_params
+        from .snapshot import roughness_from_shininess, shininess_from_roughness
+
+        materials = _target_materials(context, self.scope)
+        if not materials:
+            self.report({"WARNING"}, "No material to convert")
+            return {"CANCELLED"}
+        for mat in materials:
+            p = material_params(mat)
+            props = mat.shading_lab
+            if self.direction == "TO_SHININESS":
+                props.shininess, props.use_shininess = shininess_from_roughness(p.roughness), True
+            else:
+                props.roughness, props.use_roughness = roughness_from_shininess(p.shininess), True
+            mat.update_tag()
+        self.report({"INFO"}, f"Converted {len(materials)} material(s)")
+        return {"FINISHED"}
+
+
+classes = (SHADINGLAB_OT_apply_material_preset, SHADINGLAB_OT_principled_to_explicit,
+           SHADINGLAB_OT_convert_roughness)

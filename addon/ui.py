@@ -138,6 +138,10 @@ class SHADINGLAB_PT_material(ShadingLabPanel, bpy.types.Panel):
         layout = self.layout
         layout.operator_menu_enum("shading_lab.apply_material_preset", "preset", text="Material Preset",
                                   icon="PRESET")
+        row = layout.row(align=True)
+        row.operator("shading_lab.principled_to_explicit", text="From Shader")
+        row.operator("shading_lab.convert_roughness", text="Roughness → Shininess").direction = "TO_SHININESS"
+        row.operator("shading_lab.convert_roughness", text="Shininess → Roughness").direction = "TO_ROUGHNESS"
         layout.prop(props, "model")
         terms = layout.column(align=True)
         for name in ("fresnel", "ndf", "visibility", "diffuse"):

@@ -39,6 +39,10 @@ class Layout:
     def operator_menu_enum(self, operator, prop, **kwargs):
         self.log.append(("operator_menu_enum", prop, self.active))
 
+    def operator(self, operator, **kwargs):
+        self.log.append(("operator", operator, self.active))
+        return SimpleNamespace()
+
     def labels(self):
         return [text for kind, text, _ in self.log if kind == "label"]
 
@@ -112,3 +116,34 @@ def test_material_preset_operator_applies_measured_values():
     assert not mat.shading_lab.use_roughness  # the preset's value now comes from the shader
     layout = _draw(ui.SHADINGLAB_PT_material, SimpleNamespace(material=mat))
     assert layout.log[0][:2] == ("operator_menu_enum", "preset")
+
+
+def test_conversion_operators_with_undo():
+    from addon import extract
+    from addon.operators import SHADINGLAB_OT_convert_roughness, SHADINGLAB_OT_principled_to_explicit
+
+    assert "UNDO" in SHADINGLAB_OT_convert_roughness.bl_options
+    assert "UNDO" in SHADINGLAB_OT_principled_to_explicit.bl_options
+    scene = scenes.reset(size=8)
+    a = bpy.data.materials.new("A")
+    if a.node_tree is None:
+        a.use_nodes = True
+    node = next(n for n in a.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    node.inputs["Roughness"].default_value = 0.5
+    node.inputs["Base Color"].default_value = (0.2, 0.3, 0.4, 1.0)
+    b = scenes.material("B", shininess=100.0)
+    obj_a, obj_b = scenes.plane(scene, material=a), scenes.plane(scene, material=b)
+    with bpy.context.temp_override(material=a, object=obj_a):
+        assert bpy.ops.shading_lab.principled_to_explicit() == {"FINISHED"}
+    assert a.shading_lab.use_base_color and tuple(a.shading_lab.base_color) == pytest.approx((0.2, 0.3, 0.4))
+    node.inputs["Base Color"].default_value = (1.0, 0.0, 0.0, 1.0)  # the explicit copy now wins
+    assert extract.material_params(a).base_color == pytest.approx((0.2, 0.3, 0.4))
+    with bpy.context.temp_override(material=a, object=obj_a):
+        bpy.ops.shading_lab.convert_roughness(direction="TO_SHININESS")
+    assert a.shading_lab.shininess == pytest.approx(30.0)  # r 0.5: 2 / 0.0625 - 2
+    with bpy.context.temp_override(selected_objects=[obj_a, obj_b], material=a):
+        bpy.ops.shading_lab.convert_roughness(direction="TO_ROUGHNESS", scope="SELECTED")
+    assert b.shading_lab.use_roughness
+    assert b.shading_lab.roughness == pytest.approx((2 / 102) ** 0.25, rel=1e-5)
+    layout = _draw(ui.SHADINGLAB_PT_material, SimpleNamespace(material=a))
+    assert ("operator", "shading_lab.convert_roughness", True) in layout.log
