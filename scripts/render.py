@@ -175,6 +175,7 @@ def save(image, scene, path: Path, file_format: str) -> None:
         settings.media_type = "IMAGE"
     settings.file_format = file_format
     if file_format == "OPEN_EXR":
+        settings.color_mode = "RGBA"
         settings.color_depth = "32"
         settings.exr_codec = "ZIP"
     else:

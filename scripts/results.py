@@ -66,6 +66,8 @@ def main(argv=None) -> int:
     hdr = run("hdr", args)
     sweep = run("roughness_sweep", args)
     sweep_ms = run("roughness_sweep", args, tag="_multiscatter", multiscatter=True)
+    furnace = run("furnace", args)
+    furnace_ms = run("furnace", args, tag="_multiscatter", multiscatter=True)
     grid = run("material_grid", args)
     grid_principled = run("material_grid", args, tag="_principled", principled=True)
     lighting = {v: run("portability", args, variant=v) for v in ("studio", "noon", "sunset", "spot")}
@@ -94,6 +96,7 @@ BSDFs, so Cycles renders Blender's Principled BSDF (multiscatter GGX).
 
 {table([("fresnel", fresnel), ("long_tail (GGX)", tails), ("long_tail (Beckmann)", tails_beckmann),
         ("hdr", hdr), ("roughness_sweep", sweep), ("roughness_sweep (+ multiscatter)", sweep_ms),
+        ("furnace", furnace), ("furnace (+ multiscatter)", furnace_ms),
         ("material_grid", grid), ("material_grid (Principled set)", grid_principled)]
        + [(f"portability: {v}", r) for v, r in lighting.items()])}
 
@@ -145,6 +148,17 @@ at r = 1, `docs/figures/albedo.png`), which multiple-scattering compensation res
 as shininess falls (FLIP {_flip(sweep, BP):.3f}).
 
 ![roughness sweep with multiscatter]({_rel(sweep_ms['png'])})
+
+The furnace makes the loss visible on its own: white spheres (metal behind, dielectric in front),
+roughness 0 → 1, under 42 suns from every direction that stand in for a uniform environment of
+radiance 1, so each sphere's radiance is its albedo. Without compensation the rough white metals
+darken (FLIP {_flip(furnace, PBR):.3f} against Cycles' Principled BSDF, which compensates); with it
+they stay at 1 (FLIP {_flip(furnace_ms, PBR):.3f}). Blinn-Phong obeys no bound:
+FLIP {_flip(furnace, BP):.3f}. (The smooth spheres show the suns as separate glints.)
+
+![furnace]({_rel(furnace['png'])})
+
+![furnace with multiscatter]({_rel(furnace_ms['png'])})
 
 ## Measured materials
 

@@ -409,3 +409,24 @@ def test_unknown_scene_name_is_refused():
     hint = r'no such scene preset \(did you mean "fresnel"\?\); expected one of fresnel, hdr'
     with pytest.raises(P.PresetError, match=hint):
         P.load_scene_preset("fresnell")
+
+
+def test_furnace_preset_bounds_white_spheres(tmp_path):
+    """The furnace stands in for a uniform environment of radiance 1: the rough white spheres'
+    radiance is their directional albedo, <= 1, and ~1 for the white metal with multiple-scattering
+    compensation (cross-checked with the numpy twin's furnace albedo in test_reference.py)."""
+    import numpy as np
+
+    from addon import presets as P
+    from addon import scene_builder
+
+    scene = scenes.reset(size=8)
+    scene_builder.build_scene(P.load_scene_preset("furnace"), scene)
+    scene.render.engine = "SHADING_LAB"
+    scene.render.resolution_x, scene.render.resolution_y = 480, 200
+    scene.shading_lab.multiscatter = True
+    image = scenes.render(scene, tmp_path / "furnace.exr")[..., 0]
+    metal_rough = image[50, 40 + 80 * 3:: 80]  # sphere centres, roughness 0.6 .. 1
+    dielectric_rough = image[150, 40 + 80 * 3:: 80]
+    np.testing.assert_allclose(metal_rough, 1.0, atol=0.02)
+    assert np.all(dielectric_rough <= 1.02) and np.all(dielectric_rough > 0.9)
