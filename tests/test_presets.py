@@ -30,6 +30,7 @@ SHIPPED = {
     "roughness_sweep": (13, 2),
     "material_grid": (12, 2),
     "portability": (6, 3),
+    "furnace": (12, 42),
 }
 MATERIALS = {"gold", "copper", "aluminium", "silver", "iron", "titanium", "plastic", "rubber", "glass",
              "water", "skin"}
@@ -406,7 +407,7 @@ def test_bad_material_library_is_refused(tmp_path):
 
 
 def test_unknown_scene_name_is_refused():
-    hint = r'no such scene preset \(did you mean "fresnel"\?\); expected one of fresnel, hdr'
+    hint = r'no such scene preset \(did you mean "fresnel"\?\); expected one of fresnel, furnace, hdr'
     with pytest.raises(P.PresetError, match=hint):
         P.load_scene_preset("fresnell")
 
