@@ -68,13 +68,8 @@ _SCOPE = EnumProperty(name="Materials", default="ACTIVE", items=(
 ))
 
 
-class SHADINGLAB_OT_principled_to_explicit(bpy.types.Operator):
-    """Copy the values read from the surface shader into Shading Lab's explicit settings (ticked),
-    so they stay when the shader changes"""
-
-    bl_idname = "shading_lab.principled_to_explicit"
-    bl_label = "Principled to Shading Lab"
-    bl_options = {"REGISTER", "UNDO"}
+class _MaterialConversion:
+    """Runs ``convert(material, resolved values)`` on the chosen materials, then tags them."""
 
     scope: _SCOPE
 
@@ -86,19 +81,28 @@ class SHADINGLAB_OT_principled_to_explicit(bpy.types.Operator):
             self.report({"WARNING"}, "No material to convert")
             return {"CANCELLED"}
         for mat in materials:
-            p = material_params(mat)
-            props = mat.shading_lab
-            for name, value in (("base_color", p.base_color), ("metalness", p.metalness),
-                                ("roughness", p.roughness), ("f0", p.f0), ("shininess", p.shininess),
-                                ("specular_color", p.specular_color), ("ambient_color", p.ambient_color)):
-                setattr(props, name, value)
-                setattr(props, "use_" + name, True)
+            self.convert(mat.shading_lab, material_params(mat))
             mat.update_tag()
         self.report({"INFO"}, f"Converted {len(materials)} material(s)")
         return {"FINISHED"}
 
 
-class SHADINGLAB_OT_convert_roughness(bpy.types.Operator):
+class SHADINGLAB_OT_principled_to_explicit(_MaterialConversion, bpy.types.Operator):
+    """Copy the values read from the surface shader into Shading Lab's explicit settings (ticked),
+    so they stay when the shader changes"""
+
+    bl_idname = "shading_lab.principled_to_explicit"
+    bl_label = "Principled to Shading Lab"
+    bl_options = {"REGISTER", "UNDO"}
+
+    def convert(self, props, p):
+        for name in ("base_color", "metalness", "roughness", "f0", "shininess", "specular_color",
+                     "ambient_color"):
+            setattr(props, name, getattr(p, name))
+            setattr(props, "use_" + name, True)
+
+
+class SHADINGLAB_OT_convert_roughness(_MaterialConversion, bpy.types.Operator):
     """Set shininess from roughness, or roughness from shininess, with the documented mapping
     s = 2 / r^4 - 2 (Walter et al. 2007, alpha = r^2)"""
 
@@ -110,26 +114,14 @@ class SHADINGLAB_OT_convert_roughness(bpy.types.Operator):
         ("TO_SHININESS", "Roughness to Shininess", "Blinn-Phong shininess matching the roughness"),
         ("TO_ROUGHNESS", "Shininess to Roughness", "Roughness matching the Blinn-Phong shininess"),
     ))
-    scope: _SCOPE
 
-    def execute(self, context):
-        from .extract import material_params
+    def convert(self, props, p):
         from .snapshot import roughness_from_shininess, shininess_from_roughness
 
-        materials = _target_materials(context, self.scope)
-        if not materials:
-            self.report({"WARNING"}, "No material to convert")
-            return {"CANCELLED"}
-        for mat in materials:
-            p = material_params(mat)
-            props = mat.shading_lab
-            if self.direction == "TO_SHININESS":
-                props.shininess, props.use_shininess = shininess_from_roughness(p.roughness), True
-            else:
-                props.roughness, props.use_roughness = roughness_from_shininess(p.shininess), True
-            mat.update_tag()
-        self.report({"INFO"}, f"Converted {len(materials)} material(s)")
-        return {"FINISHED"}
+        if self.direction == "TO_SHININESS":
+            props.shininess, props.use_shininess = shininess_from_roughness(p.roughness), True
+        else:
+            props.roughness, props.use_roughness = roughness_from_shininess(p.shininess), True
 
 
 classes = (SHADINGLAB_OT_apply_material_preset, SHADINGLAB_OT_principled_to_explicit,

@@ -210,11 +210,10 @@ def _full_screen_batch() -> gpu.types.GPUBatch:
     return gpu.types.GPUBatch(type="TRIS", buf=vbo)
 
 
-def compare_pass(texture_a, texture_b, w: int, h: int, features: programs.CompareFeatures,
-                 split: float = 0.5, value_range: float = 1.0, target=None) -> np.ndarray | None:
-    """Composite two same-size renders (split view or difference heat map) into a w x h float
-    target and read it back, or into ``target`` (the viewport's) without reading back."""
-    shader = get_compare_program(features)
+def _full_screen_pass(shader, bind: Callable[[gpu.types.GPUShader], None], w: int, h: int,
+                      target=None) -> np.ndarray | None:
+    """Draw ``shader`` over a w x h float target (``bind`` sets its inputs) and read it back, or
+    into ``target`` (an offscreen the caller owns, e.g. the viewport's) without reading back."""
     batch = _full_screen_batch()
     own = target is None
     if own:
@@ -226,43 +225,39 @@ def compare_pass(texture_a, texture_b, w: int, h: int, features: programs.Compar
             gpu.state.depth_test_set("NONE")
             gpu.state.blend_set("NONE")
             shader.bind()
-            shader.uniform_sampler("image_a", texture_a)
-            shader.uniform_sampler("image_b", texture_b)
-            if features.mode == "SPLIT":
-                shader.uniform_float("split", float(split))
-            else:
-                shader.uniform_float("range", float(value_range))
+            bind(shader)
             batch.draw(shader)
             return _read(fb, w, h) if own else None
     finally:
         if own:
             target.free()
+
+
+def compare_pass(texture_a, texture_b, w: int, h: int, features: programs.CompareFeatures,
+                 split: float = 0.5, value_range: float = 1.0, target=None) -> np.ndarray | None:
+    """Composite two same-size renders: a split view or a difference heat map."""
+
+    def bind(shader):
+        shader.uniform_sampler("image_a", texture_a)
+        shader.uniform_sampler("image_b", texture_b)
+        if features.mode == "SPLIT":
+            shader.uniform_float("split", float(split))
+        else:
+            shader.uniform_float("range", float(value_range))
+
+    return _full_screen_pass(get_compare_program(features), bind, w, h, target)
 
 
 def post_pass(texture, w: int, h: int, features: programs.PostFeatures, exposure_ev: float = 0.0,
               target=None) -> np.ndarray | None:
-    """Run the resolve/display pass over ``texture`` into a w x h float target and read it back,
-    or into ``target`` (an offscreen the caller owns, e.g. the viewport's) without reading back."""
-    shader = get_post_program(features)
-    batch = _full_screen_batch()
-    own = target is None
-    if own:
-        target = gpu.types.GPUOffScreen(w, h, format="RGBA32F")
-    try:
-        with target.bind():
-            fb = gpu.state.active_framebuffer_get()
-            fb.clear(color=(0.0, 0.0, 0.0, 0.0))
-            gpu.state.depth_test_set("NONE")
-            gpu.state.blend_set("NONE")
-            shader.bind()
-            shader.uniform_sampler("hdr_image", texture)
-            if features.tone_mapper is not None:  # the resolve-only pass has no such uniform
-                shader.uniform_float("exposure_scale", 2.0 ** exposure_ev)
-            batch.draw(shader)
-            return _read(fb, w, h) if own else None
-    finally:
-        if own:
-            target.free()
+    """The resolve/display pass over ``texture``: supersampling average, then the tone curve."""
+
+    def bind(shader):
+        shader.uniform_sampler("hdr_image", texture)
+        if features.tone_mapper is not None:  # the resolve-only pass has no such uniform
+            shader.uniform_float("exposure_scale", 2.0 ** exposure_ev)
+
+    return _full_screen_pass(get_post_program(features), bind, w, h, target)
 
 
 class Renderer:
