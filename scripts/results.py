@@ -39,6 +39,66 @@ def run(scene: str, args, variant: str | None = None, tag: str = "", **terms) ->
     return result
 
 
+VARIANTS = ("studio", "noon", "sunset", "spot")
+
+
+def _portability_scene(args, variant):
+    """The portability preset under ``variant``, ready for Shading Lab, and its Cycles reference."""
+    import reference
+    import render as cli
+
+    cli.ensure_addon()
+    scene, _ = cli.load_scene("portability", variant)
+    w, h = cli.parse_resolution(args.resolution)
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = w, h, 100
+    scene.render.engine = "SHADING_LAB"
+    ref, _ = reference.render_reference(scene, samples=args.reference_samples)
+    return scene, ref
+
+
+def _apply_blinn_phong(scene, spec_scale: float, shininess_scale: float, ambient: float) -> None:
+    """Scale every material's Blinn-Phong specular colour and shininess (from its derived values)."""
+    from addon.extract import material_params
+
+    scene.shading_lab.model = "BLINN_PHONG"
+    scene.shading_lab.ambient = ambient
+    for mat in {slot.material for obj in scene.objects for slot in obj.material_slots if slot.material}:
+        props = mat.shading_lab
+        props.use_specular_color = props.use_shininess = False
+        p = material_params(mat)
+        props.specular_color = tuple(min(c * spec_scale, 1e3) for c in p.specular_color)
+        props.shininess = p.shininess * shininess_scale
+        props.use_specular_color = props.use_shininess = True
+
+
+def blinn_phong_tuned_for_studio(args) -> dict:
+    """Tune Blinn-Phong (specular scale, shininess scale, ambient) to the studio lighting by a
+    grid search on FLIP against Cycles, then keep those parameters under the other lightings."""
+    import tempfile
+
+    import metrics
+    import reference
+
+    grid = [(k, m, a) for k in (0.0625, 0.125, 0.25, 0.5, 1.0, 2.0) for m in (0.5, 1.0, 2.0, 4.0, 8.0, 16.0)
+            for a in (0.0, 0.05, 0.2)]
+    scene, ref = _portability_scene(args, "studio")
+    best = None
+    with tempfile.TemporaryDirectory() as tmp:
+        for params in grid:
+            _apply_blinn_phong(scene, *params)
+            flip = metrics.errors(ref, reference.render_to_array(scene, Path(tmp) / "bp.exr")).flip
+            if best is None or flip < best[0]:
+                best = (flip, params)
+        tuned = {}
+        for variant in VARIANTS:
+            scene, ref = _portability_scene(args, variant)
+            _apply_blinn_phong(scene, *best[1])
+            tuned[variant] = metrics.errors(ref, reference.render_to_array(scene, Path(tmp) / "bp.exr")).flip
+    print(f"  Blinn-Phong tuned on studio {best[1]}: " + ", ".join(f"{v} {f:.3f}" for v, f in tuned.items()),
+          file=sys.stderr)
+    return {"params": best[1], "grid": len(grid), "flip": tuned}
+
+
 def _rel(path: Path) -> str:
     return path.relative_to(DOCS).as_posix()
 
@@ -70,7 +130,8 @@ def main(argv=None) -> int:
     furnace_ms = run("furnace", args, tag="_multiscatter", multiscatter=True)
     grid = run("material_grid", args)
     grid_principled = run("material_grid", args, tag="_principled", principled=True)
-    lighting = {v: run("portability", args, variant=v) for v in ("studio", "noon", "sunset", "spot")}
+    lighting = {v: run("portability", args, variant=v) for v in VARIANTS}
+    tuned = blinn_phong_tuned_for_studio(args)
 
     def table(rows):
         out = ["| scene | Blinn-Phong FLIP | Phong FLIP | PBR FLIP | Blinn-Phong rel. error "
@@ -179,6 +240,18 @@ One set of physically based parameters stays right under every light: FLIP
 {min(port_pbr):.3f}–{max(port_pbr):.3f}. Blinn-Phong's parameters (derived from the same materials) are
 off by FLIP {min(port_bp):.3f}–{max(port_bp):.3f}, and by how much depends on the lighting — the
 coupling of material and lighting the source report describes.
+
+Tuned by hand, Blinn-Phong can do better under one light: a grid search over {tuned['grid']}
+settings (specular colour × 1/16–2, shininess × 1/2–16, ambient 0–0.2) against the studio
+reference picks specular × {tuned['params'][0]:g}, shininess × {tuned['params'][1]:g}, ambient
+{tuned['params'][2]:g}. Kept for the other lightings, those parameters give:
+
+| lighting | Blinn-Phong, derived | Blinn-Phong, tuned on studio | physically based |
+|---|---:|---:|---:|
+""" + "\n".join(f"| {v} | {_flip(r, BP):.3f} | {tuned['flip'][v]:.3f} | {_flip(r, PBR):.3f} |"
+                for v, r in lighting.items()) + """
+
+The physically based parameters needed no tuning at all.
 
 """ + "\n\n".join(f"![portability, {v}]({_rel(r['png'])})" for v, r in lighting.items()) + "\n"
     (DOCS / "results.md").write_text(doc, encoding="utf-8")
