@@ -255,6 +255,8 @@ The physically based parameters needed no tuning at all.
 
 """ + "\n\n".join(f"![portability, {v}]({_rel(r['png'])})" for v, r in lighting.items()) + "\n"
     (DOCS / "results.md").write_text(doc, encoding="utf-8")
+    for bulky in [*OUT.glob("*_compare.exr"), *OUT.glob("*_metrics.md")]:  # the doc holds the numbers;
+        bulky.unlink()  # the EXRs (~2 MB each) are for compare.py users, not the repository
     print(f"wrote {DOCS / 'results.md'} and {len(list(OUT.glob('*.png')))} images in {OUT}", file=sys.stderr)
     return 0
 
