@@ -123,7 +123,7 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         lobe_passes = light_passes(depsgraph.view_layer) if settings.compare_mode == "OFF" else []
         for name in lobe_passes:
             self.add_pass(name, 4, "RGBA", layer=depsgraph.view_layer.name)
-        renderer = Renderer()
+        renderer = Renderer(image_loader=extract.image_texture)
         clear_compile_error()
         try:
             if settings.compare_mode != "OFF":

@@ -48,11 +48,33 @@ def _input(node, name, default):
     return default if socket is None else socket.default_value
 
 
+def _image_map(node, name, through_normal_map: bool = False):
+    """(image name, nearest filtering) of an Image Texture node linked straight into ``name`` (or,
+    for normals, through a tangent-space Normal Map node), with the Normal Map's strength."""
+    socket = node.inputs.get(name)
+    if socket is None or not socket.is_linked:
+        return None, 1.0
+    source = socket.links[0].from_node
+    strength = 1.0
+    if through_normal_map:
+        if source.bl_idname != "ShaderNodeNormalMap" or source.space != "TANGENT":
+            return None, 1.0
+        strength = float(source.inputs["Strength"].default_value)
+        color = source.inputs.get("Color")
+        if color is None or not color.is_linked:
+            return None, 1.0
+        source = color.links[0].from_node
+    if source.bl_idname != "ShaderNodeTexImage" or source.image is None:
+        return None, 1.0
+    return (source.image.name_full, source.interpolation == "Closest"), strength
+
+
 def material_params(material: bpy.types.Material | None) -> S.MaterialParams:
     """Explicit Shading Lab values where the user set them, else the surface shader's values
     (Principled, Diffuse or Glossy BSDF), else the material's viewport display values."""
     if material is None:
         return S.DEFAULT_MATERIAL
+    maps: dict = {}
     base = _rgb(material.diffuse_color)
     metal = float(material.metallic)
     rough = float(material.roughness)
@@ -65,17 +87,25 @@ def material_params(material: bpy.types.Material | None) -> S.MaterialParams:
         rough = float(_input(node, "Roughness", rough))
         level = float(_input(node, "Specular IOR Level", 0.5))
         f0 = min(S.f0_from_ior(float(_input(node, "IOR", 1.5))) * 2.0 * level, 1.0)
+        maps = {"base_color_map": _image_map(node, "Base Color")[0],
+                "metallic_map": _image_map(node, "Metallic")[0],
+                "roughness_map": _image_map(node, "Roughness")[0]}
+        maps["normal_map"], maps["normal_strength"] = _image_map(node, "Normal", through_normal_map=True)
     elif kind == "ShaderNodeBsdfDiffuse":
         base, metal, f0 = _rgb(_input(node, "Color", base)), 0.0, 0.0
     elif kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"):
         base, metal = _rgb(_input(node, "Color", base)), 1.0
         rough = float(_input(node, "Roughness", rough))
     props = getattr(material, "shading_lab", None)
-    if props is not None:
+    if props is not None:  # explicit values win over the shader's, textures included
         base = _rgb(props.base_color) if props.use_base_color else base
         metal = float(props.metalness) if props.use_metalness else metal
         rough = float(props.roughness) if props.use_roughness else rough
         f0 = float(props.f0) if props.use_f0 else f0
+        for flag, key in (("use_base_color", "base_color_map"), ("use_metalness", "metallic_map"),
+                          ("use_roughness", "roughness_map")):
+            if getattr(props, flag):
+                maps.pop(key, None)
     metal = min(max(metal, 0.0), 1.0)
     rough = min(max(rough, 0.0), 1.0)
     # Blinn-Phong/Phong fallbacks from the physically based values: a metal's colour goes to its
@@ -99,6 +129,7 @@ def material_params(material: bpy.types.Material | None) -> S.MaterialParams:
         metalness=metal,
         shininess=max(shininess, 0.0),
         f0=min(max(f0, 0.0), 1.0),
+        **{k: v for k, v in maps.items() if v is not None},
         **_material_extras(props),
     )
 
@@ -123,8 +154,9 @@ def _material_extras(props) -> dict:
 
 # --- geometry ----------------------------------------------------------------------------------
 
-def mesh_geometry(key: str, mesh: bpy.types.Mesh) -> S.MeshGeometry | None:
-    """Unindexed triangles with corner normals, grouped by material slot; None when empty."""
+def mesh_geometry(key: str, mesh: bpy.types.Mesh, tangents: bool = False) -> S.MeshGeometry | None:
+    """Unindexed triangles with corner normals (and the active UV map's coordinates, plus
+    tangents when ``tangents``), grouped by material slot; None when empty."""
     mesh.calc_loop_triangles()
     n_tri = len(mesh.loop_triangles)
     if n_tri == 0:
@@ -146,7 +178,26 @@ def mesh_geometry(key: str, mesh: bpy.types.Mesh) -> S.MeshGeometry | None:
     normals = corner_normals.reshape(-1, 3)[tri_loops[corners]]
     slots, starts, counts = np.unique(tri_mat[order], return_index=True, return_counts=True)
     ranges = [(int(s), int(a) * 3, int(c) * 3) for s, a, c in zip(slots, starts, counts)]
-    return S.MeshGeometry(key, np.ascontiguousarray(positions), np.ascontiguousarray(normals), ranges)
+    uvs = tangent_data = None
+    uv_layer = mesh.uv_layers.active
+    if uv_layer is not None:
+        uv = np.empty(len(mesh.loops) * 2, np.float32)
+        uv_layer.uv.foreach_get("vector", uv)
+        uvs = np.ascontiguousarray(uv.reshape(-1, 2)[tri_loops[corners]])
+        if tangents:
+            try:
+                mesh.calc_tangents(uvmap=uv_layer.name)
+            except RuntimeError:  # n-gons: Blender computes tangents for triangles and quads only
+                tangent_data = None  # the normal map is then ignored for this mesh
+            else:
+                t = np.empty(len(mesh.loops) * 3, np.float32)
+                mesh.loops.foreach_get("tangent", t)
+                sign = np.empty(len(mesh.loops), np.float32)
+                mesh.loops.foreach_get("bitangent_sign", sign)
+                packed = np.column_stack([t.reshape(-1, 3), sign])
+                tangent_data = np.ascontiguousarray(packed[tri_loops[corners]], np.float32)
+    return S.MeshGeometry(key, np.ascontiguousarray(positions), np.ascontiguousarray(normals), ranges,
+                          uvs, tangent_data)
 
 
 def _geometry_key(obj: bpy.types.Object) -> str:
@@ -325,19 +376,6 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
         key = _geometry_key(obj)
         if key in skipped_empty:
             continue
-        if key not in snap.geometries:
-            geometry = reusable.get(key)
-            if geometry is None or _is_dirty(obj, dirty):
-                mesh = obj.to_mesh()
-                try:
-                    geometry = mesh_geometry(key, mesh) if mesh is not None else None
-                finally:
-                    obj.to_mesh_clear()
-                if geometry is None:
-                    skipped_empty.add(key)
-                    continue
-                snap.fresh.add(key)
-            snap.geometries[key] = geometry
         slots = []
         for slot in obj.material_slots:
             mat = slot.material
@@ -345,5 +383,28 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
             if mkey not in snap.materials:
                 snap.materials[mkey] = material_params(mat)
             slots.append(mkey)
+        if key not in snap.geometries:
+            geometry = reusable.get(key)
+            tangents = any(snap.materials[m].normal_map is not None for m in slots)
+            if geometry is None or _is_dirty(obj, dirty) or (tangents and geometry.tangents is None):
+                mesh = obj.to_mesh()
+                try:
+                    geometry = mesh_geometry(key, mesh, tangents) if mesh is not None else None
+                finally:
+                    obj.to_mesh_clear()
+                if geometry is None:
+                    skipped_empty.add(key)
+                    continue
+                snap.fresh.add(key)
+            snap.geometries[key] = geometry
         snap.items.append(S.DrawItem(key, _matrix(inst.matrix_world), slots or [""]))
     return snap
+
+
+def image_texture(name: str, closest: bool):
+    """The GPU texture Blender keeps for image ``name`` (colour-managed as the image says: sRGB
+    images decode to linear on sampling, Non-Color ones do not). ``closest`` filtering is done by
+    the shader (texelFetch), as GPU textures here carry no per-use filter setting."""
+    import gpu
+
+    return gpu.texture.from_image(bpy.data.images[name])

@@ -23,7 +23,7 @@ MODEL_FILES = {
     "PHONG": "model_phong.glsl",
     "PBR": "model_pbr.glsl",
 }
-FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl")
+FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "textures.glsl")
 PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "principled.glsl")
 
 
@@ -59,6 +59,10 @@ class Features:
     light_kinds: frozenset[str] = frozenset()
     terms: Terms = Terms()
     half_target: bool = False  # drawing into RGBA16F: cap radiance at 65504
+    maps: frozenset[str] = frozenset()  # image textures sampled: BASE_COLOR[_CLOSEST], NORMAL, ...
+
+    def has_map(self, name: str) -> bool:
+        return name in self.maps or name + "_CLOSEST" in self.maps
 
     def __post_init__(self):
         if self.model not in MODELS:
@@ -78,9 +82,14 @@ class Features:
 
     @classmethod
     def from_snapshot(cls, snapshot: Snapshot, model: str | None = None,
-                      material: MaterialParams | None = None, half_target: bool = False) -> Features:
+                      material: MaterialParams | None = None, half_target: bool = False,
+                      with_maps: bool = True) -> Features:
         """The scene's features, for ``model`` or for ``material`` (its model and term overrides)."""
         terms = snapshot.settings.terms
+        maps = frozenset()
+        if material is not None and with_maps:
+            maps = frozenset(name[:-4].upper() + ("_CLOSEST" if getattr(material, name)[1] else "")
+                             for name in MaterialParams.MAPS if getattr(material, name))
         if material is not None:
             model = material.model or model
             terms = terms.override(fresnel=material.fresnel, ndf=material.ndf,
@@ -91,6 +100,7 @@ class Features:
             light_kinds=frozenset(light.kind for light in snapshot.lights),
             terms=terms,
             half_target=half_target,
+            maps=maps,
         )
 
     @property
@@ -118,6 +128,11 @@ class Features:
             out.append(("SL_BLINN_PHONG_NORMALIZED", "1"))
         if self.half_target:
             out.append(("SL_HALF_TARGET", "1"))
+        for name in sorted(self.maps):  # BASE_COLOR, or BASE_COLOR_CLOSEST for nearest filtering
+            base = name.removesuffix("_CLOSEST")
+            out.append((f"SL_HAS_{base}_MAP", "1"))
+            if base != name:
+                out.append((f"SL_{base}_MAP_CLOSEST", "1"))
         return tuple(sorted(out))
 
 
@@ -238,7 +253,7 @@ def pack_material(m: MaterialParams) -> bytes:
         [*m.specular_color, 1.0],
         [*m.ambient_color, 1.0],
         [m.roughness, m.metalness, max(m.shininess, 1e-4), m.f0],
-        [m.f90, max(m.fresnel_p, 1e-3), 1.0 if complex_ior else 0.0, 0.0],
+        [m.f90, max(m.fresnel_p, 1e-3), 1.0 if complex_ior else 0.0, m.normal_strength],
         [*(m.ior_n if complex_ior else (1.0, 1.0, 1.0)), 0.0],
         [*(m.ior_k if complex_ior else (0.0, 0.0, 0.0)), 0.0],
     ]

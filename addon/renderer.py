@@ -15,7 +15,7 @@ import gpu
 import numpy as np
 
 from . import programs
-from .snapshot import MeshGeometry, Snapshot
+from .snapshot import MaterialParams, MeshGeometry, Snapshot
 
 
 class ShaderCompileError(RuntimeError):
@@ -75,11 +75,18 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     info.uniform_buf(1, "LightBlock", "lights")
     info.uniform_buf(2, "MaterialData", "material")
     info.uniform_buf(3, "ObjectData", "object")
+    for slot, name in enumerate(("base_color", "metallic", "roughness", "normal"), start=2):
+        if features.has_map(name.upper()):
+            info.sampler(slot, "FLOAT_2D", name + "_map")
     info.vertex_in(0, "VEC3", "pos")
     info.vertex_in(1, "VEC3", "nor")
+    info.vertex_in(2, "VEC2", "uv")
+    info.vertex_in(3, "VEC4", "tangent")
     iface = gpu.types.GPUStageInterfaceInfo("shading_lab_iface")
     iface.smooth("VEC3", "world_position")
     iface.smooth("VEC3", "world_normal")
+    iface.smooth("VEC2", "world_uv")
+    iface.smooth("VEC4", "world_tangent")
     info.vertex_out(iface)
 
 
@@ -176,6 +183,8 @@ def _vertex_format() -> gpu.types.GPUVertFormat:
     fmt = gpu.types.GPUVertFormat()
     fmt.attr_add(id="pos", comp_type="F32", len=3, fetch_mode="FLOAT")
     fmt.attr_add(id="nor", comp_type="F32", len=3, fetch_mode="FLOAT")
+    fmt.attr_add(id="uv", comp_type="F32", len=2, fetch_mode="FLOAT")
+    fmt.attr_add(id="tangent", comp_type="F32", len=4, fetch_mode="FLOAT")
     return fmt
 
 
@@ -187,8 +196,14 @@ def upload_geometry(geometry: MeshGeometry) -> list[tuple[int, gpu.types.GPUBatc
         if count == 0:
             continue
         vbo = gpu.types.GPUVertBuf(fmt, count)
-        vbo.attr_fill("pos", np.ascontiguousarray(geometry.positions[first:first + count], np.float32))
-        vbo.attr_fill("nor", np.ascontiguousarray(geometry.normals[first:first + count], np.float32))
+        part = slice(first, first + count)
+        vbo.attr_fill("pos", np.ascontiguousarray(geometry.positions[part], np.float32))
+        vbo.attr_fill("nor", np.ascontiguousarray(geometry.normals[part], np.float32))
+        uvs = geometry.uvs[part] if geometry.uvs is not None else np.zeros((count, 2), np.float32)
+        tangents = (geometry.tangents[part] if geometry.tangents is not None
+                    else np.zeros((count, 4), np.float32))
+        vbo.attr_fill("uv", np.ascontiguousarray(uvs, np.float32))
+        vbo.attr_fill("tangent", np.ascontiguousarray(tangents, np.float32))
         batches.append((slot, gpu.types.GPUBatch(type="TRIS", buf=vbo)))
     return batches
 
@@ -268,9 +283,11 @@ class Renderer:
     back. ``free`` releases every GPU object the renderer owns.
     """
 
-    def __init__(self):
+    def __init__(self, image_loader: Callable[[str, bool], gpu.types.GPUTexture] | None = None):
         self._batches: dict[str, list[tuple[int, gpu.types.GPUBatch]]] = {}
         self.uploaded_geometry = 0  # geometries uploaded by the last sync (for tests and stats)
+        #: (image name, nearest filtering) -> texture; None draws materials without their maps
+        self.image_loader = image_loader
 
     def sync(self, snapshot: Snapshot, keep: Callable[[str], bool] | None = None) -> None:
         self.uploaded_geometry = 0
@@ -294,8 +311,17 @@ class Renderer:
             key: gpu.types.GPUUniformBuf(programs.pack_material(m))
             for key, m in snapshot.materials.items()
         }
-        features = {key: programs.Features.from_snapshot(snapshot, material=m, half_target=half_target)
+        with_maps = self.image_loader is not None
+        features = {key: programs.Features.from_snapshot(snapshot, material=m, half_target=half_target,
+                                                         with_maps=with_maps)
                     for key, m in snapshot.materials.items()}
+        textures = {}
+        if with_maps:
+            for m in snapshot.materials.values():
+                for name in MaterialParams.MAPS:
+                    ref = getattr(m, name)
+                    if ref is not None and ref not in textures:
+                        textures[ref] = self.image_loader(*ref)
         groups: dict[programs.Features, list] = {}
         for index, item in enumerate(snapshot.items):
             batches = self._batches.get(item.geometry)
@@ -304,7 +330,7 @@ class Renderer:
             object_ubo = gpu.types.GPUUniformBuf(programs.pack_object(item.matrix, item.normal_matrix))
             for slot, batch in batches:
                 key = item.materials[slot] if slot < len(item.materials) else item.materials[-1]
-                groups.setdefault(features[key], []).append((index, object_ubo, material_ubos[key], batch))
+                groups.setdefault(features[key], []).append((index, object_ubo, key, batch))
         gpu.state.depth_test_set("LESS_EQUAL")
         gpu.state.depth_mask_set(True)
         gpu.state.face_culling_set("NONE")
@@ -319,11 +345,14 @@ class Renderer:
                     shader.uniform_sampler("ms_table", multiscatter_texture(feature_set.terms))
                 if feature_set.uses_s_table:
                     shader.uniform_sampler("s_table", principled_s_texture())
-                for index, object_ubo, material_ubo, batch in draws:
+                for index, object_ubo, key, batch in draws:
                     if should_stop is not None and index % 64 == 0 and should_stop():
                         return
                     shader.uniform_block("object", object_ubo)
-                    shader.uniform_block("material", material_ubo)
+                    shader.uniform_block("material", material_ubos[key])
+                    for name in feature_set.maps:
+                        sampler = name.removesuffix("_CLOSEST").lower() + "_map"
+                        shader.uniform_sampler(sampler, textures[getattr(snapshot.materials[key], sampler)])
                     batch.draw(shader)
         finally:
             gpu.state.depth_test_set("NONE")

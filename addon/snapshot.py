@@ -76,6 +76,8 @@ def roughness_from_shininess(shininess: float) -> float:
 class MaterialParams:
     """Resolved shading inputs of one material (explicit values or the Principled fallback)."""
 
+    MAPS = ("base_color_map", "metallic_map", "roughness_map", "normal_map")
+
     name: str = "Default"
     base_color: tuple[float, float, float] = (0.8, 0.8, 0.8)
     diffuse_color: tuple[float, float, float] = (0.8, 0.8, 0.8)  # Blinn-Phong/Phong c_surface_diff
@@ -90,6 +92,12 @@ class MaterialParams:
     fresnel_p: float = 0.2  # eq. 1.13's p; 1/5 is Schlick's fifth power
     ior_n: tuple[float, float, float] | None = None  # conductor complex IOR n + ik (exact Fresnel)
     ior_k: tuple[float, float, float] | None = None
+    # image textures plugged into the Principled BSDF: (image name, nearest filtering), or None
+    base_color_map: tuple[str, bool] | None = None
+    metallic_map: tuple[str, bool] | None = None
+    roughness_map: tuple[str, bool] | None = None
+    normal_map: tuple[str, bool] | None = None
+    normal_strength: float = 1.0
     fresnel: str = ""  # per-material term choices; "" follows the scene
     ndf: str = ""
     visibility: str = ""
@@ -112,6 +120,8 @@ class MeshGeometry:
     positions: np.ndarray  # (N, 3) float32
     normals: np.ndarray  # (N, 3) float32, corner normals
     ranges: list[tuple[int, int, int]]
+    uvs: np.ndarray | None = None  # (N, 2) float32, the active UV map (None: the mesh has none)
+    tangents: np.ndarray | None = None  # (N, 4) float32: tangent xyz, bitangent sign (normal maps)
 
     @property
     def triangle_count(self) -> int:

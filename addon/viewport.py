@@ -27,7 +27,7 @@ class ViewportSession:
     def __init__(self):
         self.snapshot: S.Snapshot | None = None
         self.pending: set[str] = set()  # geometry keys read anew and not yet uploaded
-        self.renderer = Renderer()
+        self.renderer = Renderer(image_loader=extract.image_texture)
         self._targets: dict[str, gpu.types.GPUOffScreen] = {}
         self.last_update_ms = 0.0
 

@@ -24,10 +24,11 @@ vec3 shading_normal(vec3 p)
 
 void main()
 {
-  vec3 n = shading_normal(world_position);
+  vec3 n = apply_normal_map(shading_normal(world_position), world_uv, world_tangent,
+                            material.fresnel.w);
   /* Back faces are shaded with the normal flipped towards the viewer, as Cycles does. */
   Surface s = make_surface(world_position, gl_FrontFacing ? n : -n, view_direction(world_position),
-                           material);
+                           apply_material_maps(material, world_uv));
   vec3 c = shade_ambient(s, frame.ambient.rgb) * frame.lobes.z;
   int count = int(frame.counts.x);
   for (int i = 0; i < SL_MAX_LIGHTS; i++) {

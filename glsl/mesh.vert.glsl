@@ -6,5 +6,7 @@ void main()
   vec4 world = object.model * vec4(pos, 1.0);
   world_position = world.xyz;
   world_normal = mat3(object.normal_matrix) * nor;
+  world_uv = uv;
+  world_tangent = vec4(mat3(object.model) * tangent.xyz, tangent.w);
   gl_Position = frame.view_proj * world;
 }

@@ -29,7 +29,8 @@ struct MaterialData {
   vec4 specular_color;   /* rgb: Blinn-Phong/Phong specular colour */
   vec4 ambient_color;    /* rgb: Blinn-Phong/Phong ambient colour */
   vec4 params;           /* x: perceptual roughness r; y: metalness; z: shininess; w: dielectric F0 */
-  vec4 fresnel;          /* x: F90 (< 0: automatic); y: eq. 1.13's p; z: 1 if ior_n/ior_k are set */
+  vec4 fresnel;          /* x: F90 (< 0: automatic); y: eq. 1.13's p; z: 1 if ior_n/ior_k are set;
+                          * w: normal-map strength */
   vec4 ior_n;            /* rgb: conductor IOR, real part */
   vec4 ior_k;            /* rgb: conductor IOR, imaginary part (extinction) */
 };
