@@ -87,10 +87,16 @@ def material_params(material: bpy.types.Material | None) -> S.MaterialParams:
         rough = float(_input(node, "Roughness", rough))
         level = float(_input(node, "Specular IOR Level", 0.5))
         f0 = min(S.f0_from_ior(float(_input(node, "IOR", 1.5))) * 2.0 * level, 1.0)
-        maps = {"base_color_map": _image_map(node, "Base Color")[0],
+        strength = float(_input(node, "Emission Strength", 0.0))
+        maps["emission"] = tuple(c * strength for c in _rgb(_input(node, "Emission Color", (0, 0, 0))))
+        maps.update({"base_color_map": _image_map(node, "Base Color")[0],
                 "metallic_map": _image_map(node, "Metallic")[0],
-                "roughness_map": _image_map(node, "Roughness")[0]}
+                "roughness_map": _image_map(node, "Roughness")[0]})
         maps["normal_map"], maps["normal_strength"] = _image_map(node, "Normal", through_normal_map=True)
+    elif kind == "ShaderNodeEmission":  # a pure emitter: no reflection
+        base, metal, f0 = (0.0, 0.0, 0.0), 0.0, 0.0
+        strength = float(_input(node, "Strength", 1.0))
+        maps["emission"] = tuple(c * strength for c in _rgb(_input(node, "Color", (1, 1, 1))))
     elif kind == "ShaderNodeBsdfDiffuse":
         base, metal, f0 = _rgb(_input(node, "Color", base)), 0.0, 0.0
     elif kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"):

@@ -256,6 +256,7 @@ def pack_material(m: MaterialParams) -> bytes:
         [m.f90, max(m.fresnel_p, 1e-3), 1.0 if complex_ior else 0.0, m.normal_strength],
         [*(m.ior_n if complex_ior else (1.0, 1.0, 1.0)), 0.0],
         [*(m.ior_k if complex_ior else (0.0, 0.0, 0.0)), 0.0],
+        [*m.emission, 0.0],
     ]
     return np.asarray(rows, np.float32).tobytes()
 

@@ -270,6 +270,7 @@ class Surface:
         self.diffuse_color = np.asarray(material.diffuse_color, f64)
         self.specular_color = np.asarray(material.specular_color, f64)
         self.ambient_color = np.asarray(material.ambient_color, f64)
+        self.emission = np.asarray(material.emission, f64)
         self.roughness = np.maximum(np.asarray(material.roughness, f64), MIN_PERCEPTUAL_ROUGHNESS)
         self.alpha = self.roughness * self.roughness
         self.metalness = np.asarray(material.metalness, f64)
@@ -429,6 +430,7 @@ def shade(model: str, s: Surface, lights: list[Light], ambient: float = 0.0,
     """Outgoing radiance (rgb) at every point of ``s``: the twin of mesh.frag.glsl's main()."""
     direct, ldr = MODELS[model]
     c = np.zeros(np.shape(s.p), np.float64)
+    c = c + s.emission
     if ldr:
         c = c + s.ambient_color * ambient  # eq. 1.4
     for light in lights:

@@ -87,6 +87,7 @@ class MaterialParams:
     metalness: float = 0.0
     shininess: float = 30.0
     f0: float = DEFAULT_F0
+    emission: tuple[float, float, float] = (0.0, 0.0, 0.0)  # emitted radiance, W/(m^2 sr)
     model: str = ""  # a shading model for this material only; "" follows the scene
     f90: float = -1.0  # Schlick's grazing reflectance; < 0: saturate(50 F0)
     fresnel_p: float = 0.2  # eq. 1.13's p; 1/5 is Schlick's fifth power

@@ -29,7 +29,8 @@ void main()
   /* Back faces are shaded with the normal flipped towards the viewer, as Cycles does. */
   Surface s = make_surface(world_position, gl_FrontFacing ? n : -n, view_direction(world_position),
                            apply_material_maps(material, world_uv));
-  vec3 c = shade_ambient(s, frame.ambient.rgb) * frame.lobes.z;
+  /* ambient and emission: neither a diffuse nor a specular lobe (weight z, off in lobe passes) */
+  vec3 c = (shade_ambient(s, frame.ambient.rgb) + material.emission.rgb) * frame.lobes.z;
   int count = int(frame.counts.x);
   for (int i = 0; i < SL_MAX_LIGHTS; i++) {
     if (i >= count) {

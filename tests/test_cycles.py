@@ -158,3 +158,22 @@ def test_principled_term_set_matches_cycles(base, metallic, roughness, tmp_path)
           f"max {rel.max():.3%}, per channel mean {chan.mean():.3%}")
     assert lit.sum() > 200
     assert rel.mean() <= 0.01
+
+
+def test_emission_matches_cycles(tmp_path):
+    """Principled Emission Color x Strength is emitted radiance, added to the lit surface."""
+    scene = scenes.reset(size=SIZE)
+    scene.shading_lab.term_set = "PRINCIPLED"
+    scenes.ortho_camera(scene, location=(0.0, 0.0, 3.0), scale=2.0)
+    mat = _principled((0.5, 0.4, 0.3), 0.0, 0.5)
+    node = next(n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    node.inputs["Emission Color"].default_value = (1.0, 0.5, 0.25, 1.0)
+    node.inputs["Emission Strength"].default_value = 0.8
+    scenes.plane(scene, size=4.0, material=mat)
+    scenes.light(scene, "POINT", energy=100.0, location=(0.3, 0.2, 0.9))
+    ours = scenes.render(scene, tmp_path / "ours.exr")[..., :3].astype(np.float64)
+    ref = _cycles(scene, tmp_path / "cycles.exr")[..., :3].astype(np.float64)
+    rel = np.abs(ours - ref) / ref
+    print(f"emission: mean relative error {rel.mean():.3%}")
+    assert ref[..., 2].min() > 0.8 * 0.25  # every pixel carries the emission
+    assert rel.mean() <= 0.01

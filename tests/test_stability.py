@@ -83,6 +83,7 @@ m.params = vec4(mat.x, mat.y, max(mat.z, 1e-4), geo.w);
 m.fresnel = vec4(-1.0, 0.2, 1.0, 0.0);
 m.ior_n = vec4(0.18, 0.42, 1.37, 0.0);
 m.ior_k = vec4(3.42, 2.35, 1.77, 0.0);
+m.emission = vec4(0.0);
 Surface s = make_surface(vec3(0.0), nrm.xyz, view.xyz, m);
 LightData L;
 L.position_kind = vec4(lpos.xyz, 0.0);
