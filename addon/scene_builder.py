@@ -76,6 +76,19 @@ def _principled(material: bpy.types.Material):
     return node
 
 
+def principled_material(name: str, base, metallic: float = 0.0, roughness: float = 0.5,
+                        ior: float = 1.5) -> bpy.types.Material:
+    """A new material whose Principled BSDF carries these values (and the viewport's colour)."""
+    material = bpy.data.materials.new(name)
+    node = _principled(material)
+    node.inputs["Base Color"].default_value = (*base, 1.0)
+    node.inputs["Metallic"].default_value = metallic
+    node.inputs["Roughness"].default_value = roughness
+    node.inputs["IOR"].default_value = ior
+    material.diffuse_color = (*base, 1.0)
+    return material
+
+
 def apply_material_preset(material: bpy.types.Material, preset: P.MaterialPreset) -> bpy.types.Material:
     """Give ``material`` the preset's values: its Principled BSDF (created and linked to the output
     if the surface is something else) carries base colour, metalness, roughness and the dielectric

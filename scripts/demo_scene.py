@@ -8,19 +8,9 @@ import math
 
 import bpy
 
+from addon.scene_builder import principled_material as _principled
+
 ROUGHNESS = (0.1, 0.3, 0.5, 0.7, 0.9)
-
-
-def _principled(name, base, metallic, roughness):
-    mat = bpy.data.materials.new(name)
-    if mat.node_tree is None:
-        mat.use_nodes = True
-    node = next(n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
-    node.inputs["Base Color"].default_value = (*base, 1.0)
-    node.inputs["Metallic"].default_value = metallic
-    node.inputs["Roughness"].default_value = roughness
-    mat.diffuse_color = (*base, 1.0)
-    return mat
 
 
 def _sphere(scene, location, material):

@@ -180,3 +180,20 @@ def euler_matrix(rotation) -> np.ndarray:
     Y = np.array([[cy, 0, sy], [0, 1, 0], [-sy, 0, cy]])
     Z = np.array([[cz, -sz, 0], [sz, cz, 0], [0, 0, 1]])
     return Z @ Y @ X  # Blender's XYZ Euler order
+
+
+#: Radiance of ``lambert_scene``'s plane: rho / pi * E * cos 45 degrees.
+LAMBERT = 0.5 / math.pi * 2.0 * math.cos(math.radians(45.0))
+
+
+def lambert_scene(size: int = 8):
+    """An orthographic camera over a Lambert plane (rho 0.5, no specular) under a 2 W/m^2 sun at
+    45 degrees: every model renders ``LAMBERT`` everywhere."""
+    scene = reset(size=size)
+    scene.shading_lab.ambient = 0.0
+    ortho_camera(scene)
+    mat = material(base_color=(0.5, 0.5, 0.5), f0=0.0, metalness=0.0, shininess=10.0,
+                   specular_color=(0.0, 0.0, 0.0))
+    plane(scene, size=4.0, material=mat)
+    light(scene, "SUN", energy=2.0, rotation=(math.radians(45.0), 0.0, 0.0))
+    return scene

@@ -27,18 +27,12 @@ SCRIPT = ROOT / "scripts" / "render.py"
 
 #: The "next render": a Lambert plane (rho 0.5, no specular in any model) under a 2 W/m^2 sun
 #: at 45 degrees seen by an orthographic camera: L = rho / pi * E * cos 45 at every pixel.
-LAMBERT = 0.5 / math.pi * 2.0 * math.cos(math.radians(45.0))
+LAMBERT = scenes.LAMBERT
+
 
 
 def _lambert_scene(size: int = 8):
-    scene = scenes.reset(size=size)
-    scene.shading_lab.ambient = 0.0
-    scenes.ortho_camera(scene)
-    mat = scenes.material(base_color=(0.5, 0.5, 0.5), f0=0.0, metalness=0.0, shininess=10.0,
-                          specular_color=(0.0, 0.0, 0.0))
-    scenes.plane(scene, size=4.0, material=mat)
-    scenes.light(scene, "SUN", energy=2.0, rotation=(math.radians(45.0), 0.0, 0.0))
-    return scene
+    return scenes.lambert_scene(size)
 
 
 def _next_render_works(tmp_path: Path) -> None:

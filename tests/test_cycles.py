@@ -56,6 +56,15 @@ def _scene(material_kind: str, light_kind: str):
     return scene
 
 
+def ours_and_cycles(scene, tmp_path):
+    """(ours, Cycles, lit mask, relative luminance error on lit pixels) for the same scene."""
+    ours = scenes.render(scene, tmp_path / "ours.exr")[..., :3].astype(np.float64)
+    ref = _cycles(scene, tmp_path / "cycles.exr")[..., :3].astype(np.float64)
+    lum_ref, lum_ours = ref.mean(-1), ours.mean(-1)
+    lit = lum_ref > 0.02 * lum_ref.max()
+    return ours, ref, lit, np.abs(lum_ours[lit] - lum_ref[lit]) / lum_ref[lit]
+
+
 def _cycles(scene, path):
     scene.render.engine = "CYCLES"
     c = scene.cycles
@@ -120,15 +129,9 @@ def test_glossy_distributions_match_cycles(distribution, terms, roughness, tmp_p
 
 
 def _principled(base, metallic, roughness, ior=1.5):
-    mat = bpy.data.materials.new("principled")
-    if mat.node_tree is None:
-        mat.use_nodes = True
-    node = next(n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
-    node.inputs["Base Color"].default_value = (*base, 1.0)
-    node.inputs["Metallic"].default_value = metallic
-    node.inputs["Roughness"].default_value = roughness
-    node.inputs["IOR"].default_value = ior
-    return mat
+    from addon.scene_builder import principled_material
+
+    return principled_material("principled", base, metallic, roughness, ior)
 
 
 @pytest.mark.parametrize("base,metallic,roughness", [
@@ -148,11 +151,7 @@ def test_principled_term_set_matches_cycles(base, metallic, roughness, tmp_path)
     scenes.plane(scene, size=4.0, rotation=(math.radians(10.0), 0.0, 0.0),
                  material=_principled(base, metallic, roughness))
     scenes.light(scene, "POINT", energy=200.0, location=(0.3, 0.2, 0.9))
-    ours = scenes.render(scene, tmp_path / "ours.exr")[..., :3].astype(np.float64)
-    ref = _cycles(scene, tmp_path / "cycles.exr")[..., :3].astype(np.float64)
-    lum_ref, lum_ours = ref.mean(-1), ours.mean(-1)
-    lit = lum_ref > 0.02 * lum_ref.max()
-    rel = np.abs(lum_ours[lit] - lum_ref[lit]) / lum_ref[lit]
+    ours, ref, lit, rel = ours_and_cycles(scene, tmp_path)
     chan = np.abs(ours[lit] - ref[lit]) / np.maximum(ref[lit], 1e-6)
     print(f"principled {base} m={metallic} r={roughness}: mean relative error {rel.mean():.3%}, "
           f"max {rel.max():.3%}, per channel mean {chan.mean():.3%}")

@@ -15,7 +15,6 @@ garbage collected both times. Margins (documented here, printed with the numbers
 from __future__ import annotations
 
 import gc
-import math
 import subprocess
 import sys
 import textwrap
@@ -32,7 +31,7 @@ from addon import engine, renderer
 ROOT = Path(__file__).resolve().parent.parent
 RENDER_MARGIN_MB = 8.0
 CYCLE_MARGIN_MB = 10.0
-LAMBERT = 0.5 / math.pi * 2.0 * math.cos(math.radians(45.0))
+LAMBERT = scenes.LAMBERT
 
 #: Cycled through so that every kind of GPU object is made and dropped: three shading programs,
 #: supersampling and a tone mapper (post-pass programs, a second target), the multiscatter table.
@@ -53,16 +52,9 @@ def _rss_mb() -> float:
     raise RuntimeError("no VmRSS in /proc/self/status")
 
 
+
 def _scene(size: int = 16):
-    """An orthographic camera over a Lambert plane (rho 0.5) under a 2 W/m^2 sun at 45 degrees."""
-    scene = scenes.reset(size=size)
-    scene.shading_lab.ambient = 0.0
-    scenes.ortho_camera(scene)
-    mat = scenes.material(base_color=(0.5, 0.5, 0.5), f0=0.0, metalness=0.0, shininess=10.0,
-                          specular_color=(0.0, 0.0, 0.0))
-    scenes.plane(scene, size=4.0, material=mat)
-    scenes.light(scene, "SUN", energy=2.0, rotation=(math.radians(45.0), 0.0, 0.0))
-    return scene
+    return scenes.lambert_scene(size)
 
 
 def _configure(scene, config: dict) -> None:

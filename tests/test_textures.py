@@ -112,7 +112,7 @@ def test_tangent_space_normal_map(tmp_path):
 def test_textured_principled_matches_cycles(tmp_path):
     """Base colour, roughness and a normal map together, with the Principled term set, against
     Cycles rendering the same Principled BSDF under a point light."""
-    from test_cycles import _cycles
+    from test_cycles import ours_and_cycles
 
     rng = np.random.default_rng(5)
     albedo = rng.uniform(0.1, 0.9, (TEXELS, TEXELS, 3))
@@ -124,11 +124,7 @@ def test_textured_principled_matches_cycles(tmp_path):
                              "Normal": ("nmap", (normals + 1.0) / 2.0, True)}, level=0.5, sun=0.0)
     scene.shading_lab.term_set = "PRINCIPLED"
     scenes.light(scene, "POINT", energy=150.0, location=(0.2, 0.3, 1.2))
-    ours = scenes.render(scene, tmp_path / "ours.exr")[..., :3].astype(np.float64)
-    ref = _cycles(scene, tmp_path / "cycles.exr")[..., :3].astype(np.float64)
-    lum_ref, lum_ours = ref.mean(-1), ours.mean(-1)
-    lit = lum_ref > 0.02 * lum_ref.max()
-    rel = np.abs(lum_ours[lit] - lum_ref[lit]) / lum_ref[lit]
+    _, _, lit, rel = ours_and_cycles(scene, tmp_path)
     print(f"textured Principled vs Cycles: mean relative error {rel.mean():.3%}, max {rel.max():.3%}")
     assert lit.mean() > 0.5
     assert rel.mean() <= 0.01
