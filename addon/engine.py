@@ -18,9 +18,11 @@ ENGINE_ID = "SHADING_LAB"
 RADIANCE_PASS = "Radiance"  # raw HDR radiance when the engine's own tone mapper fills Combined
 #: Light passes, named as EEVEE and Cycles name theirs, switched by the same view-layer toggles:
 #: pass name -> (view-layer property, lobe weights (diffuse, specular, ambient, final clamp)).
+#: Blender 5 spells the names out; 4.x used the short forms.
+_LONG_NAMES = bpy.app.version >= (5, 0, 0)
 LIGHT_PASSES = {
-    "Diffuse Direct": ("use_pass_diffuse_direct", (1.0, 0.0, 0.0, 0.0)),
-    "Glossy Direct": ("use_pass_glossy_direct", (0.0, 1.0, 0.0, 0.0)),
+    ("Diffuse Direct" if _LONG_NAMES else "DiffDir"): ("use_pass_diffuse_direct", (1.0, 0.0, 0.0, 0.0)),
+    ("Glossy Direct" if _LONG_NAMES else "GlossDir"): ("use_pass_glossy_direct", (0.0, 1.0, 0.0, 0.0)),
 }
 
 

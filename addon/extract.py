@@ -286,7 +286,8 @@ def world_color(world) -> tuple[float, float, float]:
     """The world's uniform background radiance: Background colour x strength, or world.color."""
     if world is None:
         return (0.0, 0.0, 0.0)
-    tree = world.node_tree
+    # Blender 5 worlds always use nodes (use_nodes is deprecated); 4.x honours the toggle
+    tree = world.node_tree if bpy.app.version >= (5, 0, 0) or world.use_nodes else None
     if tree is not None:
         for node in tree.nodes:
             if node.bl_idname == "ShaderNodeOutputWorld" and node.inputs["Surface"].is_linked:

@@ -416,6 +416,8 @@ def test_metaball_evaluates_to_triangles():
 
 def test_world_background_colour_times_strength():
     scene = new_scene()
+    if scene.world.node_tree is None:  # Blender 4.x: a new world has no nodes until asked
+        scene.world.use_nodes = True
     bg = next(n for n in scene.world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
     bg.inputs["Color"].default_value = (0.1, 0.2, 0.3, 1.0)
     bg.inputs["Strength"].default_value = 2.0

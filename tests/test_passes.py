@@ -32,8 +32,11 @@ def test_light_passes_sum_to_combined(model, tmp_path):
     scene = _scene(model)
     bpy.ops.render.render()
     layers = scenes.read_exr_layers(scenes.save_result(scene, tmp_path / "passes.exr", "MULTILAYER"))
-    assert {"Diffuse Direct", "Glossy Direct"} <= set(layers)
-    diffuse, glossy = layers["Diffuse Direct"][..., :3], layers["Glossy Direct"][..., :3]
+    from addon.engine import LIGHT_PASSES
+
+    diffuse_name, glossy_name = LIGHT_PASSES  # "Diffuse Direct", "Glossy Direct" (DiffDir, GlossDir in 4.x)
+    assert {diffuse_name, glossy_name} <= set(layers)
+    diffuse, glossy = layers[diffuse_name][..., :3], layers[glossy_name][..., :3]
     combined = layers["Combined"][..., :3].astype(np.float64)
     assert diffuse.max() > 0.05 and glossy.max() > 0.05, "both lobes contribute in this scene"
     total = diffuse.astype(np.float64) + glossy
