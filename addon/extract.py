@@ -87,6 +87,15 @@ def material_params(material: bpy.types.Material | None) -> S.MaterialParams:
         rough = float(_input(node, "Roughness", rough))
         level = float(_input(node, "Specular IOR Level", 0.5))
         f0 = min(S.f0_from_ior(float(_input(node, "IOR", 1.5))) * 2.0 * level, 1.0)
+        maps["alpha"] = float(_input(node, "Alpha", 1.0))
+        alpha_socket = node.inputs.get("Alpha")
+        if alpha_socket is not None and alpha_socket.is_linked:
+            source = alpha_socket.links[0]
+            base_ref = _image_map(node, "Base Color")[0]
+            if (source.from_node.bl_idname == "ShaderNodeTexImage" and source.from_socket.name == "Alpha"
+                    and base_ref is not None and source.from_node.image is not None
+                    and source.from_node.image.name_full == base_ref[0]):
+                maps["alpha_from_base_map"] = True
         strength = float(_input(node, "Emission Strength", 0.0))
         maps["emission"] = tuple(c * strength for c in _rgb(_input(node, "Emission Color", (0, 0, 0))))
         maps.update({"base_color_map": _image_map(node, "Base Color")[0],

@@ -60,6 +60,7 @@ class Features:
     terms: Terms = Terms()
     half_target: bool = False  # drawing into RGBA16F: cap radiance at 65504
     maps: frozenset[str] = frozenset()  # image textures sampled: BASE_COLOR[_CLOSEST], NORMAL, ...
+    alpha_from_base_map: bool = False  # coverage from the base colour image's alpha
 
     def has_map(self, name: str) -> bool:
         return name in self.maps or name + "_CLOSEST" in self.maps
@@ -101,6 +102,8 @@ class Features:
             terms=terms,
             half_target=half_target,
             maps=maps,
+            alpha_from_base_map=bool(material is not None and material.alpha_from_base_map
+                                     and material.base_color_map is not None and with_maps),
         )
 
     @property
@@ -128,6 +131,8 @@ class Features:
             out.append(("SL_BLINN_PHONG_NORMALIZED", "1"))
         if self.half_target:
             out.append(("SL_HALF_TARGET", "1"))
+        if self.alpha_from_base_map:
+            out.append(("SL_ALPHA_FROM_BASE_MAP", "1"))
         for name in sorted(self.maps):  # BASE_COLOR, or BASE_COLOR_CLOSEST for nearest filtering
             base = name.removesuffix("_CLOSEST")
             out.append((f"SL_HAS_{base}_MAP", "1"))
@@ -256,7 +261,7 @@ def pack_material(m: MaterialParams) -> bytes:
         [m.f90, max(m.fresnel_p, 1e-3), 1.0 if complex_ior else 0.0, m.normal_strength],
         [*(m.ior_n if complex_ior else (1.0, 1.0, 1.0)), 0.0],
         [*(m.ior_k if complex_ior else (0.0, 0.0, 0.0)), 0.0],
-        [*m.emission, 0.0],
+        [*m.emission, min(max(m.alpha, 0.0), 1.0)],
     ]
     return np.asarray(rows, np.float32).tobytes()
 

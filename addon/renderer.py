@@ -323,6 +323,8 @@ class Renderer:
                     if ref is not None and ref not in textures:
                         textures[ref] = self.image_loader(*ref)
         groups: dict[programs.Features, list] = {}
+        blended = []  # partly transparent: drawn after the opaque ones, farthest first
+        eye = np.asarray(snapshot.camera.position, np.float64)
         for index, item in enumerate(snapshot.items):
             batches = self._batches.get(item.geometry)
             if not batches:
@@ -330,21 +332,36 @@ class Renderer:
             object_ubo = gpu.types.GPUUniformBuf(programs.pack_object(item.matrix, item.normal_matrix))
             for slot, batch in batches:
                 key = item.materials[slot] if slot < len(item.materials) else item.materials[-1]
-                groups.setdefault(features[key], []).append((index, object_ubo, key, batch))
+                record = (index, object_ubo, key, batch)
+                material = snapshot.materials[key]
+                if material.alpha < 1.0 or features[key].alpha_from_base_map:
+                    distance = float(np.linalg.norm(item.matrix[:3, 3] - eye))
+                    blended.append((distance, features[key], record))
+                else:
+                    groups.setdefault(features[key], []).append(record)
+        blended.sort(key=lambda entry: -entry[0])
+        passes = [(f, draws) for f, draws in sorted(groups.items(), key=lambda kv: kv[0].defines())]
+        passes += [(f, [record]) for _, f, record in blended]
         gpu.state.depth_test_set("LESS_EQUAL")
         gpu.state.depth_mask_set(True)
         gpu.state.face_culling_set("NONE")
         gpu.state.blend_set("NONE")
+        bound = None
         try:
-            for feature_set, draws in sorted(groups.items(), key=lambda kv: kv[0].defines()):
+            for number, (feature_set, draws) in enumerate(passes):
+                if number == len(groups):  # the blended ones: over what is drawn, not hiding it
+                    gpu.state.blend_set("ALPHA")
+                    gpu.state.depth_mask_set(False)
                 shader = get_program(feature_set)
-                shader.bind()
-                shader.uniform_block("frame", frame_ubo)
-                shader.uniform_block("lights", light_ubo)
-                if feature_set.uses_albedo_table:
-                    shader.uniform_sampler("ms_table", multiscatter_texture(feature_set.terms))
-                if feature_set.uses_s_table:
-                    shader.uniform_sampler("s_table", principled_s_texture())
+                if shader is not bound:
+                    shader.bind()
+                    shader.uniform_block("frame", frame_ubo)
+                    shader.uniform_block("lights", light_ubo)
+                    if feature_set.uses_albedo_table:
+                        shader.uniform_sampler("ms_table", multiscatter_texture(feature_set.terms))
+                    if feature_set.uses_s_table:
+                        shader.uniform_sampler("s_table", principled_s_texture())
+                    bound = shader
                 for index, object_ubo, key, batch in draws:
                     if should_stop is not None and index % 64 == 0 and should_stop():
                         return
@@ -357,6 +374,7 @@ class Renderer:
         finally:
             gpu.state.depth_test_set("NONE")
             gpu.state.depth_mask_set(False)
+            gpu.state.blend_set("NONE")
 
     def render(self, snapshot: Snapshot, background: tuple[float, float, float, float] = (0, 0, 0, 1),
                should_stop: Callable[[], bool] | None = None) -> np.ndarray:

@@ -88,6 +88,8 @@ class MaterialParams:
     shininess: float = 30.0
     f0: float = DEFAULT_F0
     emission: tuple[float, float, float] = (0.0, 0.0, 0.0)  # emitted radiance, W/(m^2 sr)
+    alpha: float = 1.0  # coverage: Principled Alpha (1 opaque); drawn blended, sorted, when < 1
+    alpha_from_base_map: bool = False  # the base colour image's alpha multiplies it
     model: str = ""  # a shading model for this material only; "" follows the scene
     f90: float = -1.0  # Schlick's grazing reflectance; < 0: saturate(50 F0)
     fresnel_p: float = 0.2  # eq. 1.13's p; 1/5 is Schlick's fifth power

@@ -35,8 +35,12 @@ vec4 texel_closest(sampler2D map, vec2 uv)
 MaterialData apply_material_maps(MaterialData m, vec2 uv)
 {
 #ifdef SL_HAS_BASE_COLOR_MAP
-  vec3 base = SAMPLE_BASE_COLOR(uv).rgb;
+  vec4 texel = SAMPLE_BASE_COLOR(uv);
+  vec3 base = texel.rgb;
   m.base_color.rgb = base;
+#  ifdef SL_ALPHA_FROM_BASE_MAP
+  m.emission.w *= texel.a;
+#  endif
   /* the empirical models' derived diffuse and ambient colours follow the texture */
   m.diffuse_color.rgb = base * (1.0 - m.params.y);
   m.ambient_color.rgb = m.diffuse_color.rgb;

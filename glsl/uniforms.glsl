@@ -33,7 +33,8 @@ struct MaterialData {
                           * w: normal-map strength */
   vec4 ior_n;            /* rgb: conductor IOR, real part */
   vec4 ior_k;            /* rgb: conductor IOR, imaginary part (extinction) */
-  vec4 emission;         /* rgb: emitted radiance (Principled Emission Color x Strength) */
+  vec4 emission;         /* rgb: emitted radiance (Principled Emission Color x Strength);
+                          * w: alpha (coverage, 1 opaque) */
 };
 
 struct ObjectData {

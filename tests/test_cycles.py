@@ -65,11 +65,11 @@ def ours_and_cycles(scene, tmp_path):
     return ours, ref, lit, np.abs(lum_ours[lit] - lum_ref[lit]) / lum_ref[lit]
 
 
-def _cycles(scene, path):
+def _cycles(scene, path, samples=4):
     scene.render.engine = "CYCLES"
     c = scene.cycles
     c.device = "CPU"
-    c.samples = 4
+    c.samples = samples  # deterministic direct light needs few; stochastic transparency more
     c.use_adaptive_sampling = False
     c.use_denoising = False
     c.max_bounces = 0
