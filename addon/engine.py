@@ -98,6 +98,7 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
     def render(self, depsgraph):
         scene = depsgraph.scene
         width, height = extract.render_size(scene)
+        last_timings.clear()  # a render that fails leaves none, not the previous render's
         start = time.perf_counter()
         self.update_stats("", "Shading Lab | Reading scene")
         try:
@@ -170,7 +171,6 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
             self.end_result(result)
         self.update_progress(1.0)
         done = time.perf_counter()
-        last_timings.clear()
         last_timings.update(extract_ms=1e3 * (extracted - start), draw_ms=1e3 * (drawn - extracted),
                             result_ms=1e3 * (done - drawn), total_ms=1e3 * (done - start))
         self.update_stats("", f"Shading Lab | {label} | {last_timings['total_ms']:.0f} ms")

@@ -41,7 +41,7 @@ def read_glsl(name: str) -> str:
     return (glsl_dir() / name).read_text(encoding="utf-8")
 
 
-def _bucket(count: int) -> int:
+def light_slots(count: int) -> int:
     """Round a light count up to a power of two so adding one light rarely recompiles."""
     size = 1
     while size < count:
@@ -97,7 +97,7 @@ class Features:
                                    visibility=material.visibility, diffuse=material.diffuse)
         return cls(
             model=model or snapshot.settings.model,
-            max_lights=_bucket(len(snapshot.lights)),
+            max_lights=light_slots(len(snapshot.lights)),
             light_kinds=frozenset(light.kind for light in snapshot.lights),
             terms=terms,
             half_target=half_target,

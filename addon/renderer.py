@@ -304,9 +304,9 @@ class Renderer:
              lobes: tuple[float, float, float, float] = programs.ALL_LOBES) -> None:
         """Draw every item into the bound framebuffer, one program per shading model in use
         (the scene's, and any material's own override)."""
-        lights = programs.Features.from_snapshot(snapshot)
         frame_ubo = gpu.types.GPUUniformBuf(programs.pack_frame(snapshot, view_projection, lobes))
-        light_ubo = gpu.types.GPUUniformBuf(programs.pack_lights(snapshot, lights.max_lights))
+        light_ubo = gpu.types.GPUUniformBuf(
+            programs.pack_lights(snapshot, programs.light_slots(len(snapshot.lights))))
         material_ubos = {
             key: gpu.types.GPUUniformBuf(programs.pack_material(m))
             for key, m in snapshot.materials.items()

@@ -77,7 +77,7 @@ def test_feature_keys():
     bp = programs.Features("BLINN_PHONG", 4, frozenset({"POINT"}), S.Terms(ndf="BECKMANN", multiscatter=True))
     assert bp.defines() == programs.Features("BLINN_PHONG", 4, frozenset({"POINT"})).defines()
     assert programs.Features("PBR", 4, frozenset({"POINT"})).defines() == a.defines()
-    assert [programs._bucket(n) for n in (0, 1, 2, 3, 5, 64)] == [1, 1, 2, 4, 8, 64]
+    assert [programs.light_slots(n) for n in (0, 1, 2, 3, 5, 64)] == [1, 1, 2, 4, 8, 64]
     with pytest.raises(ValueError, match="unknown shading model"):
         programs.Features("TOON")
 
