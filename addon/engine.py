@@ -46,7 +46,7 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
     bl_idname = ENGINE_ID
     bl_label = "Shading Lab"
     bl_use_gpu_context = True
-    bl_use_preview = False
+    bl_use_preview = True  # material, world and light previews, with the artist's scene's model
     bl_use_shading_nodes_custom = False
 
     def __init__(self, *args, **kwargs):
@@ -100,9 +100,11 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         width, height = extract.render_size(scene)
         last_timings.clear()  # a render that fails leaves none, not the previous render's
         start = time.perf_counter()
+        preview = self.is_preview
         self.update_stats("", "Shading Lab | Reading scene")
         try:
-            snap = extract.snapshot(depsgraph, width, height)
+            settings = extract.preview_settings(scene) if preview else None
+            snap = extract.snapshot(depsgraph, width, height, settings=settings)
         except extract.ExtractError as exc:
             self._fail(str(exc))
             return
@@ -118,12 +120,13 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         label = f"{snap.settings.model} | {snap.triangle_count:,} triangles | {len(snap.lights)} lights"
         self.update_stats("", f"Shading Lab | {label} | Drawing")
         settings = snap.settings
+        extra_passes = settings.compare_mode == "OFF" and not preview  # previews fill Combined only
         display = None
         if settings.tone_mapper != "BLENDER":
             display = programs.PostFeatures(settings.samples, settings.tone_mapper, settings.transfer)
-            if settings.compare_mode == "OFF":
+            if extra_passes:
                 self.add_pass(RADIANCE_PASS, 4, "RGBA", layer=depsgraph.view_layer.name)
-        lobe_passes = light_passes(depsgraph.view_layer) if settings.compare_mode == "OFF" else []
+        lobe_passes = light_passes(depsgraph.view_layer) if extra_passes else []
         for name in lobe_passes:
             self.add_pass(name, 4, "RGBA", layer=depsgraph.view_layer.name)
         renderer = Renderer(image_loader=extract.image_texture)
@@ -164,7 +167,8 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
                 passes["Combined"].rect.foreach_set(radiance.reshape(-1))
             else:
                 passes["Combined"].rect.foreach_set(shown.reshape(-1))
-                passes[RADIANCE_PASS].rect.foreach_set(radiance.reshape(-1))
+                if not preview:
+                    passes[RADIANCE_PASS].rect.foreach_set(radiance.reshape(-1))
             for name, image in lobes.items():
                 passes[name].rect.foreach_set(image.reshape(-1))
         finally:
