@@ -4,6 +4,7 @@ rendering. Arrays come out through ``foreach_get``; there is no per-vertex Pytho
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import bpy
@@ -125,9 +126,11 @@ def material_params(material: bpy.types.Material | None) -> S.MaterialParams:
     rough = min(max(rough, 0.0), 1.0)
     # Blinn-Phong/Phong fallbacks from the physically based values: a metal's colour goes to its
     # highlight and none to its diffuse term; a dielectric keeps a white highlight; the ambient
-    # colour is the diffuse colour (the seed's "typically"); shininess from roughness.
+    # colour is the diffuse colour (the seed's "typically"); shininess from roughness. A surface
+    # with no specular lobe (F0 0: Diffuse BSDF, Emission, Specular IOR Level 0) has no highlight.
     diffuse = tuple(c * (1.0 - metal) for c in base)
-    spec = tuple(1.0 - metal + metal * c for c in base)
+    dielectric_spec = 1.0 if f0 > 0.0 else 0.0
+    spec = tuple((1.0 - metal) * dielectric_spec + metal * c for c in base)
     shininess = S.shininess_from_roughness(rough)
     ambient = diffuse
     if props is not None:
@@ -323,7 +326,26 @@ def scene_settings(scene) -> S.Settings:
                       tone_mapper=props.tone_mapper, exposure=float(props.exposure), transfer=props.transfer,
                       samples=int(props.samples), compare_mode=props.compare_mode,
                       compare_models=(props.compare_a, props.compare_b),
-                      compare_split=float(props.compare_split), compare_range=float(props.compare_range))
+                      compare_split=float(props.compare_split), compare_range=float(props.compare_range),
+                      transparency_layers=int(props.transparency_layers))
+
+
+def preview_settings(preview_scene) -> S.Settings:
+    """Settings for a material, world or light preview.
+
+    The scene Blender builds for a preview carries default Shading Lab settings, so the model and
+    terms come from the artist's scene (the context's) when it has them: a preview shows what a
+    render would. Previews are small and frequent: one sample per pixel, no A|B compare.
+    """
+    source = preview_scene
+    try:
+        scene = bpy.context.scene
+        own = scene is not None and scene.as_pointer() == preview_scene.as_pointer()
+        if scene is not None and hasattr(scene, "shading_lab") and not own:
+            source = scene
+    except Exception:  # no usable context (a preview thread may see none): the preview's own
+        pass
+    return dataclasses.replace(scene_settings(source), samples=1, compare_mode="OFF")
 
 
 def geometry_updates(depsgraph) -> set[str]:

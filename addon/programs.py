@@ -61,6 +61,7 @@ class Features:
     half_target: bool = False  # drawing into RGBA16F: cap radiance at 65504
     maps: frozenset[str] = frozenset()  # image textures sampled: BASE_COLOR[_CLOSEST], NORMAL, ...
     alpha_from_base_map: bool = False  # coverage from the base colour image's alpha
+    peel: bool = False  # a depth-peeling pass over the partly transparent surfaces
 
     def has_map(self, name: str) -> bool:
         return name in self.maps or name + "_CLOSEST" in self.maps
@@ -133,6 +134,8 @@ class Features:
             out.append(("SL_HALF_TARGET", "1"))
         if self.alpha_from_base_map:
             out.append(("SL_ALPHA_FROM_BASE_MAP", "1"))
+        if self.peel:
+            out.append(("SL_PEEL", "1"))
         for name in sorted(self.maps):  # BASE_COLOR, or BASE_COLOR_CLOSEST for nearest filtering
             base = name.removesuffix("_CLOSEST")
             out.append((f"SL_HAS_{base}_MAP", "1"))

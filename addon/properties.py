@@ -120,6 +120,10 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
         description="Supersampling grid per axis for final renders: N x N sub-pixel samples averaged "
                     "with equal weights (a box filter over the pixel). 1 samples pixel centres only, "
                     "as the comparisons against Cycles expect")
+    transparency_layers: IntProperty(
+        name="Transparency Layers", default=4, min=1, max=16, update=_redraw,
+        description="Partly transparent surfaces blended per pixel, nearest first, in depth order "
+                    "(depth peeling): surfaces beyond this many behind one another are left out")
 
 
 def _override(name: str, description: str):

@@ -78,6 +78,9 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     for slot, name in enumerate(("base_color", "metallic", "roughness", "normal"), start=2):
         if features.has_map(name.upper()):
             info.sampler(slot, "FLOAT_2D", name + "_map")
+    if features.peel:
+        info.sampler(6, "FLOAT_2D", "opaque_depth")
+        info.sampler(7, "FLOAT_2D", "peel_depth")
     info.vertex_in(0, "VEC3", "pos")
     info.vertex_in(1, "VEC3", "nor")
     info.vertex_in(2, "VEC2", "uv")
@@ -275,6 +278,42 @@ def post_pass(texture, w: int, h: int, features: programs.PostFeatures, exposure
     return _full_screen_pass(get_post_program(features), bind, w, h, target)
 
 
+class SceneTarget:
+    """A float colour texture and a depth texture drawn into together, both readable by shaders
+    (depth peeling samples the opaque depth); with the ``bind``/``texture_color`` interface of a
+    ``GPUOffScreen``. The peeling layers are made on first use and kept while the size holds."""
+
+    def __init__(self, width: int, height: int, format: str = "RGBA32F"):
+        self.width, self.height, self.format = width, height, format
+        self.texture_color = gpu.types.GPUTexture((width, height), format=format)
+        self.texture_depth = gpu.types.GPUTexture((width, height), format="DEPTH_COMPONENT32F")
+        self.framebuffer = gpu.types.GPUFrameBuffer(color_slots=self.texture_color,
+                                                    depth_slot=self.texture_depth)
+        self._peel: tuple | None = None
+
+    def bind(self):
+        return self.framebuffer.bind()
+
+    def peel_layers(self, count: int) -> tuple[list, list, object]:
+        """``count`` (colour texture, framebuffer, depth texture read) layers, and a framebuffer
+        whose depth is the first layer's read depth (cleared to 0: nothing is in front of it)."""
+        if self._peel is None or len(self._peel[0]) != count:
+            size = (self.width, self.height)
+            depths = [gpu.types.GPUTexture(size, format="DEPTH_COMPONENT32F") for _ in range(2)]
+            colours = [gpu.types.GPUTexture(size, format=self.format) for _ in range(count)]
+            # layer i writes depth i+1 (mod 2) and reads depth i (mod 2), the previous layer's
+            layers = [(colour, gpu.types.GPUFrameBuffer(color_slots=colour, depth_slot=depths[(i + 1) % 2]),
+                       depths[i % 2]) for i, colour in enumerate(colours)]
+            self._peel = (layers, depths, gpu.types.GPUFrameBuffer(depth_slot=depths[0]))
+        layers, _, first = self._peel
+        return layers, first
+
+    def free(self) -> None:
+        """Drop every texture and framebuffer (Blender frees them with their last reference)."""
+        self._peel = None
+        self.framebuffer = self.texture_color = self.texture_depth = None
+
+
 class Renderer:
     """Holds the GPU copies of one snapshot's geometry and draws it.
 
@@ -301,9 +340,12 @@ class Renderer:
 
     def draw(self, snapshot: Snapshot, view_projection: np.ndarray | None = None,
              should_stop: Callable[[], bool] | None = None, half_target: bool = False,
-             lobes: tuple[float, float, float, float] = programs.ALL_LOBES) -> None:
+             lobes: tuple[float, float, float, float] = programs.ALL_LOBES,
+             target: SceneTarget | None = None) -> None:
         """Draw every item into the bound framebuffer, one program per shading model in use
-        (the scene's, and any material's own override)."""
+        (the scene's, and any material's own override). Partly transparent surfaces come after
+        the opaque ones: depth peeled per pixel when ``target`` (the bound ``SceneTarget``) is
+        given, else sorted per object, far to near."""
         frame_ubo = gpu.types.GPUUniformBuf(programs.pack_frame(snapshot, view_projection, lobes))
         light_ubo = gpu.types.GPUUniformBuf(
             programs.pack_lights(snapshot, programs.light_slots(len(snapshot.lights))))
@@ -323,7 +365,7 @@ class Renderer:
                     if ref is not None and ref not in textures:
                         textures[ref] = self.image_loader(*ref)
         groups: dict[programs.Features, list] = {}
-        blended = []  # partly transparent: drawn after the opaque ones, farthest first
+        blended = []  # partly transparent: (distance to the eye, features, record)
         eye = np.asarray(snapshot.camera.position, np.float64)
         for index, item in enumerate(snapshot.items):
             batches = self._batches.get(item.geometry)
@@ -339,42 +381,90 @@ class Renderer:
                     blended.append((distance, features[key], record))
                 else:
                     groups.setdefault(features[key], []).append(record)
-        blended.sort(key=lambda entry: -entry[0])
-        passes = [(f, draws) for f, draws in sorted(groups.items(), key=lambda kv: kv[0].defines())]
-        passes += [(f, [record]) for _, f, record in blended]
+        shared = (snapshot, frame_ubo, light_ubo, material_ubos, textures, should_stop)
         gpu.state.depth_test_set("LESS_EQUAL")
         gpu.state.depth_mask_set(True)
         gpu.state.face_culling_set("NONE")
         gpu.state.blend_set("NONE")
-        bound = None
         try:
-            for number, (feature_set, draws) in enumerate(passes):
-                if number == len(groups):  # the blended ones: over what is drawn, not hiding it
-                    gpu.state.blend_set("ALPHA")
-                    gpu.state.depth_mask_set(False)
-                shader = get_program(feature_set)
-                if shader is not bound:
-                    shader.bind()
-                    shader.uniform_block("frame", frame_ubo)
-                    shader.uniform_block("lights", light_ubo)
-                    if feature_set.uses_albedo_table:
-                        shader.uniform_sampler("ms_table", multiscatter_texture(feature_set.terms))
-                    if feature_set.uses_s_table:
-                        shader.uniform_sampler("s_table", principled_s_texture())
-                    bound = shader
-                for index, object_ubo, key, batch in draws:
-                    if should_stop is not None and index % 64 == 0 and should_stop():
+            for feature_set, draws in sorted(groups.items(), key=lambda kv: kv[0].defines()):
+                if not self._draw_group(feature_set, draws, shared):
+                    return
+            if not blended:
+                return
+            if target is None:  # over what is drawn, not hiding it, farthest object first
+                gpu.state.blend_set("ALPHA")
+                gpu.state.depth_mask_set(False)
+                for _, feature_set, record in sorted(blended, key=lambda entry: -entry[0]):
+                    if not self._draw_group(feature_set, [record], shared):
                         return
-                    shader.uniform_block("object", object_ubo)
-                    shader.uniform_block("material", material_ubos[key])
-                    for name in feature_set.maps:
-                        sampler = name.removesuffix("_CLOSEST").lower() + "_map"
-                        shader.uniform_sampler(sampler, textures[getattr(snapshot.materials[key], sampler)])
-                    batch.draw(shader)
+                return
+            peel_groups: dict[programs.Features, list] = {}
+            for _, feature_set, record in blended:
+                peel_groups.setdefault(replace(feature_set, peel=True), []).append(record)
+            self._draw_peeled(target, peel_groups, snapshot.settings.transparency_layers, shared)
         finally:
             gpu.state.depth_test_set("NONE")
             gpu.state.depth_mask_set(False)
             gpu.state.blend_set("NONE")
+
+    @staticmethod
+    def _draw_group(feature_set: programs.Features, draws: list, shared: tuple,
+                    bind: Callable[[gpu.types.GPUShader], None] | None = None) -> bool:
+        """Draw ``draws`` (records of one feature set) with its program; False if cancelled."""
+        snapshot, frame_ubo, light_ubo, material_ubos, textures, should_stop = shared
+        shader = get_program(feature_set)
+        shader.bind()
+        shader.uniform_block("frame", frame_ubo)
+        shader.uniform_block("lights", light_ubo)
+        if feature_set.uses_albedo_table:
+            shader.uniform_sampler("ms_table", multiscatter_texture(feature_set.terms))
+        if feature_set.uses_s_table:
+            shader.uniform_sampler("s_table", principled_s_texture())
+        if bind is not None:
+            bind(shader)
+        for index, object_ubo, key, batch in draws:
+            if should_stop is not None and index % 64 == 0 and should_stop():
+                return False
+            shader.uniform_block("object", object_ubo)
+            shader.uniform_block("material", material_ubos[key])
+            for name in feature_set.maps:
+                sampler = name.removesuffix("_CLOSEST").lower() + "_map"
+                shader.uniform_sampler(sampler, textures[getattr(snapshot.materials[key], sampler)])
+            batch.draw(shader)
+        return True
+
+    def _draw_peeled(self, target: SceneTarget, groups: dict, layers: int, shared: tuple) -> None:
+        """Depth peeling: ``layers`` passes over the partly transparent surfaces, each keeping the
+        nearest fragment behind the previous pass's (per pixel, exact order, also within one
+        mesh), then the layers blended over ``target`` (bound by the caller) far to near."""
+        peeled, first = target.peel_layers(max(int(layers), 1))
+        with first.bind():
+            gpu.state.active_framebuffer_get().clear(depth=0.0)
+        ordered = sorted(groups.items(), key=lambda kv: kv[0].defines())
+        for _, framebuffer, previous in peeled:
+            with framebuffer.bind():
+                framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
+                gpu.state.depth_test_set("LESS")
+                gpu.state.depth_mask_set(True)
+                gpu.state.blend_set("NONE")
+
+                def bind(shader, previous=previous):
+                    shader.uniform_sampler("opaque_depth", target.texture_depth)
+                    shader.uniform_sampler("peel_depth", previous)
+
+                for feature_set, draws in ordered:
+                    if not self._draw_group(feature_set, draws, shared, bind):
+                        return
+        gpu.state.depth_test_set("NONE")
+        gpu.state.depth_mask_set(False)
+        gpu.state.blend_set("ALPHA")  # L = a L_layer + (1 - a) L_behind, as the sorted path
+        copy = get_post_program(programs.PostFeatures(samples=1))
+        batch = _full_screen_batch()
+        copy.bind()
+        for colour, _, _ in reversed(peeled):
+            copy.uniform_sampler("hdr_image", colour)
+            batch.draw(copy)
 
     def render(self, snapshot: Snapshot, background: tuple[float, float, float, float] = (0, 0, 0, 1),
                should_stop: Callable[[], bool] | None = None) -> np.ndarray:
@@ -399,12 +489,12 @@ class Renderer:
         w, h = snapshot.width, snapshot.height
         samples = max(int(samples), 1)
         self.sync(snapshot)
-        scene_target = gpu.types.GPUOffScreen(w * samples, h * samples, format="RGBA32F")
+        scene_target = SceneTarget(w * samples, h * samples)
         try:
             with scene_target.bind():
                 fb = gpu.state.active_framebuffer_get()
                 fb.clear(color=background, depth=1.0)
-                self.draw(snapshot, should_stop=should_stop, lobes=lobes)
+                self.draw(snapshot, should_stop=should_stop, lobes=lobes, target=scene_target)
                 if samples == 1 and display is None:
                     return _read(fb, w, h), None
             texture = scene_target.texture_color

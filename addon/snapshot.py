@@ -204,6 +204,7 @@ class Settings:
     compare_models: tuple[str, str] = ("BLINN_PHONG", "PBR")
     compare_split: float = 0.5
     compare_range: float = 1.0
+    transparency_layers: int = 4  # depth-peeling layers of partly transparent surfaces per pixel
 
 
 @dataclass

@@ -79,6 +79,7 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
                 box.label(text="Set Color Management > View Transform to Standard:", icon="ERROR")
                 box.label(text="this tone mapper already maps to display values")
         layout.prop(props, "samples")
+        layout.prop(props, "transparency_layers")
         layout.separator()
         layout.prop(props, "compare_mode")
         if props.compare_mode != "OFF":

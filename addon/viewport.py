@@ -17,7 +17,7 @@ import numpy as np
 
 from . import extract, programs
 from . import snapshot as S
-from .renderer import Renderer, compare_pass, post_pass
+from .renderer import Renderer, SceneTarget, compare_pass, post_pass
 
 _NO_CAMERA = S.Camera(np.eye(4, dtype=np.float32), np.eye(4, dtype=np.float32), True, (0.0, 0.0, 0.0),
                       (0.0, 0.0, -1.0))
@@ -28,7 +28,7 @@ class ViewportSession:
         self.snapshot: S.Snapshot | None = None
         self.pending: set[str] = set()  # geometry keys read anew and not yet uploaded
         self.renderer = Renderer(image_loader=extract.image_texture)
-        self._targets: dict[str, gpu.types.GPUOffScreen] = {}
+        self._targets: dict[str, SceneTarget] = {}
         self.last_update_ms = 0.0
 
     def update(self, depsgraph) -> None:
@@ -39,12 +39,12 @@ class ViewportSession:
         self.pending |= self.snapshot.fresh
         self.last_update_ms = 1e3 * (time.perf_counter() - start)
 
-    def _target(self, name: str, width: int, height: int) -> gpu.types.GPUOffScreen:
+    def _target(self, name: str, width: int, height: int) -> SceneTarget:
         target = self._targets.get(name)
         if target is None or (target.width, target.height) != (width, height):
             if target is not None:
                 target.free()
-            target = self._targets[name] = gpu.types.GPUOffScreen(width, height, format="RGBA16F")
+            target = self._targets[name] = SceneTarget(width, height, format="RGBA16F")
         return target
 
     def draw(self, width: int, height: int, view_matrix, window_matrix, is_perspective: bool,
@@ -77,7 +77,7 @@ class ViewportSession:
         with scene_target.bind():
             fb = gpu.state.active_framebuffer_get()
             fb.clear(color=background, depth=1.0)
-            self.renderer.draw(snap, half_target=True)
+            self.renderer.draw(snap, half_target=True, target=scene_target)
         settings = snap.settings
         if settings.tone_mapper == "BLENDER" or not tone_map:
             return scene_target.texture_color

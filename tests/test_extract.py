@@ -328,8 +328,28 @@ def test_principled_fallback():
     assert params.roughness == pytest.approx(0.3, abs=1e-6)
     assert params.f0 == pytest.approx(((2.0 - 1.0) / (2.0 + 1.0)) ** 2, rel=1e-6)
 
+    # Blinn-Phong highlight: the metal's share takes the base colour, the dielectric's is white
+    assert params.specular_color == pytest.approx([0.3 + 0.7 * c for c in (0.2, 0.4, 0.6)], abs=1e-6)
+
     node.inputs["Specular IOR Level"].default_value = 0.0
-    assert snap_of().materials[mat.name_full].f0 == 0.0
+    params = snap_of().materials[mat.name_full]
+    assert params.f0 == 0.0
+    # no dielectric specular lobe: no white highlight either, only the metal's coloured one
+    assert params.specular_color == pytest.approx([0.7 * c for c in (0.2, 0.4, 0.6)], abs=1e-6)
+
+
+@pytest.mark.parametrize("shader", ["ShaderNodeBsdfDiffuse", "ShaderNodeEmission"])
+def test_surfaces_without_a_specular_lobe_have_no_highlight_in_any_model(shader):
+    scene = new_scene()
+    mat = bpy.data.materials.new(shader)
+    tree = mat.node_tree
+    node = tree.nodes.new(shader)
+    output = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    tree.links.new(node.outputs[0], output.inputs["Surface"])
+    scenes.plane(scene, material=mat)
+    params = snap_of().materials[mat.name_full]
+    assert params.f0 == 0.0 and params.metalness == 0.0
+    assert params.specular_color == (0.0, 0.0, 0.0)
 
 
 # --- 8. empty and degenerate meshes ------------------------------------------------------------
