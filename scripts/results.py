@@ -262,4 +262,7 @@ The physically based parameters needed no tuning at all.
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.path.insert(0, str(Path(__file__).resolve().parent))
+    from process_exit import leave
+
+    leave(main())
