@@ -61,6 +61,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     display.add_argument("--tone-mapper", choices=TONE_MAPPERS)
     display.add_argument("--exposure", type=float, help="EV, for the engine's own tone mappers")
     display.add_argument("--samples", type=int, help="N: N x N supersampling per pixel")
+    display.add_argument("--transparency-layers", type=int, metavar="N",
+                         help="partly transparent surfaces blended per pixel in depth order (1-16)")
     args = parser.parse_args(argv)
     if not args.list and not args.scene:
         parser.error("SCENE is required (or --list)")
@@ -153,6 +155,10 @@ def configure(scene, args) -> None:
         props.term_set = "PRINCIPLED" if args.principled else "CUSTOM"
     if args.samples is not None and not 1 <= args.samples <= 8:
         raise CliError(f"--samples must be between 1 and 8, got {args.samples}")
+    if args.transparency_layers is not None:
+        if not 1 <= args.transparency_layers <= 16:
+            raise CliError(f"--transparency-layers must be between 1 and 16, got {args.transparency_layers}")
+        props.transparency_layers = args.transparency_layers
     if args.tone_mapper is not None:
         props.tone_mapper = args.tone_mapper.upper()
         if props.tone_mapper != "BLENDER":

@@ -97,4 +97,6 @@ def test_unknown_preset_and_bad_options(tmp_path):
     assert proc.returncode == 2 and "comes before" in proc.stderr
     proc = _run("portability", "--variant", "moonlight", "--out", tmp_path)
     assert proc.returncode == 2 and "no lighting variant" in proc.stderr
+    proc = _run("fresnel", "--transparency-layers", "0", "--out", tmp_path)
+    assert proc.returncode == 2 and "--transparency-layers must be between 1 and 16, got 0" in proc.stderr
     assert not any(tmp_path.glob("*.exr"))
