@@ -17,14 +17,29 @@ def _classes():
     return (*properties.classes, *engine.classes, *operators.classes, *ui.classes), (properties, ui)
 
 
+_registered = False
+_unregister_at_exit = False
+
+
 def register():
+    import atexit
+
     import bpy
 
+    global _registered, _unregister_at_exit
+    if _registered:
+        return
     classes, modules = _classes()
     for cls in classes:
         bpy.utils.register_class(cls)
     for module in modules:
         module.register()
+    _registered = True
+    if not bpy.app.binary_path and not _unregister_at_exit:
+        # Blender as a Python module never disables add-ons at exit, and 4.x then leaks the
+        # registered classes and can hang in its exit destructors: unregister first.
+        atexit.register(unregister)
+        _unregister_at_exit = True
 
 
 def unregister():
@@ -32,6 +47,10 @@ def unregister():
 
     from . import renderer
 
+    global _registered
+    if not _registered:
+        return
+    _registered = False
     classes, modules = _classes()
     for module in reversed(modules):
         module.unregister()

@@ -938,7 +938,6 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from process_exit import leave
-
-    leave(main())
+    code = main()
+    sys.stdout.flush()
+    sys.exit(code)

@@ -2,6 +2,7 @@
 
     .venv/bin/python scripts/compare.py PRESET [--resolution WxH] [--samples N] [--variant NAME]
                                                [--out DIR] [term options as in render.py]
+                                               [--transparency-layers N]
 
 Renders Blinn-Phong, Phong and the physically based model (with the scene's terms, or those
 given), and the Cycles reference (direct light only, light shadows off — the engine has none —,
@@ -44,6 +45,8 @@ def parse_args(argv):
         parser.add_argument(f"--{family}", choices=[cli._flag(c) for c in cli.TERM_CHOICES[family]])
     parser.add_argument("--multiscatter", action=argparse.BooleanOptionalAction, default=None)
     parser.add_argument("--principled", action=argparse.BooleanOptionalAction, default=None)
+    parser.add_argument("--transparency-layers", type=int, metavar="N",
+                        help="partly transparent surfaces blended per pixel in depth order (1-16)")
     args = parser.parse_args(argv)
     for name in ("normalized_blinn_phong", "tone_mapper", "exposure", "samples"):
         setattr(args, name, getattr(base, name))  # not offered here: pixel-centre radiance is compared
@@ -177,7 +180,4 @@ def compare(args) -> dict:
 
 
 if __name__ == "__main__":
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from process_exit import leave
-
-    leave(main())
+    sys.exit(main())

@@ -309,7 +309,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.path.insert(0, str(ROOT / "scripts"))
-    from process_exit import leave
-
-    leave(main())
+    code = main()
+    sys.stdout.flush()
+    if code:
+        os._exit(code)  # inside `blender --python`, sys.exit would not end Blender's process
+    sys.exit(code)

@@ -262,7 +262,4 @@ The physically based parameters needed no tuning at all.
 
 
 if __name__ == "__main__":
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from process_exit import leave
-
-    leave(main())
+    sys.exit(main())

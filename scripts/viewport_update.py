@@ -125,7 +125,4 @@ def main() -> int:
 
 
 if __name__ == "__main__":
-    sys.path.insert(0, str(Path(__file__).resolve().parent))
-    from process_exit import leave
-
-    leave(main())
+    sys.exit(main())

@@ -29,6 +29,13 @@ def reset(engine: str = "SHADING_LAB", size: int = 64) -> bpy.types.Scene:
     return scene
 
 
+def node_tree(idb) -> bpy.types.NodeTree:
+    """A material's or world's node tree; Blender 4.x makes it only when nodes are switched on."""
+    if idb.node_tree is None:
+        idb.use_nodes = True
+    return idb.node_tree
+
+
 def ortho_camera(scene, location=(0.0, 0.0, 5.0), rotation=(0.0, 0.0, 0.0), scale=2.0):
     data = bpy.data.cameras.new("Camera")
     data.type = "ORTHO"

@@ -160,11 +160,6 @@ INSTALL_AND_RENDER = textwrap.dedent("""
     report["disabled"] = (module not in prefs.addons and not hasattr(scene, "shading_lab")
                           and scene.render.engine == "CYCLES")
     print("RESULT " + json.dumps(report))
-    if bpy.app.version < (5, 0, 0):  # 4.x can hang in its C++ exit destructors: see scripts/render.py
-        import atexit, os
-        atexit._run_exitfuncs()
-        sys.stdout.flush()
-        os._exit(0)
 """).format(size=SIZE, repo_name=REPO_NAME, base=tuple(BASE.tolist()), sun=SUN_STRENGTH, angle=SUN_ANGLE)
 
 

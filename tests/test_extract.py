@@ -342,7 +342,7 @@ def test_principled_fallback():
 def test_surfaces_without_a_specular_lobe_have_no_highlight_in_any_model(shader):
     scene = new_scene()
     mat = bpy.data.materials.new(shader)
-    tree = mat.node_tree
+    tree = scenes.node_tree(mat)
     node = tree.nodes.new(shader)
     output = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
     tree.links.new(node.outputs[0], output.inputs["Surface"])

@@ -159,7 +159,7 @@ def test_built_materials_carry_the_preset_values():
 def test_apply_material_preset_sets_explicit_values_and_replaces_the_surface():
     scenes.reset()
     mat = bpy.data.materials.new("Was diffuse")
-    tree = mat.node_tree
+    tree = scenes.node_tree(mat)
     for node in [n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled"]:
         tree.nodes.remove(node)
     diffuse = tree.nodes.new("ShaderNodeBsdfDiffuse")

@@ -37,7 +37,7 @@ def preview(idb) -> np.ndarray:
 
 
 def surface(material, shader: str):
-    tree = material.node_tree
+    tree = scenes.node_tree(material)
     node = tree.nodes.new(shader)
     output = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
     tree.links.new(node.outputs[0], output.inputs["Surface"])
@@ -54,7 +54,7 @@ def emitter(color) -> bpy.types.Material:
 
 def principled(name, base, metallic=0.0, roughness=0.3) -> bpy.types.Material:
     material = bpy.data.materials.new(name)
-    node = next(n for n in material.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    node = next(n for n in scenes.node_tree(material).nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
     node.inputs["Base Color"].default_value = (*base, 1.0)
     node.inputs["Metallic"].default_value = metallic
     node.inputs["Roughness"].default_value = roughness
@@ -97,7 +97,7 @@ def test_remaining_preview_shapes_render(shape):
 def test_world_preview_is_the_world_colour():
     scenes.reset()
     world = bpy.data.worlds.new("Sky")
-    background = next(n for n in world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
+    background = next(n for n in scenes.node_tree(world).nodes if n.bl_idname == "ShaderNodeBackground")
     background.inputs["Color"].default_value = (0.1, 0.3, 0.05, 1.0)
     background.inputs["Strength"].default_value = 2.0
     pixels = preview(world)
