@@ -34,12 +34,13 @@ CYCLE_MARGIN_MB = 10.0
 LAMBERT = scenes.LAMBERT
 
 #: Cycled through so that every kind of GPU object is made and dropped: three shading programs,
-#: supersampling and a tone mapper (post-pass programs, a second target), the multiscatter table.
+#: supersampling and a tone mapper (post-pass programs, a second target), the multiscatter table,
+#: depth peeling with 4 and 2 layers.
 CONFIGS = (
-    dict(model="PBR", tone_mapper="BLENDER", samples=1, multiscatter=False),
+    dict(model="PBR", tone_mapper="BLENDER", samples=1, multiscatter=False, transparency_layers=4),
     dict(model="BLINN_PHONG", tone_mapper="BLENDER", samples=1, multiscatter=False),
     dict(model="PHONG", tone_mapper="BLENDER", samples=1, multiscatter=False),
-    dict(model="PBR", tone_mapper="REINHARD", samples=2, multiscatter=True),
+    dict(model="PBR", tone_mapper="REINHARD", samples=2, multiscatter=True, transparency_layers=2),
 )
 
 
@@ -54,7 +55,15 @@ def _rss_mb() -> float:
 
 
 def _scene(size: int = 16):
-    return scenes.lambert_scene(size)
+    """The Lambert scene under a fully transparent plane: the peeling passes, their textures and
+    framebuffers run on every render, and the image stays the closed form (0 x L + 1 x behind)."""
+    from addon.scene_builder import principled_material
+
+    scene = scenes.lambert_scene(size)
+    cover = principled_material("Invisible", (1.0, 1.0, 1.0))
+    scenes.node_tree(cover).nodes["Principled BSDF"].inputs["Alpha"].default_value = 0.0
+    scenes.plane(scene, size=4.0, location=(0.0, 0.0, 0.5), material=cover)
+    return scene
 
 
 def _configure(scene, config: dict) -> None:
