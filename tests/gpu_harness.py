@@ -7,6 +7,8 @@ return value (or exception) back, so the renderer can be tested without the prod
 
 from __future__ import annotations
 
+import atexit
+
 import bpy
 
 
@@ -26,10 +28,18 @@ class _HarnessEngine(bpy.types.RenderEngine):
             cls.outcome = ("error", exc)
 
 
+def _unregister() -> None:
+    if _HarnessEngine.is_registered:
+        bpy.utils.unregister_class(_HarnessEngine)
+
+
 def run_on_gpu(job):
     """``job(depsgraph)`` runs inside a GPU context; returns its result or re-raises its error."""
     if not _HarnessEngine.is_registered:
         bpy.utils.register_class(_HarnessEngine)
+        # Blender as a module never unregisters classes at exit; 4.x then leaks them and can
+        # hang or crash in its exit destructors (the add-on does the same for its own classes)
+        atexit.register(_unregister)
     scene = bpy.context.scene
     previous = scene.render.engine
     scene.render.engine = _HarnessEngine.bl_idname
