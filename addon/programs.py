@@ -212,6 +212,17 @@ def compare_source(features: CompareFeatures) -> ProgramSource:
                          defines=features.defines())
 
 
+#: Texels per side of a block summarised by one texel of a peeling layer's occupancy map.
+OCCUPANCY_BLOCK = 16
+
+
+@lru_cache(maxsize=1)
+def occupancy_source() -> ProgramSource:
+    return ProgramSource(typedefs="", vertex=read_glsl("post.vert.glsl"),
+                         fragment=read_glsl("occupancy.frag.glsl"),
+                         defines=(("SL_BLOCK", str(OCCUPANCY_BLOCK)),))
+
+
 # --- uniform-buffer packing (std140, vec4/mat4 members only; matrices column-major) ---------
 
 LIGHT_KIND_IDS = {kind: float(i) for i, kind in enumerate(LIGHT_KINDS)}

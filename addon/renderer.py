@@ -164,6 +164,16 @@ def get_compare_program(features: programs.CompareFeatures) -> gpu.types.GPUShad
                            _declare_compare)
 
 
+def _declare_occupancy(info) -> None:
+    info.vertex_in(0, "VEC2", "pos")
+    info.sampler(0, "FLOAT_2D", "layer_depth")
+
+
+def get_occupancy_program() -> gpu.types.GPUShader:
+    src = programs.occupancy_source()
+    return _cached_program(("occupancy",) + src.defines, "occupancy", src, _declare_occupancy)
+
+
 def get_post_program(features: programs.PostFeatures) -> gpu.types.GPUShader:
     """The resolve/display pass for ``features``, cached like the shading programs."""
     return _cached_program(("post",) + features.defines(), "display", programs.post_source(features),
@@ -175,6 +185,7 @@ def clear_program_cache() -> None:
     _MS_TEXTURES.clear()
     programs.program_source.cache_clear()
     programs.post_source.cache_clear()
+    programs.occupancy_source.cache_clear()
 
 
 # Compiled programs outlive renders; free them before Blender tears its GPU module down, or it
@@ -235,7 +246,7 @@ def _full_screen_pass(shader, bind: Callable[[gpu.types.GPUShader], None], w: in
     batch = _full_screen_batch()
     own = target is None
     if own:
-        target = gpu.types.GPUOffScreen(w, h, format="RGBA32F")
+        target = SceneTarget(w, h)
     try:
         with target.bind():
             fb = gpu.state.active_framebuffer_get()
@@ -278,6 +289,15 @@ def post_pass(texture, w: int, h: int, features: programs.PostFeatures, exposure
     return _full_screen_pass(get_post_program(features), bind, w, h, target)
 
 
+def _any_fragment(depth: gpu.types.GPUTexture, width: int, height: int) -> bool:
+    """Whether a peeled layer's depth holds any fragment: reduced on the GPU to one texel per
+    block of ``programs.OCCUPANCY_BLOCK`` texels a side, and only that read back."""
+    block = programs.OCCUPANCY_BLOCK
+    occupancy = _full_screen_pass(get_occupancy_program(), lambda s: s.uniform_sampler("layer_depth", depth),
+                                  -(-width // block), -(-height // block))
+    return bool(occupancy[..., 0].max() > 0.0)
+
+
 class SceneTarget:
     """A float colour texture and a depth texture drawn into together, both readable by shaders
     (depth peeling samples the opaque depth); with the ``bind``/``texture_color`` interface of a
@@ -294,9 +314,10 @@ class SceneTarget:
     def bind(self):
         return self.framebuffer.bind()
 
-    def peel_layers(self, count: int) -> tuple[list, list, object]:
-        """``count`` (colour texture, framebuffer, depth texture read) layers, and a framebuffer
-        whose depth is the first layer's read depth (cleared to 0: nothing is in front of it)."""
+    def peel_layers(self, count: int) -> tuple[list, object]:
+        """``count`` (colour texture, framebuffer, depth texture read: the previous layer's)
+        layers, and a framebuffer whose depth is the first layer's read depth (cleared to 0:
+        nothing is in front of it)."""
         if self._peel is None or len(self._peel[0]) != count:
             size = (self.width, self.height)
             depths = [gpu.types.GPUTexture(size, format="DEPTH_COMPONENT32F") for _ in range(2)]
@@ -325,6 +346,7 @@ class Renderer:
     def __init__(self, image_loader: Callable[[str, bool], gpu.types.GPUTexture] | None = None):
         self._batches: dict[str, list[tuple[int, gpu.types.GPUBatch]]] = {}
         self.uploaded_geometry = 0  # geometries uploaded by the last sync (for tests and stats)
+        self.peeled_layers = 0  # transparency layers the last draw blended (for tests and stats)
         #: (image name, nearest filtering) -> texture; None draws materials without their maps
         self.image_loader = image_loader
 
@@ -382,6 +404,7 @@ class Renderer:
                 else:
                     groups.setdefault(features[key], []).append(record)
         shared = (snapshot, frame_ubo, light_ubo, material_ubos, textures, should_stop)
+        self.peeled_layers = 0
         gpu.state.depth_test_set("LESS_EQUAL")
         gpu.state.depth_mask_set(True)
         gpu.state.face_culling_set("NONE")
@@ -435,14 +458,19 @@ class Renderer:
         return True
 
     def _draw_peeled(self, target: SceneTarget, groups: dict, layers: int, shared: tuple) -> None:
-        """Depth peeling: ``layers`` passes over the partly transparent surfaces, each keeping the
-        nearest fragment behind the previous pass's (per pixel, exact order, also within one
-        mesh), then the layers blended over ``target`` (bound by the caller) far to near."""
+        """Depth peeling: up to ``layers`` passes over the partly transparent surfaces, each keeping
+        the nearest fragment behind the previous pass's (per pixel, exact order, also within one
+        mesh), then the layers blended over ``target`` (bound by the caller) far to near. A pass
+        that peeled nothing ends the peeling: the scene needs no more layers."""
         peeled, first = target.peel_layers(max(int(layers), 1))
         with first.bind():
             gpu.state.active_framebuffer_get().clear(depth=0.0)
         ordered = sorted(groups.items(), key=lambda kv: kv[0].defines())
+        used = 0
         for _, framebuffer, previous in peeled:
+            if used and not _any_fragment(previous, target.width, target.height):
+                used -= 1  # the last pass peeled nothing, so no surface is left behind it
+                break
             with framebuffer.bind():
                 framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
                 gpu.state.depth_test_set("LESS")
@@ -456,13 +484,15 @@ class Renderer:
                 for feature_set, draws in ordered:
                     if not self._draw_group(feature_set, draws, shared, bind):
                         return
+            used += 1
+        self.peeled_layers = used
         gpu.state.depth_test_set("NONE")
         gpu.state.depth_mask_set(False)
         gpu.state.blend_set("ALPHA")  # L = a L_layer + (1 - a) L_behind, as the sorted path
         copy = get_post_program(programs.PostFeatures(samples=1))
         batch = _full_screen_batch()
         copy.bind()
-        for colour, _, _ in reversed(peeled):
+        for colour, *_ in reversed(peeled[:used]):
             copy.uniform_sampler("hdr_image", colour)
             batch.draw(copy)
 

@@ -16,6 +16,7 @@ import pytest
 import scenes
 from gpu_harness import read_texture, run_on_gpu
 
+from addon import extract, renderer
 from addon.scene_builder import principled_material
 from addon.viewport import ViewportSession
 
@@ -128,3 +129,22 @@ def test_one_mesh_folded_over_itself_blends_front_over_back(tmp_path):
                  for c in ([0.8, 0.1, 0.1], [0.1, 0.2, 0.9]))
     want = 0.5 * red + 0.25 * blue
     np.testing.assert_allclose(got, np.broadcast_to(want, got.shape), atol=1e-5)
+
+
+@pytest.mark.parametrize("layers,peeled", [(16, 2), (2, 2), (1, 1)])
+def test_peeling_stops_when_no_surface_is_left(layers, peeled):
+    """Two surfaces per pixel: however many layers are allowed, two are blended (a third pass
+    finds nothing and ends the peeling), and the image is still the closed form."""
+    crossing_planes(layers)
+
+    def job(depsgraph):
+        r = renderer.Renderer()
+        try:
+            return r.render(extract.snapshot(depsgraph, SIZE, SIZE)), r.peeled_layers
+        finally:
+            r.free()
+
+    image, count = run_on_gpu(job)
+    assert count == peeled
+    keep = away_from_crossing()
+    np.testing.assert_allclose(image[::-1, keep, :3], expected_crossing(layers)[:, keep], atol=1e-5)
