@@ -30,10 +30,21 @@ def register():
     if _registered:
         return
     classes, modules = _classes()
-    for cls in classes:
-        bpy.utils.register_class(cls)
-    for module in modules:
-        module.register()
+    done: list = []
+    try:
+        for cls in classes:
+            bpy.utils.register_class(cls)
+            done.append(cls)
+        for module in modules:
+            module.register()
+            done.append(module)
+    except Exception:  # leave nothing half-registered: the next register() starts clean
+        for item in reversed(done):
+            if isinstance(item, type):
+                bpy.utils.unregister_class(item)
+            else:
+                item.unregister()
+        raise
     _registered = True
     if not bpy.app.binary_path and not _unregister_at_exit:
         # Blender as a Python module never disables add-ons at exit, and 4.x then leaks the

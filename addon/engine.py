@@ -103,7 +103,11 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         preview = self.is_preview
         self.update_stats("", "Shading Lab | Reading scene")
         try:
-            settings = extract.preview_settings(scene) if preview else None
+            if preview:
+                settings = extract.preview_settings(scene)
+            else:
+                settings = None
+                extract.remember_settings(scene)  # the scene being rendered is the artist's
             snap = extract.snapshot(depsgraph, width, height, settings=settings)
         except extract.ExtractError as exc:
             self._fail(str(exc))

@@ -330,22 +330,29 @@ def scene_settings(scene) -> S.Settings:
                       transparency_layers=int(props.transparency_layers))
 
 
+#: The artist's scene settings for previews, captured on the main thread (see ``remember_settings``).
+_ARTIST_SETTINGS: list[S.Settings | None] = [None]
+
+
+def remember_settings(scene) -> None:
+    """Keep ``scene``'s settings for previews. Called where Blender runs add-on code on the main
+    thread (property edits, depsgraph updates, file loads, registration) and by renders: a
+    preview renders in a job thread, in Blender's own preview scene, where reading
+    ``bpy.context`` is not safe."""
+    if scene is not None and getattr(scene, "shading_lab", None) is not None:
+        _ARTIST_SETTINGS[0] = scene_settings(scene)
+
+
 def preview_settings(preview_scene) -> S.Settings:
     """Settings for a material, world or light preview.
 
     The scene Blender builds for a preview carries default Shading Lab settings, so the model and
-    terms come from the artist's scene (the context's) when it has them: a preview shows what a
-    render would. Previews are small and frequent: one sample per pixel, no A|B compare.
+    terms come from the artist's scene (the last one remembered): a preview shows what a render
+    would. Previews are small and frequent: one sample per pixel, no A|B compare.
     """
-    source = preview_scene
-    try:
-        scene = bpy.context.scene
-        own = scene is not None and scene.as_pointer() == preview_scene.as_pointer()
-        if scene is not None and hasattr(scene, "shading_lab") and not own:
-            source = scene
-    except Exception:  # no usable context (a preview thread may see none): the preview's own
-        pass
-    return dataclasses.replace(scene_settings(source), samples=1, compare_mode="OFF")
+    artist = _ARTIST_SETTINGS[0]
+    settings = artist if artist is not None else scene_settings(preview_scene)
+    return dataclasses.replace(settings, samples=1, compare_mode="OFF")
 
 
 def geometry_updates(depsgraph) -> set[str]:

@@ -223,6 +223,12 @@ def occupancy_source() -> ProgramSource:
                          defines=(("SL_BLOCK", str(OCCUPANCY_BLOCK)),))
 
 
+@lru_cache(maxsize=1)
+def under_source() -> ProgramSource:
+    return ProgramSource(typedefs="", vertex=read_glsl("post.vert.glsl"),
+                         fragment=read_glsl("under.frag.glsl"), defines=())
+
+
 # --- uniform-buffer packing (std140, vec4/mat4 members only; matrices column-major) ---------
 
 LIGHT_KIND_IDS = {kind: float(i) for i, kind in enumerate(LIGHT_KINDS)}

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import bpy
+from bpy.app.handlers import persistent
 from bpy.props import (
     BoolProperty,
     EnumProperty,
@@ -11,6 +12,8 @@ from bpy.props import (
     IntProperty,
     PointerProperty,
 )
+
+from . import extract
 
 MODEL_ITEMS = (
     ("BLINN_PHONG", "Blinn-Phong", "Empirical Blinn-Phong model (eq. 1.7), LDR, clamped to [0, 1]"),
@@ -53,6 +56,8 @@ def _redraw(self, context):
     owner = self.id_data
     if owner is not None:
         owner.update_tag()
+        if isinstance(owner, bpy.types.Scene):
+            extract.remember_settings(owner)
 
 
 class ShadingLabSceneSettings(bpy.types.PropertyGroup):
@@ -184,12 +189,27 @@ classes = (ShadingLabSceneSettings, ShadingLabMaterialSettings)
 _OWNERS = ((bpy.types.Scene, ShadingLabSceneSettings), (bpy.types.Material, ShadingLabMaterialSettings))
 
 
+@persistent
+def _remember_scene(*_args):
+    """Main-thread handler: the current scene's settings, kept for previews."""
+    extract.remember_settings(getattr(bpy.context, "scene", None))
+
+
+_HANDLERS = (bpy.app.handlers.depsgraph_update_post, bpy.app.handlers.load_post)
+
+
 def register():
     """Attach the settings as ``scene.shading_lab`` and ``material.shading_lab``."""
     for owner, group in _OWNERS:
         owner.shading_lab = PointerProperty(type=group)
+    for handlers in _HANDLERS:
+        handlers.append(_remember_scene)
+    _remember_scene()
 
 
 def unregister():
+    for handlers in _HANDLERS:
+        if _remember_scene in handlers:
+            handlers.remove(_remember_scene)
     for owner, _group in _OWNERS:
         del owner.shading_lab

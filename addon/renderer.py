@@ -174,6 +174,17 @@ def get_occupancy_program() -> gpu.types.GPUShader:
     return _cached_program(("occupancy",) + src.defines, "occupancy", src, _declare_occupancy)
 
 
+def _declare_under(info) -> None:
+    info.vertex_in(0, "VEC2", "pos")
+    info.sampler(0, "FLOAT_2D", "accumulated")
+    info.sampler(1, "FLOAT_2D", "peeled")
+
+
+def get_under_program() -> gpu.types.GPUShader:
+    src = programs.under_source()
+    return _cached_program(("under",), "transparency composite", src, _declare_under)
+
+
 def get_post_program(features: programs.PostFeatures) -> gpu.types.GPUShader:
     """The resolve/display pass for ``features``, cached like the shading programs."""
     return _cached_program(("post",) + features.defines(), "display", programs.post_source(features),
@@ -186,6 +197,7 @@ def clear_program_cache() -> None:
     programs.program_source.cache_clear()
     programs.post_source.cache_clear()
     programs.occupancy_source.cache_clear()
+    programs.under_source.cache_clear()
 
 
 # Compiled programs outlive renders; free them before Blender tears its GPU module down, or it
@@ -240,13 +252,13 @@ def _full_screen_batch() -> gpu.types.GPUBatch:
 
 
 def _full_screen_pass(shader, bind: Callable[[gpu.types.GPUShader], None], w: int, h: int,
-                      target=None) -> np.ndarray | None:
+                      target=None, read: bool = False) -> np.ndarray | None:
     """Draw ``shader`` over a w x h float target (``bind`` sets its inputs) and read it back, or
-    into ``target`` (an offscreen the caller owns, e.g. the viewport's) without reading back."""
+    into ``target`` (one the caller owns, e.g. the viewport's), read back only if ``read``."""
     batch = _full_screen_batch()
     own = target is None
     if own:
-        target = SceneTarget(w, h)
+        target = SceneTarget(w, h, depth=False)
     try:
         with target.bind():
             fb = gpu.state.active_framebuffer_get()
@@ -256,7 +268,7 @@ def _full_screen_pass(shader, bind: Callable[[gpu.types.GPUShader], None], w: in
             shader.bind()
             bind(shader)
             batch.draw(shader)
-            return _read(fb, w, h) if own else None
+            return _read(fb, w, h) if own or read else None
     finally:
         if own:
             target.free()
@@ -289,50 +301,63 @@ def post_pass(texture, w: int, h: int, features: programs.PostFeatures, exposure
     return _full_screen_pass(get_post_program(features), bind, w, h, target)
 
 
-def _any_fragment(depth: gpu.types.GPUTexture, width: int, height: int) -> bool:
-    """Whether a peeled layer's depth holds any fragment: reduced on the GPU to one texel per
-    block of ``programs.OCCUPANCY_BLOCK`` texels a side, and only that read back."""
-    block = programs.OCCUPANCY_BLOCK
-    occupancy = _full_screen_pass(get_occupancy_program(), lambda s: s.uniform_sampler("layer_depth", depth),
-                                  -(-width // block), -(-height // block))
-    return bool(occupancy[..., 0].max() > 0.0)
-
-
 class SceneTarget:
-    """A float colour texture and a depth texture drawn into together, both readable by shaders
-    (depth peeling samples the opaque depth); with the ``bind``/``texture_color`` interface of a
-    ``GPUOffScreen``. The peeling layers are made on first use and kept while the size holds."""
+    """A float colour texture and (unless ``depth`` is False) a depth texture drawn into
+    together, both readable by shaders (depth peeling samples the opaque depth); with the
+    ``bind``/``texture_color`` interface of a ``GPUOffScreen``. The peeling buffers are made on
+    first use and kept with the target: their number does not depend on the layer count."""
 
-    def __init__(self, width: int, height: int, format: str = "RGBA32F"):
+    def __init__(self, width: int, height: int, format: str = "RGBA32F", depth: bool = True):
         self.width, self.height, self.format = width, height, format
         self.texture_color = gpu.types.GPUTexture((width, height), format=format)
-        self.texture_depth = gpu.types.GPUTexture((width, height), format="DEPTH_COMPONENT32F")
-        self.framebuffer = gpu.types.GPUFrameBuffer(color_slots=self.texture_color,
-                                                    depth_slot=self.texture_depth)
-        self._peel: tuple | None = None
+        self.texture_depth = (gpu.types.GPUTexture((width, height), format="DEPTH_COMPONENT32F")
+                              if depth else None)
+        if depth:
+            self.framebuffer = gpu.types.GPUFrameBuffer(color_slots=self.texture_color,
+                                                        depth_slot=self.texture_depth)
+        else:
+            self.framebuffer = gpu.types.GPUFrameBuffer(color_slots=self.texture_color)
+        self._peel: _PeelBuffers | None = None
 
     def bind(self):
         return self.framebuffer.bind()
 
-    def peel_layers(self, count: int) -> tuple[list, object]:
-        """``count`` (colour texture, framebuffer, depth texture read: the previous layer's)
-        layers, and a framebuffer whose depth is the first layer's read depth (cleared to 0:
-        nothing is in front of it)."""
-        if self._peel is None or len(self._peel[0]) != count:
-            size = (self.width, self.height)
-            depths = [gpu.types.GPUTexture(size, format="DEPTH_COMPONENT32F") for _ in range(2)]
-            colours = [gpu.types.GPUTexture(size, format=self.format) for _ in range(count)]
-            # layer i writes depth i+1 (mod 2) and reads depth i (mod 2), the previous layer's
-            layers = [(colour, gpu.types.GPUFrameBuffer(color_slots=colour, depth_slot=depths[(i + 1) % 2]),
-                       depths[i % 2]) for i, colour in enumerate(colours)]
-            self._peel = (layers, depths, gpu.types.GPUFrameBuffer(depth_slot=depths[0]))
-        layers, _, first = self._peel
-        return layers, first
+    def peel_buffers(self) -> _PeelBuffers:
+        if self._peel is None:
+            self._peel = _PeelBuffers(self.width, self.height, self.format)
+        return self._peel
 
     def free(self) -> None:
         """Drop every texture and framebuffer (Blender frees them with their last reference)."""
         self._peel = None
         self.framebuffer = self.texture_color = self.texture_depth = None
+
+
+class _PeelBuffers:
+    """What depth peeling needs beside its target, the same for any number of layers: the layer
+    being peeled (colour, and two depth textures taking turns as the depth written and the
+    previous layer's depth read), two accumulators taking turns for the front-to-back composite,
+    and the small occupancy map that tells whether a layer holds anything."""
+
+    def __init__(self, width: int, height: int, format: str):
+        size = (width, height)
+        self.colour = gpu.types.GPUTexture(size, format=format)
+        self.depths = [gpu.types.GPUTexture(size, format="DEPTH_COMPONENT32F") for _ in range(2)]
+        # layer i writes depth (i + 1) % 2 and reads depth i % 2, the previous layer's
+        self.layer_fbs = [gpu.types.GPUFrameBuffer(color_slots=self.colour, depth_slot=depth)
+                          for depth in (self.depths[1], self.depths[0])]
+        self.first = gpu.types.GPUFrameBuffer(depth_slot=self.depths[0])  # cleared to 0 for layer 0
+        self.accumulators = [SceneTarget(width, height, format, depth=False) for _ in range(2)]
+        block = programs.OCCUPANCY_BLOCK
+        self.occupancy = SceneTarget(-(-width // block), -(-height // block), depth=False)
+
+    def any_fragment(self, depth: gpu.types.GPUTexture) -> bool:
+        """Whether a peeled layer's depth holds any fragment: reduced on the GPU to one texel per
+        block of ``programs.OCCUPANCY_BLOCK`` texels a side, and only that read back."""
+        occ = self.occupancy
+        image = _full_screen_pass(get_occupancy_program(), lambda s: s.uniform_sampler("layer_depth", depth),
+                                  occ.width, occ.height, target=occ, read=True)
+        return bool(image[..., 0].max() > 0.0)
 
 
 class Renderer:
@@ -362,12 +387,11 @@ class Renderer:
 
     def draw(self, snapshot: Snapshot, view_projection: np.ndarray | None = None,
              should_stop: Callable[[], bool] | None = None, half_target: bool = False,
-             lobes: tuple[float, float, float, float] = programs.ALL_LOBES,
-             target: SceneTarget | None = None) -> None:
-        """Draw every item into the bound framebuffer, one program per shading model in use
-        (the scene's, and any material's own override). Partly transparent surfaces come after
-        the opaque ones: depth peeled per pixel when ``target`` (the bound ``SceneTarget``) is
-        given, else sorted per object, far to near."""
+             lobes: tuple[float, float, float, float] = programs.ALL_LOBES, *,
+             target: SceneTarget) -> None:
+        """Draw every item into ``target`` (bound by the caller), one program per shading model
+        in use (the scene's, and any material's own override). Partly transparent surfaces come
+        after the opaque ones, depth peeled and composited in depth order per pixel."""
         frame_ubo = gpu.types.GPUUniformBuf(programs.pack_frame(snapshot, view_projection, lobes))
         light_ubo = gpu.types.GPUUniformBuf(
             programs.pack_lights(snapshot, programs.light_slots(len(snapshot.lights))))
@@ -387,8 +411,7 @@ class Renderer:
                     if ref is not None and ref not in textures:
                         textures[ref] = self.image_loader(*ref)
         groups: dict[programs.Features, list] = {}
-        blended = []  # partly transparent: (distance to the eye, features, record)
-        eye = np.asarray(snapshot.camera.position, np.float64)
+        blended: dict[programs.Features, list] = {}  # partly transparent, by peeling program
         for index, item in enumerate(snapshot.items):
             batches = self._batches.get(item.geometry)
             if not batches:
@@ -399,8 +422,7 @@ class Renderer:
                 record = (index, object_ubo, key, batch)
                 material = snapshot.materials[key]
                 if material.alpha < 1.0 or features[key].alpha_from_base_map:
-                    distance = float(np.linalg.norm(item.matrix[:3, 3] - eye))
-                    blended.append((distance, features[key], record))
+                    blended.setdefault(replace(features[key], peel=True), []).append(record)
                 else:
                     groups.setdefault(features[key], []).append(record)
         shared = (snapshot, frame_ubo, light_ubo, material_ubos, textures, should_stop)
@@ -413,19 +435,8 @@ class Renderer:
             for feature_set, draws in sorted(groups.items(), key=lambda kv: kv[0].defines()):
                 if not self._draw_group(feature_set, draws, shared):
                     return
-            if not blended:
-                return
-            if target is None:  # over what is drawn, not hiding it, farthest object first
-                gpu.state.blend_set("ALPHA")
-                gpu.state.depth_mask_set(False)
-                for _, feature_set, record in sorted(blended, key=lambda entry: -entry[0]):
-                    if not self._draw_group(feature_set, [record], shared):
-                        return
-                return
-            peel_groups: dict[programs.Features, list] = {}
-            for _, feature_set, record in blended:
-                peel_groups.setdefault(replace(feature_set, peel=True), []).append(record)
-            self._draw_peeled(target, peel_groups, snapshot.settings.transparency_layers, shared)
+            if blended:
+                self._draw_peeled(target, blended, snapshot.settings.transparency_layers, shared)
         finally:
             gpu.state.depth_test_set("NONE")
             gpu.state.depth_mask_set(False)
@@ -460,17 +471,23 @@ class Renderer:
     def _draw_peeled(self, target: SceneTarget, groups: dict, layers: int, shared: tuple) -> None:
         """Depth peeling: up to ``layers`` passes over the partly transparent surfaces, each keeping
         the nearest fragment behind the previous pass's (per pixel, exact order, also within one
-        mesh), then the layers blended over ``target`` (bound by the caller) far to near. A pass
-        that peeled nothing ends the peeling: the scene needs no more layers."""
-        peeled, first = target.peel_layers(max(int(layers), 1))
-        with first.bind():
+        mesh), composited front to back as they come; then the result over ``target``. A pass
+        whose predecessor peeled nothing is not drawn: the scene needs no more layers."""
+        buffers = target.peel_buffers()
+        with buffers.first.bind():
             gpu.state.active_framebuffer_get().clear(depth=0.0)
         ordered = sorted(groups.items(), key=lambda kv: kv[0].defines())
+        under = get_under_program()
+        current = 0
+        with buffers.accumulators[current].bind():
+            gpu.state.active_framebuffer_get().clear(color=(0.0, 0.0, 0.0, 0.0))
         used = 0
-        for _, framebuffer, previous in peeled:
-            if used and not _any_fragment(previous, target.width, target.height):
+        for i in range(max(int(layers), 1)):
+            previous = buffers.depths[i % 2]  # written by the last pass (cleared to 0 before the first)
+            if used and not buffers.any_fragment(previous):
                 used -= 1  # the last pass peeled nothing, so no surface is left behind it
                 break
+            framebuffer = buffers.layer_fbs[i % 2]
             with framebuffer.bind():
                 framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
                 gpu.state.depth_test_set("LESS")
@@ -484,17 +501,24 @@ class Renderer:
                 for feature_set, draws in ordered:
                     if not self._draw_group(feature_set, draws, shared, bind):
                         return
+            accumulated = buffers.accumulators[current]
+            current = 1 - current
+
+            def bind_under(shader, accumulated=accumulated):
+                shader.uniform_sampler("accumulated", accumulated.texture_color)
+                shader.uniform_sampler("peeled", buffers.colour)
+
+            _full_screen_pass(under, bind_under, target.width, target.height,
+                              target=buffers.accumulators[current])
             used += 1
         self.peeled_layers = used
         gpu.state.depth_test_set("NONE")
         gpu.state.depth_mask_set(False)
-        gpu.state.blend_set("ALPHA")  # L = a L_layer + (1 - a) L_behind, as the sorted path
+        gpu.state.blend_set("ALPHA_PREMULT")  # C + (1 - A) L_behind
         copy = get_post_program(programs.PostFeatures(samples=1))
-        batch = _full_screen_batch()
         copy.bind()
-        for colour, *_ in reversed(peeled[:used]):
-            copy.uniform_sampler("hdr_image", colour)
-            batch.draw(copy)
+        copy.uniform_sampler("hdr_image", buffers.accumulators[current].texture_color)
+        _full_screen_batch().draw(copy)
 
     def render(self, snapshot: Snapshot, background: tuple[float, float, float, float] = (0, 0, 0, 1),
                should_stop: Callable[[], bool] | None = None) -> np.ndarray:

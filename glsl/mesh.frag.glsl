@@ -24,20 +24,22 @@ vec3 shading_normal(vec3 p)
 
 void main()
 {
+  /* textures and screen derivatives first: they need every fragment of the quad alive */
+  vec3 n = apply_normal_map(shading_normal(world_position), world_uv, world_tangent,
+                            material.fresnel.w);
+  MaterialData m = apply_material_maps(material, world_uv);
 #ifdef SL_PEEL
   /* Depth peeling (Everitt 2001): each pass keeps, per pixel, the nearest partly transparent
    * fragment behind the layer peeled before (peel_depth) and not behind the opaque surface
-   * (opaque_depth); the renderer then blends the layers far to near. */
+   * (opaque_depth); fully transparent fragments (cut-outs) take no layer. The renderer
+   * composites the layers front to back. */
   ivec2 texel = ivec2(gl_FragCoord.xy);
-  if (gl_FragCoord.z <= texelFetch(peel_depth, texel, 0).r ||
+  if (m.emission.w <= 0.0 || gl_FragCoord.z <= texelFetch(peel_depth, texel, 0).r ||
       gl_FragCoord.z > texelFetch(opaque_depth, texel, 0).r)
   {
     discard;
   }
 #endif
-  vec3 n = apply_normal_map(shading_normal(world_position), world_uv, world_tangent,
-                            material.fresnel.w);
-  MaterialData m = apply_material_maps(material, world_uv);
   /* Back faces are shaded with the normal flipped towards the viewer, as Cycles does. */
   Surface s = make_surface(world_position, gl_FrontFacing ? n : -n, view_direction(world_position), m);
   /* ambient and emission: neither a diffuse nor a specular lobe (weight z, off in lobe passes) */
@@ -53,6 +55,6 @@ void main()
     c += shade_direct(s, l, E, light.factors * vec4(frame.lobes.xy, 1.0, 1.0));
   }
   /* alpha: coverage, blended over what is behind (L = a L_surface + (1 - a) L_behind, as Cycles'
-   * transparency); the renderer peels partly transparent surfaces and blends them far to near */
+   * transparency); the renderer peels partly transparent surfaces and composites them in depth order */
   frag_color = vec4(write_target(frame.lobes.w > 0.5 ? shade_finish(c) : c), m.emission.w);
 }

@@ -80,15 +80,15 @@ def test_viewport_matrices_give_the_camera_image():
         r = renderer.Renderer()
         try:
             reference = r.render(snap)
-            offscreen = gpu.types.GPUOffScreen(16, 16, format="RGBA32F")
+            target = renderer.SceneTarget(16, 16)
             try:
-                with offscreen.bind():
+                with target.bind():
                     fb = gpu.state.active_framebuffer_get()
                     fb.clear(color=(0, 0, 0, 1), depth=1.0)
-                    r.draw(snap, view_projection=snap.camera.view_projection)
+                    r.draw(snap, view_projection=snap.camera.view_projection, target=target)
                     buf = fb.read_color(0, 0, 16, 16, 4, 0, "FLOAT")
             finally:
-                offscreen.free()
+                target.free()
         finally:
             r.free()
         buf.dimensions = 16 * 16 * 4

@@ -136,15 +136,55 @@ def test_peeling_stops_when_no_surface_is_left(layers, peeled):
     """Two surfaces per pixel: however many layers are allowed, two are blended (a third pass
     finds nothing and ends the peeling), and the image is still the closed form."""
     crossing_planes(layers)
-
-    def job(depsgraph):
-        r = renderer.Renderer()
-        try:
-            return r.render(extract.snapshot(depsgraph, SIZE, SIZE)), r.peeled_layers
-        finally:
-            r.free()
-
-    image, count = run_on_gpu(job)
+    image, count = render_counted()
     assert count == peeled
     keep = away_from_crossing()
     np.testing.assert_allclose(image[::-1, keep, :3], expected_crossing(layers)[:, keep], atol=1e-5)
+
+GREEN = np.array([0.0, 0.5, 0.0])
+STACK = [(0.5, RED, 0.6), (0.25, GREEN, 0.5), (0.0, BLUE, 0.4)]  # (height, emission, coverage), nearest first
+
+
+def stacked_planes(layers, cover=False):
+    """Three parallel transparent emitters seen from above, and optionally a fully transparent
+    plane in front of them all (a cut-out: it must take no layer)."""
+    scene = scenes.reset(size=SIZE)
+    scenes.ortho_camera(scene, scale=2.0)
+    scene.shading_lab.transparency_layers = layers
+    for i, (z, emission, a) in enumerate(STACK):
+        scenes.plane(scene, size=4.0, location=(0.0, 0.0, z), material=emitter(f"S{i}", emission, a))
+    if cover:
+        scenes.plane(scene, size=4.0, location=(0.0, 0.0, 1.0), material=emitter("Cut", RED, 0.0))
+    return scene
+
+
+def render_counted(size=SIZE):
+    def job(depsgraph):
+        r = renderer.Renderer()
+        try:
+            return r.render(extract.snapshot(depsgraph, size, size)), r.peeled_layers
+        finally:
+            r.free()
+
+    return run_on_gpu(job)
+
+
+@pytest.mark.parametrize("layers,cover", [(2, False), (3, False), (16, False), (3, True)])
+def test_stacked_layers_nearest_first_and_cut_outs_take_none(layers, cover):
+    stacked_planes(layers, cover)
+    image, count = render_counted()
+    value, through = np.zeros(3), 1.0
+    for _, emission, a in STACK[:layers]:
+        value, through = value + through * a * emission, through * (1.0 - a)
+    assert count == min(layers, 3)
+    np.testing.assert_allclose(image[..., :3], np.broadcast_to(value, (SIZE, SIZE, 3)), atol=1e-5)
+
+
+def test_opaque_surfaces_hide_transparent_ones_behind_them():
+    scene = scenes.reset(size=SIZE)
+    scenes.ortho_camera(scene, scale=2.0)
+    scenes.plane(scene, size=4.0, location=(0.0, 0.0, 0.5), material=emitter("Opaque", GREEN, 1.0))
+    scenes.plane(scene, size=4.0, location=(0.0, 0.0, 0.0), material=emitter("Behind", RED, 0.5))
+    image, count = render_counted()
+    assert count == 0  # the transparent plane is entirely behind the opaque one
+    np.testing.assert_allclose(image[..., :3], np.broadcast_to(GREEN, (SIZE, SIZE, 3)), atol=1e-6)

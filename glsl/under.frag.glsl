@@ -1,0 +1,14 @@
+/* Front-to-back compositing of depth-peeled layers: the "under" operator (Porter & Duff 1984,
+ * read front to back). The accumulator holds the premultiplied radiance C and coverage A of the
+ * layers in front; this layer (straight radiance c, coverage a) adds what they let through:
+ * C += (1 - A) a c, A += (1 - A) a. Over the opaque image behind, C + (1 - A) L_behind is the
+ * same as blending the layers far to near (L = a c + (1 - a) L_behind, repeated). */
+
+void main()
+{
+  ivec2 texel = ivec2(gl_FragCoord.xy);
+  vec4 acc = texelFetch(accumulated, texel, 0);
+  vec4 layer = texelFetch(peeled, texel, 0);
+  float through = (1.0 - acc.a) * layer.a;
+  frag_color = vec4(acc.rgb + through * layer.rgb, acc.a + through);
+}
