@@ -327,6 +327,9 @@ class SceneTarget:
             self._peel = _PeelBuffers(self.width, self.height, self.format)
         return self._peel
 
+    def drop_peel_buffers(self) -> None:
+        self._peel = None
+
     def free(self) -> None:
         """Drop every texture and framebuffer (Blender frees them with their last reference)."""
         self._peel = None
@@ -437,6 +440,8 @@ class Renderer:
                     return
             if blended:
                 self._draw_peeled(target, blended, snapshot.settings.transparency_layers, shared)
+            else:
+                target.drop_peel_buffers()  # a viewport target keeps none once nothing is transparent
         finally:
             gpu.state.depth_test_set("NONE")
             gpu.state.depth_mask_set(False)

@@ -39,12 +39,14 @@ class ViewportSession:
         self.pending |= self.snapshot.fresh
         self.last_update_ms = 1e3 * (time.perf_counter() - start)
 
-    def _target(self, name: str, width: int, height: int) -> SceneTarget:
+    def _target(self, name: str, width: int, height: int, depth: bool = False) -> SceneTarget:
+        """The float target ``name`` at this size (remade when the region is resized); scene
+        targets have a depth buffer, display and compare targets only colour."""
         target = self._targets.get(name)
         if target is None or (target.width, target.height) != (width, height):
             if target is not None:
                 target.free()
-            target = self._targets[name] = SceneTarget(width, height, format="RGBA16F")
+            target = self._targets[name] = SceneTarget(width, height, format="RGBA16F", depth=depth)
         return target
 
     def draw(self, width: int, height: int, view_matrix, window_matrix, is_perspective: bool,
@@ -73,7 +75,7 @@ class ViewportSession:
     def _draw_model(self, snap: S.Snapshot, name: str, background, tone_map: bool = True):
         """Draw ``snap`` into the target ``name``; through the engine's tone mapper if chosen."""
         width, height = snap.width, snap.height
-        scene_target = self._target(name, width, height)
+        scene_target = self._target(name, width, height, depth=True)
         with scene_target.bind():
             fb = gpu.state.active_framebuffer_get()
             fb.clear(color=background, depth=1.0)
