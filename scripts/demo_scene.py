@@ -13,6 +13,21 @@ from addon.scene_builder import principled_material as _principled
 ROUGHNESS = (0.1, 0.3, 0.5, 0.7, 0.9)
 
 
+def empty_scene(width: int | None = None, height: int | None = None) -> bpy.types.Scene:
+    """The add-on registered and Blender's factory settings with an empty scene, rendered by
+    Shading Lab (at ``width`` x ``height``, 100 %, when given): where the scripts start."""
+    import addon
+
+    addon.register()
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.engine = "SHADING_LAB"
+    if width and height:
+        scene.render.resolution_x, scene.render.resolution_y = width, height
+        scene.render.resolution_percentage = 100
+    return scene
+
+
 def _sphere(scene, location, material):
     mesh = bpy.data.meshes.new("Sphere")
     import bmesh

@@ -30,15 +30,10 @@ def main() -> int:
     import bpy
     import demo_scene
 
-    import addon
     from addon import engine
 
-    addon.register()
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
+    scene = demo_scene.empty_scene(w, h)
     demo_scene.build(scene)
-    scene.render.engine = "SHADING_LAB"
-    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = w, h, 100
     models = ("BLINN_PHONG", "PHONG", "PBR")
     samples = {m: [] for m in models}
     for round_index in range(args.frames + 1):

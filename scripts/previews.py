@@ -20,7 +20,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
-sys.path[:0] = [str(ROOT)]
+sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
 
 MODELS = (("BLINN_PHONG", "Blinn-Phong"), ("PHONG", "Phong"), ("PBR", "Physically based"))
 
@@ -32,19 +32,16 @@ def main() -> int:
     args = parser.parse_args()
 
     import bpy
+    import demo_scene
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
     import numpy as np
 
-    import addon
     from addon import engine, presets, scene_builder
 
-    addon.register()
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    scene.render.engine = "SHADING_LAB"
+    scene = demo_scene.empty_scene()
     library = presets.load_material_presets()
     materials = {name: scene_builder.apply_material_preset(bpy.data.materials.new(name), preset)
                  for name, preset in library.items()}

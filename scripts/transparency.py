@@ -85,6 +85,7 @@ def main() -> int:
     w, h = (int(x) for x in args.resolution.split("x"))
 
     import bpy
+    import demo_scene
     import matplotlib
 
     matplotlib.use("Agg")
@@ -92,13 +93,9 @@ def main() -> int:
     import numpy as np
     import reference
 
-    import addon
     from addon import engine
 
-    addon.register()
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = w, h, 100
+    scene = demo_scene.empty_scene(w, h)
     spheres = build(scene)
     tmp = Path(tempfile.mkdtemp(prefix="shading_lab_transparency_"))
 

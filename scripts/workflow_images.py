@@ -35,15 +35,10 @@ def main() -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    import addon
     from addon import engine
 
-    addon.register()
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
+    scene = demo_scene.empty_scene(w, h)
     demo_scene.build(scene)
-    scene.render.engine = "SHADING_LAB"
-    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = w, h, 100
     scene.view_settings.view_transform = "Standard"
     props = scene.shading_lab
     args.out.mkdir(parents=True, exist_ok=True)
