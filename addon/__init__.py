@@ -18,7 +18,17 @@ def _classes():
 
 
 _registered = False
-_unregister_at_exit = False
+
+
+def _undo(items) -> None:
+    """Unregister ``items`` (classes and modules, in the order they were registered), last first."""
+    import bpy
+
+    for item in reversed(items):
+        if isinstance(item, type):
+            bpy.utils.unregister_class(item)
+        else:
+            item.unregister()
 
 
 def register():
@@ -26,7 +36,7 @@ def register():
 
     import bpy
 
-    global _registered, _unregister_at_exit
+    global _registered
     if _registered:
         return
     classes, modules = _classes()
@@ -39,23 +49,17 @@ def register():
             module.register()
             done.append(module)
     except Exception:  # leave nothing half-registered: the next register() starts clean
-        for item in reversed(done):
-            if isinstance(item, type):
-                bpy.utils.unregister_class(item)
-            else:
-                item.unregister()
+        _undo(done)
         raise
     _registered = True
-    if not bpy.app.binary_path and not _unregister_at_exit:
+    if not bpy.app.binary_path:
         # Blender as a Python module never disables add-ons at exit, and 4.x then leaks the
-        # registered classes and can hang in its exit destructors: unregister first.
+        # registered classes and can hang in its exit destructors: unregister first (once).
+        atexit.unregister(unregister)
         atexit.register(unregister)
-        _unregister_at_exit = True
 
 
 def unregister():
-    import bpy
-
     from . import renderer
 
     global _registered
@@ -63,8 +67,5 @@ def unregister():
         return
     _registered = False
     classes, modules = _classes()
-    for module in reversed(modules):
-        module.unregister()
-    for cls in reversed(classes):
-        bpy.utils.unregister_class(cls)
+    _undo([*classes, *modules])
     renderer.clear_program_cache()

@@ -171,7 +171,7 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
                 passes["Combined"].rect.foreach_set(radiance.reshape(-1))
             else:
                 passes["Combined"].rect.foreach_set(shown.reshape(-1))
-                if not preview:
+                if extra_passes:  # the condition under which the pass was added
                     passes[RADIANCE_PASS].rect.foreach_set(radiance.reshape(-1))
             for name, image in lobes.items():
                 passes[name].rect.foreach_set(image.reshape(-1))
