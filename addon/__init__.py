@@ -60,7 +60,7 @@ def register():
 
 
 def unregister():
-    from . import renderer
+    from . import gpu_library
 
     global _registered
     if not _registered:
@@ -68,4 +68,4 @@ def unregister():
     _registered = False
     classes, modules = _classes()
     _undo([*classes, *modules])
-    renderer.clear_program_cache()
+    gpu_library.LIBRARY.clear()

@@ -11,8 +11,10 @@ import time
 import bpy
 import gpu
 
-from . import extract, programs
-from .renderer import Renderer, ShaderCompileError, clear_compile_error
+from . import extract
+from .gpu_library import LIBRARY, ShaderCompileError
+from .passes import View
+from .renderer import Renderer, frame_views
 
 ENGINE_ID = "SHADING_LAB"
 RADIANCE_PASS = "Radiance"  # raw HDR radiance when the engine's own tone mapper fills Combined
@@ -33,11 +35,12 @@ def light_passes(view_layer) -> list[str]:
 last_timings: dict[str, float] = {}
 
 
-def background_color(snap, scene) -> tuple[float, float, float, float]:
+def background_color(snap, scene, model: str | None = None) -> tuple[float, float, float, float]:
+    """What the camera sees where there is no surface, for ``model`` (the scene's by default)."""
     if scene.render.film_transparent:
         return (0.0, 0.0, 0.0, 0.0)
     r, g, b = snap.world_color
-    if snap.settings.model != "PBR":  # the LDR models clamp everything they output
+    if (model or snap.settings.model) != "PBR":  # the LDR models clamp everything they output
         r, g, b = (min(max(c, 0.0), 1.0) for c in (r, g, b))
     return (r, g, b, 1.0)
 
@@ -125,33 +128,29 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         self.update_stats("", f"Shading Lab | {label} | Drawing")
         settings = snap.settings
         extra_passes = settings.compare_mode == "OFF" and not preview  # previews fill Combined only
-        display = None
-        if settings.tone_mapper != "BLENDER":
-            display = programs.PostFeatures(settings.samples, settings.tone_mapper, settings.transfer)
-            if extra_passes:
-                self.add_pass(RADIANCE_PASS, 4, "RGBA", layer=depsgraph.view_layer.name)
+        views, comparison, combined, raw = frame_views(
+            snap, lambda model: background_color(snap, scene, model), samples=settings.samples)
+        if comparison is not None:  # Combined holds the composite; no Radiance pass (one model only)
+            label = (f"{label} | {settings.compare_mode.title()} "
+                     f"A {settings.compare_models[0]} / B {settings.compare_models[1]}")
+        raw = raw if extra_passes else None
+        if raw is not None:
+            self.add_pass(RADIANCE_PASS, 4, "RGBA", layer=depsgraph.view_layer.name)
         lobe_passes = light_passes(depsgraph.view_layer) if extra_passes else []
         for name in lobe_passes:
             self.add_pass(name, 4, "RGBA", layer=depsgraph.view_layer.name)
-        renderer = Renderer(image_loader=extract.image_texture)
-        clear_compile_error()
+        renderer = Renderer()
+        LIBRARY.clear_compile_error()
         try:
-            if settings.compare_mode != "OFF":
-                # A|B: Combined holds the composite; no Radiance pass (it would hold one model only)
-                shown = renderer.render_compare(
-                    snap, settings.compare_models, programs.CompareFeatures(settings.compare_mode),
-                    lambda s: background_color(s, scene), settings.compare_split, settings.compare_range,
-                    should_stop=self.test_break, samples=settings.samples, display=display,
-                    exposure_ev=settings.exposure)
-                radiance = shown
-                label = (f"{label} | {settings.compare_mode.title()} "
-                         f"A {settings.compare_models[0]} / B {settings.compare_models[1]}")
-            else:
-                radiance, shown = renderer.render_passes(
-                    snap, background_color(snap, scene), should_stop=self.test_break,
-                    samples=settings.samples, display=display, exposure_ev=settings.exposure)
-            lobes = {name: renderer.render_lobe(snap, LIGHT_PASSES[name][1], settings.samples)
-                     for name in lobe_passes if not self.test_break()}
+            images = renderer.render_views(snap, views, [combined] + ([raw] if raw else []), comparison,
+                                           should_stop=self.test_break)
+            for name in lobe_passes:  # the same frame with one lobe's weights, black behind
+                if self.test_break():
+                    break
+                lobe = View(snap.width, snap.height, samples=settings.samples,
+                            background=(0.0, 0.0, 0.0, 0.0), lobes=LIGHT_PASSES[name][1])
+                images[name] = renderer.render_views(snap, [lobe], [lobe.output("radiance")],
+                                                     should_stop=self.test_break)[lobe.output("radiance")]
         except ShaderCompileError as exc:
             self._fail(str(exc))
             return
@@ -167,14 +166,11 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         result = self.begin_result(0, 0, width, height, layer=depsgraph.view_layer.name)
         try:
             passes = result.layers[0].passes
-            if shown is None or settings.compare_mode != "OFF":
-                passes["Combined"].rect.foreach_set(radiance.reshape(-1))
-            else:
-                passes["Combined"].rect.foreach_set(shown.reshape(-1))
-                if extra_passes:  # the condition under which the pass was added
-                    passes[RADIANCE_PASS].rect.foreach_set(radiance.reshape(-1))
-            for name, image in lobes.items():
-                passes[name].rect.foreach_set(image.reshape(-1))
+            passes["Combined"].rect.foreach_set(images[combined].reshape(-1))
+            if raw is not None:
+                passes[RADIANCE_PASS].rect.foreach_set(images[raw].reshape(-1))
+            for name in lobe_passes:
+                passes[name].rect.foreach_set(images[name].reshape(-1))
         finally:
             self.end_result(result)
         self.update_progress(1.0)

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import threading
 
 import bpy
 import numpy as np
@@ -49,9 +50,10 @@ def _input(node, name, default):
     return default if socket is None else socket.default_value
 
 
-def _image_map(node, name, through_normal_map: bool = False):
-    """(image name, nearest filtering) of an Image Texture node linked straight into ``name`` (or,
-    for normals, through a tangent-space Normal Map node), with the Normal Map's strength."""
+def _image_map(node, name, images: dict | None, through_normal_map: bool = False):
+    """(image key, nearest filtering) of an Image Texture node linked straight into ``name`` (or,
+    for normals, through a tangent-space Normal Map node), with the Normal Map's strength; the
+    image itself goes into ``images`` under its key."""
     socket = node.inputs.get(name)
     if socket is None or not socket.is_linked:
         return None, 1.0
@@ -67,12 +69,16 @@ def _image_map(node, name, through_normal_map: bool = False):
         source = color.links[0].from_node
     if source.bl_idname != "ShaderNodeTexImage" or source.image is None:
         return None, 1.0
-    return (source.image.name_full, source.interpolation == "Closest"), strength
+    key = image_key(source.image)
+    if images is not None:
+        images[key] = source.image
+    return (key, source.interpolation == "Closest"), strength
 
 
-def material_params(material: bpy.types.Material | None) -> S.MaterialParams:
+def material_params(material: bpy.types.Material | None, images: dict | None = None) -> S.MaterialParams:
     """Explicit Shading Lab values where the user set them, else the surface shader's values
-    (Principled, Diffuse or Glossy BSDF), else the material's viewport display values."""
+    (Principled, Diffuse or Glossy BSDF), else the material's viewport display values. Images the
+    material samples are added to ``images`` (key -> ``bpy.types.Image``)."""
     if material is None:
         return S.DEFAULT_MATERIAL
     maps: dict = {}
@@ -92,17 +98,18 @@ def material_params(material: bpy.types.Material | None) -> S.MaterialParams:
         alpha_socket = node.inputs.get("Alpha")
         if alpha_socket is not None and alpha_socket.is_linked:
             source = alpha_socket.links[0]
-            base_ref = _image_map(node, "Base Color")[0]
+            base_ref = _image_map(node, "Base Color", None)[0]
             if (source.from_node.bl_idname == "ShaderNodeTexImage" and source.from_socket.name == "Alpha"
                     and base_ref is not None and source.from_node.image is not None
-                    and source.from_node.image.name_full == base_ref[0]):
+                    and image_key(source.from_node.image) == base_ref[0]):
                 maps["alpha_from_base_map"] = True
         strength = float(_input(node, "Emission Strength", 0.0))
         maps["emission"] = tuple(c * strength for c in _rgb(_input(node, "Emission Color", (0, 0, 0))))
-        maps.update({"base_color_map": _image_map(node, "Base Color")[0],
-                "metallic_map": _image_map(node, "Metallic")[0],
-                "roughness_map": _image_map(node, "Roughness")[0]})
-        maps["normal_map"], maps["normal_strength"] = _image_map(node, "Normal", through_normal_map=True)
+        maps.update({"base_color_map": _image_map(node, "Base Color", images)[0],
+                     "metallic_map": _image_map(node, "Metallic", images)[0],
+                     "roughness_map": _image_map(node, "Roughness", images)[0]})
+        maps["normal_map"], maps["normal_strength"] = _image_map(node, "Normal", images,
+                                                                 through_normal_map=True)
     elif kind == "ShaderNodeEmission":  # a pure emitter: no reflection
         base, metal, f0 = (0.0, 0.0, 0.0), 0.0, 0.0
         strength = float(_input(node, "Strength", 1.0))
@@ -168,6 +175,91 @@ def _material_extras(props) -> dict:
     if props.use_complex_ior:
         extras["ior_n"], extras["ior_k"] = _rgb(props.ior_n), _rgb(props.ior_k)
     return extras
+
+
+# --- images ------------------------------------------------------------------------------------
+
+def image_key(image: bpy.types.Image) -> str:
+    """An image's identity for this session. Names repeat across linked libraries (``Img`` here
+    and ``Img [lib.blend]``), so the datablock's session uid is part of it."""
+    return f"{image.name_full}#{image.session_uid}"
+
+
+#: Colour spaces whose byte values are used as they are (no transfer function to undo).
+_LINEAR_BYTE_SPACES = {"Non-Color", "Linear Rec.709", "Linear", "Raw", "Linear CIE-XYZ E"}
+
+
+def _fingerprint(image: bpy.types.Image) -> tuple:
+    return (tuple(image.size), image.is_float, image.colorspace_settings.name, image.alpha_mode,
+            image.filepath_raw, image.source, image.packed_file is not None, image.use_half_precision)
+
+
+class _ImageCache:
+    """Pixels read from images, kept between renders: reading a 2048 x 2048 image costs ~160 ms
+    here, so each image is read once and again only when it changed (a different fingerprint:
+    size, colour space, file; unsaved edits; or a depsgraph update naming it, see ``forget``).
+    Renders, previews and the viewport read scenes on different threads: a lock guards it."""
+
+    def __init__(self):
+        self._lock = threading.Lock()
+        self._entries: dict[str, tuple[tuple, S.ImageData]] = {}
+
+    def get(self, key: str, image: bpy.types.Image, warnings: list[str]) -> S.ImageData | None:
+        fingerprint = _fingerprint(image)
+        with self._lock:
+            entry = self._entries.get(key)
+        if entry is not None and entry[0] == fingerprint and not image.is_dirty:
+            return entry[1]
+        data = _read_image(key, image, warnings)
+        with self._lock:
+            if data is None:
+                self._entries.pop(key, None)
+            else:
+                self._entries[key] = (_fingerprint(image), data)  # after loading: the real size
+        return data
+
+    def forget(self, keys) -> None:
+        with self._lock:
+            for key in keys:
+                self._entries.pop(key, None)
+
+    def clear(self) -> None:
+        with self._lock:
+            self._entries.clear()
+
+
+IMAGES = _ImageCache()
+
+
+def _read_image(key: str, image: bpy.types.Image, warnings: list[str]) -> S.ImageData | None:
+    """The pixels of ``image`` as the GPU samples them (None, with a warning, when it has none)."""
+    count = len(image.pixels)  # loads the image if it is not yet
+    width, height = image.size
+    if count == 0 or width * height * 4 != count:
+        warnings.append(f"Image '{image.name_full}' has no pixels (missing file?): the materials "
+                        f"that use it are drawn without it")
+        return None
+    flat = np.empty(count, np.float32)
+    image.pixels.foreach_get(flat)
+    pixels = flat.reshape(height, width, 4)
+    space = image.colorspace_settings.name
+    if image.is_float:
+        storage = "HALF" if image.use_half_precision else "FLOAT"
+        pixels = pixels.astype(np.float16) if storage == "HALF" else pixels
+    else:
+        storage = "SRGB8" if space == "sRGB" else "UNORM8"
+        if storage == "UNORM8" and space not in _LINEAR_BYTE_SPACES and not image.colorspace_settings.is_data:
+            warnings.append(f"Image '{image.name_full}': colour space {space} is read as linear "
+                            f"(Shading Lab converts sRGB, linear and Non-Color images)")
+        pixels = np.rint(pixels * 255.0).astype(np.uint8)  # the image's own bytes
+    if image.alpha_mode == "NONE":  # "ignore the alpha channel of the file"
+        pixels[..., 3] = 255 if pixels.dtype == np.uint8 else 1.0
+    return S.ImageData(key, pixels, storage)
+
+
+def image_updates(depsgraph) -> set[str]:
+    """Keys of the images a depsgraph update names (reloaded, repainted, re-generated)."""
+    return {image_key(u.id.original) for u in depsgraph.updates if isinstance(u.id, bpy.types.Image)}
 
 
 # --- geometry ----------------------------------------------------------------------------------
@@ -426,7 +518,7 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
             mat = slot.material
             mkey = mat.name_full if mat is not None else ""
             if mkey not in snap.materials:
-                snap.materials[mkey] = material_params(mat)
+                snap.materials[mkey] = _material_with_images(snap, mat)
             slots.append(mkey)
         if key not in snap.geometries:
             geometry = reusable.get(key)
@@ -443,13 +535,25 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
                 snap.fresh.add(key)
             snap.geometries[key] = geometry
         snap.items.append(S.DrawItem(key, _matrix(inst.matrix_world), slots or [""]))
+    snap.warnings[:] = dict.fromkeys(snap.warnings)  # each once, however many objects share it
     return snap
 
 
-def image_texture(name: str, closest: bool):
-    """The GPU texture Blender keeps for image ``name`` (colour-managed as the image says: sRGB
-    images decode to linear on sampling, Non-Color ones do not). ``closest`` filtering is done by
-    the shader (texelFetch), as GPU textures here carry no per-use filter setting."""
-    import gpu
-
-    return gpu.texture.from_image(bpy.data.images[name])
+def _material_with_images(snap: S.Snapshot, material) -> S.MaterialParams:
+    """``material_params``, with the pixels of the images it samples added to ``snap.images``;
+    a map whose image has no pixels is dropped (and said in ``snap.warnings``)."""
+    found: dict = {}
+    params = material_params(material, found)
+    dropped = {}
+    for name in S.MaterialParams.MAPS:
+        ref = getattr(params, name)
+        if ref is None or ref[0] in snap.images:
+            continue
+        data = IMAGES.get(ref[0], found[ref[0]], snap.warnings)
+        if data is None:
+            dropped[name] = None
+        else:
+            snap.images[ref[0]] = data
+    if "base_color_map" in dropped:
+        dropped["alpha_from_base_map"] = False
+    return dataclasses.replace(params, **dropped) if dropped else params

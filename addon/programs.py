@@ -11,12 +11,15 @@ from pathlib import Path
 
 import numpy as np
 
-from .snapshot import LIGHT_KINDS, MODELS, MaterialParams, Snapshot, Terms
+from .snapshot import LIGHT_KINDS, MODELS, MaterialParams, Snapshot, Terms, normal_matrices
 
 #: Side of the multiple-scattering albedo table (addon/multiscatter.py), in texels.
 MS_SIZE = 32
 #: Side of the Principled set's 3D table S(r, mu, z), as Cycles' (16^3).
 S_SIZE = 16
+#: Objects per uniform block of object data (128 bytes each: 32 KiB, within every GPU's limit);
+#: a scene with more objects uses several blocks, a draw names its object by block and index.
+OBJECT_BLOCK = 256
 
 MODEL_FILES = {
     "BLINN_PHONG": "model_blinn_phong.glsl",
@@ -163,7 +166,7 @@ def program_source(features: Features) -> ProgramSource:
         typedefs=read_glsl("uniforms.glsl"),
         vertex=read_glsl("mesh.vert.glsl"),
         fragment="\n".join(fragment),
-        defines=features.defines(),
+        defines=tuple(sorted(features.defines() + (("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)),))),
     )
 
 
@@ -212,6 +215,12 @@ def compare_source(features: CompareFeatures) -> ProgramSource:
                          defines=features.defines())
 
 
+def clear_source_caches() -> None:
+    """Forget generated sources (and the GLSL files they were read from)."""
+    for cached in (read_glsl, program_source, post_source, compare_source, occupancy_source, under_source):
+        cached.cache_clear()
+
+
 #: Texels per side of a block summarised by one texel of a peeling layer's occupancy map.
 OCCUPANCY_BLOCK = 16
 
@@ -238,12 +247,12 @@ def _mat(m: np.ndarray) -> np.ndarray:
     return np.asarray(m, np.float32).T.reshape(-1)
 
 
-#: Lobe weights of a normal draw: everything, through the model's final clamp.
+#: Lobe weights of a normal draw (the ``lobes`` push constant): everything, through the model's
+#: final clamp. A light pass draws the same frame with other weights.
 ALL_LOBES = (1.0, 1.0, 1.0, 1.0)
 
 
-def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None,
-               lobes: tuple[float, float, float, float] = ALL_LOBES) -> bytes:
+def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None) -> bytes:
     cam = snapshot.camera
     vp = cam.view_projection if view_projection is None else view_projection
     ambient = snapshot.settings.ambient
@@ -253,7 +262,6 @@ def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None,
         [*cam.forward, 0.0],
         [ambient, ambient, ambient, 0.0],
         [float(len(snapshot.lights)), 0.0, 0.0, 0.0],
-        list(lobes),
     ]
     return np.concatenate([np.asarray(r, np.float32) for r in rows]).tobytes()
 
@@ -286,5 +294,13 @@ def pack_material(m: MaterialParams) -> bytes:
     return np.asarray(rows, np.float32).tobytes()
 
 
-def pack_object(matrix: np.ndarray, normal_matrix: np.ndarray) -> bytes:
-    return np.concatenate([_mat(matrix), _mat(normal_matrix)]).tobytes()
+def pack_objects(items) -> np.ndarray:
+    """(blocks, OBJECT_BLOCK * 32) float32: each item's model and normal matrices (column-major),
+    item i at block i // OBJECT_BLOCK, index i % OBJECT_BLOCK; unused entries are zero."""
+    blocks = max(-(-len(items) // OBJECT_BLOCK), 1)
+    data = np.zeros((blocks * OBJECT_BLOCK, 2, 4, 4), np.float32)
+    if items:
+        matrices = np.stack([item.matrix for item in items])
+        data[:len(items), 0] = matrices.transpose(0, 2, 1)
+        data[:len(items), 1] = normal_matrices(matrices).transpose(0, 2, 1)
+    return data.reshape(blocks, OBJECT_BLOCK * 32)

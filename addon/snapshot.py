@@ -95,7 +95,7 @@ class MaterialParams:
     fresnel_p: float = 0.2  # eq. 1.13's p; 1/5 is Schlick's fifth power
     ior_n: tuple[float, float, float] | None = None  # conductor complex IOR n + ik (exact Fresnel)
     ior_k: tuple[float, float, float] | None = None
-    # image textures plugged into the Principled BSDF: (image name, nearest filtering), or None
+    # image textures plugged into the Principled BSDF: (key in Snapshot.images, nearest filtering)
     base_color_map: tuple[str, bool] | None = None
     metallic_map: tuple[str, bool] | None = None
     roughness_map: tuple[str, bool] | None = None
@@ -131,6 +131,33 @@ class MeshGeometry:
         return len(self.positions) // 3
 
 
+#: How an image's pixels are stored and sampled (``ImageData.storage``): sRGB-encoded bytes (decoded
+#: to linear by the sampler, before filtering), plain bytes, half or full floats.
+IMAGE_STORAGE = ("SRGB8", "UNORM8", "HALF", "FLOAT")
+
+
+@dataclass(eq=False)
+class ImageData:
+    """An image's pixels as the shaders sample them, read on the thread that reads the scene.
+
+    ``pixels`` is (height, width, 4), bottom row first, alpha as the image stores it: uint8 for
+    the byte storages (the image's own bytes, sRGB-encoded for ``SRGB8``), float16 for ``HALF``,
+    float32 for ``FLOAT`` (scene-linear).
+    """
+
+    key: str
+    pixels: np.ndarray
+    storage: str = "FLOAT"
+
+    def __post_init__(self):
+        if self.storage not in IMAGE_STORAGE:
+            raise ValueError(f"unknown image storage {self.storage!r}; expected one of {IMAGE_STORAGE}")
+
+    @property
+    def size(self) -> tuple[int, int]:
+        return self.pixels.shape[1], self.pixels.shape[0]
+
+
 @dataclass
 class DrawItem:
     """One instance of a geometry: its world matrix and a material per slot."""
@@ -141,13 +168,19 @@ class DrawItem:
 
     @property
     def normal_matrix(self) -> np.ndarray:
-        """Inverse transpose of the upper 3x3, embedded in a 4x4 (zero for degenerate scale)."""
-        m3 = self.matrix[:3, :3].astype(np.float64)
-        out = np.zeros((4, 4), np.float32)
-        if abs(np.linalg.det(m3)) > 1e-30:
-            out[:3, :3] = np.linalg.inv(m3).T
-        out[3, 3] = 1.0
-        return out
+        return normal_matrices(self.matrix[None])[0]
+
+
+def normal_matrices(matrices: np.ndarray) -> np.ndarray:
+    """(n, 4, 4) float32: the inverse transpose of each (4, 4) matrix's upper 3x3, embedded in a
+    4x4 (zero for a degenerate scale, whose normals then fall back to the face normal)."""
+    m3 = np.asarray(matrices, np.float64)[:, :3, :3]
+    out = np.zeros((len(m3), 4, 4), np.float32)
+    invertible = np.abs(np.linalg.det(m3)) > 1e-30
+    if invertible.any():
+        out[invertible, :3, :3] = np.linalg.inv(m3[invertible]).transpose(0, 2, 1)
+    out[:, 3, 3] = 1.0
+    return out
 
 
 @dataclass(frozen=True)
@@ -218,6 +251,7 @@ class Snapshot:
     materials: dict[str, MaterialParams] = field(default_factory=dict)
     lights: list[Light] = field(default_factory=list)
     world_color: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    images: dict[str, ImageData] = field(default_factory=dict)  # by the key materials refer to
     warnings: list[str] = field(default_factory=list)
     fresh: set[str] = field(default_factory=set)  # geometry keys read anew (not reused)
 

@@ -44,12 +44,12 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
     bl_context = "render"
 
     def draw(self, context):
-        from .renderer import compile_error
+        from .gpu_library import LIBRARY
 
         layout = self.layout
         layout.use_property_split = True
         props = context.scene.shading_lab
-        error = compile_error()
+        error = LIBRARY.compile_error
         if error:
             box = layout.box()
             box.label(text="Shader compilation failed (nothing was drawn):", icon="ERROR")

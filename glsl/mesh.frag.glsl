@@ -43,7 +43,7 @@ void main()
   /* Back faces are shaded with the normal flipped towards the viewer, as Cycles does. */
   Surface s = make_surface(world_position, gl_FrontFacing ? n : -n, view_direction(world_position), m);
   /* ambient and emission: neither a diffuse nor a specular lobe (weight z, off in lobe passes) */
-  vec3 c = (shade_ambient(s, frame.ambient.rgb) + m.emission.rgb) * frame.lobes.z;
+  vec3 c = (shade_ambient(s, frame.ambient.rgb) + m.emission.rgb) * lobes.z;
   int count = int(frame.counts.x);
   for (int i = 0; i < SL_MAX_LIGHTS; i++) {
     if (i >= count) {
@@ -52,9 +52,9 @@ void main()
     LightData light = lights.light[i];
     vec3 l;
     vec3 E = light_irradiance(light, s.p, l);
-    c += shade_direct(s, l, E, light.factors * vec4(frame.lobes.xy, 1.0, 1.0));
+    c += shade_direct(s, l, E, light.factors * vec4(lobes.xy, 1.0, 1.0));
   }
   /* alpha: coverage, blended over what is behind (L = a L_surface + (1 - a) L_behind, as Cycles'
    * transparency); the renderer peels partly transparent surfaces and composites them in depth order */
-  frag_color = vec4(write_target(frame.lobes.w > 0.5 ? shade_finish(c) : c), m.emission.w);
+  frag_color = vec4(write_target(lobes.w > 0.5 ? shade_finish(c) : c), m.emission.w);
 }

@@ -3,6 +3,7 @@
 
 void main()
 {
+  ObjectData object = objects.object[object_index];
   vec4 world = object.model * vec4(pos, 1.0);
   world_position = world.xyz;
   world_normal = mat3(object.normal_matrix) * nor;

@@ -8,8 +8,6 @@ struct FrameData {
   vec4 camera_forward;   /* xyz: unit view axis (camera -Z) in world space */
   vec4 ambient;          /* rgb: Blinn-Phong/Phong ambient constant x (eq. 1.4) */
   vec4 counts;           /* x: number of lights in use */
-  vec4 lobes;            /* x: diffuse, y: specular, z: ambient weight; w: 1 applies the model's
-                          * final clamp (Combined), 0 leaves a lobe pass raw */
 };
 
 struct LightData {
@@ -40,4 +38,12 @@ struct MaterialData {
 struct ObjectData {
   mat4 model;
   mat4 normal_matrix;    /* inverse transpose of the model matrix's upper 3x3 */
+};
+
+/* Every object's data in blocks of SL_OBJECT_BLOCK, uploaded when a matrix changes; a draw names
+ * its entry with the object_index push constant. (Push constants, beside it: object_index, and
+ * lobes = x: diffuse, y: specular, z: ambient weight; w: 1 applies the model's final clamp
+ * (Combined), 0 leaves a light pass raw.) */
+struct ObjectBlock {
+  ObjectData object[SL_OBJECT_BLOCK];
 };

@@ -32,7 +32,7 @@ def main() -> int:
     from gpu_harness import run_on_gpu
 
     import addon
-    from addon import programs, renderer
+    from addon import gpu_library, programs
     from addon.viewport import ViewportSession
 
     addon.register()
@@ -100,19 +100,19 @@ def main() -> int:
     snap = session.snapshot
 
     def compile_all(_):
-        renderer.clear_program_cache()
+        gpu_library.LIBRARY.clear()
         times = []
         for model in ("BLINN_PHONG", "PHONG", "PBR"):
             features = programs.Features.from_snapshot(snap, model)
             start = time.perf_counter()
-            renderer.get_program(features)
+            gpu_library.shading_program(features)
             times.append((model, features.defines(), 1e3 * (time.perf_counter() - start)))
         for tone_mapper in ("CLAMP", "REINHARD", "HABLE", "ACES"):
             post = programs.PostFeatures(1, tone_mapper, "SRGB")
             start = time.perf_counter()
-            renderer.get_post_program(post)
+            gpu_library.post_program(post)
             times.append(("display " + tone_mapper, post.defines(), 1e3 * (time.perf_counter() - start)))
-        return times, renderer.compiled_program_count()
+        return times, gpu_library.LIBRARY.program_count()
 
     times, count = run_on_gpu(compile_all)
     print(f"\nprograms for the demo scene, compiled from an empty cache: {count}")

@@ -16,7 +16,7 @@ import gpu
 import numpy as np
 from gpu_harness import run_on_gpu
 
-from addon import programs, renderer
+from addon import gpu_library, programs
 
 LIBRARY = programs.FRAGMENT_LIBRARY + programs.PBR_LIBRARY + ("tonemap.glsl",)
 WIDTH = 256
@@ -36,7 +36,7 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
     n = len(next(iter(arrays.values())))
     w = min(n, WIDTH)
     h = math.ceil(n / w)
-    defs = {"SL_MAX_LIGHTS": "1", **(defines or {})}
+    defs = {"SL_MAX_LIGHTS": "1", "SL_OBJECT_BLOCK": str(programs.OBJECT_BLOCK), **(defines or {})}
     fetch = "\n".join(f"  vec4 {name} = texelFetch(in_{name}, px, 0);" for name in arrays)
     main = f"void main()\n{{\n  ivec2 px = ivec2(gl_FragCoord.xy);\n{fetch}\n  vec4 result = vec4(0.0);\n" \
            f"  {body}\n  frag_color = result;\n}}\n"
@@ -76,9 +76,9 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
                 fb.clear(color=(0.0, 0.0, 0.0, 0.0))
                 shader.bind()
                 if albedo_table:
-                    shader.uniform_sampler("ms_table", renderer.multiscatter_texture(terms))
+                    shader.uniform_sampler("ms_table", gpu_library.albedo_table(terms))
                 if "SL_PRINCIPLED" in defs:
-                    shader.uniform_sampler("s_table", renderer.principled_s_texture())
+                    shader.uniform_sampler("s_table", gpu_library.s_table())
                 for name, texture in textures.items():
                     shader.uniform_sampler(f"in_{name}", texture)
                 batch.draw(shader)

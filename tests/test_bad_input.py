@@ -258,9 +258,9 @@ def test_cancel_midway_stops_drawing_and_next_render_works(tmp_path, monkeypatch
     seen = []
 
     class Spy(renderer.Renderer):
-        def render_passes(self, *args, should_stop=None, **kwargs):
+        def run(self, *args, should_stop=None, **kwargs):
             seen.append(should_stop)
-            return super().render_passes(*args, should_stop=should_stop, **kwargs)
+            return super().run(*args, should_stop=should_stop, **kwargs)
 
     monkeypatch.setattr(engine, "Renderer", Spy)
     image = scenes.render(scene, tmp_path / "wired.exr")

@@ -8,7 +8,7 @@ import bpy
 import pytest
 import scenes
 
-from addon import programs, renderer
+from addon import gpu_library, programs
 from addon import snapshot as S
 
 
@@ -93,12 +93,12 @@ def test_compile_error_reaches_the_user_and_clears(tmp_path, monkeypatch):
         text = real(name)
         return text + "\nthis is not GLSL;\n" if name == "model_pbr.glsl" else text
 
-    renderer.clear_program_cache()
+    gpu_library.LIBRARY.clear()
     monkeypatch.setattr(programs, "read_glsl", broken)
     with pytest.raises(RuntimeError, match="could not compile its PBR program"):
         bpy.ops.render.render()
-    assert "could not compile" in renderer.compile_error()
+    assert "could not compile" in gpu_library.LIBRARY.compile_error
     monkeypatch.setattr(programs, "read_glsl", real)
-    renderer.clear_program_cache()
+    gpu_library.LIBRARY.clear()
     assert scenes.render(scene, tmp_path / "ok.exr")[..., 0].max() > 0
-    assert renderer.compile_error() == ""
+    assert gpu_library.LIBRARY.compile_error == ""

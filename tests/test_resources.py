@@ -26,7 +26,7 @@ import numpy as np
 import scenes
 
 import addon
-from addon import engine, renderer
+from addon import engine, gpu_library, renderer
 
 ROOT = Path(__file__).resolve().parent.parent
 RENDER_MARGIN_MB = 8.0
@@ -97,14 +97,14 @@ def test_200_renders_keep_memory_programs_and_gpu_objects_flat(tmp_path, monkeyp
     for i in range(5 * len(CONFIGS)):  # warm-up: every program compiled, every cache filled
         _configure(scene, CONFIGS[i % len(CONFIGS)])
         bpy.ops.render.render()
-    programs_before = renderer.compiled_program_count()
+    programs_before = gpu_library.LIBRARY.program_count()
     made_before = _TrackedRenderer.made
     rss_before = _rss_mb()
     for i in range(200):
         _configure(scene, CONFIGS[i % len(CONFIGS)])
         bpy.ops.render.render()
     rss_after = _rss_mb()
-    programs_after = renderer.compiled_program_count()
+    programs_after = gpu_library.LIBRARY.program_count()
     print(f"\n200 renders (16x16): RSS {rss_before:.1f} -> {rss_after:.1f} MB "
           f"({rss_after - rss_before:+.2f} MB, margin {RENDER_MARGIN_MB} MB); "
           f"programs {programs_before} -> {programs_after}")
@@ -118,18 +118,18 @@ def test_200_renders_keep_memory_programs_and_gpu_objects_flat(tmp_path, monkeyp
 def test_same_scene_compiles_no_new_program():
     _scene()
     bpy.ops.render.render()
-    count = renderer.compiled_program_count()
+    count = gpu_library.LIBRARY.program_count()
     for _ in range(10):
         bpy.ops.render.render()
-        assert renderer.compiled_program_count() == count
+        assert gpu_library.LIBRARY.program_count() == count
 
 
 def test_50_unregister_register_cycles_free_gpu_objects(tmp_path):
     def cycle(scene) -> list:
-        shaders = list(renderer._PROGRAMS.values()) + list(renderer._MS_TEXTURES.values())
+        shaders = gpu_library.LIBRARY.held()
         addon.unregister()
         try:
-            assert renderer.compiled_program_count() == 0 and not renderer._MS_TEXTURES
+            assert gpu_library.LIBRARY.program_count() == 0 and gpu_library.LIBRARY.table_count() == 0
             assert not hasattr(bpy.types.Scene, "shading_lab")
             # nothing but this list holds the programs and textures: dropping it frees them
             held = [sys.getrefcount(s) - 3 for s in shaders]  # minus list, loop name, argument
@@ -144,12 +144,12 @@ def test_50_unregister_register_cycles_free_gpu_objects(tmp_path):
     scene = _scene()
     for _ in range(5):  # warm-up
         cycle(scene)
-    programs = renderer.compiled_program_count()
+    programs = gpu_library.LIBRARY.program_count()
     rss_before = _rss_mb()
     for k in range(50):
         held = cycle(scene)
         assert held and not any(held), f"cycle {k}: a program or texture is still referenced: {held}"
-        assert renderer.compiled_program_count() == programs
+        assert gpu_library.LIBRARY.program_count() == programs
     rss_after = _rss_mb()
     print(f"\n50 unregister/register cycles ({len(CONFIGS)} renders each): RSS {rss_before:.1f} -> "
           f"{rss_after:.1f} MB ({rss_after - rss_before:+.2f} MB, margin {CYCLE_MARGIN_MB} MB); "

@@ -9,7 +9,7 @@ import bpy
 import pytest
 import scenes
 
-from addon import renderer, ui
+from addon import gpu_library, ui
 
 
 class Layout:
@@ -69,7 +69,7 @@ def test_render_panel_warns_about_the_view_transform_and_shows_compile_errors(mo
     assert any("View Transform to Standard" in t for t in warned.labels())
     scene.view_settings.view_transform = "Standard"
     assert not any("Standard" in t for t in _draw(ui.SHADINGLAB_PT_render, context).labels())
-    monkeypatch.setattr(renderer, "_LAST_COMPILE_ERROR", ["could not compile its PBR program: 0:1 boom"])
+    monkeypatch.setattr(gpu_library.LIBRARY, "_compile_error", "could not compile its PBR program: 0:1 boom")
     failed = _draw(ui.SHADINGLAB_PT_render, context)
     assert any("compilation failed" in t for t in failed.labels())
     assert any("boom" in t for t in failed.labels())

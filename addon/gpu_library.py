@@ -1,0 +1,214 @@
+"""GPU objects shared by every renderer: compiled programs and precomputed tables.
+
+Final renders (a render thread in the UI), material previews (job threads) and the viewport (the
+main thread) all draw with the same programs, so they live here, once, behind one lock:
+
+- ``program(key, ...)`` compiles a program the first time its key is asked for and returns the
+  same object afterwards; ``table(key, build)`` does the same for lookup-table textures.
+- ``clear()`` (unregister, exit) empties the library without freeing anything in use: a renderer
+  holds its own references to the programs and tables of the frame it is drawing
+  (``Renderer`` keeps them for its lifetime), and Blender frees a GPU object only when its last
+  Python reference goes. A render running across an unregister finishes with the programs it
+  has; the next request compiles anew.
+- The message of the last failed compile is kept for the Render panel until a render compiles
+  cleanly.
+
+Blender shares programs and textures between its GPU contexts, so a program compiled on the
+render thread serves the viewport too; framebuffers and vertex arrays are per context and are
+never kept here (each ``Renderer`` owns its own).
+"""
+
+from __future__ import annotations
+
+import atexit
+import threading
+from collections.abc import Callable
+
+import gpu
+import numpy as np
+
+from . import programs
+
+
+class ShaderCompileError(RuntimeError):
+    """A program failed to compile or link; the message carries the driver's log."""
+
+
+class _Library:
+    def __init__(self):
+        self._lock = threading.RLock()  # re-entrant: a table's builder may ask for another table
+        self._programs: dict = {}
+        self._tables: dict = {}
+        self._compile_error = ""
+        self.compiles = 0  # programs compiled since start (for tests and benchmarks)
+
+    def program(self, key, label: str, src: programs.ProgramSource,
+                declare: Callable[[gpu.types.GPUShaderCreateInfo], None]) -> gpu.types.GPUShader:
+        """The program for ``key``: ``src``'s defines, then ``declare(info)`` adds the interface."""
+        with self._lock:
+            shader = self._programs.get(key)
+            if shader is not None:
+                return shader
+            info = gpu.types.GPUShaderCreateInfo()
+            for name, value in src.defines:
+                info.define(name, value)
+            declare(info)
+            info.fragment_out(0, "VEC4", "frag_color")
+            info.vertex_source(src.vertex)
+            info.fragment_source(src.fragment)
+            try:
+                shader = gpu.shader.create_from_info(info)
+            except Exception as exc:  # Blender raises a bare Exception with the driver log on stderr
+                message = (f"Shading Lab could not compile its {label} program "
+                           f"({', '.join(f'{n}={v}' for n, v in src.defines)}): {exc} "
+                           f"(the driver's log is on the console)")
+                self._compile_error = message
+                raise ShaderCompileError(message) from exc
+            self.compiles += 1
+            self._programs[key] = shader
+            return shader
+
+    def table(self, key, build: Callable[[], gpu.types.GPUTexture]) -> gpu.types.GPUTexture:
+        """The lookup-table texture ``key``, built by ``build()`` once."""
+        with self._lock:
+            texture = self._tables.get(key)
+            if texture is None:
+                texture = self._tables[key] = build()
+            return texture
+
+    def program_count(self) -> int:
+        return len(self._programs)
+
+    def table_count(self) -> int:
+        return len(self._tables)
+
+    def held(self) -> list:
+        """Every program and table the library holds (tests check that nothing else holds them)."""
+        with self._lock:
+            return [*self._programs.values(), *self._tables.values()]
+
+    @property
+    def compile_error(self) -> str:
+        return self._compile_error
+
+    def clear_compile_error(self) -> None:
+        self._compile_error = ""
+
+    def clear(self) -> None:
+        """Forget every program and table; renderers still drawing keep theirs until they finish."""
+        with self._lock:
+            self._programs = {}
+            self._tables = {}
+        programs.clear_source_caches()
+
+
+LIBRARY = _Library()
+
+
+# --- the programs -----------------------------------------------------------------------------
+
+def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
+    info.typedef_source(typedefs)
+    if features.uses_albedo_table:
+        info.sampler(0, "FLOAT_2D", "ms_table")
+    if features.uses_s_table:
+        info.sampler(1, "FLOAT_2D", "s_table")
+    info.uniform_buf(0, "FrameData", "frame")
+    info.uniform_buf(1, "LightBlock", "lights")
+    info.uniform_buf(2, "MaterialData", "material")
+    info.uniform_buf(3, "ObjectBlock", "objects")
+    info.push_constant("INT", "object_index")
+    info.push_constant("VEC4", "lobes")
+    for slot, name in enumerate(("base_color", "metallic", "roughness", "normal"), start=2):
+        if features.has_map(name.upper()):
+            info.sampler(slot, "FLOAT_2D", name + "_map")
+    if features.peel:
+        info.sampler(6, "FLOAT_2D", "opaque_depth")
+        info.sampler(7, "FLOAT_2D", "peel_depth")
+    info.vertex_in(0, "VEC3", "pos")
+    info.vertex_in(1, "VEC3", "nor")
+    info.vertex_in(2, "VEC2", "uv")
+    info.vertex_in(3, "VEC4", "tangent")
+    iface = gpu.types.GPUStageInterfaceInfo("shading_lab_iface")
+    iface.smooth("VEC3", "world_position")
+    iface.smooth("VEC3", "world_normal")
+    iface.smooth("VEC2", "world_uv")
+    iface.smooth("VEC4", "world_tangent")
+    info.vertex_out(iface)
+
+
+def shading_program(features: programs.Features) -> gpu.types.GPUShader:
+    """The shading program for ``features``, compiled once and cached by its sorted defines."""
+    src = programs.program_source(features)
+    return LIBRARY.program(features.defines(), features.model, src,
+                           lambda info: _declare_shading(info, src.typedefs, features))
+
+
+def _declare_full_screen(*samplers: str, floats: tuple[str, ...] = ()):
+    def declare(info) -> None:
+        info.vertex_in(0, "VEC2", "pos")
+        for slot, name in enumerate(samplers):
+            info.sampler(slot, "FLOAT_2D", name)
+        for name in floats:
+            info.push_constant("FLOAT", name)
+    return declare
+
+
+def post_program(features: programs.PostFeatures) -> gpu.types.GPUShader:
+    """The resolve/display pass for ``features``."""
+    return LIBRARY.program(("post",) + features.defines(), "display", programs.post_source(features),
+                           _declare_full_screen("hdr_image", floats=("exposure_scale",)))
+
+
+def compare_program(features: programs.CompareFeatures) -> gpu.types.GPUShader:
+    return LIBRARY.program(("compare",) + features.defines(), "compare", programs.compare_source(features),
+                           _declare_full_screen("image_a", "image_b", floats=("split", "range")))
+
+
+def occupancy_program() -> gpu.types.GPUShader:
+    src = programs.occupancy_source()
+    return LIBRARY.program(("occupancy",) + src.defines, "occupancy", src,
+                           _declare_full_screen("layer_depth"))
+
+
+def under_program() -> gpu.types.GPUShader:
+    return LIBRARY.program(("under",), "transparency composite", programs.under_source(),
+                           _declare_full_screen("accumulated", "peeled"))
+
+
+# --- the tables -------------------------------------------------------------------------------
+
+def r32f_texture(table: np.ndarray) -> gpu.types.GPUTexture:
+    h, w = table.shape
+    data = gpu.types.Buffer("FLOAT", w * h, np.ascontiguousarray(table, np.float32).ravel())
+    return gpu.types.GPUTexture((w, h), format="R32F", data=data)
+
+
+def albedo_table(terms) -> gpu.types.GPUTexture:
+    """The directional-albedo table of ``terms``' D and V as an R32F texture (built once); for the
+    Principled set, GGX + Smith's table with Eavg(r) as an extra row."""
+    from . import multiscatter
+
+    def build():
+        if terms.principled:
+            return r32f_texture(np.vstack([multiscatter.albedo_table("GGX", "SMITH_CORRELATED"),
+                                           multiscatter.average_albedo()[None, :]]))
+        return r32f_texture(multiscatter.albedo_table(terms.ndf, terms.visibility))
+
+    return LIBRARY.table(("PRINCIPLED",) if terms.principled else (terms.ndf, terms.visibility), build)
+
+
+def s_table() -> gpu.types.GPUTexture:
+    """The Principled set's S(r, mu, z) table as a 16 x 256 R32F atlas (rows: mu + 16 z)."""
+    from . import multiscatter
+
+    def build():
+        table = multiscatter.principled_s_table()
+        n = table.shape[0]
+        return r32f_texture(table.reshape(n * n, n))
+
+    return LIBRARY.table(("S",), build)
+
+# Compiled programs outlive renders; free them before Blender tears its GPU module down, or it
+# reports them as leaked blocks at exit.
+atexit.register(LIBRARY.clear)

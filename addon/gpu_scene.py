@@ -1,0 +1,253 @@
+"""The GPU copy of one scene: geometry, uniform buffers and textures, uploaded only on change.
+
+A ``SceneResources`` lives as long as its ``Renderer`` (one final render, or a viewport session)
+and is brought up to date with ``sync(snapshot)``: each piece of data is packed, compared with
+what the GPU already holds and uploaded only when it differs, and counted in ``uploads`` (reset
+at each sync) so that tests and the viewport can see what an edit cost:
+
+- ``geometry``: one vertex buffer per material range of each mesh (by geometry key);
+- ``objects``: every draw item's matrices, in blocks of ``programs.OBJECT_BLOCK`` (a draw names
+  its entry by block and index; one buffer, not one per item per frame);
+- ``lights``, one block; ``materials``, one block per material; ``frame`` (camera, counts), one
+  block, packed when a frame runs (the viewport's camera moves between syncs);
+- ``textures``: one per image the materials sample, from the pixels the snapshot carries.
+
+It also groups the draws per shading program (``draw_lists``) and draws a group
+(``draw_group``) for the passes that draw geometry.
+"""
+
+from __future__ import annotations
+
+from collections import Counter
+from collections.abc import Callable
+from dataclasses import dataclass, replace
+
+import gpu
+import numpy as np
+
+from . import gpu_library, programs
+from .snapshot import ImageData, MeshGeometry, Snapshot
+
+#: GPU texture format per ``ImageData.storage``: byte images keep their bytes (an sRGB one is
+#: decoded to linear by the sampler, before filtering, as Blender's own image textures are).
+TEXTURE_FORMATS = {"SRGB8": "SRGB8_A8", "UNORM8": "RGBA8", "HALF": "RGBA16F", "FLOAT": "RGBA32F"}
+
+
+def _vertex_format() -> gpu.types.GPUVertFormat:
+    fmt = gpu.types.GPUVertFormat()
+    fmt.attr_add(id="pos", comp_type="F32", len=3, fetch_mode="FLOAT")
+    fmt.attr_add(id="nor", comp_type="F32", len=3, fetch_mode="FLOAT")
+    fmt.attr_add(id="uv", comp_type="F32", len=2, fetch_mode="FLOAT")
+    fmt.attr_add(id="tangent", comp_type="F32", len=4, fetch_mode="FLOAT")
+    return fmt
+
+
+def upload_geometry(geometry: MeshGeometry) -> list[tuple[int, gpu.types.GPUBatch]]:
+    """One batch per material range: ``[(slot, batch), ...]``."""
+    fmt = _vertex_format()
+    batches = []
+    for slot, first, count in geometry.ranges:
+        if count == 0:
+            continue
+        vbo = gpu.types.GPUVertBuf(fmt, count)
+        part = slice(first, first + count)
+        vbo.attr_fill("pos", np.ascontiguousarray(geometry.positions[part], np.float32))
+        vbo.attr_fill("nor", np.ascontiguousarray(geometry.normals[part], np.float32))
+        uvs = geometry.uvs[part] if geometry.uvs is not None else np.zeros((count, 2), np.float32)
+        tangents = (geometry.tangents[part] if geometry.tangents is not None
+                    else np.zeros((count, 4), np.float32))
+        vbo.attr_fill("uv", np.ascontiguousarray(uvs, np.float32))
+        vbo.attr_fill("tangent", np.ascontiguousarray(tangents, np.float32))
+        batches.append((slot, gpu.types.GPUBatch(type="TRIS", buf=vbo)))
+    return batches
+
+
+def image_texture(image: ImageData) -> gpu.types.GPUTexture:
+    """The GPU copy of an image (bottom row first, as GPU textures are)."""
+    h, w = image.pixels.shape[:2]
+    values = image.pixels.astype(np.float32)
+    if image.pixels.dtype == np.uint8:
+        values /= 255.0  # the upload turns v back into the byte round(255 v)
+    data = gpu.types.Buffer("FLOAT", w * h * 4, values.ravel())
+    return gpu.types.GPUTexture((w, h), format=TEXTURE_FORMATS[image.storage], data=data)
+
+
+@dataclass(slots=True)
+class Draw:
+    """One batch of one draw item: the item's order (cancellation is polled every 64 items), its
+    object-data block and index, and its material."""
+
+    order: int
+    block: int
+    index: int
+    material: str
+    batch: gpu.types.GPUBatch
+
+
+@dataclass
+class DrawLists:
+    """The draws of one view, grouped per shading program (sorted by defines): opaque surfaces,
+    and partly transparent ones (drawn by the depth-peeling program)."""
+
+    opaque: list[tuple[programs.Features, list[Draw]]]
+    blended: list[tuple[programs.Features, list[Draw]]]
+
+
+class _Block:
+    """A uniform buffer and the bytes it holds; ``put`` uploads only different bytes."""
+
+    def __init__(self):
+        self.data: bytes | None = None
+        self.ubo: gpu.types.GPUUniformBuf | None = None
+
+    def put(self, data: bytes) -> bool:
+        if data == self.data:
+            return False
+        if self.ubo is None or self.data is None or len(data) != len(self.data):
+            self.ubo = gpu.types.GPUUniformBuf(data)
+        else:
+            self.ubo.update(data)
+        self.data = data
+        return True
+
+
+class SceneResources:
+    def __init__(self):
+        self.snapshot: Snapshot | None = None
+        self.uploads: Counter = Counter()
+        self._batches: dict[str, list[tuple[int, gpu.types.GPUBatch]]] = {}
+        self._materials: dict[str, _Block] = {}
+        self._lights = _Block()
+        self._objects: list[_Block] = []
+        self._frame = _Block()
+        self._textures: dict[str, tuple[ImageData, gpu.types.GPUTexture]] = {}
+        self._draw_lists: dict[tuple[str, bool], DrawLists] = {}
+        # programs and tables drawn with, held for this scene's lifetime (see gpu_library)
+        self._programs: dict[programs.Features, gpu.types.GPUShader] = {}
+
+    # --- keeping the GPU copy up to date ------------------------------------------------------
+
+    def sync(self, snapshot: Snapshot, keep: Callable[[str], bool] | None = None) -> None:
+        """Upload what ``snapshot`` has that the GPU copy lacks or holds differently; drop what
+        it no longer has. ``keep(key)`` False forces a geometry to be uploaded again."""
+        self.snapshot = snapshot
+        self.uploads = Counter()
+        self._draw_lists.clear()
+        for key in list(self._batches):
+            if key not in snapshot.geometries or (keep is not None and not keep(key)):
+                del self._batches[key]
+        for key, geometry in snapshot.geometries.items():
+            if key not in self._batches:
+                self._batches[key] = upload_geometry(geometry)
+                self.uploads["geometry"] += 1
+        for key in set(self._materials) - set(snapshot.materials):
+            del self._materials[key]
+        for key, material in snapshot.materials.items():
+            block = self._materials.setdefault(key, _Block())
+            self.uploads["materials"] += block.put(programs.pack_material(material))
+        slots = programs.light_slots(len(snapshot.lights))
+        self.uploads["lights"] += self._lights.put(programs.pack_lights(snapshot, slots))
+        blocks = programs.pack_objects(snapshot.items)
+        del self._objects[len(blocks):]
+        while len(self._objects) < len(blocks):
+            self._objects.append(_Block())
+        for block, data in zip(self._objects, blocks):
+            self.uploads["objects"] += block.put(data.tobytes())
+        for key in set(self._textures) - set(snapshot.images):
+            del self._textures[key]
+        for key, image in snapshot.images.items():
+            held = self._textures.get(key)
+            if held is None or held[0] is not image:
+                self._textures[key] = (image, image_texture(image))
+                self.uploads["textures"] += 1
+
+    def put_frame(self, view_projection: np.ndarray | None) -> None:
+        """The frame block for a view (the camera's, unless the viewport passes its own)."""
+        self.uploads["frame"] += self._frame.put(programs.pack_frame(self.snapshot, view_projection))
+
+    @property
+    def geometry_count(self) -> int:
+        return len(self._batches)
+
+    # --- drawing ------------------------------------------------------------------------------
+
+    def draw_lists(self, model: str | None, half_target: bool) -> DrawLists:
+        """Every batch of every item, grouped by the program its material needs in ``model``
+        (a material's own model wins); made once per sync and view kind."""
+        key = (model, half_target)
+        lists = self._draw_lists.get(key)
+        if lists is not None:
+            return lists
+        snapshot = self.snapshot
+        features = {key: programs.Features.from_snapshot(snapshot, model=model, material=m,
+                                                         half_target=half_target)
+                    for key, m in snapshot.materials.items()}
+        opaque: dict[programs.Features, list[Draw]] = {}
+        blended: dict[programs.Features, list[Draw]] = {}
+        block_size = programs.OBJECT_BLOCK
+        for order, item in enumerate(snapshot.items):
+            for slot, batch in self._batches.get(item.geometry, ()):
+                key = item.materials[slot] if slot < len(item.materials) else item.materials[-1]
+                draw = Draw(order, order // block_size, order % block_size, key, batch)
+                material = snapshot.materials[key]
+                if material.alpha < 1.0 or features[key].alpha_from_base_map:
+                    blended.setdefault(replace(features[key], peel=True), []).append(draw)
+                else:
+                    opaque.setdefault(features[key], []).append(draw)
+
+        def ordered(groups):
+            return sorted(groups.items(), key=lambda kv: kv[0].defines())
+
+        lists = self._draw_lists[key] = DrawLists(ordered(opaque), ordered(blended))
+        return lists
+
+    def program(self, features: programs.Features) -> gpu.types.GPUShader:
+        shader = self._programs.get(features)
+        if shader is None:
+            shader = self._programs[features] = gpu_library.shading_program(features)
+        return shader
+
+    def draw_group(self, features: programs.Features, draws: list[Draw], lobes,
+                   should_stop: Callable[[], bool] | None = None,
+                   bind: Callable[[gpu.types.GPUShader], None] | None = None) -> bool:
+        """Draw ``draws`` (one feature set's) into the bound framebuffer; False if cancelled."""
+        shader = self.program(features)
+        shader.bind()
+        shader.uniform_block("frame", self._frame.ubo)
+        shader.uniform_block("lights", self._lights.ubo)
+        shader.uniform_float("lobes", lobes)
+        if features.uses_albedo_table:
+            shader.uniform_sampler("ms_table", gpu_library.albedo_table(features.terms))
+        if features.uses_s_table:
+            shader.uniform_sampler("s_table", gpu_library.s_table())
+        if bind is not None:
+            bind(shader)
+        materials = self.snapshot.materials
+        samplers = [(name.removesuffix("_CLOSEST").lower() + "_map") for name in features.maps]
+        block = -1
+        for draw in draws:
+            if should_stop is not None and draw.order % 64 == 0 and should_stop():
+                return False
+            if draw.block != block:
+                block = draw.block
+                shader.uniform_block("objects", self._objects[block].ubo)
+            shader.uniform_int("object_index", draw.index)
+            shader.uniform_block("material", self._materials[draw.material].ubo)
+            for sampler in samplers:
+                image_key = getattr(materials[draw.material], sampler)[0]
+                shader.uniform_sampler(sampler, self._textures[image_key][1])
+            draw.batch.draw(shader)
+        return True
+
+    def free(self) -> None:
+        """Drop every GPU object (Blender frees each with its last reference)."""
+        self._batches.clear()
+        self._materials.clear()
+        self._objects.clear()
+        self._textures.clear()
+        self._draw_lists.clear()
+        self._programs.clear()
+        self._lights = _Block()
+        self._frame = _Block()
+        self.snapshot = None
+

@@ -1,0 +1,399 @@
+"""The passes a frame is made of, and what they share.
+
+A frame is a list of steps, each a pass and its input, run in order (``Renderer.run``):
+
+    per view:  OpaquePass ─► TransparencyPass ─► ResolvePass ─► DisplayPass
+    then:      ComparePass (A|B: two views composited)
+
+Lifetimes:
+- per scene (``SceneResources``, in ``gpu_scene``): geometry, uniform blocks, textures;
+- per frame (``Frame``): the snapshot being drawn, cancellation, and the named outputs passes
+  hand on (``"main.scene"``, ``"main.radiance"``, ``"main.display"``, ``"compare"``);
+- per pass: its own render targets, kept while their size and format stay the same (the
+  viewport redraws into the same ones), freed with the renderer.
+
+A pass with nothing to do does nothing: no transparency layers without transparent surfaces, no
+resolve without supersampling, no display pass under Blender's view transform. Passes to come
+(shadow maps, environment tables) slot in ahead of the views, reading the same ``Frame``.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+
+import gpu
+import numpy as np
+
+from . import gpu_library, programs
+from .gpu_scene import SceneResources
+from .snapshot import Snapshot
+
+
+class Target:
+    """A float colour texture and (unless ``depth`` is False) a depth texture drawn into
+    together, both readable by shaders (depth peeling samples the opaque depth)."""
+
+    def __init__(self, width: int, height: int, format: str = "RGBA32F", depth: bool = True):
+        self.width, self.height, self.format, self.depth = width, height, format, depth
+        self.texture_color = gpu.types.GPUTexture((width, height), format=format)
+        self.texture_depth = (gpu.types.GPUTexture((width, height), format="DEPTH_COMPONENT32F")
+                              if depth else None)
+        if depth:
+            self.framebuffer = gpu.types.GPUFrameBuffer(color_slots=self.texture_color,
+                                                        depth_slot=self.texture_depth)
+        else:
+            self.framebuffer = gpu.types.GPUFrameBuffer(color_slots=self.texture_color)
+
+    def bind(self):
+        return self.framebuffer.bind()
+
+    def fits(self, width: int, height: int, format: str, depth: bool) -> bool:
+        return (self.width, self.height, self.format, self.depth) == (width, height, format, depth)
+
+    def read(self) -> np.ndarray:
+        """(height, width, 4) float32, bottom row first (a copy: a view would pin the GPU buffer)."""
+        w, h = self.width, self.height
+        with self.bind():
+            buffer = self.framebuffer.read_color(0, 0, w, h, 4, 0, "FLOAT")
+        buffer.dimensions = w * h * 4
+        return np.array(buffer, np.float32).reshape(h, w, 4)
+
+    def free(self) -> None:
+        """Drop the textures and framebuffer (Blender frees them with their last reference)."""
+        self.framebuffer = self.texture_color = self.texture_depth = None
+
+
+def _fitted(target: Target | None, width: int, height: int, format: str = "RGBA32F",
+            depth: bool = False) -> Target:
+    """``target`` if it has this size and format, else a new one (the old one freed)."""
+    if target is not None and target.fits(width, height, format, depth):
+        return target
+    if target is not None:
+        target.free()
+    return Target(width, height, format, depth)
+
+
+@dataclass(frozen=True)
+class View:
+    """One image of a frame and how it is drawn. ``name`` picks the passes (and their targets)
+    that draw it: views drawn one after the other may share a name; views needed together (A
+    and B of a comparison) may not."""
+
+    width: int
+    height: int
+    name: str = "main"
+    model: str | None = None  # None: the scene's; a material's own model wins either way
+    samples: int = 1  # supersampling grid per axis
+    background: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 1.0)
+    lobes: tuple[float, float, float, float] = programs.ALL_LOBES
+    half_target: bool = False  # RGBA16F targets (the viewport)
+    display: programs.PostFeatures | None = None  # also tone map (an engine tone mapper)
+    exposure: float = 0.0
+    view_projection: np.ndarray | None = field(default=None, compare=False)  # None: the camera's
+
+    @property
+    def format(self) -> str:
+        return "RGBA16F" if self.half_target else "RGBA32F"
+
+    def output(self, kind: str) -> str:
+        return f"{self.name}.{kind}"
+
+
+@dataclass(frozen=True)
+class Comparison:
+    """The A|B composite of two views' images: a split view or a difference heat map."""
+
+    a: str  # output names
+    b: str
+    width: int
+    height: int
+    features: programs.CompareFeatures
+    split: float = 0.5
+    value_range: float = 1.0
+    half_target: bool = False
+
+
+@dataclass
+class Frame:
+    """What the passes of one frame share."""
+
+    snapshot: Snapshot
+    scene: SceneResources
+    full_screen: gpu.types.GPUBatch
+    should_stop: Callable[[], bool] | None = None
+    outputs: dict[str, Target] = field(default_factory=dict)
+    cancelled: bool = False  # should_stop() said so: no more geometry is drawn
+    peeled_layers: int = 0  # transparency layers the last view blended
+
+    def draw_full_screen(self, shader, bind: Callable[[gpu.types.GPUShader], None], target: Target,
+                         clear: bool = True) -> None:
+        """Draw ``shader`` over all of ``target`` (``bind`` sets its inputs)."""
+        with target.bind():
+            if clear:
+                target.framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0))
+            gpu.state.depth_test_set("NONE")
+            gpu.state.blend_set("NONE")
+            shader.bind()
+            bind(shader)
+            self.full_screen.draw(shader)
+
+
+_FULL_SCREEN = ((-1.0, -1.0), (3.0, -1.0), (-1.0, 3.0))
+
+
+def full_screen_batch() -> gpu.types.GPUBatch:
+    """A triangle covering clip space: every full-screen pass of a renderer draws this one."""
+    fmt = gpu.types.GPUVertFormat()
+    fmt.attr_add(id="pos", comp_type="F32", len=2, fetch_mode="FLOAT")
+    vbo = gpu.types.GPUVertBuf(fmt, 3)
+    vbo.attr_fill("pos", _FULL_SCREEN)
+    return gpu.types.GPUBatch(type="TRIS", buf=vbo)
+
+
+class Pass:
+    """A step of a frame. ``run`` returns False when the frame was cancelled; a cancelled frame
+    skips the passes that draw geometry and still runs those that make images of it."""
+
+    draws_geometry = False
+
+    def run(self, frame: Frame, spec) -> bool:
+        raise NotImplementedError
+
+    def free(self) -> None:
+        """Drop the pass's own GPU objects."""
+
+
+class OpaquePass(Pass):
+    """Clears the view's scene target to its background and draws every opaque surface.
+    Writes ``<view>.scene`` (colour and depth, supersampled size)."""
+
+    draws_geometry = True
+
+    def __init__(self):
+        self.target: Target | None = None
+
+    def run(self, frame: Frame, view: View) -> bool:
+        s = view.samples
+        self.target = _fitted(self.target, view.width * s, view.height * s, view.format, depth=True)
+        frame.outputs[view.output("scene")] = self.target
+        frame.scene.put_frame(view.view_projection)
+        lists = frame.scene.draw_lists(view.model, view.half_target)
+        with self.target.bind():
+            self.target.framebuffer.clear(color=view.background, depth=1.0)
+            gpu.state.depth_test_set("LESS_EQUAL")
+            gpu.state.depth_mask_set(True)
+            gpu.state.face_culling_set("NONE")
+            gpu.state.blend_set("NONE")
+            try:
+                for features, draws in lists.opaque:
+                    if not frame.scene.draw_group(features, draws, view.lobes, frame.should_stop):
+                        return False
+            finally:
+                gpu.state.depth_test_set("NONE")
+                gpu.state.depth_mask_set(False)
+        return True
+
+    def free(self) -> None:
+        if self.target is not None:
+            self.target.free()
+            self.target = None
+
+
+class TransparencyPass(Pass):
+    """Depth peeling (Everitt 2001) over the partly transparent surfaces: up to the scene's
+    Transparency Layers passes, each keeping per pixel the nearest fragment behind the previous
+    pass's (exact order, also within one mesh), composited front to back as they come, then the
+    result over ``<view>.scene``. A pass whose predecessor peeled nothing is not drawn.
+
+    Owns what peeling needs, the same for any number of layers: the layer being peeled (colour,
+    and two depths taking turns as the one written and the previous layer's, read), two
+    accumulators taking turns, and a small occupancy map that tells whether a layer holds
+    anything. Dropped when a frame has nothing transparent."""
+
+    draws_geometry = True
+
+    def __init__(self):
+        self._size: tuple | None = None
+
+    def _buffers(self, width: int, height: int, format: str) -> None:
+        if self._size == (width, height, format):
+            return
+        size = (width, height)
+        self.colour = gpu.types.GPUTexture(size, format=format)
+        self.depths = [gpu.types.GPUTexture(size, format="DEPTH_COMPONENT32F") for _ in range(2)]
+        # layer i writes depth (i + 1) % 2 and reads depth i % 2, the previous layer's
+        self.layer_fbs = [gpu.types.GPUFrameBuffer(color_slots=self.colour, depth_slot=depth)
+                          for depth in (self.depths[1], self.depths[0])]
+        self.first = gpu.types.GPUFrameBuffer(depth_slot=self.depths[0])  # cleared to 0 for layer 0
+        self.accumulators = [Target(width, height, format, depth=False) for _ in range(2)]
+        block = programs.OCCUPANCY_BLOCK
+        self.occupancy = Target(-(-width // block), -(-height // block), depth=False)
+        self._size = (width, height, format)
+
+    def _any_fragment(self, frame: Frame, depth: gpu.types.GPUTexture) -> bool:
+        """Whether a peeled layer's depth holds any fragment: reduced on the GPU to one texel per
+        block of ``programs.OCCUPANCY_BLOCK`` texels a side, and only that read back."""
+        frame.draw_full_screen(gpu_library.occupancy_program(),
+                               lambda s: s.uniform_sampler("layer_depth", depth), self.occupancy)
+        return bool(self.occupancy.read()[..., 0].max() > 0.0)
+
+    def run(self, frame: Frame, view: View) -> bool:
+        groups = frame.scene.draw_lists(view.model, view.half_target).blended
+        frame.peeled_layers = 0
+        if not groups:
+            self.free()  # a viewport keeps no peeling buffers once nothing is transparent
+            return True
+        target = frame.outputs[view.output("scene")]
+        self._buffers(target.width, target.height, target.format)
+        with self.first.bind():
+            self.first.clear(depth=0.0)
+        current = 0
+        with self.accumulators[current].bind():
+            self.accumulators[current].framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0))
+        used = 0
+        under = gpu_library.under_program()
+        for i in range(max(int(frame.snapshot.settings.transparency_layers), 1)):
+            previous = self.depths[i % 2]  # written by the last pass (cleared to 0 before the first)
+            if used and not self._any_fragment(frame, previous):
+                used -= 1  # the last pass peeled nothing, so no surface is left behind it
+                break
+            if not self._peel(frame, view, groups, self.layer_fbs[i % 2], target, previous):
+                return False
+            accumulated = self.accumulators[current]
+            current = 1 - current
+
+            def bind_under(shader, accumulated=accumulated):
+                shader.uniform_sampler("accumulated", accumulated.texture_color)
+                shader.uniform_sampler("peeled", self.colour)
+
+            frame.draw_full_screen(under, bind_under, self.accumulators[current])
+            used += 1
+        frame.peeled_layers = used
+        with target.bind():  # the layers over what is behind them: C + (1 - A) L_behind
+            gpu.state.depth_test_set("NONE")
+            gpu.state.depth_mask_set(False)
+            gpu.state.blend_set("ALPHA_PREMULT")
+            copy = gpu_library.post_program(programs.PostFeatures(samples=1))
+            copy.bind()
+            copy.uniform_sampler("hdr_image", self.accumulators[current].texture_color)
+            frame.full_screen.draw(copy)
+            gpu.state.blend_set("NONE")
+        return True
+
+    @staticmethod
+    def _peel(frame: Frame, view: View, groups, framebuffer, target: Target, previous) -> bool:
+        """One layer: the nearest transparent fragment behind ``previous``, in front of the opaque."""
+
+        def bind(shader):
+            shader.uniform_sampler("opaque_depth", target.texture_depth)
+            shader.uniform_sampler("peel_depth", previous)
+
+        with framebuffer.bind():
+            framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
+            gpu.state.depth_test_set("LESS")
+            gpu.state.depth_mask_set(True)
+            gpu.state.blend_set("NONE")
+            try:
+                for features, draws in groups:
+                    if not frame.scene.draw_group(features, draws, view.lobes, frame.should_stop, bind):
+                        return False
+            finally:
+                gpu.state.depth_test_set("NONE")
+                gpu.state.depth_mask_set(False)
+        return True
+
+    def free(self) -> None:
+        if self._size is not None:
+            for target in (*self.accumulators, self.occupancy):
+                target.free()
+            self.colour = self.depths = self.layer_fbs = self.first = None
+            self.accumulators = self.occupancy = None
+            self._size = None
+
+
+class ResolvePass(Pass):
+    """Averages each pixel's ``samples`` x ``samples`` sub-pixels (a box filter) of
+    ``<view>.scene`` into ``<view>.radiance``; without supersampling the scene target is the
+    radiance and nothing is drawn."""
+
+    def __init__(self):
+        self.target: Target | None = None
+
+    def run(self, frame: Frame, view: View) -> bool:
+        scene = frame.outputs[view.output("scene")]
+        if view.samples == 1:
+            frame.outputs[view.output("radiance")] = scene
+            return True
+        self.target = _fitted(self.target, view.width, view.height, view.format)
+        frame.draw_full_screen(gpu_library.post_program(programs.PostFeatures(samples=view.samples)),
+                               lambda s: s.uniform_sampler("hdr_image", scene.texture_color), self.target)
+        frame.outputs[view.output("radiance")] = self.target
+        return True
+
+    def free(self) -> None:
+        if self.target is not None:
+            self.target.free()
+            self.target = None
+
+
+class DisplayPass(Pass):
+    """Under one of the engine's own tone mappers: exposure, the tone curve and the transfer
+    function over the resolved sub-pixels of ``<view>.scene``, into ``<view>.display``."""
+
+    def __init__(self):
+        self.target: Target | None = None
+
+    def run(self, frame: Frame, view: View) -> bool:
+        if view.display is None:
+            return True
+        scene = frame.outputs[view.output("scene")]
+        self.target = _fitted(self.target, view.width, view.height, view.format)
+        features = programs.PostFeatures(view.samples, view.display.tone_mapper, view.display.transfer)
+
+        def bind(shader):
+            shader.uniform_sampler("hdr_image", scene.texture_color)
+            shader.uniform_float("exposure_scale", 2.0 ** view.exposure)
+
+        frame.draw_full_screen(gpu_library.post_program(features), bind, self.target)
+        frame.outputs[view.output("display")] = self.target
+        return True
+
+    def free(self) -> None:
+        if self.target is not None:
+            self.target.free()
+            self.target = None
+
+
+class ComparePass(Pass):
+    """A|B: two views' images composited into ``compare``: model A left of a divider and B right
+    of it, or the luminance difference as a heat map with its scale."""
+
+    def __init__(self):
+        self.target: Target | None = None
+
+    def run(self, frame: Frame, comparison: Comparison) -> bool:
+        a, b = frame.outputs[comparison.a], frame.outputs[comparison.b]
+        fmt = "RGBA16F" if comparison.half_target else "RGBA32F"
+        self.target = _fitted(self.target, comparison.width, comparison.height, fmt)
+
+        def bind(shader):
+            shader.uniform_sampler("image_a", a.texture_color)
+            shader.uniform_sampler("image_b", b.texture_color)
+            if comparison.features.mode == "SPLIT":
+                shader.uniform_float("split", float(comparison.split))
+            else:
+                shader.uniform_float("range", float(comparison.value_range))
+
+        frame.draw_full_screen(gpu_library.compare_program(comparison.features), bind, self.target)
+        frame.outputs["compare"] = self.target
+        return True
+
+    def free(self) -> None:
+        if self.target is not None:
+            self.target.free()
+            self.target = None
+
+
+#: The passes that draw one view, in order.
+VIEW_PASSES = (OpaquePass, TransparencyPass, ResolvePass, DisplayPass)
