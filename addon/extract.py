@@ -450,14 +450,13 @@ def preview_settings(preview_scene) -> S.Settings:
 def geometry_updates(depsgraph) -> set[str]:
     """Names of the original objects and meshes whose geometry this depsgraph update changed.
 
-    A transform-only edit sets ``is_updated_transform`` alone and adds nothing here.
+    A transform-only edit sets ``is_updated_transform`` alone and adds nothing here; a material
+    edit tags the meshes using it for shading only, which adds nothing either.
     """
     dirty: set[str] = set()
     for update in depsgraph.updates:
         idb = update.id
-        if isinstance(idb, bpy.types.Object) and update.is_updated_geometry:
-            dirty.add(idb.original.name_full)
-        elif isinstance(idb, bpy.types.Mesh):
+        if isinstance(idb, (bpy.types.Object, bpy.types.Mesh)) and update.is_updated_geometry:
             dirty.add(idb.original.name_full)
     return dirty
 

@@ -174,8 +174,8 @@ class SceneResources:
     def draw_lists(self, model: str | None, half_target: bool) -> DrawLists:
         """Every batch of every item, grouped by the program its material needs in ``model``
         (a material's own model wins); made once per sync and view kind."""
-        key = (model, half_target)
-        lists = self._draw_lists.get(key)
+        view_kind = (model, half_target)
+        lists = self._draw_lists.get(view_kind)
         if lists is not None:
             return lists
         snapshot = self.snapshot
@@ -198,7 +198,7 @@ class SceneResources:
         def ordered(groups):
             return sorted(groups.items(), key=lambda kv: kv[0].defines())
 
-        lists = self._draw_lists[key] = DrawLists(ordered(opaque), ordered(blended))
+        lists = self._draw_lists[view_kind] = DrawLists(ordered(opaque), ordered(blended))
         return lists
 
     def program(self, features: programs.Features) -> gpu.types.GPUShader:

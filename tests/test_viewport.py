@@ -118,3 +118,107 @@ def test_property_edits_reach_the_viewport(session_with_handler):
     bpy.context.scene.shading_lab.model = "PHONG"
     bpy.context.view_layer.update()
     assert session.snapshot.settings.model == "PHONG"
+
+
+# --- what each edit uploads (counted by the renderer: zero for an unchanged scene) ---------------
+
+def _uploads(session):
+    cam = bpy.context.scene.camera
+    view = np.linalg.inv(np.array(cam.matrix_world))
+    proj = np.array(cam.calc_matrix_camera(bpy.context.evaluated_depsgraph_get(), x=16, y=16))
+
+    def job(depsgraph):
+        session.draw(16, 16, view, proj, False)
+        return session.renderer.uploads
+
+    return run_on_gpu(job)
+
+
+def test_first_draw_uploads_everything_once(session_with_handler):
+    session, *_ = session_with_handler
+    first = _uploads(session)
+    assert first == {"geometry": 2, "materials": 1, "lights": 1, "objects": 1, "frame": 1}, first
+
+
+def test_redrawing_an_unchanged_scene_uploads_nothing(session_with_handler):
+    session, *_ = session_with_handler
+    _uploads(session)
+    assert _uploads(session) == {}
+
+
+def test_transform_only_edit_uploads_only_the_object_block(session_with_handler):
+    session, a, _, _ = session_with_handler
+    _uploads(session)
+    a.location.x -= 0.25
+    bpy.context.view_layer.update()
+    assert _uploads(session) == {"objects": 1}
+
+
+def test_light_edit_uploads_only_the_light_block(session_with_handler):
+    session, *_ = session_with_handler
+    _uploads(session)
+    bpy.data.lights[0].energy *= 2.0
+    bpy.context.view_layer.update()
+    assert _uploads(session) == {"lights": 1}
+
+
+def test_material_edit_uploads_only_that_material(session_with_handler):
+    session, a, _, _ = session_with_handler
+    a.data.materials.append(scenes.material("Edited", roughness=0.2))
+    bpy.context.view_layer.update()
+    _uploads(session)
+    a.data.materials[0].shading_lab.roughness = 0.7
+    bpy.context.view_layer.update()
+    assert _uploads(session) == {"materials": 1}
+
+
+def test_camera_orbit_uploads_only_the_frame_block(session_with_handler):
+    session, *_ = session_with_handler
+    _uploads(session)
+    bpy.context.scene.camera.location.x += 0.1  # the region's view moves; the scene does not
+    bpy.context.view_layer.update()
+    assert _uploads(session) == {"frame": 1}
+
+
+def _render_with_uploads(size):
+    def job(depsgraph):
+        r = renderer.Renderer()
+        try:
+            image = r.render(extract.snapshot(depsgraph, size, size))
+            first = r.uploads
+            r.render(extract.snapshot(depsgraph, size, size))
+            return image, first, r.uploads
+        finally:
+            r.free()
+
+    return run_on_gpu(job)
+
+
+def test_many_objects_upload_blocks_not_items_and_each_finds_its_matrix():
+    """1,024 instances of one small plane tiling the view (4 object blocks): one geometry and
+    4 blocks uploaded, and the image equals that of one plane covering the same square (an item
+    reading another's matrix would leave a hole or an overlap)."""
+    from addon import programs
+
+    size, tiles = 32, 32
+    scene = scenes.reset(size=size)
+    scenes.ortho_camera(scene, scale=2.0)
+    scenes.light(scene, "SUN", energy=2.0, rotation=(0.3, 0.2, 0.0))
+    source = scenes.plane(scene, size=2.0 / tiles)
+    for k in range(tiles * tiles):
+        row, col = divmod(k, tiles)
+        obj = source if k == 0 else bpy.data.objects.new(f"P{k}", source.data)
+        obj.location = (-1.0 + (col + 0.5) * 2.0 / tiles, -1.0 + (row + 0.5) * 2.0 / tiles, 0.0)
+        if k:
+            scene.collection.objects.link(obj)
+    tiled, first, second = _render_with_uploads(size)
+    for obj in [o for o in scene.objects if o.type == "MESH"]:
+        bpy.data.objects.remove(obj)
+    scenes.plane(scene, size=2.0)
+    whole, *_ = _render_with_uploads(size)
+    blocks = -(-tiles * tiles // programs.OBJECT_BLOCK)
+    assert blocks == 4
+    assert first == {"geometry": 1, "materials": 1, "lights": 1, "objects": blocks, "frame": 1}, first
+    assert second == {}, second
+    assert whole[..., 0].min() > 0.1
+    np.testing.assert_allclose(tiled, whole, rtol=1e-5)
