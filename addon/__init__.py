@@ -14,7 +14,7 @@ def _classes():
     # importable without Blender, and importing this package runs this file first.
     from . import engine, operators, properties, ui
 
-    return (*properties.classes, *engine.classes, *operators.classes, *ui.classes), (properties, ui)
+    return (*properties.classes, *engine.classes, *operators.classes, *ui.classes), (properties, ui, engine)
 
 
 _registered = False
@@ -32,13 +32,23 @@ def _undo(items) -> None:
 
 
 def register():
+    from . import engine
+
+    with engine.REGISTRATION:
+        _register()
+
+
+def _register():
     import atexit
 
     import bpy
 
+    from . import engine
+
     global _registered
     if _registered:
         return
+    engine.ACTIVITY.wait_idle(RENDER_WAIT_S)  # not while a render on another thread uses RNA
     classes, modules = _classes()
     done: list = []
     try:
@@ -59,12 +69,27 @@ def register():
         atexit.register(unregister)
 
 
+#: How long unregister() waits for renders running on other threads to end.
+RENDER_WAIT_S = 60.0
+
+
 def unregister():
-    from . import gpu_library
+    from . import engine
+
+    with engine.REGISTRATION:
+        _unregister()
+
+
+def _unregister():
+    from . import engine, gpu_library
 
     global _registered
     if not _registered:
         return
+    # a final render or preview may be running on its own thread: let it finish with the engine
+    # and programs it uses (a render cannot outlive its engine class)
+    if not engine.ACTIVITY.wait_idle(RENDER_WAIT_S):
+        print(f"Shading Lab: a render was still running after {RENDER_WAIT_S:.0f} s; unregistering anyway")
     _registered = False
     classes, modules = _classes()
     _undo([*classes, *modules])

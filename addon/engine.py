@@ -6,10 +6,13 @@ the render result and reports progress and errors through Blender.
 
 from __future__ import annotations
 
+import contextlib
+import threading
 import time
 
 import bpy
 import gpu
+from bpy.app.handlers import persistent
 
 from . import extract
 from .gpu_library import LIBRARY, ShaderCompileError
@@ -31,8 +34,97 @@ LIGHT_PASSES = {
 def light_passes(view_layer) -> list[str]:
     return [name for name, (toggle, _) in LIGHT_PASSES.items() if getattr(view_layer, toggle, False)]
 
-#: Phase times of the last final render in milliseconds (read by scripts/frame_time.py).
+#: Phase times of the last render (final or preview) in milliseconds, read by the benchmarks.
+#: Renders and previews run on their own threads in the UI: each replaces it whole, under a lock.
 last_timings: dict[str, float] = {}
+_TIMINGS_LOCK = threading.Lock()
+
+
+def _set_timings(timings: dict[str, float]) -> None:
+    with _TIMINGS_LOCK:
+        last_timings.clear()
+        last_timings.update(timings)
+
+
+class _Activity:
+    """Renders in progress. Blender runs final renders and previews on threads of their own, and
+    an add-on can be disabled meanwhile: ``unregister()`` waits here until none is running before
+    it takes the engine (and the programs it draws with) away. A render counts from Blender's
+    ``render_init`` to its ``render_complete``/``render_cancel`` (the whole job, Blender's own
+    use of the engine type included) and, for previews, which have no such events, for the
+    duration of ``render()``."""
+
+    def __init__(self):
+        self._changed = threading.Condition()
+        self._threads: dict[int, int] = {}  # thread id -> renders it is in
+
+    def begin(self) -> None:
+        me = threading.get_ident()
+        with self._changed:
+            self._threads[me] = self._threads.get(me, 0) + 1
+
+    def end(self) -> None:
+        me = threading.get_ident()
+        with self._changed:
+            if me not in self._threads:  # began before the handlers were installed
+                return
+            self._threads[me] -= 1
+            if not self._threads[me]:
+                del self._threads[me]
+            self._changed.notify_all()
+
+    @contextlib.contextmanager
+    def running(self):
+        self.begin()
+        try:
+            yield
+        finally:
+            self.end()
+
+    def count(self) -> int:
+        with self._changed:
+            return sum(self._threads.values())
+
+    def wait_idle(self, timeout: float) -> bool:
+        """Wait until no other thread renders (a render on this thread cannot end while it
+        waits); False if some still did after ``timeout`` seconds."""
+        me = threading.get_ident()
+        with self._changed:
+            return self._changed.wait_for(lambda: not (set(self._threads) - {me}), timeout)
+
+
+ACTIVITY = _Activity()
+
+#: Held while the add-on registers or unregisters: a render job starting meanwhile waits for it.
+REGISTRATION = threading.RLock()
+
+
+@persistent
+def _job_started(*_args) -> None:
+    with REGISTRATION:
+        ACTIVITY.begin()
+
+
+@persistent
+def _job_ended(*_args) -> None:
+    ACTIVITY.end()
+
+
+def _job_handlers():
+    h = bpy.app.handlers
+    return ((h.render_init, _job_started), (h.render_complete, _job_ended), (h.render_cancel, _job_ended))
+
+
+def register() -> None:
+    for handlers, function in _job_handlers():
+        if function not in handlers:
+            handlers.append(function)
+
+
+def unregister() -> None:
+    for handlers, function in _job_handlers():
+        if function in handlers:
+            handlers.remove(function)
 
 
 def background_color(snap, scene, model: str | None = None) -> tuple[float, float, float, float]:
@@ -99,14 +191,59 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
     # --- final renders ------------------------------------------------------------------------
 
     def render(self, depsgraph):
+        with ACTIVITY.running():
+            self._render(depsgraph)
+
+    def _render(self, depsgraph):
+        _set_timings({})  # a render that fails leaves none, not the previous render's
+        start = time.perf_counter()
+        self.update_stats("", "Shading Lab | Reading scene")
+        snap = self._read_scene(depsgraph)
+        if snap is None or self.test_break():
+            return
+        extracted = time.perf_counter()
+        self.update_progress(0.25)
+        label = f"{snap.settings.model} | {snap.triangle_count:,} triangles | {len(snap.lights)} lights"
+        settings = snap.settings
+        if settings.compare_mode != "OFF":
+            label = (f"{label} | {settings.compare_mode.title()} "
+                     f"A {settings.compare_models[0]} / B {settings.compare_models[1]}")
+        self.update_stats("", f"Shading Lab | {label} | Drawing")
+        # previews fill Combined only; with A|B, Combined holds the composite and there is no
+        # Radiance pass (it would hold one model only)
+        extra_passes = settings.compare_mode == "OFF" and not self.is_preview
+        views, comparison, combined, raw = frame_views(
+            snap, lambda model: background_color(snap, depsgraph.scene, model), samples=settings.samples)
+        raw = raw if extra_passes else None
+        lobe_passes = light_passes(depsgraph.view_layer) if extra_passes else []
+        for name in ([RADIANCE_PASS] if raw else []) + lobe_passes:
+            self.add_pass(name, 4, "RGBA", layer=depsgraph.view_layer.name)
+        images = self._draw(snap, views, comparison, [combined] + ([raw] if raw else []), lobe_passes)
+        if images is None or self.test_break():
+            return
+        drawn = time.perf_counter()
+        self.update_progress(0.9)
+        result = self.begin_result(0, 0, snap.width, snap.height, layer=depsgraph.view_layer.name)
+        try:
+            passes = result.layers[0].passes
+            for name, image in images.items():
+                pass_name = "Combined" if name == combined else RADIANCE_PASS if name == raw else name
+                passes[pass_name].rect.foreach_set(image.reshape(-1))
+        finally:
+            self.end_result(result)
+        self.update_progress(1.0)
+        done = time.perf_counter()
+        timings = dict(extract_ms=1e3 * (extracted - start), draw_ms=1e3 * (drawn - extracted),
+                       result_ms=1e3 * (done - drawn), total_ms=1e3 * (done - start))
+        _set_timings(timings)
+        self.update_stats("", f"Shading Lab | {label} | {timings['total_ms']:.0f} ms")
+
+    def _read_scene(self, depsgraph):
+        """The snapshot to draw (None, with the error reported, when the scene cannot be read)."""
         scene = depsgraph.scene
         width, height = extract.render_size(scene)
-        last_timings.clear()  # a render that fails leaves none, not the previous render's
-        start = time.perf_counter()
-        preview = self.is_preview
-        self.update_stats("", "Shading Lab | Reading scene")
         try:
-            if preview:
+            if self.is_preview:
                 settings = extract.preview_settings(scene)
             else:
                 settings = None
@@ -114,70 +251,36 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
             snap = extract.snapshot(depsgraph, width, height, settings=settings)
         except extract.ExtractError as exc:
             self._fail(str(exc))
-            return
+            return None
         except Exception as exc:  # never let a scene we did not foresee take Blender down
             self._fail(f"Shading Lab could not read the scene: {type(exc).__name__}: {exc}")
-            return
+            return None
         for warning in snap.warnings:
             self.report({"WARNING"}, warning)
-        if self.test_break():
-            return
-        extracted = time.perf_counter()
-        self.update_progress(0.25)
-        label = f"{snap.settings.model} | {snap.triangle_count:,} triangles | {len(snap.lights)} lights"
-        self.update_stats("", f"Shading Lab | {label} | Drawing")
-        settings = snap.settings
-        extra_passes = settings.compare_mode == "OFF" and not preview  # previews fill Combined only
-        views, comparison, combined, raw = frame_views(
-            snap, lambda model: background_color(snap, scene, model), samples=settings.samples)
-        if comparison is not None:  # Combined holds the composite; no Radiance pass (one model only)
-            label = (f"{label} | {settings.compare_mode.title()} "
-                     f"A {settings.compare_models[0]} / B {settings.compare_models[1]}")
-        raw = raw if extra_passes else None
-        if raw is not None:
-            self.add_pass(RADIANCE_PASS, 4, "RGBA", layer=depsgraph.view_layer.name)
-        lobe_passes = light_passes(depsgraph.view_layer) if extra_passes else []
-        for name in lobe_passes:
-            self.add_pass(name, 4, "RGBA", layer=depsgraph.view_layer.name)
+        return snap
+
+    def _draw(self, snap, views, comparison, outputs: list[str], lobe_passes: list[str]):
+        """The frame's ``outputs`` and each light pass (the same frame with one lobe's weights,
+        black behind), read back; None, with the error reported, when drawing failed."""
         renderer = Renderer()
         LIBRARY.clear_compile_error()
         try:
-            images = renderer.render_views(snap, views, [combined] + ([raw] if raw else []), comparison,
-                                           should_stop=self.test_break)
-            for name in lobe_passes:  # the same frame with one lobe's weights, black behind
+            images = renderer.render_views(snap, views, outputs, comparison, should_stop=self.test_break)
+            for name in lobe_passes:
                 if self.test_break():
                     break
-                lobe = View(snap.width, snap.height, samples=settings.samples,
+                lobe = View(snap.width, snap.height, samples=snap.settings.samples,
                             background=(0.0, 0.0, 0.0, 0.0), lobes=LIGHT_PASSES[name][1])
                 images[name] = renderer.render_views(snap, [lobe], [lobe.output("radiance")],
                                                      should_stop=self.test_break)[lobe.output("radiance")]
+            return images
         except ShaderCompileError as exc:
             self._fail(str(exc))
-            return
         except Exception as exc:
             self._fail(f"Shading Lab failed to draw: {type(exc).__name__}: {exc}")
-            return
         finally:
             renderer.free()
-        if self.test_break():
-            return
-        drawn = time.perf_counter()
-        self.update_progress(0.9)
-        result = self.begin_result(0, 0, width, height, layer=depsgraph.view_layer.name)
-        try:
-            passes = result.layers[0].passes
-            passes["Combined"].rect.foreach_set(images[combined].reshape(-1))
-            if raw is not None:
-                passes[RADIANCE_PASS].rect.foreach_set(images[raw].reshape(-1))
-            for name in lobe_passes:
-                passes[name].rect.foreach_set(images[name].reshape(-1))
-        finally:
-            self.end_result(result)
-        self.update_progress(1.0)
-        done = time.perf_counter()
-        last_timings.update(extract_ms=1e3 * (extracted - start), draw_ms=1e3 * (drawn - extracted),
-                            result_ms=1e3 * (done - drawn), total_ms=1e3 * (done - start))
-        self.update_stats("", f"Shading Lab | {label} | {last_timings['total_ms']:.0f} ms")
+        return None
 
     def update_render_passes(self, scene=None, renderlayer=None):
         """Announce the passes to the compositor and multilayer EXR output."""
