@@ -15,9 +15,9 @@ from functools import lru_cache
 
 import numpy as np
 
-from . import shading
+from . import brdf
 from .programs import MS_SIZE, S_SIZE
-from .snapshot import Terms
+from .snapshot import Terms, f0_from_ior
 
 
 def _half_vectors(ndf: str, alpha: float, strata: int, azimuths: int):
@@ -36,7 +36,7 @@ def directional_albedo(ndf: str, visibility: str, mu, roughness: float, strata: 
                        azimuths: int = 32) -> np.ndarray:
     """E(mu) for one roughness, mu an array of n.v values."""
     terms = Terms(ndf=ndf, visibility=visibility)
-    r = max(roughness, shading.MIN_PERCEPTUAL_ROUGHNESS)
+    r = max(roughness, brdf.MIN_PERCEPTUAL_ROUGHNESS)
     alpha = r * r
     h = _half_vectors(ndf, alpha, strata, azimuths)  # (S, 3)
     mu = np.atleast_1d(np.asarray(mu, np.float64))
@@ -47,7 +47,7 @@ def directional_albedo(ndf: str, visibility: str, mu, roughness: float, strata: 
     valid = (NoL > 0.0) & (VoH > 0.0)
     NoV = np.broadcast_to(mu[:, None], NoL.shape)
     with np.errstate(divide="ignore", invalid="ignore"):
-        V = shading.pbr_visibility(NoV, np.maximum(NoL, 1e-12), np.broadcast_to(NoH, NoL.shape), VoH,
+        V = brdf.pbr_visibility(NoV, np.maximum(NoL, 1e-12), np.broadcast_to(NoH, NoL.shape), VoH,
                                    alpha, terms)
         # E = E_h[V NoL 4 VoH / NoH] for h drawn with pdf D(h) NoH (l = reflect(v, h): dl = 4 VoH dh)
         weight = np.where(valid, V * NoL * 4.0 * VoH / NoH, 0.0)
@@ -58,7 +58,7 @@ def directional_albedo(ndf: str, visibility: str, mu, roughness: float, strata: 
 def albedo_table(ndf: str, visibility: str, size: int = MS_SIZE) -> np.ndarray:
     """(size, size) float32: row j = roughness j / (size - 1), column i = mu i / (size - 1)."""
     grid = np.arange(size) / (size - 1)
-    mu = np.maximum(grid, shading.MIN_COS)
+    mu = np.maximum(grid, brdf.MIN_COS)
     table = np.stack([directional_albedo(ndf, visibility, mu, r) for r in grid])
     return table.astype(np.float32)
 
@@ -123,14 +123,14 @@ def principled_s_table(size: int = S_SIZE, strata: int = 48) -> np.ndarray:
     out = np.zeros((size, size, size), np.float32)
     for k, z in enumerate(np.clip(grid, 1e-4, 0.99)):
         ior = (1.0 + z * z) / (1.0 - z * z)
-        f0 = ((ior - 1.0) / (ior + 1.0)) ** 2
+        f0 = f0_from_ior(ior)
         for j, mu in enumerate(np.clip(grid, 1e-4, 1.0)):
             v = np.array([np.sqrt(1.0 - mu * mu), 0.0, mu])
             for i, r in enumerate(np.clip(grid, 1e-4, 1.0)):
                 h = _vndf_half_vectors(r * r, mu, strata)
                 voh = h @ v
                 l_z = 2.0 * voh * h[:, 2] - mu
-                fresnel = shading.F_Dielectric(ior, voh)
+                fresnel = brdf.F_Dielectric(ior, voh)
                 s = np.clip((fresnel - f0) / (1.0 - f0), 0.0, 1.0)
                 out[k, j, i] = np.mean(np.where(l_z > 0.0, s, 0.0))
     return out

@@ -18,6 +18,8 @@ from dataclasses import dataclass, replace
 from pathlib import Path, PurePosixPath, PureWindowsPath
 from typing import Any
 
+from .snapshot import MODEL_CHOICES, cli_names, f0_from_ior
+
 
 def _find_presets_dir() -> Path:
     here = Path(__file__).resolve().parent
@@ -33,7 +35,7 @@ PRESETS_DIR = _find_presets_dir()
 MAX_FILE_BYTES = 1 << 20
 MAX_RESOLUTION = 16384
 #: Scene ``model`` values and the ``scene.shading_lab.model`` enum item each selects.
-MODELS = {"blinn-phong": "BLINN_PHONG", "phong": "PHONG", "pbr": "PBR"}
+MODELS = cli_names(MODEL_CHOICES)
 PRIMITIVES = ("plane", "cube", "uv_sphere", "ico_sphere", "cylinder", "torus")
 LIGHT_KINDS = ("point", "spot", "sun", "area")
 CAMERA_TYPES = ("perspective", "orthographic")
@@ -109,7 +111,7 @@ class MaterialPreset:
         if self.f0 is not None:
             return self.f0
         if self.ior is not None:
-            return ((self.ior - 1.0) / (self.ior + 1.0)) ** 2
+            return f0_from_ior(self.ior)
         return 0.04
 
 

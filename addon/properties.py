@@ -14,12 +14,10 @@ from bpy.props import (
 )
 
 from . import extract
+from .snapshot import MODEL_CHOICES, enum_items
+from .tonemap import TONE_MAPPER_CHOICES
 
-MODEL_ITEMS = (
-    ("BLINN_PHONG", "Blinn-Phong", "Empirical Blinn-Phong model (eq. 1.7), LDR, clamped to [0, 1]"),
-    ("PHONG", "Phong", "Original Phong model (eqs. 1.2-1.3), LDR, clamped to [0, 1]"),
-    ("PBR", "Physically Based", "Cook-Torrance GGX specular + Lambert diffuse, HDR"),
-)
+MODEL_ITEMS = enum_items(MODEL_CHOICES)
 
 
 TERM_ITEMS = {
@@ -68,14 +66,7 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
         description="Ambient constant x of the Blinn-Phong and Phong models (eq. 1.4); 0.2 is the "
                     "commonly used value")
     tone_mapper: EnumProperty(
-        name="Tone Mapper", default="BLENDER", update=_redraw, items=(
-            ("BLENDER", "Blender", "Combined holds scene-linear radiance; Blender's view transform "
-                                   "(AgX, Filmic, Standard ...) displays it, as for Cycles and EEVEE"),
-            ("CLAMP", "Clamp", "Clip to [0, 1], the seed's LDR pipeline"),
-            ("REINHARD", "Reinhard", "Reinhard et al. 2002, L / (1 + L) per channel"),
-            ("HABLE", "Hable Filmic", "Hable 2010, the Uncharted 2 filmic curve"),
-            ("ACES", "ACES Fitted", "Hill's fit of the ACES RRT + sRGB ODT"),
-        ),
+        name="Tone Mapper", default="BLENDER", update=_redraw, items=enum_items(TONE_MAPPER_CHOICES),
         description="Who turns radiance into display values. The engine's own tone mappers write "
                     "display-linear Combined (and raw radiance to a Radiance pass) and expect the "
                     "Standard view transform")

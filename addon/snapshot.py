@@ -11,7 +11,36 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-MODELS = ("BLINN_PHONG", "PHONG", "PBR")
+
+@dataclass(frozen=True)
+class Choice:
+    """One value of an enumerated setting: its identifier (Blender enum item, ``#define`` suffix),
+    label, command-line and preset spelling, and description."""
+
+    id: str
+    label: str
+    cli: str
+    description: str
+
+
+def enum_items(choices: tuple[Choice, ...]) -> tuple[tuple[str, str, str], ...]:
+    """``choices`` as Blender enum items."""
+    return tuple((c.id, c.label, c.description) for c in choices)
+
+
+def cli_names(choices: tuple[Choice, ...]) -> dict[str, str]:
+    """Command-line (and preset) name -> identifier."""
+    return {c.cli: c.id for c in choices}
+
+
+#: The shading models, in the order panels, tables and the command line list them.
+MODEL_CHOICES = (
+    Choice("BLINN_PHONG", "Blinn-Phong", "blinn-phong",
+           "Empirical Blinn-Phong model (eq. 1.7), LDR, clamped to [0, 1]"),
+    Choice("PHONG", "Phong", "phong", "Original Phong model (eqs. 1.2-1.3), LDR, clamped to [0, 1]"),
+    Choice("PBR", "Physically Based", "pbr", "Cook-Torrance GGX specular + Lambert diffuse, HDR"),
+)
+MODELS = tuple(c.id for c in MODEL_CHOICES)
 
 #: The physically based model's term variants (glsl/pbr_terms.glsl), the first of each the default.
 TERM_CHOICES = {
@@ -50,10 +79,12 @@ LIGHT_KINDS = ("POINT", "SPOT", "SUN", "AREA")
 DEFAULT_F0 = 0.04
 
 
-def f0_from_ior(ior: float) -> float:
-    """Normal-incidence Fresnel reflectance from air into a medium of index ``ior``."""
-    ior = max(float(ior), 1.0)
-    return ((ior - 1.0) / (ior + 1.0)) ** 2
+def f0_from_ior(ior):
+    """Normal-incidence Fresnel reflectance from air into a medium of index ``ior`` (>= 1; a
+    float, or an array of them)."""
+    ior = np.maximum(ior, 1.0)
+    f0 = ((ior - 1.0) / (ior + 1.0)) ** 2
+    return float(f0) if np.ndim(f0) == 0 else f0
 
 
 def shininess_from_roughness(roughness: float) -> float:

@@ -4,7 +4,19 @@ from __future__ import annotations
 
 import numpy as np
 
-TONE_MAPPERS = ("BLENDER", "CLAMP", "REINHARD", "HABLE", "ACES")
+from .snapshot import Choice
+
+#: Who turns radiance into display values: Blender's view transform, or one of the engine's curves.
+TONE_MAPPER_CHOICES = (
+    Choice("BLENDER", "Blender", "blender", "Combined holds scene-linear radiance; Blender's view "
+                                            "transform (AgX, Filmic, Standard ...) displays it, as for "
+                                            "Cycles and EEVEE"),
+    Choice("CLAMP", "Clamp", "clamp", "Clip to [0, 1], the seed's LDR pipeline"),
+    Choice("REINHARD", "Reinhard", "reinhard", "Reinhard et al. 2002, L / (1 + L) per channel"),
+    Choice("HABLE", "Hable Filmic", "hable", "Hable 2010, the Uncharted 2 filmic curve"),
+    Choice("ACES", "ACES Fitted", "aces", "Hill's fit of the ACES RRT + sRGB ODT"),
+)
+TONE_MAPPERS = tuple(c.id for c in TONE_MAPPER_CHOICES)
 TRANSFERS = ("SRGB", "GAMMA22")
 
 

@@ -28,8 +28,9 @@ sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
 
 import render as cli  # noqa: E402
 
-MODELS = (("blinn-phong", "BLINN_PHONG", "Blinn-Phong"), ("phong", "PHONG", "Phong"),
-          ("pbr", "PBR", "Physically based"))
+from addon.snapshot import MODEL_CHOICES  # noqa: E402
+
+MODELS = tuple((c.cli, c.id, c.label) for c in MODEL_CHOICES)
 
 
 def parse_args(argv):

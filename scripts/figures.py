@@ -27,7 +27,7 @@ import numpy as np  # noqa: E402
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from addon import shading  # noqa: E402
+from addon import brdf, shading  # noqa: E402
 from addon.snapshot import MaterialParams, Terms, shininess_from_roughness  # noqa: E402
 
 OUT = ROOT / "docs" / "figures"
@@ -51,21 +51,21 @@ def fresnel_figure(path: Path) -> None:
     sin_t = np.linspace(0.0, 1.0, 401)
     cos_t = np.sqrt(1.0 - sin_t ** 2)
     materials = {
-        "glass (IOR 1.5)": np.repeat(shading.F_Dielectric(1.5, cos_t)[:, None], 3, axis=1),
-        "copper": shading.F_Conductor(np.array(COPPER[0]), np.array(COPPER[1]), cos_t),
-        "aluminium": shading.F_Conductor(np.array(ALUMINIUM[0]), np.array(ALUMINIUM[1]), cos_t),
+        "glass (IOR 1.5)": np.repeat(brdf.F_Dielectric(1.5, cos_t)[:, None], 3, axis=1),
+        "copper": brdf.F_Conductor(np.array(COPPER[0]), np.array(COPPER[1]), cos_t),
+        "aluminium": brdf.F_Conductor(np.array(ALUMINIUM[0]), np.array(ALUMINIUM[1]), cos_t),
     }
     fig = plt.figure(figsize=(12.0, 4.6))
     grid = fig.add_gridspec(2, 3, height_ratios=(6, 1), hspace=0.35, wspace=0.22)
     ones = np.ones_like(cos_t)
     for col, (name, exact) in enumerate(materials.items()):
         f0 = exact[0]  # sin(theta) = 0: normal incidence
-        schlick = shading.F_Schlick(f0, ones, cos_t)
-        sg = shading.F_SchlickSG(f0, ones, cos_t)
+        schlick = brdf.F_Schlick(f0, ones, cos_t)
+        sg = brdf.F_SchlickSG(f0, ones, cos_t)
         ps = np.linspace(0.01, 0.5, 491)  # eq. 1.13's p, least squares over sin(theta)
-        errs = [np.sum((shading.F_SchlickGeneral(f0, ones, p, cos_t) - exact) ** 2) for p in ps]
+        errs = [np.sum((brdf.F_SchlickGeneral(f0, ones, p, cos_t) - exact) ** 2) for p in ps]
         p = float(ps[int(np.argmin(errs))])
-        general = shading.F_SchlickGeneral(f0, ones, p, cos_t)
+        general = brdf.F_SchlickGeneral(f0, ones, p, cos_t)
         ax = fig.add_subplot(grid[0, col])
         channels = CHANNELS[:1] if col == 0 else CHANNELS
         for c, (_, colour) in enumerate(channels):
@@ -168,7 +168,7 @@ def _half_vector_grid(alpha, nu=192, nphi=48):
 
 def directional_albedo(ndf, visibility, roughness, view_deg, multiscatter):
     """int f_spec(l, v) (n.l) dl of a white metal, by quadrature over half vectors (dl = 4 v.h dh)."""
-    h, dh = _half_vector_grid(max(roughness, shading.MIN_PERCEPTUAL_ROUGHNESS) ** 2)
+    h, dh = _half_vector_grid(max(roughness, brdf.MIN_PERCEPTUAL_ROUGHNESS) ** 2)
     mat = MaterialParams(base_color=(1.0, 1.0, 1.0), metalness=1.0, roughness=roughness)
     terms = Terms(ndf=ndf, visibility=visibility, multiscatter=multiscatter)
     out = []

@@ -34,7 +34,7 @@ def main() -> int:
 
     scene = demo_scene.empty_scene(w, h)
     demo_scene.build(scene)
-    models = ("BLINN_PHONG", "PHONG", "PBR")
+    from addon.snapshot import MODELS as models
     samples = {m: [] for m in models}
     for round_index in range(args.frames + 1):
         for model in models:

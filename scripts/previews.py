@@ -22,7 +22,9 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
 
-MODELS = (("BLINN_PHONG", "Blinn-Phong"), ("PHONG", "Phong"), ("PBR", "Physically based"))
+from addon.snapshot import MODEL_CHOICES  # noqa: E402  (pure module)
+
+MODELS = tuple((c.id, c.label) for c in MODEL_CHOICES)
 
 
 def main() -> int:

@@ -22,10 +22,12 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from addon.snapshot import TERM_CHOICES  # noqa: E402  (pure module: no Blender needed to parse args)
+# pure modules: no Blender needed to parse the arguments
+from addon.snapshot import MODEL_CHOICES, TERM_CHOICES, cli_names  # noqa: E402
+from addon.tonemap import TONE_MAPPER_CHOICES  # noqa: E402
 
-MODELS = {"blinn-phong": "BLINN_PHONG", "phong": "PHONG", "pbr": "PBR"}
-TONE_MAPPERS = ("blender", "clamp", "reinhard", "hable", "aces")
+MODELS = cli_names(MODEL_CHOICES)
+TONE_MAPPERS = tuple(cli_names(TONE_MAPPER_CHOICES))
 
 
 class CliError(Exception):

@@ -33,6 +33,8 @@ def main() -> int:
 
     import addon
     from addon import gpu_library, programs
+    from addon.snapshot import MODELS
+    from addon.tonemap import TONE_MAPPERS
     from addon.viewport import ViewportSession
 
     addon.register()
@@ -102,12 +104,12 @@ def main() -> int:
     def compile_all(_):
         gpu_library.LIBRARY.clear()
         times = []
-        for model in ("BLINN_PHONG", "PHONG", "PBR"):
+        for model in MODELS:
             features = programs.Features.from_snapshot(snap, model)
             start = time.perf_counter()
             gpu_library.shading_program(features)
             times.append((model, features.defines(), 1e3 * (time.perf_counter() - start)))
-        for tone_mapper in ("CLAMP", "REINHARD", "HABLE", "ACES"):
+        for tone_mapper in TONE_MAPPERS[1:]:  # the engine's own curves
             post = programs.PostFeatures(1, tone_mapper, "SRGB")
             start = time.perf_counter()
             gpu_library.post_program(post)

@@ -85,5 +85,5 @@ def test_compare_command_on_a_preset(tmp_path):
     rows = {line.split("|")[1].strip(): line.split("|")[2:] for line in
             (tmp_path / "long_tail_metrics.md").read_text().splitlines() if line.startswith("| ")}
     flip = {name: float(cols[0]) for name, cols in rows.items() if name in
-            ("Blinn-Phong", "Phong", "Physically based")}
-    assert flip["Physically based"] < 0.5 * flip["Blinn-Phong"]
+            ("Blinn-Phong", "Phong", "Physically Based")}
+    assert flip["Physically Based"] < 0.5 * flip["Blinn-Phong"]

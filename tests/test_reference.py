@@ -22,7 +22,7 @@ import math
 import numpy as np
 import pytest
 
-from addon import multiscatter, shading
+from addon import brdf, multiscatter, shading
 from addon.snapshot import TERM_CHOICES, MaterialParams, Terms, shininess_from_roughness
 
 trapezoid = getattr(np, "trapezoid", None) or np.trapz  # numpy 2 renamed trapz (bpy 4.2 pulls numpy 2)
@@ -62,7 +62,7 @@ def mi():
 
 # --- 1. Mitsuba 3 ------------------------------------------------------------------------------
 
-NDF_TWIN = {"GGX": shading.D_GGX, "BECKMANN": shading.D_Beckmann}
+NDF_TWIN = {"GGX": brdf.D_GGX, "BECKMANN": brdf.D_Beckmann}
 
 
 def _mi_type(mi, ndf):
@@ -72,8 +72,8 @@ def _mi_type(mi, ndf):
 def g1_twin(ndf, NoV, alpha):
     """G1 implied by the twin: V_SmithGGXSeparable = G1(v) G1(l) / (4 NoV NoL); 1 / (1 + Lambda)."""
     if ndf == "GGX":
-        return 2.0 * NoV * np.sqrt(shading.V_SmithGGXSeparable(NoV, NoV, alpha))
-    return 1.0 / (1.0 + shading.Lambda_Beckmann(NoV, alpha))
+        return 2.0 * NoV * np.sqrt(brdf.V_SmithGGXSeparable(NoV, NoV, alpha))
+    return 1.0 / (1.0 + brdf.Lambda_Beckmann(NoV, alpha))
 
 
 @pytest.mark.parametrize("ndf", ["GGX", "BECKMANN"])
@@ -127,8 +127,8 @@ def _random_pairs(count, seed, min_cos=0.02):
 @pytest.mark.parametrize("ndf", ["GGX", "BECKMANN"])
 def test_mitsuba_G_is_separable_smith(mi, ndf):
     """Mitsuba's G(wi, wo, m) is G1(wi) G1(wo): the twin's SMITH_SEPARABLE, not the correlated one."""
-    sep = {"GGX": shading.V_SmithGGXSeparable, "BECKMANN": shading.V_SmithBeckmannSeparable}[ndf]
-    cor = {"GGX": shading.V_SmithGGXCorrelated, "BECKMANN": shading.V_SmithBeckmannCorrelated}[ndf]
+    sep = {"GGX": brdf.V_SmithGGXSeparable, "BECKMANN": brdf.V_SmithBeckmannSeparable}[ndf]
+    cor = {"GGX": brdf.V_SmithGGXCorrelated, "BECKMANN": brdf.V_SmithBeckmannCorrelated}[ndf]
     worst_sep = worst_cor = 0.0
     for alpha in (0.05, 0.3, 0.6, 1.0):
         dist = mi.MicrofacetDistribution(_mi_type(mi, ndf), alpha, False)
@@ -152,7 +152,7 @@ def test_dielectric_fresnel_matches_mitsuba(mi):
     for eta in (1.33, 1.5, 2.4, 1.0 / 1.33, 1.0 / 1.5):
         e = f32(eta)
         ref = np.array([mi.fresnel(float(c), float(e))[0] for c in cos])
-        err = rel_err(shading.F_Dielectric(e, cos), ref)
+        err = rel_err(brdf.F_Dielectric(e, cos), ref)
         worst[eta] = err.max()
         # leaving the medium, dF/dcos is infinite at the critical angle: float32 inputs there
         # cost a few more ulps, so the tight bound applies 0.005 away from it
@@ -170,7 +170,7 @@ def test_conductor_fresnel_matches_mitsuba(mi):
     worst = {}
     for metal, (n, k) in METALS.items():
         n, k = f32(n), f32(k)
-        twin = shading.F_Conductor(n, k, cos)
+        twin = brdf.F_Conductor(n, k, cos)
         ref = np.array([[mi.fresnel_conductor(float(c), mi.Complex2f(float(nc), float(kc)))
                          for nc, kc in zip(n, k)] for c in cos])
         worst[metal] = rel_err(twin, ref).max()
@@ -273,7 +273,7 @@ def test_beckmann_lambda_against_erf_form():
     for alpha in (0.05, 0.3, 0.6, 1.0):
         a = mu / (alpha * np.sqrt(1.0 - mu * mu))
         exact = (erf(a) - 1.0) / 2.0 + np.exp(-a * a) / (2.0 * a * math.sqrt(math.pi))
-        twin = 1.0 / (1.0 + shading.Lambda_Beckmann(mu, alpha))
+        twin = 1.0 / (1.0 + brdf.Lambda_Beckmann(mu, alpha))
         worst = max(worst, rel_err(twin, 1.0 / (1.0 + exact)).max())
     print(f"\nBeckmann G1 rational fit vs erf form: worst relative error {worst:.2e}")
     assert worst < 3.5e-3  # Walter et al. 2007: "less than 0.35 %"
@@ -287,7 +287,7 @@ def test_ggx_correlated_is_eqs_1_16_1_17():
 
     for alpha in (0.05, 0.3, 1.0):
         G = 1.0 / (1.0 + lam(NoV, alpha) + lam(NoL, alpha))  # eq. 1.16 with m = h
-        V = shading.V_SmithGGXCorrelated(NoV, NoL, alpha)
+        V = brdf.V_SmithGGXCorrelated(NoV, NoL, alpha)
         assert np.allclose(V * 4.0 * NoV * NoL, G, rtol=1e-9, atol=0.0)
 
 
@@ -295,19 +295,19 @@ def test_schlick_facts():
     eta = 1.5
     f0 = ((eta - 1.0) / (eta + 1.0)) ** 2
     assert f0 == pytest.approx(0.04, abs=1e-15)
-    assert shading.F_Dielectric(eta, 1.0) == pytest.approx(0.04, abs=1e-15)
+    assert brdf.F_Dielectric(eta, 1.0) == pytest.approx(0.04, abs=1e-15)
     for e in (1.33, 1.5, 2.4):
         f0e = ((e - 1.0) / (e + 1.0)) ** 2
-        assert shading.F_Schlick([f0e], 1.0, 1.0)[0] == pytest.approx(shading.F_Dielectric(e, 1.0), abs=1e-15)
+        assert brdf.F_Schlick([f0e], 1.0, 1.0)[0] == pytest.approx(brdf.F_Dielectric(e, 1.0), abs=1e-15)
     x = np.linspace(0.0, 1.0, 1001)
     f0 = np.array([0.04, 0.5, 0.9])
     ones = np.ones_like(x)
-    schlick = shading.F_Schlick(f0, ones, x)
+    schlick = brdf.F_Schlick(f0, ones, x)
     # eq. 1.13 with p = 1/5 is eq. 1.11; both reach F90 = 1 at grazing
-    assert np.allclose(shading.F_SchlickGeneral(f0, ones, 0.2, x), schlick, rtol=1e-12, atol=1e-15)
+    assert np.allclose(brdf.F_SchlickGeneral(f0, ones, 0.2, x), schlick, rtol=1e-12, atol=1e-15)
     assert np.allclose(schlick[0], 1.0) and np.allclose(schlick[-1], f0)
     # eq. 1.12's spherical-Gaussian exponent stays within 0.4 % absolute of (1 - x)^5
-    sg_err = np.abs(shading.F_SchlickSG(f0, ones, x) - schlick).max()
+    sg_err = np.abs(brdf.F_SchlickSG(f0, ones, x) - schlick).max()
     print(f"\nSchlick SG vs Schlick: max abs difference {sg_err:.4f}")
     assert sg_err < 0.004
 
@@ -318,7 +318,7 @@ def test_schlick_error_against_exact_fresnel():
     cosine-weighted hemispherical mean of the absolute error is below 1 %."""
     c = np.linspace(0.0, 1.0, 100001)
     theta = np.degrees(np.arccos(c))
-    err = np.abs(shading.F_Schlick([0.04], 1.0, c)[:, 0] - shading.F_Dielectric(1.5, c))
+    err = np.abs(brdf.F_Schlick([0.04], 1.0, c)[:, 0] - brdf.F_Dielectric(1.5, c))
     mean = trapezoid(err * 2.0 * c, c)
     onset = theta[err > 0.01].min()
     print(f"\nSchlick vs exact, IOR 1.5: max abs {err.max():.4f} at {theta[err.argmax()]:.1f} deg, "
@@ -332,8 +332,8 @@ def test_conductor_normal_incidence():
     for n, k in METALS.values():
         n, k = np.array(n), np.array(k)
         expected = ((n - 1.0) ** 2 + k * k) / ((n + 1.0) ** 2 + k * k)
-        assert np.allclose(shading.F_Conductor(n, k, 1.0), expected, rtol=1e-12)
-        assert np.allclose(shading.F_Conductor(n, k, 0.0), 1.0, rtol=1e-12)
+        assert np.allclose(brdf.F_Conductor(n, k, 1.0), expected, rtol=1e-12)
+        assert np.allclose(brdf.F_Conductor(n, k, 0.0), 1.0, rtol=1e-12)
 
 
 def test_normalised_blinn_phong_albedo():
@@ -342,7 +342,7 @@ def test_normalised_blinn_phong_albedo():
     theta = np.linspace(0.0, np.pi / 2, 200001)
     alb = {}
     for s in (1, 2, 5, 10, 20, 30, 100, 300, 1000):
-        f = shading.S_BlinnPhongNormalized(np.cos(theta / 2), s) * np.cos(theta) * np.sin(theta) * 2 * np.pi
+        f = brdf.S_BlinnPhongNormalized(np.cos(theta / 2), s) * np.cos(theta) * np.sin(theta) * 2 * np.pi
         alb[s] = trapezoid(f, theta)
     print("\nnormalised Blinn-Phong albedo at normal incidence:", {k: round(v, 4) for k, v in alb.items()})
     assert all(1.0 <= a < 1.08 for a in alb.values())
@@ -355,18 +355,18 @@ def test_diffuse_facts():
     cos_phi = np.cos(np.linspace(0.0, np.pi, 51))[:, None] * np.ones((1, 51))
     rho = np.array([0.2, 0.5, 1.0])
     # Oren-Nayar with sigma = 0 is Lambert
-    on = shading.Fd_OrenNayar(rho, NoV, NoL, cos_phi, 0.0)
+    on = brdf.Fd_OrenNayar(rho, NoV, NoL, cos_phi, 0.0)
     assert np.allclose(on, rho / np.pi, rtol=1e-12)
     # Burley: 1/pi when NoL = NoV = 1, whatever the roughness and LoH ...
     for r, LoH in ((0.0, 1.0), (1.0, 1.0), (0.5, 0.3)):
-        assert shading.Fd_Burley(1.0, 1.0, LoH, r) == pytest.approx(1.0 / np.pi, rel=1e-14)
+        assert brdf.Fd_Burley(1.0, 1.0, LoH, r) == pytest.approx(1.0 / np.pi, rel=1e-14)
     # ... and exactly Lambert wherever F_D90 = 0.5 + 2 r LoH^2 = 1
     r = 0.5
     LoH = math.sqrt(0.25 / r)
-    assert np.allclose(shading.Fd_Burley(NoV, NoL, LoH, r), 1.0 / np.pi, rtol=1e-12)
+    assert np.allclose(brdf.Fd_Burley(NoV, NoL, LoH, r), 1.0 / np.pi, rtol=1e-12)
     # renormalised Burley at r = 0: F_D90 = 0, factor 1: (1 - (1 - NoL)^5)(1 - (1 - NoV)^5) / pi
     expected = (1.0 - (1.0 - NoL) ** 5) * (1.0 - (1.0 - NoV) ** 5) / np.pi
-    assert np.allclose(shading.Fd_BurleyRenormalized(NoV, NoL, 0.7, 0.0), expected, rtol=1e-12)
+    assert np.allclose(brdf.Fd_BurleyRenormalized(NoV, NoL, 0.7, 0.0), expected, rtol=1e-12)
 
 
 def test_blinn_phong_matches_beckmann_at_walter_mapping():
@@ -382,7 +382,7 @@ def test_blinn_phong_matches_beckmann_at_walter_mapping():
         alpha = r * r
         s = shininess_from_roughness(r)
         assert s == pytest.approx(2.0 / alpha ** 2 - 2.0, rel=1e-12)
-        beckmann = shading.D_Beckmann(c, np.sin(theta) ** 2, alpha)
+        beckmann = brdf.D_Beckmann(c, np.sin(theta) ** 2, alpha)
         phong = (s + 2.0) / (2.0 * np.pi) * c ** s
         assert phong[0] == pytest.approx(beckmann[0], rel=1e-12)
         assert trapezoid(phong * w, theta) == pytest.approx(1.0, abs=1e-6)
@@ -450,7 +450,7 @@ def albedos():
     spec, diff = {}, {}
     dsamples = _diffuse_samples()
     for r in ROUGHNESSES:
-        ssamples = _specular_samples(max(r, shading.MIN_PERCEPTUAL_ROUGHNESS) ** 2)
+        ssamples = _specular_samples(max(r, brdf.MIN_PERCEPTUAL_ROUGHNESS) ** 2)
         for metal in (0.0, 1.0):
             mat = MaterialParams(base_color=(1.0, 1.0, 1.0), metalness=metal, roughness=r)
             families = (TERM_CHOICES[k] for k in ("fresnel", "ndf", "visibility"))
@@ -540,7 +540,7 @@ def multiscatter_albedos():
         rows = []
         for r in MS_ROUGHNESS:
             mat = MaterialParams(base_color=(1.0, 1.0, 1.0), metalness=1.0, roughness=float(r))
-            samples = _specular_samples(max(r, shading.MIN_PERCEPTUAL_ROUGHNESS) ** 2, 192, 48)
+            samples = _specular_samples(max(r, brdf.MIN_PERCEPTUAL_ROUGHNESS) ** 2, 192, 48)
             rows.append(_albedo(samples, mat, terms, (0.0, 1.0)))
         out[ndf, vis] = np.array(rows)  # (roughness, view)
     return out

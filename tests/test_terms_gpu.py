@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 from glsl_harness import evaluate
 
-from addon import shading as S
+from addon import brdf as S
 from addon import tonemap as T
 
 N = 4096
