@@ -81,7 +81,7 @@ def unregister():
 
 
 def _unregister():
-    from . import engine, gpu_library
+    from . import engine, extract, gpu_library
 
     global _registered
     if not _registered:
@@ -94,3 +94,4 @@ def _unregister():
     classes, modules = _classes()
     _undo([*classes, *modules])
     gpu_library.LIBRARY.clear()
+    extract.IMAGES.clear()

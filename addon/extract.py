@@ -198,25 +198,34 @@ class _ImageCache:
     """Pixels read from images, kept between renders: reading a 2048 x 2048 image costs ~160 ms
     here, so each image is read once and again only when it changed (a different fingerprint:
     size, colour space, file; unsaved edits; or a depsgraph update naming it, see ``forget``).
-    Renders, previews and the viewport read scenes on different threads: a lock guards it."""
+    At most ``budget`` bytes are kept, the least recently used dropped first; a file load or
+    unregister empties it. Renders, previews and the viewport read scenes on different threads:
+    a lock guards it."""
 
-    def __init__(self):
+    def __init__(self, budget: int = 1 << 30):
         self._lock = threading.Lock()
-        self._entries: dict[str, tuple[tuple, S.ImageData]] = {}
+        self._entries: dict[str, tuple[tuple, S.ImageData]] = {}  # in order of last use
+        self.budget = budget
+        self.reads = 0  # images read from Blender since start (tests count them)
 
     def get(self, key: str, image: bpy.types.Image, warnings: list[str]) -> S.ImageData | None:
         fingerprint = _fingerprint(image)
         with self._lock:
-            entry = self._entries.get(key)
-        if entry is not None and entry[0] == fingerprint and not image.is_dirty:
-            return entry[1]
+            entry = self._entries.pop(key, None)
+            if entry is not None and entry[0] == fingerprint and not image.is_dirty:
+                self._entries[key] = entry  # most recently used last
+                return entry[1]
         data = _read_image(key, image, warnings)
-        with self._lock:
-            if data is None:
-                self._entries.pop(key, None)
-            else:
+        self.reads += 1
+        if data is not None:
+            with self._lock:
                 self._entries[key] = (_fingerprint(image), data)  # after loading: the real size
+                while self._nbytes() > self.budget and len(self._entries) > 1:
+                    del self._entries[next(iter(self._entries))]
         return data
+
+    def _nbytes(self) -> int:
+        return sum(data.pixels.nbytes for _, data in self._entries.values())
 
     def forget(self, keys) -> None:
         with self._lock:

@@ -186,21 +186,36 @@ def _remember_scene(*_args):
     extract.remember_settings(getattr(bpy.context, "scene", None))
 
 
-_HANDLERS = (bpy.app.handlers.depsgraph_update_post, bpy.app.handlers.load_post)
+@persistent
+def _forget_changed_images(_scene, depsgraph):
+    """Main-thread handler: images reloaded, repainted or regenerated are read again."""
+    extract.IMAGES.forget(extract.image_updates(depsgraph))
+
+
+@persistent
+def _forget_all_images(*_args):
+    """Main-thread handler: a file load starts with no cached pixels."""
+    extract.IMAGES.clear()
+
+
+def _handlers():
+    h = bpy.app.handlers
+    return ((h.depsgraph_update_post, _remember_scene), (h.load_post, _remember_scene),
+            (h.depsgraph_update_post, _forget_changed_images), (h.load_post, _forget_all_images))
 
 
 def register():
     """Attach the settings as ``scene.shading_lab`` and ``material.shading_lab``."""
     for owner, group in _OWNERS:
         owner.shading_lab = PointerProperty(type=group)
-    for handlers in _HANDLERS:
-        handlers.append(_remember_scene)
+    for handlers, function in _handlers():
+        handlers.append(function)
     _remember_scene()
 
 
 def unregister():
-    for handlers in _HANDLERS:
-        if _remember_scene in handlers:
-            handlers.remove(_remember_scene)
+    for handlers, function in _handlers():
+        if function in handlers:
+            handlers.remove(function)
     for owner, _group in _OWNERS:
         del owner.shading_lab

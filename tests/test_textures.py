@@ -181,3 +181,81 @@ def test_alpha_from_the_base_color_image(tmp_path):
     front = srgb_decode(_stored(np.array([0.1, 0.2, 0.9])))  # the image stores sRGB bytes
     want = a * front + (1.0 - a) * np.array([0.8, 0.1, 0.1])
     np.testing.assert_allclose(got, want, atol=3e-3)
+
+
+def _albedo_scene(texels):
+    return _textured_scene({"Base Color": ("albedo", texels, False)}, sun=math.pi)
+
+
+def test_image_pixels_are_read_once_and_again_after_an_edit(tmp_path):
+    """A saved image's pixels are read from Blender once, not per render; an unsaved edit (new
+    pixels, as painting makes) is read again by the next render, and seen."""
+    from addon import extract
+
+    rng = np.random.default_rng(11)
+    first, second = rng.uniform(0.0, 1.0, (2, TEXELS, TEXELS, 3))
+    scene = _albedo_scene(first)
+    image = bpy.data.images["albedo"]
+    image.filepath_raw = str(tmp_path / "albedo.png")
+    image.file_format = "PNG"
+    image.save()
+    assert not image.is_dirty
+    reads = extract.IMAGES.reads
+    a = scenes.render(scene, tmp_path / "a.exr")[..., :3]
+    b = scenes.render(scene, tmp_path / "b.exr")[..., :3]
+    assert extract.IMAGES.reads - reads == 1, "the second render read the image again"
+    np.testing.assert_array_equal(a, b)
+    np.testing.assert_allclose(a, _per_texel(srgb_decode(_stored(first))), atol=2e-3)
+    rgba = np.concatenate([second, np.ones((TEXELS, TEXELS, 1))], -1).astype(np.float32)
+    image.pixels.foreach_set(rgba.ravel())
+    image.update()
+    assert image.is_dirty
+    c = scenes.render(scene, tmp_path / "c.exr")[..., :3]
+    np.testing.assert_allclose(c, _per_texel(srgb_decode(_stored(second))), atol=2e-3)
+
+
+def test_image_from_a_linked_library_beside_a_local_one_of_the_same_name(tmp_path):
+    """A material linked from another file samples that file's "Img" (``Img [lib.blend]``)
+    while a local material samples the local "Img": each plane shows its own texture."""
+    rng = np.random.default_rng(12)
+    lib_texels, local_texels = rng.uniform(0.0, 1.0, (2, TEXELS, TEXELS, 3))
+    library = tmp_path / "lib.blend"
+    scenes.reset(size=SIZE)
+    lib_image = _image("Img", lib_texels)
+    lib_image.pack()  # the pixels travel inside lib.blend
+    lib_mat = bpy.data.materials.new("LibMat")
+    if lib_mat.node_tree is None:
+        lib_mat.use_nodes = True
+    tree = lib_mat.node_tree
+    node = tree.nodes.new("ShaderNodeTexImage")
+    node.image, node.interpolation = lib_image, "Closest"
+    bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    bsdf.inputs["Specular IOR Level"].default_value = 0.0
+    tree.links.new(node.outputs["Color"], bsdf.inputs["Base Color"])
+    bpy.data.libraries.write(str(library), {lib_mat}, fake_user=True)
+
+    scene = _albedo_scene(local_texels)  # resets: a new file whose image is also named "Img"
+    local = bpy.data.images["albedo"]
+    local.name = "Img"
+    with bpy.data.libraries.load(str(library), link=True) as (data_from, data_to):
+        data_to.materials = ["LibMat"]
+    linked = data_to.materials[0]
+    assert linked.library is not None
+    assert sorted(i.name_full for i in bpy.data.images) == ["Img", "Img [lib.blend]"]
+    plane = next(o for o in scene.objects if o.type == "MESH")
+    plane.scale = (0.5, 1.0, 1.0)  # the local plane covers x < 0, the linked one x > 0
+    plane.location.x = -0.5
+    other = bpy.data.objects.new("Linked", plane.data.copy())
+    other.data.materials.clear()
+    other.data.materials.append(linked)
+    other.scale, other.location = (0.5, 1.0, 1.0), (0.5, 0.0, 0.0)
+    scene.collection.objects.link(other)
+    got = scenes.render(scene, tmp_path / "linked.exr")[..., :3]
+    # each half shows its own texture squeezed into half the width: texel column from 2 u
+    centres = (np.arange(SIZE) + 0.5) / SIZE
+    u = np.where(centres < 0.5, 2.0 * centres, 2.0 * centres - 1.0)
+    u_idx = np.floor(u * TEXELS).astype(int)
+    v_idx = np.floor((1.0 - centres) * TEXELS).astype(int)
+    want = np.where((centres < 0.5)[None, :, None], srgb_decode(_stored(local_texels))[v_idx][:, u_idx],
+                    srgb_decode(_stored(lib_texels))[v_idx][:, u_idx])
+    np.testing.assert_allclose(got, want, atol=2e-3)
