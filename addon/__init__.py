@@ -1,9 +1,10 @@
 """Shading Lab: a render engine that draws scenes with Blinn-Phong, Phong and physically based
 GLSL shading, to see and measure what each model gets right and what it costs.
 
-Package layout: ``snapshot``/``programs``/``shading`` are pure Python (no ``bpy``); ``extract``
-reads Blender data; ``renderer`` draws with ``gpu``; ``engine``/``properties``/``ui`` are the
-Blender-facing layer. Installed as an extension the package is ``bl_ext.<repo>.shading_lab``,
+Package layout: ``snapshot``/``programs``/``brdf``/``multiscatter``/``shading``/``tonemap``/
+``presets`` are pure Python (no ``bpy``); ``extract`` reads Blender data; ``gpu_library``,
+``gpu_scene``, ``passes`` and ``renderer`` draw with ``gpu`` and read no Blender data;
+``engine``/``viewport``/``properties``/``operators``/``ui`` are the Blender-facing layer. Installed as an extension the package is ``bl_ext.<repo>.shading_lab``,
 so every import inside it is relative.
 """
 
