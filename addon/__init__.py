@@ -4,8 +4,9 @@ GLSL shading, to see and measure what each model gets right and what it costs.
 Package layout: ``snapshot``/``programs``/``brdf``/``multiscatter``/``shading``/``tonemap``/
 ``presets`` are pure Python (no ``bpy``); ``extract`` reads Blender data; ``gpu_library``,
 ``gpu_scene``, ``passes`` and ``renderer`` draw with ``gpu`` and read no Blender data;
-``engine``/``viewport``/``properties``/``operators``/``ui`` are the Blender-facing layer. Installed as an extension the package is ``bl_ext.<repo>.shading_lab``,
-so every import inside it is relative.
+``engine``/``viewport``/``properties``/``operators``/``ui`` are the Blender-facing layer.
+Installed as an extension the package is ``bl_ext.<repo>.shading_lab``, so every import inside
+it is relative.
 """
 
 

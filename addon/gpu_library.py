@@ -107,33 +107,36 @@ LIBRARY = _Library()
 
 # --- the programs -----------------------------------------------------------------------------
 
+#: The shading programs' interface (glsl/uniforms.glsl, mesh.vert.glsl): uniform blocks by
+#: binding, push constants, vertex attributes by location, and what the vertex stage hands on.
+_BLOCKS = (("FrameData", "frame"), ("LightBlock", "lights"), ("MaterialData", "material"),
+           ("ObjectBlock", "objects"))
+_PUSH_CONSTANTS = (("INT", "object_index"), ("VEC4", "lobes"))
+_ATTRIBUTES = (("VEC3", "pos"), ("VEC3", "nor"), ("VEC2", "uv"), ("VEC4", "tangent"))
+_VARYINGS = (("VEC3", "world_position"), ("VEC3", "world_normal"), ("VEC2", "world_uv"),
+             ("VEC4", "world_tangent"))
+
+
 def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     info.typedef_source(typedefs)
-    if features.uses_albedo_table:
-        info.sampler(0, "FLOAT_2D", "ms_table")
-    if features.uses_s_table:
-        info.sampler(1, "FLOAT_2D", "s_table")
-    info.uniform_buf(0, "FrameData", "frame")
-    info.uniform_buf(1, "LightBlock", "lights")
-    info.uniform_buf(2, "MaterialData", "material")
-    info.uniform_buf(3, "ObjectBlock", "objects")
-    info.push_constant("INT", "object_index")
-    info.push_constant("VEC4", "lobes")
+    samplers = {0: "ms_table" if features.uses_albedo_table else None,
+                1: "s_table" if features.uses_s_table else None}
     for slot, name in enumerate(("base_color", "metallic", "roughness", "normal"), start=2):
-        if features.has_map(name.upper()):
-            info.sampler(slot, "FLOAT_2D", name + "_map")
+        samplers[slot] = name + "_map" if features.has_map(name.upper()) else None
     if features.peel:
-        info.sampler(6, "FLOAT_2D", "opaque_depth")
-        info.sampler(7, "FLOAT_2D", "peel_depth")
-    info.vertex_in(0, "VEC3", "pos")
-    info.vertex_in(1, "VEC3", "nor")
-    info.vertex_in(2, "VEC2", "uv")
-    info.vertex_in(3, "VEC4", "tangent")
+        samplers.update({6: "opaque_depth", 7: "peel_depth"})
+    for slot, name in samplers.items():
+        if name is not None:
+            info.sampler(slot, "FLOAT_2D", name)
+    for binding, (struct, name) in enumerate(_BLOCKS):
+        info.uniform_buf(binding, struct, name)
+    for kind, name in _PUSH_CONSTANTS:
+        info.push_constant(kind, name)
+    for location, (kind, name) in enumerate(_ATTRIBUTES):
+        info.vertex_in(location, kind, name)
     iface = gpu.types.GPUStageInterfaceInfo("shading_lab_iface")
-    iface.smooth("VEC3", "world_position")
-    iface.smooth("VEC3", "world_normal")
-    iface.smooth("VEC2", "world_uv")
-    iface.smooth("VEC4", "world_tangent")
+    for kind, name in _VARYINGS:
+        iface.smooth(kind, name)
     info.vertex_out(iface)
 
 

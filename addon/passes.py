@@ -164,18 +164,31 @@ class Pass:
         """Drop the pass's own GPU objects."""
 
 
-class OpaquePass(Pass):
+class TargetPass(Pass):
+    """A pass drawing into one target of its own, kept while its size and format hold."""
+
+    def __init__(self):
+        self.target: Target | None = None
+
+    def fit(self, width: int, height: int, format: str, depth: bool = False) -> Target:
+        self.target = _fitted(self.target, width, height, format, depth)
+        return self.target
+
+    def free(self) -> None:
+        if self.target is not None:
+            self.target.free()
+            self.target = None
+
+
+class OpaquePass(TargetPass):
     """Clears the view's scene target to its background and draws every opaque surface.
     Writes ``<view>.scene`` (colour and depth, supersampled size)."""
 
     draws_geometry = True
 
-    def __init__(self):
-        self.target: Target | None = None
-
     def run(self, frame: Frame, view: View) -> bool:
         s = view.samples
-        self.target = _fitted(self.target, view.width * s, view.height * s, view.format, depth=True)
+        self.fit(view.width * s, view.height * s, view.format, depth=True)
         frame.outputs[view.output("scene")] = self.target
         frame.scene.put_frame(view.view_projection)
         lists = frame.scene.draw_lists(view.model, view.half_target)
@@ -193,11 +206,6 @@ class OpaquePass(Pass):
                 gpu.state.depth_test_set("NONE")
                 gpu.state.depth_mask_set(False)
         return True
-
-    def free(self) -> None:
-        if self.target is not None:
-            self.target.free()
-            self.target = None
 
 
 class TransparencyPass(Pass):
@@ -312,43 +320,32 @@ class TransparencyPass(Pass):
             self._size = None
 
 
-class ResolvePass(Pass):
+class ResolvePass(TargetPass):
     """Averages each pixel's ``samples`` x ``samples`` sub-pixels (a box filter) of
     ``<view>.scene`` into ``<view>.radiance``; without supersampling the scene target is the
     radiance and nothing is drawn."""
-
-    def __init__(self):
-        self.target: Target | None = None
 
     def run(self, frame: Frame, view: View) -> bool:
         scene = frame.outputs[view.output("scene")]
         if view.samples == 1:
             frame.outputs[view.output("radiance")] = scene
             return True
-        self.target = _fitted(self.target, view.width, view.height, view.format)
+        self.fit(view.width, view.height, view.format)
         frame.draw_full_screen(gpu_library.post_program(programs.PostFeatures(samples=view.samples)),
                                lambda s: s.uniform_sampler("hdr_image", scene.texture_color), self.target)
         frame.outputs[view.output("radiance")] = self.target
         return True
 
-    def free(self) -> None:
-        if self.target is not None:
-            self.target.free()
-            self.target = None
 
-
-class DisplayPass(Pass):
+class DisplayPass(TargetPass):
     """Under one of the engine's own tone mappers: exposure, the tone curve and the transfer
     function over the resolved sub-pixels of ``<view>.scene``, into ``<view>.display``."""
-
-    def __init__(self):
-        self.target: Target | None = None
 
     def run(self, frame: Frame, view: View) -> bool:
         if view.display is None:
             return True
         scene = frame.outputs[view.output("scene")]
-        self.target = _fitted(self.target, view.width, view.height, view.format)
+        self.fit(view.width, view.height, view.format)
         features = programs.PostFeatures(view.samples, view.display.tone_mapper, view.display.transfer)
 
         def bind(shader):
@@ -359,23 +356,14 @@ class DisplayPass(Pass):
         frame.outputs[view.output("display")] = self.target
         return True
 
-    def free(self) -> None:
-        if self.target is not None:
-            self.target.free()
-            self.target = None
 
-
-class ComparePass(Pass):
+class ComparePass(TargetPass):
     """A|B: two views' images composited into ``compare``: model A left of a divider and B right
     of it, or the luminance difference as a heat map with its scale."""
 
-    def __init__(self):
-        self.target: Target | None = None
-
     def run(self, frame: Frame, comparison: Comparison) -> bool:
         a, b = frame.outputs[comparison.a], frame.outputs[comparison.b]
-        fmt = "RGBA16F" if comparison.half_target else "RGBA32F"
-        self.target = _fitted(self.target, comparison.width, comparison.height, fmt)
+        self.fit(comparison.width, comparison.height, "RGBA16F" if comparison.half_target else "RGBA32F")
 
         def bind(shader):
             shader.uniform_sampler("image_a", a.texture_color)
@@ -388,11 +376,6 @@ class ComparePass(Pass):
         frame.draw_full_screen(gpu_library.compare_program(comparison.features), bind, self.target)
         frame.outputs["compare"] = self.target
         return True
-
-    def free(self) -> None:
-        if self.target is not None:
-            self.target.free()
-            self.target = None
 
 
 #: The passes that draw one view, in order.
