@@ -168,6 +168,18 @@ def compare_program(features: programs.CompareFeatures) -> gpu.types.GPUShader:
                            _declare_full_screen("image_a", "image_b", floats=("split", "range")))
 
 
+def background_program(features: programs.BackgroundFeatures) -> gpu.types.GPUShader:
+    def declare(info):
+        info.typedef_source(programs.read_glsl("world_data.glsl"))
+        _declare_full_screen(*(f"env_image_{i}" for i in range(features.images)))(info)
+        info.uniform_buf(0, "WorldData", "world")
+        info.push_constant("MAT4", "inverse_view_projection")
+        info.push_constant("VEC4", "viewport")
+
+    return LIBRARY.program(("background",) + features.defines(), "background",
+                           programs.background_source(features), declare)
+
+
 def occupancy_program() -> gpu.types.GPUShader:
     src = programs.occupancy_source()
     return LIBRARY.program(("occupancy",) + src.defines, "occupancy", src,

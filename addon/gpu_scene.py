@@ -26,7 +26,7 @@ import gpu
 import numpy as np
 
 from . import gpu_library, programs
-from .snapshot import ImageData, MeshGeometry, Snapshot
+from .snapshot import MAX_ENVIRONMENT_IMAGES, ImageData, MeshGeometry, Snapshot, World
 
 #: GPU texture format per ``ImageData.storage``: byte images keep their bytes (an sRGB one is
 #: decoded to linear by the sampler, before filtering, as Blender's own image textures are).
@@ -120,6 +120,7 @@ class SceneResources:
         self._lights = _Block()
         self._objects: list[_Block] = []
         self._frame = _Block()
+        self._world_camera = _Block()
         self._textures: dict[str, tuple[ImageData, gpu.types.GPUTexture]] = {}
         self._draw_lists: dict[tuple[str, bool], DrawLists] = {}
         # programs and tables drawn with, held for this scene's lifetime (see gpu_library)
@@ -153,6 +154,10 @@ class SceneResources:
             self._objects.append(_Block())
         for block, data in zip(self._objects, blocks):
             self.uploads["objects"] += block.put(data.tobytes())
+        if World.images(snapshot.world.camera):  # a constant world is only a clear colour
+            self.uploads["world"] += self._world_camera.put(programs.pack_world(snapshot.world.camera))
+        else:
+            self._world_camera = _Block()
         for key in set(self._textures) - set(snapshot.images):
             del self._textures[key]
         for key, image in snapshot.images.items():
@@ -168,6 +173,12 @@ class SceneResources:
     @property
     def geometry_count(self) -> int:
         return len(self._batches)
+
+    def bind_world(self, shader, terms) -> None:
+        """The world block and environment images of ``terms`` (the camera's field)."""
+        shader.uniform_block("world", self._world_camera.ubo)
+        for i, term in enumerate(World.images(terms)[:MAX_ENVIRONMENT_IMAGES]):
+            shader.uniform_sampler(f"env_image_{i}", self._textures[term.image.key][1])
 
     # --- drawing ------------------------------------------------------------------------------
 
@@ -249,5 +260,6 @@ class SceneResources:
         self._programs.clear()
         self._lights = _Block()
         self._frame = _Block()
+        self._world_camera = _Block()
         self.snapshot = None
 

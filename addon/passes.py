@@ -2,7 +2,7 @@
 
 A frame is a list of steps, each a pass and its input, run in order (``Renderer.run``):
 
-    per view:  OpaquePass ─► TransparencyPass ─► ResolvePass ─► DisplayPass
+    per view:  BackgroundPass ─► OpaquePass ─► TransparencyPass ─► ResolvePass ─► DisplayPass
     then:      ComparePass (A|B: two views composited)
 
 Lifetimes:
@@ -27,7 +27,7 @@ import numpy as np
 
 from . import gpu_library, programs
 from .gpu_scene import SceneResources
-from .snapshot import Snapshot
+from .snapshot import MAX_ENVIRONMENT_IMAGES, Snapshot, World
 
 
 class Target:
@@ -180,20 +180,47 @@ class TargetPass(Pass):
             self.target = None
 
 
-class OpaquePass(TargetPass):
-    """Clears the view's scene target to its background and draws every opaque surface.
-    Writes ``<view>.scene`` (colour and depth, supersampled size)."""
+class BackgroundPass(TargetPass):
+    """The view's scene target (colour and depth, supersampled size), cleared to the background
+    colour; where the camera sees environment images (and the film is not transparent), the
+    world along each sub-pixel's ray. Writes ``<view>.scene``."""
+
+    def run(self, frame: Frame, view: View) -> bool:
+        s = view.samples
+        target = self.fit(view.width * s, view.height * s, view.format, depth=True)
+        frame.outputs[view.output("scene")] = target
+        terms = frame.snapshot.world.camera
+        with target.bind():
+            target.framebuffer.clear(color=view.background, depth=1.0)
+            images = min(len(World.images(terms)), MAX_ENVIRONMENT_IMAGES)
+            if images and view.background[3] > 0.0:
+                model = view.model or frame.snapshot.settings.model
+                features = programs.BackgroundFeatures(images, clamp=model != "PBR",
+                                                       half_target=view.half_target)
+                shader = gpu_library.background_program(features)
+                vp = (frame.snapshot.camera.view_projection if view.view_projection is None
+                      else view.view_projection)
+                inverse = np.linalg.inv(np.asarray(vp, np.float64)).astype(np.float32)
+                gpu.state.depth_test_set("NONE")
+                gpu.state.blend_set("NONE")
+                shader.bind()
+                frame.scene.bind_world(shader, terms)
+                shader.uniform_float("inverse_view_projection", inverse.T.ravel().tolist())
+                shader.uniform_float("viewport", (float(target.width), float(target.height), 0.0, 0.0))
+                frame.full_screen.draw(shader)
+        return True
+
+
+class OpaquePass(Pass):
+    """Draws every opaque surface into ``<view>.scene``."""
 
     draws_geometry = True
 
     def run(self, frame: Frame, view: View) -> bool:
-        s = view.samples
-        self.fit(view.width * s, view.height * s, view.format, depth=True)
-        frame.outputs[view.output("scene")] = self.target
+        target = frame.outputs[view.output("scene")]
         frame.scene.put_frame(view.view_projection)
         lists = frame.scene.draw_lists(view.model, view.half_target)
-        with self.target.bind():
-            self.target.framebuffer.clear(color=view.background, depth=1.0)
+        with target.bind():
             gpu.state.depth_test_set("LESS_EQUAL")
             gpu.state.depth_mask_set(True)
             gpu.state.face_culling_set("NONE")
@@ -379,4 +406,4 @@ class ComparePass(TargetPass):
 
 
 #: The passes that draw one view, in order.
-VIEW_PASSES = (OpaquePass, TransparencyPass, ResolvePass, DisplayPass)
+VIEW_PASSES = (BackgroundPass, OpaquePass, TransparencyPass, ResolvePass, DisplayPass)

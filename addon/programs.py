@@ -11,7 +11,16 @@ from pathlib import Path
 
 import numpy as np
 
-from .snapshot import LIGHT_KINDS, MODELS, MaterialParams, Snapshot, Terms, normal_matrices
+from .snapshot import (
+    LIGHT_KINDS,
+    MAX_ENVIRONMENT_IMAGES,
+    MODELS,
+    MaterialParams,
+    Snapshot,
+    Terms,
+    World,
+    normal_matrices,
+)
 
 #: Side of the multiple-scattering albedo table (addon/multiscatter.py), in texels.
 MS_SIZE = 32
@@ -217,8 +226,35 @@ def compare_source(features: CompareFeatures) -> ProgramSource:
 
 def clear_source_caches() -> None:
     """Forget generated sources (and the GLSL files they were read from)."""
-    for cached in (read_glsl, program_source, post_source, compare_source, occupancy_source, under_source):
+    for cached in (read_glsl, program_source, post_source, compare_source, occupancy_source, under_source,
+                   background_source):
         cached.cache_clear()
+
+
+@dataclass(frozen=True)
+class BackgroundFeatures:
+    """The background pass: how many environment images the camera sees, clamped to [0, 1] for
+    the empirical models, capped for half-float targets."""
+
+    images: int = 0
+    clamp: bool = False
+    half_target: bool = False
+
+    def defines(self) -> tuple[tuple[str, str], ...]:
+        out = [("SL_ENV_IMAGES", str(self.images))]
+        if self.clamp:
+            out.append(("SL_CLAMP", "1"))
+        if self.half_target:
+            out.append(("SL_HALF_TARGET", "1"))
+        return tuple(sorted(out))
+
+
+@lru_cache(maxsize=16)
+def background_source(features: BackgroundFeatures) -> ProgramSource:
+    return ProgramSource(typedefs=read_glsl("world_data.glsl"), vertex=read_glsl("post.vert.glsl"),
+                         fragment="\n".join(read_glsl(name) for name in
+                                            ("common.glsl", "environment.glsl", "background.frag.glsl")),
+                         defines=features.defines())
 
 
 #: Texels per side of a block summarised by one texel of a peeling layer's occupancy map.
@@ -292,6 +328,22 @@ def pack_material(m: MaterialParams) -> bytes:
         [*m.emission, min(max(m.alpha, 0.0), 1.0)],
     ]
     return np.asarray(rows, np.float32).tobytes()
+
+
+def pack_world(terms) -> bytes:
+    """A radiance field (``snapshot.World.camera`` or ``.lighting``) as the WorldData block: the
+    constant terms' sum and the first ``MAX_ENVIRONMENT_IMAGES`` image terms."""
+    images = World.images(terms)[:MAX_ENVIRONMENT_IMAGES]
+    weight = np.zeros((MAX_ENVIRONMENT_IMAGES, 4), np.float32)
+    lookup = np.tile(np.eye(4, dtype=np.float32), (MAX_ENVIRONMENT_IMAGES, 1, 1))
+    kind = np.zeros((MAX_ENVIRONMENT_IMAGES, 4), np.float32)
+    for i, term in enumerate(images):
+        weight[i, :3] = term.weight
+        lookup[i] = term.lookup
+        kind[i, :2] = (1.0 if term.projection == "MIRROR_BALL" else 0.0, 1.0 if term.closest else 0.0)
+    constant = np.array([*World.constant(terms), 0.0], np.float32)
+    columns = lookup.transpose(0, 2, 1).ravel()  # column-major, as GLSL's mat4
+    return np.concatenate([constant, weight.ravel(), columns, kind.ravel()]).tobytes()
 
 
 def pack_objects(items) -> np.ndarray:

@@ -189,6 +189,57 @@ class ImageData:
         return self.pixels.shape[1], self.pixels.shape[0]
 
 
+#: How an environment image maps directions to texels (Cycles' Environment Texture projections).
+ENVIRONMENT_PROJECTIONS = ("EQUIRECTANGULAR", "MIRROR_BALL")
+#: Image terms of one radiance field a program evaluates in one pass (more are a warning).
+MAX_ENVIRONMENT_IMAGES = 4
+
+
+@dataclass(eq=False)
+class EnvironmentTerm:
+    """One Background shader of the world: radiance ``weight`` (colour x strength x the mix
+    weights above it) from every direction, or, with an ``image``, ``weight`` times the image
+    looked up in direction ``d`` through ``lookup`` (4x4: the Mapping node, the texture-space
+    vector is ``lookup @ (d, 1)``) and the image's ``projection``."""
+
+    weight: tuple[float, float, float]
+    image: ImageData | None = None
+    projection: str = "EQUIRECTANGULAR"
+    closest: bool = False
+    lookup: np.ndarray = field(default_factory=lambda: np.eye(4, dtype=np.float32))
+
+    def __post_init__(self):
+        if self.projection not in ENVIRONMENT_PROJECTIONS:
+            raise ValueError(f"unknown environment projection {self.projection!r}")
+
+
+@dataclass(eq=False)
+class World:
+    """The world as two radiance fields, each a sum of terms: what camera rays see and what lights
+    the scene (different when a Light Path "Is Camera Ray" mix says so)."""
+
+    camera: tuple[EnvironmentTerm, ...] = ()
+    lighting: tuple[EnvironmentTerm, ...] = ()
+
+    @staticmethod
+    def constant(terms) -> tuple[float, float, float]:
+        """The summed radiance of ``terms``' constant (imageless) terms."""
+        rgb = np.zeros(3)
+        for term in terms:
+            if term.image is None:
+                rgb += term.weight
+        return tuple(float(c) for c in rgb)
+
+    @staticmethod
+    def images(terms) -> tuple[EnvironmentTerm, ...]:
+        return tuple(term for term in terms if term.image is not None)
+
+    @property
+    def lights(self) -> bool:
+        """Whether the world sends any light (a black world computes nothing)."""
+        return any(term.image is not None or any(term.weight) for term in self.lighting)
+
+
 @dataclass
 class DrawItem:
     """One instance of a geometry: its world matrix and a material per slot."""
@@ -281,7 +332,8 @@ class Snapshot:
     items: list[DrawItem] = field(default_factory=list)
     materials: dict[str, MaterialParams] = field(default_factory=dict)
     lights: list[Light] = field(default_factory=list)
-    world_color: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    world_color: tuple[float, float, float] = (0.0, 0.0, 0.0)  # the camera's constant terms
+    world: World = field(default_factory=World)
     images: dict[str, ImageData] = field(default_factory=dict)  # by the key materials refer to
     warnings: list[str] = field(default_factory=list)
     fresh: set[str] = field(default_factory=set)  # geometry keys read anew (not reused)
