@@ -92,3 +92,102 @@ def world_radiance(terms, d) -> np.ndarray:
     for term in World.images(terms)[:MAX_ENVIRONMENT_IMAGES]:
         out += term_radiance(term, d)
     return out
+
+
+# --- precomputation: spherical harmonics, prefiltered levels ------------------------------------
+
+#: Real spherical harmonics up to band 2 (Ramamoorthi & Hanrahan 2001, eq. 3): constants and
+#: the order used everywhere (glsl/ibl.glsl): Y00, Y1-1, Y10, Y11, Y2-2, Y2-1, Y20, Y21, Y22.
+SH_CONSTANTS = (0.282095, 0.488603, 0.488603, 0.488603, 1.092548, 1.092548, 0.315392, 1.092548, 0.546274)
+#: The clamped-cosine kernel's band factors A_l (Ramamoorthi & Hanrahan 2001, eq. 8): pi, 2pi/3, pi/4.
+SH_COSINE = (np.pi, 2.0 * np.pi / 3.0, 2.0 * np.pi / 3.0, 2.0 * np.pi / 3.0) + (np.pi / 4.0,) * 5
+
+
+def sh9_basis(d) -> np.ndarray:
+    """(..., 9): the nine basis functions at unit directions ``d``."""
+    d = np.asarray(d, np.float64)
+    x, y, z = d[..., 0], d[..., 1], d[..., 2]
+    one = np.ones_like(x)
+    polys = (one, y, z, x, x * y, y * z, 3.0 * z * z - 1.0, x * z, x * x - y * y)
+    return np.stack([c * p for c, p in zip(SH_CONSTANTS, polys)], -1)
+
+
+def texel_solid_angles(height: int, width: int) -> np.ndarray:
+    """(height,) solid angle of one texel in each row of an equirectangular image (bottom row
+    first): (2 pi / width) (cos theta_top - cos theta_bottom)."""
+    v = np.arange(height + 1) / height
+    z = -np.cos(np.pi * v)  # z = cos(theta) with theta = pi (1 - v): -1 at the bottom edge
+    return (2.0 * np.pi / width) * np.diff(z)
+
+
+def texel_directions(height: int, width: int) -> np.ndarray:
+    """(height, width, 3) unit directions of an equirectangular image's texel centres."""
+    u = (np.arange(width) + 0.5) / width
+    v = (np.arange(height) + 0.5) / height
+    return equirect_direction(*np.meshgrid(u, v))
+
+
+def sh9_project(pixels: np.ndarray) -> np.ndarray:
+    """(9, 3): the radiance coefficients L_lm of an equirectangular radiance image (h, w, >= 3),
+    each texel taken as constant over its solid angle."""
+    h, w = pixels.shape[:2]
+    weights = texel_solid_angles(h, w)[:, None, None] * sh9_basis(texel_directions(h, w))
+    return np.einsum("hwk,hwc->kc", weights, np.asarray(pixels, np.float64)[..., :3])
+
+
+def sh9_irradiance(coefficients: np.ndarray, n) -> np.ndarray:
+    """(..., 3): irradiance E(n) = sum_lm A_l L_lm Y_lm(n) (Ramamoorthi & Hanrahan 2001, eq. 7),
+    floored at 0 (nine bands ring below zero behind a very bright source)."""
+    premultiplied = np.asarray(coefficients, np.float64) * np.array(SH_COSINE)[:, None]
+    return np.maximum(sh9_basis(n) @ premultiplied, 0.0)
+
+
+#: Prefiltered specular levels: level k holds the environment seen through a GGX lobe of
+#: perceptual roughness PREFILTER_ROUGHNESS[k]; level 0 is the mirror image, which the shading
+#: takes for the smallest roughness a surface has (0.045). Closer at the smooth end, where
+#: mixing two neighbours would blur a sharp reflection most.
+PREFILTER_ROUGHNESS = (0.0, 0.125, 0.25, 0.375, 0.5, 0.75, 1.0)
+PREFILTER_LEVELS = len(PREFILTER_ROUGHNESS)
+#: The diffuse irradiance map (exact convolution of a downsampled environment), texels wide.
+IRRADIANCE_WIDTH = 64
+#: Importance samples per texel of each prefiltered level: few for the sharp, large levels, many
+#: for the rough, small ones (a wide lobe over an environment with small bright sources needs
+#: them), about the same work per level.
+PREFILTER_SAMPLES = (0, 64, 256, 512, 1024, 2048, 2048)
+#: Widest mirror level (texels); narrower levels halve down to the narrowest.
+MIRROR_WIDTH, NARROWEST = 1024, 32
+
+
+def level_roughness(k: int) -> float:
+    return PREFILTER_ROUGHNESS[k]
+
+
+def atlas_layout(mirror_width: int) -> tuple[tuple[int, int, int, int], ...]:
+    """(x, y, width, height) of each prefiltered level in one texture, then of the irradiance
+    map: the mirror level on top of a row of the others, each half as wide as the one before
+    (never narrower than ``NARROWEST``), the irradiance map below; all equirectangular."""
+    widths = [mirror_width] + [max(mirror_width >> k, NARROWEST) for k in range(1, PREFILTER_LEVELS)]
+    rects, x = [(0, 0, widths[0], widths[0] // 2)], 0
+    for w in widths[1:]:
+        rects.append((x, widths[0] // 2, w, w // 2))
+        x += w
+    rects.append((0, widths[0] // 2 + widths[1] // 2, IRRADIANCE_WIDTH, IRRADIANCE_WIDTH // 2))
+    return tuple(rects)
+
+
+#: The narrowest downsampled level filtered importance sampling reads (texels).
+CHAIN_NARROWEST = 8
+
+
+def chain_layout(width: int) -> tuple[tuple[int, int, int, int], ...]:
+    """(x, y, width, height) of each downsampled level, ``width`` wide down to
+    ``CHAIN_NARROWEST``, in one texture: the widest on top of a row of the others."""
+    rects, x, w = [(0, 0, width, width // 2)], 0, width // 2
+    while w >= CHAIN_NARROWEST:
+        rects.append((x, width // 2, w, w // 2))
+        x, w = x + w, w // 2
+    return tuple(rects)
+
+
+def atlas_size(layout) -> tuple[int, int]:
+    return max(x + w for x, _, w, _ in layout), max(y + h for _, y, _, h in layout)

@@ -5,6 +5,7 @@ rendering. Arrays come out through ``foreach_get``; there is no per-vertex Pytho
 from __future__ import annotations
 
 import dataclasses
+import itertools
 import math
 import threading
 
@@ -238,6 +239,7 @@ class _ImageCache:
 
 
 IMAGES = _ImageCache()
+_REVISIONS = itertools.count(1)
 
 
 def _read_image(key: str, image: bpy.types.Image, warnings: list[str]) -> S.ImageData | None:
@@ -263,7 +265,7 @@ def _read_image(key: str, image: bpy.types.Image, warnings: list[str]) -> S.Imag
         pixels = np.rint(pixels * 255.0).astype(np.uint8)  # the image's own bytes
     if image.alpha_mode == "NONE":  # "ignore the alpha channel of the file"
         pixels[..., 3] = 255 if pixels.dtype == np.uint8 else 1.0
-    return S.ImageData(key, pixels, storage)
+    return S.ImageData(key, pixels, storage, next(_REVISIONS))
 
 
 def image_updates(depsgraph) -> set[str]:

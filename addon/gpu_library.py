@@ -34,11 +34,17 @@ class ShaderCompileError(RuntimeError):
     """A program failed to compile or link; the message carries the driver's log."""
 
 
+#: Precomputed worlds kept (each ~13 MB of GPU memory): the viewport going back and forth
+#: between two worlds, or a world edit and its undo, recomputes nothing.
+ENVIRONMENTS_KEPT = 2
+
+
 class _Library:
     def __init__(self):
         self._lock = threading.RLock()  # re-entrant: a table's builder may ask for another table
         self._programs: dict = {}
         self._tables: dict = {}
+        self._environments: dict = {}
         self._compile_error = ""
         self.compiles = 0  # programs compiled since start (for tests and benchmarks)
 
@@ -76,6 +82,18 @@ class _Library:
                 texture = self._tables[key] = build()
             return texture
 
+    def environment(self, key, build: Callable[[], object]):
+        """The precomputed world light for ``key`` (its content), built by ``build()`` when it is
+        not one of the last ``ENVIRONMENTS_KEPT`` asked for."""
+        with self._lock:
+            held = self._environments.pop(key, None)
+            if held is None:
+                held = build()
+            self._environments[key] = held  # most recently used last
+            while len(self._environments) > ENVIRONMENTS_KEPT:
+                del self._environments[next(iter(self._environments))]
+            return held
+
     def program_count(self) -> int:
         return len(self._programs)
 
@@ -85,7 +103,7 @@ class _Library:
     def held(self) -> list:
         """Every program and table the library holds (tests check that nothing else holds them)."""
         with self._lock:
-            return [*self._programs.values(), *self._tables.values()]
+            return [*self._programs.values(), *self._tables.values(), *self._environments.values()]
 
     @property
     def compile_error(self) -> str:
@@ -99,6 +117,7 @@ class _Library:
         with self._lock:
             self._programs = {}
             self._tables = {}
+            self._environments = {}
         programs.clear_source_caches()
 
 
@@ -125,11 +144,15 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
         samplers[slot] = name + "_map" if features.has_map(name.upper()) else None
     if features.peel:
         samplers.update({6: "opaque_depth", 7: "peel_depth"})
+    samplers[8] = "env_atlas" if features.environment == "MAP" else None
+    samplers[9] = "split_table" if features.uses_split_table else None
     for slot, name in samplers.items():
         if name is not None:
             info.sampler(slot, "FLOAT_2D", name)
     for binding, (struct, name) in enumerate(_BLOCKS):
         info.uniform_buf(binding, struct, name)
+    if features.environment:
+        info.uniform_buf(len(_BLOCKS), "EnvironmentData", "env")
     for kind, name in _PUSH_CONSTANTS:
         info.push_constant(kind, name)
     for location, (kind, name) in enumerate(_ATTRIBUTES):
@@ -178,6 +201,67 @@ def background_program(features: programs.BackgroundFeatures) -> gpu.types.GPUSh
 
     return LIBRARY.program(("background",) + features.defines(), "background",
                            programs.background_source(features), declare)
+
+
+def env_bake_program(images: int) -> gpu.types.GPUShader:
+    def declare(info):
+        info.typedef_source(programs.read_glsl("world_data.glsl"))
+        _declare_full_screen(*(f"env_image_{i}" for i in range(images)))(info)
+        info.uniform_buf(0, "WorldData", "world")
+        info.push_constant("VEC4", "target")
+
+    return LIBRARY.program(("env_bake", images), "environment bake", programs.env_bake_source(images),
+                           declare)
+
+
+def env_downsample_program(copy: bool = False) -> gpu.types.GPUShader:
+    """Halve an equirectangular image; or (``copy``) copy one into a rectangle (``offset``)."""
+    def declare(info):
+        _declare_full_screen("source")(info)
+        if copy:
+            info.push_constant("VEC4", "offset")
+
+    return LIBRARY.program(("env_downsample", copy), "environment downsample",
+                           programs.env_downsample_source(copy), declare)
+
+
+def env_prefilter_program(samples: int) -> gpu.types.GPUShader:
+    def declare(info):
+        info.typedef_source(programs.read_glsl("world_data.glsl"))
+        _declare_full_screen("source")(info)
+        info.uniform_buf(0, "ChainData", "chain")
+        info.push_constant("VEC4", "rect")
+        info.push_constant("VEC4", "params")
+
+    return LIBRARY.program(("env_prefilter", samples), "environment prefilter",
+                           programs.env_prefilter_source(samples), declare)
+
+
+def env_irradiance_program() -> gpu.types.GPUShader:
+    def declare(info):
+        info.typedef_source(programs.read_glsl("world_data.glsl"))
+        _declare_full_screen("source")(info)
+        info.uniform_buf(0, "ChainData", "chain")
+        info.push_constant("VEC4", "rect")
+        info.push_constant("VEC4", "params")
+
+    return LIBRARY.program(("env_irradiance",), "irradiance map", programs.env_irradiance_source(), declare)
+
+
+def split_table(terms) -> gpu.types.GPUTexture:
+    """E(mu, r) and B(mu, r) of ``terms``' D and V (RGBA32F, E in red, B in green): the split
+    sum's second factor (the Principled set: GGX with Smith)."""
+    from . import multiscatter
+
+    ndf, visibility = ("GGX", "SMITH_CORRELATED") if terms.principled else (terms.ndf, terms.visibility)
+
+    def build():
+        table = multiscatter.split_sum_table(ndf, visibility)
+        h, w = table.shape[:2]
+        data = gpu.types.Buffer("FLOAT", w * h * 4, np.ascontiguousarray(table, np.float32).ravel())
+        return gpu.types.GPUTexture((w, h), format="RGBA32F", data=data)
+
+    return LIBRARY.table(("SPLIT", ndf, visibility), build)
 
 
 def occupancy_program() -> gpu.types.GPUShader:

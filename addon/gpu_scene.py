@@ -121,6 +121,8 @@ class SceneResources:
         self._objects: list[_Block] = []
         self._frame = _Block()
         self._world_camera = _Block()
+        self._world_lighting = _Block()
+        self.environment = None  # the world's precomputed light (gpu_environment.EnvironmentPass)
         self._textures: dict[str, tuple[ImageData, gpu.types.GPUTexture]] = {}
         self._draw_lists: dict[tuple[str, bool], DrawLists] = {}
         # programs and tables drawn with, held for this scene's lifetime (see gpu_library)
@@ -158,6 +160,10 @@ class SceneResources:
             self.uploads["world"] += self._world_camera.put(programs.pack_world(snapshot.world.camera))
         else:
             self._world_camera = _Block()
+        if World.images(snapshot.world.lighting):  # baked into the environment maps
+            self.uploads["world"] += self._world_lighting.put(programs.pack_world(snapshot.world.lighting))
+        else:
+            self._world_lighting = _Block()
         for key in set(self._textures) - set(snapshot.images):
             del self._textures[key]
         for key, image in snapshot.images.items():
@@ -174,9 +180,10 @@ class SceneResources:
     def geometry_count(self) -> int:
         return len(self._batches)
 
-    def bind_world(self, shader, terms) -> None:
-        """The world block and environment images of ``terms`` (the camera's field)."""
-        shader.uniform_block("world", self._world_camera.ubo)
+    def bind_world(self, shader, terms, lighting: bool = False) -> None:
+        """The world block and environment images of ``terms``, the camera's field or (with
+        ``lighting``) the lighting one."""
+        shader.uniform_block("world", (self._world_lighting if lighting else self._world_camera).ubo)
         for i, term in enumerate(World.images(terms)[:MAX_ENVIRONMENT_IMAGES]):
             shader.uniform_sampler(f"env_image_{i}", self._textures[term.image.key][1])
 
@@ -231,6 +238,11 @@ class SceneResources:
             shader.uniform_sampler("ms_table", gpu_library.albedo_table(features.terms))
         if features.uses_s_table:
             shader.uniform_sampler("s_table", gpu_library.s_table())
+        if features.environment:
+            shader.uniform_block("env", self.environment.block)
+            shader.uniform_sampler("split_table", gpu_library.split_table(features.terms))
+            if features.environment == "MAP":
+                shader.uniform_sampler("env_atlas", self.environment.atlas)
         if bind is not None:
             bind(shader)
         materials = self.snapshot.materials
@@ -261,5 +273,7 @@ class SceneResources:
         self._lights = _Block()
         self._frame = _Block()
         self._world_camera = _Block()
+        self._world_lighting = _Block()
+        self.environment = None
         self.snapshot = None
 

@@ -32,9 +32,8 @@ def _half_vectors(ndf: str, alpha: float, strata: int, azimuths: int):
     return h.reshape(-1, 3)
 
 
-def directional_albedo(ndf: str, visibility: str, mu, roughness: float, strata: int = 512,
-                       azimuths: int = 32) -> np.ndarray:
-    """E(mu) for one roughness, mu an array of n.v values."""
+def _albedo_samples(ndf: str, visibility: str, mu, roughness: float, strata: int, azimuths: int):
+    """Per half-vector sample of the quadrature: (weight, v.h), with E(mu) = mean(weight)."""
     terms = Terms(ndf=ndf, visibility=visibility)
     r = max(roughness, brdf.MIN_PERCEPTUAL_ROUGHNESS)
     alpha = r * r
@@ -51,7 +50,28 @@ def directional_albedo(ndf: str, visibility: str, mu, roughness: float, strata: 
                                    alpha, terms)
         # E = E_h[V NoL 4 VoH / NoH] for h drawn with pdf D(h) NoH (l = reflect(v, h): dl = 4 VoH dh)
         weight = np.where(valid, V * NoL * 4.0 * VoH / NoH, 0.0)
-    return weight.mean(axis=1)
+    return weight, VoH
+
+
+def directional_albedo(ndf: str, visibility: str, mu, roughness: float, strata: int = 512,
+                       azimuths: int = 32) -> np.ndarray:
+    """E(mu) for one roughness, mu an array of n.v values."""
+    return _albedo_samples(ndf, visibility, mu, roughness, strata, azimuths)[0].mean(axis=1)
+
+
+@lru_cache(maxsize=16)
+def split_sum_table(ndf: str, visibility: str, size: int = MS_SIZE) -> np.ndarray:
+    """(size, size, 4) float32 on the grid of ``albedo_table``: E(mu, r) and B(mu, r), the part of
+    the albedo carried by Schlick's (1 - v.h)^5, so that a Schlick-Fresnel lobe reflects
+    F0 (E - B) + F90 B of a uniform environment (Karis 2013's split sum, second factor)."""
+    grid = np.arange(size) / (size - 1)
+    mu = np.maximum(grid, brdf.MIN_COS)
+    out = np.zeros((size, size, 4), np.float32)
+    for j, r in enumerate(grid):
+        weight, VoH = _albedo_samples(ndf, visibility, mu, r, 512, 32)
+        out[j, :, 0] = weight.mean(axis=1)
+        out[j, :, 1] = (weight * brdf.pow5(1.0 - np.clip(VoH, 0.0, 1.0))).mean(axis=1)
+    return out
 
 
 @lru_cache(maxsize=16)

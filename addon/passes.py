@@ -59,6 +59,11 @@ class Target:
         buffer.dimensions = w * h * 4
         return np.array(buffer, np.float32).reshape(h, w, 4)
 
+    def fence(self) -> None:
+        """Wait until everything drawn into the target is done (one texel read back)."""
+        with self.bind():
+            self.framebuffer.read_color(0, 0, 1, 1, 4, 0, "FLOAT")
+
     def free(self) -> None:
         """Drop the textures and framebuffer (Blender frees them with their last reference)."""
         self.framebuffer = self.texture_color = self.texture_depth = None

@@ -36,7 +36,10 @@ MODEL_FILES = {
     "PBR": "model_pbr.glsl",
 }
 FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "textures.glsl")
-PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "principled.glsl")
+PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "environment.glsl", "ibl.glsl", "principled.glsl")
+#: How the world lights a program: "" not at all (a black world), "UNIFORM" a constant radiance,
+#: "MAP" environment images (glsl/ibl.glsl).
+ENVIRONMENTS = ("", "UNIFORM", "MAP")
 
 
 def glsl_dir() -> Path:
@@ -74,6 +77,8 @@ class Features:
     maps: frozenset[str] = frozenset()  # image textures sampled: BASE_COLOR[_CLOSEST], NORMAL, ...
     alpha_from_base_map: bool = False  # coverage from the base colour image's alpha
     peel: bool = False  # a depth-peeling pass over the partly transparent surfaces
+    environment: str = ""  # the world's light: one of ENVIRONMENTS (the physically based model)
+    env_diffuse: str = "MAP"  # its irradiance: "MAP" (exactly convolved) or "SH9"
 
     def has_map(self, name: str) -> bool:
         return name in self.maps or name + "_CLOSEST" in self.maps
@@ -84,6 +89,10 @@ class Features:
         unknown = set(self.light_kinds) - set(LIGHT_KINDS)
         if unknown:
             raise ValueError(f"unknown light kinds {sorted(unknown)}")
+        if self.environment not in ENVIRONMENTS:
+            raise ValueError(f"unknown environment {self.environment!r}; expected one of {ENVIRONMENTS}")
+        if self.model != "PBR":  # the empirical models see the world only through their ambient term
+            object.__setattr__(self, "environment", "")
         if self.model == "PBR" and self.terms.principled:
             canonical = Terms(principled=True)  # one fixed set: exact Fresnel, GGX, Smith, layered
         elif self.model == "PBR":
@@ -117,12 +126,19 @@ class Features:
             maps=maps,
             alpha_from_base_map=bool(material is not None and material.alpha_from_base_map
                                      and material.base_color_map is not None and with_maps),
+            environment=environment_kind(snapshot.world),
+            env_diffuse=snapshot.settings.environment_diffuse,
         )
 
     @property
     def uses_albedo_table(self) -> bool:
         """The program samples ``ms_table`` (multiple-scattering compensation, Principled set)."""
         return self.model == "PBR" and (self.terms.multiscatter or self.terms.principled)
+
+    @property
+    def uses_split_table(self) -> bool:
+        """The program samples ``split_table`` (the world's split-sum specular)."""
+        return self.environment != ""
 
     @property
     def uses_s_table(self) -> bool:
@@ -148,12 +164,25 @@ class Features:
             out.append(("SL_ALPHA_FROM_BASE_MAP", "1"))
         if self.peel:
             out.append(("SL_PEEL", "1"))
+        if self.environment:
+            out.append(("SL_ENV_" + self.environment, "1"))
+            if self.environment == "MAP" and self.env_diffuse == "SH9":
+                out.append(("SL_ENV_DIFFUSE_SH9", "1"))
+            if ("SL_MS_SIZE", str(MS_SIZE)) not in out:
+                out.append(("SL_MS_SIZE", str(MS_SIZE)))
         for name in sorted(self.maps):  # BASE_COLOR, or BASE_COLOR_CLOSEST for nearest filtering
             base = name.removesuffix("_CLOSEST")
             out.append((f"SL_HAS_{base}_MAP", "1"))
             if base != name:
                 out.append((f"SL_{base}_MAP_CLOSEST", "1"))
         return tuple(sorted(out))
+
+
+def environment_kind(world: World) -> str:
+    """How ``world`` lights the scene (see ``ENVIRONMENTS``)."""
+    if not world.lights:
+        return ""
+    return "MAP" if World.images(world.lighting) else "UNIFORM"
 
 
 @dataclass(frozen=True)
@@ -227,7 +256,8 @@ def compare_source(features: CompareFeatures) -> ProgramSource:
 def clear_source_caches() -> None:
     """Forget generated sources (and the GLSL files they were read from)."""
     for cached in (read_glsl, program_source, post_source, compare_source, occupancy_source, under_source,
-                   background_source):
+                   background_source, env_bake_source, env_downsample_source, env_prefilter_source,
+                   env_irradiance_source):
         cached.cache_clear()
 
 
@@ -255,6 +285,38 @@ def background_source(features: BackgroundFeatures) -> ProgramSource:
                          fragment="\n".join(read_glsl(name) for name in
                                             ("common.glsl", "environment.glsl", "background.frag.glsl")),
                          defines=features.defines())
+
+
+def _full_screen_source(*files: str, defines=(), typedefs: str = "") -> ProgramSource:
+    return ProgramSource(typedefs=typedefs, vertex=read_glsl("post.vert.glsl"),
+                         fragment="\n".join(read_glsl(name) for name in files),
+                         defines=tuple(sorted(defines)))
+
+
+@lru_cache(maxsize=8)
+def env_bake_source(images: int) -> ProgramSource:
+    """The world's lighting field baked into an equirectangular image."""
+    return _full_screen_source("common.glsl", "environment.glsl", "env_bake.frag.glsl",
+                               defines=(("SL_ENV_IMAGES", str(images)),),
+                               typedefs=read_glsl("world_data.glsl"))
+
+
+@lru_cache(maxsize=2)
+def env_downsample_source(copy: bool = False) -> ProgramSource:
+    return _full_screen_source("common.glsl", "env_downsample.frag.glsl",
+                               defines=(("SL_COPY", "1"),) if copy else ())
+
+
+@lru_cache(maxsize=1)
+def env_irradiance_source() -> ProgramSource:
+    return _full_screen_source("common.glsl", "environment.glsl", "env_irradiance.frag.glsl",
+                               typedefs=read_glsl("world_data.glsl"))
+
+
+@lru_cache(maxsize=4)
+def env_prefilter_source(samples: int) -> ProgramSource:
+    return _full_screen_source("common.glsl", "environment.glsl", "env_prefilter.frag.glsl",
+                               defines=(("SL_SAMPLES", str(samples)),), typedefs=read_glsl("world_data.glsl"))
 
 
 #: Texels per side of a block summarised by one texel of a peeling layer's occupancy map.
@@ -344,6 +406,20 @@ def pack_world(terms) -> bytes:
     constant = np.array([*World.constant(terms), 0.0], np.float32)
     columns = lookup.transpose(0, 2, 1).ravel()  # column-major, as GLSL's mat4
     return np.concatenate([constant, weight.ravel(), columns, kind.ravel()]).tobytes()
+
+
+def pack_environment(sh: np.ndarray, rects, uniform_radiance, roughness=()) -> bytes:
+    """The EnvironmentData block: SH coefficients (9, 3) premultiplied by the cosine kernel's
+    band factors, the rectangles of the prefiltered levels (one per ``roughness``) and of the
+    irradiance map, the radiance of a world without images."""
+    rows = np.zeros((9 + 8 + 1 + 2 + 1, 4), np.float32)
+    rows[:9, :3] = sh
+    if len(rects):
+        rows[9:9 + len(rects)] = rects
+    rows[17, 0] = len(roughness)
+    rows[18:20].ravel()[:len(roughness)] = roughness
+    rows[20, :3] = uniform_radiance
+    return rows.tobytes()
 
 
 def pack_objects(items) -> np.ndarray:

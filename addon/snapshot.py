@@ -179,6 +179,7 @@ class ImageData:
     key: str
     pixels: np.ndarray
     storage: str = "FLOAT"
+    revision: int = 0  # a new number each time the pixels are read (precomputation keys use it)
 
     def __post_init__(self):
         if self.storage not in IMAGE_STORAGE:
@@ -320,6 +321,7 @@ class Settings:
     compare_split: float = 0.5
     compare_range: float = 1.0
     transparency_layers: int = 4  # depth-peeling layers of partly transparent surfaces per pixel
+    environment_diffuse: str = "MAP"  # the world's irradiance: "MAP" (exact convolution) or "SH9"
 
 
 @dataclass

@@ -15,6 +15,14 @@ vec2 equirect_uv(vec3 d)
   return vec2(u, 1.0 - acos_accurate(d.z * inversesqrt(len2)) * INV_PI);
 }
 
+/* The unit direction of equirectangular coordinates: the inverse of equirect_uv. */
+vec3 equirect_direction(vec2 uv)
+{
+  float phi = PI - 2.0 * PI * uv.x;
+  float theta = PI * (1.0 - uv.y);
+  return vec3(sin(theta) * cos(phi), sin(theta) * sin(phi), cos(theta));
+}
+
 /* Cycles' mirror ball: the image is a chrome ball seen along +Y from -Y (u along +X, v along +Z). */
 vec2 mirror_ball_uv(vec3 d)
 {
@@ -59,6 +67,7 @@ vec3 env_term(sampler2D map, mat4 lookup, vec4 kind, vec3 d)
   return env_lookup(map, uv, kind.y > 0.5).rgb;
 }
 
+#ifdef SL_ENV_IMAGES
 vec3 world_radiance(vec3 d)
 {
   vec3 c = world.constant_radiance.rgb;
@@ -76,3 +85,4 @@ vec3 world_radiance(vec3 d)
 #endif
   return c;
 }
+#endif

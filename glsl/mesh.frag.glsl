@@ -44,6 +44,8 @@ void main()
   Surface s = make_surface(world_position, gl_FrontFacing ? n : -n, view_direction(world_position), m);
   /* ambient and emission: neither a diffuse nor a specular lobe (weight z, off in lobe passes) */
   vec3 c = (shade_ambient(s, frame.ambient.rgb) + m.emission.rgb) * lobes.z;
+  /* the world is a light: its diffuse and specular parts go to the lobes' passes */
+  c += shade_environment(s, lobes.xy);
   int count = int(frame.counts.x);
   for (int i = 0; i < SL_MAX_LIGHTS; i++) {
     if (i >= count) {

@@ -28,6 +28,12 @@ vec3 shade_ambient(Surface s, vec3 x)
   return s.ambient_color * x;
 }
 
+/* The world lights the empirical models only through their ambient term. */
+vec3 shade_environment(Surface s, vec2 weights)
+{
+  return vec3(0.0);
+}
+
 vec3 shade_finish(vec3 c)
 {
   return clamp(c, 0.0, 1.0);

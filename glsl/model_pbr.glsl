@@ -27,7 +27,42 @@ vec3 shade_direct(Surface s, vec3 l, vec3 E, vec4 factors)
   return (diffuse * factors.x + specular * factors.y) * E * NoL;
 }
 
-/* The PBR model takes no ambient constant: indirect light comes from the world (not yet). */
+#if defined(SL_ENV_UNIFORM) || defined(SL_ENV_MAP)
+/* The world's light (glsl/ibl.glsl): the split-sum specular lobe, the prefiltered radiance read
+ * where the lobe's energy peaks, and the diffuse lobe lit by the irradiance, weighted by the
+ * energy the specular lobe did not take (1 - F0 (E - B) - F90 B: Lambert's 1 - F over the
+ * hemisphere; every diffuse variant is lit this way). */
+vec3 shade_environment(Surface s, vec2 weights)
+{
+  vec2 EB = env_split_sum(s.NoV, s.roughness);
+  vec3 radiance = env_prefiltered(env_dominant_direction(s.n, reflect(-s.v, s.n), s.alpha), s.roughness);
+  vec3 irradiance = env_irradiance(s.n);
+#  ifdef SL_PRINCIPLED
+  return principled_environment(s, EB, radiance, irradiance, weights);
+#  else
+  vec3 albedo = s.f0 * (EB.x - EB.y) + s.f90 * EB.y;
+  vec3 specular = albedo * radiance;
+#    ifdef SL_MULTISCATTER
+  /* light scattered more than once between microfacets leaves like a rough diffuse lobe
+   * (Fdez-Aguera 2019, eq. 16-18): Fms Ems of the irradiance */
+  float Ems = 1.0 - EB.x;
+  vec3 Favg = s.f0 + (1.0 - s.f0) / 21.0;
+  vec3 Fms_Ems = albedo * Favg * Ems / (1.0 - Ems * Favg);
+  specular += Fms_Ems * irradiance * INV_PI;
+  albedo += Fms_Ems;
+#    endif
+  vec3 diffuse = s.base_color * (1.0 - s.metalness) * clamp(1.0 - albedo, 0.0, 1.0) * irradiance * INV_PI;
+  return diffuse * weights.x + specular * weights.y;
+#  endif
+}
+#else
+vec3 shade_environment(Surface s, vec2 weights)
+{
+  return vec3(0.0);
+}
+#endif
+
+/* The PBR model takes no ambient constant: indirect light comes from the world. */
 vec3 shade_ambient(Surface s, vec3 x)
 {
   return vec3(0.0);

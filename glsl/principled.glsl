@@ -50,26 +50,58 @@ vec3 principled_M(vec3 Fss, float E, float Eavg)
   return 1.0 + Fms * (1.0 - E) / E;
 }
 
+/* What both lobes' compensation and the layering need, at the view direction: the metal
+ * lobe's compensation (for its F0 = base colour), the dielectric lobe's, and the dielectric
+ * layer's albedo estimate E M mix(F0, 1, S) that the Lambert base sits under. */
+struct PrincipledLayers {
+  vec3 metal_M;
+  float dielectric_M;
+  float layer;
+};
+
+PrincipledLayers principled_layers(Surface s)
+{
+  PrincipledLayers p;
+  float E_mu = max(ms_albedo(s.NoV, s.roughness), 1e-3);
+  float Eavg = principled_Eavg(s.roughness);
+  vec3 F0m = min(s.base_color, vec3(1.0));
+  p.metal_M = principled_M(F0m + (1.0 - F0m) / 21.0, E_mu, Eavg);
+  p.dielectric_M = principled_M(vec3(principled_Fss(s.eta)), E_mu, Eavg).x;
+  float ratio = (s.eta - 1.0) / (s.eta + 1.0);
+  p.layer = s.eta > 1.0 ? E_mu * p.dielectric_M *
+                              mix(ratio * ratio, 1.0, principled_S(s.roughness, s.NoV, sqrt(abs(ratio))))
+                        : 0.0;
+  return p;
+}
+
 /* f * E * NoL for the Principled set: a metal lobe (F82-tint Fresnel, which is Schlick for a
  * white tint) weighted by metalness, a dielectric lobe with exact Fresnel weighted by
  * 1 - metalness, each with its own compensation, and a Lambert base weighted by
- * 1 - the dielectric layer's albedo estimate E M mix(F0, 1, S) at the view direction. */
+ * 1 - the dielectric layer's albedo. */
 vec3 principled_direct(Surface s, float NoL, float NoH, float NxH2, float LoH, vec3 E, vec4 factors)
 {
   float D = D_GGX(NoH, NxH2, s.alpha);
   float V = V_SmithGGXCorrelated(s.NoV, NoL, s.alpha);
-  float E_mu = max(ms_albedo(s.NoV, s.roughness), 1e-3);
-  float Eavg = principled_Eavg(s.roughness);
-  vec3 F0m = min(s.base_color, vec3(1.0));
-  vec3 metal = principled_M(F0m + (1.0 - F0m) / 21.0, E_mu, Eavg) * F_Schlick(F0m, 1.0, LoH);
-  float Md = principled_M(vec3(principled_Fss(s.eta)), E_mu, Eavg).x;
-  float dielectric = Md * F_Dielectric(s.eta, LoH);
+  PrincipledLayers p = principled_layers(s);
+  vec3 metal = p.metal_M * F_Schlick(min(s.base_color, vec3(1.0)), 1.0, LoH);
+  float dielectric = p.dielectric_M * F_Dielectric(s.eta, LoH);
   vec3 specular = (s.metalness * metal + (1.0 - s.metalness) * dielectric) * (D * V);
-  float ratio = (s.eta - 1.0) / (s.eta + 1.0);
-  float layer = s.eta > 1.0 ? E_mu * Md * mix(ratio * ratio, 1.0, principled_S(s.roughness, s.NoV,
-                                                                                sqrt(abs(ratio))))
-                            : 0.0;
-  vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - layer) * INV_PI;
+  vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) * INV_PI;
   return (diffuse * factors.x + specular * factors.y) * E * NoL;
 }
+
+#  if defined(SL_ENV_UNIFORM) || defined(SL_ENV_MAP)
+/* The world's light for the Principled set: each lobe's split-sum albedo (the metal's Schlick
+ * F0 (E - B) + B, the dielectric layer's own estimate) times the prefiltered radiance, and the
+ * base under the layer lit by the irradiance. */
+vec3 principled_environment(Surface s, vec2 EB, vec3 radiance, vec3 irradiance, vec2 weights)
+{
+  PrincipledLayers p = principled_layers(s);
+  vec3 F0m = min(s.base_color, vec3(1.0));
+  vec3 metal = p.metal_M * (F0m * (EB.x - EB.y) + EB.y);
+  vec3 specular = (s.metalness * metal + (1.0 - s.metalness) * p.layer) * radiance;
+  vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) * irradiance * INV_PI;
+  return diffuse * weights.x + specular * weights.y;
+}
+#  endif
 #endif

@@ -35,6 +35,19 @@ struct MaterialData {
                           * w: alpha (coverage, 1 opaque) */
 };
 
+/* The world's light, precomputed (glsl/ibl.glsl, addon/environment.py): nine SH coefficients
+ * premultiplied by the cosine kernel's band factors, the rectangles in the atlas (x, y, width,
+ * height in texels) of the prefiltered levels and, last, of the irradiance map; info.x: the
+ * number of prefiltered levels; each level's roughness (4 per vec4); the radiance of a world
+ * without images. */
+struct EnvironmentData {
+  vec4 sh[9];
+  vec4 rect[8];
+  vec4 info;
+  vec4 level_roughness[2];
+  vec4 uniform_radiance;
+};
+
 struct ObjectData {
   mat4 model;
   mat4 normal_matrix;    /* inverse transpose of the model matrix's upper 3x3 */

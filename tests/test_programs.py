@@ -17,7 +17,10 @@ def preprocess(source: str, defines: dict[str, str]) -> str:
     #endif), enough to see which lines a compiler receives for these defines."""
     out, stack = [], []  # stack of (taking, any_branch_taken)
 
-    def holds(expr: str) -> bool:  # "defined(A) || defined(B)", the only form glsl/ uses
+    def holds(expr: str) -> bool:  # "defined(A) || defined(B)" or "NAME > N", the forms glsl/ uses
+        compared = re.fullmatch(r"\s*(\w+)\s*>\s*(\d+)\s*", expr)
+        if compared:
+            return int(defines.get(compared[1], 0)) > int(compared[2])
         names = re.findall(r"defined\s*\(\s*(\w+)\s*\)", expr)
         assert names and "&&" not in expr and "!" not in expr, f"unsupported #if: {expr}"
         return any(name in defines for name in names)

@@ -1,0 +1,170 @@
+"""The world's light, precomputed on the GPU once per world content (``EnvironmentPass``).
+
+From the lighting field of ``snapshot.World`` (constant terms and up to four environment images):
+1. bake: one equirectangular image of the field (``env_bake``), as wide as the widest image
+   (a power of two, 64 to 4096; a mirror ball counts twice its width);
+2. downsample: halve it down to ``environment.NARROWEST`` texels wide, each level
+   solid-angle weighted (``env_downsample``);
+3. spherical harmonics: the level 256 texels wide (or the bake, if narrower) read back and
+   projected in numpy (``environment.sh9_project``): nine coefficients for the irradiance;
+4. prefiltered levels: an atlas (``environment.atlas_layout``) of the environment seen through
+   GGX lobes of roughness k / 6: level 0 a copy of the level as wide as the mirror level, the
+   others ``PREFILTER_SAMPLES`` lobe samples each from the level whose texels match a sample's
+   share of the lobe (``env_prefilter``).
+A world without images needs none of this: its SH are those of a constant and its prefiltered
+radiance the constant itself. The result (``EnvironmentMaps``) is kept in the program library by
+a key of the field's content, so renders and the viewport share it and an object edit recomputes
+nothing.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass
+
+import gpu
+import numpy as np
+
+from . import environment as env
+from . import gpu_library, programs
+from .passes import Frame, Pass, Target
+from .snapshot import MAX_ENVIRONMENT_IMAGES, World
+
+#: The level the spherical harmonics are projected from (texels wide).
+SH_WIDTH = 256
+
+
+@dataclass
+class EnvironmentMaps:
+    """What the shading programs bind: the EnvironmentData block and, for images, the atlas."""
+
+    block: gpu.types.GPUUniformBuf
+    atlas: gpu.types.GPUTexture | None
+    sh: np.ndarray  # (9, 3) radiance coefficients L_lm (not premultiplied)
+    rects: tuple
+    build_ms: float
+
+
+def environment_key(terms) -> tuple:
+    """The lighting field's content: what a precomputation depends on."""
+    key = [tuple(round(c, 7) for c in World.constant(terms))]
+    for term in World.images(terms)[:MAX_ENVIRONMENT_IMAGES]:
+        key.append((term.image.key, term.image.revision, tuple(term.weight), term.projection, term.closest,
+                    np.asarray(term.lookup, np.float32).tobytes()))
+    return tuple(key)
+
+
+def _packed(sh: np.ndarray, rects, uniform) -> gpu.types.GPUUniformBuf:
+    premultiplied = sh * np.array(env.SH_COSINE)[:, None]
+    roughness = env.PREFILTER_ROUGHNESS if rects else ()
+    return gpu.types.GPUUniformBuf(programs.pack_environment(premultiplied, rects, uniform, roughness))
+
+
+def _uniform(terms) -> EnvironmentMaps:
+    radiance = np.array(World.constant(terms))
+    sh = np.zeros((9, 3))
+    sh[0] = radiance * env.SH_CONSTANTS[0] * 4.0 * np.pi  # L00 of a constant: L Y00 4 pi
+    return EnvironmentMaps(_packed(sh, (), radiance), None, sh, (), 0.0)
+
+
+def _bake_width(terms) -> int:
+    widest = max((term.image.size[0] * (2 if term.projection == "MIRROR_BALL" else 1)
+                  for term in World.images(terms)[:MAX_ENVIRONMENT_IMAGES]), default=64)
+    width = 64
+    while width < min(widest, 4096):
+        width *= 2
+    return width
+
+
+def _draw(frame: Frame, shader, bind, target: Target, rect=None) -> None:
+    with target.bind():
+        gpu.state.depth_test_set("NONE")
+        gpu.state.blend_set("NONE")
+        if rect is not None:
+            gpu.state.viewport_set(*rect)
+        shader.bind()
+        bind(shader)
+        frame.full_screen.draw(shader)
+        if rect is not None:
+            gpu.state.viewport_set(0, 0, target.width, target.height)
+
+
+def _chain(frame: Frame, terms) -> tuple[list[Target], Target, tuple]:
+    """Bake the field and halve it down to ``environment.CHAIN_NARROWEST``; the levels from the
+    mirror level's width down also go into one texture for the prefilter. Returns the separate
+    levels, that texture and its rectangles."""
+    width = _bake_width(terms)
+    images = min(len(World.images(terms)), MAX_ENVIRONMENT_IMAGES)
+    levels = [Target(width, width // 2, depth=False)]
+    _draw(frame, gpu_library.env_bake_program(images),
+          lambda s: (frame.scene.bind_world(s, terms, lighting=True),
+                     s.uniform_float("target", (float(width), float(width // 2), 0.0, 0.0))), levels[0])
+    downsample = gpu_library.env_downsample_program()
+    while levels[-1].width > env.CHAIN_NARROWEST:
+        source = levels[-1]
+        levels.append(Target(source.width // 2, source.height // 2, depth=False))
+        _draw(frame, downsample, lambda s, t=source.texture_color: s.uniform_sampler("source", t), levels[-1])
+    rects = env.chain_layout(min(width, env.MIRROR_WIDTH))
+    chain = Target(*env.atlas_size(rects), depth=False)
+    copy = gpu_library.env_downsample_program(copy=True)
+    by_width = {t.width: t for t in levels}
+    for rect in rects:
+        def bind(shader, level=by_width[rect[2]], rect=rect):
+            shader.uniform_sampler("source", level.texture_color)
+            shader.uniform_float("offset", (float(rect[0]), float(rect[1]), 0.0, 0.0))
+
+        _draw(frame, copy, bind, chain, rect)
+    return levels, chain, rects
+
+
+def _build_maps(frame: Frame, terms) -> EnvironmentMaps:
+    start = time.perf_counter()
+    levels, chain, chain_rects = _chain(frame, terms)
+    by_width = {t.width: t for t in levels}
+    sh = env.sh9_project(by_width.get(SH_WIDTH, levels[0]).read())
+    rows = np.zeros((13, 4), np.float32)
+    rows[:len(chain_rects)] = chain_rects
+    rows[12, 0] = len(chain_rects)
+    chain_block = gpu.types.GPUUniformBuf(rows.tobytes())
+    rects = env.atlas_layout(chain_rects[0][2])
+    atlas = Target(*env.atlas_size(rects), depth=False)
+    irradiance = gpu_library.env_irradiance_program()
+    irradiance_source = next(k for k, r in enumerate(chain_rects) if r[2] == env.IRRADIANCE_WIDTH)
+    for k, rect in enumerate(rects):
+        last = k == len(rects) - 1  # the irradiance map
+        alpha = 0.0 if last else env.level_roughness(k) ** 2
+        params = (alpha, float(irradiance_source) if last else 0.0, 0.0, 0.0)
+
+        def bind(shader, rect=rect, params=params):
+            shader.uniform_sampler("source", chain.texture_color)
+            shader.uniform_block("chain", chain_block)
+            shader.uniform_float("rect", tuple(float(x) for x in rect))
+            shader.uniform_float("params", params)
+
+        program = irradiance if last else gpu_library.env_prefilter_program(max(env.PREFILTER_SAMPLES[k], 1))
+        _draw(frame, program, bind, atlas, rect)
+    atlas.fence()  # the time below is the GPU's too
+    texture = atlas.texture_color
+    for target in (*levels, chain):
+        target.free()
+    return EnvironmentMaps(_packed(sh, rects, (0.0, 0.0, 0.0)), texture, sh, rects,
+                           1e3 * (time.perf_counter() - start))
+
+
+class EnvironmentPass(Pass):
+    """The world's light for this frame's shading (``frame.scene.environment``): nothing for a
+    black world, a constant for a world without images, else the precomputed maps, shared
+    through the program library by content."""
+
+    def run(self, frame: Frame, _spec) -> bool:
+        world = frame.snapshot.world
+        kind = programs.environment_kind(world)
+        if not kind:
+            frame.scene.environment = None
+        elif kind == "UNIFORM":
+            frame.scene.environment = gpu_library.LIBRARY.environment(
+                environment_key(world.lighting), lambda: _uniform(world.lighting))
+        else:
+            frame.scene.environment = gpu_library.LIBRARY.environment(
+                environment_key(world.lighting), lambda: _build_maps(frame, world.lighting))
+        return True

@@ -1,0 +1,22 @@
+/* Half the size of an equirectangular image: each texel the solid-angle-weighted mean of the
+ * 2 x 2 texels it covers (a row's texels span sin(theta) times the equator's solid angle), so
+ * that every level integrates to the same light. */
+
+void main()
+{
+#ifdef SL_COPY
+  /* a level copied into its rectangle of the chain texture (drawn with the viewport set to it) */
+  frag_color = texelFetch(source, ivec2(gl_FragCoord.xy - offset.xy), 0);
+  return;
+#endif
+  ivec2 p = ivec2(gl_FragCoord.xy) * 2;
+  float height = float(textureSize(source, 0).y);
+  vec3 sum = vec3(0.0);
+  float weight = 0.0;
+  for (int y = 0; y < 2; y++) {
+    float w = sin(PI * (1.0 - (float(p.y + y) + 0.5) / height));
+    sum += w * (texelFetch(source, p + ivec2(0, y), 0).rgb + texelFetch(source, p + ivec2(1, y), 0).rgb);
+    weight += 2.0 * w;
+  }
+  frag_color = vec4(sum / weight, 1.0);
+}

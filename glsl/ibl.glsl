@@ -1,0 +1,106 @@
+/* Image-based lighting from the world (addon/environment.py computes what is bound here):
+ * - diffuse: irradiance from nine spherical-harmonic coefficients (Ramamoorthi & Hanrahan 2001,
+ *   "An Efficient Representation for Irradiance Environment Maps", eq. 7), premultiplied on
+ *   the CPU by the cosine kernel's band factors;
+ * - specular: Karis 2013's split sum, "Real Shading in Unreal Engine 4": the environment
+ *   prefiltered by a GGX lobe per roughness level (an atlas of equirectangular levels), times
+ *   the lobe's directional albedo split as F0 (E - B) + F90 B (table split_table: E, B);
+ * - multiple scattering (Fdez-Aguera 2019, "A Multiple-Scattering Microfacet Model for
+ *   Real-Time Image-based Lighting", eq. 16-18) where the term set compensates.
+ * SL_ENV_UNIFORM: a world without images, whose prefiltered radiance is the constant itself. */
+
+#if defined(SL_ENV_UNIFORM) || defined(SL_ENV_MAP)
+
+vec3 env_irradiance_sh9(vec3 n)
+{
+  vec3 e = env.sh[0].rgb * 0.282095;
+  e += (env.sh[1].rgb * n.y + env.sh[2].rgb * n.z + env.sh[3].rgb * n.x) * 0.488603;
+  e += (env.sh[4].rgb * (n.x * n.y) + env.sh[5].rgb * (n.y * n.z) + env.sh[7].rgb * (n.x * n.z)) * 1.092548;
+  e += env.sh[6].rgb * (0.315392 * (3.0 * n.z * n.z - 1.0));
+  e += env.sh[8].rgb * (0.546274 * (n.x * n.x - n.y * n.y));
+  /* nine bands ring below zero behind a very bright, small source: no negative light */
+  return max(e, vec3(0.0));
+}
+
+/* E(mu, r) and B(mu, r) of the program's D and V, bilinear on the grid i / (N - 1). */
+vec2 env_split_sum(float NoV, float roughness)
+{
+  float n = float(SL_MS_SIZE);
+  vec2 x = clamp(vec2(NoV, roughness) * (n - 1.0), vec2(0.0), vec2(n - 1.0));
+  ivec2 i0 = ivec2(floor(x));
+  ivec2 i1 = min(i0 + 1, ivec2(SL_MS_SIZE - 1));
+  vec2 t = x - vec2(i0);
+  vec2 a = mix(texelFetch(split_table, i0, 0).rg, texelFetch(split_table, ivec2(i1.x, i0.y), 0).rg, t.x);
+  vec2 b = mix(texelFetch(split_table, ivec2(i0.x, i1.y), 0).rg, texelFetch(split_table, i1, 0).rg, t.x);
+  return mix(a, b, t.y);
+}
+
+#  ifdef SL_ENV_MAP
+/* One level of the atlas, bilinear, repeating in u and clamped in v inside its rectangle. */
+vec3 env_atlas_texel(ivec4 rect, int x, int y)
+{
+  x = x - rect.z * int(floor(float(x) / float(rect.z)));
+  return texelFetch(env_atlas, rect.xy + ivec2(x, clamp(y, 0, rect.w - 1)), 0).rgb;
+}
+
+vec3 env_level(int k, vec3 d)
+{
+  ivec4 rect = ivec4(env.rect[k]);
+  vec2 p = equirect_uv(d) * vec2(rect.zw) - 0.5;
+  vec2 i = floor(p);
+  vec2 f = p - i;
+  int x = int(i.x), y = int(i.y);
+  return mix(mix(env_atlas_texel(rect, x, y), env_atlas_texel(rect, x + 1, y), f.x),
+             mix(env_atlas_texel(rect, x, y + 1), env_atlas_texel(rect, x + 1, y + 1), f.x), f.y);
+}
+
+float env_level_roughness(int k)
+{
+  /* level 0 is the mirror image, shown as is for the smoothest surfaces */
+  return k == 0 ? MIN_PERCEPTUAL_ROUGHNESS : env.level_roughness[k / 4][k % 4];
+}
+
+/* The environment through a GGX lobe of perceptual roughness r: the two levels around it, mixed
+ * linearly in roughness. */
+vec3 env_prefiltered(vec3 d, float roughness)
+{
+  int last = int(env.info.x) - 1;
+  int k = 0;
+  while (k < last - 1 && roughness > env_level_roughness(k + 1)) {
+    k++;
+  }
+  float r0 = env_level_roughness(k), r1 = env_level_roughness(k + 1);
+  float t = clamp((roughness - r0) / (r1 - r0), 0.0, 1.0);
+  return mix(env_level(k, d), env_level(k + 1, d), t);
+}
+
+/* The irradiance: the exactly convolved map (the atlas' last rectangle), or the nine spherical
+ * harmonics (SL_ENV_DIFFUSE_SH9: cheaper, smoother, wrong where a small bright source rules). */
+vec3 env_irradiance(vec3 n)
+{
+#    ifdef SL_ENV_DIFFUSE_SH9
+  return env_irradiance_sh9(n);
+#    else
+  return env_level(7, n);
+#    endif
+}
+#  else
+vec3 env_prefiltered(vec3 d, float roughness)
+{
+  return env.uniform_radiance.rgb;
+}
+
+vec3 env_irradiance(vec3 n)
+{
+  return env_irradiance_sh9(n);  /* exact for a constant */
+}
+#  endif
+
+/* Where a GGX lobe's reflected energy peaks: off the mirror direction towards the normal as the
+ * surface roughens (Lagarde & de Rousiers 2014, "Moving Frostbite to PBR", listing 22). */
+vec3 env_dominant_direction(vec3 n, vec3 r, float alpha)
+{
+  float smoothness = 1.0 - alpha;
+  return normalize(mix(n, r, smoothness * (sqrt(smoothness) + alpha)));
+}
+#endif
