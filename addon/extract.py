@@ -546,7 +546,10 @@ def scene_settings(scene) -> S.Settings:
                       samples=int(props.samples), compare_mode=props.compare_mode,
                       compare_models=(props.compare_a, props.compare_b),
                       compare_split=float(props.compare_split), compare_range=float(props.compare_range),
-                      transparency_layers=int(props.transparency_layers))
+                      transparency_layers=int(props.transparency_layers),
+                      environment_diffuse=props.world_diffuse,
+                      environment_samples=(int(props.world_samples) if props.world_specular == "SAMPLED"
+                                           else 0))
 
 
 #: The artist's scene settings for previews, captured on the main thread (see ``remember_settings``).

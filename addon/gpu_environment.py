@@ -32,6 +32,8 @@ from .snapshot import MAX_ENVIRONMENT_IMAGES, World
 
 #: The level the spherical harmonics are projected from (texels wide).
 SH_WIDTH = 256
+#: Environments precomputed since start (tests count them: an object edit must add none).
+BUILDS = 0
 
 
 @dataclass
@@ -40,6 +42,8 @@ class EnvironmentMaps:
 
     block: gpu.types.GPUUniformBuf
     atlas: gpu.types.GPUTexture | None
+    chain: gpu.types.GPUTexture | None  # the downsampled levels, for per-pixel sampling
+    chain_block: gpu.types.GPUUniformBuf | None
     sh: np.ndarray  # (9, 3) radiance coefficients L_lm (not premultiplied)
     rects: tuple
     build_ms: float
@@ -64,7 +68,7 @@ def _uniform(terms) -> EnvironmentMaps:
     radiance = np.array(World.constant(terms))
     sh = np.zeros((9, 3))
     sh[0] = radiance * env.SH_CONSTANTS[0] * 4.0 * np.pi  # L00 of a constant: L Y00 4 pi
-    return EnvironmentMaps(_packed(sh, (), radiance), None, sh, (), 0.0)
+    return EnvironmentMaps(_packed(sh, (), radiance), None, None, None, sh, (), 0.0)
 
 
 def _bake_width(terms) -> int:
@@ -118,6 +122,8 @@ def _chain(frame: Frame, terms) -> tuple[list[Target], Target, tuple]:
 
 
 def _build_maps(frame: Frame, terms) -> EnvironmentMaps:
+    global BUILDS
+    BUILDS += 1
     start = time.perf_counter()
     levels, chain, chain_rects = _chain(frame, terms)
     by_width = {t.width: t for t in levels}
@@ -144,11 +150,10 @@ def _build_maps(frame: Frame, terms) -> EnvironmentMaps:
         program = irradiance if last else gpu_library.env_prefilter_program(max(env.PREFILTER_SAMPLES[k], 1))
         _draw(frame, program, bind, atlas, rect)
     atlas.fence()  # the time below is the GPU's too
-    texture = atlas.texture_color
-    for target in (*levels, chain):
+    for target in levels:
         target.free()
-    return EnvironmentMaps(_packed(sh, rects, (0.0, 0.0, 0.0)), texture, sh, rects,
-                           1e3 * (time.perf_counter() - start))
+    return EnvironmentMaps(_packed(sh, rects, (0.0, 0.0, 0.0)), atlas.texture_color, chain.texture_color,
+                           chain_block, sh, rects, 1e3 * (time.perf_counter() - start))
 
 
 class EnvironmentPass(Pass):

@@ -146,6 +146,7 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
         samplers.update({6: "opaque_depth", 7: "peel_depth"})
     samplers[8] = "env_atlas" if features.environment == "MAP" else None
     samplers[9] = "split_table" if features.uses_split_table else None
+    samplers[10] = "env_chain" if features.environment == "MAP" and features.env_samples else None
     for slot, name in samplers.items():
         if name is not None:
             info.sampler(slot, "FLOAT_2D", name)
@@ -153,6 +154,8 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
         info.uniform_buf(binding, struct, name)
     if features.environment:
         info.uniform_buf(len(_BLOCKS), "EnvironmentData", "env")
+    if features.environment == "MAP" and features.env_samples:
+        info.uniform_buf(len(_BLOCKS) + 1, "ChainData", "chain")
     for kind, name in _PUSH_CONSTANTS:
         info.push_constant(kind, name)
     for location, (kind, name) in enumerate(_ATTRIBUTES):
@@ -227,7 +230,7 @@ def env_downsample_program(copy: bool = False) -> gpu.types.GPUShader:
 
 def env_prefilter_program(samples: int) -> gpu.types.GPUShader:
     def declare(info):
-        info.typedef_source(programs.read_glsl("world_data.glsl"))
+        info.typedef_source(programs.read_glsl("chain_data.glsl"))
         _declare_full_screen("source")(info)
         info.uniform_buf(0, "ChainData", "chain")
         info.push_constant("VEC4", "rect")
@@ -239,7 +242,7 @@ def env_prefilter_program(samples: int) -> gpu.types.GPUShader:
 
 def env_irradiance_program() -> gpu.types.GPUShader:
     def declare(info):
-        info.typedef_source(programs.read_glsl("world_data.glsl"))
+        info.typedef_source(programs.read_glsl("chain_data.glsl"))
         _declare_full_screen("source")(info)
         info.uniform_buf(0, "ChainData", "chain")
         info.push_constant("VEC4", "rect")

@@ -243,6 +243,9 @@ class SceneResources:
             shader.uniform_sampler("split_table", gpu_library.split_table(features.terms))
             if features.environment == "MAP":
                 shader.uniform_sampler("env_atlas", self.environment.atlas)
+                if features.env_samples:
+                    shader.uniform_sampler("env_chain", self.environment.chain)
+                    shader.uniform_block("chain", self.environment.chain_block)
         if bind is not None:
             bind(shader)
         materials = self.snapshot.materials

@@ -79,6 +79,7 @@ class Features:
     peel: bool = False  # a depth-peeling pass over the partly transparent surfaces
     environment: str = ""  # the world's light: one of ENVIRONMENTS (the physically based model)
     env_diffuse: str = "MAP"  # its irradiance: "MAP" (exactly convolved) or "SH9"
+    env_samples: int = 0  # > 0: specular sampled per pixel with this many samples, not split sum
 
     def has_map(self, name: str) -> bool:
         return name in self.maps or name + "_CLOSEST" in self.maps
@@ -128,6 +129,7 @@ class Features:
                                      and material.base_color_map is not None and with_maps),
             environment=environment_kind(snapshot.world),
             env_diffuse=snapshot.settings.environment_diffuse,
+            env_samples=snapshot.settings.environment_samples,
         )
 
     @property
@@ -168,6 +170,8 @@ class Features:
             out.append(("SL_ENV_" + self.environment, "1"))
             if self.environment == "MAP" and self.env_diffuse == "SH9":
                 out.append(("SL_ENV_DIFFUSE_SH9", "1"))
+            if self.environment == "MAP" and self.env_samples > 0:
+                out += [("SL_ENV_SAMPLES", str(self.env_samples)), ("SL_CHAIN", "1")]
             if ("SL_MS_SIZE", str(MS_SIZE)) not in out:
                 out.append(("SL_MS_SIZE", str(MS_SIZE)))
         for name in sorted(self.maps):  # BASE_COLOR, or BASE_COLOR_CLOSEST for nearest filtering
@@ -201,7 +205,7 @@ def program_source(features: Features) -> ProgramSource:
     fragment.append(read_glsl(MODEL_FILES[features.model]))
     fragment.append(read_glsl("mesh.frag.glsl"))
     return ProgramSource(
-        typedefs=read_glsl("uniforms.glsl"),
+        typedefs=read_glsl("uniforms.glsl") + "\n" + read_glsl("chain_data.glsl"),
         vertex=read_glsl("mesh.vert.glsl"),
         fragment="\n".join(fragment),
         defines=tuple(sorted(features.defines() + (("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)),))),
@@ -310,13 +314,14 @@ def env_downsample_source(copy: bool = False) -> ProgramSource:
 @lru_cache(maxsize=1)
 def env_irradiance_source() -> ProgramSource:
     return _full_screen_source("common.glsl", "environment.glsl", "env_irradiance.frag.glsl",
-                               typedefs=read_glsl("world_data.glsl"))
+                               typedefs=read_glsl("chain_data.glsl"))
 
 
-@lru_cache(maxsize=4)
+@lru_cache(maxsize=8)
 def env_prefilter_source(samples: int) -> ProgramSource:
     return _full_screen_source("common.glsl", "environment.glsl", "env_prefilter.frag.glsl",
-                               defines=(("SL_SAMPLES", str(samples)),), typedefs=read_glsl("world_data.glsl"))
+                               defines=(("SL_SAMPLES", str(samples)), ("SL_CHAIN", "1")),
+                               typedefs=read_glsl("chain_data.glsl"))
 
 
 #: Texels per side of a block summarised by one texel of a peeling layer's occupancy map.

@@ -120,6 +120,25 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
         name="Transparency Layers", default=4, min=1, max=16, update=_redraw,
         description="Partly transparent surfaces blended per pixel, nearest first, in depth order "
                     "(depth peeling): surfaces beyond this many behind one another are left out")
+    world_diffuse: EnumProperty(
+        name="World Diffuse", default="MAP", update=_redraw, items=(
+            ("MAP", "Irradiance Map", "The world's light convolved exactly with the cosine, per "
+                                      "direction (64 x 32 texels, from a 64 x 32 downsampled world)"),
+            ("SH9", "Spherical Harmonics", "Nine coefficients (Ramamoorthi & Hanrahan 2001): cheaper, "
+                                           "smooth; wrong where a small bright source dominates"),
+        ),
+        description="How the world lights the diffuse lobe of the physically based model")
+    world_specular: EnumProperty(
+        name="World Specular", default="SPLIT_SUM", update=_redraw, items=(
+            ("SPLIT_SUM", "Split Sum", "Prefiltered world x directional albedo (Karis 2013): one lookup; "
+                                       "assumes the view along the normal, so errs at grazing angles"),
+            ("SAMPLED", "Sampled", "The BRDF importance-sampled against the world at every pixel: slow, "
+                                   "converges to the reference as the samples grow"),
+        ),
+        description="How the world lights the specular lobe of the physically based model")
+    world_samples: IntProperty(
+        name="World Samples", default=64, min=1, max=1024, update=_redraw,
+        description="Samples of the world per pixel for sampled world specular")
 
 
 def _override(name: str, description: str):

@@ -322,6 +322,7 @@ class Settings:
     compare_range: float = 1.0
     transparency_layers: int = 4  # depth-peeling layers of partly transparent surfaces per pixel
     environment_diffuse: str = "MAP"  # the world's irradiance: "MAP" (exact convolution) or "SH9"
+    environment_samples: int = 0  # the world's specular: split sum (0) or this many samples per pixel
 
 
 @dataclass

@@ -78,6 +78,12 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
                 box = layout.box()
                 box.label(text="Set Color Management > View Transform to Standard:", icon="ERROR")
                 box.label(text="this tone mapper already maps to display values")
+        col = layout.column(heading="World")
+        col.active = props.model == "PBR"
+        col.prop(props, "world_diffuse", text="Diffuse")
+        col.prop(props, "world_specular", text="Specular")
+        if props.world_specular == "SAMPLED":
+            col.prop(props, "world_samples", text="Samples")
         layout.prop(props, "samples")
         layout.prop(props, "transparency_layers")
         layout.separator()

@@ -67,6 +67,61 @@ vec3 env_term(sampler2D map, mat4 lookup, vec4 kind, vec3 d)
   return env_lookup(map, uv, kind.y > 0.5).rgb;
 }
 
+#ifdef SL_CHAIN
+/* Filtered importance sampling (Krivanek & Colbert 2008, "Real-time Shading with Filtered
+ * Importance Sampling") over the downsampled environment (all levels in one texture,
+ * rectangles in chain.rect): a sample standing for the solid angle 1 / (N pdf) reads the level
+ * whose texels cover that much (plus one level: the filter's own width), trilinearly -- a
+ * bright small source spreads over the lobe instead of sparkling. */
+
+/* The Van der Corput radical inverse in base 2 (the second Hammersley coordinate). */
+float radical_inverse(uint bits)
+{
+  bits = (bits << 16u) | (bits >> 16u);
+  bits = ((bits & 0x55555555u) << 1u) | ((bits & 0xAAAAAAAAu) >> 1u);
+  bits = ((bits & 0x33333333u) << 2u) | ((bits & 0xCCCCCCCCu) >> 2u);
+  bits = ((bits & 0x0F0F0F0Fu) << 4u) | ((bits & 0xF0F0F0F0u) >> 4u);
+  bits = ((bits & 0x00FF00FFu) << 8u) | ((bits & 0xFF00FF00u) >> 8u);
+  return float(bits) * 2.3283064365386963e-10;
+}
+
+vec3 chain_texel(sampler2D map, ivec4 rect, int x, int y)
+{
+  x = x - rect.z * int(floor(float(x) / float(rect.z)));
+  return texelFetch(map, rect.xy + ivec2(x, clamp(y, 0, rect.w - 1)), 0).rgb;
+}
+
+vec3 chain_level(sampler2D map, int k, vec2 uv)
+{
+  ivec4 rect = ivec4(chain.rect[k]);
+  vec2 p = uv * vec2(rect.zw) - 0.5;
+  vec2 i = floor(p);
+  vec2 f = p - i;
+  int x = int(i.x), y = int(i.y);
+  return mix(mix(chain_texel(map, rect, x, y), chain_texel(map, rect, x + 1, y), f.x),
+             mix(chain_texel(map, rect, x, y + 1), chain_texel(map, rect, x + 1, y + 1), f.x), f.y);
+}
+
+vec3 chain_lookup(sampler2D map, vec3 d, float lod)
+{
+  vec2 uv = equirect_uv(d);
+  lod = clamp(lod, 0.0, chain.info.x - 1.0);
+  int k = int(floor(lod));
+  int k1 = min(k + 1, int(chain.info.x) - 1);
+  return mix(chain_level(map, k, uv), chain_level(map, k1, uv), lod - float(k));
+}
+
+/* The level of detail for a sample of probability density pdf (per steradian) out of n, plus
+ * bias levels (Krivanek & Colbert use 1: each sample also averages its neighbourhood). */
+float chain_lod(vec3 l, float pdf, int n, float bias)
+{
+  vec2 base = chain.rect[0].zw;  /* level 0: an equator texel spans (2 pi / w)(pi / h) */
+  float omega_s = 1.0 / (float(n) * pdf);
+  float omega_p = 2.0 * PI * PI * sqrt(max(1.0 - l.z * l.z, 1e-4)) / (base.x * base.y);
+  return 0.5 * log2(omega_s / omega_p) + bias;
+}
+#endif
+
 #ifdef SL_ENV_IMAGES
 vec3 world_radiance(vec3 d)
 {

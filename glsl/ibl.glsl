@@ -22,9 +22,14 @@ vec3 env_irradiance_sh9(vec3 n)
   return max(e, vec3(0.0));
 }
 
-/* E(mu, r) and B(mu, r) of the program's D and V, bilinear on the grid i / (N - 1). */
+/* E(mu, r) and B(mu, r) of the program's D and V, bilinear on the grid i / (N - 1). At the
+ * roughness floor the surface stands for a perfect mirror (as Cycles renders roughness 0):
+ * E = 1, B = (1 - n.v)^5, i.e. Schlick's Fresnel at n.v, no masking. */
 vec2 env_split_sum(float NoV, float roughness)
 {
+  if (roughness <= MIN_PERCEPTUAL_ROUGHNESS) {
+    return vec2(1.0, pow5(1.0 - NoV));
+  }
   float n = float(SL_MS_SIZE);
   vec2 x = clamp(vec2(NoV, roughness) * (n - 1.0), vec2(0.0), vec2(n - 1.0));
   ivec2 i0 = ivec2(floor(x));

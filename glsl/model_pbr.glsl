@@ -27,6 +27,75 @@ vec3 shade_direct(Surface s, vec3 l, vec3 E, vec4 factors)
   return (diffuse * factors.x + specular * factors.y) * E * NoL;
 }
 
+#ifdef SL_ENV_SAMPLES
+/* The world's specular light by importance sampling the actual BRDF at every pixel: half
+ * vectors drawn from D (Walter et al. 2007, eq. 35-36 for GGX, 28-29 for Beckmann) at
+ * SL_ENV_SAMPLES Hammersley points, each sample's light read with filtered importance sampling
+ * (environment.glsl), weighted by f cos / pdf = F V 4 (v.h)(n.l) / (n.h). No split-sum
+ * assumption (n = v = r): it converges to the unoccluded reference as the count grows. */
+vec3 env_sampled_specular(Surface s)
+{
+  vec3 up = abs(s.n.z) < 0.999 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0);
+  vec3 tx = normalize(cross(up, s.n));
+  vec3 ty = cross(s.n, tx);
+  float a2 = s.alpha * s.alpha;
+#  ifdef SL_PRINCIPLED
+  PrincipledLayers p = principled_layers(s);
+  vec3 F0m = min(s.base_color, vec3(1.0));
+#  endif
+  if (s.roughness <= MIN_PERCEPTUAL_ROUGHNESS) {
+    /* at the roughness floor the lobe stands for a perfect mirror (roughness 0, as Cycles
+     * renders it): GGX's long tails at alpha = 0.002 would still blur fine detail */
+    vec3 r = reflect(-s.v, s.n);
+#  ifdef SL_PRINCIPLED
+    vec3 F = s.metalness * p.metal_M * F_Schlick(F0m, 1.0, s.NoV) +
+             (1.0 - s.metalness) * p.dielectric_M * F_Dielectric(s.eta, s.NoV);
+    return chain_level(env_chain, 0, equirect_uv(r)) * F;
+#  else
+    return chain_level(env_chain, 0, equirect_uv(r)) * pbr_fresnel(s, s.NoV);
+#  endif
+  }
+  vec3 sum = vec3(0.0);
+  for (int i = 0; i < SL_ENV_SAMPLES; i++) {
+    float phi = 2.0 * PI * (float(i) + 0.5) / float(SL_ENV_SAMPLES);
+    float xi = radical_inverse(uint(i));
+#  ifdef SL_NDF_BECKMANN
+    float cos_t = inversesqrt(1.0 - a2 * log(max(1.0 - xi, 1e-12)));
+#  else
+    float cos_t = sqrt((1.0 - xi) / (1.0 + (a2 - 1.0) * xi));
+#  endif
+    float sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
+    vec3 h = tx * (sin_t * cos(phi)) + ty * (sin_t * sin(phi)) + s.n * cos_t;
+    float VoH = dot(s.v, h);
+    vec3 l = 2.0 * VoH * h - s.v;
+    float NoL = dot(s.n, l);
+    if (VoH <= 0.0 || NoL <= 0.0) {
+      continue;
+    }
+    float NoH = max(cos_t, MIN_COS);
+    float D = pbr_distribution(NoH, sin_t * sin_t, s.alpha);
+    float pdf = D * NoH / (4.0 * VoH);
+    /* no extra bias level: measured against Cycles on the bundled forest world, bias 0 and 0.5
+     * differ by under 1 % at 256 samples; 1 blurs what near-mirror lobes see */
+    vec3 L = chain_lookup(env_chain, l, chain_lod(l, pdf, SL_ENV_SAMPLES, 0.0));
+#  ifdef SL_PRINCIPLED
+    vec3 F = s.metalness * p.metal_M * F_Schlick(F0m, 1.0, VoH) +
+             (1.0 - s.metalness) * p.dielectric_M * F_Dielectric(s.eta, VoH);
+    float V = V_SmithGGXCorrelated(s.NoV, NoL, s.alpha);
+#  else
+    vec3 F = pbr_fresnel(s, VoH);
+    float V = pbr_visibility(s.NoV, NoL, NoH, VoH, s.alpha);
+#  endif
+    sum += L * F * (V * 4.0 * VoH * NoL / NoH);
+  }
+#  ifdef SL_PRINCIPLED
+  return sum / float(SL_ENV_SAMPLES);
+#  else
+  return sum / float(SL_ENV_SAMPLES) * specular_energy_compensation(s);
+#  endif
+}
+#endif
+
 #if defined(SL_ENV_UNIFORM) || defined(SL_ENV_MAP)
 /* The world's light (glsl/ibl.glsl): the split-sum specular lobe, the prefiltered radiance read
  * where the lobe's energy peaks, and the diffuse lobe lit by the irradiance, weighted by the
@@ -35,13 +104,19 @@ vec3 shade_direct(Surface s, vec3 l, vec3 E, vec4 factors)
 vec3 shade_environment(Surface s, vec2 weights)
 {
   vec2 EB = env_split_sum(s.NoV, s.roughness);
-  vec3 radiance = env_prefiltered(env_dominant_direction(s.n, reflect(-s.v, s.n), s.alpha), s.roughness);
+  vec3 r = reflect(-s.v, s.n);
+  vec3 radiance = env_prefiltered(s.roughness > MIN_PERCEPTUAL_ROUGHNESS ? env_dominant_direction(s.n, r, s.alpha) : r,
+                                  s.roughness);
   vec3 irradiance = env_irradiance(s.n);
 #  ifdef SL_PRINCIPLED
   return principled_environment(s, EB, radiance, irradiance, weights);
 #  else
   vec3 albedo = s.f0 * (EB.x - EB.y) + s.f90 * EB.y;
+#    ifdef SL_ENV_SAMPLES
+  vec3 specular = env_sampled_specular(s);
+#    else
   vec3 specular = albedo * radiance;
+#    endif
 #    ifdef SL_MULTISCATTER
   /* light scattered more than once between microfacets leaves like a rough diffuse lobe
    * (Fdez-Aguera 2019, eq. 16-18): Fms Ems of the irradiance */

@@ -90,6 +90,10 @@ vec3 principled_direct(Surface s, float NoL, float NoH, float NxH2, float LoH, v
   return (diffuse * factors.x + specular * factors.y) * E * NoL;
 }
 
+#  ifdef SL_ENV_SAMPLES
+vec3 env_sampled_specular(Surface s); /* model_pbr.glsl */
+#  endif
+
 #  if defined(SL_ENV_UNIFORM) || defined(SL_ENV_MAP)
 /* The world's light for the Principled set: each lobe's split-sum albedo (the metal's Schlick
  * F0 (E - B) + B, the dielectric layer's own estimate) times the prefiltered radiance, and the
@@ -97,9 +101,13 @@ vec3 principled_direct(Surface s, float NoL, float NoH, float NxH2, float LoH, v
 vec3 principled_environment(Surface s, vec2 EB, vec3 radiance, vec3 irradiance, vec2 weights)
 {
   PrincipledLayers p = principled_layers(s);
+#    ifdef SL_ENV_SAMPLES
+  vec3 specular = env_sampled_specular(s);
+#    else
   vec3 F0m = min(s.base_color, vec3(1.0));
   vec3 metal = p.metal_M * (F0m * (EB.x - EB.y) + EB.y);
   vec3 specular = (s.metalness * metal + (1.0 - s.metalness) * p.layer) * radiance;
+#    endif
   vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) * irradiance * INV_PI;
   return diffuse * weights.x + specular * weights.y;
 }

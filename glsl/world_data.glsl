@@ -1,13 +1,6 @@
 /* The world as one radiance field (glsl/environment.glsl): the constant terms' sum and up to
  * four image terms (weight, Mapping as a 4x4, x: projection 0 equirectangular / 1 mirror ball,
  * y: 1 for Closest interpolation). */
-/* The downsampled environment in one texture for filtered importance sampling: each level's
- * rectangle (x, y, width, height in texels), x: the number of levels. */
-struct ChainData {
-  vec4 rect[12];
-  vec4 info;
-};
-
 struct WorldData {
   vec4 constant_radiance; /* rgb: the constant terms' sum */
   vec4 weight[4];

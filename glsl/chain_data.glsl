@@ -1,0 +1,6 @@
+/* The downsampled environment in one texture for filtered importance sampling: each level's
+ * rectangle (x, y, width, height in texels), x: the number of levels. */
+struct ChainData {
+  vec4 rect[12];
+  vec4 info;
+};
