@@ -246,3 +246,26 @@ def test_black_world_compiles_no_environment_and_edits_recompute_only_world_chan
     scene.world.node_tree.nodes["Background"].inputs["Strength"].default_value = 2.0  # a world edit
     scenes.render(scene, tmp_path / "brighter.exr")
     assert gpu_environment.BUILDS == builds + 2
+
+
+def test_the_startup_cube_faces_turned_from_the_light_are_lit_by_the_world_as_in_cycles(tmp_path):
+    """Blender's startup file: the default cube, its 1000 W light, the grey world. The faces the
+    light does not reach are lit by the world alone (the cube is convex: nothing occludes it),
+    as in Cycles with direct light only."""
+    bpy.ops.wm.read_factory_settings()
+    scene = bpy.context.scene
+    scene.render.engine = "SHADING_LAB"
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = 160, 90, 100
+    scene.view_settings.view_transform = "Standard"
+    ours = scenes.render(scene, tmp_path / "ours.exr")[..., :3].astype(np.float64)
+    ref = _cycles(scene, tmp_path / "cycles.exr", samples=256)[..., :3].astype(np.float64)
+    background = ref[0, 0]
+    cube = np.abs(ref - background).max(-1) > 1e-4
+    o, c = ours.mean(-1), ref.mean(-1)
+    shade = cube & (c < 0.1)
+    err = np.abs(o[shade] - c[shade]).mean() / c[shade].mean()
+    print(f"startup cube, faces the light does not reach ({shade.sum()} px): ours {o[shade].mean():.4f}, "
+          f"Cycles {c[shade].mean():.4f}, mean absolute error {err:.2%} of it")
+    assert shade.sum() > 500 and c[shade].mean() > 0.02
+    assert err < 0.01
+    np.testing.assert_allclose(ours[0, 0], background, rtol=1e-4)  # the camera sees the world
