@@ -73,24 +73,28 @@ def lookup(pixels: np.ndarray, uv, closest: bool = False) -> np.ndarray:
     return bottom * (1 - fy) + top * fy
 
 
-def term_radiance(term: EnvironmentTerm, d) -> np.ndarray:
-    """(..., 3): one term's radiance in directions ``d``."""
+def term_radiance(term: EnvironmentTerm, d, threshold: float = 0.0) -> np.ndarray:
+    """(..., 3): one term's radiance in directions ``d``; an equirectangular image's clamped to
+    luminance ``threshold`` when it is > 0 (the lighting field, its excess split off as suns)."""
     d = np.asarray(d, np.float64)
     if term.image is None:
         return np.broadcast_to(np.asarray(term.weight, np.float64), d.shape).copy()
     m = np.asarray(term.lookup, np.float64)
     v = d @ m[:3, :3].T + m[:3, 3]
     uv = mirror_ball_uv(v) if term.projection == "MIRROR_BALL" else equirect_uv(v)
-    return np.asarray(term.weight, np.float64) * lookup(linear_pixels(term.image), uv, term.closest)[..., :3]
+    c = np.asarray(term.weight, np.float64) * lookup(linear_pixels(term.image), uv, term.closest)[..., :3]
+    if threshold > 0.0 and term.projection == "EQUIRECTANGULAR":
+        c = clamp_luminance(c, threshold)
+    return c
 
 
-def world_radiance(terms, d) -> np.ndarray:
+def world_radiance(terms, d, threshold: float = 0.0) -> np.ndarray:
     """(..., 3): a radiance field (``World.camera`` or ``World.lighting``) in directions ``d``,
     its constant terms and its first ``MAX_ENVIRONMENT_IMAGES`` image terms, as the GPU sums it."""
     d = np.asarray(d, np.float64)
     out = np.broadcast_to(np.asarray(World.constant(terms)), d.shape).copy()
     for term in World.images(terms)[:MAX_ENVIRONMENT_IMAGES]:
-        out += term_radiance(term, d)
+        out += term_radiance(term, d, threshold)
     return out
 
 
@@ -148,6 +152,9 @@ def sh9_irradiance(coefficients: np.ndarray, n) -> np.ndarray:
 #: mixing two neighbours would blur a sharp reflection most.
 PREFILTER_ROUGHNESS = (0.0, 0.125, 0.25, 0.375, 0.5, 0.75, 1.0)
 PREFILTER_LEVELS = len(PREFILTER_ROUGHNESS)
+#: With suns split off the world, levels from this one on (roughness 0.375 and up), the
+#: irradiance and the SH are made from the clamped world, the smoother levels from the whole.
+FIRST_CLAMPED_LEVEL = 2
 #: The diffuse irradiance map (exact convolution of a downsampled environment), texels wide.
 IRRADIANCE_WIDTH = 64
 #: Importance samples per texel of each prefiltered level: few for the sharp, large levels, many
@@ -191,3 +198,96 @@ def chain_layout(width: int) -> tuple[tuple[int, int, int, int], ...]:
 
 def atlas_size(layout) -> tuple[int, int]:
     return max(x + w for x, _, w, _ in layout), max(y + h for _, y, _, h in layout)
+
+
+# --- very bright texels: split off as suns ------------------------------------------------------
+
+#: Rec. 709 luminance weights (the clamp keeps each texel's colour, scaling it to the threshold).
+LUMINANCE = np.array([0.2126, 0.7152, 0.0722])
+#: Suns split off one world at the most; fainter bright spots join the nearest of them.
+MAX_SUNS = 4
+
+
+def clamp_luminance(radiance, threshold: float) -> np.ndarray:
+    """``radiance`` (..., 3) scaled down where its luminance exceeds ``threshold`` (> 0)."""
+    radiance = np.asarray(radiance, np.float64)
+    y = radiance @ LUMINANCE
+    with np.errstate(divide="ignore", invalid="ignore"):
+        scale = np.where(y > threshold, threshold / y, 1.0)
+    return radiance * scale[..., None]
+
+
+#: Bright spots are told apart on a grid this many times coarser than the image (fast enough in
+#: Python; two spots closer than that are one sun).
+CLUSTER_CELL = 4
+
+
+def _clusters(mask: np.ndarray) -> np.ndarray:
+    """Connected components (8 neighbours, repeating in u) of a boolean image: labels, -1 outside,
+    found on cells of ``CLUSTER_CELL`` texels."""
+    h, w = mask.shape
+    c = CLUSTER_CELL if h % CLUSTER_CELL == 0 and w % CLUSTER_CELL == 0 else 1
+    coarse = mask.reshape(h // c, c, w // c, c).any(axis=(1, 3))
+    labels = _cell_clusters(coarse)
+    return np.where(mask, np.repeat(np.repeat(labels, c, axis=0), c, axis=1), -1)
+
+
+def _cell_clusters(mask: np.ndarray) -> np.ndarray:
+    labels = np.full(mask.shape, -1, np.int64)
+    h, w = mask.shape
+    current = 0
+    for start in zip(*np.nonzero(mask)):
+        if labels[start] >= 0:
+            continue
+        stack = [start]
+        labels[start] = current
+        while stack:
+            y, x = stack.pop()
+            for dy in (-1, 0, 1):
+                for dx in (-1, 0, 1):
+                    ny, nx = y + dy, (x + dx) % w
+                    if 0 <= ny < h and mask[ny, nx] and labels[ny, nx] < 0:
+                        labels[ny, nx] = current
+                        stack.append((ny, nx))
+        current += 1
+    return labels
+
+
+def split_suns(term: EnvironmentTerm, threshold: float, max_suns: int = MAX_SUNS):
+    """The light of ``term``'s texels above ``threshold`` (luminance, after the term's weight)
+    that the clamped map no longer holds, as up to ``max_suns`` suns: [(unit direction towards
+    the sun, irradiance rgb in W/m^2 on a surface facing it, solid angle)], brightest first.
+    EEVEE's sun threshold makes one sun of all of it; here each bright cluster is its own, the
+    faint ones joining the nearest bright one. An equirectangular image only (none for a
+    mirror ball, whose texels this does not map)."""
+    if term.image is None or term.projection != "EQUIRECTANGULAR" or threshold <= 0.0:
+        return []
+    radiance = linear_pixels(term.image)[..., :3] * np.asarray(term.weight, np.float64)
+    h, w = radiance.shape[:2]
+    luminance = radiance @ LUMINANCE
+    mask = luminance > threshold
+    if not mask.any():
+        return []
+    ys, xs = np.nonzero(mask)
+    omega = texel_solid_angles(h, w)[ys]
+    bright = radiance[ys, xs]
+    excess = (bright - clamp_luminance(bright, threshold)) * omega[:, None]
+    # texture-space directions back to the world through the Mapping's rotation and scale
+    inverse = np.linalg.inv(np.asarray(term.lookup, np.float64)[:3, :3])
+    directions = equirect_direction((xs + 0.5) / w, (ys + 0.5) / h) @ inverse.T
+    directions /= np.linalg.norm(directions, axis=-1, keepdims=True)
+    labels = _clusters(mask)[ys, xs]
+    suns = []
+    for label in range(labels.max() + 1):
+        where = labels == label
+        e = excess[where].sum(axis=0)
+        d = (directions[where] * (excess[where] @ LUMINANCE)[:, None]).sum(axis=0)
+        suns.append([d / max(np.linalg.norm(d), 1e-30), e, float(omega[where].sum())])
+    suns.sort(key=lambda s: -float(s[1] @ LUMINANCE))
+    brightest = float(suns[0][1] @ LUMINANCE)
+    kept = [s for s in suns[:max_suns] if float(s[1] @ LUMINANCE) >= 0.01 * brightest]
+    for d, e, omega in suns[len(kept):]:  # fainter spots: their light joins the nearest sun
+        nearest = max(kept, key=lambda s: float(s[0] @ d))
+        nearest[1] = nearest[1] + e
+        nearest[2] += omega
+    return [(tuple(d), tuple(float(c) for c in e), omega) for d, e, omega in kept]

@@ -511,8 +511,35 @@ class _WorldReader:
         return (np.array(m, np.float64) @ inner).astype(np.float32)
 
 
+_SUNS: dict = {}  # split_suns results by the term's content (a few ms to a few tens of ms each)
+_SUNS_LOCK = threading.Lock()
+
+
+def _world_suns(terms, threshold: float, angle: float) -> tuple[S.Light, ...]:
+    """The lighting field's brightest texels as suns (``environment.split_suns``), cached."""
+    from . import environment
+
+    lights = []
+    for term in S.World.images(terms)[:S.MAX_ENVIRONMENT_IMAGES]:
+        key = (term.image.key, term.image.revision, tuple(term.weight), term.projection,
+               np.asarray(term.lookup, np.float32).tobytes(), threshold)
+        with _SUNS_LOCK:
+            suns = _SUNS.get(key)
+        if suns is None:
+            suns = environment.split_suns(term, threshold)
+            with _SUNS_LOCK:
+                if len(_SUNS) > 16:
+                    _SUNS.clear()
+                _SUNS[key] = suns
+        for direction, irradiance, _omega in suns:
+            lights.append(S.Light("SUN", (0.0, 0.0, 0.0), tuple(-c for c in direction), irradiance,
+                                  angle=angle, world=True))
+    return tuple(lights)
+
+
 def world_environment(world, snap: S.Snapshot) -> S.World:
-    """The world's radiance terms (see ``_WorldReader``); a missing world is black."""
+    """The world's radiance terms (see ``_WorldReader``) and, for the lighting field, the suns
+    split off above Blender's World > Sun > Threshold; a missing world is black."""
     if world is None:
         return S.World()
     tree = _world_tree(world)
@@ -528,7 +555,9 @@ def world_environment(world, snap: S.Snapshot) -> S.World:
             snap.warnings.append(f"World '{world.name}': more than {S.MAX_ENVIRONMENT_IMAGES} "
                                  f"environment images {label}; the first {S.MAX_ENVIRONMENT_IMAGES} "
                                  f"are used")
-    return S.World(tuple(camera), tuple(lighting))
+    threshold = float(getattr(world, "sun_threshold", 10.0))  # EEVEE's setting, 10 by default
+    suns = _world_suns(lighting, threshold, float(getattr(world, "sun_angle", 0.0))) if threshold > 0 else ()
+    return S.World(tuple(camera), tuple(lighting), threshold, suns)
 
 
 # --- the snapshot ------------------------------------------------------------------------------
@@ -626,6 +655,7 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
     )
     snap.world = world_environment(scene.world, snap)
     snap.world_color = S.World.constant(snap.world.camera)
+    snap.lights.extend(snap.world.suns)
     snap.materials[""] = S.DEFAULT_MATERIAL
     reusable = previous.geometries if previous is not None else {}
     skipped_empty: set[str] = set()

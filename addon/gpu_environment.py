@@ -43,32 +43,34 @@ class EnvironmentMaps:
     block: gpu.types.GPUUniformBuf
     atlas: gpu.types.GPUTexture | None
     chain: gpu.types.GPUTexture | None  # the downsampled levels, for per-pixel sampling
+    clamped_chain: gpu.types.GPUTexture | None  # the same with the suns split off
     chain_block: gpu.types.GPUUniformBuf | None
     sh: np.ndarray  # (9, 3) radiance coefficients L_lm (not premultiplied)
     rects: tuple
     build_ms: float
 
 
-def environment_key(terms) -> tuple:
+def environment_key(terms, threshold: float = 0.0) -> tuple:
     """The lighting field's content: what a precomputation depends on."""
-    key = [tuple(round(c, 7) for c in World.constant(terms))]
+    key = [tuple(round(c, 7) for c in World.constant(terms)), threshold]
     for term in World.images(terms)[:MAX_ENVIRONMENT_IMAGES]:
         key.append((term.image.key, term.image.revision, tuple(term.weight), term.projection, term.closest,
                     np.asarray(term.lookup, np.float32).tobytes()))
     return tuple(key)
 
 
-def _packed(sh: np.ndarray, rects, uniform) -> gpu.types.GPUUniformBuf:
+def _packed(sh: np.ndarray, rects, uniform, first_clamped: int = 0) -> gpu.types.GPUUniformBuf:
     premultiplied = sh * np.array(env.SH_COSINE)[:, None]
     roughness = env.PREFILTER_ROUGHNESS if rects else ()
-    return gpu.types.GPUUniformBuf(programs.pack_environment(premultiplied, rects, uniform, roughness))
+    return gpu.types.GPUUniformBuf(programs.pack_environment(premultiplied, rects, uniform, roughness,
+                                                             first_clamped))
 
 
 def _uniform(terms) -> EnvironmentMaps:
     radiance = np.array(World.constant(terms))
     sh = np.zeros((9, 3))
     sh[0] = radiance * env.SH_CONSTANTS[0] * 4.0 * np.pi  # L00 of a constant: L Y00 4 pi
-    return EnvironmentMaps(_packed(sh, (), radiance), None, None, None, sh, (), 0.0)
+    return EnvironmentMaps(_packed(sh, (), radiance), None, None, None, None, sh, (), 0.0)
 
 
 def _bake_width(terms) -> int:
@@ -93,16 +95,17 @@ def _draw(frame: Frame, shader, bind, target: Target, rect=None) -> None:
             gpu.state.viewport_set(0, 0, target.width, target.height)
 
 
-def _chain(frame: Frame, terms) -> tuple[list[Target], Target, tuple]:
-    """Bake the field and halve it down to ``environment.CHAIN_NARROWEST``; the levels from the
-    mirror level's width down also go into one texture for the prefilter. Returns the separate
-    levels, that texture and its rectangles."""
+def _chain(frame: Frame, terms, clamp: bool) -> tuple[list[Target], Target, tuple]:
+    """Bake the field (with its brightest texels clamped, if ``clamp``) and halve it down to
+    ``environment.CHAIN_NARROWEST``; the levels from the mirror level's width down also go into
+    one texture for the prefilter. Returns the separate levels, that texture and its rectangles."""
     width = _bake_width(terms)
     images = min(len(World.images(terms)), MAX_ENVIRONMENT_IMAGES)
     levels = [Target(width, width // 2, depth=False)]
+    size = (float(width), float(width // 2), 1.0 if clamp else 0.0, 0.0)
     _draw(frame, gpu_library.env_bake_program(images),
-          lambda s: (frame.scene.bind_world(s, terms, lighting=True),
-                     s.uniform_float("target", (float(width), float(width // 2), 0.0, 0.0))), levels[0])
+          lambda s: (frame.scene.bind_world(s, terms, lighting=True), s.uniform_float("target", size)),
+          levels[0])
     downsample = gpu_library.env_downsample_program()
     while levels[-1].width > env.CHAIN_NARROWEST:
         source = levels[-1]
@@ -121,13 +124,17 @@ def _chain(frame: Frame, terms) -> tuple[list[Target], Target, tuple]:
     return levels, chain, rects
 
 
-def _build_maps(frame: Frame, terms) -> EnvironmentMaps:
+def _build_maps(frame: Frame, terms, suns: bool) -> EnvironmentMaps:
+    """The maps of an image-lit world. With suns split off, two chains: the whole world for the
+    smoother prefiltered levels (which show the brightest texels where they are), the clamped one
+    for the rougher levels, the irradiance and the SH (the suns light those as lights)."""
     global BUILDS
     BUILDS += 1
     start = time.perf_counter()
-    levels, chain, chain_rects = _chain(frame, terms)
-    by_width = {t.width: t for t in levels}
-    sh = env.sh9_project(by_width.get(SH_WIDTH, levels[0]).read())
+    levels, chain, chain_rects = _chain(frame, terms, clamp=False)
+    clamped_levels, clamped, _ = _chain(frame, terms, clamp=True) if suns else (levels, chain, None)
+    by_width = {t.width: t for t in clamped_levels}
+    sh = env.sh9_project(by_width.get(SH_WIDTH, clamped_levels[0]).read())
     rows = np.zeros((13, 4), np.float32)
     rows[:len(chain_rects)] = chain_rects
     rows[12, 0] = len(chain_rects)
@@ -141,8 +148,10 @@ def _build_maps(frame: Frame, terms) -> EnvironmentMaps:
         alpha = 0.0 if last else env.level_roughness(k) ** 2
         params = (alpha, float(irradiance_source) if last else 0.0, 0.0, 0.0)
 
-        def bind(shader, rect=rect, params=params):
-            shader.uniform_sampler("source", chain.texture_color)
+        source = clamped if last or k >= env.FIRST_CLAMPED_LEVEL else chain
+
+        def bind(shader, rect=rect, params=params, source=source):
+            shader.uniform_sampler("source", source.texture_color)
             shader.uniform_block("chain", chain_block)
             shader.uniform_float("rect", tuple(float(x) for x in rect))
             shader.uniform_float("params", params)
@@ -150,10 +159,12 @@ def _build_maps(frame: Frame, terms) -> EnvironmentMaps:
         program = irradiance if last else gpu_library.env_prefilter_program(max(env.PREFILTER_SAMPLES[k], 1))
         _draw(frame, program, bind, atlas, rect)
     atlas.fence()  # the time below is the GPU's too
-    for target in levels:
+    for target in {*levels, *clamped_levels}:
         target.free()
-    return EnvironmentMaps(_packed(sh, rects, (0.0, 0.0, 0.0)), atlas.texture_color, chain.texture_color,
-                           chain_block, sh, rects, 1e3 * (time.perf_counter() - start))
+    first_clamped = env.FIRST_CLAMPED_LEVEL if suns else env.PREFILTER_LEVELS
+    return EnvironmentMaps(_packed(sh, rects, (0.0, 0.0, 0.0), first_clamped), atlas.texture_color,
+                           chain.texture_color, clamped.texture_color, chain_block, sh, rects,
+                           1e3 * (time.perf_counter() - start))
 
 
 class EnvironmentPass(Pass):
@@ -171,5 +182,6 @@ class EnvironmentPass(Pass):
                 environment_key(world.lighting), lambda: _uniform(world.lighting))
         else:
             frame.scene.environment = gpu_library.LIBRARY.environment(
-                environment_key(world.lighting), lambda: _build_maps(frame, world.lighting))
+                environment_key(world.lighting, world.threshold),
+                lambda: _build_maps(frame, world.lighting, bool(world.suns)))
         return True

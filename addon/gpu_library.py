@@ -147,6 +147,7 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     samplers[8] = "env_atlas" if features.environment == "MAP" else None
     samplers[9] = "split_table" if features.uses_split_table else None
     samplers[10] = "env_chain" if features.environment == "MAP" and features.env_samples else None
+    samplers[11] = "env_chain_clamped" if features.environment == "MAP" and features.env_samples else None
     for slot, name in samplers.items():
         if name is not None:
             info.sampler(slot, "FLOAT_2D", name)

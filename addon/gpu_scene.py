@@ -161,7 +161,8 @@ class SceneResources:
         else:
             self._world_camera = _Block()
         if World.images(snapshot.world.lighting):  # baked into the environment maps
-            self.uploads["world"] += self._world_lighting.put(programs.pack_world(snapshot.world.lighting))
+            lighting = programs.pack_world(snapshot.world.lighting, snapshot.world.threshold)
+            self.uploads["world"] += self._world_lighting.put(lighting)
         else:
             self._world_lighting = _Block()
         for key in set(self._textures) - set(snapshot.images):
@@ -245,6 +246,7 @@ class SceneResources:
                 shader.uniform_sampler("env_atlas", self.environment.atlas)
                 if features.env_samples:
                     shader.uniform_sampler("env_chain", self.environment.chain)
+                    shader.uniform_sampler("env_chain_clamped", self.environment.clamped_chain)
                     shader.uniform_block("chain", self.environment.chain_block)
         if bind is not None:
             bind(shader)

@@ -376,7 +376,7 @@ def pack_lights(snapshot: Snapshot, max_lights: int) -> bytes:
             *light.position, LIGHT_KIND_IDS[light.kind],
             *light.direction, light.spot_cos_half,
             *light.intensity, light.spot_smooth,
-            light.diffuse_factor, light.specular_factor, 0.0, 0.0,
+            light.diffuse_factor, light.specular_factor, 1.0 if light.world else 0.0, 0.0,
         ]
     return data.tobytes()
 
@@ -397,9 +397,10 @@ def pack_material(m: MaterialParams) -> bytes:
     return np.asarray(rows, np.float32).tobytes()
 
 
-def pack_world(terms) -> bytes:
+def pack_world(terms, threshold: float = 0.0) -> bytes:
     """A radiance field (``snapshot.World.camera`` or ``.lighting``) as the WorldData block: the
-    constant terms' sum and the first ``MAX_ENVIRONMENT_IMAGES`` image terms."""
+    constant terms' sum and the first ``MAX_ENVIRONMENT_IMAGES`` image terms, each clamped to
+    luminance ``threshold`` (0: not clamped)."""
     images = World.images(terms)[:MAX_ENVIRONMENT_IMAGES]
     weight = np.zeros((MAX_ENVIRONMENT_IMAGES, 4), np.float32)
     lookup = np.tile(np.eye(4, dtype=np.float32), (MAX_ENVIRONMENT_IMAGES, 1, 1))
@@ -407,13 +408,14 @@ def pack_world(terms) -> bytes:
     for i, term in enumerate(images):
         weight[i, :3] = term.weight
         lookup[i] = term.lookup
-        kind[i, :2] = (1.0 if term.projection == "MIRROR_BALL" else 0.0, 1.0 if term.closest else 0.0)
+        kind[i, :3] = (1.0 if term.projection == "MIRROR_BALL" else 0.0, 1.0 if term.closest else 0.0,
+                       threshold if term.projection == "EQUIRECTANGULAR" else 0.0)
     constant = np.array([*World.constant(terms), 0.0], np.float32)
     columns = lookup.transpose(0, 2, 1).ravel()  # column-major, as GLSL's mat4
     return np.concatenate([constant, weight.ravel(), columns, kind.ravel()]).tobytes()
 
 
-def pack_environment(sh: np.ndarray, rects, uniform_radiance, roughness=()) -> bytes:
+def pack_environment(sh: np.ndarray, rects, uniform_radiance, roughness=(), first_clamped: int = 0) -> bytes:
     """The EnvironmentData block: SH coefficients (9, 3) premultiplied by the cosine kernel's
     band factors, the rectangles of the prefiltered levels (one per ``roughness``) and of the
     irradiance map, the radiance of a world without images."""
@@ -421,7 +423,7 @@ def pack_environment(sh: np.ndarray, rects, uniform_radiance, roughness=()) -> b
     rows[:9, :3] = sh
     if len(rects):
         rows[9:9 + len(rects)] = rects
-    rows[17, 0] = len(roughness)
+    rows[17, :2] = (len(roughness), first_clamped)
     rows[18:20].ravel()[:len(roughness)] = roughness
     rows[20, :3] = uniform_radiance
     return rows.tobytes()

@@ -221,6 +221,10 @@ class World:
 
     camera: tuple[EnvironmentTerm, ...] = ()
     lighting: tuple[EnvironmentTerm, ...] = ()
+    #: the lighting field's texels are clamped to this luminance (0: not at all); what lies above
+    #: it lights the scene as ``suns`` instead (Blender's World > Sun > Threshold)
+    threshold: float = 0.0
+    suns: tuple[Light, ...] = ()
 
     @staticmethod
     def constant(terms) -> tuple[float, float, float]:
@@ -282,6 +286,8 @@ class Light:
     spot_smooth: float = 1e20
     diffuse_factor: float = 1.0
     specular_factor: float = 1.0
+    angle: float = 0.0  # a sun's angular diameter (radians)
+    world: bool = False  # split off the world's brightest texels: it lights what the world lights
 
 
 @dataclass

@@ -7,7 +7,7 @@ void main()
   vec2 ndc = gl_FragCoord.xy / viewport.xy * 2.0 - 1.0;
   vec4 near = inverse_view_projection * vec4(ndc, -1.0, 1.0);
   vec4 far = inverse_view_projection * vec4(ndc, 1.0, 1.0);
-  vec3 c = world_radiance(far.xyz / far.w - near.xyz / near.w);
+  vec3 c = world_radiance(far.xyz / far.w - near.xyz / near.w, false);
 #ifdef SL_CLAMP
   c = clamp(c, 0.0, 1.0);
 #endif

@@ -59,12 +59,16 @@ vec4 env_lookup(sampler2D map, vec2 uv, bool closest)
              mix(env_texel(map, size, x, y + 1), env_texel(map, size, x + 1, y + 1), f.x), f.y);
 }
 
-/* One image term: the world direction through the Mapping node (lookup), then the projection. */
-vec3 env_term(sampler2D map, mat4 lookup, vec4 kind, vec3 d)
+/* One image term: the world direction through the Mapping node (lookup), then the projection.
+ * For the lighting field, kind.z > 0 clamps the luminance there (keeping the colour): the light
+ * above it was split off as suns (addon/environment.py split_suns). */
+vec3 env_term(sampler2D map, mat4 lookup, vec4 kind, vec4 weight, vec3 d, bool clamp_bright)
 {
   vec3 v = (lookup * vec4(d, 1.0)).xyz;
   vec2 uv = kind.x > 0.5 ? mirror_ball_uv(v) : equirect_uv(v);
-  return env_lookup(map, uv, kind.y > 0.5).rgb;
+  vec3 c = weight.rgb * env_lookup(map, uv, kind.y > 0.5).rgb;
+  float y = dot(c, vec3(0.2126, 0.7152, 0.0722));
+  return (clamp_bright && kind.z > 0.0 && y > kind.z) ? c * (kind.z / y) : c;
 }
 
 #ifdef SL_CHAIN
@@ -123,20 +127,20 @@ float chain_lod(vec3 l, float pdf, int n, float bias)
 #endif
 
 #ifdef SL_ENV_IMAGES
-vec3 world_radiance(vec3 d)
+vec3 world_radiance(vec3 d, bool clamp_bright)
 {
   vec3 c = world.constant_radiance.rgb;
 #if SL_ENV_IMAGES > 0
-  c += world.weight[0].rgb * env_term(env_image_0, world.lookup[0], world.kind[0], d);
+  c += env_term(env_image_0, world.lookup[0], world.kind[0], world.weight[0], d, clamp_bright);
 #endif
 #if SL_ENV_IMAGES > 1
-  c += world.weight[1].rgb * env_term(env_image_1, world.lookup[1], world.kind[1], d);
+  c += env_term(env_image_1, world.lookup[1], world.kind[1], world.weight[1], d, clamp_bright);
 #endif
 #if SL_ENV_IMAGES > 2
-  c += world.weight[2].rgb * env_term(env_image_2, world.lookup[2], world.kind[2], d);
+  c += env_term(env_image_2, world.lookup[2], world.kind[2], world.weight[2], d, clamp_bright);
 #endif
 #if SL_ENV_IMAGES > 3
-  c += world.weight[3].rgb * env_term(env_image_3, world.lookup[3], world.kind[3], d);
+  c += env_term(env_image_3, world.lookup[3], world.kind[3], world.weight[3], d, clamp_bright);
 #endif
   return c;
 }

@@ -65,6 +65,20 @@ float env_level_roughness(int k)
   return k == 0 ? MIN_PERCEPTUAL_ROUGHNESS : env.level_roughness[k / 4][k % 4];
 }
 
+/* The specular weight of the suns split off the world: 0 for surfaces smooth enough to see the
+ * world's brightest texels in their prefiltered levels (which keep them: a sun without a shape
+ * would be a pin-point there), 1 from the first level without them, ramping between the two
+ * levels' roughness so that the light passes from one to the other without gain or loss. */
+float world_sun_specular(float roughness)
+{
+  int k = int(env.info.y);
+  if (k >= int(env.info.x)) {
+    return 1.0;
+  }
+  float r0 = env_level_roughness(k - 1), r1 = env_level_roughness(k);
+  return clamp((roughness - r0) / (r1 - r0), 0.0, 1.0);
+}
+
 /* The environment through a GGX lobe of perceptual roughness r: the two levels around it, mixed
  * linearly in roughness. */
 vec3 env_prefiltered(vec3 d, float roughness)
@@ -95,6 +109,11 @@ vec3 env_prefiltered(vec3 d, float roughness)
   return env.uniform_radiance.rgb;
 }
 
+float world_sun_specular(float roughness)
+{
+  return 1.0;
+}
+
 vec3 env_irradiance(vec3 n)
 {
   return env_irradiance_sh9(n);  /* exact for a constant */
@@ -107,5 +126,10 @@ vec3 env_dominant_direction(vec3 n, vec3 r, float alpha)
 {
   float smoothness = 1.0 - alpha;
   return normalize(mix(n, r, smoothness * (sqrt(smoothness) + alpha)));
+}
+#else
+float world_sun_specular(float roughness)
+{
+  return 1.0;  /* no world light, no suns split off it */
 }
 #endif

@@ -52,9 +52,18 @@ void main()
       break;
     }
     LightData light = lights.light[i];
+    vec4 factors = light.factors * vec4(lobes.xy, 1.0, 1.0);
+    if (light.factors.z > 0.5) {
+      /* a sun split off the world */
+#ifdef SL_MODEL_PBR
+      factors.y *= world_sun_specular(s.roughness);
+#else
+      continue; /* the empirical models are lit by their ambient term, not the world */
+#endif
+    }
     vec3 l;
     vec3 E = light_irradiance(light, s.p, l);
-    c += shade_direct(s, l, E, light.factors * vec4(lobes.xy, 1.0, 1.0));
+    c += shade_direct(s, l, E, factors);
   }
   /* alpha: coverage, blended over what is behind (L = a L_surface + (1 - a) L_behind, as Cycles'
    * transparency); the renderer peels partly transparent surfaces and composites them in depth order */

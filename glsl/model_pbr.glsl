@@ -33,7 +33,7 @@ vec3 shade_direct(Surface s, vec3 l, vec3 E, vec4 factors)
  * SL_ENV_SAMPLES Hammersley points, each sample's light read with filtered importance sampling
  * (environment.glsl), weighted by f cos / pdf = F V 4 (v.h)(n.l) / (n.h). No split-sum
  * assumption (n = v = r): it converges to the unoccluded reference as the count grows. */
-vec3 env_sampled_specular(Surface s)
+vec3 env_sample_lobe(Surface s, sampler2D chain_map)
 {
   vec3 up = abs(s.n.z) < 0.999 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0);
   vec3 tx = normalize(cross(up, s.n));
@@ -50,9 +50,9 @@ vec3 env_sampled_specular(Surface s)
 #  ifdef SL_PRINCIPLED
     vec3 F = s.metalness * p.metal_M * F_Schlick(F0m, 1.0, s.NoV) +
              (1.0 - s.metalness) * p.dielectric_M * F_Dielectric(s.eta, s.NoV);
-    return chain_level(env_chain, 0, equirect_uv(r)) * F;
+    return chain_level(chain_map, 0, equirect_uv(r)) * F;
 #  else
-    return chain_level(env_chain, 0, equirect_uv(r)) * pbr_fresnel(s, s.NoV);
+    return chain_level(chain_map, 0, equirect_uv(r)) * pbr_fresnel(s, s.NoV);
 #  endif
   }
   vec3 sum = vec3(0.0);
@@ -77,7 +77,7 @@ vec3 env_sampled_specular(Surface s)
     float pdf = D * NoH / (4.0 * VoH);
     /* no extra bias level: measured against Cycles on the bundled forest world, bias 0 and 0.5
      * differ by under 1 % at 256 samples; 1 blurs what near-mirror lobes see */
-    vec3 L = chain_lookup(env_chain, l, chain_lod(l, pdf, SL_ENV_SAMPLES, 0.0));
+    vec3 L = chain_lookup(chain_map, l, chain_lod(l, pdf, SL_ENV_SAMPLES, 0.0));
 #  ifdef SL_PRINCIPLED
     vec3 F = s.metalness * p.metal_M * F_Schlick(F0m, 1.0, VoH) +
              (1.0 - s.metalness) * p.dielectric_M * F_Dielectric(s.eta, VoH);
@@ -93,6 +93,16 @@ vec3 env_sampled_specular(Surface s)
 #  else
   return sum / float(SL_ENV_SAMPLES) * specular_energy_compensation(s);
 #  endif
+}
+
+/* The whole world for smooth surfaces, the world without its suns (lit by them as lights) for
+ * rough ones, ramping between as the split-sum levels do (world_sun_specular). */
+vec3 env_sampled_specular(Surface s)
+{
+  float t = world_sun_specular(s.roughness);
+  vec3 whole = t < 1.0 ? env_sample_lobe(s, env_chain) : vec3(0.0);
+  vec3 clamped = t > 0.0 ? env_sample_lobe(s, env_chain_clamped) : vec3(0.0);
+  return mix(whole, clamped, t);
 }
 #endif
 

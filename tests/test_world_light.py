@@ -156,7 +156,8 @@ def test_uniform_world_white_metal_with_multiple_scattering_reflects_all_of_it(t
 def test_a_single_bright_texel_lights_what_faces_it(tmp_path):
     """Direction convention and magnitude: a black world with one bright texel at (i, j)
     lights a Lambert sphere with E = L dOmega max(n.d, 0), d the texel's direction by Cycles'
-    equirectangular mapping (written here), dOmega its solid angle."""
+    equirectangular mapping (written here), dOmega its solid angle. (The texel is far above the
+    world's sun threshold: it lights the sphere as a sun split off the world.)"""
     w, h, i, j, radiance = 64, 32, 20, 22, 2000.0
     scene = scenes.reset(size=64)  # before the image: it empties bpy.data
     img = bpy.data.images.new("Texel", w, h, float_buffer=True, alpha=False)
@@ -187,7 +188,7 @@ def test_a_single_bright_texel_lights_what_faces_it(tmp_path):
           f"{np.percentile(err, 99):.3%}, max {err.max():.2%} of the peak; "
           f"facing away max {image[dark].max() / want[lit].max():.2%}")
     assert lit.sum() > 200 and dark.sum() > 100
-    assert err.mean() < 2.5e-3 and np.percentile(err, 99) < 5e-3
+    assert err.mean() < 1e-3 and np.percentile(err, 99) < 2e-3
     assert image[dark].max() < 2e-3 * want[lit].max()
 
 
@@ -207,11 +208,12 @@ def test_uniform_world_split_sum_is_exact_for_every_roughness(tmp_path):
 #: (world, kind, specular variant) -> the error bound per roughness 0, 0.25, 0.5, 0.75, 1, about 2x
 #: what was measured (1024 Cycles samples, which alone differ by 0.4 % between runs)
 HDRI_BOUNDS = {
-    ("forest", "metal", "SPLIT_SUM"): (0.004, 0.12, 0.16, 0.17, 0.11),
-    ("forest", "metal", "SAMPLED"): (0.004, 0.06, 0.075, 0.10, 0.10),
-    ("forest", "dielectric", "SPLIT_SUM"): (0.012, 0.02, 0.022, 0.02, 0.015),
-    ("city", "metal", "SPLIT_SUM"): (0.002, 0.12, 0.22, 0.27, 0.19),
-    ("city", "dielectric", "SPLIT_SUM"): (0.008, 0.012, 0.016, 0.018, 0.014),
+    ("forest", "metal", "SPLIT_SUM"): (0.004, 0.18, 0.14, 0.16, 0.10),
+    ("forest", "metal", "SAMPLED"): (0.004, 0.16, 0.065, 0.07, 0.07),
+    ("forest", "dielectric", "SPLIT_SUM"): (0.012, 0.022, 0.019, 0.019, 0.015),
+    ("city", "metal", "SPLIT_SUM"): (0.002, 0.04, 0.12, 0.14, 0.075),
+    ("city", "metal", "SAMPLED"): (0.002, 0.11, 0.035, 0.05, 0.06),
+    ("city", "dielectric", "SPLIT_SUM"): (0.006, 0.008, 0.011, 0.011, 0.009),
 }
 
 
