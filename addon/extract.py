@@ -577,6 +577,7 @@ def scene_settings(scene) -> S.Settings:
                       compare_split=float(props.compare_split), compare_range=float(props.compare_range),
                       transparency_layers=int(props.transparency_layers),
                       environment_diffuse=props.world_diffuse,
+                      ambient_world=props.ambient_source == "WORLD",
                       environment_samples=(int(props.world_samples) if props.world_specular == "SAMPLED"
                                            else 0))
 

@@ -144,7 +144,7 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
         samplers[slot] = name + "_map" if features.has_map(name.upper()) else None
     if features.peel:
         samplers.update({6: "opaque_depth", 7: "peel_depth"})
-    samplers[8] = "env_atlas" if features.environment == "MAP" else None
+    samplers[8] = "env_atlas" if features.environment == "MAP" else None  # irradiance, levels
     samplers[9] = "split_table" if features.uses_split_table else None
     samplers[10] = "env_chain" if features.environment == "MAP" and features.env_samples else None
     samplers[11] = "env_chain_clamped" if features.environment == "MAP" and features.env_samples else None

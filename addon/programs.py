@@ -35,8 +35,9 @@ MODEL_FILES = {
     "PHONG": "model_phong.glsl",
     "PBR": "model_pbr.glsl",
 }
-FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "textures.glsl")
-PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "environment.glsl", "ibl.glsl", "principled.glsl")
+FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "textures.glsl",
+                    "environment.glsl", "ibl.glsl")
+PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "principled.glsl")
 #: How the world lights a program: "" not at all (a black world), "UNIFORM" a constant radiance,
 #: "MAP" environment images (glsl/ibl.glsl).
 ENVIRONMENTS = ("", "UNIFORM", "MAP")
@@ -80,6 +81,7 @@ class Features:
     environment: str = ""  # the world's light: one of ENVIRONMENTS (the physically based model)
     env_diffuse: str = "MAP"  # its irradiance: "MAP" (exactly convolved) or "SH9"
     env_samples: int = 0  # > 0: specular sampled per pixel with this many samples, not split sum
+    ambient_world: bool = False  # the empirical models' ambient term is the world's irradiance
 
     def has_map(self, name: str) -> bool:
         return name in self.maps or name + "_CLOSEST" in self.maps
@@ -92,7 +94,9 @@ class Features:
             raise ValueError(f"unknown light kinds {sorted(unknown)}")
         if self.environment not in ENVIRONMENTS:
             raise ValueError(f"unknown environment {self.environment!r}; expected one of {ENVIRONMENTS}")
-        if self.model != "PBR":  # the empirical models see the world only through their ambient term
+        if self.model == "PBR":
+            object.__setattr__(self, "ambient_world", False)
+        elif not self.ambient_world:  # the empirical models see the world only through their ambient term
             object.__setattr__(self, "environment", "")
         if self.model == "PBR" and self.terms.principled:
             canonical = Terms(principled=True)  # one fixed set: exact Fresnel, GGX, Smith, layered
@@ -130,6 +134,7 @@ class Features:
             environment=environment_kind(snapshot.world),
             env_diffuse=snapshot.settings.environment_diffuse,
             env_samples=snapshot.settings.environment_samples,
+            ambient_world=snapshot.settings.ambient_world,
         )
 
     @property
@@ -140,7 +145,7 @@ class Features:
     @property
     def uses_split_table(self) -> bool:
         """The program samples ``split_table`` (the world's split-sum specular)."""
-        return self.environment != ""
+        return self.environment != "" and self.model == "PBR"
 
     @property
     def uses_s_table(self) -> bool:
@@ -166,11 +171,13 @@ class Features:
             out.append(("SL_ALPHA_FROM_BASE_MAP", "1"))
         if self.peel:
             out.append(("SL_PEEL", "1"))
+        if self.ambient_world and self.environment:
+            out.append(("SL_AMBIENT_WORLD", "1"))
         if self.environment:
             out.append(("SL_ENV_" + self.environment, "1"))
             if self.environment == "MAP" and self.env_diffuse == "SH9":
                 out.append(("SL_ENV_DIFFUSE_SH9", "1"))
-            if self.environment == "MAP" and self.env_samples > 0:
+            if self.environment == "MAP" and self.env_samples > 0 and self.model == "PBR":
                 out += [("SL_ENV_SAMPLES", str(self.env_samples)), ("SL_CHAIN", "1")]
             if ("SL_MS_SIZE", str(MS_SIZE)) not in out:
                 out.append(("SL_MS_SIZE", str(MS_SIZE)))

@@ -65,6 +65,14 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
         name="Ambient", default=0.2, min=0.0, soft_max=1.0, update=_redraw,
         description="Ambient constant x of the Blinn-Phong and Phong models (eq. 1.4); 0.2 is the "
                     "commonly used value")
+    ambient_source: EnumProperty(
+        name="Ambient", default="CONSTANT", update=_redraw, items=(
+            ("CONSTANT", "Constant", "The report's ambient term: ambient colour x the constant x (eq. 1.4)"),
+            ("WORLD", "World", "The world's light: ambient colour x the world's irradiance / pi, the "
+                               "diffuse light the physically based model receives from the world, and "
+                               "the suns split off the world as lights"),
+        ),
+        description="What the Blinn-Phong and Phong models' ambient term is")
     tone_mapper: EnumProperty(
         name="Tone Mapper", default="BLENDER", update=_redraw, items=enum_items(TONE_MAPPER_CHOICES),
         description="Who turns radiance into display values. The engine's own tone mappers write "

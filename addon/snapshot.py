@@ -329,6 +329,7 @@ class Settings:
     transparency_layers: int = 4  # depth-peeling layers of partly transparent surfaces per pixel
     environment_diffuse: str = "MAP"  # the world's irradiance: "MAP" (exact convolution) or "SH9"
     environment_samples: int = 0  # the world's specular: split sum (0) or this many samples per pixel
+    ambient_world: bool = False  # Blinn-Phong/Phong ambient: the world's irradiance, not the constant
 
 
 @dataclass

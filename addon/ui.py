@@ -56,8 +56,11 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
             for line in _wrap(error, 60):
                 box.label(text=line)
         layout.prop(props, "model")
-        row = layout.row()
-        row.active = props.model != "PBR"
+        col = layout.column()
+        col.active = props.model != "PBR"
+        col.prop(props, "ambient_source")
+        row = col.row()
+        row.active = props.ambient_source == "CONSTANT"
         row.prop(props, "ambient")
         col = layout.column(heading="Physically Based")
         col.active = props.model == "PBR"

@@ -22,6 +22,7 @@ vec3 env_irradiance_sh9(vec3 n)
   return max(e, vec3(0.0));
 }
 
+#  ifdef SL_MODEL_PBR
 /* E(mu, r) and B(mu, r) of the program's D and V, bilinear on the grid i / (N - 1). At the
  * roughness floor the surface stands for a perfect mirror (as Cycles renders roughness 0):
  * E = 1, B = (1 - n.v)^5, i.e. Schlick's Fresnel at n.v, no masking. */
@@ -39,6 +40,7 @@ vec2 env_split_sum(float NoV, float roughness)
   vec2 b = mix(texelFetch(split_table, ivec2(i0.x, i1.y), 0).rg, texelFetch(split_table, i1, 0).rg, t.x);
   return mix(a, b, t.y);
 }
+#  endif
 
 #  ifdef SL_ENV_MAP
 /* One level of the atlas, bilinear, repeating in u and clamped in v inside its rectangle. */

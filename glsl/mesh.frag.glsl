@@ -58,7 +58,9 @@ void main()
 #ifdef SL_MODEL_PBR
       factors.y *= world_sun_specular(s.roughness);
 #else
-      continue; /* the empirical models are lit by their ambient term, not the world */
+#  ifndef SL_AMBIENT_WORLD
+      continue; /* the empirical models are lit by their ambient constant, not the world */
+#  endif
 #endif
     }
     vec3 l;

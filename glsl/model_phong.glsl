@@ -16,7 +16,12 @@ vec3 shade_direct(Surface s, vec3 l, vec3 E, vec4 factors)
 /* Eq. 1.4. */
 vec3 shade_ambient(Surface s, vec3 x)
 {
+#ifdef SL_AMBIENT_WORLD
+  /* Ambient: World -- the diffuse light the world gives: irradiance / pi (glsl/ibl.glsl) */
+  return s.ambient_color * env_irradiance(s.n) * INV_PI;
+#else
   return s.ambient_color * x;
+#endif
 }
 
 /* The world lights the empirical models only through their ambient term. */

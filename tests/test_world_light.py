@@ -271,3 +271,23 @@ def test_the_startup_cube_faces_turned_from_the_light_are_lit_by_the_world_as_in
     assert shade.sum() > 500 and c[shade].mean() > 0.02
     assert err < 0.01
     np.testing.assert_allclose(ours[0, 0], background, rtol=1e-4)  # the camera sees the world
+
+
+def test_empirical_ambient_world_is_the_lambert_light_of_the_world(tmp_path):
+    """Ambient: World -- a Blinn-Phong surface with no highlight takes ambient colour x the world's
+    irradiance / pi: the physically based Lambert sphere's radiance, clamped to [0, 1]; with
+    Ambient: Constant the world does not reach it (ambient colour x the constant)."""
+    scene = _row_scene("diffuse")
+    _world(scene, image=_hdri("forest"), strength=0.5)
+    pbr = scenes.render(scene, tmp_path / "pbr.exr")[..., :3].astype(np.float64)
+    scene.shading_lab.model = "BLINN_PHONG"
+    scene.shading_lab.ambient_source = "WORLD"
+    bp = scenes.render(scene, tmp_path / "bp.exr")[..., :3].astype(np.float64)
+    inside = np.any(_sphere_masks(), axis=0)
+    err = np.abs(bp[inside] - np.clip(pbr[inside], 0.0, 1.0)).max()
+    print(f"Blinn-Phong with Ambient: World vs the physically based Lambert sphere: max difference {err:.1e}")
+    assert pbr[inside].mean() > 0.1 and err < 1e-5
+    scene.shading_lab.ambient_source = "CONSTANT"
+    scene.shading_lab.ambient = 0.2
+    constant = scenes.render(scene, tmp_path / "constant.exr")[..., :3]
+    np.testing.assert_allclose(constant[inside], 0.8 * 0.2, atol=1e-6)  # diffuse colour 0.8 x 0.2
