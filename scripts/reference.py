@@ -1,12 +1,13 @@
 """Ground truth and peers: the same scene rendered by Cycles (the reference), EEVEE and Workbench.
 
 The reference is what Shading Lab computes, computed exactly: Cycles on the CPU with direct light
-only (max bounces 0), every light's radius 0 and soft falloff off, **light shadows off** (the
-engine has no shadows yet), the world visible to the camera but not lighting the scene (the
-physically based model has no world lighting yet), pixel-centre sampling (a Gaussian filter of
-width 0.01 px: Cycles' Box filter ignores its width and averages the whole pixel), no denoising,
-and enough samples that noise is below the differences measured. References are cached on disk
-by a hash of everything that decides them.
+only (max bounces 0), every light's radius 0 and soft falloff off, the world lighting the scene,
+**nothing occluded**: light shadows off and every object's shadow-ray visibility off, so that the
+world's light is not occluded either (the engine has neither shadows nor ambient occlusion yet:
+this switches a real feature off, and the world-lighting tests say so too), pixel-centre sampling
+(a Gaussian filter of width 0.01 px: Cycles' Box filter ignores its width and averages the whole
+pixel), no denoising, and enough samples that noise is below the differences measured. References
+are cached on disk by a hash of everything that decides them.
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import OpenEXR
 ROOT = Path(__file__).resolve().parent.parent
 CACHE_DIR = ROOT / ".cache" / "references"
 #: Bump when the reference settings below change: old cache entries then stop matching.
-SETTINGS_VERSION = 1
+SETTINGS_VERSION = 2  # 2: the world lights the scene, unoccluded
 EEVEE = "BLENDER_EEVEE" if bpy.app.version >= (5, 0, 0) else "BLENDER_EEVEE_NEXT"
 
 
@@ -85,8 +86,13 @@ def _material_key(mat) -> str:
 
 
 def _prepare_lights(scene):
-    """Shadows off, radius 0, soft falloff off; returns a function that restores them."""
+    """Shadows off, radius 0, soft falloff off, objects casting no shadow (not even the world's
+    light); returns a function that restores them."""
     saved = []
+    for obj in scene.objects:
+        if hasattr(obj, "visible_shadow") and obj.type != "LIGHT":
+            saved.append((obj, {"visible_shadow": obj.visible_shadow}))
+            obj.visible_shadow = False
     for obj in scene.objects:
         if obj.type == "LIGHT":
             light = obj.data
@@ -141,12 +147,6 @@ def render_reference(scene, samples: int = 256, cache_dir: Path = CACHE_DIR) -> 
         return read_exr_rgba(cached), True
     engine = scene.render.engine
     restore = _prepare_lights(scene)
-    world = scene.world
-    visibility = None
-    if world is not None and hasattr(world, "cycles_visibility"):
-        vis = world.cycles_visibility
-        visibility = (vis.diffuse, vis.glossy, vis.transmission, vis.scatter)
-        vis.diffuse = vis.glossy = vis.transmission = vis.scatter = False
     try:
         scene.render.engine = "CYCLES"
         c = scene.cycles
@@ -164,9 +164,6 @@ def render_reference(scene, samples: int = 256, cache_dir: Path = CACHE_DIR) -> 
     finally:
         scene.render.engine = engine
         restore()
-        if visibility is not None:
-            vis = world.cycles_visibility
-            vis.diffuse, vis.glossy, vis.transmission, vis.scatter = visibility
     return image, False
 
 
