@@ -2,7 +2,7 @@
 
 A frame is a list of steps, each a pass and its input, run in order (``Renderer.run``):
 
-    per view:  BackgroundPass ─► OpaquePass ─► TransparencyPass ─► ResolvePass ─► DisplayPass
+    per view:  OpaquePass ─► BackgroundPass ─► TransparencyPass ─► ResolvePass ─► DisplayPass
     then:      ComparePass (A|B: two views composited)
 
 Lifetimes:
@@ -185,47 +185,20 @@ class TargetPass(Pass):
             self.target = None
 
 
-class BackgroundPass(TargetPass):
+class OpaquePass(TargetPass):
     """The view's scene target (colour and depth, supersampled size), cleared to the background
-    colour; where the camera sees environment images (and the film is not transparent), the
-    world along each sub-pixel's ray. Writes ``<view>.scene``."""
+    colour, and every opaque surface drawn into it. Writes ``<view>.scene``."""
+
+    draws_geometry = True
 
     def run(self, frame: Frame, view: View) -> bool:
         s = view.samples
         target = self.fit(view.width * s, view.height * s, view.format, depth=True)
         frame.outputs[view.output("scene")] = target
-        terms = frame.snapshot.world.camera
-        with target.bind():
-            target.framebuffer.clear(color=view.background, depth=1.0)
-            images = min(len(World.images(terms)), MAX_ENVIRONMENT_IMAGES)
-            if images and view.background[3] > 0.0:
-                model = view.model or frame.snapshot.settings.model
-                features = programs.BackgroundFeatures(images, clamp=model != "PBR",
-                                                       half_target=view.half_target)
-                shader = gpu_library.background_program(features)
-                vp = (frame.snapshot.camera.view_projection if view.view_projection is None
-                      else view.view_projection)
-                inverse = np.linalg.inv(np.asarray(vp, np.float64)).astype(np.float32)
-                gpu.state.depth_test_set("NONE")
-                gpu.state.blend_set("NONE")
-                shader.bind()
-                frame.scene.bind_world(shader, terms)
-                shader.uniform_float("inverse_view_projection", inverse.T.ravel().tolist())
-                shader.uniform_float("viewport", (float(target.width), float(target.height), 0.0, 0.0))
-                frame.full_screen.draw(shader)
-        return True
-
-
-class OpaquePass(Pass):
-    """Draws every opaque surface into ``<view>.scene``."""
-
-    draws_geometry = True
-
-    def run(self, frame: Frame, view: View) -> bool:
-        target = frame.outputs[view.output("scene")]
         frame.scene.put_frame(view.view_projection)
         lists = frame.scene.draw_lists(view.model, view.half_target)
         with target.bind():
+            target.framebuffer.clear(color=view.background, depth=1.0)
             gpu.state.depth_test_set("LESS_EQUAL")
             gpu.state.depth_mask_set(True)
             gpu.state.face_culling_set("NONE")
@@ -237,6 +210,36 @@ class OpaquePass(Pass):
             finally:
                 gpu.state.depth_test_set("NONE")
                 gpu.state.depth_mask_set(False)
+        return True
+
+
+class BackgroundPass(Pass):
+    """Where the camera sees no opaque surface (depth still at the far plane) and environment
+    images (the film not transparent): the world along each sub-pixel's ray, into
+    ``<view>.scene`` -- after the opaque surfaces, so that covered pixels cost nothing, and before
+    the transparent ones, which blend over it."""
+
+    def run(self, frame: Frame, view: View) -> bool:
+        target = frame.outputs[view.output("scene")]
+        terms = frame.snapshot.world.camera
+        images = min(len(World.images(terms)), MAX_ENVIRONMENT_IMAGES)
+        if not images or view.background[3] <= 0.0:
+            return True  # the clear colour is the background
+        model = view.model or frame.snapshot.settings.model
+        features = programs.BackgroundFeatures(images, clamp=model != "PBR", half_target=view.half_target)
+        shader = gpu_library.background_program(features)
+        vp = frame.snapshot.camera.view_projection if view.view_projection is None else view.view_projection
+        inverse = np.linalg.inv(np.asarray(vp, np.float64)).astype(np.float32)
+        with target.bind():
+            gpu.state.depth_test_set("LESS_EQUAL")  # the triangle lies at the far plane
+            gpu.state.depth_mask_set(False)
+            gpu.state.blend_set("NONE")
+            shader.bind()
+            frame.scene.bind_world(shader, terms)
+            shader.uniform_float("inverse_view_projection", inverse.T.ravel().tolist())
+            shader.uniform_float("viewport", (float(target.width), float(target.height), 0.0, 0.0))
+            frame.full_screen.draw(shader)
+            gpu.state.depth_test_set("NONE")
         return True
 
 
@@ -411,4 +414,4 @@ class ComparePass(TargetPass):
 
 
 #: The passes that draw one view, in order.
-VIEW_PASSES = (BackgroundPass, OpaquePass, TransparencyPass, ResolvePass, DisplayPass)
+VIEW_PASSES = (OpaquePass, BackgroundPass, TransparencyPass, ResolvePass, DisplayPass)

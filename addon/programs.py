@@ -292,7 +292,7 @@ class BackgroundFeatures:
 
 @lru_cache(maxsize=16)
 def background_source(features: BackgroundFeatures) -> ProgramSource:
-    return ProgramSource(typedefs=read_glsl("world_data.glsl"), vertex=read_glsl("post.vert.glsl"),
+    return ProgramSource(typedefs=read_glsl("world_data.glsl"), vertex=read_glsl("background.vert.glsl"),
                          fragment="\n".join(read_glsl(name) for name in
                                             ("common.glsl", "environment.glsl", "background.frag.glsl")),
                          defines=features.defines())

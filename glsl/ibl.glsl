@@ -50,15 +50,20 @@ vec3 env_atlas_texel(ivec4 rect, int x, int y)
   return texelFetch(env_atlas, rect.xy + ivec2(x, clamp(y, 0, rect.w - 1)), 0).rgb;
 }
 
-vec3 env_level(int k, vec3 d)
+vec3 env_level_uv(int k, vec2 uv)
 {
   ivec4 rect = ivec4(env.rect[k]);
-  vec2 p = equirect_uv(d) * vec2(rect.zw) - 0.5;
+  vec2 p = uv * vec2(rect.zw) - 0.5;
   vec2 i = floor(p);
   vec2 f = p - i;
   int x = int(i.x), y = int(i.y);
   return mix(mix(env_atlas_texel(rect, x, y), env_atlas_texel(rect, x + 1, y), f.x),
              mix(env_atlas_texel(rect, x, y + 1), env_atlas_texel(rect, x + 1, y + 1), f.x), f.y);
+}
+
+vec3 env_level(int k, vec3 d)
+{
+  return env_level_uv(k, equirect_uv(d));
 }
 
 float env_level_roughness(int k)
@@ -92,7 +97,9 @@ vec3 env_prefiltered(vec3 d, float roughness)
   }
   float r0 = env_level_roughness(k), r1 = env_level_roughness(k + 1);
   float t = clamp((roughness - r0) / (r1 - r0), 0.0, 1.0);
-  return mix(env_level(k, d), env_level(k + 1, d), t);
+  vec2 uv = equirect_uv(d);
+  vec3 a = env_level_uv(k, uv);
+  return t > 0.0 ? mix(a, env_level_uv(k + 1, uv), t) : a;
 }
 
 /* The irradiance: the exactly convolved map (the atlas' last rectangle), or the nine spherical
