@@ -52,14 +52,15 @@ def linear_pixels(image: ImageData) -> np.ndarray:
 
 
 def lookup(pixels: np.ndarray, uv, closest: bool = False) -> np.ndarray:
-    """Bilinear between texel centres (Cycles' "Linear"), repeating in u and clamped in v; or the
-    texel under uv ("Closest"). ``pixels`` (h, w, c), bottom row first."""
+    """Bilinear between texel centres (Cycles' "Linear"), repeating in both directions as Cycles'
+    environment images do; or the texel under uv ("Closest"). ``pixels`` (h, w, c), bottom row
+    first."""
     h, w = pixels.shape[:2]
     uv = np.asarray(uv, np.float64)
     p = uv * np.array([w, h])
 
     def texel(x, y):
-        return pixels[np.clip(y, 0, h - 1), np.mod(x, w)]
+        return pixels[np.mod(y, h), np.mod(x, w)]
 
     if closest:
         return texel(np.floor(p[..., 0]).astype(int), np.floor(p[..., 1]).astype(int))
@@ -263,6 +264,7 @@ def split_suns(term: EnvironmentTerm, threshold: float, max_suns: int = MAX_SUNS
     if term.image is None or term.projection != "EQUIRECTANGULAR" or threshold <= 0.0:
         return []
     radiance = linear_pixels(term.image)[..., :3] * np.asarray(term.weight, np.float64)
+    radiance = np.where(np.isfinite(radiance), radiance, 0.0)
     h, w = radiance.shape[:2]
     luminance = radiance @ LUMINANCE
     mask = luminance > threshold

@@ -255,8 +255,15 @@ def _read_image(key: str, image: bpy.types.Image, warnings: list[str]) -> S.Imag
     pixels = flat.reshape(height, width, 4)
     space = image.colorspace_settings.name
     if image.is_float:
-        storage = "HALF" if image.use_half_precision else "FLOAT"
-        pixels = pixels.astype(np.float16) if storage == "HALF" else pixels
+        bad = ~np.isfinite(pixels)
+        if bad.any():  # NaN or Inf would poison every sum the image enters
+            warnings.append(f"Image '{image.name_full}' has {int(bad.any(axis=-1).sum())} texels that are "
+                            f"not finite numbers: they are read as 0")
+            pixels = np.where(bad, 0.0, pixels).astype(np.float32)
+        # half floats top out at 65504: a sun baked into a sky goes beyond, keep those in float
+        half = image.use_half_precision and float(np.abs(pixels).max(initial=0.0)) <= 65504.0
+        storage = "HALF" if half else "FLOAT"
+        pixels = pixels.astype(np.float16) if half else pixels
     else:
         storage = "SRGB8" if space == "sRGB" else "UNORM8"
         if storage == "UNORM8" and space not in _LINEAR_BYTE_SPACES and not image.colorspace_settings.is_data:
@@ -417,10 +424,10 @@ class _WorldReader:
 
     def __init__(self, world, snap: S.Snapshot):
         self.world, self.snap = world, snap
+        self.unreadable: list[str] = []  # what could not be read (a baked world stands in for it)
 
     def warn(self, what: str) -> None:
-        self.snap.warnings.append(f"World '{self.world.name}': {what} is not read by Shading Lab; "
-                                  f"it lights and shows as the world's viewport colour")
+        self.unreadable.append(what)
 
     def shader(self, socket, weight: np.ndarray, camera: bool | None) -> tuple[list, list]:
         """(camera terms, lighting terms) of what is linked into ``socket``; ``camera`` None
@@ -537,6 +544,30 @@ def _world_suns(terms, threshold: float, angle: float) -> tuple[S.Light, ...]:
     return tuple(lights)
 
 
+def _baked_or_warned(world, snap: S.Snapshot, unreadable: list[str], camera, lighting):
+    """A world with parts Shading Lab cannot read: its baked image (World > Shading Lab > Bake
+    World) if it has one, with a warning when the world changed since; else what was read, the
+    rest as the viewport colour, with a warning saying so."""
+    from .world_bake import world_fingerprint
+
+    props = getattr(world, "shading_lab", None)
+    baked = props.baked_image if props is not None else None
+    what = ", ".join(dict.fromkeys(unreadable))
+    if baked is not None:
+        data = IMAGES.get(image_key(baked), baked, snap.warnings)
+        if data is not None:
+            snap.images[image_key(baked)] = data
+            if props.baked_fingerprint != world_fingerprint(world):
+                snap.warnings.append(f"World '{world.name}' changed since it was baked: bake it again "
+                                     f"(World > Shading Lab > Bake World)")
+            term = (S.EnvironmentTerm((1.0, 1.0, 1.0), data, "EQUIRECTANGULAR"),)
+            return term, term
+    snap.warnings.append(f"World '{world.name}': {what} is not read by Shading Lab; it lights and shows "
+                         f"as the world's viewport colour (World > Shading Lab > Bake World renders it "
+                         f"into an image Shading Lab reads)")
+    return camera, lighting
+
+
 def world_environment(world, snap: S.Snapshot) -> S.World:
     """The world's radiance terms (see ``_WorldReader``) and, for the lighting field, the suns
     split off above Blender's World > Sun > Threshold; a missing world is black."""
@@ -549,7 +580,10 @@ def world_environment(world, snap: S.Snapshot) -> S.World:
     output = _world_output(tree)
     if output is None:
         return S.World()
-    camera, lighting = _WorldReader(world, snap).shader(output.inputs["Surface"], np.ones(3), None)
+    reader = _WorldReader(world, snap)
+    camera, lighting = reader.shader(output.inputs["Surface"], np.ones(3), None)
+    if reader.unreadable:
+        camera, lighting = _baked_or_warned(world, snap, reader.unreadable, camera, lighting)
     for terms, label in ((camera, "seen by the camera"), (lighting, "lighting the scene")):
         if len(S.World.images(terms)) > S.MAX_ENVIRONMENT_IMAGES:
             snap.warnings.append(f"World '{world.name}': more than {S.MAX_ENVIRONMENT_IMAGES} "

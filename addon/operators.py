@@ -124,5 +124,36 @@ class SHADINGLAB_OT_convert_roughness(_MaterialConversion, bpy.types.Operator):
             props.roughness, props.use_roughness = roughness_from_shininess(p.shininess), True
 
 
+class SHADINGLAB_OT_bake_world(bpy.types.Operator):
+    """Render the world once with Cycles into an equirectangular image, which Shading Lab then
+    lights and shows with (for skies and procedural worlds it cannot read)"""
+
+    bl_idname = "shading_lab.bake_world"
+    bl_label = "Bake World"
+    bl_options = {"REGISTER", "UNDO"}
+
+    @classmethod
+    def poll(cls, context):
+        return getattr(context.scene, "world", None) is not None
+
+    def execute(self, context):
+        from .world_bake import bake_world, world_fingerprint
+
+        world = context.scene.world
+        props = world.shading_lab
+        self.report({"INFO"}, f"Baking world '{world.name}' with Cycles ({props.bake_resolution} x "
+                              f"{props.bake_resolution // 2}, {props.bake_samples} samples)...")
+        try:
+            image = bake_world(world, props.bake_resolution, props.bake_samples)
+        except (RuntimeError, OSError) as exc:
+            self.report({"ERROR"}, f"Could not bake world '{world.name}': {exc}")
+            return {"CANCELLED"}
+        props.baked_image = image
+        props.baked_fingerprint = world_fingerprint(world)
+        world.update_tag()
+        self.report({"INFO"}, f"World '{world.name}' baked into image '{image.name}'")
+        return {"FINISHED"}
+
+
 classes = (SHADINGLAB_OT_apply_material_preset, SHADINGLAB_OT_principled_to_explicit,
-           SHADINGLAB_OT_convert_roughness)
+           SHADINGLAB_OT_convert_roughness, SHADINGLAB_OT_bake_world)

@@ -11,6 +11,7 @@ from bpy.props import (
     FloatVectorProperty,
     IntProperty,
     PointerProperty,
+    StringProperty,
 )
 
 from . import extract
@@ -203,8 +204,25 @@ class ShadingLabMaterialSettings(bpy.types.PropertyGroup):
                                        default=(0.8, 0.8, 0.8), update=_redraw)
 
 
-classes = (ShadingLabSceneSettings, ShadingLabMaterialSettings)
-_OWNERS = ((bpy.types.Scene, ShadingLabSceneSettings), (bpy.types.Material, ShadingLabMaterialSettings))
+class ShadingLabWorldSettings(bpy.types.PropertyGroup):
+    """The baked world (World > Shading Lab > Bake World) for worlds Shading Lab cannot read."""
+
+    baked_image: PointerProperty(
+        name="Baked World", type=bpy.types.Image, update=_redraw,
+        description="The world rendered by Cycles into an equirectangular image; Shading Lab lights "
+                    "and shows with it while the world has nodes it cannot read")
+    baked_fingerprint: StringProperty(
+        name="Baked Fingerprint", default="",
+        description="A hash of the world's nodes when it was baked (a different one: out of date)")
+    bake_resolution: IntProperty(name="Resolution", default=1024, min=64, max=8192,
+                                 description="Width of the baked image in pixels (its height is half)")
+    bake_samples: IntProperty(name="Samples", default=16, min=1, max=4096,
+                              description="Cycles samples per pixel for the bake")
+
+
+classes = (ShadingLabSceneSettings, ShadingLabMaterialSettings, ShadingLabWorldSettings)
+_OWNERS = ((bpy.types.Scene, ShadingLabSceneSettings), (bpy.types.Material, ShadingLabMaterialSettings),
+           (bpy.types.World, ShadingLabWorldSettings))
 
 
 @persistent

@@ -125,6 +125,36 @@ class SHADINGLAB_PT_light(ShadingLabPanel, bpy.types.Panel):
         layout.prop(light, "specular_factor", text="Specular")
 
 
+class SHADINGLAB_PT_world(ShadingLabPanel, bpy.types.Panel):
+    bl_label = "Shading Lab"
+    bl_context = "world"
+
+    @classmethod
+    def poll(cls, context):
+        return super().poll(context) and getattr(context, "world", None) is not None
+
+    def draw(self, context):
+        from .world_bake import world_fingerprint
+
+        layout = self.layout
+        layout.use_property_split = True
+        world = context.world
+        props = world.shading_lab
+        if hasattr(world, "sun_threshold"):
+            col = layout.column(heading="Sun")
+            col.prop(world, "sun_threshold", text="Threshold")
+            col.prop(world, "sun_angle", text="Angle")
+        col = layout.column(heading="Bake")
+        col.prop(props, "bake_resolution")
+        col.prop(props, "bake_samples")
+        col.operator("shading_lab.bake_world", icon="RENDER_STILL")
+        if props.baked_image is not None:
+            current = props.baked_fingerprint == world_fingerprint(world)
+            col.label(text=f"Baked: {props.baked_image.name}" + ("" if current else " (out of date)"),
+                      icon="CHECKMARK" if current else "ERROR")
+            col.prop(props, "baked_image", text="Image")
+
+
 def _material_row(layout, props, flag, value, fallback_label):
     row = layout.row(align=True)
     row.prop(props, flag, text="")
@@ -175,7 +205,7 @@ class SHADINGLAB_PT_material(ShadingLabPanel, bpy.types.Panel):
         _material_row(col, props, "use_ambient_color", "ambient_color", "base colour")
 
 
-classes = (SHADINGLAB_PT_render, SHADINGLAB_PT_light, SHADINGLAB_PT_material)
+classes = (SHADINGLAB_PT_render, SHADINGLAB_PT_light, SHADINGLAB_PT_world, SHADINGLAB_PT_material)
 
 
 def register():

@@ -35,13 +35,15 @@ vec2 mirror_ball_uv(vec3 d)
   return 0.5 * (d.xz + 1.0);
 }
 
-/* Bilinear lookup between texel centres (Cycles' "Linear"), repeating in u (the seam of an
- * equirectangular image) and clamped in v; "Closest" takes the texel under uv. Done by hand
- * with texelFetch: textures made from Python carry no wrap setting. */
+/* Bilinear lookup between texel centres (Cycles' "Linear"), repeating in both directions as
+ * Cycles' environment images do (so the last half row at a pole mixes in the opposite edge, as
+ * there); "Closest" takes the texel under uv. Done by hand with texelFetch: textures made from
+ * Python carry no wrap setting. */
 vec4 env_texel(sampler2D map, ivec2 size, int x, int y)
 {
   x = x - size.x * int(floor(float(x) / float(size.x)));
-  return texelFetch(map, ivec2(x, clamp(y, 0, size.y - 1)), 0);
+  y = y - size.y * int(floor(float(y) / float(size.y)));
+  return texelFetch(map, ivec2(x, y), 0);
 }
 
 vec4 env_lookup(sampler2D map, vec2 uv, bool closest)
