@@ -612,6 +612,8 @@ def scene_settings(scene) -> S.Settings:
                       transparency_layers=int(props.transparency_layers),
                       environment_diffuse=props.world_diffuse,
                       ambient_world=props.ambient_source == "WORLD",
+                      world_occlusion=bool(props.world_occlusion),
+                      occlusion_distance=float(props.occlusion_distance),
                       environment_samples=(int(props.world_samples) if props.world_specular == "SAMPLED"
                                            else 0))
 

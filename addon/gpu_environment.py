@@ -110,14 +110,15 @@ def _chain(frame: Frame, terms, clamp: bool) -> tuple[list[Target], Target, tupl
     while levels[-1].width > env.CHAIN_NARROWEST:
         source = levels[-1]
         levels.append(Target(source.width // 2, source.height // 2, depth=False))
-        _draw(frame, downsample, lambda s, t=source.texture_color: s.uniform_sampler("source", t), levels[-1])
+        _draw(frame, downsample, lambda s, t=source.texture_color: gpu_library.bind_sampler(s, "source", t),
+              levels[-1])
     rects = env.chain_layout(min(width, env.MIRROR_WIDTH))
     chain = Target(*env.atlas_size(rects), depth=False)
     copy = gpu_library.env_downsample_program(copy=True)
     by_width = {t.width: t for t in levels}
     for rect in rects:
         def bind(shader, level=by_width[rect[2]], rect=rect):
-            shader.uniform_sampler("source", level.texture_color)
+            gpu_library.bind_sampler(shader, "source", level.texture_color)
             shader.uniform_float("offset", (float(rect[0]), float(rect[1]), 0.0, 0.0))
 
         _draw(frame, copy, bind, chain, rect)
@@ -151,7 +152,7 @@ def _build_maps(frame: Frame, terms, suns: bool) -> EnvironmentMaps:
         source = clamped if last or k >= env.FIRST_CLAMPED_LEVEL else chain
 
         def bind(shader, rect=rect, params=params, source=source):
-            shader.uniform_sampler("source", source.texture_color)
+            gpu_library.bind_sampler(shader, "source", source.texture_color)
             shader.uniform_block("chain", chain_block)
             shader.uniform_float("rect", tuple(float(x) for x in rect))
             shader.uniform_float("params", params)

@@ -126,6 +126,19 @@ LIBRARY = _Library()
 
 # --- the programs -----------------------------------------------------------------------------
 
+def bind_sampler(shader, name: str, texture) -> None:
+    """``shader.uniform_sampler(name, texture)``, unless the compiler removed the sampler (unused
+    in this variant of the program): Blender binds a sampler it cannot find to texture unit -1,
+    writing before the start of its own array of bound textures -- memory corruption that
+    crashed Blender a few renders later (seen here with a Blinn-Phong program that declared the
+    world's table it did not read)."""
+    try:
+        shader.uniform_from_name(name)
+    except ValueError:
+        return
+    shader.uniform_sampler(name, texture)
+
+
 #: The shading programs' interface (glsl/uniforms.glsl, mesh.vert.glsl): uniform blocks by
 #: binding, push constants, vertex attributes by location, and what the vertex stage hands on.
 _BLOCKS = (("FrameData", "frame"), ("LightBlock", "lights"), ("MaterialData", "material"),
@@ -146,8 +159,9 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
         samplers.update({6: "opaque_depth", 7: "peel_depth"})
     samplers[8] = "env_atlas" if features.environment == "MAP" else None  # irradiance, levels
     samplers[9] = "split_table" if features.uses_split_table else None
-    samplers[10] = "env_chain" if features.environment == "MAP" and features.env_samples else None
-    samplers[11] = "env_chain_clamped" if features.environment == "MAP" and features.env_samples else None
+    samplers[10] = "env_chain" if features.uses_env_chain else None
+    samplers[11] = "env_chain_clamped" if features.uses_env_chain else None
+    samplers[12] = "env_occlusion" if features.occlusion else None
     for slot, name in samplers.items():
         if name is not None:
             info.sampler(slot, "FLOAT_2D", name)
@@ -155,7 +169,7 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
         info.uniform_buf(binding, struct, name)
     if features.environment:
         info.uniform_buf(len(_BLOCKS), "EnvironmentData", "env")
-    if features.environment == "MAP" and features.env_samples:
+    if features.uses_env_chain:
         info.uniform_buf(len(_BLOCKS) + 1, "ChainData", "chain")
     for kind, name in _PUSH_CONSTANTS:
         info.push_constant(kind, name)
@@ -165,6 +179,34 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     for kind, name in _VARYINGS:
         iface.smooth(kind, name)
     info.vertex_out(iface)
+
+
+def prepass_program() -> gpu.types.GPUShader:
+    """Depth and world normals of opaque surfaces (for the occlusion pass)."""
+    src = programs.prepass_source()
+
+    def declare(info):
+        info.typedef_source(src.typedefs)
+        info.uniform_buf(0, "FrameData", "frame")
+        info.uniform_buf(3, "ObjectBlock", "objects")
+        info.push_constant("INT", "object_index")
+        for location, (kind, name) in enumerate(_ATTRIBUTES):
+            info.vertex_in(location, kind, name)
+        iface = gpu.types.GPUStageInterfaceInfo("shading_lab_prepass_iface")
+        for kind, name in _VARYINGS:
+            iface.smooth(kind, name)
+        info.vertex_out(iface)
+
+    return LIBRARY.program(("prepass",), "depth and normal", src, declare)
+
+
+def gtao_program() -> gpu.types.GPUShader:
+    def declare(info):
+        info.typedef_source(programs.read_glsl("chain_data.glsl"))
+        _declare_full_screen("depth_map", "normal_map")(info)
+        info.uniform_buf(0, "OcclusionData", "occlusion")
+
+    return LIBRARY.program(("gtao",), "ambient occlusion", programs.gtao_source(), declare)
 
 
 def shading_program(features: programs.Features) -> gpu.types.GPUShader:

@@ -186,7 +186,7 @@ class SceneResources:
         ``lighting``) the lighting one."""
         shader.uniform_block("world", (self._world_lighting if lighting else self._world_camera).ubo)
         for i, term in enumerate(World.images(terms)[:MAX_ENVIRONMENT_IMAGES]):
-            shader.uniform_sampler(f"env_image_{i}", self._textures[term.image.key][1])
+            gpu_library.bind_sampler(shader, f"env_image_{i}", self._textures[term.image.key][1])
 
     # --- drawing ------------------------------------------------------------------------------
 
@@ -210,7 +210,7 @@ class SceneResources:
                 draw = Draw(order, order // block_size, order % block_size, key, batch)
                 material = snapshot.materials[key]
                 if material.alpha < 1.0 or features[key].alpha_from_base_map:
-                    blended.setdefault(replace(features[key], peel=True), []).append(draw)
+                    blended.setdefault(replace(features[key], peel=True, occlusion=False), []).append(draw)
                 else:
                     opaque.setdefault(features[key], []).append(draw)
 
@@ -236,17 +236,18 @@ class SceneResources:
         shader.uniform_block("lights", self._lights.ubo)
         shader.uniform_float("lobes", lobes)
         if features.uses_albedo_table:
-            shader.uniform_sampler("ms_table", gpu_library.albedo_table(features.terms))
+            gpu_library.bind_sampler(shader, "ms_table", gpu_library.albedo_table(features.terms))
         if features.uses_s_table:
-            shader.uniform_sampler("s_table", gpu_library.s_table())
+            gpu_library.bind_sampler(shader, "s_table", gpu_library.s_table())
         if features.environment:
             shader.uniform_block("env", self.environment.block)
-            shader.uniform_sampler("split_table", gpu_library.split_table(features.terms))
+            if features.uses_split_table:
+                gpu_library.bind_sampler(shader, "split_table", gpu_library.split_table(features.terms))
             if features.environment == "MAP":
-                shader.uniform_sampler("env_atlas", self.environment.atlas)
-                if features.env_samples:
-                    shader.uniform_sampler("env_chain", self.environment.chain)
-                    shader.uniform_sampler("env_chain_clamped", self.environment.clamped_chain)
+                gpu_library.bind_sampler(shader, "env_atlas", self.environment.atlas)
+                if features.uses_env_chain:
+                    gpu_library.bind_sampler(shader, "env_chain", self.environment.chain)
+                    gpu_library.bind_sampler(shader, "env_chain_clamped", self.environment.clamped_chain)
                     shader.uniform_block("chain", self.environment.chain_block)
         if bind is not None:
             bind(shader)
@@ -263,9 +264,21 @@ class SceneResources:
             shader.uniform_block("material", self._materials[draw.material].ubo)
             for sampler in samplers:
                 image_key = getattr(materials[draw.material], sampler)[0]
-                shader.uniform_sampler(sampler, self._textures[image_key][1])
+                gpu_library.bind_sampler(shader, sampler, self._textures[image_key][1])
             draw.batch.draw(shader)
         return True
+
+    def draw_positions(self, draws: list[Draw], shader) -> None:
+        """Draw ``draws`` with a program that needs only positions and normals (the prepass)."""
+        shader.bind()
+        shader.uniform_block("frame", self._frame.ubo)
+        block = -1
+        for draw in draws:
+            if draw.block != block:
+                block = draw.block
+                shader.uniform_block("objects", self._objects[block].ubo)
+            shader.uniform_int("object_index", draw.index)
+            draw.batch.draw(shader)
 
     def free(self) -> None:
         """Drop every GPU object (Blender frees each with its last reference)."""

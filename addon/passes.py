@@ -2,7 +2,8 @@
 
 A frame is a list of steps, each a pass and its input, run in order (``Renderer.run``):
 
-    per view:  OpaquePass ─► BackgroundPass ─► TransparencyPass ─► ResolvePass ─► DisplayPass
+    per view:  OcclusionPass ─► OpaquePass ─► BackgroundPass ─► TransparencyPass ─► ResolvePass
+               ─► DisplayPass
     then:      ComparePass (A|B: two views composited)
 
 Lifetimes:
@@ -185,6 +186,68 @@ class TargetPass(Pass):
             self.target = None
 
 
+class OcclusionPass(Pass):
+    """Screen-space ambient occlusion of the world's light (glsl/gtao.frag.glsl), for the views
+    whose programs use it: the opaque surfaces' depth and normals drawn first (a prepass), then
+    the visible fraction of the hemisphere per sub-pixel. Writes ``<view>.occlusion``. Nothing
+    when the world sends no light or occlusion is off."""
+
+    draws_geometry = True
+
+    def __init__(self):
+        self.prepass: Target | None = None
+        self.target: Target | None = None
+
+    def run(self, frame: Frame, view: View) -> bool:
+        lists = frame.scene.draw_lists(view.model, view.half_target)
+        if not any(features.occlusion for features, _ in lists.opaque):
+            self.free()
+            return True
+        s = view.samples
+        w, h = view.width * s, view.height * s
+        self.prepass = _fitted(self.prepass, w, h, "RGBA16F", depth=True)
+        self.target = _fitted(self.target, w, h, "RGBA16F")
+        frame.scene.put_frame(view.view_projection)
+        with self.prepass.bind():
+            self.prepass.framebuffer.clear(color=(0.0, 0.0, 1.0, 0.0), depth=1.0)
+            gpu.state.depth_test_set("LESS_EQUAL")
+            gpu.state.depth_mask_set(True)
+            gpu.state.blend_set("NONE")
+            shader = gpu_library.prepass_program()
+            try:
+                for _features, draws in lists.opaque:
+                    frame.scene.draw_positions(draws, shader)
+            finally:
+                gpu.state.depth_test_set("NONE")
+                gpu.state.depth_mask_set(False)
+        camera = frame.snapshot.camera
+        vp = camera.view_projection if view.view_projection is None else view.view_projection
+        projection = np.asarray(vp, np.float64) @ np.linalg.inv(np.asarray(camera.view, np.float64))
+        rows = np.zeros((3 * 16 + 4,), np.float32)
+        rows[0:16] = np.linalg.inv(projection).T.ravel()
+        rows[16:32] = projection.T.ravel()
+        rows[32:48] = np.asarray(camera.view, np.float64).T.ravel()
+        perspective = 1.0 if camera.is_perspective else 0.0
+        rows[48:52] = (frame.snapshot.settings.occlusion_distance, perspective, w, h)
+        block = gpu.types.GPUUniformBuf(rows.tobytes())
+        prepass = self.prepass
+
+        def bind(shader):
+            gpu_library.bind_sampler(shader, "depth_map", prepass.texture_depth)
+            gpu_library.bind_sampler(shader, "normal_map", prepass.texture_color)
+            shader.uniform_block("occlusion", block)
+
+        frame.draw_full_screen(gpu_library.gtao_program(), bind, self.target)
+        frame.outputs[view.output("occlusion")] = self.target
+        return True
+
+    def free(self) -> None:
+        for target in (self.prepass, self.target):
+            if target is not None:
+                target.free()
+        self.prepass = self.target = None
+
+
 class OpaquePass(TargetPass):
     """The view's scene target (colour and depth, supersampled size), cleared to the background
     colour, and every opaque surface drawn into it. Writes ``<view>.scene``."""
@@ -197,6 +260,11 @@ class OpaquePass(TargetPass):
         frame.outputs[view.output("scene")] = target
         frame.scene.put_frame(view.view_projection)
         lists = frame.scene.draw_lists(view.model, view.half_target)
+        occlusion = frame.outputs.get(view.output("occlusion"))
+
+        def bind(shader):
+            gpu_library.bind_sampler(shader, "env_occlusion", occlusion.texture_color)
+
         with target.bind():
             target.framebuffer.clear(color=view.background, depth=1.0)
             gpu.state.depth_test_set("LESS_EQUAL")
@@ -205,7 +273,8 @@ class OpaquePass(TargetPass):
             gpu.state.blend_set("NONE")
             try:
                 for features, draws in lists.opaque:
-                    if not frame.scene.draw_group(features, draws, view.lobes, frame.should_stop):
+                    if not frame.scene.draw_group(features, draws, view.lobes, frame.should_stop,
+                                                  bind if features.occlusion else None):
                         return False
             finally:
                 gpu.state.depth_test_set("NONE")
@@ -278,7 +347,7 @@ class TransparencyPass(Pass):
         """Whether a peeled layer's depth holds any fragment: reduced on the GPU to one texel per
         block of ``programs.OCCUPANCY_BLOCK`` texels a side, and only that read back."""
         frame.draw_full_screen(gpu_library.occupancy_program(),
-                               lambda s: s.uniform_sampler("layer_depth", depth), self.occupancy)
+                               lambda s: gpu_library.bind_sampler(s, "layer_depth", depth), self.occupancy)
         return bool(self.occupancy.read()[..., 0].max() > 0.0)
 
     def run(self, frame: Frame, view: View) -> bool:
@@ -307,8 +376,8 @@ class TransparencyPass(Pass):
             current = 1 - current
 
             def bind_under(shader, accumulated=accumulated):
-                shader.uniform_sampler("accumulated", accumulated.texture_color)
-                shader.uniform_sampler("peeled", self.colour)
+                gpu_library.bind_sampler(shader, "accumulated", accumulated.texture_color)
+                gpu_library.bind_sampler(shader, "peeled", self.colour)
 
             frame.draw_full_screen(under, bind_under, self.accumulators[current])
             used += 1
@@ -319,7 +388,7 @@ class TransparencyPass(Pass):
             gpu.state.blend_set("ALPHA_PREMULT")
             copy = gpu_library.post_program(programs.PostFeatures(samples=1))
             copy.bind()
-            copy.uniform_sampler("hdr_image", self.accumulators[current].texture_color)
+            gpu_library.bind_sampler(copy, "hdr_image", self.accumulators[current].texture_color)
             frame.full_screen.draw(copy)
             gpu.state.blend_set("NONE")
         return True
@@ -329,8 +398,8 @@ class TransparencyPass(Pass):
         """One layer: the nearest transparent fragment behind ``previous``, in front of the opaque."""
 
         def bind(shader):
-            shader.uniform_sampler("opaque_depth", target.texture_depth)
-            shader.uniform_sampler("peel_depth", previous)
+            gpu_library.bind_sampler(shader, "opaque_depth", target.texture_depth)
+            gpu_library.bind_sampler(shader, "peel_depth", previous)
 
         with framebuffer.bind():
             framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
@@ -367,7 +436,8 @@ class ResolvePass(TargetPass):
             return True
         self.fit(view.width, view.height, view.format)
         frame.draw_full_screen(gpu_library.post_program(programs.PostFeatures(samples=view.samples)),
-                               lambda s: s.uniform_sampler("hdr_image", scene.texture_color), self.target)
+                               lambda s: gpu_library.bind_sampler(s, "hdr_image", scene.texture_color),
+                               self.target)
         frame.outputs[view.output("radiance")] = self.target
         return True
 
@@ -384,7 +454,7 @@ class DisplayPass(TargetPass):
         features = programs.PostFeatures(view.samples, view.display.tone_mapper, view.display.transfer)
 
         def bind(shader):
-            shader.uniform_sampler("hdr_image", scene.texture_color)
+            gpu_library.bind_sampler(shader, "hdr_image", scene.texture_color)
             shader.uniform_float("exposure_scale", 2.0 ** view.exposure)
 
         frame.draw_full_screen(gpu_library.post_program(features), bind, self.target)
@@ -401,8 +471,8 @@ class ComparePass(TargetPass):
         self.fit(comparison.width, comparison.height, "RGBA16F" if comparison.half_target else "RGBA32F")
 
         def bind(shader):
-            shader.uniform_sampler("image_a", a.texture_color)
-            shader.uniform_sampler("image_b", b.texture_color)
+            gpu_library.bind_sampler(shader, "image_a", a.texture_color)
+            gpu_library.bind_sampler(shader, "image_b", b.texture_color)
             if comparison.features.mode == "SPLIT":
                 shader.uniform_float("split", float(comparison.split))
             else:
@@ -414,4 +484,4 @@ class ComparePass(TargetPass):
 
 
 #: The passes that draw one view, in order.
-VIEW_PASSES = (OpaquePass, BackgroundPass, TransparencyPass, ResolvePass, DisplayPass)
+VIEW_PASSES = (OcclusionPass, OpaquePass, BackgroundPass, TransparencyPass, ResolvePass, DisplayPass)

@@ -82,6 +82,7 @@ class Features:
     env_diffuse: str = "MAP"  # its irradiance: "MAP" (exactly convolved) or "SH9"
     env_samples: int = 0  # > 0: specular sampled per pixel with this many samples, not split sum
     ambient_world: bool = False  # the empirical models' ambient term is the world's irradiance
+    occlusion: bool = False  # the world's light occluded by screen-space ambient occlusion
 
     def has_map(self, name: str) -> bool:
         return name in self.maps or name + "_CLOSEST" in self.maps
@@ -98,6 +99,8 @@ class Features:
             object.__setattr__(self, "ambient_world", False)
         elif not self.ambient_world:  # the empirical models see the world only through their ambient term
             object.__setattr__(self, "environment", "")
+        if self.peel or not self.environment:  # a transparent surface lies in front of what the
+            object.__setattr__(self, "occlusion", False)  # occlusion pass saw
         if self.model == "PBR" and self.terms.principled:
             canonical = Terms(principled=True)  # one fixed set: exact Fresnel, GGX, Smith, layered
         elif self.model == "PBR":
@@ -135,12 +138,18 @@ class Features:
             env_diffuse=snapshot.settings.environment_diffuse,
             env_samples=snapshot.settings.environment_samples,
             ambient_world=snapshot.settings.ambient_world,
+            occlusion=snapshot.settings.world_occlusion,
         )
 
     @property
     def uses_albedo_table(self) -> bool:
         """The program samples ``ms_table`` (multiple-scattering compensation, Principled set)."""
         return self.model == "PBR" and (self.terms.multiscatter or self.terms.principled)
+
+    @property
+    def uses_env_chain(self) -> bool:
+        """The program samples ``env_chain`` (the world's specular sampled per pixel)."""
+        return self.environment == "MAP" and self.env_samples > 0 and self.model == "PBR"
 
     @property
     def uses_split_table(self) -> bool:
@@ -173,11 +182,13 @@ class Features:
             out.append(("SL_PEEL", "1"))
         if self.ambient_world and self.environment:
             out.append(("SL_AMBIENT_WORLD", "1"))
+        if self.occlusion:
+            out.append(("SL_ENV_OCCLUSION", "1"))
         if self.environment:
             out.append(("SL_ENV_" + self.environment, "1"))
             if self.environment == "MAP" and self.env_diffuse == "SH9":
                 out.append(("SL_ENV_DIFFUSE_SH9", "1"))
-            if self.environment == "MAP" and self.env_samples > 0 and self.model == "PBR":
+            if self.uses_env_chain:
                 out += [("SL_ENV_SAMPLES", str(self.env_samples)), ("SL_CHAIN", "1")]
             if ("SL_MS_SIZE", str(MS_SIZE)) not in out:
                 out.append(("SL_MS_SIZE", str(MS_SIZE)))
@@ -268,7 +279,7 @@ def clear_source_caches() -> None:
     """Forget generated sources (and the GLSL files they were read from)."""
     for cached in (read_glsl, program_source, post_source, compare_source, occupancy_source, under_source,
                    background_source, env_bake_source, env_downsample_source, env_prefilter_source,
-                   env_irradiance_source):
+                   env_irradiance_source, prepass_source, gtao_source):
         cached.cache_clear()
 
 
@@ -329,6 +340,28 @@ def env_prefilter_source(samples: int) -> ProgramSource:
     return _full_screen_source("common.glsl", "environment.glsl", "env_prefilter.frag.glsl",
                                defines=(("SL_SAMPLES", str(samples)), ("SL_CHAIN", "1")),
                                typedefs=read_glsl("chain_data.glsl"))
+
+
+@lru_cache(maxsize=1)
+def prepass_source() -> ProgramSource:
+    """Depth and normals of the opaque surfaces (the occlusion pass's input)."""
+    return ProgramSource(
+        typedefs=read_glsl("uniforms.glsl") + "\n" + read_glsl("chain_data.glsl"),
+        vertex=read_glsl("mesh.vert.glsl"),
+        fragment=read_glsl("prepass.frag.glsl"),
+        defines=(("SL_MAX_LIGHTS", "1"), ("SL_OBJECT_BLOCK", str(OBJECT_BLOCK))),
+    )
+
+
+#: Slices and steps per horizon of the ambient occlusion pass (glsl/gtao.frag.glsl).
+OCCLUSION_DIRECTIONS, OCCLUSION_STEPS = 8, 12
+
+
+@lru_cache(maxsize=1)
+def gtao_source() -> ProgramSource:
+    return _full_screen_source("common.glsl", "gtao.frag.glsl", typedefs=read_glsl("chain_data.glsl"),
+                               defines=(("SL_DIRECTIONS", str(OCCLUSION_DIRECTIONS)),
+                                        ("SL_STEPS", str(OCCLUSION_STEPS))))
 
 
 #: Texels per side of a block summarised by one texel of a peeling layer's occupancy map.

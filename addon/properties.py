@@ -145,6 +145,14 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
                                    "converges to the reference as the samples grow"),
         ),
         description="How the world lights the specular lobe of the physically based model")
+    world_occlusion: BoolProperty(
+        name="World Occlusion", default=True, update=_redraw,
+        description="Geometry occludes the world's light: screen-space ambient occlusion (ground-truth "
+                    "ambient occlusion, Jimenez et al. 2016) of its diffuse and specular parts")
+    occlusion_distance: FloatProperty(
+        name="Occlusion Distance", default=2.0, min=0.001, soft_max=100.0, subtype="DISTANCE", update=_redraw,
+        description="How far geometry occludes the world's light (on screen only: what the camera does not "
+                    "see occludes nothing)")
     world_samples: IntProperty(
         name="World Samples", default=64, min=1, max=1024, update=_redraw,
         description="Samples of the world per pixel for sampled world specular")

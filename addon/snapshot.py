@@ -330,6 +330,8 @@ class Settings:
     environment_diffuse: str = "MAP"  # the world's irradiance: "MAP" (exact convolution) or "SH9"
     environment_samples: int = 0  # the world's specular: split sum (0) or this many samples per pixel
     ambient_world: bool = False  # Blinn-Phong/Phong ambient: the world's irradiance, not the constant
+    world_occlusion: bool = True  # screen-space ambient occlusion of the world's light
+    occlusion_distance: float = 2.0  # how far (m) geometry occludes the world's light
 
 
 @dataclass

@@ -83,6 +83,10 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
                 box.label(text="this tone mapper already maps to display values")
         col = layout.column(heading="World")
         col.active = props.model == "PBR"
+        col.prop(props, "world_occlusion", text="Occlusion")
+        sub = col.row()
+        sub.active = props.world_occlusion
+        sub.prop(props, "occlusion_distance", text="Distance")
         col.prop(props, "world_diffuse", text="Diffuse")
         col.prop(props, "world_specular", text="Specular")
         if props.world_specular == "SAMPLED":

@@ -4,3 +4,11 @@ struct ChainData {
   vec4 rect[12];
   vec4 info;
 };
+
+/* The occlusion pass's camera (glsl/gtao.frag.glsl). */
+struct OcclusionData {
+  mat4 inverse_projection;
+  mat4 projection;
+  mat4 view;
+  vec4 params;
+};

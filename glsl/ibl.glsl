@@ -142,3 +142,26 @@ float world_sun_specular(float roughness)
   return 1.0;  /* no world light, no suns split off it */
 }
 #endif
+
+/* Occlusion of the world's light by geometry (SL_ENV_OCCLUSION: the screen-space pass,
+ * glsl/gtao.frag.glsl): the visible fraction of the hemisphere at this pixel for the diffuse
+ * lobe, and for the specular lobe Lagarde & de Rousiers 2014's estimate from it ("Moving
+ * Frostbite to PBR", listing 26): a lobe narrower than the cone of unoccluded directions is
+ * occluded less than the hemisphere is. */
+float env_occlusion_diffuse()
+{
+#ifdef SL_ENV_OCCLUSION
+  return texelFetch(env_occlusion, ivec2(gl_FragCoord.xy), 0).r;
+#else
+  return 1.0;
+#endif
+}
+
+float env_occlusion_specular(float NoV, float ao, float roughness)
+{
+#ifdef SL_ENV_OCCLUSION
+  return clamp(pow(NoV + ao, exp2(-16.0 * roughness - 1.0)) - 1.0 + ao, 0.0, 1.0);
+#else
+  return 1.0;
+#endif
+}

@@ -115,15 +115,17 @@ vec3 shade_environment(Surface s, vec2 weights)
 {
   vec2 EB = env_split_sum(s.NoV, s.roughness);
   vec3 r = reflect(-s.v, s.n);
+  float ao = env_occlusion_diffuse();
+  float specular_ao = env_occlusion_specular(s.NoV, ao, s.roughness);
   vec3 radiance = env_prefiltered(s.roughness > MIN_PERCEPTUAL_ROUGHNESS ? env_dominant_direction(s.n, r, s.alpha) : r,
-                                  s.roughness);
-  vec3 irradiance = env_irradiance(s.n);
+                                  s.roughness) * specular_ao;
+  vec3 irradiance = env_irradiance(s.n) * ao;
 #  ifdef SL_PRINCIPLED
   return principled_environment(s, EB, radiance, irradiance, weights);
 #  else
   vec3 albedo = s.f0 * (EB.x - EB.y) + s.f90 * EB.y;
 #    ifdef SL_ENV_SAMPLES
-  vec3 specular = env_sampled_specular(s);
+  vec3 specular = env_sampled_specular(s) * specular_ao;
 #    else
   vec3 specular = albedo * radiance;
 #    endif

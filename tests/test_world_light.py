@@ -88,6 +88,7 @@ def _row_scene(kind: str):
     scene.render.resolution_x, scene.render.resolution_y = W, H
     scene.render.film_transparent = True
     scene.shading_lab.model = "PBR"
+    scene.shading_lab.world_occlusion = False  # nothing occludes here (nor in Cycles): the light alone
     if kind == "dielectric":
         scene.shading_lab.term_set = "PRINCIPLED"
     scenes.ortho_camera(scene, location=(0.0, 0.0, 10.0), scale=10.0)
@@ -291,3 +292,104 @@ def test_empirical_ambient_world_is_the_lambert_light_of_the_world(tmp_path):
     scene.shading_lab.ambient = 0.2
     constant = scenes.render(scene, tmp_path / "constant.exr")[..., :3]
     np.testing.assert_allclose(constant[inside], 0.8 * 0.2, atol=1e-6)  # diffuse colour 0.8 x 0.2
+
+
+def _sphere_on_ground(world: str):
+    """A Lambert sphere resting on a Lambert ground, seen from above and in front, the world on
+    and everything occluding (Cycles' default)."""
+    scene = scenes.reset(size=96)
+    scene.shading_lab.model = "PBR"
+    data = bpy.data.cameras.new("Camera")
+    cam = bpy.data.objects.new("Camera", data)
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    cam.location, cam.rotation_euler = (0.0, -4.5, 3.0), (math.radians(56.0), 0.0, 0.0)
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=64, ring_count=32, radius=0.5, location=(0.0, 0.0, 0.5))
+    bpy.ops.object.shade_smooth()
+    bpy.context.active_object.data.materials.append(_diffuse("sphere"))
+    bpy.ops.mesh.primitive_plane_add(size=6.0)
+    bpy.context.active_object.data.materials.append(_diffuse("ground"))
+    if world == "uniform":
+        _world(scene, color=(1.0, 1.0, 1.0))
+    else:
+        _world(scene, image=_hdri(world))
+    return scene
+
+
+#: world -> (error bound with occlusion, measured without it, about): 2x what was measured with it
+OCCLUDED = {"uniform": (0.07, 0.049), "forest": (0.07, 0.044)}
+
+
+@pytest.mark.parametrize("world", OCCLUDED)
+def test_world_light_occluded_by_a_sphere_on_the_ground_against_cycles(world, tmp_path):
+    """Cycles occludes the world's light (the ground darkens under the sphere, the sphere's
+    underside sees the ground): with World Occlusion the screen-space pass gets closer to it than
+    without. What the camera cannot see occludes nothing on screen (the ground under the sphere),
+    and the sun split off the forest world casts no shadow yet: the remaining error."""
+    scene = _sphere_on_ground(world)
+    ref = _cycles(scene, tmp_path / "cycles.exr", samples=512)[..., :3].astype(np.float64)
+    scene.render.engine = "SHADING_LAB"
+    errors = {}
+    for occlusion in (False, True):
+        scene.shading_lab.world_occlusion = occlusion
+        ours = scenes.render(scene, tmp_path / f"ours_{occlusion}.exr")[..., :3].astype(np.float64)
+        errors[occlusion] = float(np.abs(ours - ref).mean() / ref.mean())
+    print(f"sphere on the ground under {world}: mean absolute error / mean, without occlusion "
+          f"{errors[False]:.2%}, with {errors[True]:.2%}")
+    bound, _unoccluded = OCCLUDED[world]
+    assert errors[True] < bound and errors[True] < 0.85 * errors[False], errors
+
+
+SEQUENCE = """
+import sys
+sys.path[:0] = [{root!r}, {tests!r}]
+import bpy, addon
+addon.register()
+import scenes
+import test_world_light as T
+from pathlib import Path
+probe = scenes.reset(size=8)
+scenes.ortho_camera(probe)
+scenes.plane(probe)
+scenes.light(probe, "SUN", energy=1.0)
+scenes.render(probe, Path({tmp!r}) / "probe.exr")
+scene = T._row_scene("diffuse")
+T._world(scene, image=T._hdri("forest"), strength=0.5)
+VARIANTS = [("PBR", "CONSTANT", "MAP"), ("BLINN_PHONG", "WORLD", "MAP"), ("BLINN_PHONG", "CONSTANT", "MAP"),
+            ("BLINN_PHONG", "WORLD", "SH9"), ("PBR", "CONSTANT", "SH9"), ("PHONG", "WORLD", "MAP")]
+for i, (model, ambient, diffuse) in enumerate(VARIANTS):
+    scene.shading_lab.model, scene.shading_lab.ambient_source = model, ambient
+    scene.shading_lab.world_diffuse = diffuse
+    scenes.render(scene, Path({tmp!r}) / f"{{i}}.exr")
+print("rendered every variant")
+"""
+
+
+def test_programs_that_leave_a_declared_sampler_unused_do_not_corrupt_blender(tmp_path):
+    """A program variant that declares a sampler its code does not read (the compiler removes
+    it; Blender would bind it to texture unit -1): this sequence crashed Blender at its third
+    render before samplers were bound only when present. Run in its own process."""
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    root = Path(__file__).resolve().parent.parent
+    script = tmp_path / "sequence.py"
+    script.write_text(SEQUENCE.format(root=str(root), tests=str(root / "tests"), tmp=str(tmp_path)))
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=300,
+                          stdin=subprocess.DEVNULL, cwd=tmp_path)
+    assert proc.returncode == 0 and "rendered every variant" in proc.stdout, proc.stderr[-2000:]
+
+
+def test_occlusion_leaves_a_lone_convex_sphere_lit(tmp_path):
+    """Nothing occludes a lone sphere: the occlusion pass should find nothing. What it does find,
+    at the rim where the surface turns away, is its error."""
+    scene = _row_scene("diffuse")
+    _world(scene, color=(0.5, 0.5, 0.5))
+    scene.shading_lab.world_occlusion = True
+    image = scenes.render(scene, tmp_path / "occluded.exr")[..., :3]
+    inside = np.any(_sphere_masks(), axis=0)
+    err = np.abs(image[inside] - 0.4) / 0.4  # rho L
+    print(f"a lone sphere with World Occlusion: error mean {err.mean():.3%}, 99th percentile "
+          f"{np.percentile(err, 99):.2%}, max {err.max():.1%} (its rim)")
+    assert err.mean() < 2e-3 and np.percentile(err, 99) < 0.08
