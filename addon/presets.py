@@ -173,12 +173,28 @@ class ObjectPreset:
         }.get(self.primitive or "", 0)
 
 
+#: Blender's bundled worlds (its ``datafiles/studiolights/world`` HDRIs, CC0): referenced by name,
+#: never copied into the presets.
+BUNDLED_WORLDS = ("city", "courtyard", "forest", "interior", "night", "studio", "sunrise", "sunset")
+
+
+@dataclass(frozen=True)
+class WorldPreset:
+    """A world: a colour, or one of Blender's bundled HDRIs times a strength, turned about Z."""
+
+    color: Vec3 = (0.0, 0.0, 0.0)
+    image: str | None = None  # one of BUNDLED_WORLDS
+    strength: float = 1.0
+    rotation: float = 0.0  # degrees about the vertical axis
+
+
 @dataclass(frozen=True)
 class LightingVariant:
     name: str
     lights: tuple[LightPreset, ...]
     description: str = ""
     world_color: Vec3 | None = None
+    world: WorldPreset | None = None  # a world image for this variant
 
 
 @dataclass(frozen=True)
@@ -194,21 +210,26 @@ class ScenePreset:
     model: str = "PBR"  # the scene.shading_lab.model enum item
     ambient: float = 0.2
     world_color: Vec3 = (0.0, 0.0, 0.0)
+    world: WorldPreset | None = None  # a world image (else the world is world_color)
 
     @property
     def variant_names(self) -> tuple[str, ...]:
         return tuple(v.name for v in self.variants)
 
-    def lighting(self, variant: str | None = None) -> tuple[tuple[LightPreset, ...], Vec3]:
-        """The lights and world colour of ``variant``; None gives the top-level ``[[lights]]``,
-        or the first variant when the file has none."""
+    def lighting(self, variant: str | None = None) -> tuple[tuple[LightPreset, ...], WorldPreset]:
+        """The lights and world of ``variant``; None gives the top-level ``[[lights]]`` and
+        world, or the first variant when the file has neither lights nor a world image."""
         if variant is None:
-            if self.lights or not self.variants:
-                return self.lights, self.world_color
+            if self.lights or self.world is not None or not self.variants:
+                return self.lights, self.world or WorldPreset(self.world_color)
             variant = self.variants[0].name
         for v in self.variants:
             if v.name == variant:
-                return v.lights, v.world_color if v.world_color is not None else self.world_color
+                if v.world is not None:
+                    return v.lights, v.world
+                if v.world_color is not None:
+                    return v.lights, WorldPreset(v.world_color)
+                return v.lights, self.world or WorldPreset(self.world_color)
         names = ", ".join(self.variant_names) or "(none)"
         raise PresetError(_display(self.path), "variants", f"one of {names}", got=variant,
                           note="no such lighting variant")
@@ -769,8 +790,8 @@ def load_scene_preset(path_or_name: str | Path) -> ScenePreset:
     r = _Reader(path)
     r.keys(data, "", {"scene", "camera", "lights", "objects", "arrays", "variants"})
     scene = r.table(r.get(data, "scene", "", True), "scene")
-    r.keys(scene, "scene",
-           {"name", "description", "resolution", "model", "ambient", "world_color", "materials"})
+    r.keys(scene, "scene", {"name", "description", "resolution", "model", "ambient", "world_color",
+                            "world_image", "world_strength", "world_rotation", "materials"})
     name = r.string(scene, "name", "scene")
     description = r.string(scene, "description", "scene")
     resolution = scene.get("resolution", [960, 540])
@@ -782,6 +803,7 @@ def load_scene_preset(path_or_name: str | Path) -> ScenePreset:
     model = MODELS[r.string(scene, "model", "scene", "pbr", choices=tuple(MODELS))]
     ambient = r.number(scene, "ambient", "scene", 0.2, lo=0.0)
     world_color = r.color(scene, "world_color", "scene", (0.0, 0.0, 0.0), hi=None)
+    world = _world_image(r, scene, "scene")
     materials = r.string(scene, "materials", "scene", "materials.toml")
     library = _Library(r, "scene.materials", materials)
 
@@ -790,18 +812,20 @@ def load_scene_preset(path_or_name: str | Path) -> ScenePreset:
     variants: list[LightingVariant] = []
     for i, tbl in enumerate(r.table_list(data.get("variants", []), "variants")):
         path_i = f"variants[{i}]"
-        r.keys(tbl, path_i, {"name", "description", "lights", "world_color"})
+        r.keys(tbl, path_i, {"name", "description", "lights", "world_color", "world_image",
+                             "world_strength", "world_rotation"})
         vname = r.string(tbl, "name", path_i)
         if vname in (v.name for v in variants):
             r.fail(r.join(path_i, "name"), "a name no other variant has", got=vname)
-        vlights = _lights(r, r.get(tbl, "lights", path_i, True), f"{path_i}.lights")
-        if not vlights:
-            r.fail(f"{path_i}.lights", "at least one [[variants.lights]] table", got=[])
+        vworld = _world_image(r, tbl, path_i)
+        vlights = _lights(r, tbl["lights"], f"{path_i}.lights") if "lights" in tbl else ()
+        if not vlights and vworld is None:
+            r.fail(f"{path_i}.lights", "at least one [[variants.lights]] table, or a world_image", got=[])
         variants.append(LightingVariant(
             name=vname, lights=vlights, description=r.string(tbl, "description", path_i, ""),
-            world_color=r.color(tbl, "world_color", path_i, None, hi=None)))
-    if not lights and not variants:
-        r.fail("lights", "at least one [[lights]] table (or [[variants]] with lights)",
+            world_color=r.color(tbl, "world_color", path_i, None, hi=None), world=vworld))
+    if not lights and not variants and world is None:
+        r.fail("lights", "at least one [[lights]] table (or [[variants]] with lights, or a world_image)",
                note="the scene is unlit")
 
     objects = [_object(r, tbl, f"objects[{i}]", library, i)
@@ -813,4 +837,16 @@ def load_scene_preset(path_or_name: str | Path) -> ScenePreset:
     return ScenePreset(
         name=name, description=description, path=path.resolve(), camera=camera, lights=lights,
         objects=tuple(objects), variants=tuple(variants), resolution=(resolution[0], resolution[1]),
-        model=model, ambient=ambient, world_color=world_color)
+        model=model, ambient=ambient, world_color=world_color, world=world)
+
+
+def _world_image(r, tbl: dict, path: str) -> WorldPreset | None:
+    """``world_image`` (a bundled world's name), ``world_strength`` and ``world_rotation``."""
+    if "world_image" not in tbl:
+        for key in ("world_strength", "world_rotation"):
+            if key in tbl:
+                r.fail(r.join(path, key), "a world_image beside it", got=tbl[key])
+        return None
+    image = r.string(tbl, "world_image", path, choices=BUNDLED_WORLDS)
+    return WorldPreset(image=image, strength=r.number(tbl, "world_strength", path, 1.0, lo=0.0),
+                       rotation=r.number(tbl, "world_rotation", path, 0.0, lo=-360.0, hi=360.0))

@@ -280,15 +280,33 @@ def _read_file_object(scene, obj: P.ObjectPreset, collection, shown: str, where:
 
 # --- the scene ---------------------------------------------------------------------------------
 
-def _world(name: str, color) -> bpy.types.World:
+def bundled_world_path(name: str) -> str:
+    """The file of one of Blender's bundled worlds (``presets.BUNDLED_WORLDS``)."""
+    import os
+
+    return os.path.join(bpy.utils.system_resource("DATAFILES", path="studiolights/world"), f"{name}.exr")
+
+
+def _world(name: str, preset: P.WorldPreset) -> bpy.types.World:
     world = bpy.data.worlds.new(name)
-    world.color = color
+    world.color = preset.color
     if world.node_tree is None:
         world.use_nodes = True
-    for node in world.node_tree.nodes:
-        if node.bl_idname == "ShaderNodeBackground":
-            node.inputs["Color"].default_value = (*color, 1.0)
-            node.inputs["Strength"].default_value = 1.0
+    tree = world.node_tree
+    background = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBackground")
+    background.inputs["Color"].default_value = (*preset.color, 1.0)
+    background.inputs["Strength"].default_value = preset.strength if preset.image else 1.0
+    if preset.image:
+        env = tree.nodes.new("ShaderNodeTexEnvironment")
+        env.image = bpy.data.images.load(bundled_world_path(preset.image), check_existing=True)
+        env.location = (background.location.x - 300.0, background.location.y)
+        tree.links.new(env.outputs["Color"], background.inputs["Color"])
+        if preset.rotation:
+            coords = tree.nodes.new("ShaderNodeTexCoord")
+            mapping = tree.nodes.new("ShaderNodeMapping")
+            mapping.inputs["Rotation"].default_value = (0.0, 0.0, math.radians(preset.rotation))
+            tree.links.new(coords.outputs["Generated"], mapping.inputs["Vector"])
+            tree.links.new(mapping.outputs["Vector"], env.inputs["Vector"])
     return world
 
 
@@ -334,7 +352,7 @@ def build_scene(preset: P.ScenePreset, scene: bpy.types.Scene, variant: str | No
     camera), lights (``variant``'s when given), objects and their materials; set the render
     resolution, the world colour and the Shading Lab model and ambient constant. Existing objects
     are left alone: build into an empty scene for the preset as designed."""
-    lights, world_color = preset.lighting(variant)
+    lights, world = preset.lighting(variant)
     collection = bpy.data.collections.new(preset.name)
     scene.collection.children.link(collection)
 
@@ -344,7 +362,7 @@ def build_scene(preset: P.ScenePreset, scene: bpy.types.Scene, variant: str | No
     if props is not None:
         props.model = preset.model
         props.ambient = preset.ambient
-    scene.world = _world(preset.name, world_color)
+    scene.world = _world(preset.name, world)
 
     camera = _camera(preset, collection)
     scene.camera = camera

@@ -468,7 +468,7 @@ def report(args, results, lights, tris, configs, peers, machine, elapsed) -> str
              f"in one process. *total* is the engine's own time (`engine.last_timings`): scene "
              f"extraction + draw + read-back (the read-back fences the GPU work) + handing pixels to "
              f"Blender; *wall* is `bpy.ops.render.render()` as a whole. Errors are against Cycles "
-             f"(direct light only, world on, nothing occluded, pixel centres, {args.reference_samples} spp, "
+             f"(direct light only, world on and occluded, light shadows off, pixel centres, {args.reference_samples} spp, "
              f"`reference.render_reference`, cached) **at {res(ref)}**: every compared image, ours and "
              f"the peers', is rendered at {res(ref)}. FLIP is mean HDR-FLIP; *rel* the mean relative "
              f"luminance error on lit pixels. Peers (EEVEE, Workbench) are timed at {res(ref)} in the "

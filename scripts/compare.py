@@ -5,8 +5,8 @@
                                                [--transparency-layers N]
 
 Renders Blinn-Phong, Phong and the physically based model (with the scene's terms, or those
-given), and the Cycles reference (direct light only, the world lighting, nothing occluded — the
-engine has neither shadows nor ambient occlusion —, pixel-centre sampling; cached on disk, see
+given), and the Cycles reference (direct light only, the world lighting occluded by the objects,
+light shadows off — the engine casts none yet —, pixel-centre sampling; cached on disk, see
 reference.py). Writes ``DIR/<scene>_compare.exr``
 (multi-layer OpenEXR: a layer per model, the reference, and each model's absolute error),
 ``DIR/<scene>_compare.png`` (labelled: the images through a simple display transform, then
@@ -160,7 +160,7 @@ def compare(args) -> dict:
                  f"{terms.fresnel.lower()} / {terms.ndf.lower()} / {terms.visibility.lower()} / "
                  f"{terms.diffuse.lower()}{' + multiscatter' if terms.multiscatter else ''}")
     title = (f"{stem} — physically based terms: {term_text}. Reference: Cycles, "
-             f"{args.reference_samples} spp, direct light only, world on, nothing occluded")
+             f"{args.reference_samples} spp, direct light only, world on and occluded, light shadows off")
     png = args.out / f"{stem}_compare.png"
     labelled_png(png, [(label, images[key]) for key, _, label in MODELS] + [("Cycles reference", ref)],
                  flips, title)

@@ -1,10 +1,9 @@
 """Ground truth and peers: the same scene rendered by Cycles (the reference), EEVEE and Workbench.
 
 The reference is what Shading Lab computes, computed exactly: Cycles on the CPU with direct light
-only (max bounces 0), every light's radius 0 and soft falloff off, the world lighting the scene,
-**nothing occluded**: light shadows off and every object's shadow-ray visibility off, so that the
-world's light is not occluded either (the engine has neither shadows nor ambient occlusion yet:
-this switches a real feature off, and the world-lighting tests say so too), pixel-centre sampling
+only (max bounces 0), every light's radius 0 and soft falloff off, the world lighting the scene
+and occluded by the objects as Cycles does, but **no light shadows** (each light's Cast Shadow
+off: the engine casts none yet; this switches a real feature off), pixel-centre sampling
 (a Gaussian filter of width 0.01 px: Cycles' Box filter ignores its width and averages the whole
 pixel), no denoising, and enough samples that noise is below the differences measured. References
 are cached on disk by a hash of everything that decides them.
@@ -24,7 +23,7 @@ import OpenEXR
 ROOT = Path(__file__).resolve().parent.parent
 CACHE_DIR = ROOT / ".cache" / "references"
 #: Bump when the reference settings below change: old cache entries then stop matching.
-SETTINGS_VERSION = 2  # 2: the world lights the scene, unoccluded
+SETTINGS_VERSION = 3  # 2: the world lights the scene; 3: objects occlude the world's light
 EEVEE = "BLENDER_EEVEE" if bpy.app.version >= (5, 0, 0) else "BLENDER_EEVEE_NEXT"
 
 
@@ -47,7 +46,7 @@ def scene_fingerprint(scene) -> str:
             mesh.vertices.foreach_get("co", co)
             h.update(co.tobytes())
             for slot in obj.material_slots:
-                h.update(_material_key(slot.material).encode())
+                h.update(_id_key(slot.material).encode())
         elif obj.type == "LIGHT":
             light = obj.data
             h.update(repr((light.type, tuple(light.color), light.energy, getattr(light, "exposure", 0.0),
@@ -57,11 +56,7 @@ def scene_fingerprint(scene) -> str:
             cam = obj.data
             h.update(repr((cam.type, cam.lens, cam.ortho_scale, cam.sensor_width, cam.shift_x,
                            cam.shift_y)).encode())
-    if scene.world is not None and scene.world.node_tree is not None:
-        for node in scene.world.node_tree.nodes:
-            for socket in node.inputs:
-                if hasattr(socket, "default_value"):
-                    h.update(repr(_plain(socket.default_value)).encode())
+    h.update(_id_key(scene.world).encode())
     return h.hexdigest()[:24]
 
 
@@ -72,27 +67,61 @@ def _plain(value):
         return value
 
 
-def _material_key(mat) -> str:
-    if mat is None:
+#: Properties every shader node has (placement, labels, selection): they do not change a render.
+_NODE_BASE = None
+
+
+def _id_key(block) -> str:
+    """A material's or world's node graph as text: every node's type, settings (images by their
+    file and date, or their pixels), input values and links, node groups followed."""
+    if block is None:
         return "none"
-    parts = [mat.name]
-    if mat.node_tree is not None:
-        for node in mat.node_tree.nodes:
-            parts.append(node.bl_idname + str(getattr(node, "distribution", "")))
-            for socket in node.inputs:
-                if hasattr(socket, "default_value"):
-                    parts.append(repr(_plain(socket.default_value)))
-    return json.dumps(parts)
+    return json.dumps([block.name, _tree_key(block.node_tree, set())] if block.node_tree else [block.name])
+
+
+def _tree_key(tree, seen: set) -> list:
+    global _NODE_BASE
+    if _NODE_BASE is None:
+        _NODE_BASE = {p.identifier for p in bpy.types.ShaderNode.bl_rna.properties}
+    if tree.name in seen:
+        return [tree.name]
+    seen.add(tree.name)
+    parts = []
+    for node in sorted(tree.nodes, key=lambda n: n.name):
+        parts.append([node.name, node.bl_idname])
+        for prop in node.bl_rna.properties:
+            if prop.identifier in _NODE_BASE:
+                continue
+            value = getattr(node, prop.identifier)
+            if isinstance(value, bpy.types.Image):
+                parts.append(_image_key(value))
+            elif isinstance(value, bpy.types.NodeTree):
+                parts.append(_tree_key(value, seen))
+            elif prop.type in ("BOOLEAN", "INT", "FLOAT", "STRING", "ENUM"):
+                parts.append(repr(_plain(value)))
+        for socket in node.inputs:
+            if hasattr(socket, "default_value"):
+                parts.append(repr(_plain(socket.default_value)))
+    parts.append(sorted(f"{link.from_node.name}.{link.from_socket.identifier}>"
+                        f"{link.to_node.name}.{link.to_socket.identifier}" for link in tree.links))
+    return parts
+
+
+def _image_key(image) -> str:
+    """An image by its file's path, size and date, or (packed, generated, edited) by its pixels."""
+    path = Path(bpy.path.abspath(image.filepath_raw)) if image.filepath_raw else None
+    if image.source == "FILE" and image.packed_file is None and not image.is_dirty and path and path.is_file():
+        stat = path.stat()
+        return f"{image.name} {path} {stat.st_size} {stat.st_mtime_ns}"
+    pixels = np.empty(len(image.pixels), np.float32)
+    image.pixels.foreach_get(pixels)
+    return f"{image.name} {tuple(image.size)} {hashlib.sha256(pixels.tobytes()).hexdigest()}"
 
 
 def _prepare_lights(scene):
-    """Shadows off, radius 0, soft falloff off, objects casting no shadow (not even the world's
-    light); returns a function that restores them."""
+    """Lights' shadows off, radius 0, soft falloff off (objects still occlude the world's light);
+    returns a function that restores them."""
     saved = []
-    for obj in scene.objects:
-        if hasattr(obj, "visible_shadow") and obj.type != "LIGHT":
-            saved.append((obj, {"visible_shadow": obj.visible_shadow}))
-            obj.visible_shadow = False
     for obj in scene.objects:
         if obj.type == "LIGHT":
             light = obj.data

@@ -6,6 +6,7 @@ from __future__ import annotations
 import sys
 from pathlib import Path
 
+import bpy
 import numpy as np
 import OpenEXR
 import pytest
@@ -68,6 +69,35 @@ def test_reference_cache_and_fingerprint(tmp_path):
     brighter, cached = reference.render_reference(scene, samples=4, cache_dir=tmp_path)
     assert not cached
     np.testing.assert_allclose(brighter[..., :3], first[..., :3] * 1.5, rtol=1e-5)  # Cycles, linear in power
+
+
+def test_reference_fingerprint_follows_node_graphs(tmp_path):
+    """What decides a Cycles render and is not a socket value changes the cache key too: a world
+    image swapped for another, a node linked, a packed image's pixels."""
+    scene = scenes.reset()
+    scenes.ortho_camera(scene)
+    mat = bpy.data.materials.new("Surface")
+    scenes.plane(scene, size=4.0, material=mat)
+    tree = scenes.node_tree(scene.world)
+    env = tree.nodes.new("ShaderNodeTexEnvironment")
+    keys = [reference.scene_fingerprint(scene)]
+    tree.links.new(env.outputs["Color"], tree.nodes["Background"].inputs["Color"])
+    keys.append(reference.scene_fingerprint(scene))
+    image = bpy.data.images.new("sky", 8, 4, float_buffer=True)
+    env.image = image
+    keys.append(reference.scene_fingerprint(scene))
+    image.pixels.foreach_set(np.full(8 * 4 * 4, 0.5, np.float32))
+    keys.append(reference.scene_fingerprint(scene))
+    env.image = bpy.data.images.new("sky", 8, 4, float_buffer=True)  # same pixels, another name
+    keys.append(reference.scene_fingerprint(scene))
+    mtree = scenes.node_tree(mat)
+    principled = next(n for n in mtree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    value = mtree.nodes.new("ShaderNodeValue")
+    keys.append(reference.scene_fingerprint(scene))  # an unlinked node: also a change (kept simple)
+    mtree.links.new(value.outputs[0], principled.inputs["Roughness"])
+    keys.append(reference.scene_fingerprint(scene))
+    assert len(set(keys)) == len(keys), keys
+    assert reference.scene_fingerprint(scene) == keys[-1]  # and stable
 
 
 def test_compare_command_on_a_preset(tmp_path):

@@ -31,6 +31,7 @@ SHIPPED = {
     "material_grid": (12, 2),
     "portability": (6, 3),
     "furnace": (12, 42),
+    "world": (6, 0),
 }
 MATERIALS = {"gold", "copper", "aluminium", "silver", "iron", "titanium", "plastic", "rubber", "glass",
              "water", "skin"}
@@ -140,6 +141,25 @@ def test_portability_variants():
     assert kinds["spot"] == ["SPOT"] and kinds["sunset"] == ["SUN", "SUN"]
     with pytest.raises(P.PresetError, match="no such lighting variant.*studio, noon"):
         preset.lighting("moonlight")
+
+
+def test_world_variants_light_with_bundled_worlds():
+    """The world preset has no lights: each variant's world is one of Blender's bundled HDRIs,
+    which Shading Lab reads as an image (not the flat colour), turned by the variant's rotation."""
+    preset = P.load_scene_preset("world")
+    assert preset.variant_names == ("forest", "city", "studio", "sunset")
+    for name in preset.variant_names:
+        scene = scenes.reset()
+        built = scene_builder.build_scene(preset, scene, variant=name)
+        assert not built.lights and len(built.objects) == 6
+        env = next(n for n in scene.world.node_tree.nodes if n.bl_idname == "ShaderNodeTexEnvironment")
+        assert os.path.samefile(env.image.filepath, scene_builder.bundled_world_path(name))
+        world = extract.snapshot(bpy.context.evaluated_depsgraph_get(), 8, 8).world
+        (term,) = world.lighting
+        assert term.image is not None and term.image.pixels.shape[1] == 2 * term.image.pixels.shape[0]
+        turned = np.array(term.lookup)[:3, :3]
+        angle = math.degrees(math.atan2(turned[1, 0], turned[0, 0]))
+        assert angle == pytest.approx(90.0 if name == "city" else 0.0, abs=1e-4), (name, turned)  # Rz(+90)
 
 
 def test_built_materials_carry_the_preset_values():
@@ -366,6 +386,13 @@ BAD = {
                             ["objects[0].file: resolves to", "outside the presets folder"]),
     "missing_file": (HEADER + '[[objects]]\nfile = "nothing.glb"\n',
                      ["objects[0].file: no such file", "expected a relative path"]),
+    "world_unknown": (HEADER.replace('[64, 64]', '[64, 64]\nworld_image = "forrest"') + SPHERE,
+                      ['scene.world_image: did you mean "forest"?', '"city", "courtyard", "forest"']),
+    "world_strength_alone": (HEADER.replace('[64, 64]', '[64, 64]\nworld_strength = 2') + SPHERE,
+                             ["scene.world_strength: expected a world_image beside it, got 2"]),
+    "variant_unlit": (HEADER + SPHERE + '[[variants]]\nname = "dark"\n',
+                      ["variants[0].lights: expected at least one [[variants.lights]] table, or a "
+                       "world_image"]),
 }
 
 
