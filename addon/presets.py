@@ -209,6 +209,7 @@ class ScenePreset:
     resolution: tuple[int, int] = (960, 540)
     model: str = "PBR"  # the scene.shading_lab.model enum item
     ambient: float = 0.2
+    ambient_source: str = "CONSTANT"  # the scene.shading_lab.ambient_source enum item
     world_color: Vec3 = (0.0, 0.0, 0.0)
     world: WorldPreset | None = None  # a world image (else the world is world_color)
 
@@ -790,7 +791,8 @@ def load_scene_preset(path_or_name: str | Path) -> ScenePreset:
     r = _Reader(path)
     r.keys(data, "", {"scene", "camera", "lights", "objects", "arrays", "variants"})
     scene = r.table(r.get(data, "scene", "", True), "scene")
-    r.keys(scene, "scene", {"name", "description", "resolution", "model", "ambient", "world_color",
+    r.keys(scene, "scene", {"name", "description", "resolution", "model", "ambient", "ambient_source",
+                            "world_color",
                             "world_image", "world_strength", "world_rotation", "materials"})
     name = r.string(scene, "name", "scene")
     description = r.string(scene, "description", "scene")
@@ -802,6 +804,8 @@ def load_scene_preset(path_or_name: str | Path) -> ScenePreset:
         r.fail("scene.resolution", expected, got=resolution)
     model = MODELS[r.string(scene, "model", "scene", "pbr", choices=tuple(MODELS))]
     ambient = r.number(scene, "ambient", "scene", 0.2, lo=0.0)
+    ambient_source = r.string(scene, "ambient_source", "scene", "constant",
+                              choices=("constant", "world")).upper()
     world_color = r.color(scene, "world_color", "scene", (0.0, 0.0, 0.0), hi=None)
     world = _world_image(r, scene, "scene")
     materials = r.string(scene, "materials", "scene", "materials.toml")
@@ -837,7 +841,7 @@ def load_scene_preset(path_or_name: str | Path) -> ScenePreset:
     return ScenePreset(
         name=name, description=description, path=path.resolve(), camera=camera, lights=lights,
         objects=tuple(objects), variants=tuple(variants), resolution=(resolution[0], resolution[1]),
-        model=model, ambient=ambient, world_color=world_color, world=world)
+        model=model, ambient=ambient, ambient_source=ambient_source, world_color=world_color, world=world)
 
 
 def _world_image(r, tbl: dict, path: str) -> WorldPreset | None:

@@ -35,7 +35,7 @@ MODEL_FILES = {
     "PHONG": "model_phong.glsl",
     "PBR": "model_pbr.glsl",
 }
-FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "textures.glsl",
+FRAGMENT_LIBRARY = ("common.glsl", "facing.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "textures.glsl",
                     "environment.glsl", "ibl.glsl")
 PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "principled.glsl")
 #: How the world lights a program: "" not at all (a black world), "UNIFORM" a constant radiance,
@@ -348,7 +348,7 @@ def prepass_source() -> ProgramSource:
     return ProgramSource(
         typedefs=read_glsl("uniforms.glsl") + "\n" + read_glsl("chain_data.glsl"),
         vertex=read_glsl("mesh.vert.glsl"),
-        fragment=read_glsl("prepass.frag.glsl"),
+        fragment=read_glsl("facing.glsl") + "\n" + read_glsl("prepass.frag.glsl"),
         defines=(("SL_MAX_LIGHTS", "1"), ("SL_OBJECT_BLOCK", str(OBJECT_BLOCK))),
     )
 
@@ -470,7 +470,8 @@ def pack_environment(sh: np.ndarray, rects, uniform_radiance, roughness=(), firs
 
 
 def pack_objects(items) -> np.ndarray:
-    """(blocks, OBJECT_BLOCK * 32) float32: each item's model and normal matrices (column-major),
+    """(blocks, OBJECT_BLOCK * 32) float32: each item's model and normal matrices (column-major;
+    the normal matrix's [3][3] is the sign of the model's determinant, -1 for a mirrored object),
     item i at block i // OBJECT_BLOCK, index i % OBJECT_BLOCK; unused entries are zero."""
     blocks = max(-(-len(items) // OBJECT_BLOCK), 1)
     data = np.zeros((blocks * OBJECT_BLOCK, 2, 4, 4), np.float32)
@@ -478,4 +479,5 @@ def pack_objects(items) -> np.ndarray:
         matrices = np.stack([item.matrix for item in items])
         data[:len(items), 0] = matrices.transpose(0, 2, 1)
         data[:len(items), 1] = normal_matrices(matrices).transpose(0, 2, 1)
+        data[:len(items), 1, 3, 3] = np.where(np.linalg.det(matrices[:, :3, :3]) < 0.0, -1.0, 1.0)
     return data.reshape(blocks, OBJECT_BLOCK * 32)

@@ -362,6 +362,7 @@ def build_scene(preset: P.ScenePreset, scene: bpy.types.Scene, variant: str | No
     if props is not None:
         props.model = preset.model
         props.ambient = preset.ambient
+        props.ambient_source = preset.ambient_source
     scene.world = _world(preset.name, world)
 
     camera = _camera(preset, collection)

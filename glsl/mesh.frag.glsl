@@ -40,8 +40,7 @@ void main()
     discard;
   }
 #endif
-  /* Back faces are shaded with the normal flipped towards the viewer, as Cycles does. */
-  Surface s = make_surface(world_position, gl_FrontFacing ? n : -n, view_direction(world_position), m);
+  Surface s = make_surface(world_position, facing_outward() ? n : -n, view_direction(world_position), m);
   /* ambient and emission: neither a diffuse nor a specular lobe (weight z, off in lobe passes) */
   vec3 c = (shade_ambient(s, frame.ambient.rgb) + m.emission.rgb) * lobes.z;
   /* the world is a light: its diffuse and specular parts go to the lobes' passes */

@@ -8,6 +8,7 @@ void main()
   world_position = world.xyz;
   world_normal = mat3(object.normal_matrix) * nor;
   world_uv = uv;
-  world_tangent = vec4(mat3(object.model) * tangent.xyz, tangent.w);
+  /* a mirror reverses the bitangent too: B = sign x det-sign x (N x T) */
+  world_tangent = vec4(mat3(object.model) * tangent.xyz, tangent.w * object.normal_matrix[3][3]);
   gl_Position = frame.view_proj * world;
 }

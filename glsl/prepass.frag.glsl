@@ -7,5 +7,5 @@ void main()
   vec3 n = world_normal;
   float len2 = dot(n, n);
   n = len2 > 1e-20 ? n * inversesqrt(len2) : vec3(0.0, 0.0, 1.0);
-  frag_color = vec4(gl_FrontFacing ? n : -n, 1.0);
+  frag_color = vec4(facing_outward() ? n : -n, 1.0);
 }

@@ -51,7 +51,8 @@ struct EnvironmentData {
 
 struct ObjectData {
   mat4 model;
-  mat4 normal_matrix;    /* inverse transpose of the model matrix's upper 3x3 */
+  mat4 normal_matrix;    /* inverse transpose of the model matrix's upper 3x3; [3][3]: the sign
+                          * of its determinant (-1: mirrored) */
 };
 
 /* Every object's data in blocks of SL_OBJECT_BLOCK, uploaded when a matrix changes; a draw names

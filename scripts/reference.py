@@ -110,7 +110,8 @@ def _tree_key(tree, seen: set) -> list:
 def _image_key(image) -> str:
     """An image by its file's path, size and date, or (packed, generated, edited) by its pixels."""
     path = Path(bpy.path.abspath(image.filepath_raw)) if image.filepath_raw else None
-    if image.source == "FILE" and image.packed_file is None and not image.is_dirty and path and path.is_file():
+    on_disk = path is not None and path.is_file()
+    if image.source == "FILE" and image.packed_file is None and not image.is_dirty and on_disk:
         stat = path.stat()
         return f"{image.name} {path} {stat.st_size} {stat.st_mtime_ns}"
     pixels = np.empty(len(image.pixels), np.float32)

@@ -5,7 +5,8 @@
 For each phenomenon of the source report's section 2.4 (Fresnel, long-tailed highlights, HDR,
 energy conservation) and its stated aim (material portability, measured materials), renders the
 preset with Blinn-Phong, Phong and the physically based model against the Cycles reference
-(direct light only, world on and occluded, light shadows off, pixel-centre sampling) through compare.py, and writes the
+(direct light only, world on and occluded, light shadows off, pixel-centre sampling) through
+compare.py, and writes the
 labelled images to docs/results/ and the numbers and what they show to docs/results.md.
 """
 

@@ -45,6 +45,21 @@ def _next_render_works(tmp_path: Path) -> None:
         np.testing.assert_allclose(image[..., :3], LAMBERT, rtol=1e-4, err_msg=model)
 
 
+@pytest.mark.parametrize("scale", [(-1, 1, 1), (1, 1, -1), (-1, -1, -1), (-2, 0.5, 1)])
+def test_mirrored_objects_are_lit_like_their_originals(scale, tmp_path):
+    """A negative scale (mirrored geometry: the triangles' winding reverses) changes nothing on a
+    Lambert plane at the origin: every pixel is still rho / pi E cos 45, in every model."""
+    scene = _lambert_scene()
+    plane = next(o for o in scene.objects if o.type == "MESH")
+    plane.scale = scale
+    for model in ("BLINN_PHONG", "PHONG", "PBR"):
+        scene.shading_lab.model = model
+        image = scenes.render(scene, tmp_path / f"mirrored_{model}.exr")[..., :3]
+        covered = image[2:-2, 2:-2]  # (-2, 0.5): the plane is 1 unit tall, 2 of the view's 4
+        err = float(np.abs(covered - LAMBERT).max())
+        assert err < 1e-4, f"{scale} {model}: mean {covered.mean():.5f}, want {LAMBERT:.5f}"
+
+
 def _files(folder: Path) -> list[str]:
     """Everything inside ``folder`` (hidden partial files included), sorted; [] when absent."""
     return sorted(str(p.relative_to(folder)) for p in folder.rglob("*")) if folder.exists() else []

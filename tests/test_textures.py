@@ -8,6 +8,7 @@ import math
 
 import bpy
 import numpy as np
+import pytest
 import scenes
 
 SIZE = 64
@@ -107,6 +108,33 @@ def test_tangent_space_normal_map(tmp_path):
     # white Lambert, F0 = 0, sun straight down with E = pi: radiance = n.l = n_z
     np.testing.assert_allclose(got, n[2], rtol=2e-3)
     assert abs(n[2] - math.cos(tilt)) < 0.01  # the map really tilts the normal
+
+
+@pytest.mark.parametrize("scale", [(1, 1, 1), (-1, 1, 1), (1, -1, 1)], ids=["plain", "mirror_x", "mirror_y"])
+def test_normal_map_on_a_mirrored_object(scale, tmp_path):
+    """A mirror reverses the tangent frame's handedness: mirrored in x the tangent turns to -x and
+    the bitangent stays +y; mirrored in y the bitangent turns to -y. The map tilts the normal
+    towards +v (the bitangent); a sun from the side then tells +y from -y."""
+    tilt = math.radians(35.0)
+    normal = np.array([0.0, math.sin(tilt), math.cos(tilt)])
+    texels = np.broadcast_to((normal + 1.0) / 2.0, (TEXELS, TEXELS, 3)).copy()
+    scene = _textured_scene({"Normal": ("nmap", texels, True)}, sun=math.pi)
+    sun = next(o for o in scene.objects if o.type == "LIGHT")
+    sun.rotation_euler = (math.radians(40.0), 0.0, 0.0)
+    plane = next(o for o in scene.objects if o.type == "MESH")
+    plane.scale = scale
+    got = scenes.render(scene, tmp_path / "mirrored.exr")[..., :3].astype(np.float64)
+    bpy.context.view_layer.update()
+    to_light = np.array(sun.matrix_world)[:3, 2]
+    stored = _stored(texels[0, 0]) * 2.0 - 1.0
+    n = stored / np.linalg.norm(stored)
+    frame = np.diag(np.sign(scale).astype(float))  # T, B, N of the plane mirrored: the axes mirrored
+    frame[2, 2] = 1.0  # a mirror in x or y keeps the plane's normal +z
+    want = max(float(frame @ n @ to_light), 0.0)  # white Lambert, E = pi: n.l
+    mirrored_wrong = max(float(np.array([n[0], -n[1], n[2]]) @ frame @ to_light), 0.0)
+    assert abs(want - mirrored_wrong) > 0.3  # the test tells the two frames apart
+    err = float(np.abs(got - want).max())
+    assert err < 2e-3 * want, f"{scale}: got {got.mean():.4f}, want {want:.4f} (max error {err:.1e})"
 
 
 def test_textured_principled_matches_cycles(tmp_path):
