@@ -181,9 +181,10 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     info.vertex_out(iface)
 
 
-def prepass_program() -> gpu.types.GPUShader:
-    """Depth and world normals of opaque surfaces (for the occlusion pass)."""
-    src = programs.prepass_source()
+def prepass_program(back_faces: bool = False) -> gpu.types.GPUShader:
+    """Depth and world normals of opaque surfaces, or the depth of the faces turned away (for the
+    occlusion pass)."""
+    src = programs.prepass_source(back_faces)
 
     def declare(info):
         info.typedef_source(src.typedefs)
@@ -197,13 +198,18 @@ def prepass_program() -> gpu.types.GPUShader:
             iface.smooth(kind, name)
         info.vertex_out(iface)
 
-    return LIBRARY.program(("prepass",), "depth and normal", src, declare)
+    return LIBRARY.program(("prepass", back_faces), "depth and normal", src, declare)
+
+
+def occlusion_depths_program() -> gpu.types.GPUShader:
+    return LIBRARY.program(("occlusion depths",), "ambient occlusion", programs.occlusion_depths_source(),
+                           _declare_full_screen("depth_map", "back_depth_map", "normal_map"))
 
 
 def gtao_program() -> gpu.types.GPUShader:
     def declare(info):
         info.typedef_source(programs.read_glsl("chain_data.glsl"))
-        _declare_full_screen("depth_map", "normal_map")(info)
+        _declare_full_screen("depths", "normal_map")(info)
         info.uniform_buf(0, "OcclusionData", "occlusion")
 
     return LIBRARY.program(("gtao",), "ambient occlusion", programs.gtao_source(), declare)

@@ -196,6 +196,8 @@ class OcclusionPass(Pass):
 
     def __init__(self):
         self.prepass: Target | None = None
+        self.back: Target | None = None
+        self.depths: Target | None = None
         self.target: Target | None = None
 
     def run(self, frame: Frame, view: View) -> bool:
@@ -206,20 +208,23 @@ class OcclusionPass(Pass):
         s = view.samples
         w, h = view.width * s, view.height * s
         self.prepass = _fitted(self.prepass, w, h, "RGBA16F", depth=True)
+        self.back = _fitted(self.back, w, h, "R16F", depth=True)
+        self.depths = _fitted(self.depths, w, h, "RG32F")
         self.target = _fitted(self.target, w, h, "RGBA16F")
         frame.scene.put_frame(view.view_projection)
-        with self.prepass.bind():
-            self.prepass.framebuffer.clear(color=(0.0, 0.0, 1.0, 0.0), depth=1.0)
-            gpu.state.depth_test_set("LESS_EQUAL")
-            gpu.state.depth_mask_set(True)
-            gpu.state.blend_set("NONE")
-            shader = gpu_library.prepass_program()
-            try:
-                for _features, draws in lists.opaque:
-                    frame.scene.draw_positions(draws, shader)
-            finally:
-                gpu.state.depth_test_set("NONE")
-                gpu.state.depth_mask_set(False)
+        for target, back_faces in ((self.prepass, False), (self.back, True)):
+            with target.bind():
+                target.framebuffer.clear(color=(0.0, 0.0, 1.0, 0.0), depth=1.0)
+                gpu.state.depth_test_set("LESS_EQUAL")
+                gpu.state.depth_mask_set(True)
+                gpu.state.blend_set("NONE")
+                shader = gpu_library.prepass_program(back_faces)
+                try:
+                    for _features, draws in lists.opaque:
+                        frame.scene.draw_positions(draws, shader)
+                finally:
+                    gpu.state.depth_test_set("NONE")
+                    gpu.state.depth_mask_set(False)
         camera = frame.snapshot.camera
         vp = camera.view_projection if view.view_projection is None else view.view_projection
         projection = np.asarray(vp, np.float64) @ np.linalg.inv(np.asarray(camera.view, np.float64))
@@ -230,22 +235,29 @@ class OcclusionPass(Pass):
         perspective = 1.0 if camera.is_perspective else 0.0
         rows[48:52] = (frame.snapshot.settings.occlusion_distance, perspective, w, h)
         block = gpu.types.GPUUniformBuf(rows.tobytes())
-        prepass = self.prepass
+        prepass, back, depths = self.prepass, self.back, self.depths
+
+        def bind_depths(shader):
+            gpu_library.bind_sampler(shader, "depth_map", prepass.texture_depth)
+            gpu_library.bind_sampler(shader, "back_depth_map", back.texture_depth)
+            gpu_library.bind_sampler(shader, "normal_map", prepass.texture_color)
 
         def bind(shader):
-            gpu_library.bind_sampler(shader, "depth_map", prepass.texture_depth)
+            gpu_library.bind_sampler(shader, "depths", depths.texture_color)
             gpu_library.bind_sampler(shader, "normal_map", prepass.texture_color)
             shader.uniform_block("occlusion", block)
+
+        frame.draw_full_screen(gpu_library.occlusion_depths_program(), bind_depths, self.depths)
 
         frame.draw_full_screen(gpu_library.gtao_program(), bind, self.target)
         frame.outputs[view.output("occlusion")] = self.target
         return True
 
     def free(self) -> None:
-        for target in (self.prepass, self.target):
+        for target in (self.prepass, self.back, self.depths, self.target):
             if target is not None:
                 target.free()
-        self.prepass = self.target = None
+        self.prepass = self.back = self.depths = self.target = None
 
 
 class OpaquePass(TargetPass):

@@ -279,7 +279,8 @@ def clear_source_caches() -> None:
     """Forget generated sources (and the GLSL files they were read from)."""
     for cached in (read_glsl, program_source, post_source, compare_source, occupancy_source, under_source,
                    background_source, env_bake_source, env_downsample_source, env_prefilter_source,
-                   env_irradiance_source, prepass_source, gtao_source):
+                   env_irradiance_source, prepass_source, gtao_source,
+                   occlusion_depths_source):
         cached.cache_clear()
 
 
@@ -343,13 +344,15 @@ def env_prefilter_source(samples: int) -> ProgramSource:
 
 
 @lru_cache(maxsize=1)
-def prepass_source() -> ProgramSource:
-    """Depth and normals of the opaque surfaces (the occlusion pass's input)."""
+def prepass_source(back_faces: bool = False) -> ProgramSource:
+    """Depth and normals of the opaque surfaces, or (``back_faces``) the depth of the faces turned
+    away from the viewer (the occlusion pass's input)."""
     return ProgramSource(
         typedefs=read_glsl("uniforms.glsl") + "\n" + read_glsl("chain_data.glsl"),
         vertex=read_glsl("mesh.vert.glsl"),
         fragment=read_glsl("facing.glsl") + "\n" + read_glsl("prepass.frag.glsl"),
-        defines=(("SL_MAX_LIGHTS", "1"), ("SL_OBJECT_BLOCK", str(OBJECT_BLOCK))),
+        defines=(("SL_MAX_LIGHTS", "1"), ("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)))
+        + ((("SL_BACK_FACES", "1"),) if back_faces else ()),
     )
 
 
@@ -362,6 +365,11 @@ def gtao_source() -> ProgramSource:
     return _full_screen_source("common.glsl", "gtao.frag.glsl", typedefs=read_glsl("chain_data.glsl"),
                                defines=(("SL_DIRECTIONS", str(OCCLUSION_DIRECTIONS)),
                                         ("SL_STEPS", str(OCCLUSION_STEPS))))
+
+
+@lru_cache(maxsize=1)
+def occlusion_depths_source() -> ProgramSource:
+    return _full_screen_source("occlusion_depths.frag.glsl")
 
 
 #: Texels per side of a block summarised by one texel of a peeling layer's occupancy map.

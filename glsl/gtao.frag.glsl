@@ -1,24 +1,73 @@
 /* Ground-truth ambient occlusion (Jimenez, Wu, Pesce & Jarabo 2016, "Practical Real-Time
- * Strategies for Accurate Indirect Occlusion"): for SL_DIRECTIONS slices through the view
- * vector, the two horizons are searched in screen space (SL_STEPS samples each, out to the
- * occlusion distance), clamped to the hemisphere of the normal projected into the slice, and
- * the cosine-weighted visible arc integrated in closed form (their eq. 10). The result is the
- * fraction of the world's light a Lambertian surface still receives, for a uniform world
- * exactly what Cycles' occluded world light gives where the occluders are on screen. No
- * multiple-bounce term: Cycles is compared with direct light only.
+ * Strategies for Accurate Indirect Occlusion") with occluders of measured thickness (a visibility
+ * bitmask, Therrien, Levesque & Gilet 2023, "Screen Space Indirect Lighting with Visibility
+ * Bitmask"). For SL_DIRECTIONS slices through the view vector, SL_STEPS samples on each side (out
+ * to the occlusion distance) each occlude the arc of the slice between their front surface and
+ * their back surface: the nearest surface by which the ray leaves the object (a prepass of the
+ * faces turned away), or, where there is none (a floor, an open surface, a face seen from inside),
+ * everything behind the front (the classic horizon). The arc's sectors, SL_SECTORS across the
+ * normal's hemisphere, are marked occluded; the cosine-weighted visible part is integrated in
+ * closed form per run of visible sectors (Jimenez et al.'s eq. 10), weighted by the normal's
+ * length in the slice and averaged over the slices (their eq. 3). The result is the fraction of
+ * the world's light a Lambertian surface still receives, for a uniform world what Cycles'
+ * occluded world light gives where the occluders are on screen. No multiple-bounce term: Cycles
+ * is compared with direct light only.
  *
  * occlusion: inverse_projection, projection, view (world -> view rotation), params: x = the
- * occlusion distance in world units, y = 1 perspective / 0 orthographic, zw = target size. */
+ * occlusion distance in world units, y = 1 perspective / 0 orthographic, zw = target size.
+ * normal_map: world normal; depths: x the nearest surface's depth, y the depth where the ray
+ * leaves its object, 1 where unknown (glsl/occlusion_depths.frag.glsl). */
 
-/* The view-space position of the surface at a texel (its centre; depth nearest, not blended). */
+/* A surface occluding within HORIZON_BIAS of the point's own tangent plane is the surface itself,
+ * facetted and quantised (a convex sphere would otherwise occlude itself at its rim). */
 #define HORIZON_BIAS 0.1 /* radians */
+#define SL_SECTORS 32
 
-vec3 view_position(ivec2 texel, vec2 size)
+vec3 view_position(vec2 uv, float d)
 {
-  float d = texelFetch(depth_map, texel, 0).r;
-  vec2 uv = (vec2(texel) + 0.5) / size;
   vec4 p = occlusion.inverse_projection * vec4(uv * 2.0 - 1.0, d * 2.0 - 1.0, 1.0);
   return p.xyz / p.w;
+}
+
+/* The view-space depth (z) at a depth-buffer value: perspective and orthographic projections
+ * alike map depth to z without x and y. */
+float view_z(float d)
+{
+  mat4 ip = occlusion.inverse_projection;
+  float z = d * 2.0 - 1.0;
+  return (ip[2][2] * z + ip[3][2]) / (ip[2][3] * z + ip[3][3]);
+}
+
+/* acos to within 7e-5 radians, a fraction of a sector (Abramowitz & Stegun 4.4.45): the
+ * occlusion pass takes two per sample. */
+float acos_fast(float x)
+{
+  float a = abs(clamp(x, -1.0, 1.0));
+  float r = sqrt(1.0 - a) * (1.5707288 + a * (-0.2121144 + a * (0.0742610 - 0.0187293 * a)));
+  return x < 0.0 ? PI - r : r;
+}
+
+/* The cosine-weighted integral of the slice from its view direction (h = 0) to the signed angle
+ * h, for the normal's angle n in the slice: sign(h) int_0^|h| cos(t - n) |sin t| dt (the
+ * antiderivative of Jimenez et al.'s eq. 10; 1 across the whole hemisphere when n = 0). */
+float slice_integral(float h, float n)
+{
+  return sign(h) * 0.25 * (-cos(2.0 * h - n) + cos(n) + 2.0 * h * sin(n));
+}
+
+/* Sectors [first, last) of the hemisphere [n - pi/2, n + pi/2] covering signed angles [a, b]. */
+uint sector_mask(float a, float b, float n)
+{
+  float lo = clamp((a - n) / PI + 0.5, 0.0, 1.0);
+  float hi = clamp((b - n) / PI + 0.5, 0.0, 1.0);
+  int first = int(floor(lo * float(SL_SECTORS) + 0.5));
+  int last = int(floor(hi * float(SL_SECTORS) + 0.5));
+  if (last <= first) {
+    return 0u;
+  }
+  uint below_last = last >= 32 ? 0xFFFFFFFFu : (1u << uint(last)) - 1u;
+  uint below_first = (1u << uint(first)) - 1u;
+  return below_last & ~below_first;
 }
 
 void main()
@@ -26,12 +75,12 @@ void main()
   vec2 size = occlusion.params.zw;
   ivec2 texel = ivec2(gl_FragCoord.xy);
   vec2 uv = gl_FragCoord.xy / size;
-  float depth = texelFetch(depth_map, texel, 0).r;
+  float depth = texelFetch(depths, texel, 0).r;
   if (depth >= 1.0) {
-    frag_color = vec4(1.0);  /* the sky: nothing to occlude */
+    frag_color = vec4(1.0); /* the sky: nothing to occlude */
     return;
   }
-  vec3 P = view_position(texel, size);
+  vec3 P = view_position(uv, depth);
   vec3 V = occlusion.params.y > 0.5 ? normalize(-P) : vec3(0.0, 0.0, 1.0);
   vec3 N = normalize(mat3(occlusion.view) * texelFetch(normal_map, texel, 0).xyz);
   /* the occlusion distance on screen, in uv units, at this point's depth */
@@ -39,7 +88,6 @@ void main()
   vec4 centre = occlusion.projection * vec4(P, 1.0);
   float radius_uv = abs(edge.x / edge.w - centre.x / centre.w) * 0.5;
   float visibility = 0.0;
-  float weight = 0.0;
   for (int i = 0; i < SL_DIRECTIONS; i++) {
     float phi = PI * (float(i) + 0.5) / float(SL_DIRECTIONS);
     vec2 dir = vec2(cos(phi), sin(phi));
@@ -48,39 +96,61 @@ void main()
     vec3 n_proj = N - axis * dot(N, axis);
     float proj_len = length(n_proj);
     if (proj_len < 1e-6) {
-      continue;
+      continue; /* the normal is perpendicular to the slice: it weighs nothing */
     }
     vec3 ortho = slice_dir - V * dot(slice_dir, V);
     float cos_n = clamp(dot(n_proj, V) / proj_len, -1.0, 1.0);
     float n = (dot(ortho, n_proj) < 0.0 ? -1.0 : 1.0) * acos_accurate(cos_n);
-    float h[2];
+    uint occluded = 0u;
     for (int side = 0; side < 2; side++) {
       float s = side == 0 ? -1.0 : 1.0;
-      float best = -1.0;
       for (int j = 0; j < SL_STEPS; j++) {
         float t = (float(j) + 0.5) / float(SL_STEPS);
+        t *= t; /* denser near the point, where occluders subtend most */
         /* at least two texels out: the next texel is the same surface, its depth quantised */
         vec2 step_uv = max(t * radius_uv * size.x, 2.0) / size;
         vec2 suv = uv + s * dir * step_uv;
         if (any(lessThan(suv, vec2(0.0))) || any(greaterThan(suv, vec2(1.0)))) {
-          break;  /* off screen: nothing known there, nothing occludes */
+          break; /* off screen: nothing known there, nothing occludes */
         }
-        vec3 H = view_position(ivec2(suv * size), size) - P;
+        ivec2 stexel = ivec2(suv * size);
+        vec2 scentre = (vec2(stexel) + 0.5) / size;
+        vec2 pair = texelFetch(depths, stexel, 0).rg;
+        float front_depth = pair.x;
+        if (front_depth >= 1.0) {
+          continue; /* the sky */
+        }
+        vec3 F = view_position(scentre, front_depth);
+        vec3 H = F - P;
         float dist = length(H);
         if (dist < 1e-6 || dist > occlusion.params.x) {
-          continue;  /* beyond the occlusion distance: does not occlude */
+          continue; /* beyond the occlusion distance: does not occlude */
         }
-        best = max(best, dot(H / dist, V));
+        float front = acos_fast(dot(H / dist, V));
+        float back = PI; /* everything behind the front surface */
+        if (pair.y < 1.0) {
+          /* the same pixel's ray, further: scaled (perspective) or moved along z (orthographic) */
+          float zb = view_z(pair.y);
+          vec3 B = (occlusion.params.y > 0.5 ? F * (zb / F.z) : vec3(F.xy, zb)) - P;
+          back = acos_fast(dot(normalize(B), V));
+        }
+        front += HORIZON_BIAS;
+        back = max(back + HORIZON_BIAS, front);
+        occluded |= side == 0 ? sector_mask(-back, -front, n) : sector_mask(front, back, n);
       }
-      /* a horizon within HORIZON_BIAS of the surface's own tangent plane is the surface itself,
-       * facetted and quantised (a convex sphere would otherwise occlude itself at its rim) */
-      float angle = acos_accurate(best) + HORIZON_BIAS;
-      h[side] = side == 0 ? n + max(-angle - n, -0.5 * PI) : n + min(angle - n, 0.5 * PI);
     }
-    float arc = -cos(2.0 * h[0] - n) + cos(n) + 2.0 * h[0] * sin(n) +
-                -cos(2.0 * h[1] - n) + cos(n) + 2.0 * h[1] * sin(n);
-    visibility += proj_len * 0.25 * arc;
-    weight += proj_len;
+    /* integrate the runs of visible sectors */
+    uint visible = ~occluded;
+    float arc = 0.0;
+    while (visible != 0u) {
+      int first = findLSB(visible);
+      uint rest = ~visible & ~((1u << uint(first)) - 1u);
+      int last = rest == 0u ? 32 : findLSB(rest);
+      arc += slice_integral(n + PI * (float(last) / float(SL_SECTORS) - 0.5), n) -
+             slice_integral(n + PI * (float(first) / float(SL_SECTORS) - 0.5), n);
+      visible = last >= 32 ? 0u : visible & ~((1u << uint(last)) - 1u);
+    }
+    visibility += proj_len * arc;
   }
-  frag_color = vec4(vec3(weight > 0.0 ? clamp(visibility / weight, 0.0, 1.0) : 1.0), 1.0);
+  frag_color = vec4(vec3(clamp(visibility / float(SL_DIRECTIONS), 0.0, 1.0)), 1.0);
 }

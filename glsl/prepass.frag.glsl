@@ -1,11 +1,20 @@
 /* Depth and normals of the opaque surfaces, ahead of shading, for the occlusion pass: the
  * interpolated normal (flipped towards the viewer on back faces, as the shading does) in world
- * space. */
+ * space, alpha 1 where the surface is seen from outside and 0.5 from inside. With SL_BACK_FACES,
+ * only the faces turned away from the viewer, depth alone: where rays leave the objects. */
 
 void main()
 {
+#ifdef SL_BACK_FACES
+  if (facing_outward()) {
+    discard;
+  }
+  frag_color = vec4(0.0);
+#else
   vec3 n = world_normal;
   float len2 = dot(n, n);
   n = len2 > 1e-20 ? n * inversesqrt(len2) : vec3(0.0, 0.0, 1.0);
-  frag_color = vec4(facing_outward() ? n : -n, 1.0);
+  bool outward = facing_outward();
+  frag_color = vec4(outward ? n : -n, outward ? 1.0 : 0.5);
+#endif
 }

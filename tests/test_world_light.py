@@ -1,7 +1,7 @@
 """The world as a light in the physically based model, against closed forms and against Cycles
-rendering the same spheres with direct light only and the world on, unoccluded (the spheres'
-shadow, diffuse, glossy and transmission ray visibility off, as the engine has no occlusion of
-world light yet).
+rendering the same spheres with direct light only and the world on: unoccluded (the spheres'
+shadow, diffuse, glossy and transmission ray visibility off) where a test is about the light
+alone, occluded as Cycles does by default where it is about World Occlusion.
 
 Errors on a sphere are the mean absolute error over its pixels divided by the sphere's mean
 radiance in Cycles (a per-pixel relative error would be ruled by the darkest pixels)."""
@@ -316,8 +316,9 @@ def _sphere_on_ground(world: str):
     return scene
 
 
-#: world -> (error bound with occlusion, measured without it, about): 2x what was measured with it
-OCCLUDED = {"uniform": (0.07, 0.049), "forest": (0.07, 0.044)}
+#: world -> (error bound with occlusion, bound on its ratio to the error without): about 2x and
+#: 1.2x what was measured (uniform 1.2 % with, 4.9 % without; forest 3.1 %, 4.4 %)
+OCCLUDED = {"uniform": (0.025, 0.3), "forest": (0.065, 0.85)}
 
 
 @pytest.mark.parametrize("world", OCCLUDED)
@@ -336,8 +337,62 @@ def test_world_light_occluded_by_a_sphere_on_the_ground_against_cycles(world, tm
         errors[occlusion] = float(np.abs(ours - ref).mean() / ref.mean())
     print(f"sphere on the ground under {world}: mean absolute error / mean, without occlusion "
           f"{errors[False]:.2%}, with {errors[True]:.2%}")
-    bound, _unoccluded = OCCLUDED[world]
-    assert errors[True] < bound and errors[True] < 0.85 * errors[False], errors
+    bound, ratio = OCCLUDED[world]
+    assert errors[True] < bound and errors[True] < ratio * errors[False], errors
+
+
+def test_neighbours_occlude_each_other_as_in_cycles(tmp_path):
+    """Five Lambert spheres 0.2 m apart under a uniform world, seen from above: each darkens its
+    neighbours' facing sides (Cycles, everything occluding). The front surface alone would make
+    each sphere an infinitely deep column; its back faces give it its real depth."""
+    scene = _row_scene("diffuse")
+    for obj in scene.objects:
+        if obj.type == "MESH":
+            for name in ("visible_shadow", "visible_diffuse", "visible_glossy", "visible_transmission"):
+                setattr(obj, name, True)
+    _world(scene, color=(0.5, 0.5, 0.5))
+    ref = _cycles(scene, tmp_path / "cycles.exr", samples=512)[..., :3].astype(np.float64)
+    scene.render.engine = "SHADING_LAB"
+    inside = np.any(_sphere_masks(), axis=0)
+    errors = {}
+    for occlusion in (False, True):
+        scene.shading_lab.world_occlusion = occlusion
+        ours = scenes.render(scene, tmp_path / f"ours_{occlusion}.exr")[..., :3].astype(np.float64)
+        errors[occlusion] = float(np.abs(ours - ref)[inside].mean() / ref[inside].mean())
+    print(f"five spheres in a row, uniform world: error without occlusion {errors[False]:.2%}, "
+          f"with {errors[True]:.2%}")
+    assert errors[True] < 0.018 and errors[True] < 0.4 * errors[False], errors
+
+
+def test_world_preset_occlusion_against_cycles(tmp_path):
+    """The world preset's five spheres on a ground, seen from a low perspective camera, every
+    surface white Lambert under a uniform world: what Cycles renders is the occlusion alone. A
+    sphere seen from the front hides the ground behind it, but it is not a column reaching to
+    the horizon: the back-face prepass gives it its depth (without it the ground behind each
+    sphere darkens in wedges: 4.5 % here, against 3.3 % with it)."""
+    from addon import presets, scene_builder
+
+    scene = scenes.reset()
+    scene_builder.build_scene(presets.load_scene_preset("world"), scene)
+    scene.render.resolution_x, scene.render.resolution_y = 192, 108
+    _world(scene, color=(1.0, 1.0, 1.0))
+    for mat in bpy.data.materials:
+        for node in mat.node_tree.nodes if mat.node_tree else ():
+            if node.bl_idname == "ShaderNodeBsdfPrincipled":
+                node.inputs["Base Color"].default_value = (0.8, 0.8, 0.8, 1.0)
+                node.inputs["Metallic"].default_value = 0.0
+                node.inputs["Roughness"].default_value = 1.0
+                node.inputs["Specular IOR Level"].default_value = 0.0  # no specular: Lambert
+    ref = _cycles(scene, tmp_path / "cycles.exr", samples=512)[..., :3].astype(np.float64)
+    scene.render.engine = "SHADING_LAB"
+    errors = {}
+    for occlusion in (False, True):
+        scene.shading_lab.world_occlusion = occlusion
+        ours = scenes.render(scene, tmp_path / f"ours_{occlusion}.exr")[..., :3].astype(np.float64)
+        errors[occlusion] = float(np.abs(ours - ref).mean() / ref.mean())
+    print(f"world preset, white, uniform world: error without occlusion {errors[False]:.2%}, "
+          f"with {errors[True]:.2%}")
+    assert errors[True] < 0.04 and errors[True] < 0.35 * errors[False], errors
 
 
 SEQUENCE = """
@@ -385,14 +440,16 @@ def test_occlusion_leaves_a_lone_convex_sphere_lit(tmp_path):
     """Nothing occludes a lone sphere: the occlusion pass should find nothing. What it does find,
     at the rim where the surface turns away, is its error."""
     scene = _row_scene("diffuse")
+    for obj in [o for o in scene.objects if o.type == "MESH" and abs(o.location.x) > 1.0]:
+        bpy.data.objects.remove(obj)  # the middle sphere alone: its neighbours would occlude it
     _world(scene, color=(0.5, 0.5, 0.5))
     scene.shading_lab.world_occlusion = True
     image = scenes.render(scene, tmp_path / "occluded.exr")[..., :3]
-    inside = np.any(_sphere_masks(), axis=0)
+    inside = _sphere_masks()[2]
     err = np.abs(image[inside] - 0.4) / 0.4  # rho L
     print(f"a lone sphere with World Occlusion: error mean {err.mean():.3%}, 99th percentile "
           f"{np.percentile(err, 99):.2%}, max {err.max():.1%} (its rim)")
-    assert err.mean() < 2e-3 and np.percentile(err, 99) < 0.08
+    assert err.mean() < 6e-4 and np.percentile(err, 99) < 3e-3
 
 
 def test_the_viewport_is_lit_by_the_world_as_the_final_render(tmp_path):
