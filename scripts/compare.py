@@ -36,7 +36,7 @@ MODELS = tuple((c.cli, c.id, c.label) for c in MODEL_CHOICES)
 
 def parse_args(argv):
     parser = argparse.ArgumentParser(prog="compare.py", description=__doc__.split("\n\n")[0])
-    parser.add_argument("scene", help="a preset name or .toml, a .blend, or demo")
+    parser.add_argument("scene", help="a preset name or .toml, a .blend, demo or startup")
     parser.add_argument("--resolution", default="480x270", metavar="WxH")
     parser.add_argument("--reference-samples", type=int, default=256,
                         help="Cycles samples per pixel (default 256)")

@@ -4,7 +4,8 @@
                              [--out DIR] [--frames A-B] [--variant NAME] [term options]
     blender -b --python scripts/render.py -- SCENE [options]
 
-SCENE is ``demo`` (the built-in demo scene), a preset name (``fresnel``, ``long_tail`` ...; see
+SCENE is ``demo`` (the built-in demo scene), ``startup`` (Blender's startup file: the default
+cube, its light and grey world), a preset name (``fresnel``, ``long_tail`` ...; see
 ``--list``), a preset ``.toml`` file, or a ``.blend`` file. Writes ``DIR/<scene>_<model>.exr``
 and ``.png`` per model (``_<frame>`` appended with ``--frames``), and ``DIR/<scene>_comparison.png``
 with the models side by side when there are several. Files appear only when complete. Any error
@@ -42,7 +43,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     if "--" in argv:  # blender -b ... --python render.py -- ARGS
         argv = argv[argv.index("--") + 1:]
     parser = argparse.ArgumentParser(prog="render.py", description=__doc__.split("\n\n")[0])
-    parser.add_argument("scene", nargs="?", help="demo, a preset name, a preset .toml or a .blend file")
+    parser.add_argument("scene", nargs="?", help="demo, startup, a preset name, a preset .toml or a .blend file")
     parser.add_argument("--list", action="store_true", help="list the shipped scene presets and exit")
     parser.add_argument("--model", default="all", choices=[*MODELS, "all"])
     parser.add_argument("--resolution", default=None, metavar="WxH",
@@ -106,7 +107,8 @@ def ensure_addon():
 
 
 def load_scene(name: str, variant: str | None):
-    """(scene, stem): the demo, a preset (name or .toml) or a .blend, loaded into Blender."""
+    """(scene, stem): the demo, Blender's startup file, a preset (name or .toml) or a .blend,
+    loaded into Blender."""
     import bpy
 
     path = Path(name)
@@ -119,6 +121,9 @@ def load_scene(name: str, variant: str | None):
         demo_scene.build(scene)
         scene.render.resolution_x, scene.render.resolution_y = 1280, 720
         return scene, "demo"
+    if name == "startup":
+        bpy.ops.wm.read_factory_settings(use_empty=False)
+        return bpy.context.scene, "startup"
     if path.suffix.lower() == ".blend":
         if not path.is_file():
             raise CliError(f"no such .blend file: {path}")
@@ -132,7 +137,8 @@ def load_scene(name: str, variant: str | None):
     if path.suffix.lower() == ".toml" and not path.is_file():
         raise CliError(f"no such preset file: {path}")
     if path.suffix.lower() not in ("", ".toml"):
-        raise CliError(f"SCENE must be demo, a preset name, a .toml preset or a .blend file, got {name!r}")
+        raise CliError(f"SCENE must be demo, startup, a preset name, a .toml preset or a .blend file, "
+                       f"got {name!r}")
     preset = presets.load_scene_preset(path if path.suffix else name)  # PresetError names file and key
     if variant is not None and variant not in preset.variant_names:
         raise CliError(f"{name}: no lighting variant {variant!r}; it has: "
@@ -293,6 +299,8 @@ def main(argv: list[str] | None = None) -> int:
         if args.list:
             from addon import presets
 
+            print(f"{'demo':18s} the built-in demo scene")
+            print(f"{'startup':18s} Blender's startup file: the default cube, its light, the grey world")
             for name in presets.scene_preset_names():
                 print(f"{name:18s} {presets.load_scene_preset(name).description}")
             return 0

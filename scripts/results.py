@@ -3,8 +3,8 @@
     .venv/bin/python scripts/results.py [--resolution 400x225] [--reference-samples 256]
 
 For each phenomenon of the source report's section 2.4 (Fresnel, long-tailed highlights, HDR,
-energy conservation) and its stated aim (material portability, measured materials), renders the
-preset with Blinn-Phong, Phong and the physically based model against the Cycles reference
+energy conservation), its stated aim (material portability, measured materials) and the world as
+a light (Blender's startup file, the world preset under four HDRIs), renders the scene with Blinn-Phong, Phong and the physically based model against the Cycles reference
 (direct light only, world on and occluded, light shadows off, pixel-centre sampling) through
 compare.py, and writes the
 labelled images to docs/results/ and the numbers and what they show to docs/results.md.
@@ -41,6 +41,7 @@ def run(scene: str, args, variant: str | None = None, tag: str = "", **terms) ->
 
 
 VARIANTS = ("studio", "noon", "sunset", "spot")
+WORLD_VARIANTS = ("forest", "city", "studio", "sunset")
 
 
 def _portability_scene(args, variant):
@@ -133,6 +134,8 @@ def main(argv=None) -> int:
     grid_principled = run("material_grid", args, tag="_principled", principled=True)
     lighting = {v: run("portability", args, variant=v) for v in VARIANTS}
     tuned = blinn_phong_tuned_for_studio(args)
+    startup = run("startup", args)
+    worlds = {v: run("world", args, variant=v) for v in WORLD_VARIANTS}
 
     def table(rows):
         out = ["| scene | Blinn-Phong FLIP | Phong FLIP | PBR FLIP | Blinn-Phong rel. error "
@@ -161,7 +164,38 @@ BSDFs, so Cycles renders Blender's Principled BSDF (multiscatter GGX).
         ("hdr", hdr), ("roughness_sweep", sweep), ("roughness_sweep (+ multiscatter)", sweep_ms),
         ("furnace", furnace), ("furnace (+ multiscatter)", furnace_ms),
         ("material_grid", grid), ("material_grid (Principled set)", grid_principled)]
-       + [(f"portability: {v}", r) for v, r in lighting.items()])}
+       + [(f"portability: {v}", r) for v, r in lighting.items()]
+       + [("startup (Blender's default cube)", startup)]
+       + [(f"world: {v}", r) for v, r in worlds.items()])}
+
+## The world as a light
+
+![startup]({_rel(startup['png'])})
+
+Blender's startup file as it opens: the default cube, its 1000 W point light and the grey world
+(radiance 0.05). The faces the light does not reach are lit by the world alone; the physically
+based model lights them as Cycles does (FLIP {_flip(startup, PBR):.3f}, relative error
+{_relerr(startup, PBR):.1%}). Blinn-Phong and Phong keep the source report's constant ambient term
+(*Ambient: Constant*), which is not the world's light (FLIP {_flip(startup, BP):.3f}).
+
+The `world` preset: five library materials (gold, a smooth aluminium, red plastic, rubber, skin)
+on a grey ground lit by nothing but one of Blender's bundled HDRI worlds. The metals show the world
+in their reflections, the rough surfaces its irradiance, and the ground darkens around the spheres
+(World Occlusion, screen-space: against Cycles, which occludes everything). Blinn-Phong and Phong
+take the world's irradiance as their ambient light here (*Ambient: World*) and have no reflections.
+
+| world | Blinn-Phong FLIP | Physically based FLIP | physically based rel. error |
+|---|---:|---:|---:|
+""" + "\n".join(f"| {v} | {_flip(r, BP):.3f} | {_flip(r, PBR):.3f} | {_relerr(r, PBR):.1%} |"
+                for v, r in worlds.items()) + """
+
+What is left is visible: the smooth aluminium sphere's lower half reflects the sky where Cycles,
+with direct light only, reflects the unlit ground (the specular occlusion estimate knows how much
+of the world a point sees, not from which direction); the sunset world's sun, split off as a
+light, casts no shadow yet; and the relative error counts the few brightest pixels of each frame,
+which are the sky's own.
+
+""" + "\n\n".join(f"![world, {v}]({_rel(r['png'])})" for v, r in worlds.items()) + f"""
 
 ## Fresnel effect
 
