@@ -4,10 +4,11 @@
 
 For each phenomenon of the source report's section 2.4 (Fresnel, long-tailed highlights, HDR,
 energy conservation), its stated aim (material portability, measured materials) and the world as
-a light (Blender's startup file, the world preset under four HDRIs), renders the scene with Blinn-Phong, Phong and the physically based model against the Cycles reference
-(direct light only, world on and occluded, light shadows off, pixel-centre sampling) through
-compare.py, and writes the
-labelled images to docs/results/ and the numbers and what they show to docs/results.md.
+a light (Blender's startup file, the world preset under four HDRIs), renders the scene with
+Blinn-Phong, Phong and the physically based model against the Cycles reference (direct light
+only, world on and occluded, light shadows off, pixel-centre sampling) through compare.py, and
+writes the labelled images to docs/results/ and the numbers and what they show to
+docs/results.md.
 """
 
 from __future__ import annotations
@@ -15,23 +16,22 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from types import SimpleNamespace
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
 
 import compare  # noqa: E402
 
+from addon.snapshot import MODEL_CHOICES  # noqa: E402
+
 DOCS = ROOT / "docs"
 OUT = DOCS / "results"
 
 
 def run(scene: str, args, variant: str | None = None, tag: str = "", **terms) -> dict:
-    ns = SimpleNamespace(
-        scene=scene, tag=tag, resolution=args.resolution, reference_samples=args.reference_samples,
-        variant=variant, out=OUT, normalized_blinn_phong=None, tone_mapper=None, exposure=None,
-        samples=None, multiscatter=None, principled=None, fresnel=None, ndf=None, visibility=None,
-        diffuse=None)
+    ns = compare.parse_args([scene])  # compare.py's own defaults: every option it reads
+    ns.tag, ns.resolution, ns.reference_samples = tag, args.resolution, args.reference_samples
+    ns.variant, ns.out = variant, OUT
     for key, value in terms.items():
         setattr(ns, key, value)
     result = compare.compare(ns)
@@ -119,7 +119,7 @@ def main(argv=None) -> int:
     parser.add_argument("--reference-samples", type=int, default=256)
     args = parser.parse_args(argv)
     OUT.mkdir(parents=True, exist_ok=True)
-    BP, PH, PBR = "Blinn-Phong", "Phong", "Physically based"
+    BP, PH, PBR = (choice.label for choice in MODEL_CHOICES)  # compare.py's labels
 
     print("rendering (each scene: three models and the Cycles reference)", file=sys.stderr)
     fresnel = run("fresnel", args)

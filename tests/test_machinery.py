@@ -4,6 +4,7 @@ images, the multi-layer EXR round trip, and the reference cache."""
 from __future__ import annotations
 
 import sys
+import types
 from pathlib import Path
 
 import bpy
@@ -117,3 +118,17 @@ def test_compare_command_on_a_preset(tmp_path):
     flip = {name: float(cols[0]) for name, cols in rows.items() if name in
             ("Blinn-Phong", "Phong", "Physically Based")}
     assert flip["Physically Based"] < 0.5 * flip["Blinn-Phong"]
+
+
+def test_results_script_drives_compare(tmp_path, monkeypatch):
+    """scripts/results.py hands compare.py every option it reads (a missing one once broke the
+    whole document): one scene with a term override, the startup file, end to end, tiny."""
+    import results
+
+    monkeypatch.setattr(results, "OUT", tmp_path)
+    args = types.SimpleNamespace(resolution="32x18", reference_samples=4)
+    result = results.run("long_tail", args, tag="_beckmann", ndf="beckmann")
+    assert result["png"].is_file() and result["png"].parent == tmp_path
+    assert result["stem"] == "long_tail_beckmann"
+    startup = results.run("startup", args)
+    assert 0.0 <= results._flip(startup, "Physically Based") < results._flip(startup, "Blinn-Phong")
