@@ -43,7 +43,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     if "--" in argv:  # blender -b ... --python render.py -- ARGS
         argv = argv[argv.index("--") + 1:]
     parser = argparse.ArgumentParser(prog="render.py", description=__doc__.split("\n\n")[0])
-    parser.add_argument("scene", nargs="?", help="demo, startup, a preset name, a preset .toml or a .blend file")
+    parser.add_argument("scene", nargs="?",
+                        help="demo, startup, a preset name, a preset .toml or a .blend file")
     parser.add_argument("--list", action="store_true", help="list the shipped scene presets and exit")
     parser.add_argument("--model", default="all", choices=[*MODELS, "all"])
     parser.add_argument("--resolution", default=None, metavar="WxH",
