@@ -161,7 +161,7 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     samplers[9] = "split_table" if features.uses_split_table else None
     samplers[10] = "env_chain" if features.uses_env_chain else None
     samplers[11] = "env_chain_clamped" if features.uses_env_chain else None
-    samplers[12] = "env_occlusion" if features.occlusion else None
+    samplers[12] = "env_occlusion_map" if features.occlusion else None
     for slot, name in samplers.items():
         if name is not None:
             info.sampler(slot, "FLOAT_2D", name)

@@ -275,7 +275,7 @@ class OpaquePass(TargetPass):
         occlusion = frame.outputs.get(view.output("occlusion"))
 
         def bind(shader):
-            gpu_library.bind_sampler(shader, "env_occlusion", occlusion.texture_color)
+            gpu_library.bind_sampler(shader, "env_occlusion_map", occlusion.texture_color)
 
         with target.bind():
             target.framebuffer.clear(color=view.background, depth=1.0)

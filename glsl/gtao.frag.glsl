@@ -11,7 +11,9 @@
  * length in the slice and averaged over the slices (their eq. 3). The result is the fraction of
  * the world's light a Lambertian surface still receives, for a uniform world what Cycles'
  * occluded world light gives where the occluders are on screen. No multiple-bounce term: Cycles
- * is compared with direct light only.
+ * is compared with direct light only. Beside it, the bent normal: the cosine-weighted mean of
+ * the visible directions (the same integrals with the direction inside), which says from where
+ * the unoccluded light comes (the normal itself where nothing occludes).
  *
  * occlusion: inverse_projection, projection, view (world -> view rotation), params: x = the
  * occlusion distance in world units, y = 1 perspective / 0 orthographic, zw = target size.
@@ -55,6 +57,16 @@ float slice_integral(float h, float n)
   return sign(h) * 0.25 * (-cos(2.0 * h - n) + cos(n) + 2.0 * h * sin(n));
 }
 
+/* The cosine-weighted integral of the direction itself, as (view-vector, slice-direction)
+ * components: sign(h) int_0^|h| (cos t, sin t) cos(t - n) |sin t| dt. */
+vec2 slice_direction_integral(float h, float n)
+{
+  float c = cos(h), s = sin(h), cn = cos(n), sn = sin(n);
+  vec2 g = vec2(-cn * c * c * c + sn * s * s * s, cn * s * s * s + sn * (c * c * c - 3.0 * c)) / 3.0;
+  vec2 g0 = vec2(-cn, -2.0 * sn) / 3.0;
+  return sign(h) * (g - g0);
+}
+
 /* Sectors [first, last) of the hemisphere [n - pi/2, n + pi/2] covering signed angles [a, b]. */
 uint sector_mask(float a, float b, float n)
 {
@@ -88,6 +100,7 @@ void main()
   vec4 centre = occlusion.projection * vec4(P, 1.0);
   float radius_uv = abs(edge.x / edge.w - centre.x / centre.w) * 0.5;
   float visibility = 0.0;
+  vec3 bent = vec3(0.0);
   for (int i = 0; i < SL_DIRECTIONS; i++) {
     float phi = PI * (float(i) + 0.5) / float(SL_DIRECTIONS);
     vec2 dir = vec2(cos(phi), sin(phi));
@@ -98,7 +111,7 @@ void main()
     if (proj_len < 1e-6) {
       continue; /* the normal is perpendicular to the slice: it weighs nothing */
     }
-    vec3 ortho = slice_dir - V * dot(slice_dir, V);
+    vec3 ortho = normalize(slice_dir - V * dot(slice_dir, V));
     float cos_n = clamp(dot(n_proj, V) / proj_len, -1.0, 1.0);
     float n = (dot(ortho, n_proj) < 0.0 ? -1.0 : 1.0) * acos_accurate(cos_n);
     uint occluded = 0u;
@@ -142,15 +155,24 @@ void main()
     /* integrate the runs of visible sectors */
     uint visible = ~occluded;
     float arc = 0.0;
+    vec2 mean = vec2(0.0);
     while (visible != 0u) {
       int first = findLSB(visible);
       uint rest = ~visible & ~((1u << uint(first)) - 1u);
       int last = rest == 0u ? 32 : findLSB(rest);
-      arc += slice_integral(n + PI * (float(last) / float(SL_SECTORS) - 0.5), n) -
-             slice_integral(n + PI * (float(first) / float(SL_SECTORS) - 0.5), n);
+      float a = n + PI * (float(first) / float(SL_SECTORS) - 0.5);
+      float b = n + PI * (float(last) / float(SL_SECTORS) - 0.5);
+      arc += slice_integral(b, n) - slice_integral(a, n);
+      mean += slice_direction_integral(b, n) - slice_direction_integral(a, n);
       visible = last >= 32 ? 0u : visible & ~((1u << uint(last)) - 1u);
     }
     visibility += proj_len * arc;
+    bent += proj_len * (mean.x * V + mean.y * ortho);
   }
-  frag_color = vec4(vec3(clamp(visibility / float(SL_DIRECTIONS), 0.0, 1.0)), 1.0);
+  /* the bent normal in world space (view is a rotation: its transpose inverts it); the normal
+   * where nothing is visible */
+  float len2 = dot(bent, bent);
+  vec3 bent_world = len2 > 1e-12 ? transpose(mat3(occlusion.view)) * (bent * inversesqrt(len2)) :
+                                   texelFetch(normal_map, texel, 0).xyz;
+  frag_color = vec4(bent_world, clamp(visibility / float(SL_DIRECTIONS), 0.0, 1.0));
 }

@@ -27,7 +27,7 @@ vec3 shade_ambient(Surface s, vec3 x)
 {
 #ifdef SL_AMBIENT_WORLD
   /* Ambient: World -- the diffuse light the world gives: irradiance / pi (glsl/ibl.glsl) */
-  return s.ambient_color * env_irradiance(s.n) * (env_occlusion_diffuse() * INV_PI);
+  return s.ambient_color * env_irradiance(env_bent_normal(s.n)) * (env_occlusion_diffuse() * INV_PI);
 #else
   return s.ambient_color * x;
 #endif

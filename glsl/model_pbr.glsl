@@ -116,10 +116,10 @@ vec3 shade_environment(Surface s, vec2 weights)
   vec2 EB = env_split_sum(s.NoV, s.roughness);
   vec3 r = reflect(-s.v, s.n);
   float ao = env_occlusion_diffuse();
-  float specular_ao = env_occlusion_specular(s.NoV, ao, s.roughness);
+  float specular_ao = env_occlusion_specular(s.n, r, s.alpha);
   vec3 radiance = env_prefiltered(s.roughness > MIN_PERCEPTUAL_ROUGHNESS ? env_dominant_direction(s.n, r, s.alpha) : r,
                                   s.roughness) * specular_ao;
-  vec3 irradiance = env_irradiance(s.n) * ao;
+  vec3 irradiance = env_irradiance(env_bent_normal(s.n)) * ao;
 #  ifdef SL_PRINCIPLED
   return principled_environment(s, EB, radiance, irradiance, weights);
 #  else

@@ -102,7 +102,7 @@ vec3 principled_environment(Surface s, vec2 EB, vec3 radiance, vec3 irradiance, 
 {
   PrincipledLayers p = principled_layers(s);
 #    ifdef SL_ENV_SAMPLES
-  vec3 specular = env_sampled_specular(s) * env_occlusion_specular(s.NoV, env_occlusion_diffuse(), s.roughness);
+  vec3 specular = env_sampled_specular(s) * env_occlusion_specular(s.n, reflect(-s.v, s.n), s.alpha);
 #    else
   vec3 F0m = min(s.base_color, vec3(1.0));
   vec3 metal = p.metal_M * (F0m * (EB.x - EB.y) + EB.y);
