@@ -189,11 +189,12 @@ take the world's irradiance as their ambient light here (*Ambient: World*) and h
 """ + "\n".join(f"| {v} | {_flip(r, BP):.3f} | {_flip(r, PBR):.3f} | {_relerr(r, PBR):.1%} |"
                 for v, r in worlds.items()) + """
 
-What is left is visible: the smooth aluminium sphere's lower half reflects the sky where Cycles,
-with direct light only, reflects the unlit ground (the specular occlusion estimate knows how much
-of the world a point sees, not from which direction); the sunset world's sun, split off as a
-light, casts no shadow yet; and the relative error counts the few brightest pixels of each frame,
-which are the sky's own.
+Below their equators the metal spheres reflect the ground, which Cycles, with direct light only,
+leaves black: the specular occlusion (a cone of visible directions around the bent normal against
+the reflection lobe) takes the world away there too. What is left: the screen-space occlusion
+cannot see the ground hidden under each sphere, so their lower halves stay a little bright; the
+sunset world's sun, split off as a light, casts no shadow yet; and the relative error counts the
+few brightest pixels of each frame, which are the sky's own (Blinn-Phong and Phong clamp them).
 
 """ + "\n\n".join(f"![world, {v}]({_rel(r['png'])})" for v, r in worlds.items()) + f"""
 
