@@ -35,7 +35,7 @@ MODEL_FILES = {
     "PHONG": "model_phong.glsl",
     "PBR": "model_pbr.glsl",
 }
-FRAGMENT_LIBRARY = ("common.glsl", "facing.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "textures.glsl",
+FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "textures.glsl",
                     "environment.glsl", "ibl.glsl")
 PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "principled.glsl")
 #: How the world lights a program: "" not at all (a black world), "UNIFORM" a constant radiance,
@@ -221,6 +221,7 @@ def program_source(features: Features) -> ProgramSource:
     if features.model == "PBR":
         fragment += [read_glsl(name) for name in PBR_LIBRARY]
     fragment.append(read_glsl(MODEL_FILES[features.model]))
+    fragment.append(read_glsl("facing.glsl"))  # reads the object block: mesh programs only
     fragment.append(read_glsl("mesh.frag.glsl"))
     return ProgramSource(
         typedefs=read_glsl("uniforms.glsl") + "\n" + read_glsl("chain_data.glsl"),
