@@ -316,6 +316,21 @@ def _sphere_on_ground(world: str):
     return scene
 
 
+def _occlusion_errors(scene, tmp_path, mask=None) -> dict[bool, float]:
+    """Cycles (everything occluding) against ours without and with World Occlusion: the mean
+    absolute error over ``mask`` (all pixels when None) / Cycles' mean there."""
+    ref = _cycles(scene, tmp_path / "cycles.exr", samples=512)[..., :3].astype(np.float64)
+    scene.render.engine = "SHADING_LAB"
+    if mask is None:
+        mask = np.ones(ref.shape[:2], bool)
+    errors = {}
+    for occlusion in (False, True):
+        scene.shading_lab.world_occlusion = occlusion
+        ours = scenes.render(scene, tmp_path / f"ours_{occlusion}.exr")[..., :3].astype(np.float64)
+        errors[occlusion] = float(np.abs(ours - ref)[mask].mean() / ref[mask].mean())
+    return errors
+
+
 #: world -> (error bound with occlusion, bound on its ratio to the error without): about 2x and
 #: 1.3x what was measured (uniform 1.2 % with, 4.9 % without; forest 2.2 %, 4.4 %: the bent
 #: normal's irradiance; 3.1 % with the normal's)
@@ -328,14 +343,7 @@ def test_world_light_occluded_by_a_sphere_on_the_ground_against_cycles(world, tm
     underside sees the ground): with World Occlusion the screen-space pass gets closer to it than
     without. What the camera cannot see occludes nothing on screen (the ground under the sphere),
     and the sun split off the forest world casts no shadow yet: the remaining error."""
-    scene = _sphere_on_ground(world)
-    ref = _cycles(scene, tmp_path / "cycles.exr", samples=512)[..., :3].astype(np.float64)
-    scene.render.engine = "SHADING_LAB"
-    errors = {}
-    for occlusion in (False, True):
-        scene.shading_lab.world_occlusion = occlusion
-        ours = scenes.render(scene, tmp_path / f"ours_{occlusion}.exr")[..., :3].astype(np.float64)
-        errors[occlusion] = float(np.abs(ours - ref).mean() / ref.mean())
+    errors = _occlusion_errors(_sphere_on_ground(world), tmp_path)
     print(f"sphere on the ground under {world}: mean absolute error / mean, without occlusion "
           f"{errors[False]:.2%}, with {errors[True]:.2%}")
     bound, ratio = OCCLUDED[world]
@@ -360,17 +368,12 @@ def test_specular_occlusion_of_a_metal_sphere_on_the_ground_against_cycles(world
     ground = next(o for o in scene.objects if o.type == "MESH" and o is not sphere)
     sphere.data.materials.clear()
     sphere.data.materials.append(_glossy("metal", roughness))
-    ref = _cycles(scene, tmp_path / "cycles.exr", samples=512)[..., :3].astype(np.float64)
     scene.render.engine = "SHADING_LAB"
     ground.hide_render = True  # the sphere's pixels, from its coverage alone
     scene.render.film_transparent = True
     mask = scenes.render(scene, tmp_path / "mask.exr")[..., 3] > 0.999
     ground.hide_render, scene.render.film_transparent = False, False
-    errors = {}
-    for occlusion in (False, True):
-        scene.shading_lab.world_occlusion = occlusion
-        ours = scenes.render(scene, tmp_path / f"ours_{occlusion}.exr")[..., :3].astype(np.float64)
-        errors[occlusion] = float(np.abs(ours - ref)[mask].mean() / ref[mask].mean())
+    errors = _occlusion_errors(scene, tmp_path, mask)
     print(f"metal sphere r {roughness} on the ground under {world}: error over the sphere without "
           f"occlusion {errors[False]:.2%}, with {errors[True]:.2%}")
     bound, ratio = SPECULAR_OCCLUDED[world, roughness]
@@ -387,14 +390,7 @@ def test_neighbours_occlude_each_other_as_in_cycles(tmp_path):
             for name in ("visible_shadow", "visible_diffuse", "visible_glossy", "visible_transmission"):
                 setattr(obj, name, True)
     _world(scene, color=(0.5, 0.5, 0.5))
-    ref = _cycles(scene, tmp_path / "cycles.exr", samples=512)[..., :3].astype(np.float64)
-    scene.render.engine = "SHADING_LAB"
-    inside = np.any(_sphere_masks(), axis=0)
-    errors = {}
-    for occlusion in (False, True):
-        scene.shading_lab.world_occlusion = occlusion
-        ours = scenes.render(scene, tmp_path / f"ours_{occlusion}.exr")[..., :3].astype(np.float64)
-        errors[occlusion] = float(np.abs(ours - ref)[inside].mean() / ref[inside].mean())
+    errors = _occlusion_errors(scene, tmp_path, np.any(_sphere_masks(), axis=0))
     print(f"five spheres in a row, uniform world: error without occlusion {errors[False]:.2%}, "
           f"with {errors[True]:.2%}")
     assert errors[True] < 0.018 and errors[True] < 0.4 * errors[False], errors
@@ -419,13 +415,7 @@ def test_world_preset_occlusion_against_cycles(tmp_path):
                 node.inputs["Metallic"].default_value = 0.0
                 node.inputs["Roughness"].default_value = 1.0
                 node.inputs["Specular IOR Level"].default_value = 0.0  # no specular: Lambert
-    ref = _cycles(scene, tmp_path / "cycles.exr", samples=512)[..., :3].astype(np.float64)
-    scene.render.engine = "SHADING_LAB"
-    errors = {}
-    for occlusion in (False, True):
-        scene.shading_lab.world_occlusion = occlusion
-        ours = scenes.render(scene, tmp_path / f"ours_{occlusion}.exr")[..., :3].astype(np.float64)
-        errors[occlusion] = float(np.abs(ours - ref).mean() / ref.mean())
+    errors = _occlusion_errors(scene, tmp_path)
     print(f"world preset, white, uniform world: error without occlusion {errors[False]:.2%}, "
           f"with {errors[True]:.2%}")
     assert errors[True] < 0.04 and errors[True] < 0.35 * errors[False], errors
