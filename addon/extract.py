@@ -375,6 +375,12 @@ def make_light(light: bpy.types.Light, matrix) -> S.Light:
             spot_cos_half=math.cos(0.5 * light.spot_size),
             spot_smooth=S.spot_smooth(light.spot_size, light.spot_blend),
         )
+    if kind == "SUN":
+        extra["angle"] = max(float(light.angle), 0.0)
+    elif kind == "AREA":
+        extra["radius"] = math.sqrt(_area(light) / math.pi)
+    else:
+        extra["radius"] = max(float(light.shadow_soft_size), 0.0)
     return S.Light(
         kind=kind,
         position=position,
@@ -382,6 +388,7 @@ def make_light(light: bpy.types.Light, matrix) -> S.Light:
         intensity=tuple(float(x) for x in intensity),
         diffuse_factor=float(light.diffuse_factor),
         specular_factor=float(light.specular_factor),
+        shadow=bool(getattr(light, "use_shadow", True)),
         **extra,
     )
 
@@ -540,7 +547,7 @@ def _world_suns(terms, threshold: float, angle: float) -> tuple[S.Light, ...]:
                 _SUNS[key] = suns
         for direction, irradiance, _omega in suns:
             lights.append(S.Light("SUN", (0.0, 0.0, 0.0), tuple(-c for c in direction), irradiance,
-                                  angle=angle, world=True))
+                                  angle=angle, world=True, shadow=True))
     return tuple(lights)
 
 
@@ -614,6 +621,8 @@ def scene_settings(scene) -> S.Settings:
                       ambient_world=props.ambient_source == "WORLD",
                       world_occlusion=bool(props.world_occlusion),
                       occlusion_distance=float(props.occlusion_distance),
+                      shadows=bool(props.shadows), shadow_map_size=int(props.shadow_map_size),
+                      soft_shadows=bool(props.soft_shadows),
                       environment_samples=(int(props.world_samples) if props.world_specular == "SAMPLED"
                                            else 0))
 
@@ -731,7 +740,8 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
                     continue
                 snap.fresh.add(key)
             snap.geometries[key] = geometry
-        snap.items.append(S.DrawItem(key, _matrix(inst.matrix_world), slots or [""]))
+        snap.items.append(S.DrawItem(key, _matrix(inst.matrix_world), slots or [""],
+                                     casts_shadow=bool(getattr(obj, "visible_shadow", True))))
     snap.warnings[:] = dict.fromkeys(snap.warnings)  # each once, however many objects share it
     return snap
 

@@ -165,6 +165,9 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     for slot, name in samplers.items():
         if name is not None:
             info.sampler(slot, "FLOAT_2D", name)
+    if features.shadow_layers:
+        info.sampler(13, "FLOAT_2D_ARRAY", "shadow_maps")
+        info.uniform_buf(len(_BLOCKS) + 2, "ShadowBlock", "shadow")
     for binding, (struct, name) in enumerate(_BLOCKS):
         info.uniform_buf(binding, struct, name)
     if features.environment:
@@ -199,6 +202,25 @@ def prepass_program(back_faces: bool = False) -> gpu.types.GPUShader:
         info.vertex_out(iface)
 
     return LIBRARY.program(("prepass", back_faces), "depth and normal", src, declare)
+
+
+def shadow_program() -> gpu.types.GPUShader:
+    """A shadow map's layer: the casters' distances from the light."""
+    src = programs.shadow_source()
+
+    def declare(info):
+        info.typedef_source(src.typedefs)
+        info.uniform_buf(3, "ObjectBlock", "objects")
+        info.push_constant("MAT4", "shadow_view_projection")
+        info.push_constant("VEC4", "light_origin")
+        info.push_constant("INT", "object_index")
+        info.vertex_in(0, "VEC3", "pos")
+        iface = gpu.types.GPUStageInterfaceInfo("shading_lab_shadow_iface")
+        iface.smooth("VEC3", "world_position")
+        info.vertex_out(iface)
+        info.depth_write("ANY")
+
+    return LIBRARY.program(("shadow",), "shadow map", src, declare)
 
 
 def occlusion_depths_program() -> gpu.types.GPUShader:

@@ -10,7 +10,10 @@ at each sync) so that tests and the viewport can see what an edit cost:
   its entry by block and index; one buffer, not one per item per frame);
 - ``lights``, one block; ``materials``, one block per material; ``frame`` (camera, counts), one
   block, packed when a frame runs (the viewport's camera moves between syncs);
-- ``textures``: one per image the materials sample, from the pixels the snapshot carries.
+- ``textures``: one per image the materials sample, from the pixels the snapshot carries;
+- ``shadows``: the shadow maps' layers (``shadows.plan``, fitted to the geometry's bounds), one
+  block; the maps themselves are drawn by ``passes.ShadowPass`` when ``caster_key`` or the plan
+  changes.
 
 It also groups the draws per shading program (``draw_lists``) and draws a group
 (``draw_group``) for the passes that draw geometry.
@@ -25,7 +28,7 @@ from dataclasses import dataclass, replace
 import gpu
 import numpy as np
 
-from . import gpu_library, programs
+from . import gpu_library, programs, shadows
 from .snapshot import MAX_ENVIRONMENT_IMAGES, ImageData, MeshGeometry, Snapshot, World
 
 #: GPU texture format per ``ImageData.storage``: byte images keep their bytes (an sRGB one is
@@ -127,6 +130,12 @@ class SceneResources:
         self._draw_lists: dict[tuple[str, bool], DrawLists] = {}
         # programs and tables drawn with, held for this scene's lifetime (see gpu_library)
         self._programs: dict[programs.Features, gpu.types.GPUShader] = {}
+        self._bounds: dict[str, np.ndarray] = {}  # object-space (min, max) per geometry
+        self._geometry_version: Counter = Counter()  # uploads per geometry key
+        self._shadows = _Block()
+        self.shadow_plan: shadows.ShadowPlan | None = None
+        self.caster_key: bytes = b""  # what the shadow maps saw: casters' geometry and matrices
+        self.shadow_maps = None  # the 2D-array depth texture (passes.ShadowPass)
 
     # --- keeping the GPU copy up to date ------------------------------------------------------
 
@@ -139,9 +148,14 @@ class SceneResources:
         for key in list(self._batches):
             if key not in snapshot.geometries or (keep is not None and not keep(key)):
                 del self._batches[key]
+                self._bounds.pop(key, None)
         for key, geometry in snapshot.geometries.items():
             if key not in self._batches:
                 self._batches[key] = upload_geometry(geometry)
+                positions = np.asarray(geometry.positions, np.float32)
+                self._bounds[key] = (np.stack([positions.min(0), positions.max(0)]) if len(positions)
+                                     else np.zeros((2, 3), np.float32))
+                self._geometry_version[key] += 1
                 self.uploads["geometry"] += 1
         for key in set(self._materials) - set(snapshot.materials):
             del self._materials[key]
@@ -165,6 +179,7 @@ class SceneResources:
             self.uploads["world"] += self._world_lighting.put(lighting)
         else:
             self._world_lighting = _Block()
+        self._sync_shadows(snapshot)
         for key in set(self._textures) - set(snapshot.images):
             del self._textures[key]
         for key, image in snapshot.images.items():
@@ -172,6 +187,26 @@ class SceneResources:
             if held is None or held[0] is not image:
                 self._textures[key] = (image, image_texture(image))
                 self.uploads["textures"] += 1
+
+    def _sync_shadows(self, snapshot: Snapshot) -> None:
+        plan = self.shadow_plan = shadows.plan(snapshot, self._bounds)
+        if plan.dropped:
+            snapshot.warnings.append(f"{plan.dropped} shadowed light(s) cast no shadow: the frame holds "
+                                     f"{shadows.MAX_SHADOW_LAYERS} shadow maps (a point or area light takes six)")
+        if not plan.layers:
+            self._shadows = _Block()
+            self.caster_key = b""
+            return
+        self.uploads["shadows"] += self._shadows.put(programs.pack_shadows(plan, programs.light_slots(plan.layers)))
+        casters = [(item.geometry, self._geometry_version[item.geometry], item.matrix.tobytes())
+                   for item in snapshot.items if item.casts_shadow]
+        self.caster_key = repr(casters).encode()
+
+    def shadow_casters(self) -> list[Draw]:
+        """The opaque draws of the items that cast shadows (partly transparent surfaces cast none)."""
+        items = self.snapshot.items
+        return [draw for _features, draws in self.draw_lists(None, False).opaque for draw in draws
+                if items[draw.order].casts_shadow]
 
     def put_frame(self, view_projection: np.ndarray | None) -> None:
         """The frame block for a view (the camera's, unless the viewport passes its own)."""
@@ -249,6 +284,9 @@ class SceneResources:
                     gpu_library.bind_sampler(shader, "env_chain", self.environment.chain)
                     gpu_library.bind_sampler(shader, "env_chain_clamped", self.environment.clamped_chain)
                     shader.uniform_block("chain", self.environment.chain_block)
+        if features.shadow_layers:
+            shader.uniform_block("shadow", self._shadows.ubo)
+            gpu_library.bind_sampler(shader, "shadow_maps", self.shadow_maps)
         if bind is not None:
             bind(shader)
         materials = self.snapshot.materials
@@ -268,10 +306,12 @@ class SceneResources:
             draw.batch.draw(shader)
         return True
 
-    def draw_positions(self, draws: list[Draw], shader) -> None:
-        """Draw ``draws`` with a program that needs only positions and normals (the prepass)."""
+    def draw_positions(self, draws: list[Draw], shader, frame_block: bool = True) -> None:
+        """Draw ``draws`` with a program that needs only positions and normals (the prepass), or
+        (``frame_block`` False) positions under its own projection (a shadow map)."""
         shader.bind()
-        shader.uniform_block("frame", self._frame.ubo)
+        if frame_block:
+            shader.uniform_block("frame", self._frame.ubo)
         block = -1
         for draw in draws:
             if draw.block != block:
@@ -292,6 +332,10 @@ class SceneResources:
         self._frame = _Block()
         self._world_camera = _Block()
         self._world_lighting = _Block()
+        self._shadows = _Block()
+        self._bounds.clear()
+        self.shadow_plan = None
+        self.shadow_maps = None
         self.environment = None
         self.snapshot = None
 

@@ -2,6 +2,7 @@
 
 A frame is a list of steps, each a pass and its input, run in order (``Renderer.run``):
 
+    per frame: EnvironmentPass (the world's light), ShadowPass (the lights' shadow maps)
     per view:  OcclusionPass ─► OpaquePass ─► BackgroundPass ─► TransparencyPass ─► ResolvePass
                ─► DisplayPass
     then:      ComparePass (A|B: two views composited)
@@ -14,8 +15,9 @@ Lifetimes:
   viewport redraws into the same ones), freed with the renderer.
 
 A pass with nothing to do does nothing: no transparency layers without transparent surfaces, no
-resolve without supersampling, no display pass under Blender's view transform. Passes to come
-(shadow maps, environment tables) slot in ahead of the views, reading the same ``Frame``.
+resolve without supersampling, no display pass under Blender's view transform, no shadow maps
+without a light that casts. The per-frame passes run ahead of the views, reading the same
+``Frame``.
 """
 
 from __future__ import annotations
@@ -184,6 +186,75 @@ class TargetPass(Pass):
         if self.target is not None:
             self.target.free()
             self.target = None
+
+
+class ShadowPass(Pass):
+    """The frame's shadow maps (``gpu_scene.SceneResources.shadow_plan``): one layer of a 2D-array
+    depth texture per map, each holding the casters' distances from its light
+    (glsl/shadow.frag.glsl). Drawn again only when the plan (lights, map size, the scene's
+    bounds) or a caster (its matrix or geometry) changed: a camera orbit or a material edit
+    re-renders nothing. Sets ``SceneResources.shadow_maps``; nothing when no light casts."""
+
+    draws_geometry = True
+
+    def __init__(self):
+        self.texture = None
+        self.framebuffers: list = []
+        self.key = None
+        self._shape = None
+        self.renders = 0  # layers drawn since the pass was made (tests count them)
+
+    def run(self, frame: Frame, _spec=None) -> bool:
+        scene = frame.scene
+        plan = scene.shadow_plan
+        if plan is None or plan.layers == 0:
+            self.free()
+            scene.shadow_maps = None
+            return True
+        key = (plan.key(), scene.caster_key)
+        shape = (plan.size, plan.layers)
+        if self.texture is None or self._shape != shape:
+            self.free()
+            self.texture = gpu.types.GPUTexture((plan.size, plan.size), layers=plan.layers,
+                                                format="DEPTH_COMPONENT32F")
+            self.framebuffers = [gpu.types.GPUFrameBuffer(depth_slot={"texture": self.texture, "layer": i})
+                                 for i in range(plan.layers)]
+            self._shape = shape
+        scene.shadow_maps = self.texture
+        if key == self.key:
+            return True
+        self.key = None  # until every layer is drawn
+        shader = gpu_library.shadow_program()
+        casters = scene.shadow_casters()
+        for layer, framebuffer in enumerate(self.framebuffers):
+            if frame.should_stop is not None and frame.should_stop():
+                return False
+            origin = plan.origins[layer]
+            perspective = origin[3] < 1.5
+            light_origin = (*(float(x) for x in origin[:3]), 1.0 / float(plan.info[layer][0]) if perspective else 0.0)
+            with framebuffer.bind():
+                framebuffer.clear(depth=1.0)
+                gpu.state.depth_test_set("LESS")
+                gpu.state.depth_mask_set(True)
+                gpu.state.face_culling_set("NONE")
+                gpu.state.blend_set("NONE")
+                try:
+                    shader.bind()
+                    shader.uniform_float("shadow_view_projection", plan.matrices[layer].T.ravel().tolist())
+                    shader.uniform_float("light_origin", light_origin)
+                    scene.draw_positions(casters, shader, frame_block=False)
+                finally:
+                    gpu.state.depth_test_set("NONE")
+                    gpu.state.depth_mask_set(False)
+            self.renders += 1
+        self.key = key
+        return True
+
+    def free(self) -> None:
+        self.texture = None
+        self.framebuffers = []
+        self.key = None
+        self._shape = None
 
 
 class OcclusionPass(Pass):

@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from . import shadows
 from .snapshot import (
     LIGHT_KINDS,
     MAX_ENVIRONMENT_IMAGES,
@@ -83,6 +84,9 @@ class Features:
     env_samples: int = 0  # > 0: specular sampled per pixel with this many samples, not split sum
     ambient_world: bool = False  # the empirical models' ambient term is the world's irradiance
     occlusion: bool = False  # the world's light occluded by screen-space ambient occlusion
+    shadow_layers: int = 0  # shadow-map layers the uniform block holds (0: no shadows)
+    shadow_size: int = 0  # their texels per side
+    soft_shadows: bool = False  # penumbrae from the lights' sizes
 
     def has_map(self, name: str) -> bool:
         return name in self.maps or name + "_CLOSEST" in self.maps
@@ -101,6 +105,9 @@ class Features:
             object.__setattr__(self, "environment", "")
         if self.peel or not self.environment:  # a transparent surface lies in front of what the
             object.__setattr__(self, "occlusion", False)  # occlusion pass saw
+        if not self.shadow_layers:
+            object.__setattr__(self, "shadow_size", 0)
+            object.__setattr__(self, "soft_shadows", False)
         if self.model == "PBR" and self.terms.principled:
             canonical = Terms(principled=True)  # one fixed set: exact Fresnel, GGX, Smith, layered
         elif self.model == "PBR":
@@ -121,6 +128,7 @@ class Features:
         if material is not None and with_maps:
             maps = frozenset(name[:-4].upper() + ("_CLOSEST" if getattr(material, name)[1] else "")
                              for name in MaterialParams.MAPS if getattr(material, name))
+        _first, layers, _dropped = shadows.assign(snapshot)
         if material is not None:
             model = material.model or model
             terms = terms.override(fresnel=material.fresnel, ndf=material.ndf,
@@ -139,6 +147,9 @@ class Features:
             env_samples=snapshot.settings.environment_samples,
             ambient_world=snapshot.settings.ambient_world,
             occlusion=snapshot.settings.world_occlusion,
+            shadow_layers=light_slots(layers) if layers else 0,
+            shadow_size=int(snapshot.settings.shadow_map_size),
+            soft_shadows=snapshot.settings.soft_shadows,
         )
 
     @property
@@ -184,6 +195,11 @@ class Features:
             out.append(("SL_AMBIENT_WORLD", "1"))
         if self.occlusion:
             out.append(("SL_ENV_OCCLUSION", "1"))
+        if self.shadow_layers:
+            out += [("SL_SHADOWS", "1"), ("SL_SHADOW_LAYERS", str(self.shadow_layers)),
+                    ("SL_SHADOW_SIZE", str(self.shadow_size))]
+            if self.soft_shadows:
+                out.append(("SL_SOFT_SHADOWS", "1"))
         if self.environment:
             out.append(("SL_ENV_" + self.environment, "1"))
             if self.environment == "MAP" and self.env_diffuse == "SH9":
@@ -222,6 +238,7 @@ def program_source(features: Features) -> ProgramSource:
         fragment += [read_glsl(name) for name in PBR_LIBRARY]
     fragment.append(read_glsl(MODEL_FILES[features.model]))
     fragment.append(read_glsl("facing.glsl"))  # reads the object block: mesh programs only
+    fragment.append(read_glsl("shadows.glsl"))  # reads the shadow block (SL_SHADOWS)
     fragment.append(read_glsl("mesh.frag.glsl"))
     return ProgramSource(
         typedefs=read_glsl("uniforms.glsl") + "\n" + read_glsl("chain_data.glsl"),
@@ -281,7 +298,7 @@ def clear_source_caches() -> None:
     for cached in (read_glsl, program_source, post_source, compare_source, occupancy_source, under_source,
                    background_source, env_bake_source, env_downsample_source, env_prefilter_source,
                    env_irradiance_source, prepass_source, gtao_source,
-                   occlusion_depths_source):
+                   occlusion_depths_source, shadow_source):
         cached.cache_clear()
 
 
@@ -420,14 +437,36 @@ def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None) ->
 
 def pack_lights(snapshot: Snapshot, max_lights: int) -> bytes:
     data = np.zeros((max_lights, 16), np.float32)
+    first_layer, _used, _dropped = shadows.assign(snapshot)
     for i, light in enumerate(snapshot.lights[:max_lights]):
         data[i] = [
             *light.position, LIGHT_KIND_IDS[light.kind],
             *light.direction, light.spot_cos_half,
             *light.intensity, light.spot_smooth,
-            light.diffuse_factor, light.specular_factor, 1.0 if light.world else 0.0, 0.0,
+            light.diffuse_factor, light.specular_factor, 1.0 if light.world else 0.0, first_layer[i],
         ]
     return data.tobytes()
+
+
+def pack_shadows(plan: shadows.ShadowPlan, slots: int) -> bytes:
+    """The ShadowBlock (glsl/uniforms.glsl) of ``plan``'s layers, ``slots`` entries each."""
+    matrices = np.tile(np.eye(4, dtype=np.float32), (slots, 1, 1))
+    matrices[:plan.layers] = plan.matrices
+    inverse = np.linalg.inv(matrices.astype(np.float64)).astype(np.float32)
+    info = np.zeros((slots, 4), np.float32)
+    info[:plan.layers] = plan.info
+    origins = np.zeros((slots, 4), np.float32)
+    origins[:plan.layers] = plan.origins
+    return np.concatenate([matrices.transpose(0, 2, 1).ravel(), inverse.transpose(0, 2, 1).ravel(),
+                           info.ravel(), origins.ravel()]).tobytes()
+
+
+@lru_cache(maxsize=1)
+def shadow_source() -> ProgramSource:
+    """A shadow map's layer: the casters' distances from the light (glsl/shadow.frag.glsl)."""
+    return ProgramSource(typedefs=read_glsl("uniforms.glsl"), vertex=read_glsl("shadow.vert.glsl"),
+                         fragment=read_glsl("shadow.frag.glsl"),
+                         defines=(("SL_MAX_LIGHTS", "1"), ("SL_OBJECT_BLOCK", str(OBJECT_BLOCK))))
 
 
 def pack_material(m: MaterialParams) -> bytes:

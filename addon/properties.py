@@ -153,6 +153,22 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
         name="Occlusion Distance", default=2.0, min=0.001, soft_max=100.0, subtype="DISTANCE", update=_redraw,
         description="How far geometry occludes the world's light (on screen only: what the camera does not "
                     "see occludes nothing)")
+    shadows: BoolProperty(
+        name="Shadows", default=True, update=_redraw,
+        description="Lights whose Cast Shadow is on cast shadows (shadow maps); objects whose shadow ray "
+                    "visibility is off cast none")
+    shadow_map_size: EnumProperty(
+        name="Shadow Map Size", default="1024", update=_redraw, items=(
+            ("512", "512", "512 x 512 texels per map (a point or area light has six)"),
+            ("1024", "1024", "1024 x 1024 texels per map (a point or area light has six)"),
+            ("2048", "2048", "2048 x 2048 texels per map (a point or area light has six)"),
+            ("4096", "4096", "4096 x 4096 texels per map: sharp, 64 MiB per map"),
+        ),
+        description="Resolution of each shadow map: larger is sharper and takes more memory and time")
+    soft_shadows: BoolProperty(
+        name="Soft Shadows", default=True, update=_redraw,
+        description="Penumbrae from the lights' sizes (Radius, Angle, area Size); off: hard shadows, "
+                    "filtered over one texel")
     world_samples: IntProperty(
         name="World Samples", default=64, min=1, max=1024, update=_redraw,
         description="Samples of the world per pixel for sampled world specular")

@@ -20,7 +20,7 @@ import numpy as np
 from . import programs
 from .gpu_environment import EnvironmentPass
 from .gpu_scene import SceneResources
-from .passes import VIEW_PASSES, ComparePass, Comparison, Frame, Pass, View, full_screen_batch
+from .passes import VIEW_PASSES, ComparePass, Comparison, Frame, Pass, ShadowPass, View, full_screen_batch
 from .snapshot import Snapshot
 
 
@@ -84,7 +84,8 @@ class Renderer:
 
     def steps(self, views: list[View], comparison: Comparison | None = None) -> list[tuple[Pass, object]]:
         """The frame: each view's passes in order, then the comparison if any."""
-        steps = [(self._pass(EnvironmentPass, "world"), None)]  # once per frame, for every view
+        steps = [(self._pass(EnvironmentPass, "world"), None),  # once per frame, for every view
+                 (self._pass(ShadowPass, "shadows"), None)]
         steps += [(self._pass(kind, view.name), view) for view in views for kind in VIEW_PASSES]
         if comparison is not None:
             steps.append((self._pass(ComparePass, "compare"), comparison))

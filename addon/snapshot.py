@@ -252,6 +252,7 @@ class DrawItem:
     geometry: str
     matrix: np.ndarray  # (4, 4) float32, object -> world
     materials: list[str]  # material key per slot
+    casts_shadow: bool = True  # the object's shadow ray visibility
 
     @property
     def normal_matrix(self) -> np.ndarray:
@@ -288,6 +289,9 @@ class Light:
     specular_factor: float = 1.0
     angle: float = 0.0  # a sun's angular diameter (radians)
     world: bool = False  # split off the world's brightest texels: it lights what the world lights
+    shadow: bool = False  # casts shadows (Blender's Cast Shadow, and the scene's Shadows setting)
+    radius: float = 0.0  # the emitter's size for soft shadows: a sphere's radius (point, spot),
+    #                     an area light's equal-area disc radius (m); a sun uses ``angle``
 
 
 @dataclass
@@ -332,6 +336,9 @@ class Settings:
     ambient_world: bool = False  # Blinn-Phong/Phong ambient: the world's irradiance, not the constant
     world_occlusion: bool = True  # screen-space ambient occlusion of the world's light
     occlusion_distance: float = 2.0  # how far (m) geometry occludes the world's light
+    shadows: bool = True  # lights whose Cast Shadow is on cast shadows (shadow maps)
+    shadow_map_size: int = 1024  # texels per side of each shadow map (a point light has six)
+    soft_shadows: bool = True  # penumbrae from the lights' sizes (else hard, filtered over a texel)
 
 
 @dataclass

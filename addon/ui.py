@@ -91,6 +91,12 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
         col.prop(props, "world_specular", text="Specular")
         if props.world_specular == "SAMPLED":
             col.prop(props, "world_samples", text="Samples")
+        col = layout.column(heading="Shadows")
+        col.prop(props, "shadows", text="")
+        sub = col.column()
+        sub.active = props.shadows
+        sub.prop(props, "shadow_map_size", text="Map Size")
+        sub.prop(props, "soft_shadows")
         layout.prop(props, "samples")
         layout.prop(props, "transparency_layers")
         layout.separator()
@@ -125,6 +131,16 @@ class SHADINGLAB_PT_light(ShadingLabPanel, bpy.types.Panel):
         if light.type == "SPOT":
             layout.prop(light, "spot_size")
             layout.prop(light, "spot_blend")
+        if light.type == "SUN":
+            layout.prop(light, "angle")
+        elif light.type == "AREA":
+            layout.prop(light, "shape")
+            layout.prop(light, "size")
+            if light.shape in ("RECTANGLE", "ELLIPSE"):
+                layout.prop(light, "size_y")
+        else:
+            layout.prop(light, "shadow_soft_size", text="Radius")
+        layout.prop(light, "use_shadow", text="Cast Shadow")
         layout.prop(light, "diffuse_factor", text="Diffuse")
         layout.prop(light, "specular_factor", text="Specular")
 

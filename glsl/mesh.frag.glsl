@@ -27,6 +27,11 @@ void main()
   /* textures and screen derivatives first: they need every fragment of the quad alive */
   vec3 n = apply_normal_map(shading_normal(world_position), world_uv, world_tangent,
                             material.fresnel.w);
+#ifdef SL_SHADOWS
+  /* the flat face's normal, for shadow lookups (the receiver's plane) */
+  vec3 face = cross(dFdx(world_position), dFdy(world_position));
+  vec3 ng = dot(face, face) > 1e-30 ? normalize(face) : n;
+#endif
   MaterialData m = apply_material_maps(material, world_uv);
 #ifdef SL_PEEL
   /* Depth peeling (Everitt 2001): each pass keeps, per pixel, the nearest partly transparent
@@ -64,6 +69,11 @@ void main()
     }
     vec3 l;
     vec3 E = light_irradiance(light, s.p, l);
+#ifdef SL_SHADOWS
+    if (dot(s.n, l) > 0.0 && max(E.r, max(E.g, E.b)) > 0.0) {
+      E *= light_visibility(light, s.p, ng);
+    }
+#endif
     c += shade_direct(s, l, E, factors);
   }
   /* alpha: coverage, blended over what is behind (L = a L_surface + (1 - a) L_behind, as Cycles'

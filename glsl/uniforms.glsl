@@ -14,7 +14,8 @@ struct LightData {
   vec4 position_kind;    /* xyz: position; w: LIGHT_POINT / LIGHT_SPOT / LIGHT_SUN / LIGHT_AREA */
   vec4 direction_cone;   /* xyz: unit direction the light faces (its -Z); w: cos(spot_size / 2) */
   vec4 intensity_blend;  /* rgb: W/sr (point, spot, area) or W/m^2 (sun); w: spot smoothstep scale */
-  vec4 factors;          /* x: diffuse factor; y: specular factor */
+  vec4 factors;          /* x: diffuse factor; y: specular factor; z: 1 a sun split off the world;
+                          * w: the first shadow-map layer (-1: casts no shadow) */
 };
 
 struct LightBlock {
@@ -62,3 +63,18 @@ struct ObjectData {
 struct ObjectBlock {
   ObjectData object[SL_OBJECT_BLOCK];
 };
+
+#ifdef SL_SHADOWS
+/* The frame's shadow-map layers (addon/shadows.py's ShadowPlan): world -> clip and back; info.x:
+ * far distance (m per unit of stored depth), y: a texel's width per metre of distance
+ * (perspective) or in metres (orthographic), z: the light's size for penumbrae (radius in m; a
+ * sun's tan(angle / 2)); origin.xyz: the light's position (perspective) or the near plane's
+ * centre (orthographic), w: the layer's kind (0 cube face, 1 perspective, 2 orthographic). A
+ * light's first layer is its LightData.factors.w (-1: no shadow). */
+struct ShadowBlock {
+  mat4 layer_matrix[SL_SHADOW_LAYERS];
+  mat4 layer_inverse[SL_SHADOW_LAYERS];
+  vec4 layer_info[SL_SHADOW_LAYERS];
+  vec4 layer_origin[SL_SHADOW_LAYERS];
+};
+#endif

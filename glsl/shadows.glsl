@@ -1,0 +1,160 @@
+/* Shadows: how much of a light reaches a point, read from the light's shadow maps (addon/shadows.py
+ * plans the layers, passes.ShadowPass draws them, glsl/shadow.frag.glsl stores distances).
+ *
+ * Each map texel holds the distance to the nearest caster along its ray, from the light's centre
+ * (perspective and cube layers) or from the map's near plane (orthographic), over the layer's far
+ * distance. A receiver is compared with the texels around it as the plane through it (its
+ * geometric normal) would be at each texel's centre (receiver-plane depth bias): a flat lit surface
+ * is never behind itself, whatever its slope, so no acne and only a small constant bias.
+ *
+ * Penumbrae (soft shadows) by percentage-closer soft shadows (Fernando 2005): the casters' mean
+ * distance d_b found around the receiver, then the light's size R projected through them onto
+ * the receiver at distance d, w = R (d - d_b) / d_b (a sun: w = (d - d_b) tan(angle / 2)), sets
+ * the filter's radius. Without a size, a bilinear filter over one texel. */
+
+#ifdef SL_SHADOWS
+
+#define SHADOW_CUBE 0
+#define SHADOW_PERSPECTIVE 1
+#define SHADOW_ORTHOGRAPHIC 2
+#define SHADOW_SEARCH_TAPS 16
+#define SHADOW_FILTER_TAPS 24
+#define SHADOW_MAX_RADIUS 48.0 /* texels */
+
+/* The cube face holding direction d (from the light), in addon/shadows.py's CUBE_FACES order. */
+int shadow_face(vec3 d)
+{
+  vec3 a = abs(d);
+  if (a.x >= a.y && a.x >= a.z) {
+    return d.x > 0.0 ? 0 : 1;
+  }
+  if (a.y >= a.z) {
+    return d.y > 0.0 ? 2 : 3;
+  }
+  return d.z > 0.0 ? 4 : 5;
+}
+
+/* Where the map ray through texel position uv_texels (in texels) meets the plane (p, ng), as a
+ * stored distance in metres. */
+float shadow_plane_distance(int layer, vec2 uv_texels, vec3 p, vec3 ng)
+{
+  vec2 ndc = uv_texels * (2.0 / float(SL_SHADOW_SIZE)) - 1.0;
+  mat4 inv = shadow.layer_inverse[layer];
+  vec4 a = inv * vec4(ndc, -1.0, 1.0);
+  vec4 b = inv * vec4(ndc, 1.0, 1.0);
+  vec3 near_point = a.xyz / a.w;
+  vec3 far_point = b.xyz / b.w;
+  vec4 origin = shadow.layer_origin[layer];
+  /* perspective: rays leave the light's centre; orthographic: the near plane */
+  vec3 o = origin.w < 1.5 ? origin.xyz : near_point;
+  vec3 dir = normalize(far_point - o);
+  float cosine = dot(dir, ng);
+  return dot(p - o, ng) / (abs(cosine) > 1e-4 ? cosine : (cosine < 0.0 ? -1e-4 : 1e-4));
+}
+
+/* Stored distance (metres) of a texel, clamped to the map. */
+float shadow_texel(int layer, ivec2 texel)
+{
+  texel = clamp(texel, ivec2(0), ivec2(SL_SHADOW_SIZE - 1));
+  return texelFetch(shadow_maps, ivec3(texel, layer), 0).r * shadow.layer_info[layer].x;
+}
+
+/* 1 where the texel's caster is not in front of the receiver's plane there, else 0. */
+float shadow_test(int layer, ivec2 texel, vec2 uv_texels, float d, vec2 gradient, float bias)
+{
+  vec2 offset = vec2(texel) + 0.5 - uv_texels;
+  return shadow_texel(layer, texel) >= d + dot(offset, gradient) - bias ? 1.0 : 0.0;
+}
+
+/* Bilinear percentage-closer filter of the four texels around uv_texels. */
+float shadow_bilinear(int layer, vec2 uv_texels, float d, vec2 gradient, float bias)
+{
+  vec2 base = uv_texels - 0.5;
+  ivec2 t = ivec2(floor(base));
+  vec2 f = base - floor(base);
+  float v00 = shadow_test(layer, t, uv_texels, d, gradient, bias);
+  float v10 = shadow_test(layer, t + ivec2(1, 0), uv_texels, d, gradient, bias);
+  float v01 = shadow_test(layer, t + ivec2(0, 1), uv_texels, d, gradient, bias);
+  float v11 = shadow_test(layer, t + ivec2(1, 1), uv_texels, d, gradient, bias);
+  return mix(mix(v00, v10, f.x), mix(v01, v11, f.x), f.y);
+}
+
+/* The k-th of n points of a Vogel (golden-angle) disc of radius 1, turned by `turn`. */
+vec2 vogel_disc(int k, int n, float turn)
+{
+  float r = sqrt((float(k) + 0.5) / float(n));
+  float phi = float(k) * 2.39996323 + turn;
+  return r * vec2(cos(phi), sin(phi));
+}
+
+/* The fraction of `light` that reaches p (geometric normal ng): 1 unshadowed. */
+float light_visibility(LightData light, vec3 p, vec3 ng)
+{
+  int first = int(light.factors.w);
+  if (first < 0) {
+    return 1.0;
+  }
+  vec3 from_light = p - light.position_kind.xyz;
+  int layer = first;
+  int kind = int(shadow.layer_origin[first].w + 0.5);
+  if (kind == SHADOW_CUBE) {
+    layer += shadow_face(from_light);
+  }
+  vec4 clip = shadow.layer_matrix[layer] * vec4(p, 1.0);
+  if (clip.w <= 0.0) {
+    return 1.0;
+  }
+  vec2 uv_texels = (clip.xy / clip.w * 0.5 + 0.5) * float(SL_SHADOW_SIZE);
+  if (any(lessThan(uv_texels, vec2(0.0))) || any(greaterThan(uv_texels, vec2(SL_SHADOW_SIZE)))) {
+    return 1.0; /* outside the map: nothing was drawn there to cast */
+  }
+  vec4 info = shadow.layer_info[layer];
+  bool ortho = kind == SHADOW_ORTHOGRAPHIC;
+  float d = ortho ? dot(p - shadow.layer_origin[layer].xyz, light.direction_cone.xyz) : length(from_light);
+  float texel = ortho ? info.y : info.y * d; /* a texel's width at the receiver (m) */
+  /* the receiver's plane: its distance's change per texel, limited to 8 texels (83 degrees) */
+  vec2 gradient = vec2(shadow_plane_distance(layer, uv_texels + vec2(1.0, 0.0), p, ng),
+                       shadow_plane_distance(layer, uv_texels + vec2(0.0, 1.0), p, ng)) -
+                  shadow_plane_distance(layer, uv_texels, p, ng);
+  gradient = clamp(gradient, vec2(-8.0 * texel), vec2(8.0 * texel));
+  float bias = 0.5 * texel + 1e-5 * d;
+#ifdef SL_SOFT_SHADOWS
+  float size = info.z;
+  if (size > 0.0) {
+    float turn = 6.2831853 * fract(52.9829189 * fract(dot(gl_FragCoord.xy, vec2(0.06711056, 0.00583715))));
+    /* blocker search: casters between the receiver and a quarter of its distance (the sun: the
+     * map's top) that hide some of the light */
+    float search = ortho ? d * size / texel : 3.0 * size / info.y / d;
+    search = clamp(search, 1.0, SHADOW_MAX_RADIUS);
+    float blockers = 0.0;
+    float blocker_sum = 0.0;
+    for (int k = 0; k < SHADOW_SEARCH_TAPS; k++) {
+      vec2 at = uv_texels + search * vogel_disc(k, SHADOW_SEARCH_TAPS, turn);
+      ivec2 t = ivec2(floor(at));
+      vec2 offset = vec2(t) + 0.5 - uv_texels;
+      float stored = shadow_texel(layer, t);
+      if (stored < d + dot(offset, gradient) - bias) {
+        blockers += 1.0;
+        blocker_sum += stored;
+      }
+    }
+    if (blockers == 0.0) {
+      return 1.0;
+    }
+    float d_blocker = max(blocker_sum / blockers, 1e-4);
+    float penumbra = ortho ? (d - d_blocker) * size : size * (d - d_blocker) / d_blocker;
+    float radius = min(max(penumbra, 0.0) / texel, SHADOW_MAX_RADIUS);
+    if (radius > 1.0) {
+      float lit = 0.0;
+      for (int k = 0; k < SHADOW_FILTER_TAPS; k++) {
+        vec2 at = uv_texels + radius * vogel_disc(k, SHADOW_FILTER_TAPS, turn);
+        lit += shadow_test(layer, ivec2(floor(at)), uv_texels, d, gradient, bias);
+      }
+      return lit / float(SHADOW_FILTER_TAPS);
+    }
+  }
+#endif
+  return shadow_bilinear(layer, uv_texels, d, gradient, bias);
+}
+
+#endif
