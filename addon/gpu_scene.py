@@ -192,12 +192,14 @@ class SceneResources:
         plan = self.shadow_plan = shadows.plan(snapshot, self._bounds)
         if plan.dropped:
             snapshot.warnings.append(f"{plan.dropped} shadowed light(s) cast no shadow: the frame holds "
-                                     f"{shadows.MAX_SHADOW_LAYERS} shadow maps (a point or area light takes six)")
+                                     f"{shadows.MAX_SHADOW_LAYERS} shadow maps (point and area lights "
+                                     f"take six)")
         if not plan.layers:
             self._shadows = _Block()
             self.caster_key = b""
             return
-        self.uploads["shadows"] += self._shadows.put(programs.pack_shadows(plan, programs.light_slots(plan.layers)))
+        block = programs.pack_shadows(plan, programs.light_slots(plan.layers))
+        self.uploads["shadows"] += self._shadows.put(block)
         casters = [(item.geometry, self._geometry_version[item.geometry], item.matrix.tobytes())
                    for item in snapshot.items if item.casts_shadow]
         self.caster_key = repr(casters).encode()

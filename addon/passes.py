@@ -230,8 +230,8 @@ class ShadowPass(Pass):
             if frame.should_stop is not None and frame.should_stop():
                 return False
             origin = plan.origins[layer]
-            perspective = origin[3] < 1.5
-            light_origin = (*(float(x) for x in origin[:3]), 1.0 / float(plan.info[layer][0]) if perspective else 0.0)
+            inverse_far = 1.0 / float(plan.info[layer][0]) if origin[3] < 1.5 else 0.0  # 0: orthographic
+            light_origin = (*(float(x) for x in origin[:3]), inverse_far)
             with framebuffer.bind():
                 framebuffer.clear(depth=1.0)
                 gpu.state.depth_test_set("LESS")

@@ -450,15 +450,14 @@ def pack_lights(snapshot: Snapshot, max_lights: int) -> bytes:
 
 def pack_shadows(plan: shadows.ShadowPlan, slots: int) -> bytes:
     """The ShadowBlock (glsl/uniforms.glsl) of ``plan``'s layers, ``slots`` entries each."""
-    matrices = np.tile(np.eye(4, dtype=np.float32), (slots, 1, 1))
-    matrices[:plan.layers] = plan.matrices
-    inverse = np.linalg.inv(matrices.astype(np.float64)).astype(np.float32)
-    info = np.zeros((slots, 4), np.float32)
-    info[:plan.layers] = plan.info
-    origins = np.zeros((slots, 4), np.float32)
-    origins[:plan.layers] = plan.origins
-    return np.concatenate([matrices.transpose(0, 2, 1).ravel(), inverse.transpose(0, 2, 1).ravel(),
-                           info.ravel(), origins.ravel()]).tobytes()
+    matrices = np.tile(np.eye(4, dtype=np.float32), (2, slots, 1, 1))
+    matrices[0, :plan.layers] = plan.matrices
+    matrices[1, :plan.layers] = np.linalg.inv(plan.views.astype(np.float64))  # view -> world
+    rows = np.zeros((3, slots, 4), np.float32)
+    rows[0, :plan.layers] = plan.info
+    rows[1, :plan.layers] = plan.origins
+    rows[2, :plan.layers] = plan.extents
+    return np.concatenate([matrices.transpose(0, 1, 3, 2).ravel(), rows.ravel()]).tobytes()
 
 
 @lru_cache(maxsize=1)

@@ -73,6 +73,13 @@ class Renderer:
     def uploaded_geometry(self) -> int:
         return self.scene.uploads["geometry"]
 
+    @property
+    def shadow_layers_drawn(self) -> int:
+        """Shadow-map layers drawn since the renderer was made (a viewport keeps its maps while
+        lights and casters hold still)."""
+        step = self._passes.get((ShadowPass, "shadows"))
+        return step.renders if step is not None else 0
+
     def sync(self, snapshot: Snapshot, keep: Callable[[str], bool] | None = None) -> None:
         self.scene.sync(snapshot, keep)
 

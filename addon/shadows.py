@@ -41,7 +41,8 @@ KIND_CUBE, KIND_PERSPECTIVE, KIND_ORTHOGRAPHIC = 0.0, 1.0, 2.0
 class ShadowPlan:
     """The layers of one frame's shadow maps.
 
-    ``matrices`` (n, 4, 4): world -> clip of each layer; ``info`` (n, 4): far distance (metres
+    ``matrices`` (n, 4, 4): world -> clip of each layer (``views`` then the projection, whose
+    half extents ``extents`` holds); ``info`` (n, 4): far distance (metres
     per unit of stored depth), the width of one texel per metre of distance (perspective) or in
     metres (orthographic), the light's size for penumbrae (radius in metres; a sun's tan of half
     its angle), and the layer's kind; ``origins`` (n, 4): the light's position (perspective) or
@@ -53,6 +54,8 @@ class ShadowPlan:
     info: np.ndarray
     origins: np.ndarray
     first_layer: tuple[int, ...]
+    views: np.ndarray = None  # (n, 4, 4) world -> the layer's view (camera looking down -Z)
+    extents: np.ndarray = None  # (n, 4) x, y: tan of the half field of view, or half widths (m)
     dropped: int = 0  # shadowed lights left out (no layers left)
 
     @property
@@ -125,7 +128,7 @@ def _far_near(position, lo, hi) -> tuple[float, float]:
     """Near and far distances of a perspective map at ``position`` that hold the whole box."""
     corners = _box_corners(lo, hi)
     far = float(np.linalg.norm(corners - np.asarray(position), axis=1).max()) * 1.01 + 1e-3
-    near = max(far * 1e-5, 1e-3)
+    near = max(far * 1e-4, 1e-3)
     return near, far
 
 
@@ -146,7 +149,7 @@ def _sun_layer(light: Light, lo, hi, size: int):
     matrix = orthographic(half_x, half_y, depth) @ view
     texel = 2.0 * max(half_x, half_y) / size
     return [(matrix, (depth, texel, math.tan(0.5 * light.angle), KIND_ORTHOGRAPHIC),
-             (*near_centre, KIND_ORTHOGRAPHIC))]
+             (*near_centre, KIND_ORTHOGRAPHIC), view, (half_x, half_y, 0.0, 0.0))]
 
 
 def _perspective_layers(light: Light, lo, hi, size: int, cube: bool):
@@ -163,8 +166,12 @@ def _perspective_layers(light: Light, lo, hi, size: int, cube: bool):
         kind = KIND_PERSPECTIVE
     projection = perspective(tan_half, near, far)
     texel = 2.0 * tan_half / size
-    return [(projection @ look_at(position, forward, up), (far, texel, light.radius, kind), (*position, kind))
-            for forward, up in faces]
+    layers = []
+    for forward, up in faces:
+        view = look_at(position, forward, up)
+        layers.append((projection @ view, (far, texel, light.radius, kind), (*position, kind), view,
+                       (tan_half, tan_half, 0.0, 0.0)))
+    return layers
 
 
 def _cube(light: Light) -> bool:
@@ -198,7 +205,9 @@ def plan(snapshot: Snapshot, bounds: dict[str, np.ndarray]) -> ShadowPlan:
     box = scene_bounds(snapshot, bounds) if used else None
     if box is None:
         return ShadowPlan(size, np.zeros((0, 4, 4), np.float32), np.zeros((0, 4), np.float32),
-                          np.zeros((0, 4), np.float32), tuple(-1 for _ in first), dropped)
+                          np.zeros((0, 4), np.float32), tuple(-1 for _ in first),
+                          views=np.zeros((0, 4, 4), np.float32), extents=np.zeros((0, 4), np.float32),
+                          dropped=dropped)
     lo, hi = box
     pad = 1e-3 * max(float(np.max(hi - lo)), 1.0)
     lo, hi = lo - pad, hi + pad
@@ -210,6 +219,7 @@ def plan(snapshot: Snapshot, bounds: dict[str, np.ndarray]) -> ShadowPlan:
             layers += _sun_layer(light, lo, hi, size)
         else:
             layers += _perspective_layers(light, lo, hi, size, _cube(light))
-    return ShadowPlan(size, np.stack([m for m, _, _ in layers]).astype(np.float32),
-                      np.array([info for _, info, _ in layers], np.float32),
-                      np.array([o for _, _, o in layers], np.float32), first, dropped)
+    matrices, info, origins, views, extents = zip(*layers)
+    return ShadowPlan(size, np.stack(matrices).astype(np.float32), np.array(info, np.float32),
+                      np.array(origins, np.float32), first, views=np.stack(views).astype(np.float32),
+                      extents=np.array(extents, np.float32), dropped=dropped)

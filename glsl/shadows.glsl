@@ -35,19 +35,22 @@ int shadow_face(vec3 d)
 }
 
 /* Where the map ray through texel position uv_texels (in texels) meets the plane (p, ng), as a
- * stored distance in metres. */
+ * stored distance in metres. The ray from the layer's view and half extents (not the inverse
+ * projection: with the near plane close to the light, its depth rows lose float precision). */
 float shadow_plane_distance(int layer, vec2 uv_texels, vec3 p, vec3 ng)
 {
   vec2 ndc = uv_texels * (2.0 / float(SL_SHADOW_SIZE)) - 1.0;
-  mat4 inv = shadow.layer_inverse[layer];
-  vec4 a = inv * vec4(ndc, -1.0, 1.0);
-  vec4 b = inv * vec4(ndc, 1.0, 1.0);
-  vec3 near_point = a.xyz / a.w;
-  vec3 far_point = b.xyz / b.w;
-  vec4 origin = shadow.layer_origin[layer];
-  /* perspective: rays leave the light's centre; orthographic: the near plane */
-  vec3 o = origin.w < 1.5 ? origin.xyz : near_point;
-  vec3 dir = normalize(far_point - o);
+  mat4 to_world = shadow.layer_view_inverse[layer];
+  vec2 extent = shadow.layer_extent[layer].xy;
+  vec3 o, dir;
+  if (shadow.layer_origin[layer].w < 1.5) { /* perspective: rays leave the light's centre */
+    o = to_world[3].xyz;
+    dir = normalize(mat3(to_world) * vec3(ndc * extent, -1.0));
+  }
+  else { /* orthographic: parallel rays from the near plane */
+    o = (to_world * vec4(ndc * extent, 0.0, 1.0)).xyz;
+    dir = -to_world[2].xyz;
+  }
   float cosine = dot(dir, ng);
   return dot(p - o, ng) / (abs(cosine) > 1e-4 ? cosine : (cosine < 0.0 ? -1e-4 : 1e-4));
 }
@@ -112,11 +115,13 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
   bool ortho = kind == SHADOW_ORTHOGRAPHIC;
   float d = ortho ? dot(p - shadow.layer_origin[layer].xyz, light.direction_cone.xyz) : length(from_light);
   float texel = ortho ? info.y : info.y * d; /* a texel's width at the receiver (m) */
-  /* the receiver's plane: its distance's change per texel, limited to 8 texels (83 degrees) */
+  /* the receiver's plane: its distance's change per texel, limited to 64 texels (89 degrees from
+   * the light: a limit much lower predicts a steep plane too close to the light on one side of the
+   * point and shadows a lit convex surface there) */
   vec2 gradient = vec2(shadow_plane_distance(layer, uv_texels + vec2(1.0, 0.0), p, ng),
                        shadow_plane_distance(layer, uv_texels + vec2(0.0, 1.0), p, ng)) -
                   shadow_plane_distance(layer, uv_texels, p, ng);
-  gradient = clamp(gradient, vec2(-8.0 * texel), vec2(8.0 * texel));
+  gradient = clamp(gradient, vec2(-64.0 * texel), vec2(64.0 * texel));
   float bias = 0.5 * texel + 1e-5 * d;
 #ifdef SL_SOFT_SHADOWS
   float size = info.z;

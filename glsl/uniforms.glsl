@@ -65,7 +65,9 @@ struct ObjectBlock {
 };
 
 #ifdef SL_SHADOWS
-/* The frame's shadow-map layers (addon/shadows.py's ShadowPlan): world -> clip and back; info.x:
+/* The frame's shadow-map layers (addon/shadows.py's ShadowPlan): world -> clip, the layer's view
+ * -> world, and its projection's half extents (extent.xy: tan of half the field of view, or the
+ * half widths in m); info.x:
  * far distance (m per unit of stored depth), y: a texel's width per metre of distance
  * (perspective) or in metres (orthographic), z: the light's size for penumbrae (radius in m; a
  * sun's tan(angle / 2)); origin.xyz: the light's position (perspective) or the near plane's
@@ -73,8 +75,9 @@ struct ObjectBlock {
  * light's first layer is its LightData.factors.w (-1: no shadow). */
 struct ShadowBlock {
   mat4 layer_matrix[SL_SHADOW_LAYERS];
-  mat4 layer_inverse[SL_SHADOW_LAYERS];
+  mat4 layer_view_inverse[SL_SHADOW_LAYERS];
   vec4 layer_info[SL_SHADOW_LAYERS];
   vec4 layer_origin[SL_SHADOW_LAYERS];
+  vec4 layer_extent[SL_SHADOW_LAYERS];
 };
 #endif
