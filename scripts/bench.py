@@ -145,22 +145,6 @@ def round_robin(items: list, frames: int, run, progress, label: str) -> list[dic
     return [medians(s) for s in samples]
 
 
-class PeerLights:
-    """Shadows off, radius 0 (as reference.render_peer does) for the duration of a peer round."""
-
-    def __init__(self, scene):
-        self.scene = scene
-
-    def __enter__(self):
-        import reference
-
-        self.restore = reference._prepare_lights(self.scene)
-        return self
-
-    def __exit__(self, *exc):
-        self.restore()
-
-
 def set_peer(scene, peer: tuple[str, str, int]) -> None:
     import reference
 
@@ -311,8 +295,7 @@ def bench_preset(name: str, args, configs, peers, progress, tmp: Path) -> dict:
             images[peer[0]] = save_result(scene, tmp / f"{name}_{peer[0]}.exr")
         return t
 
-    with PeerLights(scene):
-        med = round_robin(peers, args.peer_frames, run_peer, progress, f"{name} peers")
+    med = round_robin(peers, args.peer_frames, run_peer, progress, f"{name} peers")
     apply(scene, configs[0])
     out["peer_times"] = {p[0]: m for p, m in zip(peers, med)}
     for key, image in images.items():
@@ -468,13 +451,14 @@ def report(args, results, lights, tris, configs, peers, machine, elapsed) -> str
              f"in one process. *total* is the engine's own time (`engine.last_timings`): scene "
              f"extraction + draw + read-back (the read-back fences the GPU work) + handing pixels to "
              f"Blender; *wall* is `bpy.ops.render.render()` as a whole. Errors are against Cycles "
-             f"(direct light only, world on and occluded, light shadows off, pixel centres, "
+             f"(direct light only, world on and occluded, lights as the file has them, shadows included, "
+             f"pixel centres, "
              f"{args.reference_samples} spp, "
              f"`reference.render_reference`, cached) **at {res(ref)}**: every compared image, ours and "
              f"the peers', is rendered at {res(ref)}. FLIP is mean HDR-FLIP; *rel* the mean relative "
              f"luminance error on lit pixels. Peers (EEVEE, Workbench) are timed at {res(ref)} in the "
              f"same rounds as Shading Lab's Blinn-Phong and default PBR (wall times, median of "
-             f"{args.peer_frames} after a warm-up), lights' shadows off as for the reference.", ""]
+             f"{args.peer_frames} after a warm-up), lights as for the reference.", ""]
     summary_at = len(lines)
 
     # 1. headline per preset
@@ -514,13 +498,13 @@ def report(args, results, lights, tris, configs, peers, machine, elapsed) -> str
         if p[1] != "SHADING_LAB":
             header += [f"{PEER_LABELS[p[0]]} ms (× SL PBR)", f"{PEER_LABELS[p[0]]} FLIP / rel"]
     lines += table(header + ["SL PBR FLIP / rel"], rows)
-    lines += ["", "Set up as `reference.render_peer`: EEVEE with light threshold 1e-6 and the lights' "
-              "shadows off; Workbench with its default studio lighting (not the scene's lights), so its "
-              "error is large by design. The reference samples pixel centres (no anti-aliasing): EEVEE "
-              "at 1 sample does too, EEVEE at 16 samples jitters over Blender's 1.5 px film filter, and "
-              "the metrics count that smoothing as error — which is why 16 samples can score worse "
-              "than 1 here. Peer times are whole-render wall times, including EEVEE's per-render "
-              "set-up.", ""]
+    lines += ["", "Set up as `reference.render_peer`: EEVEE with light threshold 1e-6 and the lights as "
+              "the file has them (shadows on); Workbench with its default studio lighting (not the "
+              "scene's lights), so its error is large by design. The reference samples pixel centres "
+              "(no anti-aliasing): EEVEE at 1 sample does too, EEVEE at 16 samples jitters over "
+              "Blender's 1.5 px film filter, and the metrics count that smoothing as error — which "
+              "is why 16 samples can score worse than 1 here. Peer times are whole-render wall "
+              "times, including EEVEE's per-render set-up.", ""]
 
     # 3. variants across presets
     lines += [f"## Every configuration, across presets ({len(results)})", ""]

@@ -2,11 +2,11 @@
 
     .venv/bin/python scripts/compare.py PRESET [--resolution WxH] [--samples N] [--variant NAME]
                                                [--out DIR] [term options as in render.py]
-                                               [--transparency-layers N]
+                                               [--transparency-layers N] [shadow options as in render.py]
 
 Renders Blinn-Phong, Phong and the physically based model (with the scene's terms, or those
 given), and the Cycles reference (direct light only, the world lighting occluded by the objects,
-light shadows off — the engine casts none yet —, pixel-centre sampling; cached on disk, see
+the lights as the file has them, shadows included, pixel-centre sampling; cached on disk, see
 reference.py). Writes ``DIR/<scene>_compare.exr``
 (multi-layer OpenEXR: a layer per model, the reference, and each model's absolute error),
 ``DIR/<scene>_compare.png`` (labelled: the images through a simple display transform, then
@@ -49,6 +49,7 @@ def parse_args(argv):
     parser.add_argument("--principled", action=argparse.BooleanOptionalAction, default=None)
     parser.add_argument("--transparency-layers", type=int, metavar="N",
                         help="partly transparent surfaces blended per pixel in depth order (1-16)")
+    cli.add_shadow_options(parser)
     args = parser.parse_args(argv)
     for name in ("normalized_blinn_phong", "tone_mapper", "exposure", "samples"):
         setattr(args, name, getattr(base, name))  # not offered here: pixel-centre radiance is compared
@@ -160,7 +161,7 @@ def compare(args) -> dict:
                  f"{terms.fresnel.lower()} / {terms.ndf.lower()} / {terms.visibility.lower()} / "
                  f"{terms.diffuse.lower()}{' + multiscatter' if terms.multiscatter else ''}")
     title = (f"{stem} — physically based terms: {term_text}. Reference: Cycles, "
-             f"{args.reference_samples} spp, direct light only, world on and occluded, light shadows off")
+             f"{args.reference_samples} spp, direct light only, world on and occluded, shadows on")
     png = args.out / f"{stem}_compare.png"
     labelled_png(png, [(label, images[key]) for key, _, label in MODELS] + [("Cycles reference", ref)],
                  flips, title)

@@ -1,12 +1,12 @@
 """Ground truth and peers: the same scene rendered by Cycles (the reference), EEVEE and Workbench.
 
 The reference is what Shading Lab computes, computed exactly: Cycles on the CPU with direct light
-only (max bounces 0), every light's radius 0 and soft falloff off, the world lighting the scene
-and occluded by the objects as Cycles does, but **no light shadows** (each light's Cast Shadow
-off: the engine casts none yet; this switches a real feature off), pixel-centre sampling
-(a Gaussian filter of width 0.01 px: Cycles' Box filter ignores its width and averages the whole
-pixel), no denoising, and enough samples that noise is below the differences measured. References
-are cached on disk by a hash of everything that decides them.
+only (max bounces 0), the lights as the file has them (Cast Shadow, radius, soft falloff: the
+engine casts shadows with penumbrae from the lights' sizes, but still shades a sphere or area light
+as a point, which the reference does not), the world lighting the scene and occluded by the
+objects, pixel-centre sampling (a Gaussian filter of width 0.01 px: Cycles' Box filter ignores its
+width and averages the whole pixel), no denoising, and enough samples that noise is below the
+differences measured. References are cached on disk by a hash of everything that decides them.
 """
 
 from __future__ import annotations
@@ -23,7 +23,8 @@ import OpenEXR
 ROOT = Path(__file__).resolve().parent.parent
 CACHE_DIR = ROOT / ".cache" / "references"
 #: Bump when the reference settings below change: old cache entries then stop matching.
-SETTINGS_VERSION = 3  # 2: the world lights the scene; 3: objects occlude the world's light
+SETTINGS_VERSION = 4  # 2: the world lights the scene; 3: objects occlude the world's light; 4: lights
+#                       cast shadows and keep their size, as the file has them
 EEVEE = "BLENDER_EEVEE" if bpy.app.version >= (5, 0, 0) else "BLENDER_EEVEE_NEXT"
 
 
@@ -40,6 +41,7 @@ def scene_fingerprint(scene) -> str:
         obj = inst.object
         h.update(obj.name.encode())
         h.update(np.array(inst.matrix_world, np.float32).tobytes())
+        h.update(repr((getattr(obj, "visible_shadow", True),)).encode())
         if obj.type == "MESH":
             mesh = obj.data
             co = np.empty(len(mesh.vertices) * 3, np.float32)
@@ -51,7 +53,10 @@ def scene_fingerprint(scene) -> str:
             light = obj.data
             h.update(repr((light.type, tuple(light.color), light.energy, getattr(light, "exposure", 0.0),
                            getattr(light, "spot_size", 0), getattr(light, "spot_blend", 0),
-                           getattr(light, "size", 0), getattr(light, "angle", 0))).encode())
+                           getattr(light, "size", 0), getattr(light, "size_y", 0),
+                           getattr(light, "shape", ""), getattr(light, "angle", 0), light.use_shadow,
+                           getattr(light, "shadow_soft_size", 0),
+                           getattr(light, "use_soft_falloff", None))).encode())
         elif obj.type == "CAMERA":
             cam = obj.data
             h.update(repr((cam.type, cam.lens, cam.ortho_scale, cam.sensor_width, cam.shift_x,
@@ -119,33 +124,6 @@ def _image_key(image) -> str:
     return f"{image.name} {tuple(image.size)} {hashlib.sha256(pixels.tobytes()).hexdigest()}"
 
 
-def _prepare_lights(scene):
-    """Lights' shadows off, radius 0, soft falloff off (objects still occlude the world's light);
-    returns a function that restores them."""
-    saved = []
-    for obj in scene.objects:
-        if obj.type == "LIGHT":
-            light = obj.data
-            state = {"use_shadow": light.use_shadow}
-            if light.type != "SUN":
-                state["shadow_soft_size"] = light.shadow_soft_size
-                if hasattr(light, "use_soft_falloff"):
-                    state["use_soft_falloff"] = light.use_soft_falloff
-            saved.append((light, state))
-            light.use_shadow = False
-            if light.type != "SUN":
-                light.shadow_soft_size = 0.0
-                if hasattr(light, "use_soft_falloff"):
-                    light.use_soft_falloff = False
-
-    def restore():
-        for light, state in saved:
-            for key, value in state.items():
-                setattr(light, key, value)
-
-    return restore
-
-
 def read_exr_rgba(path: Path) -> np.ndarray:
     with OpenEXR.File(str(path)) as f:
         channels = f.channels()
@@ -176,7 +154,6 @@ def render_reference(scene, samples: int = 256, cache_dir: Path = CACHE_DIR) -> 
     if cached.is_file():
         return read_exr_rgba(cached), True
     engine = scene.render.engine
-    restore = _prepare_lights(scene)
     try:
         scene.render.engine = "CYCLES"
         c = scene.cycles
@@ -193,15 +170,13 @@ def render_reference(scene, samples: int = 256, cache_dir: Path = CACHE_DIR) -> 
         partial.replace(cached)
     finally:
         scene.render.engine = engine
-        restore()
     return image, False
 
 
 def render_peer(scene, engine: str, samples: int, path: Path) -> tuple[np.ndarray, float]:
-    """(image, seconds) of EEVEE (light threshold lowered so weak lights are not culled, shadows
-    off) or Workbench on the same scene."""
+    """(image, seconds) of EEVEE (light threshold lowered so weak lights are not culled; lights
+    as the file has them, shadows included) or Workbench on the same scene."""
     previous = scene.render.engine
-    restore = _prepare_lights(scene)
     try:
         scene.render.engine = engine
         if engine == EEVEE:
@@ -212,4 +187,3 @@ def render_peer(scene, engine: str, samples: int, path: Path) -> tuple[np.ndarra
         return image, time.perf_counter() - start
     finally:
         scene.render.engine = previous
-        restore()

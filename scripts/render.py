@@ -67,6 +67,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     display.add_argument("--samples", type=int, help="N: N x N supersampling per pixel")
     display.add_argument("--transparency-layers", type=int, metavar="N",
                          help="partly transparent surfaces blended per pixel in depth order (1-16)")
+    add_shadow_options(parser)
     args = parser.parse_args(argv)
     if not args.list and not args.scene:
         parser.error("SCENE is required (or --list)")
@@ -150,6 +151,19 @@ def load_scene(name: str, variant: str | None):
     return scene, path.stem + (f"_{variant}" if variant else "")
 
 
+SHADOW_MAP_SIZES = (512, 1024, 2048, 4096)
+
+
+def add_shadow_options(parser) -> None:
+    shadows = parser.add_argument_group("shadows (default: the scene's settings)")
+    shadows.add_argument("--shadows", action=argparse.BooleanOptionalAction, default=None,
+                         help="lights whose Cast Shadow is on cast shadows")
+    shadows.add_argument("--shadow-map-size", type=int, choices=SHADOW_MAP_SIZES,
+                         help="texels per side of each shadow map")
+    shadows.add_argument("--soft-shadows", action=argparse.BooleanOptionalAction, default=None,
+                         help="penumbrae from the lights' sizes")
+
+
 def configure(scene, args) -> None:
     props = scene.shading_lab
     for family in TERM_CHOICES:
@@ -162,6 +176,11 @@ def configure(scene, args) -> None:
             setattr(props, name, value)
     if args.principled is not None:
         props.term_set = "PRINCIPLED" if args.principled else "CUSTOM"
+    for name in ("shadows", "soft_shadows"):
+        if getattr(args, name, None) is not None:
+            setattr(props, name, getattr(args, name))
+    if getattr(args, "shadow_map_size", None) is not None:
+        props.shadow_map_size = str(args.shadow_map_size)
     if args.samples is not None and not 1 <= args.samples <= 8:
         raise CliError(f"--samples must be between 1 and 8, got {args.samples}")
     if args.transparency_layers is not None:
