@@ -10,6 +10,7 @@ from pathlib import Path
 
 import bpy
 import numpy as np
+import pytest
 import scenes
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -100,3 +101,17 @@ def test_unknown_preset_and_bad_options(tmp_path):
     proc = _run("fresnel", "--transparency-layers", "0", "--out", tmp_path)
     assert proc.returncode == 2 and "--transparency-layers must be between 1 and 16, got 0" in proc.stderr
     assert not any(tmp_path.glob("*.exr"))
+
+
+def test_shadow_options_reach_the_scene():
+    sys.path.insert(0, str(ROOT / "scripts"))
+    import render as cli
+
+    scene = scenes.reset(size=8)
+    cli.configure(scene, cli.parse_args(["x"]))
+    props = scene.shading_lab
+    assert (props.shadows, props.shadow_map_size, props.soft_shadows) == (True, "1024", True)  # defaults
+    cli.configure(scene, cli.parse_args(["x", "--no-shadows", "--shadow-map-size", "2048", "--no-soft-shadows"]))
+    assert (props.shadows, props.shadow_map_size, props.soft_shadows) == (False, "2048", False)
+    with pytest.raises(SystemExit):
+        cli.parse_args(["x", "--shadow-map-size", "300"])
