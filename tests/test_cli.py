@@ -110,8 +110,9 @@ def test_shadow_options_reach_the_scene():
     scene = scenes.reset(size=8)
     cli.configure(scene, cli.parse_args(["x"]))
     props = scene.shading_lab
-    assert (props.shadows, props.shadow_map_size, props.soft_shadows) == (True, "1024", True)  # defaults
-    cli.configure(scene, cli.parse_args(["x", "--no-shadows", "--shadow-map-size", "2048", "--no-soft-shadows"]))
+    assert (props.shadows, props.shadow_map_size, props.soft_shadows) == (True, "1024", True)
+    args = cli.parse_args(["x", "--no-shadows", "--shadow-map-size", "2048", "--no-soft-shadows"])
+    cli.configure(scene, args)
     assert (props.shadows, props.shadow_map_size, props.soft_shadows) == (False, "2048", False)
     with pytest.raises(SystemExit):
         cli.parse_args(["x", "--shadow-map-size", "300"])
