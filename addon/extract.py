@@ -381,6 +381,7 @@ def make_light(light: bpy.types.Light, matrix) -> S.Light:
         extra["radius"] = math.sqrt(_area(light) / math.pi)
     else:
         extra["radius"] = max(float(light.shadow_soft_size), 0.0)
+        extra["soft_falloff"] = bool(getattr(light, "use_soft_falloff", False))
     return S.Light(
         kind=kind,
         position=position,

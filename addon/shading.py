@@ -10,6 +10,8 @@ numpy: no ``bpy``, no ``gpu``.
 
 from __future__ import annotations
 
+import copy
+
 import numpy as np
 
 from . import multiscatter as M
@@ -51,7 +53,29 @@ def E_Point(light: Light, p):
     d = np.asarray(light.position) - p
     d2 = _dot(d, d)
     l = d / np.sqrt(np.maximum(d2, 1e-30))[..., None]  # unit, or 0 for a light exactly at p
-    return np.asarray(light.intensity) / np.maximum(d2, MIN_DIST2)[..., None], l
+    r = light.sphere_radius
+    falloff = d2 + (r * r if light.soft_falloff else 0.0)
+    return np.asarray(light.intensity) / np.maximum(falloff, MIN_DIST2)[..., None], l
+
+
+def sphere_light_specular(light: Light, p, r_dir, alpha):
+    """(direction, alpha_wide, wide_weight, point_weight): a sphere light's specular lobe as
+    glsl/lights.glsl's sphere_light_specular mixes it -- the representative point (Karis 2013)
+    renormalised by 1 + (pi/2) k + k^2, and the lobe widened in quadrature, k = theta / alpha."""
+    to_light = np.asarray(light.position) - p
+    d2 = _dot(to_light, to_light)
+    radius = light.sphere_radius
+    theta = radius * 0.5 / np.sqrt(np.maximum(d2 + (radius * radius if light.soft_falloff else 0.0), 1e-8))
+    k2 = theta * theta / np.maximum(alpha * alpha, 1e-12)
+    k = np.sqrt(k2)
+    wide_weight = 1.0 / (1.0 + k2)
+    point_weight = (1.0 - wide_weight) / (1.0 + 0.5 * np.pi * k + k2)
+    centre_to_ray = _dot(to_light, r_dir)[..., None] * r_dir - to_light
+    gap = np.sqrt(_dot(centre_to_ray, centre_to_ray))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        closest = to_light + centre_to_ray * np.where(gap > radius, radius / gap, 1.0)[..., None]
+        direction = closest / np.sqrt(np.maximum(_dot(closest, closest), 1e-30))[..., None]
+    return direction, np.sqrt(alpha * alpha + theta * theta), wide_weight, point_weight
 
 
 def E_Spot(light: Light, p):
@@ -239,5 +263,18 @@ def shade(model: str, s: Surface, lights: list[Light], ambient: float = 0.0,
         c = c + s.ambient_color * ambient  # eq. 1.4
     for light in lights:
         E, l = light_irradiance(light, s.p)
+        if model == "PBR" and light.sphere_radius > 0.0:
+            # a sphere light: the diffuse lobe from its centre; the specular from its nearest
+            # point and, widened, from its centre
+            r_dir = 2.0 * _dot(s.n, s.v)[..., None] * s.n - s.v
+            l_specular, alpha_wide, wide_weight, point_weight = sphere_light_specular(
+                light, s.p, r_dir, s.alpha)
+            wide = copy.copy(s)
+            wide.alpha = alpha_wide
+            specular = (0.0, light.specular_factor)
+            c = c + direct(s, l, E, (light.diffuse_factor, 0.0), terms)
+            c = c + direct(wide, l, E * np.asarray(wide_weight)[..., None], specular, terms)
+            c = c + direct(s, l_specular, E * np.asarray(point_weight)[..., None], specular, terms)
+            continue
         c = c + direct(s, l, E, (light.diffuse_factor, light.specular_factor), terms)
     return np.clip(c, 0.0, 1.0) if ldr else c

@@ -292,6 +292,13 @@ class Light:
     shadow: bool = False  # casts shadows (Blender's Cast Shadow, and the scene's Shadows setting)
     radius: float = 0.0  # the emitter's size for soft shadows: a sphere's radius (point, spot),
     #                     an area light's equal-area disc radius (m); a sun uses ``angle``
+    soft_falloff: bool = False  # a point or spot of radius r: Cycles' disc facing the point,
+    #                             E = I / (d^2 + r^2); off: a sphere, E = I / d^2
+
+    @property
+    def sphere_radius(self) -> float:
+        """The radius a point or spot light is shaded with (0 for the other kinds)."""
+        return self.radius if self.kind in ("POINT", "SPOT") else 0.0
 
 
 @dataclass

@@ -74,6 +74,21 @@ void main()
       E *= light_visibility(light, s.p, ng);
     }
 #endif
+#if defined(SL_MODEL_PBR) && (defined(SL_HAS_POINT) || defined(SL_HAS_SPOT))
+    if (light.shape.x > 0.0) {
+      /* a sphere light (lights.glsl): the diffuse lobe from its centre; the specular from its
+       * nearest point and, widened, from its centre */
+      Surface wide = s;
+      float wide_weight, point_weight;
+      vec3 l_specular = sphere_light_specular(light, s.p, reflect(-s.v, s.n), s.alpha, wide.alpha,
+                                              wide_weight, point_weight);
+      vec4 specular = factors * vec4(0.0, 1.0, 1.0, 1.0);
+      c += shade_direct(s, l, E, factors * vec4(1.0, 0.0, 1.0, 1.0));
+      c += shade_direct(wide, l, E * wide_weight, specular);
+      c += shade_direct(s, l_specular, E * point_weight, specular);
+      continue;
+    }
+#endif
     c += shade_direct(s, l, E, factors);
   }
   /* alpha: coverage, blended over what is behind (L = a L_surface + (1 - a) L_behind, as Cycles'

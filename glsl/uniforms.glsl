@@ -16,6 +16,8 @@ struct LightData {
   vec4 intensity_blend;  /* rgb: W/sr (point, spot, area) or W/m^2 (sun); w: spot smoothstep scale */
   vec4 factors;          /* x: diffuse factor; y: specular factor; z: 1 a sun split off the world;
                           * w: the first shadow-map layer (-1: casts no shadow) */
+  vec4 shape;            /* x: a point or spot light's radius r (0: a true point); y: 1 soft falloff
+                          * (Cycles' disc facing the point: E = I / (d^2 + r^2)), 0 a sphere */
 };
 
 struct LightBlock {

@@ -18,7 +18,7 @@ SCALE = 2.0
 KINDS = ("POINT", "SPOT", "SUN", "AREA")
 
 
-def _random_case(rng):
+def _random_case(rng, sizes: bool = False):
     tilt = (rng.uniform(-0.6, 0.6), rng.uniform(-0.6, 0.6), rng.uniform(0, math.pi))
     mat = dict(
         base_color=tuple(rng.uniform(0.05, 1.0, 3)),
@@ -43,6 +43,9 @@ def _random_case(rng):
         )
         if kind == "SPOT":
             props.update(spot_size=float(rng.uniform(0.5, 2.5)), spot_blend=float(rng.uniform(0.0, 1.0)))
+        if sizes and kind in ("POINT", "SPOT"):  # sphere lights
+            props.update(shadow_soft_size=float(rng.uniform(0.05, 0.6)),
+                         use_soft_falloff=bool(rng.integers(2)))
         lights.append(props)
     return tilt, mat, lights
 
@@ -59,14 +62,28 @@ def _twin_light(props) -> S.Light:
         extra = dict(spot_cos_half=math.cos(props["spot_size"] / 2),
                      spot_smooth=S.spot_smooth(props["spot_size"], props["spot_blend"]))
     return S.Light(kind, tuple(props["location"]), direction, tuple(intensity),
-                   diffuse_factor=props["diffuse_factor"], specular_factor=props["specular_factor"], **extra)
+                   diffuse_factor=props["diffuse_factor"], specular_factor=props["specular_factor"],
+                   radius=props.get("shadow_soft_size", 0.0),
+                   soft_falloff=props.get("use_soft_falloff", False),
+                   **extra)
 
 
 @pytest.mark.parametrize("seed", range(6))
 @pytest.mark.parametrize("model", ["BLINN_PHONG", "PHONG", "PBR"])
 def test_gpu_matches_numpy_twin(model, seed, tmp_path):
+    _compare(model, seed, tmp_path)
+
+
+@pytest.mark.parametrize("seed", range(4))
+@pytest.mark.parametrize("model", ["BLINN_PHONG", "PBR"])
+def test_gpu_matches_numpy_twin_with_sphere_lights(model, seed, tmp_path):
+    """Point and spot lights with a radius, with and without soft falloff."""
+    _compare(model, seed + 100, tmp_path, sizes=True)
+
+
+def _compare(model, seed, tmp_path, sizes=False):
     rng = np.random.default_rng(1000 * seed + len(model))
-    tilt, mat, lights = _random_case(rng)
+    tilt, mat, lights = _random_case(rng, sizes)
     scene = scenes.reset(size=SIZE)
     scene.shading_lab.model = model
     scene.shading_lab.ambient = 0.05
