@@ -378,7 +378,15 @@ def make_light(light: bpy.types.Light, matrix) -> S.Light:
     if kind == "SUN":
         extra["angle"] = max(float(light.angle), 0.0)
     elif kind == "AREA":
-        extra["radius"] = math.sqrt(_area(light) / math.pi)
+        scale_x, scale_y = (float(np.linalg.norm(m[:3, i])) for i in (0, 1))
+        sx = light.size
+        sy = light.size_y if light.shape in ("RECTANGLE", "ELLIPSE") else light.size
+        ellipse = light.shape in ("DISK", "ELLIPSE")
+        half = (0.5 * sx * scale_x, 0.5 * sy * scale_y)
+        extra["radius"] = math.sqrt(half[0] * half[1] * (1.0 if ellipse else 4.0 / math.pi))  # equal area
+        extra["axis_x"] = tuple(float(x) for x in m[:3, 0] / max(scale_x, 1e-30))
+        extra["half_size"] = half
+        extra["ellipse"] = ellipse
     else:
         extra["radius"] = max(float(light.shadow_soft_size), 0.0)
         extra["soft_falloff"] = bool(getattr(light, "use_soft_falloff", False))

@@ -436,7 +436,7 @@ def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None) ->
 
 
 def pack_lights(snapshot: Snapshot, max_lights: int) -> bytes:
-    data = np.zeros((max_lights, 20), np.float32)
+    data = np.zeros((max_lights, 24), np.float32)
     first_layer, _used, _dropped = shadows.assign(snapshot)
     for i, light in enumerate(snapshot.lights[:max_lights]):
         data[i] = [
@@ -444,7 +444,8 @@ def pack_lights(snapshot: Snapshot, max_lights: int) -> bytes:
             *light.direction, light.spot_cos_half,
             *light.intensity, light.spot_smooth,
             light.diffuse_factor, light.specular_factor, 1.0 if light.world else 0.0, first_layer[i],
-            light.sphere_radius, 1.0 if light.soft_falloff else 0.0, 0.0, 0.0,
+            light.sphere_radius, 1.0 if light.soft_falloff else 0.0, *light.half_size,
+            *light.axis_x, 1.0 if light.ellipse else 0.0,
         ]
     return data.tobytes()
 

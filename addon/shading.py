@@ -11,6 +11,7 @@ numpy: no ``bpy``, no ``gpu``.
 from __future__ import annotations
 
 import copy
+import math
 
 import numpy as np
 
@@ -58,6 +59,19 @@ def E_Point(light: Light, p):
     return np.asarray(light.intensity) / np.maximum(falloff, MIN_DIST2)[..., None], l
 
 
+def size_lobe_weights(theta, alpha):
+    """(alpha_wide, wide_weight, point_weight) of a light of angular radius ``theta`` (half-vector
+    space) against a lobe of width ``alpha`` (lights.glsl's size_lobe_weights)."""
+    k2 = theta * theta / np.maximum(alpha * alpha, 1e-12)
+    wide_weight = 1.0 / (1.0 + k2)
+    point_weight = (1.0 - wide_weight) / (1.0 + 0.5 * np.pi * np.sqrt(k2) + k2)
+    return np.sqrt(alpha * alpha + theta * theta), wide_weight, point_weight
+
+
+def _unit(v):
+    return v / np.sqrt(np.maximum(_dot(v, v), 1e-30))[..., None]
+
+
 def sphere_light_specular(light: Light, p, r_dir, alpha):
     """(direction, alpha_wide, wide_weight, point_weight): a sphere light's specular lobe as
     glsl/lights.glsl's sphere_light_specular mixes it -- the representative point (Karis 2013)
@@ -66,16 +80,33 @@ def sphere_light_specular(light: Light, p, r_dir, alpha):
     d2 = _dot(to_light, to_light)
     radius = light.sphere_radius
     theta = radius * 0.5 / np.sqrt(np.maximum(d2 + (radius * radius if light.soft_falloff else 0.0), 1e-8))
-    k2 = theta * theta / np.maximum(alpha * alpha, 1e-12)
-    k = np.sqrt(k2)
-    wide_weight = 1.0 / (1.0 + k2)
-    point_weight = (1.0 - wide_weight) / (1.0 + 0.5 * np.pi * k + k2)
     centre_to_ray = _dot(to_light, r_dir)[..., None] * r_dir - to_light
     gap = np.sqrt(_dot(centre_to_ray, centre_to_ray))
     with np.errstate(divide="ignore", invalid="ignore"):
         closest = to_light + centre_to_ray * np.where(gap > radius, radius / gap, 1.0)[..., None]
-        direction = closest / np.sqrt(np.maximum(_dot(closest, closest), 1e-30))[..., None]
-    return direction, np.sqrt(alpha * alpha + theta * theta), wide_weight, point_weight
+    return (_unit(closest), *size_lobe_weights(theta, alpha))
+
+
+def area_light_specular(light: Light, p, r_dir, alpha):
+    """The same for an area light: its point nearest where the reflected ray meets its plane."""
+    centre = np.asarray(light.position, np.float64)
+    normal = np.asarray(light.direction, np.float64)
+    x = np.asarray(light.axis_x, np.float64)
+    y = np.cross(-normal, x)
+    d = np.sqrt(_dot(centre - p, centre - p))
+    hx, hy = light.half_size
+    radius = math.sqrt(hx * hy * (1.0 if light.ellipse else 4.0 / math.pi))
+    towards = _dot(r_dir, normal)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = np.where(towards < -1e-6, _dot(centre - p, normal) / towards, d)
+    hit = p + r_dir * t[..., None]
+    uv = np.stack([_dot(hit - centre, x) / max(hx, 1e-8), _dot(hit - centre, y) / max(hy, 1e-8)], -1)
+    if light.ellipse:
+        uv = uv / np.maximum(np.linalg.norm(uv, axis=-1, keepdims=True), 1.0)
+    else:
+        uv = np.clip(uv, -1.0, 1.0)
+    closest = centre + uv[..., :1] * hx * x + uv[..., 1:] * hy * y - p
+    return (_unit(closest), *size_lobe_weights(radius / (2.0 * np.maximum(d, 1e-4)), alpha))
 
 
 def E_Spot(light: Light, p):
@@ -91,9 +122,51 @@ def E_Sun(light: Light, p):
     return np.broadcast_to(np.asarray(light.intensity, np.float64), shape), l
 
 
+AREA_ELLIPSE_SIDES = 16
+#: Radius scale of a 16-gon with the area of its circle: sqrt(2 pi / (n sin(2 pi / n))).
+ELLIPSE_SCALE = math.sqrt(2.0 * math.pi / (AREA_ELLIPSE_SIDES * math.sin(2.0 * math.pi / AREA_ELLIPSE_SIDES)))
+
+
+def area_corners(light: Light) -> np.ndarray:
+    """(n, 3): the area light's polygon (a disk or ellipse: a 16-gon of its area)."""
+    x = np.asarray(light.axis_x, np.float64)
+    y = np.cross(-np.asarray(light.direction, np.float64), x)
+    hx, hy = light.half_size
+    if light.ellipse:
+        phi = 2.0 * np.pi * np.arange(AREA_ELLIPSE_SIDES) / AREA_ELLIPSE_SIDES
+        uv = ELLIPSE_SCALE * np.stack([np.cos(phi), np.sin(phi)], -1)
+    else:
+        uv = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    return np.asarray(light.position) + uv[:, :1] * hx * x + uv[:, 1:] * hy * y
+
+
 def E_Area(light: Light, p):
-    E, l = E_Point(light, p)
-    return E * np.maximum(_dot(-l, np.asarray(light.direction)), 0.0)[..., None], l
+    """The polygon's vector form factor V = 1/2 sum theta_i g_i: E = L |V|, l = V / |V| (lights.glsl)."""
+    centre = np.asarray(light.position, np.float64)
+    to_centre = centre - p
+    corners = area_corners(light)
+    V = np.zeros(np.shape(p))
+    for i in range(len(corners)):
+        a = corners[i - 1] - p
+        b = corners[i] - p
+        a = a / np.linalg.norm(a, axis=-1, keepdims=True)
+        b = b / np.linalg.norm(b, axis=-1, keepdims=True)
+        c = np.cross(a, b)
+        sin = np.linalg.norm(c, axis=-1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            edge = c * (np.arctan2(sin, _dot(a, b)) / sin)[..., None]
+            V = V + np.where((sin > 1e-12)[..., None], edge, 0.0)
+    V = 0.5 * V
+    V = np.where((_dot(V, to_centre) < 0.0)[..., None], -V, V)
+    length = np.linalg.norm(V, axis=-1)
+    front = _dot(-to_centre, np.asarray(light.direction)) > 0.0
+    hx, hy = light.half_size
+    area = 4.0 * hx * hy * (np.pi / 4.0 if light.ellipse else 1.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        l = np.where((length > 0.0)[..., None], V / length[..., None],
+                     to_centre / np.linalg.norm(to_centre, axis=-1, keepdims=True))
+    E = np.asarray(light.intensity) / max(area, 1e-12) * np.where(front, length, 0.0)[..., None]
+    return E, l
 
 
 def light_irradiance(light: Light, p):
@@ -263,12 +336,13 @@ def shade(model: str, s: Surface, lights: list[Light], ambient: float = 0.0,
         c = c + s.ambient_color * ambient  # eq. 1.4
     for light in lights:
         E, l = light_irradiance(light, s.p)
-        if model == "PBR" and light.sphere_radius > 0.0:
-            # a sphere light: the diffuse lobe from its centre; the specular from its nearest
-            # point and, widened, from its centre
+        area = light.kind == "AREA" and light.half_size[0] > 0.0
+        if model == "PBR" and (light.sphere_radius > 0.0 or area):
+            # a light with a size: the diffuse lobe as its irradiance says; the specular from its
+            # nearest point and, widened, from its centre
             r_dir = 2.0 * _dot(s.n, s.v)[..., None] * s.n - s.v
-            l_specular, alpha_wide, wide_weight, point_weight = sphere_light_specular(
-                light, s.p, r_dir, s.alpha)
+            shape = area_light_specular if area else sphere_light_specular
+            l_specular, alpha_wide, wide_weight, point_weight = shape(light, s.p, r_dir, s.alpha)
             wide = copy.copy(s)
             wide.alpha = alpha_wide
             specular = (0.0, light.specular_factor)

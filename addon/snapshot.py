@@ -294,6 +294,9 @@ class Light:
     #                     an area light's equal-area disc radius (m); a sun uses ``angle``
     soft_falloff: bool = False  # a point or spot of radius r: Cycles' disc facing the point,
     #                             E = I / (d^2 + r^2); off: a sphere, E = I / d^2
+    axis_x: tuple[float, float, float] = (1.0, 0.0, 0.0)  # an area light's local X axis (unit)
+    half_size: tuple[float, float] = (0.0, 0.0)  # an area light's half width and height (m, scaled)
+    ellipse: bool = False  # an area light's shape: disk or ellipse (else square or rectangle)
 
     @property
     def sphere_radius(self) -> float:

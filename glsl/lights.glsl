@@ -40,7 +40,17 @@ vec3 E_Point(LightData light, vec3 p, out vec3 l)
  * The two are mixed with the representative point's weight k^2 / (1 + k^2). Against Cycles (a
  * white GGX metal sphere, unshadowed, mean |error| / mean): mirror 0.05 under a 0.1 / 0.5 m light
  * 8 % / 7 % (a point: 93 % / 98 %), roughness 0.2: 8 % / 28 % (11 % / 98 %), 0.5: 0.3 % / 4 %
- * (0.3 % / 7 %). Returns the representative direction; alpha_wide and the weights by `out`. */
+ * (0.3 % / 7 %). sphere_light_specular returns the representative direction; alpha_wide and the
+ * weights by `out` (size_lobe_weights: shared with area lights). */
+void size_lobe_weights(float theta, float alpha, out float alpha_wide, out float wide_weight,
+                       out float point_weight)
+{
+  float k2 = theta * theta / max(alpha * alpha, 1e-12);
+  alpha_wide = sqrt(alpha * alpha + theta * theta);
+  wide_weight = 1.0 / (1.0 + k2);
+  point_weight = (1.0 - wide_weight) / (1.0 + 1.5707963 * sqrt(k2) + k2);
+}
+
 vec3 sphere_light_specular(LightData light, vec3 p, vec3 r_dir, float alpha, out float alpha_wide,
                            out float wide_weight, out float point_weight)
 {
@@ -48,11 +58,7 @@ vec3 sphere_light_specular(LightData light, vec3 p, vec3 r_dir, float alpha, out
   float d2 = dot(to_light, to_light);
   float radius = light.shape.x;
   float theta = radius * 0.5 * inversesqrt(max(d2 + light.shape.y * radius * radius, 1e-8));
-  float k2 = theta * theta / max(alpha * alpha, 1e-12);
-  float k = sqrt(k2);
-  alpha_wide = sqrt(alpha * alpha + theta * theta);
-  wide_weight = 1.0 / (1.0 + k2);
-  point_weight = (1.0 - wide_weight) / (1.0 + 1.5707963 * k + k2);
+  size_lobe_weights(theta, alpha, alpha_wide, wide_weight, point_weight);
   vec3 centre_to_ray = dot(to_light, r_dir) * r_dir - to_light;
   float gap = length(centre_to_ray);
   vec3 closest = to_light + centre_to_ray * (gap > radius ? radius / gap : 1.0);
@@ -84,13 +90,104 @@ vec3 E_Sun(LightData light, out vec3 l)
 #endif
 
 #ifdef SL_HAS_AREA
-/* Area light, approximated as a one-sided Lambertian point emitter at its centre: intensity
- * I(theta) = (P / pi) cos(theta) towards the light's -Z, zero behind it. Exact in the far field;
- * ignores the light's extent (no soft highlights, no horizon clipping). */
+/* Area light: a one-sided Lambertian emitter of radiance L = I / A (I = P / pi along its normal,
+ * packed on the CPU; A its area) towards its -Z. Its irradiance is exact for the polygon (a disk
+ * or ellipse: a 16-gon of the same area): the vector form factor (Lambert 1760; Arvo 1995)
+ * V = 1/2 sum_i theta_i g_i over the edges seen from p (theta_i the angle an edge subtends, g_i
+ * the unit normal of the plane through p and the edge), E . (n.l) = L n.V with l = V / |V| and
+ * E = L |V|: exact for every diffuse term's n.l, the polygon not clipped by p's horizon. */
+#define AREA_ELLIPSE_SIDES 16
+vec3 area_corner(LightData light, int i, vec3 y_axis)
+{
+  vec2 half_size = light.shape.zw;
+  vec2 uv;
+  if (light.area.w > 0.5) {
+    /* a 16-gon of the ellipse's area: radius scaled by sqrt(2 pi / (n sin(2 pi / n))) */
+    float phi = 6.2831853 * float(i) / float(AREA_ELLIPSE_SIDES);
+    uv = 1.0130016 * vec2(cos(phi), sin(phi));
+  }
+  else {
+    uv = vec2(i == 0 || i == 3 ? -1.0 : 1.0, i < 2 ? -1.0 : 1.0);
+  }
+  return light.position_kind.xyz + light.area.xyz * (uv.x * half_size.x) + y_axis * (uv.y * half_size.y);
+}
+
 vec3 E_Area(LightData light, vec3 p, out vec3 l)
 {
-  vec3 E = E_Point(light, p, l);
-  return E * max(dot(-l, light.direction_cone.xyz), 0.0);
+  vec3 centre = light.position_kind.xyz;
+  vec3 to_centre = centre - p;
+  l = normalize(to_centre);
+  if (dot(-to_centre, light.direction_cone.xyz) <= 0.0) {
+    return vec3(0.0); /* behind the emitting side */
+  }
+  vec3 y_axis = cross(-light.direction_cone.xyz, light.area.xyz);
+  int n = light.area.w > 0.5 ? AREA_ELLIPSE_SIDES : 4;
+  vec3 V = vec3(0.0);
+  vec3 a = normalize(area_corner(light, n - 1, y_axis) - p);
+  for (int i = 0; i < AREA_ELLIPSE_SIDES; i++) {
+    if (i >= n) {
+      break;
+    }
+    vec3 b = normalize(area_corner(light, i, y_axis) - p);
+    vec3 c = cross(a, b);
+    float s = length(c);
+    if (s > 1e-12) {
+      V += c * (atan(s, dot(a, b)) / s); /* theta g, with theta from atan2: acos loses precision */
+    }
+    a = b;
+  }
+  V *= 0.5;
+  if (dot(V, to_centre) < 0.0) {
+    V = -V; /* the corners' winding as seen from p */
+  }
+  float len = length(V);
+  if (len <= 0.0) {
+    return vec3(0.0);
+  }
+  l = V / len;
+  float area = 4.0 * light.shape.z * light.shape.w * (light.area.w > 0.5 ? 0.78539816 : 1.0);
+  return light.intensity_blend.rgb / max(area, 1e-12) * len;
+}
+
+/* An area light's specular lobe: the representative point (Karis 2013) is the point of the light
+ * nearest where the reflected ray meets its plane, mixed with the widened lobe as a sphere light's
+ * is (size_lobe_weights), the light's size being its equal-area disc's radius. */
+vec3 area_light_specular(LightData light, vec3 p, vec3 r_dir, float alpha, out float alpha_wide,
+                         out float wide_weight, out float point_weight)
+{
+  vec3 centre = light.position_kind.xyz;
+  vec3 normal = light.direction_cone.xyz;
+  vec3 y_axis = cross(-normal, light.area.xyz);
+  float d = length(centre - p);
+  vec2 half_size = light.shape.zw;
+  float radius = sqrt(half_size.x * half_size.y * (light.area.w > 0.5 ? 1.0 : 1.2732395));
+  size_lobe_weights(radius / (2.0 * max(d, 1e-4)), alpha, alpha_wide, wide_weight, point_weight);
+  float towards = dot(r_dir, normal);
+  vec3 hit = towards < -1e-6 ? p + r_dir * (dot(centre - p, normal) / towards) : p + r_dir * d;
+  vec2 uv = vec2(dot(hit - centre, light.area.xyz), dot(hit - centre, y_axis)) / max(half_size, vec2(1e-8));
+  if (light.area.w > 0.5) {
+    uv /= max(length(uv), 1.0);
+  }
+  else {
+    uv = clamp(uv, -1.0, 1.0);
+  }
+  vec3 closest = centre + light.area.xyz * (uv.x * half_size.x) + y_axis * (uv.y * half_size.y) - p;
+  float len2 = dot(closest, closest);
+  return len2 > 1e-30 ? closest * inversesqrt(len2) : r_dir;
+}
+#endif
+
+#if defined(SL_HAS_POINT) || defined(SL_HAS_SPOT) || defined(SL_HAS_AREA)
+/* The specular lobe of a light with a size: a sphere (point, spot) or an area light. */
+vec3 light_specular_direction(LightData light, vec3 p, vec3 r_dir, float alpha, out float alpha_wide,
+                              out float wide_weight, out float point_weight)
+{
+#  ifdef SL_HAS_AREA
+  if (int(light.position_kind.w) == LIGHT_AREA) {
+    return area_light_specular(light, p, r_dir, alpha, alpha_wide, wide_weight, point_weight);
+  }
+#  endif
+  return sphere_light_specular(light, p, r_dir, alpha, alpha_wide, wide_weight, point_weight);
 }
 #endif
 

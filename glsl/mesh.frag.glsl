@@ -74,14 +74,14 @@ void main()
       E *= light_visibility(light, s.p, ng);
     }
 #endif
-#if defined(SL_MODEL_PBR) && (defined(SL_HAS_POINT) || defined(SL_HAS_SPOT))
-    if (light.shape.x > 0.0) {
-      /* a sphere light (lights.glsl): the diffuse lobe from its centre; the specular from its
-       * nearest point and, widened, from its centre */
+#if defined(SL_MODEL_PBR) && (defined(SL_HAS_POINT) || defined(SL_HAS_SPOT) || defined(SL_HAS_AREA))
+    if (light.shape.x > 0.0 || light.shape.z > 0.0) {
+      /* a light with a size (lights.glsl): the diffuse lobe as its irradiance says; the specular
+       * from its nearest point and, widened, from its centre */
       Surface wide = s;
       float wide_weight, point_weight;
-      vec3 l_specular = sphere_light_specular(light, s.p, reflect(-s.v, s.n), s.alpha, wide.alpha,
-                                              wide_weight, point_weight);
+      vec3 l_specular = light_specular_direction(light, s.p, reflect(-s.v, s.n), s.alpha, wide.alpha,
+                                                 wide_weight, point_weight);
       vec4 specular = factors * vec4(0.0, 1.0, 1.0, 1.0);
       c += shade_direct(s, l, E, factors * vec4(1.0, 0.0, 1.0, 1.0));
       c += shade_direct(wide, l, E * wide_weight, specular);

@@ -17,7 +17,9 @@ struct LightData {
   vec4 factors;          /* x: diffuse factor; y: specular factor; z: 1 a sun split off the world;
                           * w: the first shadow-map layer (-1: casts no shadow) */
   vec4 shape;            /* x: a point or spot light's radius r (0: a true point); y: 1 soft falloff
-                          * (Cycles' disc facing the point: E = I / (d^2 + r^2)), 0 a sphere */
+                          * (Cycles' disc facing the point: E = I / (d^2 + r^2)), 0 a sphere;
+                          * zw: an area light's half width and height (m) */
+  vec4 area;             /* xyz: an area light's local X axis; w: 1 disk or ellipse, 0 rectangle */
 };
 
 struct LightBlock {

@@ -43,6 +43,9 @@ def _random_case(rng, sizes: bool = False):
         )
         if kind == "SPOT":
             props.update(spot_size=float(rng.uniform(0.5, 2.5)), spot_blend=float(rng.uniform(0.0, 1.0)))
+        if kind == "AREA":
+            shape = str(rng.choice(["SQUARE", "RECTANGLE", "DISK", "ELLIPSE"]))
+            props.update(shape=shape, size=float(rng.uniform(0.1, 1.0)), size_y=float(rng.uniform(0.1, 1.0)))
         if sizes and kind in ("POINT", "SPOT"):  # sphere lights
             props.update(shadow_soft_size=float(rng.uniform(0.05, 0.6)),
                          use_soft_falloff=bool(rng.integers(2)))
@@ -61,6 +64,10 @@ def _twin_light(props) -> S.Light:
     if kind == "SPOT":
         extra = dict(spot_cos_half=math.cos(props["spot_size"] / 2),
                      spot_smooth=S.spot_smooth(props["spot_size"], props["spot_blend"]))
+    if kind == "AREA":
+        sy = props["size_y"] if props["shape"] in ("RECTANGLE", "ELLIPSE") else props["size"]
+        extra = dict(axis_x=tuple(m[:, 0]), half_size=(props["size"] / 2, sy / 2),
+                     ellipse=props["shape"] in ("DISK", "ELLIPSE"))
     return S.Light(kind, tuple(props["location"]), direction, tuple(intensity),
                    diffuse_factor=props["diffuse_factor"], specular_factor=props["specular_factor"],
                    radius=props.get("shadow_soft_size", 0.0),
