@@ -74,7 +74,8 @@ void main()
       E *= light_visibility(light, s.p, ng);
     }
 #endif
-#if defined(SL_MODEL_PBR) && (defined(SL_HAS_POINT) || defined(SL_HAS_SPOT) || defined(SL_HAS_AREA))
+#ifdef SL_MODEL_PBR
+#  if defined(SL_HAS_POINT) || defined(SL_HAS_SPOT) || defined(SL_HAS_AREA)
     if (light.shape.x > 0.0 || light.shape.z > 0.0) {
       /* a light with a size (lights.glsl): the diffuse lobe as its irradiance says; the specular
        * from its nearest point and, widened, from its centre */
@@ -88,6 +89,7 @@ void main()
       c += shade_direct(s, l_specular, E * point_weight, specular);
       continue;
     }
+#  endif
 #endif
     c += shade_direct(s, l, E, factors);
   }
