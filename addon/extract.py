@@ -751,6 +751,10 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
             snap.geometries[key] = geometry
         snap.items.append(S.DrawItem(key, _matrix(inst.matrix_world), slots or [""],
                                      casts_shadow=bool(getattr(obj, "visible_shadow", True))))
+    if len(snap.lights) > S.MAX_LIGHTS:
+        snap.warnings.append(f"{len(snap.lights):,} lights: the first {S.MAX_LIGHTS:,} are drawn, the rest "
+                             f"left out")
+        del snap.lights[S.MAX_LIGHTS:]
     snap.warnings[:] = dict.fromkeys(snap.warnings)  # each once, however many objects share it
     return snap
 

@@ -141,7 +141,7 @@ def bind_sampler(shader, name: str, texture) -> None:
 
 #: The shading programs' interface (glsl/uniforms.glsl, mesh.vert.glsl): uniform blocks by
 #: binding, push constants, vertex attributes by location, and what the vertex stage hands on.
-_BLOCKS = (("FrameData", "frame"), ("LightBlock", "lights"), ("MaterialData", "material"),
+_BLOCKS = (("FrameData", "frame"), None, ("MaterialData", "material"),  # 1: was the lights' block
            ("ObjectBlock", "objects"))
 _PUSH_CONSTANTS = (("INT", "object_index"), ("VEC4", "lobes"))
 _ATTRIBUTES = (("VEC3", "pos"), ("VEC3", "nor"), ("VEC2", "uv"), ("VEC4", "tangent"))
@@ -168,8 +168,10 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     if features.shadow_layers:
         info.sampler(13, "FLOAT_2D_ARRAY", "shadow_maps")
         info.uniform_buf(len(_BLOCKS) + 2, "ShadowBlock", "shadow")
-    for binding, (struct, name) in enumerate(_BLOCKS):
-        info.uniform_buf(binding, struct, name)
+    info.sampler(14, "FLOAT_2D", "light_data")
+    for binding, block in enumerate(_BLOCKS):
+        if block is not None:
+            info.uniform_buf(binding, *block)
     if features.environment:
         info.uniform_buf(len(_BLOCKS), "EnvironmentData", "env")
     if features.uses_env_chain:

@@ -8,8 +8,9 @@ at each sync) so that tests and the viewport can see what an edit cost:
 - ``geometry``: one vertex buffer per material range of each mesh (by geometry key);
 - ``objects``: every draw item's matrices, in blocks of ``programs.OBJECT_BLOCK`` (a draw names
   its entry by block and index; one buffer, not one per item per frame);
-- ``lights``, one block; ``materials``, one block per material; ``frame`` (camera, counts), one
-  block, packed when a frame runs (the viewport's camera moves between syncs);
+- ``lights``, one texture (a row per light); ``materials``, one block per material; ``frame``
+  (camera, counts), one block, packed when a frame runs (the viewport's camera moves between
+  syncs);
 - ``textures``: one per image the materials sample, from the pixels the snapshot carries;
 - ``shadows``: the shadow maps' layers (``shadows.plan``, fitted to the geometry's bounds), one
   block; the maps themselves are drawn by ``passes.ShadowPass`` when ``caster_key`` or the plan
@@ -114,13 +115,34 @@ class _Block:
         return True
 
 
+class _RowTexture:
+    """A float texture of rows (one per item, ``width`` texels each) and the bytes it holds;
+    ``put`` makes a new texture only for different bytes (Python's textures take data only when
+    made). Holds what a uniform block cannot: the lights, any number of them."""
+
+    def __init__(self):
+        self.data: bytes | None = None
+        self.texture: gpu.types.GPUTexture | None = None
+
+    def put(self, rows: np.ndarray) -> bool:
+        data = np.ascontiguousarray(rows, np.float32)
+        raw = data.tobytes()
+        if raw == self.data:
+            return False
+        height, floats = data.shape
+        buffer = gpu.types.Buffer("FLOAT", height * floats, data.ravel())
+        self.texture = gpu.types.GPUTexture((floats // 4, height), format="RGBA32F", data=buffer)
+        self.data = raw
+        return True
+
+
 class SceneResources:
     def __init__(self):
         self.snapshot: Snapshot | None = None
         self.uploads: Counter = Counter()
         self._batches: dict[str, list[tuple[int, gpu.types.GPUBatch]]] = {}
         self._materials: dict[str, _Block] = {}
-        self._lights = _Block()
+        self._lights = _RowTexture()
         self._objects: list[_Block] = []
         self._frame = _Block()
         self._world_camera = _Block()
@@ -270,7 +292,7 @@ class SceneResources:
         shader = self.program(features)
         shader.bind()
         shader.uniform_block("frame", self._frame.ubo)
-        shader.uniform_block("lights", self._lights.ubo)
+        gpu_library.bind_sampler(shader, "light_data", self._lights.texture)
         shader.uniform_float("lobes", lobes)
         if features.uses_albedo_table:
             gpu_library.bind_sampler(shader, "ms_table", gpu_library.albedo_table(features.terms))
@@ -330,7 +352,7 @@ class SceneResources:
         self._textures.clear()
         self._draw_lists.clear()
         self._programs.clear()
-        self._lights = _Block()
+        self._lights = _RowTexture()
         self._frame = _Block()
         self._world_camera = _Block()
         self._world_lighting = _Block()

@@ -435,8 +435,13 @@ def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None) ->
     return np.concatenate([np.asarray(r, np.float32) for r in rows]).tobytes()
 
 
-def pack_lights(snapshot: Snapshot, max_lights: int) -> bytes:
-    data = np.zeros((max_lights, 24), np.float32)
+#: Floats per light: LightData's six vec4 (glsl/uniforms.glsl), one row of the light texture.
+LIGHT_FLOATS = 24
+
+
+def pack_lights(snapshot: Snapshot, max_lights: int) -> np.ndarray:
+    """(max_lights, LIGHT_FLOATS) float32: each light's LightData, a row of the light texture."""
+    data = np.zeros((max_lights, LIGHT_FLOATS), np.float32)
     first_layer, _used, _dropped = shadows.assign(snapshot)
     for i, light in enumerate(snapshot.lights[:max_lights]):
         data[i] = [
@@ -447,7 +452,7 @@ def pack_lights(snapshot: Snapshot, max_lights: int) -> bytes:
             light.sphere_radius, 1.0 if light.soft_falloff else 0.0, *light.half_size,
             *light.axis_x, 1.0 if light.ellipse else 0.0,
         ]
-    return data.tobytes()
+    return data
 
 
 def pack_shadows(plan: shadows.ShadowPlan, slots: int) -> bytes:

@@ -74,6 +74,9 @@ class Terms:
         changes = {k: v for k, v in families.items() if v}
         return replace(self, **changes) if changes else self
 LIGHT_KINDS = ("POINT", "SPOT", "SUN", "AREA")
+#: Lights one frame draws (rows of the light texture: GPUs hold 16,384 at least); further ones
+#: are left out with a warning.
+MAX_LIGHTS = 16384
 
 #: Fresnel reflectance at normal incidence of a dielectric with IOR 1.5 (most plastics, glass).
 DEFAULT_F0 = 0.04

@@ -22,6 +22,19 @@ vec3 shading_normal(vec3 p)
   return flen2 > 0.0 ? face * inversesqrt(flen2) : vec3(0.0, 0.0, 1.0);
 }
 
+/* Light i's data: row i of the light texture, one texel per vec4 of LightData. */
+LightData load_light(int i)
+{
+  LightData light;
+  light.position_kind = texelFetch(light_data, ivec2(0, i), 0);
+  light.direction_cone = texelFetch(light_data, ivec2(1, i), 0);
+  light.intensity_blend = texelFetch(light_data, ivec2(2, i), 0);
+  light.factors = texelFetch(light_data, ivec2(3, i), 0);
+  light.shape = texelFetch(light_data, ivec2(4, i), 0);
+  light.area = texelFetch(light_data, ivec2(5, i), 0);
+  return light;
+}
+
 void main()
 {
   /* textures and screen derivatives first: they need every fragment of the quad alive */
@@ -55,7 +68,7 @@ void main()
     if (i >= count) {
       break;
     }
-    LightData light = lights.light[i];
+    LightData light = load_light(i);
     vec4 factors = light.factors * vec4(lobes.xy, 1.0, 1.0);
     if (light.factors.z > 0.5) {
       /* a sun split off the world */

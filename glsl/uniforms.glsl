@@ -22,9 +22,8 @@ struct LightData {
   vec4 area;             /* xyz: an area light's local X axis; w: 1 disk or ellipse, 0 rectangle */
 };
 
-struct LightBlock {
-  LightData light[SL_MAX_LIGHTS];
-};
+/* The lights are not a uniform block (64 KiB would hold 682 of them): each is a row of a texture,
+ * light_data, its six vec4 in LightData's order (mesh.frag.glsl's load_light). */
 
 struct MaterialData {
   vec4 base_color;       /* rgb: PBR base colour */
