@@ -17,8 +17,8 @@
 #define SHADOW_CUBE 0
 #define SHADOW_PERSPECTIVE 1
 #define SHADOW_ORTHOGRAPHIC 2
-#define SHADOW_SEARCH_TAPS 16
-#define SHADOW_FILTER_TAPS 24
+#define SHADOW_SEARCH_TAPS 16 /* half of them for a search within 2 texels */
+#define SHADOW_FILTER_TAPS 24 /* half of them for a penumbra within 3 texels */
 #define SHADOW_MAX_RADIUS 48.0 /* texels */
 
 /* The cube face holding direction d (from the light), in addon/shadows.py's CUBE_FACES order. */
@@ -82,13 +82,9 @@ float shadow_bilinear(int layer, vec2 uv_texels, float d, vec2 gradient, float b
   return mix(mix(v00, v10, f.x), mix(v01, v11, f.x), f.y);
 }
 
-/* The k-th of n points of a Vogel (golden-angle) disc of radius 1, turned by `turn`. */
-vec2 vogel_disc(int k, int n, float turn)
-{
-  float r = sqrt((float(k) + 0.5) / float(n));
-  float phi = float(k) * 2.39996323 + turn;
-  return r * vec2(cos(phi), sin(phi));
-}
+/* Vogel (golden-angle) disc points, k = 0, 1, ...: radius sqrt((k + 0.5) / n), each turned from
+ * the last by the golden angle (a fixed rotation: no sine or cosine per tap). */
+const mat2 GOLDEN_TURN = mat2(-0.7373688, 0.6754903, -0.6754903, -0.7373688);
 
 /* The fraction of `light` that reaches p (geometric normal ng): 1 unshadowed. */
 float light_visibility(LightData light, vec3 p, vec3 ng)
@@ -127,14 +123,19 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
   float size = info.z;
   if (size > 0.0) {
     float turn = 6.2831853 * fract(52.9829189 * fract(dot(gl_FragCoord.xy, vec2(0.06711056, 0.00583715))));
+    vec2 first_direction = vec2(cos(turn), sin(turn)); /* a per-pixel turn (interleaved gradient noise) */
     /* blocker search: casters between the receiver and a quarter of its distance (the sun: the
      * map's top) that hide some of the light */
     float search = ortho ? d * size / texel : 3.0 * size / info.y / d;
     search = clamp(search, 1.0, SHADOW_MAX_RADIUS);
     float blockers = 0.0;
     float blocker_sum = 0.0;
-    for (int k = 0; k < SHADOW_SEARCH_TAPS; k++) {
-      vec2 at = uv_texels + search * vogel_disc(k, SHADOW_SEARCH_TAPS, turn);
+    vec2 direction = first_direction;
+    /* a search a few texels wide needs fewer taps (half of them within 2 texels) */
+    int taps = search <= 2.0 ? SHADOW_SEARCH_TAPS / 2 : SHADOW_SEARCH_TAPS;
+    for (int k = 0; k < taps; k++) {
+      vec2 at = uv_texels + (search * sqrt((float(k) + 0.5) / float(taps))) * direction;
+      direction = GOLDEN_TURN * direction;
       ivec2 t = ivec2(floor(at));
       vec2 offset = vec2(t) + 0.5 - uv_texels;
       float stored = shadow_texel(layer, t);
@@ -151,11 +152,14 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
     float radius = min(max(penumbra, 0.0) / texel, SHADOW_MAX_RADIUS);
     if (radius > 1.0) {
       float lit = 0.0;
-      for (int k = 0; k < SHADOW_FILTER_TAPS; k++) {
-        vec2 at = uv_texels + radius * vogel_disc(k, SHADOW_FILTER_TAPS, turn);
+      direction = first_direction;
+      taps = radius <= 3.0 ? SHADOW_FILTER_TAPS / 2 : SHADOW_FILTER_TAPS;
+      for (int k = 0; k < taps; k++) {
+        vec2 at = uv_texels + (radius * sqrt((float(k) + 0.5) / float(taps))) * direction;
+        direction = GOLDEN_TURN * direction;
         lit += shadow_test(layer, ivec2(floor(at)), uv_texels, d, gradient, bias);
       }
-      return lit / float(SHADOW_FILTER_TAPS);
+      return lit / float(taps);
     }
   }
 #endif
