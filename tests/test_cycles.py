@@ -1,7 +1,7 @@
 """The same scene rendered by Cycles and by Shading Lab, for point, spot and sun lights.
 
 Cycles is set up to compute what the engine computes: direct light only (max bounces 0), shadows
-off (the engine has none yet), point and spot radius 0 (a true point light), soft falloff off,
+off (these tests measure the shading; tests/test_shadows.py measures shadows), point and spot radius 0 (a true point light), soft falloff off,
 pixel-centre sampling (a Gaussian filter of width 0.01 px; Cycles' Box filter would average the
 whole pixel), a black world. One light per render, so Cycles' light selection adds no noise.
 (a) a Diffuse BSDF plane: Shading Lab reads it as F0 = 0 (pure Lambert);
@@ -80,6 +80,17 @@ def _cycles(scene, path, samples=4):
     return scenes.render(scene, path)
 
 
+def _within(value: float, measured: float, what: str, factor: float = 3.0, floor: float = 1e-5) -> None:
+    """``value`` at most ``factor`` times what was measured (plus ``floor`` for a measured 0)."""
+    assert value <= factor * measured + floor, f"{what}: {value:.4%} (measured {measured:.4%})"
+
+
+#: Mean and max relative error on lit pixels measured at 64 px with bpy 5.0.1 (bounds: 3x).
+MEASURED = {("diffuse", "POINT"): (4.3e-5, 6.75e-3), ("diffuse", "SPOT"): (2.73e-4, 1.342e-2),
+            ("diffuse", "SUN"): (0.0, 0.0), ("glossy", "POINT"): (1.15e-4, 1.305e-2),
+            ("glossy", "SPOT"): (2.46e-4, 1.52e-2), ("glossy", "SUN"): (6e-6, 6e-6)}
+
+
 @pytest.mark.parametrize("light_kind", ["POINT", "SPOT", "SUN"])
 @pytest.mark.parametrize("material_kind", ["diffuse", "glossy"])
 def test_matches_cycles(material_kind, light_kind, tmp_path):
@@ -93,11 +104,12 @@ def test_matches_cycles(material_kind, light_kind, tmp_path):
     rel = np.abs(lum_ours[lit] - lum_ref[lit]) / lum_ref[lit]
     print(f"{material_kind}/{light_kind}: mean relative error {rel.mean():.4%}, "
           f"max {rel.max():.4%}, over {lit.sum()} lit pixels")
-    assert rel.mean() <= 0.02
+    mean, largest = MEASURED[material_kind, light_kind]
     # Cycles 4.x's spot cone edge differs from Cycles 5.0's: in this scene the two Cycles disagree
     # by 8.0 % on the outermost lit pixel (mean 0.05 %); ours agrees with 5.0 there to 0.1 %.
     edge_slack = light_kind == "SPOT" and bpy.app.version < (5, 0, 0)
-    assert rel.max() <= (0.10 if edge_slack else 0.05)
+    _within(rel.mean(), 0.0007 if edge_slack else mean, "mean")
+    _within(rel.max(), 0.10 if edge_slack else largest, "max", factor=1.0 if edge_slack else 3.0)
     # colour: each channel agrees too, not only the mean
     chan = np.abs(ours[lit] - ref[lit]) / np.maximum(ref[lit], 1e-6)
     assert np.median(chan) <= 0.02
@@ -128,7 +140,9 @@ def test_glossy_distributions_match_cycles(distribution, terms, roughness, tmp_p
     rel = np.abs(ours[lit] - ref[lit]) / ref[lit]
     print(f"{distribution} r={roughness}: mean relative error {rel.mean():.4%}, max {rel.max():.4%}")
     assert lit.sum() > 200, "the highlight must cover enough pixels to compare"
-    assert rel.mean() <= 0.02
+    measured = {("BECKMANN", 0.3): 3.95e-4, ("MULTI_GGX", 0.3): 2.71e-4, ("BECKMANN", 0.8): 3.5e-5,
+                ("MULTI_GGX", 0.8): 4.5e-5}[distribution, roughness]
+    _within(rel.mean(), measured, "mean")
 
 
 def _principled(base, metallic, roughness, ior=1.5):
@@ -146,7 +160,7 @@ def _principled(base, metallic, roughness, ior=1.5):
 ])
 def test_principled_term_set_matches_cycles(base, metallic, roughness, tmp_path):
     """Principled BSDF scenes (Multiscatter GGX, the node's default) against the Principled term
-    set: within 1 % on lit interior pixels."""
+    set: measured 0.004-0.016 % on lit pixels, bound 3x that."""
     scene = scenes.reset(size=SIZE)
     scene.shading_lab.model = "PBR"
     scene.shading_lab.term_set = "PRINCIPLED"
@@ -159,7 +173,8 @@ def test_principled_term_set_matches_cycles(base, metallic, roughness, tmp_path)
     print(f"principled {base} m={metallic} r={roughness}: mean relative error {rel.mean():.3%}, "
           f"max {rel.max():.3%}, per channel mean {chan.mean():.3%}")
     assert lit.sum() > 200
-    assert rel.mean() <= 0.01
+    measured = {0.5: 5e-5, 0.25: 5e-5, 0.35: 1.6e-4, 0.8: 4e-5, 0.6: 6e-5}[roughness]
+    _within(rel.mean(), measured, "mean")
 
 
 def test_emission_matches_cycles(tmp_path):
@@ -178,4 +193,4 @@ def test_emission_matches_cycles(tmp_path):
     rel = np.abs(ours - ref) / ref
     print(f"emission: mean relative error {rel.mean():.3%}")
     assert ref[..., 2].min() > 0.8 * 0.25  # every pixel carries the emission
-    assert rel.mean() <= 0.01
+    _within(rel.mean(), 4e-5, "mean")  # measured 0.004 %
