@@ -9,14 +9,31 @@ from bpy.props import EnumProperty
 
 from . import presets
 
+#: The menu's items, kept alive between draws (Blender does not copy the strings a dynamic enum
+#: returns: items built anew on every call may be freed while the menu shows them) and read again
+#: only when the library file changes.
+_PRESET_ITEMS: dict = {"stamp": None, "items": []}
+#: The identifier of the one item shown when the library cannot be read.
+UNREADABLE = "UNREADABLE"
+
 
 def _preset_items(self, context):
+    path = presets.PRESETS_DIR / "materials.toml"
+    try:
+        stat = path.stat()
+        stamp = (stat.st_mtime_ns, stat.st_size)
+    except OSError:
+        stamp = None
+    if stamp is not None and stamp == _PRESET_ITEMS["stamp"]:
+        return _PRESET_ITEMS["items"]
     try:
         library = presets.load_material_presets()
+        items = [(name, name.replace("_", " ").title(), p.description or name)
+                 for name, p in sorted(library.items())]
     except presets.PresetError as exc:  # a broken library must not break the panel
-        return [("", f"(material library unreadable: {exc})", "")]
-    return [(name, name.replace("_", " ").title(), p.description or name)
-            for name, p in sorted(library.items())]
+        items = [(UNREADABLE, "(material library unreadable)", str(exc))]
+    _PRESET_ITEMS.update(stamp=stamp, items=items)
+    return items
 
 
 class SHADINGLAB_OT_apply_material_preset(bpy.types.Operator):

@@ -147,3 +147,25 @@ def test_conversion_operators_with_undo():
     assert b.shading_lab.roughness == pytest.approx((2 / 102) ** 0.25, rel=1e-5)
     layout = _draw(ui.SHADINGLAB_PT_material, SimpleNamespace(material=a))
     assert ("operator", "shading_lab.convert_roughness", True) in layout.log
+
+
+def test_material_preset_menu_keeps_its_items_and_names_its_error(tmp_path, monkeypatch):
+    """The dynamic menu returns the same (kept-alive) items while the library file is unchanged,
+    reads it again when it changes, and a broken library is one item with a real identifier."""
+    from addon import operators, presets
+
+    library = tmp_path / "materials.toml"
+    library.write_text((presets.PRESETS_DIR / "materials.toml").read_text(encoding="utf-8"), encoding="utf-8")
+    monkeypatch.setattr(presets, "PRESETS_DIR", tmp_path)
+    monkeypatch.setattr(operators, "_PRESET_ITEMS", {"stamp": None, "items": []})
+    reads = []
+    load = presets.load_material_presets
+    monkeypatch.setattr(presets, "load_material_presets",
+                        lambda path=None: reads.append(1) or load(tmp_path / "materials.toml"))
+    first = operators._preset_items(None, None)
+    assert operators._preset_items(None, None) is first and len(reads) == 1
+    assert ("gold", "Gold") == first[[i[0] for i in first].index("gold")][:2]
+    library.write_text("[broken\n", encoding="utf-8")
+    broken = operators._preset_items(None, None)
+    assert len(reads) == 2
+    assert [item[0] for item in broken] == [operators.UNREADABLE] and "materials.toml" in broken[0][2]
