@@ -1,7 +1,8 @@
 """The same scene rendered by Cycles and by Shading Lab, for point, spot and sun lights.
 
 Cycles is set up to compute what the engine computes: direct light only (max bounces 0), shadows
-off (these tests measure the shading; tests/test_shadows.py measures shadows), point and spot radius 0 (a true point light), soft falloff off,
+off (these tests measure the shading; tests/test_shadows.py measures shadows), point and spot
+radius 0 (a true point light; tests/test_light_shapes.py has sizes), soft falloff off,
 pixel-centre sampling (a Gaussian filter of width 0.01 px; Cycles' Box filter would average the
 whole pixel), a black world. One light per render, so Cycles' light selection adds no noise.
 (a) a Diffuse BSDF plane: Shading Lab reads it as F0 = 0 (pure Lambert);
