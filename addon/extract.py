@@ -8,10 +8,12 @@ import dataclasses
 import itertools
 import math
 import threading
+from collections import Counter
 
 import bpy
 import numpy as np
 
+from . import shadows
 from . import snapshot as S
 
 LIGHT_KIND = {"POINT": "POINT", "SPOT": "SPOT", "SUN": "SUN", "AREA": "AREA"}
@@ -76,10 +78,44 @@ def _image_map(node, name, images: dict | None, through_normal_map: bool = False
     return (key, source.interpolation == "Closest"), strength
 
 
-def material_params(material: bpy.types.Material | None, images: dict | None = None) -> S.MaterialParams:
+#: The surface shaders read, and the Principled BSDF inputs whose images are read.
+READ_SHADERS = ("ShaderNodeBsdfPrincipled", "ShaderNodeEmission", "ShaderNodeBsdfDiffuse",
+                "ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic")
+READ_PRINCIPLED_MAPS = ("Base Color", "Metallic", "Roughness", "Normal")
+
+
+def _unread_parts(material, node) -> list[str]:
+    """What of ``material``'s surface Shading Lab does not read (for ``Snapshot.warnings``)."""
+    if node is None:
+        return []
+    if node.bl_idname not in READ_SHADERS:
+        return [f"Material '{material.name}': its surface shader ({node.name}) is not read; it is drawn "
+                f"with its viewport display values"]
+    if node.bl_idname != "ShaderNodeBsdfPrincipled":
+        return []
+    unread = []
+    for socket in node.inputs:
+        if not socket.is_linked or not socket.enabled:
+            continue
+        source = socket.links[0].from_node
+        image_like = source.bl_idname in ("ShaderNodeTexImage", "ShaderNodeNormalMap")
+        if socket.name in READ_PRINCIPLED_MAPS and image_like:
+            continue
+        if socket.name == "Alpha" and source.bl_idname == "ShaderNodeTexImage":
+            continue
+        unread.append(socket.name)
+    if not unread:
+        return []
+    return [f"Material '{material.name}': {', '.join(unread)} driven by nodes Shading Lab does not read; "
+            f"their own values are used"]
+
+
+def material_params(material: bpy.types.Material | None, images: dict | None = None,
+                    warnings: list[str] | None = None) -> S.MaterialParams:
     """Explicit Shading Lab values where the user set them, else the surface shader's values
     (Principled, Diffuse or Glossy BSDF), else the material's viewport display values. Images the
-    material samples are added to ``images`` (key -> ``bpy.types.Image``)."""
+    material samples are added to ``images`` (key -> ``bpy.types.Image``); what of the shader is
+    not read is said in ``warnings``."""
     if material is None:
         return S.DEFAULT_MATERIAL
     maps: dict = {}
@@ -89,6 +125,8 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
     f0 = S.DEFAULT_F0
     node = _linked_surface_node(material)
     kind = node.bl_idname if node is not None else ""
+    if warnings is not None:
+        warnings.extend(_unread_parts(material, node))
     if kind == "ShaderNodeBsdfPrincipled":
         base = _rgb(_input(node, "Base Color", base))
         metal = float(_input(node, "Metallic", metal))
@@ -335,6 +373,11 @@ def _geometry_key(obj: bpy.types.Object) -> str:
 
 def _matrix(m) -> np.ndarray:
     return np.array(m, np.float32)
+
+
+#: Object types that reach the depsgraph with no mesh of their own, and are not drawn.
+UNDRAWN_KINDS = {"CURVES": "hair curves object(s)", "VOLUME": "volume(s)", "POINTCLOUD": "point cloud(s)",
+                 "GREASEPENCIL": "Grease Pencil object(s)", "GPENCIL": "Grease Pencil object(s)"}
 
 
 # --- lights ------------------------------------------------------------------------------------
@@ -714,6 +757,7 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
     snap.materials[""] = S.DEFAULT_MATERIAL
     reusable = previous.geometries if previous is not None else {}
     skipped_empty: set[str] = set()
+    skipped_kinds: Counter = Counter()
     for inst in depsgraph.object_instances:
         obj = inst.object
         if obj.type == "LIGHT":
@@ -724,6 +768,8 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
         # instances of their own, beside the source object: take geometry from meshes only, or
         # they are drawn twice (Cycles' BlenderSync::object_is_geometry does the same).
         if obj.type != "MESH":
+            if obj.type in UNDRAWN_KINDS:
+                skipped_kinds[obj.type] += 1
             continue
         key = _geometry_key(obj)
         if key in skipped_empty:
@@ -751,6 +797,14 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
             snap.geometries[key] = geometry
         snap.items.append(S.DrawItem(key, _matrix(inst.matrix_world), slots or [""],
                                      casts_shadow=bool(getattr(obj, "visible_shadow", True))))
+    _first, _layers, dropped = shadows.assign(snap)
+    if dropped:
+        snap.warnings.append(f"{dropped} shadowed light(s) cast no shadow: a frame holds "
+                             f"{shadows.MAX_SHADOW_LAYERS} shadow maps (point and area lights take six)")
+    skipped = {kind: count for kind, count in skipped_kinds.items() if count}
+    if skipped:
+        snap.warnings.append("Not drawn (Shading Lab draws meshes): " + ", ".join(
+            f"{count} {UNDRAWN_KINDS[kind]}" for kind, count in sorted(skipped.items())))
     if len(snap.lights) > S.MAX_LIGHTS:
         snap.warnings.append(f"{len(snap.lights):,} lights: the first {S.MAX_LIGHTS:,} are drawn, the rest "
                              f"left out")
@@ -763,7 +817,7 @@ def _material_with_images(snap: S.Snapshot, material) -> S.MaterialParams:
     """``material_params``, with the pixels of the images it samples added to ``snap.images``;
     a map whose image has no pixels is dropped (and said in ``snap.warnings``)."""
     found: dict = {}
-    params = material_params(material, found)
+    params = material_params(material, found, snap.warnings)
     dropped = {}
     for name in S.MaterialParams.MAPS:
         ref = getattr(params, name)

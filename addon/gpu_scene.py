@@ -212,10 +212,6 @@ class SceneResources:
 
     def _sync_shadows(self, snapshot: Snapshot) -> None:
         plan = self.shadow_plan = shadows.plan(snapshot, self._bounds)
-        if plan.dropped:
-            snapshot.warnings.append(f"{plan.dropped} shadowed light(s) cast no shadow: the frame holds "
-                                     f"{shadows.MAX_SHADOW_LAYERS} shadow maps (point and area lights "
-                                     f"take six)")
         if not plan.layers:
             self._shadows = _Block()
             self.caster_key = b""

@@ -460,3 +460,30 @@ def test_large_grid_arrays():
         assert array.shape == (3 * triangles, 3)
         assert array.flags.c_contiguous
     assert geo.ranges == [(0, 0, 3 * triangles)]
+
+
+def test_what_is_not_read_is_said_once():
+    """Unread surface shaders, node-driven inputs and undrawn object types each give one warning,
+    however many objects share them."""
+    scene = scenes.reset(size=8)
+    scenes.ortho_camera(scene)
+    mix = bpy.data.materials.new("Mixed")
+    tree = scenes.node_tree(mix)
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    tree.links.new(tree.nodes.new("ShaderNodeMixShader").outputs[0], out.inputs["Surface"])
+    ramp = bpy.data.materials.new("Ramped")
+    tree = scenes.node_tree(ramp)
+    bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    tree.links.new(tree.nodes.new("ShaderNodeValToRGB").outputs["Color"], bsdf.inputs["Base Color"])
+    tree.links.new(tree.nodes.new("ShaderNodeValue").outputs[0], bsdf.inputs["Coat Weight"])
+    for i, mat in enumerate((mix, mix, ramp)):
+        scenes.plane(scene, size=0.5, location=(i, 0.0, 0.0), material=mat)
+    for i in range(2):
+        scene.collection.objects.link(bpy.data.objects.new(f"Hair{i}", bpy.data.hair_curves.new(f"Hair{i}")))
+    scene.collection.objects.link(bpy.data.objects.new("Smoke", bpy.data.volumes.new("Smoke")))
+    snap = extract.snapshot(bpy.context.evaluated_depsgraph_get())
+    said = "\n".join(snap.warnings)
+    assert len(snap.warnings) == 3, snap.warnings
+    assert "Material 'Mixed': its surface shader (Mix Shader) is not read" in said
+    assert "Material 'Ramped': Base Color, Coat Weight driven by nodes" in said
+    assert "Not drawn (Shading Lab draws meshes): 2 hair curves object(s), 1 volume(s)" in said
