@@ -794,6 +794,10 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
                     skipped_empty.add(key)
                     continue
                 snap.fresh.add(key)
+                if tangents and geometry.tangents is None:
+                    snap.warnings.append(f"Mesh '{obj.data.name}': its normal map is not drawn (Blender "
+                                         f"gives tangents to triangles and quads with a UV map only: "
+                                         f"triangulate its n-gons or add a UV map)")
             snap.geometries[key] = geometry
         snap.items.append(S.DrawItem(key, _matrix(inst.matrix_world), slots or [""],
                                      casts_shadow=bool(getattr(obj, "visible_shadow", True))))

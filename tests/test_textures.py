@@ -287,3 +287,24 @@ def test_image_from_a_linked_library_beside_a_local_one_of_the_same_name(tmp_pat
     want = np.where((centres < 0.5)[None, :, None], srgb_decode(_stored(local_texels))[v_idx][:, u_idx],
                     srgb_decode(_stored(lib_texels))[v_idx][:, u_idx])
     np.testing.assert_allclose(got, want, atol=2e-3)
+
+
+def test_a_normal_map_on_n_gons_is_said_to_be_dropped():
+    """Blender gives tangents to triangles and quads only: the normal map of a mesh with a
+    pentagon is not drawn, and the render says so."""
+    from addon import extract
+
+    scene = _textured_scene({"Normal": ("bumps", np.full((TEXELS, TEXELS, 3), (0.5, 0.5, 1.0)), True)})
+    plane = next(o for o in scene.objects if o.type == "MESH")
+    quad = extract.snapshot(bpy.context.evaluated_depsgraph_get()).warnings
+    assert not any("normal map is not drawn" in w for w in quad)
+    mesh = bpy.data.meshes.new("Pentagon")
+    mesh.from_pydata([(math.cos(a), math.sin(a), 0.0) for a in np.linspace(0, 2 * math.pi, 6)[:5]], [],
+                     [(0, 1, 2, 3, 4)])
+    mesh.uv_layers.new(name="UVMap")
+    mesh.materials.append(plane.data.materials[0])
+    plane.data = mesh
+    said = extract.snapshot(bpy.context.evaluated_depsgraph_get()).warnings
+    assert [w for w in said if "normal map is not drawn" in w] == [
+        "Mesh 'Pentagon': its normal map is not drawn (Blender gives tangents to triangles and quads with "
+        "a UV map only: triangulate its n-gons or add a UV map)"]
