@@ -37,6 +37,8 @@ def light_passes(view_layer) -> list[str]:
 #: Phase times of the last render (final or preview) in milliseconds, read by the benchmarks.
 #: Renders and previews run on their own threads in the UI: each replaces it whole, under a lock.
 last_timings: dict[str, float] = {}
+#: What the last final render said of the scene (``Snapshot.warnings``): the CLI lists it.
+last_warnings: list[str] = []
 _TIMINGS_LOCK = threading.Lock()
 
 
@@ -236,7 +238,8 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         timings = dict(extract_ms=1e3 * (extracted - start), draw_ms=1e3 * (drawn - extracted),
                        result_ms=1e3 * (done - drawn), total_ms=1e3 * (done - start))
         _set_timings(timings)
-        self.update_stats("", f"Shading Lab | {label} | {timings['total_ms']:.0f} ms")
+        said = f" | {len(snap.warnings)} warning(s), see the Info editor" if snap.warnings else ""
+        self.update_stats("", f"Shading Lab | {label} | {timings['total_ms']:.0f} ms{said}")
 
     def _read_scene(self, depsgraph):
         """The snapshot to draw (None, with the error reported, when the scene cannot be read)."""
@@ -257,6 +260,9 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
             return None
         for warning in snap.warnings:
             self.report({"WARNING"}, warning)
+        if not self.is_preview:
+            with _TIMINGS_LOCK:
+                last_warnings[:] = snap.warnings
         return snap
 
     def _draw(self, snap, views, comparison, outputs: list[str], lobe_passes: list[str]):

@@ -283,6 +283,7 @@ def run(args: argparse.Namespace) -> list[Path]:
     if scene.camera is None:
         raise CliError(f"{args.scene}: the scene has no active camera")
     written = []
+    warned: dict[str, None] = {}
     progress = Progress(len(models) * len(frames or [None]))
     for frame in frames or [None]:
         if frame is not None:
@@ -295,6 +296,9 @@ def run(args: argparse.Namespace) -> list[Path]:
                 bpy.ops.render.render()
             except RuntimeError as exc:
                 raise CliError(f"rendering {model}{suffix} failed: {str(exc).strip()}") from None
+            from addon import engine
+
+            warned.update(dict.fromkeys(engine.last_warnings))
             result = bpy.data.images.get("Render Result")
             if result is None:
                 raise CliError(f"rendering {model}{suffix} produced no image")
@@ -308,6 +312,8 @@ def run(args: argparse.Namespace) -> list[Path]:
             comparison = args.out / f"{stem}_comparison{suffix}.png"
             side_by_side(pngs, comparison)
             written.append(comparison)
+    for warning in warned:  # each once, whatever the number of models and frames
+        print(f"warning: {warning}", file=sys.stderr)
     print(f"wrote {len(written)} files to {args.out}/ (models left to right in the comparison: "
           f"{', '.join(models)})")
     return written

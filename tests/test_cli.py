@@ -116,3 +116,22 @@ def test_shadow_options_reach_the_scene():
     assert (props.shadows, props.shadow_map_size, props.soft_shadows) == (False, "2048", False)
     with pytest.raises(SystemExit):
         cli.parse_args(["x", "--shadow-map-size", "300"])
+
+
+def test_warnings_are_listed_once_per_run(tmp_path):
+    """What the engine could not read is listed by the CLI once, whatever the number of models."""
+    scene = scenes.reset(size=8)
+    scenes.ortho_camera(scene)
+    mat = bpy.data.materials.new("Mixed")
+    tree = scenes.node_tree(mat)
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    tree.links.new(tree.nodes.new("ShaderNodeMixShader").outputs[0], out.inputs["Surface"])
+    scenes.plane(scene, size=4.0, material=mat)
+    scenes.light(scene, "SUN", energy=2.0)
+    blend = tmp_path / "mixed.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    proc = _run(blend, "--model", "all", "--resolution", "8x8", "--out", tmp_path / "out")
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    listed = [line for line in proc.stderr.splitlines() if line.startswith("warning: ")]
+    assert listed == ["warning: Material 'Mixed': its surface shader (Mix Shader) is not read; it is drawn "
+                      "with its viewport display values"], proc.stderr[-2000:]
