@@ -12,6 +12,7 @@ import time
 
 import bpy
 import gpu
+import numpy as np
 from bpy.app.handlers import persistent
 
 from . import extract
@@ -46,6 +47,35 @@ def _set_timings(timings: dict[str, float]) -> None:
     with _TIMINGS_LOCK:
         last_timings.clear()
         last_timings.update(timings)
+
+
+def target_too_big(width: int, height: int, samples: int) -> str:
+    """Why a width x height frame at ``samples`` x ``samples`` anti-aliasing cannot be drawn (its
+    targets exceed the GPU's largest texture), with what would fit; "" when it can."""
+    limit = gpu.capabilities.max_texture_size_get()
+    if max(width, height) * samples <= limit:
+        return ""
+    fits = limit // max(width, height)
+    advice = (f"set Anti-Aliasing to {fits} or less" if fits >= 1
+              else f"the frame itself is larger than {limit} pixels")
+    return (f"Shading Lab cannot draw {width} x {height} at Anti-Aliasing {samples}: it needs a "
+            f"{width * samples} x {height * samples} target and this GPU's largest is {limit} x {limit}; "
+            f"{advice}")
+
+
+def render_region(scene, snap) -> tuple[int, int, int, int]:
+    """(x, y, width, height) in pixels, from the bottom left, of what the render result holds: the
+    render region (Output > Render Region) if set, as Blender rounds it, else the whole frame.
+    The frame is drawn whole and the region cut from it; with *Crop to Render Region* the result
+    is the region's size, without it the rest of the frame stays empty, as in Cycles."""
+    r = scene.render
+    if not r.use_border:
+        return 0, 0, snap.width, snap.height
+    x0, x1 = (min(max(round(v * snap.width), 0), snap.width) for v in (r.border_min_x, r.border_max_x))
+    y0, y1 = (min(max(round(v * snap.height), 0), snap.height) for v in (r.border_min_y, r.border_max_y))
+    if x1 <= x0 or y1 <= y0:
+        return 0, 0, snap.width, snap.height
+    return x0, y0, x1 - x0, y1 - y0
 
 
 class _Activity:
@@ -214,6 +244,10 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         # previews fill Combined only; with A|B, Combined holds the composite and there is no
         # Radiance pass (it would hold one model only)
         extra_passes = settings.compare_mode == "OFF" and not self.is_preview
+        too_big = target_too_big(snap.width, snap.height, settings.samples)
+        if too_big:
+            self._fail(too_big)
+            return
         views, comparison, combined, raw = frame_views(
             snap, lambda model: background_color(snap, depsgraph.scene, model), samples=settings.samples)
         raw = raw if extra_passes else None
@@ -225,12 +259,16 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
             return
         drawn = time.perf_counter()
         self.update_progress(0.9)
-        result = self.begin_result(0, 0, snap.width, snap.height, layer=depsgraph.view_layer.name)
+        whole = (0, 0, snap.width, snap.height)
+        x0, y0, w, h = whole if self.is_preview else render_region(depsgraph.scene, snap)
+        # Blender's result already is the region: its own coordinates start at the region's corner
+        result = self.begin_result(0, 0, w, h, layer=depsgraph.view_layer.name)
         try:
             passes = result.layers[0].passes
             for name, image in images.items():
                 pass_name = "Combined" if name == combined else RADIANCE_PASS if name == raw else name
-                passes[pass_name].rect.foreach_set(image.reshape(-1))
+                region = np.ascontiguousarray(image[y0:y0 + h, x0:x0 + w])
+                passes[pass_name].rect.foreach_set(region.reshape(-1))
         finally:
             self.end_result(result)
         self.update_progress(1.0)
