@@ -56,6 +56,14 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
             for line in _wrap(error, 60):
                 box.label(text=line)
         layout.prop(props, "model")
+        empirical = props.model != "PBR" or (props.compare_mode != "OFF" and
+                                             {props.compare_a, props.compare_b} != {"PBR"})
+        view = context.scene.view_settings.view_transform
+        if empirical and props.tone_mapper == "BLENDER" and view not in ("Standard", "Raw"):
+            box = layout.box()
+            box.label(text=f"Blinn-Phong and Phong clamp to [0, 1]; {view} shows 1 as light grey:",
+                      icon="INFO")
+            box.label(text="set Color Management > View Transform to Standard for their white")
         col = layout.column()
         col.active = props.model != "PBR"
         col.prop(props, "ambient_source")

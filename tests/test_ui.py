@@ -169,3 +169,20 @@ def test_material_preset_menu_keeps_its_items_and_names_its_error(tmp_path, monk
     broken = operators._preset_items(None, None)
     assert len(reads) == 2
     assert [item[0] for item in broken] == [operators.UNREADABLE] and "materials.toml" in broken[0][2]
+
+
+def test_render_panel_says_how_the_empirical_models_white_is_displayed():
+    """Blinn-Phong and Phong clamp to [0, 1] in scene-linear: under AgX (Blender's default) 1 is
+    light grey, so the panel says to use Standard; not under Standard, nor for the physically
+    based model alone."""
+    scene = scenes.reset(size=8)
+    context = SimpleNamespace(scene=scene)
+    scene.view_settings.view_transform = "AgX"
+    scene.shading_lab.model = "BLINN_PHONG"
+    assert any("AgX shows 1 as light grey" in t for t in _draw(ui.SHADINGLAB_PT_render, context).labels())
+    scene.shading_lab.model = "PBR"
+    assert not any("light grey" in t for t in _draw(ui.SHADINGLAB_PT_render, context).labels())
+    scene.shading_lab.compare_mode = "SPLIT"  # Blinn-Phong | physically based by default
+    assert any("light grey" in t for t in _draw(ui.SHADINGLAB_PT_render, context).labels())
+    scene.view_settings.view_transform = "Standard"
+    assert not any("light grey" in t for t in _draw(ui.SHADINGLAB_PT_render, context).labels())
