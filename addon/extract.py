@@ -78,10 +78,58 @@ def _image_map(node, name, images: dict | None, through_normal_map: bool = False
     return (key, source.interpolation == "Closest"), strength
 
 
+IDENTITY_UV = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0)
+
+
+def _uv_mapping(texture_node) -> tuple[tuple[float, ...], str, str]:
+    """(uv transform, extension, what is not read) of an Image Texture node: its Vector from the
+    UV map directly or through a Mapping node (Point or Texture; its Z rotation, X/Y location and
+    scale act on the UVs), its Extension."""
+    extension = getattr(texture_node, "extension", "REPEAT")
+    vector = texture_node.inputs.get("Vector")
+    if vector is None or not vector.is_linked:
+        return IDENTITY_UV, extension, ""
+    mapping = vector.links[0].from_node
+    if mapping.bl_idname in ("ShaderNodeUVMap", "ShaderNodeTexCoord"):
+        return IDENTITY_UV, extension, ""
+    if mapping.bl_idname != "ShaderNodeMapping" or mapping.vector_type not in ("POINT", "TEXTURE"):
+        return IDENTITY_UV, extension, f"its {mapping.name} node on the texture's Vector"
+    loc = tuple(mapping.inputs["Location"].default_value)
+    rot = tuple(mapping.inputs["Rotation"].default_value)
+    scale = tuple(mapping.inputs["Scale"].default_value)
+    linked = [s.name for s in mapping.inputs if s.is_linked and s.name != "Vector"]
+    unread = f"the Mapping node's linked {', '.join(linked)}" if linked else ""
+    if abs(rot[0]) > 1e-6 or abs(rot[1]) > 1e-6:
+        unread = "the Mapping node's X/Y rotation"
+    c, s = math.cos(rot[2]), math.sin(rot[2])
+    if mapping.vector_type == "POINT":  # uv' = Rz (scale * uv) + location
+        m = np.array([[c * scale[0], -s * scale[1], loc[0]], [s * scale[0], c * scale[1], loc[1]]])
+    else:  # TEXTURE, the inverse: uv' = (Rz^-1 (uv - location)) / scale
+        inv = np.array([[c, s], [-s, c]]) / np.array([[scale[0]], [scale[1]]])
+        m = np.hstack([inv, -inv @ np.array(loc[:2])[:, None]])
+    return tuple(float(x) for x in m.ravel()), extension, unread
+
+
 #: The surface shaders read, and the Principled BSDF inputs whose images are read.
 READ_SHADERS = ("ShaderNodeBsdfPrincipled", "ShaderNodeEmission", "ShaderNodeBsdfDiffuse",
                 "ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic")
 READ_PRINCIPLED_MAPS = ("Base Color", "Metallic", "Roughness", "Normal")
+
+
+def _texture_nodes(node) -> list:
+    """The Image Texture nodes a Principled BSDF reads (straight, or through its Normal Map)."""
+    found = []
+    for name in READ_PRINCIPLED_MAPS:
+        socket = node.inputs.get(name)
+        if socket is None or not socket.is_linked:
+            continue
+        source = socket.links[0].from_node
+        if source.bl_idname == "ShaderNodeNormalMap":
+            color = source.inputs.get("Color")
+            source = color.links[0].from_node if color is not None and color.is_linked else None
+        if source is not None and source.bl_idname == "ShaderNodeTexImage" and source.image is not None:
+            found.append(source)
+    return found
 
 
 def _unread_parts(material, node) -> list[str]:
@@ -149,6 +197,12 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
                      "roughness_map": _image_map(node, "Roughness", images)[0]})
         maps["normal_map"], maps["normal_strength"] = _image_map(node, "Normal", images,
                                                                  through_normal_map=True)
+        mappings = {_uv_mapping(n) for n in _texture_nodes(node)}
+        if mappings:
+            maps["uv_transform"], maps["extension"], unread = sorted(mappings)[0]
+            if warnings is not None and (len(mappings) > 1 or unread):
+                what = unread or "different mappings or extensions on its textures (the first is used)"
+                warnings.append(f"Material '{material.name}': {what} not read")
     elif kind == "ShaderNodeEmission":  # a pure emitter: no reflection
         base, metal, f0 = (0.0, 0.0, 0.0), 0.0, 0.0
         strength = float(_input(node, "Strength", 1.0))

@@ -475,6 +475,10 @@ def shadow_source() -> ProgramSource:
                          defines=(("SL_MAX_LIGHTS", "1"), ("SL_OBJECT_BLOCK", str(OBJECT_BLOCK))))
 
 
+#: The Image Texture node's extensions, in the order glsl/textures.glsl numbers them.
+EXTENSIONS = ("REPEAT", "EXTEND", "CLIP", "MIRROR")
+
+
 def pack_material(m: MaterialParams) -> bytes:
     complex_ior = m.ior_n is not None and m.ior_k is not None
     rows = [
@@ -487,6 +491,8 @@ def pack_material(m: MaterialParams) -> bytes:
         [*(m.ior_n if complex_ior else (1.0, 1.0, 1.0)), 0.0],
         [*(m.ior_k if complex_ior else (0.0, 0.0, 0.0)), 0.0],
         [*m.emission, min(max(m.alpha, 0.0), 1.0)],
+        [*m.uv_transform[:3], float(EXTENSIONS.index(m.extension)) if m.extension in EXTENSIONS else 0.0],
+        [*m.uv_transform[3:], 0.0],
     ]
     return np.asarray(rows, np.float32).tobytes()
 

@@ -135,6 +135,10 @@ class MaterialParams:
     roughness_map: tuple[str, bool] | None = None
     normal_map: tuple[str, bool] | None = None
     normal_strength: float = 1.0
+    # how the maps read their UVs: the Image Texture node's Vector (a Mapping node on the UV map:
+    # uv' = (a u + b v + c, d u + e v + f)) and Extension (REPEAT, EXTEND, CLIP, MIRROR)
+    uv_transform: tuple[float, float, float, float, float, float] = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0)
+    extension: str = "REPEAT"
     fresnel: str = ""  # per-material term choices; "" follows the scene
     ndf: str = ""
     visibility: str = ""

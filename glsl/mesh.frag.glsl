@@ -38,14 +38,15 @@ LightData load_light(int i)
 void main()
 {
   /* textures and screen derivatives first: they need every fragment of the quad alive */
-  vec3 n = apply_normal_map(shading_normal(world_position), world_uv, world_tangent,
+  vec2 uv = map_uv(material, world_uv);
+  vec3 n = apply_normal_map(shading_normal(world_position), uv, world_tangent,
                             material.fresnel.w);
 #ifdef SL_SHADOWS
   /* the flat face's normal, for shadow lookups (the receiver's plane) */
   vec3 face = cross(dFdx(world_position), dFdy(world_position));
   vec3 ng = dot(face, face) > 1e-30 ? normalize(face) : n;
 #endif
-  MaterialData m = apply_material_maps(material, world_uv);
+  MaterialData m = apply_material_maps(material, uv);
 #ifdef SL_PEEL
   /* Depth peeling (Everitt 2001): each pass keeps, per pixel, the nearest partly transparent
    * fragment behind the layer peeled before (peel_depth) and not behind the opaque surface

@@ -3,33 +3,74 @@
  * map (through a Normal Map node) bends the shading normal. The textures come from Blender's own
  * image cache: an sRGB image is decoded to linear on sampling, a Non-Color one is not. */
 
-/* Nearest-texel lookup with repeat (the Image Texture node's "Closest"). */
-vec4 texel_closest(sampler2D map, vec2 uv)
+/* Texel coordinate i of a map n texels wide under the Image Texture node's Extension: 0 repeat,
+ * 1 extend (the edge texel), 2 clip (-1: outside, transparent black), 3 mirror. */
+int wrap_texel(int i, int n, int extension)
 {
-  ivec2 size = textureSize(map, 0);
-  ivec2 p = clamp(ivec2(floor(fract(uv) * vec2(size))), ivec2(0), size - 1);
-  return texelFetch(map, p, 0);
+  if (extension == 1) {
+    return clamp(i, 0, n - 1);
+  }
+  if (extension == 2) {
+    return (i < 0 || i >= n) ? -1 : i;
+  }
+  if (extension == 3) {
+    int period = i - (2 * n) * int(floor(float(i) / float(2 * n)));
+    return period < n ? period : 2 * n - 1 - period;
+  }
+  return i - n * int(floor(float(i) / float(n)));
 }
 
+vec4 fetch_wrapped(sampler2D map, ivec2 p, ivec2 size, int extension)
+{
+  ivec2 q = ivec2(wrap_texel(p.x, size.x, extension), wrap_texel(p.y, size.y, extension));
+  return (q.x < 0 || q.y < 0) ? vec4(0.0) : texelFetch(map, q, 0);
+}
+
+/* A map's value at uv as Cycles filters it: the nearest texel ("Closest") or the bilinear blend of
+ * the four around uv ("Linear", after an sRGB image's decoding), the texels outside the image
+ * given by the Extension. */
+vec4 sample_map(sampler2D map, vec2 uv, bool closest, int extension)
+{
+  ivec2 size = textureSize(map, 0);
+  vec2 x = uv * vec2(size);
+  if (closest) {
+    return fetch_wrapped(map, ivec2(floor(x)), size, extension);
+  }
+  x -= 0.5;
+  ivec2 p = ivec2(floor(x));
+  vec2 f = x - floor(x);
+  vec4 a = mix(fetch_wrapped(map, p, size, extension), fetch_wrapped(map, p + ivec2(1, 0), size, extension), f.x);
+  vec4 b = mix(fetch_wrapped(map, p + ivec2(0, 1), size, extension),
+               fetch_wrapped(map, p + ivec2(1, 1), size, extension), f.x);
+  return mix(a, b, f.y);
+}
+
+/* The maps' UVs: the Image Texture node's Vector (a Mapping node on the UV map). */
+vec2 map_uv(MaterialData m, vec2 uv)
+{
+  return vec2(dot(m.uv_x.xy, uv) + m.uv_x.z, dot(m.uv_y.xy, uv) + m.uv_y.z);
+}
+
+#define MAP_EXTENSION int(material.uv_x.w + 0.5)
 #ifdef SL_BASE_COLOR_MAP_CLOSEST
-#  define SAMPLE_BASE_COLOR(uv) texel_closest(base_color_map, uv)
+#  define SAMPLE_BASE_COLOR(uv) sample_map(base_color_map, uv, true, MAP_EXTENSION)
 #else
-#  define SAMPLE_BASE_COLOR(uv) texture(base_color_map, uv)
+#  define SAMPLE_BASE_COLOR(uv) sample_map(base_color_map, uv, false, MAP_EXTENSION)
 #endif
 #ifdef SL_METALLIC_MAP_CLOSEST
-#  define SAMPLE_METALLIC(uv) texel_closest(metallic_map, uv)
+#  define SAMPLE_METALLIC(uv) sample_map(metallic_map, uv, true, MAP_EXTENSION)
 #else
-#  define SAMPLE_METALLIC(uv) texture(metallic_map, uv)
+#  define SAMPLE_METALLIC(uv) sample_map(metallic_map, uv, false, MAP_EXTENSION)
 #endif
 #ifdef SL_ROUGHNESS_MAP_CLOSEST
-#  define SAMPLE_ROUGHNESS(uv) texel_closest(roughness_map, uv)
+#  define SAMPLE_ROUGHNESS(uv) sample_map(roughness_map, uv, true, MAP_EXTENSION)
 #else
-#  define SAMPLE_ROUGHNESS(uv) texture(roughness_map, uv)
+#  define SAMPLE_ROUGHNESS(uv) sample_map(roughness_map, uv, false, MAP_EXTENSION)
 #endif
 #ifdef SL_NORMAL_MAP_CLOSEST
-#  define SAMPLE_NORMAL(uv) texel_closest(normal_map, uv)
+#  define SAMPLE_NORMAL(uv) sample_map(normal_map, uv, true, MAP_EXTENSION)
 #else
-#  define SAMPLE_NORMAL(uv) texture(normal_map, uv)
+#  define SAMPLE_NORMAL(uv) sample_map(normal_map, uv, false, MAP_EXTENSION)
 #endif
 
 MaterialData apply_material_maps(MaterialData m, vec2 uv)

@@ -37,6 +37,9 @@ struct MaterialData {
   vec4 ior_k;            /* rgb: conductor IOR, imaginary part (extinction) */
   vec4 emission;         /* rgb: emitted radiance (Principled Emission Color x Strength);
                           * w: alpha (coverage, 1 opaque) */
+  vec4 uv_x;             /* the maps' UVs: u' = dot(uv_x.xy, uv) + uv_x.z (a Mapping node); w: the
+                          * extension, 0 repeat, 1 extend, 2 clip, 3 mirror */
+  vec4 uv_y;             /* v' = dot(uv_y.xy, uv) + uv_y.z */
 };
 
 /* The world's light, precomputed (glsl/ibl.glsl, addon/environment.py): nine SH coefficients
