@@ -95,6 +95,15 @@ def material(name="Material", **overrides) -> bpy.types.Material:
     return mat
 
 
+def unread_material(name="Mixed") -> bpy.types.Material:
+    """A material whose surface is a Mix Shader (a shader Shading Lab does not read)."""
+    mat = bpy.data.materials.new(name)
+    tree = node_tree(mat)
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    tree.links.new(tree.nodes.new("ShaderNodeMixShader").outputs[0], out.inputs["Surface"])
+    return mat
+
+
 def render(scene, path: Path) -> np.ndarray:
     """Render to a 32-bit OpenEXR and read it back: (height, width, 4) float32, top row first."""
     settings = scene.render.image_settings

@@ -122,10 +122,7 @@ def test_warnings_are_listed_once_per_run(tmp_path):
     """What the engine could not read is listed by the CLI once, whatever the number of models."""
     scene = scenes.reset(size=8)
     scenes.ortho_camera(scene)
-    mat = bpy.data.materials.new("Mixed")
-    tree = scenes.node_tree(mat)
-    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
-    tree.links.new(tree.nodes.new("ShaderNodeMixShader").outputs[0], out.inputs["Surface"])
+    mat = scenes.unread_material()
     scenes.plane(scene, size=4.0, material=mat)
     scenes.light(scene, "SUN", energy=2.0)
     blend = tmp_path / "mixed.blend"

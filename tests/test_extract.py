@@ -467,10 +467,7 @@ def test_what_is_not_read_is_said_once():
     however many objects share them."""
     scene = scenes.reset(size=8)
     scenes.ortho_camera(scene)
-    mix = bpy.data.materials.new("Mixed")
-    tree = scenes.node_tree(mix)
-    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
-    tree.links.new(tree.nodes.new("ShaderNodeMixShader").outputs[0], out.inputs["Surface"])
+    mix = scenes.unread_material()
     ramp = bpy.data.materials.new("Ramped")
     tree = scenes.node_tree(ramp)
     bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")

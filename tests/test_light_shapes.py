@@ -14,20 +14,29 @@ from test_cycles import _cycles
 SIZE = 96
 
 
+def _bsdf_material(name: str, kind: str, **inputs) -> bpy.types.Material:
+    """A material whose surface is one BSDF node of ``kind`` with ``inputs`` set."""
+    mat = bpy.data.materials.new(name)
+    tree = scenes.node_tree(mat)
+    tree.nodes.clear()
+    out = tree.nodes.new("ShaderNodeOutputMaterial")
+    bsdf = tree.nodes.new(kind)
+    for key, value in inputs.items():
+        if key == "distribution":
+            bsdf.distribution = value
+        else:
+            bsdf.inputs[key].default_value = value
+    tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    return mat
+
+
 def _glossy_sphere(roughness: float, radius: float, soft: bool):
     """A white GGX metal sphere (Glossy BSDF) under a point light of ``radius``."""
     scene = scenes.reset(size=SIZE)
     scene.shading_lab.model = "PBR"
     scenes.ortho_camera(scene, location=(0.0, 0.0, 5.0), scale=2.4)
-    mat = bpy.data.materials.new("Glossy")
-    tree = scenes.node_tree(mat)
-    tree.nodes.clear()
-    out = tree.nodes.new("ShaderNodeOutputMaterial")
-    bsdf = tree.nodes.new("ShaderNodeBsdfGlossy")
-    bsdf.distribution = "GGX"
-    bsdf.inputs["Roughness"].default_value = roughness
-    bsdf.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
-    tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    mat = _bsdf_material("Glossy", "ShaderNodeBsdfGlossy", distribution="GGX", Roughness=roughness,
+                         Color=(1.0, 1.0, 1.0, 1.0))
     bpy.ops.mesh.primitive_uv_sphere_add(radius=1.0, segments=128, ring_count=64)
     sphere = bpy.context.object
     for poly in sphere.data.polygons:
@@ -76,13 +85,7 @@ def test_soft_falloff_lights_a_diffuse_plane_as_cycles(tmp_path):
     scene = scenes.reset(size=48)
     scene.shading_lab.model = "PBR"
     scenes.ortho_camera(scene, location=(0.0, 0.0, 3.0), scale=2.0)
-    mat = bpy.data.materials.new("Diffuse")
-    tree = scenes.node_tree(mat)
-    tree.nodes.clear()
-    out = tree.nodes.new("ShaderNodeOutputMaterial")
-    bsdf = tree.nodes.new("ShaderNodeBsdfDiffuse")
-    bsdf.inputs["Color"].default_value = (0.8, 0.8, 0.8, 1.0)
-    tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    mat = _bsdf_material("Diffuse", "ShaderNodeBsdfDiffuse", Color=(0.8, 0.8, 0.8, 1.0))
     scenes.plane(scene, size=4.0, material=mat)
     light = scenes.light(scene, "POINT", energy=50.0, location=(0.0, 0.0, 0.6))
     light.data.shadow_soft_size = 0.5
@@ -106,13 +109,7 @@ def _diffuse_plane_under_area(shape):
     scene = scenes.reset(size=64)
     scene.shading_lab.model = "PBR"
     scenes.ortho_camera(scene, location=(0.0, 0.0, 3.0), scale=3.0)
-    mat = bpy.data.materials.new("Diffuse")
-    tree = scenes.node_tree(mat)
-    tree.nodes.clear()
-    out = tree.nodes.new("ShaderNodeOutputMaterial")
-    bsdf = tree.nodes.new("ShaderNodeBsdfDiffuse")
-    bsdf.inputs["Color"].default_value = (0.8, 0.8, 0.8, 1.0)
-    tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    mat = _bsdf_material("Diffuse", "ShaderNodeBsdfDiffuse", Color=(0.8, 0.8, 0.8, 1.0))
     scenes.plane(scene, size=6.0, material=mat)
     _area_light(scene, shape, (0.2, 0.1, 0.35), (0.3, 0.2, 0.4))
     return scene
