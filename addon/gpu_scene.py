@@ -184,8 +184,10 @@ class SceneResources:
         for key, material in snapshot.materials.items():
             block = self._materials.setdefault(key, _Block())
             self.uploads["materials"] += block.put(programs.pack_material(material))
+        self._sync_shadows(snapshot)  # before the lights: they name their first shadow layer
         slots = programs.light_slots(len(snapshot.lights))
-        self.uploads["lights"] += self._lights.put(programs.pack_lights(snapshot, slots))
+        lights = programs.pack_lights(snapshot, slots, self.shadow_plan.first_layer)
+        self.uploads["lights"] += self._lights.put(lights)
         blocks = programs.pack_objects(snapshot.items)
         del self._objects[len(blocks):]
         while len(self._objects) < len(blocks):
@@ -201,7 +203,6 @@ class SceneResources:
             self.uploads["world"] += self._world_lighting.put(lighting)
         else:
             self._world_lighting = _Block()
-        self._sync_shadows(snapshot)
         for key in set(self._textures) - set(snapshot.images):
             del self._textures[key]
         for key, image in snapshot.images.items():
@@ -253,8 +254,9 @@ class SceneResources:
         if lists is not None:
             return lists
         snapshot = self.snapshot
+        layers = self.shadow_plan.layers  # planned once per sync, not counted again per material
         features = {key: programs.Features.from_snapshot(snapshot, model=model, material=m,
-                                                         half_target=half_target)
+                                                         half_target=half_target, shadow_layers=layers)
                     for key, m in snapshot.materials.items()}
         opaque: dict[programs.Features, list[Draw]] = {}
         blended: dict[programs.Features, list[Draw]] = {}

@@ -121,14 +121,17 @@ class Features:
     @classmethod
     def from_snapshot(cls, snapshot: Snapshot, model: str | None = None,
                       material: MaterialParams | None = None, half_target: bool = False,
-                      with_maps: bool = True) -> Features:
-        """The scene's features, for ``model`` or for ``material`` (its model and term overrides)."""
+                      with_maps: bool = True, shadow_layers: int | None = None) -> Features:
+        """The scene's features, for ``model`` or for ``material`` (its model and term overrides).
+        ``shadow_layers``: the frame's shadow-map layers when the caller planned them (else counted
+        by ``shadows.assign``)."""
         terms = snapshot.settings.terms
         maps = frozenset()
         if material is not None and with_maps:
             maps = frozenset(name[:-4].upper() + ("_CLOSEST" if getattr(material, name)[1] else "")
                              for name in MaterialParams.MAPS if getattr(material, name))
-        _first, layers, _dropped = shadows.assign(snapshot)
+        if shadow_layers is None:
+            shadow_layers = shadows.assign(snapshot)[1]
         if material is not None:
             model = material.model or model
             terms = terms.override(fresnel=material.fresnel, ndf=material.ndf,
@@ -147,7 +150,7 @@ class Features:
             env_samples=snapshot.settings.environment_samples,
             ambient_world=snapshot.settings.ambient_world,
             occlusion=snapshot.settings.world_occlusion,
-            shadow_layers=light_slots(layers) if layers else 0,
+            shadow_layers=light_slots(shadow_layers) if shadow_layers else 0,
             shadow_size=int(snapshot.settings.shadow_map_size),
             soft_shadows=snapshot.settings.soft_shadows,
         )
@@ -439,10 +442,10 @@ def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None) ->
 LIGHT_FLOATS = 24
 
 
-def pack_lights(snapshot: Snapshot, max_lights: int) -> np.ndarray:
-    """(max_lights, LIGHT_FLOATS) float32: each light's LightData, a row of the light texture."""
+def pack_lights(snapshot: Snapshot, max_lights: int, first_layer: tuple[int, ...]) -> np.ndarray:
+    """(max_lights, LIGHT_FLOATS) float32: each light's LightData, a row of the light texture;
+    ``first_layer[i]``: light i's first shadow-map layer (``shadows.ShadowPlan``), -1 for none."""
     data = np.zeros((max_lights, LIGHT_FLOATS), np.float32)
-    first_layer, _used, _dropped = shadows.assign(snapshot)
     for i, light in enumerate(snapshot.lights[:max_lights]):
         data[i] = [
             *light.position, LIGHT_KIND_IDS[light.kind],
