@@ -43,7 +43,7 @@ float shadow_plane_distance(int layer, vec2 uv_texels, vec3 p, vec3 ng)
   mat4 to_world = shadow.layer_view_inverse[layer];
   vec2 extent = shadow.layer_extent[layer].xy;
   vec3 o, dir;
-  if (shadow.layer_origin[layer].w < 1.5) { /* perspective: rays leave the light's centre */
+  if (int(shadow.layer_origin[layer].w + 0.5) != SHADOW_ORTHOGRAPHIC) { /* rays leave the light's centre */
     o = to_world[3].xyz;
     dir = normalize(mat3(to_world) * vec3(ndc * extent, -1.0));
   }
@@ -62,11 +62,17 @@ float shadow_texel(int layer, ivec2 texel)
   return texelFetch(shadow_maps, ivec3(texel, layer), 0).r * shadow.layer_info[layer].x;
 }
 
+/* The receiver's plane at a texel's centre, as a stored distance less the bias: a caster stored
+ * nearer than this hides the light there. */
+float shadow_receiver(ivec2 texel, vec2 uv_texels, float d, vec2 gradient, float bias)
+{
+  return d + dot(vec2(texel) + 0.5 - uv_texels, gradient) - bias;
+}
+
 /* 1 where the texel's caster is not in front of the receiver's plane there, else 0. */
 float shadow_test(int layer, ivec2 texel, vec2 uv_texels, float d, vec2 gradient, float bias)
 {
-  vec2 offset = vec2(texel) + 0.5 - uv_texels;
-  return shadow_texel(layer, texel) >= d + dot(offset, gradient) - bias ? 1.0 : 0.0;
+  return shadow_texel(layer, texel) >= shadow_receiver(texel, uv_texels, d, gradient, bias) ? 1.0 : 0.0;
 }
 
 /* Bilinear percentage-closer filter of the four texels around uv_texels. */
@@ -137,9 +143,8 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
       vec2 at = uv_texels + (search * sqrt((float(k) + 0.5) / float(taps))) * direction;
       direction = GOLDEN_TURN * direction;
       ivec2 t = ivec2(floor(at));
-      vec2 offset = vec2(t) + 0.5 - uv_texels;
       float stored = shadow_texel(layer, t);
-      if (stored < d + dot(offset, gradient) - bias) {
+      if (stored < shadow_receiver(t, uv_texels, d, gradient, bias)) {
         blockers += 1.0;
         blocker_sum += stored;
       }
