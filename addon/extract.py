@@ -476,9 +476,7 @@ def make_light(light: bpy.types.Light, matrix) -> S.Light:
         extra["angle"] = max(float(light.angle), 0.0)
     elif kind == "AREA":
         scale_x, scale_y = (float(np.linalg.norm(m[:3, i])) for i in (0, 1))
-        sx = light.size
-        sy = light.size_y if light.shape in ("RECTANGLE", "ELLIPSE") else light.size
-        ellipse = light.shape in ("DISK", "ELLIPSE")
+        sx, sy, ellipse = _area_shape(light)
         half = (0.5 * sx * scale_x, 0.5 * sy * scale_y)
         extra["radius"] = math.sqrt(half[0] * half[1] * (1.0 if ellipse else 4.0 / math.pi))  # equal area
         extra["axis_x"] = tuple(float(x) for x in m[:3, 0] / max(scale_x, 1e-30))
@@ -499,10 +497,15 @@ def make_light(light: bpy.types.Light, matrix) -> S.Light:
     )
 
 
-def _area(light) -> float:
-    sx = light.size
+def _area_shape(light) -> tuple[float, float, bool]:
+    """An area light's width, height and whether it is a disk or an ellipse."""
     sy = light.size_y if light.shape in ("RECTANGLE", "ELLIPSE") else light.size
-    return sx * sy * (math.pi / 4.0 if light.shape in ("DISK", "ELLIPSE") else 1.0)
+    return float(light.size), float(sy), light.shape in ("DISK", "ELLIPSE")
+
+
+def _area(light) -> float:
+    sx, sy, ellipse = _area_shape(light)
+    return sx * sy * (math.pi / 4.0 if ellipse else 1.0)
 
 
 # --- camera and world --------------------------------------------------------------------------

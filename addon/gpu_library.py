@@ -178,9 +178,14 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
         info.uniform_buf(len(_BLOCKS) + 1, "ChainData", "chain")
     for kind, name in _PUSH_CONSTANTS:
         info.push_constant(kind, name)
+    _declare_mesh_stage(info, "shading_lab_iface")
+
+
+def _declare_mesh_stage(info, interface: str) -> None:
+    """mesh.vert.glsl's vertex attributes and what it hands the fragment stage."""
     for location, (kind, name) in enumerate(_ATTRIBUTES):
         info.vertex_in(location, kind, name)
-    iface = gpu.types.GPUStageInterfaceInfo("shading_lab_iface")
+    iface = gpu.types.GPUStageInterfaceInfo(interface)
     for kind, name in _VARYINGS:
         iface.smooth(kind, name)
     info.vertex_out(iface)
@@ -196,12 +201,7 @@ def prepass_program(back_faces: bool = False) -> gpu.types.GPUShader:
         info.uniform_buf(0, "FrameData", "frame")
         info.uniform_buf(3, "ObjectBlock", "objects")
         info.push_constant("INT", "object_index")
-        for location, (kind, name) in enumerate(_ATTRIBUTES):
-            info.vertex_in(location, kind, name)
-        iface = gpu.types.GPUStageInterfaceInfo("shading_lab_prepass_iface")
-        for kind, name in _VARYINGS:
-            iface.smooth(kind, name)
-        info.vertex_out(iface)
+        _declare_mesh_stage(info, "shading_lab_prepass_iface")
 
     return LIBRARY.program(("prepass", back_faces), "depth and normal", src, declare)
 

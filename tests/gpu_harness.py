@@ -63,3 +63,23 @@ def read_texture(texture, size: int):
     buffer = texture.read()
     buffer.dimensions = size * size * 4
     return np.array(buffer, np.float32).reshape(size, size, 4)
+
+
+def viewport_image(scene, size: int):
+    """What a size x size viewport region looking through ``scene``'s camera shows, drawn by a
+    fresh viewport session: (size, size, 4) float32, bottom row first."""
+    import numpy as np
+
+    from addon.viewport import ViewportSession
+
+    session = ViewportSession()
+    try:
+        depsgraph = bpy.context.evaluated_depsgraph_get()
+        session.update(depsgraph)
+        cam = scene.camera
+        view = np.linalg.inv(np.array(cam.matrix_world))
+        proj = np.array(cam.calc_matrix_camera(depsgraph, x=size, y=size))
+        perspective = cam.data.type != "ORTHO"
+        return run_on_gpu(lambda _d: read_texture(session.draw(size, size, view, proj, perspective), size))
+    finally:
+        session.free()

@@ -9,9 +9,7 @@ import bpy
 import numpy as np
 import pytest
 import scenes
-from gpu_harness import read_texture, run_on_gpu
-
-from addon.viewport import ViewportSession
+from gpu_harness import viewport_image
 
 SIZE = 32
 
@@ -89,15 +87,7 @@ def test_viewport_compare_matches_final_render(tmp_path):
     props = scene.shading_lab
     props.compare_mode, props.compare_split = "SPLIT", 0.5
     final = _render(scene, tmp_path, "final")[::-1]  # bottom row first, like textures
-    session = ViewportSession()
-    try:
-        session.update(bpy.context.evaluated_depsgraph_get())
-        cam = scene.camera
-        view = np.linalg.inv(np.array(cam.matrix_world))
-        proj = np.array(cam.calc_matrix_camera(bpy.context.evaluated_depsgraph_get(), x=SIZE, y=SIZE))
-        shown = run_on_gpu(lambda d: read_texture(session.draw(SIZE, SIZE, view, proj, False), SIZE))
-    finally:
-        session.free()
+    shown = viewport_image(scene, SIZE)
     np.testing.assert_allclose(shown[..., :3], final[..., :3], rtol=2e-3, atol=1e-3)  # half-float targets
 
 

@@ -14,11 +14,10 @@ import bpy
 import numpy as np
 import pytest
 import scenes
-from gpu_harness import read_texture, run_on_gpu
+from gpu_harness import run_on_gpu, viewport_image
 
 from addon import extract, renderer
 from addon.scene_builder import principled_material
-from addon.viewport import ViewportSession
 
 SIZE = 32
 RED, BLUE = np.array([0.8, 0.0, 0.0]), np.array([0.0, 0.0, 0.6])  # emitted radiance
@@ -84,15 +83,7 @@ def test_crossing_transparent_planes_blend_in_depth_order_per_pixel(tmp_path, la
 
 def test_viewport_blends_in_depth_order_too():
     crossing_planes()
-    session = ViewportSession()
-    try:
-        session.update(bpy.context.evaluated_depsgraph_get())
-        cam = bpy.context.scene.camera
-        view = np.linalg.inv(np.array(cam.matrix_world))
-        proj = np.array(cam.calc_matrix_camera(bpy.context.evaluated_depsgraph_get(), x=SIZE, y=SIZE))
-        shown = run_on_gpu(lambda depsgraph: read_texture(session.draw(SIZE, SIZE, view, proj, False), SIZE))
-    finally:
-        session.free()
+    shown = viewport_image(bpy.context.scene, SIZE)
     keep = away_from_crossing()
     np.testing.assert_allclose(shown[:, keep, :3], expected_crossing()[:, keep], atol=2e-3)  # RGBA16F
 

@@ -216,23 +216,12 @@ def test_empirical_models_clamp_the_background_and_transparent_film_hides_it(tmp
 
 
 def test_the_viewport_shows_the_environment_as_the_final_render(tmp_path):
-    from gpu_harness import read_texture, run_on_gpu
-
-    from addon.viewport import ViewportSession
+    from gpu_harness import viewport_image
 
     scene = _sky_scene()
     scene.render.resolution_x = scene.render.resolution_y = 32
     final = scenes.render(scene, tmp_path / "final.exr")[::-1]  # bottom row first, as textures
-    session = ViewportSession()
-    try:
-        depsgraph = bpy.context.evaluated_depsgraph_get()
-        session.update(depsgraph)
-        cam = scene.camera
-        view = np.linalg.inv(np.array(cam.matrix_world))
-        proj = np.array(cam.calc_matrix_camera(depsgraph, x=32, y=32))
-        shown = run_on_gpu(lambda _d: read_texture(session.draw(32, 32, view, proj, True), 32))
-    finally:
-        session.free()
+    shown = viewport_image(scene, 32)
     np.testing.assert_allclose(shown[..., :3], final[..., :3], rtol=2e-3, atol=1e-3)  # RGBA16F target
 
 

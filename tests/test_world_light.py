@@ -480,24 +480,13 @@ def test_occlusion_leaves_a_lone_convex_sphere_lit(tmp_path):
 
 def test_the_viewport_is_lit_by_the_world_as_the_final_render(tmp_path):
     """The viewport session draws the world's light (and its occlusion) as F12 does."""
-    from gpu_harness import read_texture, run_on_gpu
-
-    from addon.viewport import ViewportSession
+    from gpu_harness import viewport_image
 
     scene = _sphere_on_ground("forest")
     scene.render.resolution_x = scene.render.resolution_y = 48
     scene.render.film_transparent = True
     final = scenes.render(scene, tmp_path / "final.exr")[::-1]  # bottom row first, as textures
-    session = ViewportSession()
-    try:
-        depsgraph = bpy.context.evaluated_depsgraph_get()
-        session.update(depsgraph)
-        cam = scene.camera
-        view = np.linalg.inv(np.array(cam.matrix_world))
-        proj = np.array(cam.calc_matrix_camera(depsgraph, x=48, y=48))
-        shown = run_on_gpu(lambda _d: read_texture(session.draw(48, 48, view, proj, True), 48))
-    finally:
-        session.free()
+    shown = viewport_image(scene, 48)
     surface = final[..., 3] > 0.0  # (the viewport shows the world behind; the film here is transparent)
     assert surface.mean() > 0.5 and final[surface, :3].mean() > 0.3
     np.testing.assert_allclose(shown[surface, :3], final[surface, :3], rtol=3e-3, atol=2e-3)  # RGBA16F
