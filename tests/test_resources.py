@@ -1,19 +1,22 @@
-"""Resources over a long session: memory and GPU objects across hundreds of renders and repeated
+"""Resources over a long session: GPU objects and memory across a thousand renders and a hundred
 add-on register/unregister cycles, the program cache, and Blender's leak report at exit.
 
-Memory is the process's current resident set (VmRSS from /proc/self/status), measured after a
-warm-up (programs compiled, Blender's and Mesa's caches filled) and again after the loop, with
-garbage collected both times. Margins (documented here, printed with the numbers by ``-s``):
+GPU objects are counted by a census (tests/gpu_census.py) of every texture, framebuffer, uniform
+buffer, vertex/index buffer, batch and shader the add-on makes: after each render none it made may
+still be alive, after each unregister none at all, and after each cycle's renders exactly the
+programs and tables its caches hold. Memory is the process's current resident set (VmRSS from
+/proc/self/status), measured after a warm-up (programs compiled, Blender's and Mesa's caches
+filled) and again after the loop, with garbage collected both times; margins (printed with the
+numbers by ``-s``):
 
-* 200 final renders at 16 x 16: growth below RENDER_MARGIN_MB (8 MB, 40 kB per render: a
-  leaked 16 x 16 RGBA32F target with its depth buffer, batch and uniform buffers per render
-  would add several MB);
-* 50 unregister/register cycles, each followed by renders that compile every program again:
+* 1,000 final renders at 16 x 16: growth below RENDER_MARGIN_MB (8 MB, 8 kB per render);
+* 100 unregister/register cycles, each followed by renders that compile every program again:
   growth below CYCLE_MARGIN_MB (10 MB).
 """
 
 from __future__ import annotations
 
+import collections
 import gc
 import subprocess
 import sys
@@ -22,8 +25,11 @@ import weakref
 from pathlib import Path
 
 import bpy
+import gpu
 import numpy as np
 import scenes
+from gpu_census import Census
+from gpu_harness import run_on_gpu
 
 import addon
 from addon import engine, gpu_library, renderer
@@ -31,6 +37,8 @@ from addon import engine, gpu_library, renderer
 ROOT = Path(__file__).resolve().parent.parent
 RENDER_MARGIN_MB = 8.0
 CYCLE_MARGIN_MB = 10.0
+RENDERS = 1000
+CYCLES = 100
 LAMBERT = scenes.LAMBERT
 
 #: Cycled through so that every kind of GPU object is made and dropped: three shading programs,
@@ -91,7 +99,7 @@ class _TrackedRenderer(renderer.Renderer):
         type(self).made += 1
 
 
-def test_200_renders_keep_memory_programs_and_gpu_objects_flat(tmp_path, monkeypatch):
+def test_1000_renders_free_every_gpu_object_they_make_and_keep_memory_flat(tmp_path, monkeypatch):
     monkeypatch.setattr(engine, "Renderer", _TrackedRenderer)
     scene = _scene()
     for i in range(5 * len(CONFIGS)):  # warm-up: every program compiled, every cache filled
@@ -100,18 +108,24 @@ def test_200_renders_keep_memory_programs_and_gpu_objects_flat(tmp_path, monkeyp
     programs_before = gpu_library.LIBRARY.program_count()
     made_before = _TrackedRenderer.made
     rss_before = _rss_mb()
-    for i in range(200):
-        _configure(scene, CONFIGS[i % len(CONFIGS)])
-        bpy.ops.render.render()
+    census = Census()
+    with census.active():
+        for i in range(RENDERS):
+            _configure(scene, CONFIGS[i % len(CONFIGS)])
+            bpy.ops.render.render()
+            alive = census.settle()
+            assert not alive, f"render {i} ({CONFIGS[i % len(CONFIGS)]}) left alive {dict(alive)}"
     rss_after = _rss_mb()
     programs_after = gpu_library.LIBRARY.program_count()
-    print(f"\n200 renders (16x16): RSS {rss_before:.1f} -> {rss_after:.1f} MB "
-          f"({rss_after - rss_before:+.2f} MB, margin {RENDER_MARGIN_MB} MB); "
-          f"programs {programs_before} -> {programs_after}")
-    assert _TrackedRenderer.made - made_before == 200, "every render must go through the engine"
+    print(f"\n{RENDERS} renders (16x16): made {dict(census.made)} GPU objects, all freed; RSS "
+          f"{rss_before:.1f} -> {rss_after:.1f} MB ({rss_after - rss_before:+.2f} MB, margin "
+          f"{RENDER_MARGIN_MB} MB); programs {programs_before} -> {programs_after}")
+    assert census.made["GPUTexture"] >= 2 * RENDERS and census.made["GPUFrameBuffer"] >= RENDERS, (
+        f"the census did not see the renders' targets: {dict(census.made)}")
+    assert _TrackedRenderer.made - made_before == RENDERS, "every render must go through the engine"
     assert len(_TrackedRenderer.live) == 0, "a renderer (and its GPU batches) outlived its render"
     assert programs_after == programs_before, "re-rendering the same scenes compiled new programs"
-    assert rss_after - rss_before < RENDER_MARGIN_MB
+    assert rss_after - rss_before < RENDER_MARGIN_MB, f"RSS grew {rss_after - rss_before:.2f} MB"
     _check_closed_form(scene, tmp_path / "after.exr")
 
 
@@ -124,37 +138,43 @@ def test_same_scene_compiles_no_new_program():
         assert gpu_library.LIBRARY.program_count() == count
 
 
-def test_50_unregister_register_cycles_free_gpu_objects(tmp_path):
-    def cycle(scene) -> list:
-        shaders = gpu_library.LIBRARY.held()
+def test_100_unregister_register_cycles_free_every_gpu_object(tmp_path):
+    """Each cycle unregisters the add-on (after which nothing it made may be alive), registers it
+    and renders every configuration, which compiles every program and table again."""
+    census = Census()
+
+    def cycle(scene) -> collections.Counter:
         addon.unregister()
         try:
             assert gpu_library.LIBRARY.program_count() == 0 and gpu_library.LIBRARY.table_count() == 0
             assert not hasattr(bpy.types.Scene, "shading_lab")
-            # nothing but this list holds the programs and textures: dropping it frees them
-            held = [sys.getrefcount(s) - 3 for s in shaders]  # minus list, loop name, argument
+            left = census.settle()
+            assert not left, f"unregister left GPU objects alive: {dict(left)}"
         finally:
             addon.register()
         scene.render.engine = "SHADING_LAB"
-        for config in CONFIGS:  # compiles every program (and the multiscatter table) again
+        for config in CONFIGS:
             _configure(scene, config)
             bpy.ops.render.render()
-        return held
+        return census.settle()
 
     scene = _scene()
-    for _ in range(5):  # warm-up
-        cycle(scene)
-    programs = gpu_library.LIBRARY.program_count()
-    rss_before = _rss_mb()
-    for k in range(50):
-        held = cycle(scene)
-        assert held and not any(held), f"cycle {k}: a program or texture is still referenced: {held}"
-        assert gpu_library.LIBRARY.program_count() == programs
-    rss_after = _rss_mb()
-    print(f"\n50 unregister/register cycles ({len(CONFIGS)} renders each): RSS {rss_before:.1f} -> "
-          f"{rss_after:.1f} MB ({rss_after - rss_before:+.2f} MB, margin {CYCLE_MARGIN_MB} MB); "
-          f"{programs} programs recompiled per cycle")
-    assert rss_after - rss_before < CYCLE_MARGIN_MB
+    with census.active():
+        for _ in range(5):  # warm-up
+            cycle(scene)
+        programs = gpu_library.LIBRARY.program_count()
+        cached = cycle(scene)  # the programs and tables the caches hold after the renders
+        rss_before = _rss_mb()
+        for k in range(CYCLES):
+            alive = cycle(scene)
+            assert alive == cached, f"cycle {k}: {dict(alive)} alive after the renders, not {dict(cached)}"
+            assert gpu_library.LIBRARY.program_count() == programs
+        rss_after = _rss_mb()
+    print(f"\n{CYCLES} unregister/register cycles ({len(CONFIGS)} renders each): made {dict(census.made)}; "
+          f"alive after each cycle's renders {dict(cached)}, none after unregister; RSS {rss_before:.1f} -> "
+          f"{rss_after:.1f} MB ({rss_after - rss_before:+.2f} MB, margin {CYCLE_MARGIN_MB} MB)")
+    assert cached["GPUShader"] == programs, (dict(cached), programs)
+    assert rss_after - rss_before < CYCLE_MARGIN_MB, f"RSS grew {rss_after - rss_before:.2f} MB"
     _check_closed_form(scene, tmp_path / "after.exr")
 
 
@@ -165,6 +185,7 @@ SUBPROCESS = textwrap.dedent("""
     import addon
     addon.register()
     import scenes
+from gpu_census import Census
     from test_resources import CONFIGS, _configure, _scene
 
     scene = _scene()
@@ -197,3 +218,27 @@ def test_no_leaked_blocks_at_exit_of_the_cli(tmp_path):
                           capture_output=True, text=True, timeout=120, stdin=subprocess.DEVNULL, cwd=tmp_path)
     _no_leak_report(proc)
     assert (tmp_path / "out" / "fresnel_comparison.png").is_file()
+
+
+def test_the_census_sees_an_object_kept_alive():
+    """The census itself can fail: a texture and a batch someone keeps are counted, and counted no
+    more once let go (with the vertex buffer only the batch held)."""
+    census = Census()
+    kept = []
+
+    def job(_depsgraph):
+        kept.append(gpu.types.GPUTexture((4, 4), format="RGBA32F"))
+        fmt = gpu.types.GPUVertFormat()
+        fmt.attr_add(id="pos", comp_type="F32", len=2, fetch_mode="FLOAT")
+        vbo = gpu.types.GPUVertBuf(fmt, 3)
+        vbo.attr_fill("pos", ((0.0, 0.0), (1.0, 0.0), (0.0, 1.0)))
+        kept.append(gpu.types.GPUBatch(type="TRIS", buf=vbo))
+        gpu.types.GPUTexture((4, 4), format="RGBA32F")  # dropped at once
+
+    with census.active():
+        run_on_gpu(job)
+        alive = census.settle()
+        assert alive == {"GPUTexture": 1, "GPUBatch": 1, "GPUVertBuf": 1}, dict(alive)
+        kept.clear()
+        assert not census.settle(), dict(census.settle())
+    assert census.made == {"GPUTexture": 2, "GPUBatch": 1, "GPUVertBuf": 1}, dict(census.made)
