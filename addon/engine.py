@@ -159,6 +159,64 @@ def unregister() -> None:
             handlers.remove(function)
 
 
+def viewport_border(context, scene) -> tuple[int, int, int, int] | None:
+    """(x, y, width, height) in region pixels of the viewport's render region, None without one:
+    in camera view the scene's render region (Output > Render Region) over the camera frame, else
+    the viewport's own (View > Render Region), as Blender's engines read them."""
+    from bpy_extras.view3d_utils import location_3d_to_region_2d
+
+    region, rv3d, space = context.region, context.region_data, context.space_data
+    if rv3d.view_perspective == "CAMERA":
+        r = scene.render
+        camera = space.camera if getattr(space, "use_local_camera", False) and space.camera else scene.camera
+        if not r.use_border or camera is None:
+            return None
+        corners = [location_3d_to_region_2d(region, rv3d, camera.matrix_world @ v, default=None)
+                   for v in camera.data.view_frame(scene=scene)]
+        if any(c is None for c in corners):
+            return None
+        xs, ys = [c.x for c in corners], [c.y for c in corners]
+        x0, x1, y0, y1 = min(xs), max(xs), min(ys), max(ys)
+        box = (x0 + r.border_min_x * (x1 - x0), y0 + r.border_min_y * (y1 - y0),
+               x0 + r.border_max_x * (x1 - x0), y0 + r.border_max_y * (y1 - y0))
+    elif getattr(space, "use_render_border", False):
+        w, h = region.width, region.height
+        box = (space.render_border_min_x * w, space.render_border_min_y * h,
+               space.render_border_max_x * w, space.render_border_max_y * h)
+    else:
+        return None
+    x0, x1 = (min(max(round(v), 0), region.width) for v in (box[0], box[2]))
+    y0, y1 = (min(max(round(v), 0), region.height) for v in (box[1], box[3]))
+    return x0, y0, max(x1 - x0, 0), max(y1 - y0, 0)
+
+
+def draw_error(message: str, width: int, height: int) -> None:
+    """``message`` in the region's top left, wrapped to its width (as Blender's engines show
+    theirs), over whatever image is there."""
+    import blf
+
+    prefs = bpy.context.preferences
+    size = 12.0 * ((prefs.system.ui_scale if prefs else 0.0) or 1.0)  # 0 in background mode
+    font, margin = 0, 1.5 * size
+    blf.size(font, size)
+    lines = [""]
+    for word in message.split():
+        line = f"{lines[-1]} {word}".strip()
+        if lines[-1] and blf.dimensions(font, line)[0] > width - 2 * margin:
+            lines.append(word)
+        else:
+            lines[-1] = line
+    blf.enable(font, blf.SHADOW)
+    blf.shadow(font, 3, 0.0, 0.0, 0.0, 1.0)
+    blf.color(font, 1.0, 0.35, 0.3, 1.0)
+    y = height - 3.0 * size
+    for line in lines[:8]:
+        blf.position(font, margin, y, 0.0)
+        blf.draw(font, line)
+        y -= 1.4 * size
+    blf.disable(font, blf.SHADOW)
+
+
 def background_color(snap, scene, model: str | None = None) -> tuple[float, float, float, float]:
     """What the camera sees where there is no surface, for ``model`` (the scene's by default)."""
     if scene.render.film_transparent:
@@ -201,6 +259,8 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
             self.report({"ERROR"}, f"Shading Lab could not read the scene: {type(exc).__name__}: {exc}")
 
     def view_draw(self, context, depsgraph):
+        """Draw the session's frame (the last good one if this one failed), clipped to the render
+        region when one is set, and the error, if any, over it."""
         from gpu_extras.presets import draw_texture_2d
 
         session = self._viewport
@@ -208,17 +268,25 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
             return
         scene = depsgraph.scene
         region, rv3d = context.region, context.region_data
-        try:
-            texture = session.draw(region.width, region.height, rv3d.view_matrix, rv3d.window_matrix,
-                                   rv3d.is_perspective, background_color(session.snapshot, scene))
-        except Exception as exc:
-            self.report({"ERROR"}, f"Shading Lab failed to draw: {type(exc).__name__}: {exc}")
-            return
-        gpu.state.blend_set("ALPHA_PREMULT")
-        self.bind_display_space_shader(scene)
-        draw_texture_2d(texture, (0, 0), region.width, region.height)
-        self.unbind_display_space_shader()
-        gpu.state.blend_set("NONE")
+        texture = session.draw(region.width, region.height, rv3d.view_matrix, rv3d.window_matrix,
+                               rv3d.is_perspective, background_color(session.snapshot, scene))
+        if session.error and not session.error_reported:
+            self.report({"ERROR"}, session.error)
+            session.error_reported = True
+        if texture is not None:
+            border = viewport_border(context, scene)
+            if border is not None:
+                gpu.state.scissor_test_set(True)
+                gpu.state.scissor_set(*border)
+            gpu.state.blend_set("ALPHA_PREMULT")
+            self.bind_display_space_shader(scene)
+            draw_texture_2d(texture, (0, 0), region.width, region.height)
+            self.unbind_display_space_shader()
+            gpu.state.blend_set("NONE")
+            if border is not None:
+                gpu.state.scissor_test_set(False)
+        if session.error:
+            draw_error(session.error, region.width, region.height)
 
     # --- final renders ------------------------------------------------------------------------
 

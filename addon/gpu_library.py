@@ -46,6 +46,7 @@ class _Library:
         self._tables: dict = {}
         self._environments: dict = {}
         self._compile_error = ""
+        self._failed: dict = {}  # key -> why it did not compile (not tried again on every redraw)
         self.compiles = 0  # programs compiled since start (for tests and benchmarks)
 
     def program(self, key, label: str, src: programs.ProgramSource,
@@ -55,6 +56,9 @@ class _Library:
             shader = self._programs.get(key)
             if shader is not None:
                 return shader
+            if key in self._failed:
+                self._compile_error = self._failed[key]
+                raise ShaderCompileError(self._failed[key])
             info = gpu.types.GPUShaderCreateInfo()
             for name, value in src.defines:
                 info.define(name, value)
@@ -68,7 +72,7 @@ class _Library:
                 message = (f"Shading Lab could not compile its {label} program "
                            f"({', '.join(f'{n}={v}' for n, v in src.defines)}): {exc} "
                            f"(the driver's log is on the console)")
-                self._compile_error = message
+                self._compile_error = self._failed[key] = message
                 raise ShaderCompileError(message) from exc
             self.compiles += 1
             self._programs[key] = shader
@@ -110,12 +114,17 @@ class _Library:
         return self._compile_error
 
     def clear_compile_error(self) -> None:
-        self._compile_error = ""
+        """Forget the last error and which programs failed: the next use compiles them again (a
+        final render tries again; the viewport does not, redraw after redraw)."""
+        with self._lock:
+            self._compile_error = ""
+            self._failed = {}
 
     def clear(self) -> None:
         """Forget every program and table; renderers still drawing keep theirs until they finish."""
         with self._lock:
             self._programs = {}
+            self._failed = {}
             self._tables = {}
             self._environments = {}
         programs.clear_source_caches()

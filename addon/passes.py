@@ -99,6 +99,9 @@ class View:
     display: programs.PostFeatures | None = None  # also tone map (an engine tone mapper)
     exposure: float = 0.0
     view_projection: np.ndarray | None = field(default=None, compare=False)  # None: the camera's
+    # the radiance in a target of its own, written only once the frame is complete (the viewport
+    # shows it: a frame that fails half-way leaves the last good image there)
+    own_radiance: bool = False
 
     @property
     def format(self) -> str:
@@ -510,11 +513,11 @@ class TransparencyPass(Pass):
 class ResolvePass(TargetPass):
     """Averages each pixel's ``samples`` x ``samples`` sub-pixels (a box filter) of
     ``<view>.scene`` into ``<view>.radiance``; without supersampling the scene target is the
-    radiance and nothing is drawn."""
+    radiance and nothing is drawn (unless the view asks for a radiance target of its own)."""
 
     def run(self, frame: Frame, view: View) -> bool:
         scene = frame.outputs[view.output("scene")]
-        if view.samples == 1:
+        if view.samples == 1 and not view.own_radiance:
             frame.outputs[view.output("radiance")] = scene
             return True
         self.fit(view.width, view.height, view.format)

@@ -14,6 +14,7 @@ targets between frames; ``sync`` brings the scene up to date (uploading only wha
 from __future__ import annotations
 
 from collections.abc import Callable
+from dataclasses import replace
 
 import numpy as np
 
@@ -25,11 +26,13 @@ from .snapshot import Snapshot
 
 
 def frame_views(snapshot: Snapshot, background: Callable[[str | None], tuple], samples: int = 1,
-                half_target: bool = False) -> tuple[list[View], Comparison | None, str, str | None]:
+                half_target: bool = False, keep_last: bool = False
+                ) -> tuple[list[View], Comparison | None, str, str | None]:
     """The views of a frame as the scene's settings ask for them (one view, or A and B and their
     comparison), the output to show and the raw radiance output when it differs from the one
     shown (under an engine tone mapper, without A|B). ``background(model)`` is what the camera
-    sees where there is no surface."""
+    sees where there is no surface. ``keep_last``: the output shown is written by the frame's
+    last pass only, into a target of its own (a frame that fails leaves the last good image)."""
     settings = snapshot.settings
     display = None
     if settings.tone_mapper != "BLENDER":
@@ -42,7 +45,8 @@ def frame_views(snapshot: Snapshot, background: Callable[[str | None], tuple], s
 
     if settings.compare_mode == "OFF":
         main = view("main")
-        if display is None:
+        if display is None:  # the display and compare passes write targets of their own anyway
+            main = replace(main, own_radiance=keep_last)
             return [main], None, main.output("radiance"), None
         return [main], None, main.output("display"), main.output("radiance")
     # a split composites what each model shows (display values under an engine tone mapper); a

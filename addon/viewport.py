@@ -4,7 +4,9 @@
 matrices (cheap) but only the geometry of objects whose geometry changed, so a transform-only
 edit uploads no geometry. ``draw`` renders with the region's own view and projection matrices
 into a float target (and through the engine's tone mapper when one is chosen) and returns the
-texture for the engine to show through Blender's display transform.
+texture for the engine to show through Blender's display transform. A frame that fails (a
+program that does not compile after an edit, say) leaves the last good image to show, and the
+failure in ``error`` for the engine to draw over it.
 """
 
 from __future__ import annotations
@@ -16,6 +18,7 @@ import numpy as np
 
 from . import extract
 from . import snapshot as S
+from .gpu_library import ShaderCompileError
 from .renderer import Renderer, frame_views
 
 _NO_CAMERA = S.Camera(np.eye(4, dtype=np.float32), np.eye(4, dtype=np.float32), True, (0.0, 0.0, 0.0),
@@ -28,6 +31,9 @@ class ViewportSession:
         self.pending: set[str] = set()  # geometry keys read anew and not yet uploaded
         self.renderer = Renderer()
         self.last_update_ms = 0.0
+        self.error = ""  # why the last frame failed ("" when it did not)
+        self.error_reported = False  # the engine reports each new error once, not every redraw
+        self._last_good: gpu.types.GPUTexture | None = None
 
     def update(self, depsgraph) -> None:
         start = time.perf_counter()
@@ -39,16 +45,33 @@ class ViewportSession:
         self.last_update_ms = 1e3 * (time.perf_counter() - start)
 
     def draw(self, width: int, height: int, view_matrix, window_matrix, is_perspective: bool,
-             background=(0.0, 0.0, 0.0, 1.0)) -> gpu.types.GPUTexture:
-        """Render the last snapshot as the region sees it; returns the texture to display."""
+             background=(0.0, 0.0, 0.0, 1.0)) -> gpu.types.GPUTexture | None:
+        """Render the last snapshot as the region sees it; returns the texture to display: this
+        frame's or, when it fails (``error`` says why), the last good frame's (None if none)."""
         snap = self.snapshot
         snap.camera = S.Camera.from_matrices(np.array(view_matrix), np.array(window_matrix), is_perspective)
         snap.width, snap.height = width, height
         pending = self.pending
-        self.renderer.sync(snap, keep=lambda key: key not in pending)
-        self.pending = set()
-        views, comparison, shown, _ = frame_views(snap, lambda model: background, half_target=True)
-        return self.renderer.run(views, comparison).outputs[shown].texture_color
+        try:
+            self.renderer.sync(snap, keep=lambda key: key not in pending)
+            self.pending = set()  # kept on failure: the next frame uploads them
+            views, comparison, shown, _ = frame_views(snap, lambda model: background, half_target=True,
+                                                      keep_last=True)
+            texture = self.renderer.run(views, comparison).outputs[shown].texture_color
+        except ShaderCompileError as exc:
+            self._failed(str(exc))
+            return self._last_good
+        except Exception as exc:  # an error in one frame must not take the viewport down
+            self._failed(f"Shading Lab failed to draw: {type(exc).__name__}: {exc}")
+            return self._last_good
+        self.error = ""
+        self._last_good = texture
+        return texture
+
+    def _failed(self, message: str) -> None:
+        if message != self.error:
+            self.error, self.error_reported = message, False
 
     def free(self) -> None:
+        self._last_good = None
         self.renderer.free()

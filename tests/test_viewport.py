@@ -4,13 +4,15 @@ a viewport region would pass."""
 
 from __future__ import annotations
 
+from types import SimpleNamespace
+
 import bpy
 import numpy as np
 import pytest
 import scenes
 from gpu_harness import read_texture, run_on_gpu
 
-from addon import extract, renderer
+from addon import engine, extract, renderer
 from addon.viewport import ViewportSession
 
 
@@ -222,3 +224,160 @@ def test_many_objects_upload_blocks_not_items_and_each_finds_its_matrix():
     assert second == {}, second
     assert whole[..., 0].min() > 0.1
     np.testing.assert_allclose(tiled, whole, rtol=1e-5)
+
+
+# --- the engine's own view_update / view_draw ------------------------------------------------------
+# Background mode has no window, so Blender itself never calls view_update/view_draw. These tests
+# call the engine's methods as Blender would: with a stand-in for the RenderEngine instance (its
+# report(); bind_display_space_shader, which needs a real viewport's display settings, is a
+# no-op, so the region receives scene-linear values), a stand-in context (region size, the
+# region's view and window matrices, the 3D view's render-region settings) and the region's
+# pixel-space projection that Blender sets before view_draw. Everything else is the engine's own
+# code: the session, the renderer, the render-region clip, the error text and draw_texture_2d.
+
+class _EngineStandIn:
+    def __init__(self):
+        self._viewport = None
+        self.reports: list[tuple[set, str]] = []
+
+    def report(self, kind, message):
+        self.reports.append((kind, message))
+
+    def bind_display_space_shader(self, scene):
+        pass
+
+    def unbind_display_space_shader(self):
+        pass
+
+
+def _context(scene, size: int, *, space=None):
+    from mathutils import Matrix
+
+    cam = scene.camera
+    view = cam.matrix_world.inverted()
+    window = Matrix(cam.calc_matrix_camera(bpy.context.evaluated_depsgraph_get(), x=size, y=size))
+    rv3d = SimpleNamespace(view_matrix=view, window_matrix=window, perspective_matrix=window @ view,
+                           is_perspective=cam.data.type == "PERSP", view_perspective="CAMERA")
+    if space is not None:  # a free view with the 3D view's own render region
+        rv3d.view_perspective = "PERSP"
+    space = space or SimpleNamespace(use_local_camera=False, camera=None, use_render_border=False)
+    region = SimpleNamespace(width=size, height=size)
+    return SimpleNamespace(region=region, region_data=rv3d, space_data=space)
+
+
+CLEAR = (0.5, 0.25, 0.125, 1.0)  # the region before the engine draws
+
+
+def _view_draw(stand_in, context, size: int) -> np.ndarray:
+    """What the engine's view_draw leaves in a size x size region cleared to CLEAR."""
+    import gpu
+
+    def job(depsgraph):
+        offscreen = gpu.types.GPUOffScreen(size, size, format="RGBA32F")
+        with offscreen.bind():
+            gpu.state.active_framebuffer_get().clear(color=CLEAR)
+            with gpu.matrix.push_pop(), gpu.matrix.push_pop_projection():
+                gpu.matrix.load_identity()  # the region's pixel space, as Blender sets it
+                gpu.matrix.load_projection_matrix(_pixel_space(size))
+                engine.ShadingLabRenderEngine.view_draw(stand_in, context, depsgraph)
+        return read_texture(offscreen.texture_color, size)
+
+    return run_on_gpu(job)
+
+
+def _pixel_space(size: int):
+    from mathutils import Matrix
+
+    return Matrix(((2.0 / size, 0, 0, -1.0), (0, 2.0 / size, 0, -1.0), (0, 0, -1.0, 0), (0, 0, 0, 1.0)))
+
+
+@pytest.fixture
+def engine_viewport():
+    scene = scenes.lambert_scene(size=32)
+    stand_in = _EngineStandIn()
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    engine.ShadingLabRenderEngine.view_update(stand_in, _context(scene, 32), depsgraph)
+    try:
+        yield scene, stand_in
+    finally:
+        stand_in._viewport.free()
+
+
+def test_engine_view_draw_shows_the_closed_form(engine_viewport):
+    scene, stand_in = engine_viewport
+    image = _view_draw(stand_in, _context(scene, 32), 32)
+    err = np.abs(image[..., :3] / scenes.LAMBERT - 1.0).max()
+    assert err < 1e-3, f"viewport pixels differ from the closed form by {err:.2e} (RGBA16F target)"
+    assert not stand_in.reports, stand_in.reports
+
+
+def _inside(image, box):
+    x, y, w, h = box
+    mask = np.zeros(image.shape[:2], bool)
+    mask[y:y + h, x:x + w] = True
+    return mask
+
+
+def test_engine_view_draw_honours_the_scene_render_region_in_camera_view(engine_viewport):
+    scene, stand_in = engine_viewport
+    r = scene.render
+    r.use_border = True
+    r.border_min_x, r.border_max_x, r.border_min_y, r.border_max_y = 0.25, 0.75, 0.5, 1.0
+    image = _view_draw(stand_in, _context(scene, 32), 32)
+    inside = _inside(image, (8, 16, 16, 16))
+    assert np.allclose(image[inside][:, :3], scenes.LAMBERT, rtol=1e-3), image[inside][:, 0].min()
+    assert np.array_equal(image[~inside], np.tile(CLEAR, ((~inside).sum(), 1))), "drawn outside the region"
+
+
+def test_engine_view_draw_honours_the_viewport_render_region(engine_viewport):
+    scene, stand_in = engine_viewport
+    scene.render.use_border = True  # the scene's region applies in camera view only
+    space = SimpleNamespace(use_local_camera=False, camera=None, use_render_border=True,
+                            render_border_min_x=0.0, render_border_max_x=0.5,
+                            render_border_min_y=0.25, render_border_max_y=0.5)
+    image = _view_draw(stand_in, _context(scene, 32, space=space), 32)
+    inside = _inside(image, (0, 8, 16, 8))
+    assert np.allclose(image[inside][:, :3], scenes.LAMBERT, rtol=1e-3)
+    assert np.array_equal(image[~inside], np.tile(CLEAR, ((~inside).sum(), 1))), "drawn outside the region"
+
+
+def test_engine_view_draw_keeps_the_last_good_image_and_draws_the_error(engine_viewport, monkeypatch):
+    """A program that fails to compile after an edit: the region keeps the last good image, the
+    error is written over it and reported once, and redraws do not try the same program again."""
+    import gpu
+
+    scene, stand_in = engine_viewport
+    size = 256
+    context = _context(scene, size)
+    engine.ShadingLabRenderEngine.view_update(stand_in, context, bpy.context.evaluated_depsgraph_get())
+    good = _view_draw(stand_in, context, size)
+    assert np.allclose(good[..., :3], scenes.LAMBERT, rtol=1e-3)
+    tries = []
+
+    def broken(info):
+        tries.append(info)
+        raise Exception("compile failed: test")
+
+    monkeypatch.setattr(gpu.shader, "create_from_info", broken)
+    scene.shading_lab.model = "PHONG"  # a program not compiled yet
+    engine.ShadingLabRenderEngine.view_update(stand_in, context, bpy.context.evaluated_depsgraph_get())
+    first = _view_draw(stand_in, context, size)
+    second = _view_draw(stand_in, context, size)
+    assert len(tries) == 1, f"the failed program was compiled {len(tries)} times"
+    errors = [m for kind, m in stand_in.reports if "ERROR" in kind]
+    assert len(errors) == 1 and "could not compile" in errors[0], stand_in.reports
+    assert "compile failed: test" in stand_in._viewport.error
+    changed = np.any(first != good, axis=-1)
+    text_rows = np.nonzero(changed.any(axis=1))[0]
+    rows = f"{text_rows.min()}..{text_rows.max()}" if len(text_rows) else "none"
+    assert changed.sum() > 50 and text_rows.max() < size - 24 and not changed[:size // 4].any(), (
+        f"the error text must be drawn from the top left down, over the image: {changed.sum()} pixels "
+        f"changed, in rows {rows}")
+    assert np.array_equal(first[~changed], good[~changed]), "the last good image must stay under the text"
+    assert np.array_equal(first, second)
+    monkeypatch.undo()
+    scene.shading_lab.model = "BLINN_PHONG"
+    engine.ShadingLabRenderEngine.view_update(stand_in, context, bpy.context.evaluated_depsgraph_get())
+    recovered = _view_draw(stand_in, context, size)
+    assert stand_in._viewport.error == ""
+    assert np.allclose(recovered[..., :3], scenes.LAMBERT, rtol=1e-3)
