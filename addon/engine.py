@@ -15,7 +15,7 @@ import gpu
 import numpy as np
 from bpy.app.handlers import persistent
 
-from . import extract
+from . import exposure, extract
 from .gpu_library import LIBRARY, ShaderCompileError
 from .passes import View
 from .renderer import Renderer, frame_views
@@ -40,6 +40,8 @@ def light_passes(view_layer) -> list[str]:
 last_timings: dict[str, float] = {}
 #: What the last final render said of the scene (``Snapshot.warnings``): the CLI lists it.
 last_warnings: list[str] = []
+#: The last final render's automatic exposure: view name -> (stops used, stops metered).
+last_exposures: dict[str, tuple[float, float]] = {}
 _TIMINGS_LOCK = threading.Lock()
 
 
@@ -135,6 +137,7 @@ REGISTRATION = threading.RLock()
 def _job_started(*_args) -> None:
     with REGISTRATION:
         ACTIVITY.begin()
+    exposure.TRACK.job_started()  # an animation adapts from its own first frame only
 
 
 @persistent
@@ -157,6 +160,16 @@ def unregister() -> None:
     for handlers, function in _job_handlers():
         if function in handlers:
             handlers.remove(function)
+
+
+def exposure_text(exposures: dict[str, tuple[float, float]]) -> str:
+    """The automatic exposure of a frame's views, as the stats line and the EXR header say it:
+    "+2.350 EV (auto)", or per view for A|B ("a +1.200 EV, b +0.800 EV (auto)")."""
+    if not exposures:
+        return ""
+    if len(exposures) == 1:
+        return f"{next(iter(exposures.values()))[0]:+.3f} EV (auto)"
+    return ", ".join(f"{name} {stops:+.3f} EV" for name, (stops, _) in exposures.items()) + " (auto)"
 
 
 def viewport_border(context, scene) -> tuple[int, int, int, int] | None:
@@ -287,6 +300,8 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
                 gpu.state.scissor_test_set(False)
         if session.error:
             draw_error(session.error, region.width, region.height)
+        if session.adapting:  # automatic exposure still approaching its target
+            self.tag_redraw()
 
     # --- final renders ------------------------------------------------------------------------
 
@@ -322,9 +337,11 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         lobe_passes = light_passes(depsgraph.view_layer) if extra_passes else []
         for name in ([RADIANCE_PASS] if raw else []) + lobe_passes:
             self.add_pass(name, 4, "RGBA", layer=depsgraph.view_layer.name)
-        images = self._draw(snap, views, comparison, [combined] + ([raw] if raw else []), lobe_passes)
-        if images is None or self.test_break():
+        drawn_frame = self._draw(snap, views, comparison, [combined] + ([raw] if raw else []), lobe_passes,
+                                 self._adapter(depsgraph, snap))
+        if drawn_frame is None or self.test_break():
             return
+        images, exposures = drawn_frame
         drawn = time.perf_counter()
         self.update_progress(0.9)
         whole = (0, 0, snap.width, snap.height)
@@ -339,13 +356,38 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
                 passes[pass_name].rect.foreach_set(region.reshape(-1))
         finally:
             self.end_result(result)
+        said_exposure = exposure_text(exposures)
+        if said_exposure:  # into the EXR's header and the image editor's metadata, as Cycles does
+            self.get_result().stamp_data_add_field("Shading Lab Exposure", said_exposure)
         self.update_progress(1.0)
         done = time.perf_counter()
         timings = dict(extract_ms=1e3 * (extracted - start), draw_ms=1e3 * (drawn - extracted),
                        result_ms=1e3 * (done - drawn), total_ms=1e3 * (done - start))
         _set_timings(timings)
+        if not self.is_preview:
+            with _TIMINGS_LOCK:
+                last_exposures.clear()
+                last_exposures.update(exposures)
         said = f" | {len(snap.warnings)} warning(s), see the Info editor" if snap.warnings else ""
-        self.update_stats("", f"Shading Lab | {label} | {timings['total_ms']:.0f} ms{said}")
+        said_exposure = f" | exposure {said_exposure}" if said_exposure else ""
+        self.update_stats("", f"Shading Lab | {label} | {timings['total_ms']:.0f} ms{said_exposure}{said}")
+
+    def _adapter(self, depsgraph, snap):
+        """Automatic exposure's adaptation for this render: from the frame before it in an
+        animation (a render job, or a sequence the CLI holds), none for stills and previews."""
+        if self.is_preview or snap.settings.auto_exposure is None:
+            return None
+        scene = depsgraph.scene
+        animating = bool(self.is_animation) or exposure.TRACK.held
+        fps = scene.render.fps / scene.render.fps_base
+        frame = scene.frame_current + scene.frame_subframe
+        layer = depsgraph.view_layer.name
+
+        def adapt(view, metered: float) -> float:
+            key = (scene.name, layer, view.name, view.model or snap.settings.model)
+            return exposure.TRACK.step(key, frame, fps, metered, view.auto_exposure, animating)
+
+        return adapt
 
     def _read_scene(self, depsgraph):
         """The snapshot to draw (None, with the error reported, when the scene cannot be read)."""
@@ -371,13 +413,16 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
                 last_warnings[:] = snap.warnings
         return snap
 
-    def _draw(self, snap, views, comparison, outputs: list[str], lobe_passes: list[str]):
+    def _draw(self, snap, views, comparison, outputs: list[str], lobe_passes: list[str], adapt=None):
         """The frame's ``outputs`` and each light pass (the same frame with one lobe's weights,
-        black behind), read back; None, with the error reported, when drawing failed."""
+        black behind), read back, and the frame's automatic exposures; None, with the error
+        reported, when drawing failed."""
         renderer = Renderer()
         LIBRARY.clear_compile_error()
         try:
-            images = renderer.render_views(snap, views, outputs, comparison, should_stop=self.test_break)
+            images = renderer.render_views(snap, views, outputs, comparison, should_stop=self.test_break,
+                                           adapt=adapt)
+            exposures = renderer.exposures
             for name in lobe_passes:
                 if self.test_break():
                     break
@@ -385,7 +430,7 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
                             background=(0.0, 0.0, 0.0, 0.0), lobes=LIGHT_PASSES[name][1])
                 images[name] = renderer.render_views(snap, [lobe], [lobe.output("radiance")],
                                                      should_stop=self.test_break)[lobe.output("radiance")]
-            return images
+            return images, exposures
         except ShaderCompileError as exc:
             self._fail(str(exc))
         except Exception as exc:
@@ -398,7 +443,8 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         """Announce the passes to the compositor and multilayer EXR output."""
         self.register_pass(scene, renderlayer, "Combined", 4, "RGBA", "COLOR")
         props = getattr(scene, "shading_lab", None)
-        if props is not None and props.tone_mapper != "BLENDER" and props.compare_mode == "OFF":
+        exposed = props is not None and (props.tone_mapper != "BLENDER" or props.exposure_mode == "AUTO")
+        if exposed and props.compare_mode == "OFF":
             self.register_pass(scene, renderlayer, RADIANCE_PASS, 4, "RGBA", "COLOR")
         for name in light_passes(renderlayer):
             self.register_pass(scene, renderlayer, name, 4, "RGBA", "COLOR")

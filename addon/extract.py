@@ -720,7 +720,14 @@ def scene_settings(scene) -> S.Settings:
                     multiscatter=bool(props.multiscatter),
                     normalized_blinn_phong=bool(props.normalized_blinn_phong),
                     principled=props.term_set == "PRINCIPLED")
-    return S.Settings(model=props.model, terms=terms, ambient=float(props.ambient),
+    auto = None
+    if props.exposure_mode == "AUTO":
+        auto = S.AutoExposure(method=props.exposure_method, key=float(props.exposure_key),
+                              low=float(props.exposure_low) / 100.0, high=float(props.exposure_high) / 100.0,
+                              compensation=float(props.exposure), min_stops=float(props.exposure_min),
+                              max_stops=float(props.exposure_max), brighter=float(props.adapt_brighter),
+                              darker=float(props.adapt_darker))
+    return S.Settings(model=props.model, terms=terms, ambient=float(props.ambient), auto_exposure=auto,
                       tone_mapper=props.tone_mapper, exposure=float(props.exposure), transfer=props.transfer,
                       samples=int(props.samples), compare_mode=props.compare_mode,
                       compare_models=(props.compare_a, props.compare_b),
@@ -808,7 +815,9 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
         height=height,
         settings=settings or scene_settings(scene),
     )
-    snap.world = world_environment(scene.world, snap)
+    # the evaluated world: its animated values as this frame has them (an animation render job
+    # evaluates frames without writing them back to the original data)
+    snap.world = world_environment(depsgraph.scene_eval.world, snap)
     snap.world_color = S.World.constant(snap.world.camera)
     snap.lights.extend(snap.world.suns)
     snap.materials[""] = S.DEFAULT_MATERIAL

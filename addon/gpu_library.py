@@ -271,6 +271,12 @@ def post_program(features: programs.PostFeatures) -> gpu.types.GPUShader:
                            _declare_full_screen("hdr_image", floats=("exposure_scale",)))
 
 
+def exposure_program(stage: str) -> gpu.types.GPUShader:
+    """A stage of automatic exposure's reduction (programs.EXPOSURE_STAGES)."""
+    return LIBRARY.program(("exposure", stage), "exposure", programs.exposure_source(stage),
+                           _declare_full_screen("source", floats=("block",)))
+
+
 def compare_program(features: programs.CompareFeatures) -> gpu.types.GPUShader:
     return LIBRARY.program(("compare",) + features.defines(), "compare", programs.compare_source(features),
                            _declare_full_screen("image_a", "image_b", floats=("split", "range")))

@@ -4,7 +4,7 @@ A frame is a list of steps, each a pass and its input, run in order (``Renderer.
 
     per frame: EnvironmentPass (the world's light), ShadowPass (the lights' shadow maps)
     per view:  OcclusionPass ─► OpaquePass ─► BackgroundPass ─► TransparencyPass ─► ResolvePass
-               ─► DisplayPass
+               ─► ExposurePass ─► DisplayPass
     then:      ComparePass (A|B: two views composited)
 
 Lifetimes:
@@ -15,8 +15,9 @@ Lifetimes:
   viewport redraws into the same ones), freed with the renderer.
 
 A pass with nothing to do does nothing: no transparency layers without transparent surfaces, no
-resolve without supersampling, no display pass under Blender's view transform, no shadow maps
-without a light that casts. The per-frame passes run ahead of the views, reading the same
+resolve without supersampling, no metering under manual exposure, no display pass under
+Blender's view transform (unless automatic exposure scales Combined), no shadow maps without a
+light that casts. The per-frame passes run ahead of the views, reading the same
 ``Frame``.
 """
 
@@ -28,7 +29,7 @@ from dataclasses import dataclass, field
 import gpu
 import numpy as np
 
-from . import gpu_library, programs
+from . import exposure, gpu_library, programs
 from .gpu_scene import SceneResources
 from .snapshot import MAX_ENVIRONMENT_IMAGES, Snapshot, World
 
@@ -97,7 +98,8 @@ class View:
     lobes: tuple[float, float, float, float] = programs.ALL_LOBES
     half_target: bool = False  # RGBA16F targets (the viewport)
     display: programs.PostFeatures | None = None  # also tone map (an engine tone mapper)
-    exposure: float = 0.0
+    exposure: float = 0.0  # stops (manual)
+    auto_exposure: exposure.AutoExposure | None = None  # metered by ExposurePass instead
     view_projection: np.ndarray | None = field(default=None, compare=False)  # None: the camera's
     # the radiance in a target of its own, written only once the frame is complete (the viewport
     # shows it: a frame that fails half-way leaves the last good image there)
@@ -136,6 +138,14 @@ class Frame:
     outputs: dict[str, Target] = field(default_factory=dict)
     cancelled: bool = False  # should_stop() said so: no more geometry is drawn
     peeled_layers: int = 0  # transparency layers the last view blended
+    # automatic exposure: (view, metered stops) -> the stops to use (eye adaptation between
+    # frames); None: the metered value
+    adapt: Callable[[View, float], float] | None = None
+    exposures: dict[str, tuple[float, float]] = field(default_factory=dict)  # view -> (stops, metered)
+
+    def exposure(self, view: View) -> float:
+        """The view's exposure in stops: metered (and adapted) when automatic, else its own."""
+        return self.exposures[view.name][0] if view.name in self.exposures else view.exposure
 
     def draw_full_screen(self, shader, bind: Callable[[gpu.types.GPUShader], None], target: Target,
                          clear: bool = True) -> None:
@@ -528,9 +538,59 @@ class ResolvePass(TargetPass):
         return True
 
 
+class ExposurePass(Pass):
+    """Automatic exposure: ``<view>.radiance`` reduced to a histogram of log2 luminance on the
+    GPU (three small full-screen stages, exposure.frag.glsl), BINS texels read back and metered
+    (``exposure.meter``), then adapted from the previous frame by ``frame.adapt``. Writes
+    ``frame.exposures[view.name]``; nothing to do under manual exposure."""
+
+    def __init__(self):
+        self.targets: dict[str, Target] = {}
+
+    def _fit(self, stage: str, width: int, height: int) -> Target:
+        self.targets[stage] = _fitted(self.targets.get(stage), width, height)
+        return self.targets[stage]
+
+    def histogram(self, frame: Frame, radiance: Target) -> tuple[np.ndarray, np.ndarray]:
+        """(sum of log2 L, pixel count) per bin of ``radiance`` (``exposure.histogram``'s twin)."""
+        k = exposure.block_size(radiance.width, radiance.height)
+        blocks = self._fit("BLOCKS", -(-radiance.width // k), -(-radiance.height // k))
+        rows = self._fit("ROWS", exposure.BINS, blocks.height)
+        columns = self._fit("COLUMNS", exposure.BINS, 1)
+        source = radiance
+        for stage, target in (("BLOCKS", blocks), ("ROWS", rows), ("COLUMNS", columns)):
+            def bind(shader, source=source, stage=stage):
+                gpu_library.bind_sampler(shader, "source", source.texture_color)
+                if stage == "BLOCKS":
+                    shader.uniform_float("block", float(k))
+            frame.draw_full_screen(gpu_library.exposure_program(stage), bind, target)
+            source = target
+        values = columns.read()[0]
+        return values[:, 0].astype(np.float64), values[:, 1].astype(np.float64)
+
+    def run(self, frame: Frame, view: View) -> bool:
+        if view.auto_exposure is None:
+            return True
+        sums, counts = self.histogram(frame, frame.outputs[view.output("radiance")])
+        metered = exposure.meter(sums, counts, view.auto_exposure)
+        if metered is None:  # nothing counted (an empty transparent frame): compensation only
+            metered = min(max(view.auto_exposure.compensation, view.auto_exposure.min_stops),
+                          view.auto_exposure.max_stops)
+        stops = frame.adapt(view, metered) if frame.adapt is not None else metered
+        frame.exposures[view.name] = (stops, metered)
+        return True
+
+    def free(self) -> None:
+        for target in self.targets.values():
+            target.free()
+        self.targets = {}
+
+
 class DisplayPass(TargetPass):
     """Under one of the engine's own tone mappers: exposure, the tone curve and the transfer
-    function over the resolved sub-pixels of ``<view>.scene``, into ``<view>.display``."""
+    function over the resolved sub-pixels of ``<view>.scene``, into ``<view>.display``; under
+    Blender's view transform with automatic exposure, the exposure alone (Combined stays
+    scene-linear)."""
 
     def run(self, frame: Frame, view: View) -> bool:
         if view.display is None:
@@ -541,7 +601,7 @@ class DisplayPass(TargetPass):
 
         def bind(shader):
             gpu_library.bind_sampler(shader, "hdr_image", scene.texture_color)
-            shader.uniform_float("exposure_scale", 2.0 ** view.exposure)
+            shader.uniform_float("exposure_scale", 2.0 ** frame.exposure(view))
 
         frame.draw_full_screen(gpu_library.post_program(features), bind, self.target)
         frame.outputs[view.output("display")] = self.target
@@ -570,4 +630,5 @@ class ComparePass(TargetPass):
 
 
 #: The passes that draw one view, in order.
-VIEW_PASSES = (OcclusionPass, OpaquePass, BackgroundPass, TransparencyPass, ResolvePass, DisplayPass)
+VIEW_PASSES = (OcclusionPass, OpaquePass, BackgroundPass, TransparencyPass, ResolvePass, ExposurePass,
+               DisplayPass)

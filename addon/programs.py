@@ -261,9 +261,9 @@ class PostFeatures:
 
     def defines(self) -> tuple[tuple[str, str], ...]:
         out = [("SL_SAMPLES", str(self.samples))]
-        if self.tone_mapper is not None:
+        if self.tone_mapper is not None:  # BLENDER: exposure only, Blender's view transform follows
             out += [("SL_DISPLAY", "1"), ("SL_TONEMAP_" + self.tone_mapper, "1")]
-            if self.transfer == "GAMMA22":
+            if self.transfer == "GAMMA22" and self.tone_mapper != "BLENDER":
                 out.append(("SL_TRANSFER_GAMMA22", "1"))
         return tuple(sorted(out))
 
@@ -301,7 +301,7 @@ def clear_source_caches() -> None:
     for cached in (read_glsl, program_source, post_source, compare_source, occupancy_source, under_source,
                    background_source, env_bake_source, env_downsample_source, env_prefilter_source,
                    env_irradiance_source, prepass_source, gtao_source,
-                   occlusion_depths_source, shadow_source):
+                   occlusion_depths_source, shadow_source, exposure_source):
         cached.cache_clear()
 
 
@@ -379,6 +379,19 @@ def prepass_source(back_faces: bool = False) -> ProgramSource:
 
 #: Slices and steps per horizon of the ambient occlusion pass (glsl/gtao.frag.glsl).
 OCCLUSION_DIRECTIONS, OCCLUSION_STEPS = 8, 12
+
+
+#: Automatic exposure's reduction stages (glsl/exposure.frag.glsl).
+EXPOSURE_STAGES = ("BLOCKS", "ROWS", "COLUMNS")
+
+
+@lru_cache(maxsize=4)
+def exposure_source(stage: str) -> ProgramSource:
+    from . import exposure
+
+    return _full_screen_source("exposure.frag.glsl", defines=(
+        ("SL_EXPOSURE_" + stage, "1"), ("SL_EXPOSURE_BINS", str(exposure.BINS)),
+        ("SL_LOG_MIN", f"{exposure.LOG_MIN:.1f}"), ("SL_LOG_MAX", f"{exposure.LOG_MAX:.1f}")))
 
 
 @lru_cache(maxsize=1)

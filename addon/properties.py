@@ -79,8 +79,46 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
         description="Who turns radiance into display values. The engine's own tone mappers write "
                     "display-linear Combined (and raw radiance to a Radiance pass) and expect the "
                     "Standard view transform")
+    exposure_mode: EnumProperty(
+        name="Exposure", default="MANUAL", update=_redraw, items=(
+            ("MANUAL", "Manual", "The exposure set below"),
+            ("AUTO", "Automatic", "Metered from each frame's luminance (and, in animations and the "
+                                  "viewport, adapted from frame to frame), plus the compensation below"),
+        ),
+        description="How the exposure before the tone mapper is chosen. Automatic also scales Combined "
+                    "under Blender's view transform (the raw radiance goes to the Radiance pass)")
     exposure: FloatProperty(name="Exposure", default=0.0, soft_min=-10.0, soft_max=10.0, update=_redraw,
-                            description="Exposure in stops (radiance x 2^EV) before the tone mapper")
+                            description="Exposure in stops (radiance x 2^EV) before the tone mapper; "
+                                        "with automatic exposure, stops added to the metered value")
+    exposure_method: EnumProperty(
+        name="Metering", default="HISTOGRAM", update=_redraw, items=(
+            ("HISTOGRAM", "Histogram", "Log-average of the pixels between the low and high percentiles "
+                                       "(the darkest and brightest ignored)"),
+            ("LOG_AVERAGE", "Log Average", "Log-average luminance of every pixel (Reinhard et al. 2002)"),
+        ),
+        description="How the frame's luminance is measured")
+    exposure_key: FloatProperty(
+        name="Key", default=0.18, min=1e-4, soft_min=0.01, soft_max=1.0, update=_redraw,
+        description="The luminance the frame's measured average is brought to (0.18: middle grey)")
+    exposure_low: FloatProperty(
+        name="Low", default=10.0, min=0.0, max=100.0, subtype="PERCENTAGE", update=_redraw,
+        description="Histogram metering: the darkest pixels up to this percentage are ignored")
+    exposure_high: FloatProperty(
+        name="High", default=90.0, min=0.0, max=100.0, subtype="PERCENTAGE", update=_redraw,
+        description="Histogram metering: the brightest pixels above this percentage are ignored")
+    exposure_min: FloatProperty(
+        name="Minimum", default=-16.0, soft_min=-16.0, soft_max=16.0, update=_redraw,
+        description="Lowest automatic exposure, in stops")
+    exposure_max: FloatProperty(
+        name="Maximum", default=16.0, soft_min=-16.0, soft_max=16.0, update=_redraw,
+        description="Highest automatic exposure, in stops")
+    adapt_brighter: FloatProperty(
+        name="Adapt to Brighter", default=0.5, min=0.0, soft_max=10.0, unit="TIME_ABSOLUTE", update=_redraw,
+        description="Time constant (seconds) of the exposure's approach when the scene gets brighter, in "
+                    "animations and the viewport (0: at once)")
+    adapt_darker: FloatProperty(
+        name="Adapt to Darker", default=2.0, min=0.0, soft_max=10.0, unit="TIME_ABSOLUTE", update=_redraw,
+        description="Time constant (seconds) of the exposure's approach when the scene gets darker")
     transfer: EnumProperty(
         name="Transfer", default="SRGB", update=_redraw, items=(
             ("SRGB", "sRGB (exact)", "The exact sRGB transfer function (Blender's Standard view)"),

@@ -35,13 +35,14 @@ def frame_views(snapshot: Snapshot, background: Callable[[str | None], tuple], s
     last pass only, into a target of its own (a frame that fails leaves the last good image)."""
     settings = snapshot.settings
     display = None
-    if settings.tone_mapper != "BLENDER":
+    if settings.tone_mapper != "BLENDER" or settings.auto_exposure is not None:
         display = programs.PostFeatures(samples, settings.tone_mapper, settings.transfer)
 
     def view(name, model=None, tone_map=True):
         return View(snapshot.width, snapshot.height, name=name, model=model, samples=samples,
                     background=background(model), half_target=half_target,
-                    display=display if tone_map else None, exposure=settings.exposure)
+                    display=display if tone_map else None, exposure=settings.exposure,
+                    auto_exposure=settings.auto_exposure if tone_map else None)
 
     if settings.compare_mode == "OFF":
         main = view("main")
@@ -103,27 +104,31 @@ class Renderer:
         return steps
 
     def run(self, views: list[View], comparison: Comparison | None = None, *,
-            should_stop: Callable[[], bool] | None = None) -> Frame:
+            should_stop: Callable[[], bool] | None = None,
+            adapt: Callable[[View, float], float] | None = None) -> Frame:
         """Draw one frame of the synced scene. Once ``should_stop()`` says so, no more geometry
-        is drawn; the passes after it still make their images from what was drawn."""
+        is drawn; the passes after it still make their images from what was drawn. ``adapt``:
+        automatic exposure's adaptation from the previous frame (``Frame.adapt``)."""
         if self._full_screen is None:
             self._full_screen = full_screen_batch()
-        frame = Frame(self.scene.snapshot, self.scene, self._full_screen, should_stop)
+        frame = Frame(self.scene.snapshot, self.scene, self._full_screen, should_stop, adapt=adapt)
         for step, spec in self.steps(views, comparison):
             if frame.cancelled and step.draws_geometry:
                 continue
             if not step.run(frame, spec):
                 frame.cancelled = True
         self.peeled_layers = frame.peeled_layers
+        self.exposures = dict(frame.exposures)
         return frame
 
     def render_views(self, snapshot: Snapshot, views: list[View], outputs: list[str],
                      comparison: Comparison | None = None,
-                     should_stop: Callable[[], bool] | None = None) -> dict[str, np.ndarray]:
+                     should_stop: Callable[[], bool] | None = None,
+                     adapt: Callable[[View, float], float] | None = None) -> dict[str, np.ndarray]:
         """Sync ``snapshot``, draw the frame and read ``outputs`` back: each (height, width, 4)
         float32, bottom row first."""
         self.sync(snapshot)
-        frame = self.run(views, comparison, should_stop=should_stop)
+        frame = self.run(views, comparison, should_stop=should_stop, adapt=adapt)
         return {name: frame.outputs[name].read() for name in outputs}
 
     def render(self, snapshot: Snapshot, background: tuple[float, float, float, float] = (0, 0, 0, 1),

@@ -11,6 +11,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from .exposure import AutoExposure
+
 
 @dataclass(frozen=True)
 class Choice:
@@ -340,7 +342,8 @@ class Settings:
     terms: Terms = field(default_factory=Terms)
     ambient: float = 0.2  # the seed's "commonly used" ambient constant x (eq. 1.4)
     tone_mapper: str = "BLENDER"  # BLENDER: Combined is scene-linear, Blender's view transform displays
-    exposure: float = 0.0  # EV, for the engine's own tone mappers
+    exposure: float = 0.0  # EV: the exposure (manual) or its compensation (automatic)
+    auto_exposure: AutoExposure | None = None  # None: manual exposure
     transfer: str = "SRGB"  # SRGB (exact) or GAMMA22, for the engine's own tone mappers
     samples: int = 1  # supersampling grid per axis for final renders (1 = pixel centres)
     compare_mode: str = "OFF"  # OFF, SPLIT or DIFFERENCE

@@ -82,8 +82,25 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
         row.prop(props, "normalized_blinn_phong")
         layout.separator()
         layout.prop(props, "tone_mapper")
+        auto = props.exposure_mode == "AUTO"
+        layout.prop(props, "exposure_mode")
+        if props.tone_mapper != "BLENDER" or auto:
+            layout.prop(props, "exposure", text="Compensation" if auto else "Exposure")
+        if auto:
+            col = layout.column(align=True)
+            col.prop(props, "exposure_method")
+            col.prop(props, "exposure_key")
+            sub = col.column(align=True)
+            sub.active = props.exposure_method == "HISTOGRAM"
+            sub.prop(props, "exposure_low")
+            sub.prop(props, "exposure_high")
+            col = layout.column(align=True)
+            col.prop(props, "exposure_min")
+            col.prop(props, "exposure_max")
+            col = layout.column(align=True)
+            col.prop(props, "adapt_brighter")
+            col.prop(props, "adapt_darker")
         if props.tone_mapper != "BLENDER":
-            layout.prop(props, "exposure")
             layout.prop(props, "transfer")
             if context.scene.view_settings.view_transform != "Standard":
                 box = layout.box()

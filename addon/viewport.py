@@ -6,7 +6,8 @@ edit uploads no geometry. ``draw`` renders with the region's own view and projec
 into a float target (and through the engine's tone mapper when one is chosen) and returns the
 texture for the engine to show through Blender's display transform. A frame that fails (a
 program that does not compile after an edit, say) leaves the last good image to show, and the
-failure in ``error`` for the engine to draw over it.
+failure in ``error`` for the engine to draw over it. Automatic exposure adapts from draw to
+draw by the time between them (``adapting`` asks the engine for another redraw until it settles).
 """
 
 from __future__ import annotations
@@ -16,13 +17,17 @@ import time
 import gpu
 import numpy as np
 
-from . import extract
+from . import exposure, extract
 from . import snapshot as S
 from .gpu_library import ShaderCompileError
 from .renderer import Renderer, frame_views
 
 _NO_CAMERA = S.Camera(np.eye(4, dtype=np.float32), np.eye(4, dtype=np.float32), True, (0.0, 0.0, 0.0),
                       (0.0, 0.0, -1.0))
+
+
+#: Automatic exposure closer than this to its target counts as settled (no further redraw).
+ADAPTED_STOPS = 0.01
 
 
 class ViewportSession:
@@ -33,6 +38,10 @@ class ViewportSession:
         self.last_update_ms = 0.0
         self.error = ""  # why the last frame failed ("" when it did not)
         self.error_reported = False  # the engine reports each new error once, not every redraw
+        self.clock = time.perf_counter  # seconds; automatic exposure adapts by the time between draws
+        self.adapting = False  # the last draw's automatic exposure had not reached its target
+        self._exposures: dict[tuple, float] = {}
+        self._last_draw: float | None = None
         self._last_good: gpu.types.GPUTexture | None = None
 
     def update(self, depsgraph) -> None:
@@ -57,7 +66,8 @@ class ViewportSession:
             self.pending = set()  # kept on failure: the next frame uploads them
             views, comparison, shown, _ = frame_views(snap, lambda model: background, half_target=True,
                                                       keep_last=True)
-            texture = self.renderer.run(views, comparison).outputs[shown].texture_color
+            frame = self.renderer.run(views, comparison, adapt=self._adapter(snap))
+            texture = frame.outputs[shown].texture_color
         except ShaderCompileError as exc:
             self._failed(str(exc))
             return self._last_good
@@ -67,6 +77,25 @@ class ViewportSession:
         self.error = ""
         self._last_good = texture
         return texture
+
+    def _adapter(self, snap):
+        """Automatic exposure's adaptation over the time since the last draw (none: converged)."""
+        now = self.clock()
+        dt = 0.0 if self._last_draw is None else now - self._last_draw
+        self._last_draw = now
+        self.adapting = False
+        if snap.settings.auto_exposure is None:
+            self._exposures.clear()
+            return None
+
+        def adapt(view, metered: float) -> float:
+            key = (view.name, view.model or snap.settings.model)
+            stops = exposure.adapt(self._exposures.get(key), metered, dt, view.auto_exposure)
+            self._exposures[key] = stops
+            self.adapting |= abs(stops - metered) > ADAPTED_STOPS
+            return stops
+
+        return adapt
 
     def _failed(self, message: str) -> None:
         if message != self.error:

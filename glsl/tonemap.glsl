@@ -67,6 +67,8 @@ vec3 tonemap(vec3 x)
   return tonemap_hable(x);
 #elif defined(SL_TONEMAP_ACES)
   return tonemap_aces(x);
+#elif defined(SL_TONEMAP_BLENDER)
+  return x; /* automatic exposure only: Blender's view transform displays it */
 #else
   return tonemap_clamp(x);
 #endif

@@ -15,6 +15,7 @@ prints one line and exits with status 2.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import sys
 import time
@@ -63,7 +64,14 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
                        help="the Principled term set: Blender's Principled BSDF as Cycles evaluates it")
     display = parser.add_argument_group("display")
     display.add_argument("--tone-mapper", choices=TONE_MAPPERS)
-    display.add_argument("--exposure", type=float, help="EV, for the engine's own tone mappers")
+    display.add_argument("--exposure", type=parse_exposure, metavar="EV|auto",
+                         help="EV for the engine's own tone mappers, or 'auto': metered per frame (adapted "
+                              "from frame to frame with --frames) and reported per image")
+    display.add_argument("--exposure-compensation", type=float, metavar="EV",
+                         help="with --exposure auto: stops added to the metered exposure")
+    display.add_argument("--exposure-metering", choices=("histogram", "log-average"),
+                         help="with --exposure auto: histogram (percentile-clipped, the default) or "
+                              "log-average of every pixel")
     display.add_argument("--samples", type=int, help="N: N x N supersampling per pixel")
     display.add_argument("--transparency-layers", type=int, metavar="N",
                          help="partly transparent surfaces blended per pixel in depth order (1-16)")
@@ -82,6 +90,15 @@ def parse_resolution(text: str) -> tuple[int, int]:
     if not (1 <= w <= 16384 and 1 <= h <= 16384):
         raise CliError(f"--resolution must be between 1x1 and 16384x16384, got {text!r}")
     return w, h
+
+
+def parse_exposure(text: str) -> float | str:
+    if text.strip().lower() == "auto":
+        return "auto"
+    try:
+        return float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a number of stops or 'auto', got {text!r}") from None
 
 
 def parse_frames(text: str | None) -> list[int] | None:
@@ -170,10 +187,19 @@ def configure(scene, args) -> None:
         value = getattr(args, family)
         if value is not None:
             setattr(props, family, value.upper().replace("-", "_"))
-    for name in ("multiscatter", "normalized_blinn_phong", "exposure", "samples"):
+    for name in ("multiscatter", "normalized_blinn_phong", "samples"):
         value = getattr(args, name)
         if value is not None:
             setattr(props, name, value)
+    if args.exposure == "auto":
+        props.exposure_mode = "AUTO"
+        props.exposure = args.exposure_compensation or 0.0
+    elif args.exposure is not None:
+        props.exposure_mode, props.exposure = "MANUAL", args.exposure
+    if args.exposure != "auto" and (args.exposure_compensation is not None or args.exposure_metering):
+        raise CliError("--exposure-compensation and --exposure-metering need --exposure auto")
+    if args.exposure_metering:
+        props.exposure_method = args.exposure_metering.upper().replace("-", "_")
     if args.principled is not None:
         props.term_set = "PRINCIPLED" if args.principled else "CUSTOM"
     for name in ("shadows", "soft_shadows"):
@@ -266,12 +292,50 @@ class Progress:
             print(file=sys.stderr)
 
 
+def render_frame(args, scene, stem: str, models: list[str], frame: int | None, warned: dict,
+                 progress: Progress) -> list[Path]:
+    """Render ``frame`` (None: the current one) with each model; the files written."""
+    import bpy
+
+    from addon import engine
+
+    written = []
+    if frame is not None:
+        scene.frame_set(frame)
+    pngs = []
+    suffix = "" if frame is None else f"_{frame:04d}"
+    for model in models:
+        scene.shading_lab.model = MODELS[model]
+        try:
+            bpy.ops.render.render()
+        except RuntimeError as exc:
+            raise CliError(f"rendering {model}{suffix} failed: {str(exc).strip()}") from None
+
+        warned.update(dict.fromkeys(engine.last_warnings))
+        said = engine.exposure_text(engine.last_exposures)
+        if said:
+            print(f"{stem}_{model}{suffix}: exposure {said}")
+        result = bpy.data.images.get("Render Result")
+        if result is None:
+            raise CliError(f"rendering {model}{suffix} produced no image")
+        exr, png = args.out / f"{stem}_{model}{suffix}.exr", args.out / f"{stem}_{model}{suffix}.png"
+        save(result, scene, exr, "OPEN_EXR")
+        save(result, scene, png, "PNG")
+        written += [exr, png]
+        pngs.append(png)
+        progress.step(f"{model}{suffix} -> {exr.name}")
+    if len(pngs) > 1:
+        comparison = args.out / f"{stem}_comparison{suffix}.png"
+        side_by_side(pngs, comparison)
+        written.append(comparison)
+    return written
+
+
 def run(args: argparse.Namespace) -> list[Path]:
     models = list(MODELS) if args.model == "all" else [args.model]
     frames = parse_frames(args.frames)
     resolution = parse_resolution(args.resolution) if args.resolution else None
     check_output_dir(args.out)
-    import bpy
 
     ensure_addon()
     scene, stem = load_scene(args.scene, args.variant)
@@ -285,33 +349,12 @@ def run(args: argparse.Namespace) -> list[Path]:
     written = []
     warned: dict[str, None] = {}
     progress = Progress(len(models) * len(frames or [None]))
-    for frame in frames or [None]:
-        if frame is not None:
-            scene.frame_set(frame)
-        pngs = []
-        suffix = "" if frame is None else f"_{frame:04d}"
-        for model in models:
-            scene.shading_lab.model = MODELS[model]
-            try:
-                bpy.ops.render.render()
-            except RuntimeError as exc:
-                raise CliError(f"rendering {model}{suffix} failed: {str(exc).strip()}") from None
-            from addon import engine
+    from addon import exposure
 
-            warned.update(dict.fromkeys(engine.last_warnings))
-            result = bpy.data.images.get("Render Result")
-            if result is None:
-                raise CliError(f"rendering {model}{suffix} produced no image")
-            exr, png = args.out / f"{stem}_{model}{suffix}.exr", args.out / f"{stem}_{model}{suffix}.png"
-            save(result, scene, exr, "OPEN_EXR")
-            save(result, scene, png, "PNG")
-            written += [exr, png]
-            pngs.append(png)
-            progress.step(f"{model}{suffix} -> {exr.name}")
-        if len(pngs) > 1:
-            comparison = args.out / f"{stem}_comparison{suffix}.png"
-            side_by_side(pngs, comparison)
-            written.append(comparison)
+    # with --frames, automatic exposure adapts from each frame to the next, as in an animation
+    with exposure.TRACK.sequence() if frames else contextlib.nullcontext():
+        for frame in frames or [None]:
+            written += render_frame(args, scene, stem, models, frame, warned, progress)
     for warning in warned:  # each once, whatever the number of models and frames
         print(f"warning: {warning}", file=sys.stderr)
     print(f"wrote {len(written)} files to {args.out}/ (models left to right in the comparison: "

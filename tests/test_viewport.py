@@ -249,6 +249,9 @@ class _EngineStandIn:
     def unbind_display_space_shader(self):
         pass
 
+    def tag_redraw(self):
+        self.redraws_asked = getattr(self, "redraws_asked", 0) + 1
+
 
 def _context(scene, size: int, *, space=None):
     from mathutils import Matrix
