@@ -282,3 +282,48 @@ def test_cli_exposure_auto_reports_the_exposure(tmp_path):
     assert proc.returncode == 0, proc.stderr[-3000:]
     lines = [line for line in proc.stdout.splitlines() if "exposure" in line and "EV (auto)" in line]
     assert lines, proc.stdout[-2000:]
+
+
+# --- the viewport ------------------------------------------------------------------------------------
+
+def test_viewport_adapts_by_the_time_between_draws():
+    """The viewport's first draw is converged; after the light gets 100 x brighter, each draw moves
+    the exposure by the formula over the (here simulated) time since the previous draw, asks for
+    another redraw while it has not settled, and settles."""
+    from addon.viewport import ADAPTED_STOPS, ViewportSession
+
+    scene = scenes.lambert_scene(size=16)
+    props = scene.shading_lab
+    props.exposure_mode, props.exposure_method, props.adapt_brighter = "AUTO", "LOG_AVERAGE", 0.2
+    bpy.context.view_layer.update()  # the camera's matrix_world
+    cam = scene.camera
+    view = np.linalg.inv(np.array(cam.matrix_world))
+    proj = np.array(cam.calc_matrix_camera(bpy.context.evaluated_depsgraph_get(), x=16, y=16))
+    session = ViewportSession()
+    now = [0.0]
+    session.clock = lambda: now[0]
+
+    def draw(t):
+        now[0] = t
+        session.update(bpy.context.evaluated_depsgraph_get())
+        run_on_gpu(lambda _d: session.draw(16, 16, view, proj, False))
+        return session.renderer.exposures["main"], session.adapting
+
+    try:
+        (stops, metered), adapting = draw(0.0)
+        start = math.log2(KEY / scenes.LAMBERT)
+        assert stops == metered == pytest.approx(start, abs=2e-3) and not adapting
+        next(o for o in scene.objects if o.type == "LIGHT").data.energy *= 100.0
+        target = start - math.log2(100.0)
+        expected, t = start, 0.0
+        for dt in (0.05, 0.05, 0.1, 0.3):
+            t += dt
+            (stops, metered), adapting = draw(t)
+            expected = target + (expected - target) * math.exp(-dt / 0.2)
+            assert metered == pytest.approx(target, abs=2e-3)
+            assert stops == pytest.approx(expected, abs=2e-3), (t, stops, expected)
+            assert adapting == (abs(expected - target) > ADAPTED_STOPS)
+        (stops, _), adapting = draw(t + 5.0)
+        assert stops == pytest.approx(target, abs=2e-3) and not adapting
+    finally:
+        session.free()
