@@ -374,50 +374,118 @@ def image_updates(depsgraph) -> set[str]:
 
 # --- geometry ----------------------------------------------------------------------------------
 
+def _attribute(mesh, name: str, prop: str, dtype, count: int, width: int = 1) -> np.ndarray | None:
+    """A mesh attribute's values as a flat array (Blender's attribute arrays copy out at memory
+    speed, unlike the per-item RNA collections); None if the mesh has no such attribute."""
+    attribute = mesh.attributes.get(name)
+    if attribute is None:
+        return None
+    out = np.empty(count * width, dtype)
+    attribute.data.foreach_get(prop, out)
+    return out
+
+
+def triangle_corners(mesh, corner_positions: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(corners of each loop triangle (n, 3) int32, the face of each): ``mesh.loop_triangles``'
+    own ``loops`` and ``polygon_index``, after ``calc_loop_triangles()``; ``corner_positions``
+    (one row per corner, float32) decides how quads split.
+
+    Reading ``loop_triangles`` item by item costs ~0.2 us per triangle; its face indices copy out
+    as one array. Triangles and quads - nearly every mesh - are then triangulated here as Blender
+    triangulates them (a face's triangles are consecutive, starting at its first corner minus
+    twice its index; a quad splits along 0-2 unless that folds it, then along 1-3: Blender's
+    mesh_tessellate, is_quad_flip_v3_first_third_fast, in the same float32 operations); meshes
+    with larger faces are read from Blender."""
+    n_tri = len(mesh.loop_triangles)
+    tri_face = np.empty(n_tri, np.int32)
+    mesh.loop_triangle_polygons.foreach_get("value", tri_face)
+    sizes = np.bincount(tri_face, minlength=len(mesh.polygons)) + 2
+    if sizes.max(initial=3) > 4:
+        corners = np.empty(n_tri * 3, np.int32)
+        mesh.loop_triangles.foreach_get("loops", corners)
+        return corners.reshape(-1, 3), tri_face
+    starts = np.zeros(len(sizes), np.int32)
+    np.cumsum(sizes[:-1], out=starts[1:])
+    second = np.zeros(n_tri, np.uint8)  # a quad's second triangle: (0, 2, 3), else (0, 1, 2)
+    np.equal(tri_face[1:], tri_face[:-1], out=second[1:].view(bool))
+    corners = _SPLITS[second]
+    corners += starts[tri_face][:, None]
+    quads = np.nonzero(sizes == 4)[0]
+    if len(quads):
+        first = starts[quads]
+        v = [np.take(corner_positions, first + i, axis=0).T for i in range(4)]  # (3, quads) each
+        d12, d13, d14 = v[1] - v[0], v[2] - v[0], v[3] - v[0]
+        a, b = _cross(d12, d13), _cross(d14, d13)
+        flip = np.nonzero(a[0] * b[0] + a[1] * b[1] + a[2] * b[2] > np.float32(0.0))[0]
+        if len(flip):
+            tri = (first[flip] - 2 * quads[flip]).astype(np.int64)  # the quad's first triangle
+            corners[tri] = first[flip][:, None] + _FLIPPED[0]
+            corners[tri + 1] = first[flip][:, None] + _FLIPPED[1]
+    return corners, tri_face
+
+
+_SPLITS = np.array([[0, 1, 2], [0, 2, 3]], np.int32)
+_FLIPPED = np.array([[0, 1, 3], [1, 2, 3]], np.int32)
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Cross products of (3, n) float32 vectors, component by component as Blender's cross_v3_v3v3."""
+    return np.stack([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
+def _corner_verts(mesh) -> np.ndarray:
+    corner_vert = _attribute(mesh, ".corner_vert", "value", np.int32, len(mesh.loops))
+    if corner_vert is None:  # older Blender: no corner attribute
+        corner_vert = np.empty(len(mesh.loops), np.int32)
+        mesh.loops.foreach_get("vertex_index", corner_vert)
+    return corner_vert
+
+
 def mesh_geometry(key: str, mesh: bpy.types.Mesh, tangents: bool = False) -> S.MeshGeometry | None:
-    """Unindexed triangles with corner normals (and the active UV map's coordinates, plus
-    tangents when ``tangents``), grouped by material slot; None when empty."""
+    """The mesh's corners (position, corner normal, the active UV map's coordinates, tangents when
+    ``tangents``) and its triangles as indices into them, grouped by material slot; None when
+    empty. Everything is read as whole arrays; no per-corner work happens in Python beyond one
+    gather of positions (the GPU draws the triangles indexed)."""
     mesh.calc_loop_triangles()
     n_tri = len(mesh.loop_triangles)
     if n_tri == 0:
         return None
-    co = np.empty(len(mesh.vertices) * 3, np.float32)
-    mesh.vertices.foreach_get("co", co)
-    tri_verts = np.empty(n_tri * 3, np.int32)
-    mesh.loop_triangles.foreach_get("vertices", tri_verts)
-    tri_loops = np.empty(n_tri * 3, np.int32)
-    mesh.loop_triangles.foreach_get("loops", tri_loops)
-    tri_mat = np.empty(n_tri, np.int32)
-    mesh.loop_triangles.foreach_get("material_index", tri_mat)
-    corner_normals = np.empty(len(mesh.loops) * 3, np.float32)
-    mesh.corner_normals.foreach_get("vector", corner_normals)
-
-    order = np.argsort(tri_mat, kind="stable")
-    corners = (order[:, None] * 3 + np.arange(3)).reshape(-1)
-    positions = co.reshape(-1, 3)[tri_verts[corners]]
-    normals = corner_normals.reshape(-1, 3)[tri_loops[corners]]
-    slots, starts, counts = np.unique(tri_mat[order], return_index=True, return_counts=True)
-    ranges = [(int(s), int(a) * 3, int(c) * 3) for s, a, c in zip(slots, starts, counts)]
+    n_corner = len(mesh.loops)
+    co = _attribute(mesh, "position", "vector", np.float32, len(mesh.vertices), 3)
+    if co is None:
+        co = np.empty(len(mesh.vertices) * 3, np.float32)
+        mesh.vertices.foreach_get("co", co)
+    positions = np.take(co.reshape(-1, 3), _corner_verts(mesh), axis=0)
+    tri_corners, tri_face = triangle_corners(mesh, positions)
+    face_mat = _attribute(mesh, "material_index", "value", np.int32, len(mesh.polygons))
+    if face_mat is None or face_mat.min() == face_mat.max():
+        slot = int(face_mat[0]) if face_mat is not None else 0
+        indices, ranges = tri_corners.reshape(-1), [(max(slot, 0), 0, 3 * n_tri)]
+    else:
+        tri_mat = face_mat[tri_face]
+        order = np.argsort(tri_mat, kind="stable")
+        indices = tri_corners[order].reshape(-1)
+        slots, starts, counts = np.unique(tri_mat[order], return_index=True, return_counts=True)
+        ranges = [(int(s), int(a) * 3, int(c) * 3) for s, a, c in zip(slots, starts, counts)]
+    normals = np.empty((n_corner, 3), np.float32)
+    mesh.corner_normals.foreach_get("vector", normals.reshape(-1))
     uvs = tangent_data = None
     uv_layer = mesh.uv_layers.active
     if uv_layer is not None:
-        uv = np.empty(len(mesh.loops) * 2, np.float32)
-        uv_layer.uv.foreach_get("vector", uv)
-        uvs = np.ascontiguousarray(uv.reshape(-1, 2)[tri_loops[corners]])
+        uvs = np.empty((n_corner, 2), np.float32)
+        uv_layer.uv.foreach_get("vector", uvs.reshape(-1))
         if tangents:
             try:
                 mesh.calc_tangents(uvmap=uv_layer.name)
             except RuntimeError:  # n-gons: Blender computes tangents for triangles and quads only
                 tangent_data = None  # the normal map is then ignored for this mesh
             else:
-                t = np.empty(len(mesh.loops) * 3, np.float32)
+                t = np.empty(n_corner * 3, np.float32)
                 mesh.loops.foreach_get("tangent", t)
-                sign = np.empty(len(mesh.loops), np.float32)
+                sign = np.empty(n_corner, np.float32)
                 mesh.loops.foreach_get("bitangent_sign", sign)
-                packed = np.column_stack([t.reshape(-1, 3), sign])
-                tangent_data = np.ascontiguousarray(packed[tri_loops[corners]], np.float32)
-    return S.MeshGeometry(key, np.ascontiguousarray(positions), np.ascontiguousarray(normals), ranges,
-                          uvs, tangent_data)
+                tangent_data = np.ascontiguousarray(np.column_stack([t.reshape(-1, 3), sign]), np.float32)
+    return S.MeshGeometry(key, positions, normals, ranges, uvs, tangent_data, indices=indices)
 
 
 def _geometry_key(obj: bpy.types.Object) -> str:
@@ -761,11 +829,12 @@ def preview_settings(preview_scene) -> S.Settings:
 
     The scene Blender builds for a preview carries default Shading Lab settings, so the model and
     terms come from the artist's scene (the last one remembered): a preview shows what a render
-    would. Previews are small and frequent: one sample per pixel, no A|B compare.
+    would. Previews are small and frequent: one sample per pixel, no A|B compare; and manual
+    exposure (automatic exposure would meter a dark material up to middle grey).
     """
     artist = _ARTIST_SETTINGS[0]
     settings = artist if artist is not None else scene_settings(preview_scene)
-    return dataclasses.replace(settings, samples=1, compare_mode="OFF")
+    return dataclasses.replace(settings, samples=1, compare_mode="OFF", auto_exposure=None)
 
 
 def geometry_updates(depsgraph) -> set[str]:

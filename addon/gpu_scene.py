@@ -47,22 +47,23 @@ def _vertex_format() -> gpu.types.GPUVertFormat:
 
 
 def upload_geometry(geometry: MeshGeometry) -> list[tuple[int, gpu.types.GPUBatch]]:
-    """One batch per material range: ``[(slot, batch), ...]``."""
-    fmt = _vertex_format()
+    """One vertex buffer of the mesh's corners and one indexed batch per material range:
+    ``[(slot, batch), ...]``."""
+    count = len(geometry.positions)
+    vbo = gpu.types.GPUVertBuf(_vertex_format(), count)
+    vbo.attr_fill("pos", np.ascontiguousarray(geometry.positions, np.float32))
+    vbo.attr_fill("nor", np.ascontiguousarray(geometry.normals, np.float32))
+    uvs = geometry.uvs if geometry.uvs is not None else np.zeros((count, 2), np.float32)
+    tangents = geometry.tangents if geometry.tangents is not None else np.zeros((count, 4), np.float32)
+    vbo.attr_fill("uv", np.ascontiguousarray(uvs, np.float32))
+    vbo.attr_fill("tangent", np.ascontiguousarray(tangents, np.float32))
     batches = []
-    for slot, first, count in geometry.ranges:
-        if count == 0:
+    for slot, first, n in geometry.ranges:
+        if n == 0:
             continue
-        vbo = gpu.types.GPUVertBuf(fmt, count)
-        part = slice(first, first + count)
-        vbo.attr_fill("pos", np.ascontiguousarray(geometry.positions[part], np.float32))
-        vbo.attr_fill("nor", np.ascontiguousarray(geometry.normals[part], np.float32))
-        uvs = geometry.uvs[part] if geometry.uvs is not None else np.zeros((count, 2), np.float32)
-        tangents = (geometry.tangents[part] if geometry.tangents is not None
-                    else np.zeros((count, 4), np.float32))
-        vbo.attr_fill("uv", np.ascontiguousarray(uvs, np.float32))
-        vbo.attr_fill("tangent", np.ascontiguousarray(tangents, np.float32))
-        batches.append((slot, gpu.types.GPUBatch(type="TRIS", buf=vbo)))
+        triangles = np.ascontiguousarray(geometry.indices[first:first + n], np.int32).reshape(-1, 3)
+        elements = gpu.types.GPUIndexBuf(type="TRIS", seq=triangles)
+        batches.append((slot, gpu.types.GPUBatch(type="TRIS", buf=vbo, elem=elements)))
     return batches
 
 

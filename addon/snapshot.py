@@ -154,9 +154,10 @@ DEFAULT_MATERIAL = MaterialParams()
 
 @dataclass
 class MeshGeometry:
-    """Triangles of one evaluated mesh, unindexed (three corners per triangle), object space.
+    """Triangles of one evaluated mesh, object space: per-corner rows (a mesh's face corners,
+    Blender's loops) and the triangles as ``indices`` into them, three per triangle.
 
-    ``ranges`` lists ``(material_slot, first_corner, corner_count)``, sorted by slot.
+    ``ranges`` lists ``(material_slot, first_index, index_count)``, sorted by slot.
     """
 
     key: str
@@ -165,10 +166,19 @@ class MeshGeometry:
     ranges: list[tuple[int, int, int]]
     uvs: np.ndarray | None = None  # (N, 2) float32, the active UV map (None: the mesh has none)
     tangents: np.ndarray | None = None  # (N, 4) float32: tangent xyz, bitangent sign (normal maps)
+    indices: np.ndarray | None = None  # (3T,) int32 rows of the triangles' corners; None: 0, 1, 2, ...
+
+    def __post_init__(self):
+        if self.indices is None:
+            self.indices = np.arange(len(self.positions), dtype=np.int32)
 
     @property
     def triangle_count(self) -> int:
-        return len(self.positions) // 3
+        return len(self.indices) // 3
+
+    def per_corner(self, values: np.ndarray) -> np.ndarray:
+        """``values`` (one row per corner row) for each triangle's corners in order: (3T, ...)."""
+        return values[self.indices]
 
 
 #: How an image's pixels are stored and sampled (``ImageData.storage``): sRGB-encoded bytes (decoded

@@ -327,3 +327,14 @@ def test_viewport_adapts_by_the_time_between_draws():
         assert stops == pytest.approx(target, abs=2e-3) and not adapting
     finally:
         session.free()
+
+
+def test_previews_use_manual_exposure():
+    """A material preview shows the material's own brightness: no metering to middle grey."""
+    from addon import extract
+
+    scene, _ = _world_scene(40.0)
+    bpy.ops.render.render()  # remembers the artist's settings, which previews follow
+    assert extract.scene_settings(scene).auto_exposure is not None
+    settings = extract.preview_settings(scene)
+    assert settings.auto_exposure is None and settings.model == scene.shading_lab.model

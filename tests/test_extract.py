@@ -138,8 +138,9 @@ def test_two_material_slots_give_sorted_ranges_and_params():
     snap = snap_of()
     item, geo = only_item(snap)
     assert geo.ranges == [(0, 0, 6), (1, 6, 6)]  # two quads, two triangles (six corners) each
-    assert (geo.positions[0:6, 0] >= 0).all()  # slot 0 = the right-hand face
-    assert (geo.positions[6:12, 0] <= 0).all()
+    corners = geo.per_corner(geo.positions)
+    assert (corners[0:6, 0] >= 0).all()  # slot 0 = the right-hand face
+    assert (corners[6:12, 0] <= 0).all()
     assert item.materials == [red.name_full, blue.name_full]
     assert snap.materials[red.name_full].base_color == pytest.approx((1.0, 0.0, 0.0))
     assert snap.materials[blue.name_full].base_color == pytest.approx((0.0, 0.0, 1.0))
@@ -151,10 +152,10 @@ def test_flat_cube_normals_are_face_normals():
     scene = new_scene()
     cube(scene)
     _, geo = only_item(snap_of())
-    n = geo.normals.astype(np.float64)
+    n = geo.per_corner(geo.normals).astype(np.float64)
     axes = np.concatenate([np.eye(3), -np.eye(3)])
     assert np.abs(n @ axes.T).max(axis=1) == pytest.approx(np.ones(len(n)), abs=1e-6)
-    p = geo.positions.reshape(-1, 3, 3).astype(np.float64)
+    p = geo.per_corner(geo.positions).reshape(-1, 3, 3).astype(np.float64)
     face = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
     face /= np.linalg.norm(face, axis=1, keepdims=True)
     np.testing.assert_allclose(n.reshape(-1, 3, 3), np.repeat(face[:, None], 3, axis=1),
@@ -184,7 +185,7 @@ def test_custom_normals_override_geometry():
                       [(0, 1, 2, 3)])
     obj.data.normals_split_custom_set_from_vertices([(0.0, 0.0, 1.0)] * 4)
     _, geo = only_item(snap_of())
-    np.testing.assert_allclose(geo.normals, np.tile([0.0, 0.0, 1.0], (6, 1)), atol=1e-4)
+    np.testing.assert_allclose(geo.per_corner(geo.normals), np.tile([0.0, 0.0, 1.0], (6, 1)), atol=1e-4)
 
 
 # --- 5. cameras --------------------------------------------------------------------------------
@@ -455,10 +456,12 @@ def test_large_grid_arrays():
     _, geo = only_item(snap_of())
     triangles = 2 * 200 * 200
     assert geo.triangle_count == triangles
+    corners = 4 * 200 * 200  # a row per face corner, indexed by the triangles
     for array in (geo.positions, geo.normals):
         assert array.dtype == np.float32
-        assert array.shape == (3 * triangles, 3)
+        assert array.shape == (corners, 3)
         assert array.flags.c_contiguous
+    assert geo.indices.shape == (3 * triangles,) and geo.indices.dtype == np.int32
     assert geo.ranges == [(0, 0, 3 * triangles)]
 
 
@@ -484,3 +487,85 @@ def test_what_is_not_read_is_said_once():
     assert "Material 'Mixed': its surface shader (Mix Shader) is not read" in said
     assert "Material 'Ramped': Base Color, Coat Weight driven by nodes" in said
     assert "Not drawn (Shading Lab draws meshes): 2 hair curves object(s), 1 volume(s)" in said
+
+
+# --- triangulation read as arrays: identical to Blender's loop triangles ------------------------
+
+def _mesh_of(name: str, verts, faces, material_indices=None) -> bpy.types.Mesh:
+    mesh = bpy.data.meshes.new(name)
+    mesh.from_pydata([tuple(v) for v in verts], [], [tuple(f) for f in faces])
+    if material_indices is not None:
+        mesh.polygons.foreach_set("material_index", np.asarray(material_indices, np.int32))
+    mesh.update()
+    return mesh
+
+
+def _blenders_triangles(mesh):
+    mesh.calc_loop_triangles()
+    n = len(mesh.loop_triangles)
+    loops, faces = np.empty(3 * n, np.int32), np.empty(n, np.int32)
+    mesh.loop_triangles.foreach_get("loops", loops)
+    mesh.loop_triangles.foreach_get("polygon_index", faces)
+    return loops.reshape(-1, 3), faces
+
+
+def _test_meshes():
+    rng = np.random.default_rng(5)
+    n = 40  # a bumpy grid: non-planar quads, some folded along 0-2 (Blender splits them 1-3)
+    xs, ys = np.meshgrid(np.arange(n), np.arange(n))
+    verts = np.column_stack([xs.ravel(), ys.ravel(), rng.normal(0.0, 0.8, n * n)])
+    quads = [(y * n + x, y * n + x + 1, (y + 1) * n + x + 1, (y + 1) * n + x)
+             for y in range(n - 1) for x in range(n - 1)]
+    yield _mesh_of("Bumpy", verts, quads, rng.integers(0, 3, len(quads)))
+    darts = []  # concave (arrow-head) quads in the plane, in every rotation of their corners
+    dverts = []
+    for k in range(4):
+        base = len(dverts)
+        shape = [(0, 0, 0), (2, 1, 0), (0, 2, 0), (0.5, 1, 0)]
+        dverts += [(x + 3 * k, y, z) for x, y, z in shape]
+        darts.append(tuple(base + (i + k) % 4 for i in range(4)))
+    yield _mesh_of("Darts", dverts, darts)
+    # triangles and quads mixed
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=17, ring_count=9)  # tris at the poles, quads between
+    sphere = bpy.context.object
+    yield sphere.data
+    # larger faces: read from Blender
+    yield _mesh_of("Ngons", [(math.cos(a), math.sin(a), 0.1 * math.sin(3 * a))
+                             for a in np.linspace(0, 2 * math.pi, 9)[:-1]], [tuple(range(8))])
+
+
+def test_triangles_read_as_arrays_equal_blenders_loop_triangles():
+    scenes.reset()
+    flips = 0
+    for mesh in _test_meshes():
+        expected_loops, expected_faces = _blenders_triangles(mesh)
+        co = np.empty(len(mesh.vertices) * 3, np.float32)
+        mesh.vertices.foreach_get("co", co)
+        corner_vert = np.empty(len(mesh.loops), np.int32)
+        mesh.loops.foreach_get("vertex_index", corner_vert)
+        loops, faces = extract.triangle_corners(mesh, co.reshape(-1, 3)[corner_vert])
+        assert np.array_equal(faces, expected_faces), mesh.name
+        assert np.array_equal(loops, expected_loops), (
+            f"{mesh.name}: {int((loops != expected_loops).any(axis=1).sum())} triangles differ")
+        starts = np.empty(len(mesh.polygons), np.int32)
+        mesh.polygons.foreach_get("loop_start", starts)
+        flips += int(np.sum(loops[:, 0] != starts[faces]))  # a first triangle split along 1-3
+    assert flips >= 10, f"the test meshes must fold some quads along 0-2 ({flips} flipped triangles)"
+
+
+def test_mesh_geometry_keeps_material_ranges_of_the_fast_path():
+    scenes.reset()
+    mesh = next(_test_meshes())
+    geometry = extract.mesh_geometry("bumpy", mesh)
+    loops, faces = _blenders_triangles(mesh)
+    mats = np.empty(len(mesh.polygons), np.int32)
+    mesh.polygons.foreach_get("material_index", mats)
+    counts = np.bincount(mats[faces], minlength=3)
+    assert [(s, c) for s, _, c in geometry.ranges] == [(s, 3 * int(counts[s])) for s in range(3)]
+    co = np.empty(len(mesh.vertices) * 3, np.float32)
+    mesh.vertices.foreach_get("co", co)
+    corner_vert = np.empty(len(mesh.loops), np.int32)
+    mesh.loops.foreach_get("vertex_index", corner_vert)
+    order = np.argsort(mats[faces], kind="stable")
+    expected = co.reshape(-1, 3)[corner_vert[loops[order].reshape(-1)]]
+    assert np.array_equal(geometry.per_corner(geometry.positions), expected)
