@@ -191,15 +191,18 @@ def configure(scene, args) -> None:
         value = getattr(args, name)
         if value is not None:
             setattr(props, name, value)
-    if args.exposure == "auto":
+    exposure = getattr(args, "exposure", None)
+    compensation = getattr(args, "exposure_compensation", None)
+    metering = getattr(args, "exposure_metering", None)
+    if exposure == "auto":
         props.exposure_mode = "AUTO"
-        props.exposure = args.exposure_compensation or 0.0
-    elif args.exposure is not None:
-        props.exposure_mode, props.exposure = "MANUAL", args.exposure
-    if args.exposure != "auto" and (args.exposure_compensation is not None or args.exposure_metering):
+        props.exposure = compensation or 0.0
+    elif exposure is not None:
+        props.exposure_mode, props.exposure = "MANUAL", exposure
+    if exposure != "auto" and (compensation is not None or metering):
         raise CliError("--exposure-compensation and --exposure-metering need --exposure auto")
-    if args.exposure_metering:
-        props.exposure_method = args.exposure_metering.upper().replace("-", "_")
+    if metering:
+        props.exposure_method = metering.upper().replace("-", "_")
     if args.principled is not None:
         props.term_set = "PRINCIPLED" if args.principled else "CUSTOM"
     for name in ("shadows", "soft_shadows"):
