@@ -5,19 +5,24 @@ microfacet lobe reflects when seen at n.v = mu, for perceptual roughness r. Comp
 numpy, deterministic stratified quadrature over half vectors drawn by D(h)(n.h)) on a grid that
 includes both ends, mu, r = i / (N - 1) (mu = 0 taken at the shaders' n.v floor 1e-4), so that
 interpolation never clamps to an inner value (a texel-centre grid lost 6 % of a white metal's
-energy at r = 1, found by tests/test_reference.py); built at first use in a fraction of a second
-and cached per (D, V) pair.
+energy at r = 1, found by tests/test_reference.py).
+
+The tables take seconds to compute (the Principled set's ~8 s on two cores), so they ship as data:
+``tables.npz`` beside this file, written by ``scripts/build_tables.py`` from the ``compute_*``
+functions here (tests/test_tables.py checks that the shipped tables equal what they compute). A
+table missing from the file, or asked for at another size, is computed and cached.
 """
 
 from __future__ import annotations
 
 from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 
 from . import brdf
 from .programs import MS_SIZE, S_SIZE
-from .snapshot import Terms, f0_from_ior
+from .snapshot import TERM_CHOICES, Terms, f0_from_ior
 
 
 def _half_vectors(ndf: str, alpha: float, strata: int, azimuths: int):
@@ -59,8 +64,62 @@ def directional_albedo(ndf: str, visibility: str, mu, roughness: float, strata: 
     return _albedo_samples(ndf, visibility, mu, roughness, strata, azimuths)[0].mean(axis=1)
 
 
-@lru_cache(maxsize=16)
+SHIPPED = Path(__file__).with_name("tables.npz")
+
+
+@lru_cache(maxsize=1)
+def _shipped() -> dict[str, np.ndarray]:
+    """The shipped tables by name ({} when the file is missing or unreadable: they are computed)."""
+    try:
+        with np.load(SHIPPED, allow_pickle=False) as data:
+            return {name: data[name] for name in data.files}
+    except (OSError, ValueError):
+        return {}
+
+
+def _table(name: str, shape: tuple, compute) -> np.ndarray:
+    shipped = _shipped().get(name)
+    if shipped is not None and shipped.shape == shape:
+        return shipped
+    return compute()
+
+
 def split_sum_table(ndf: str, visibility: str, size: int = MS_SIZE) -> np.ndarray:
+    """``compute_split_sum_table``, shipped."""
+    return _table(f"split_{ndf}_{visibility}", (size, size, 4),
+                  lambda: compute_split_sum_table(ndf, visibility, size))
+
+
+def albedo_table(ndf: str, visibility: str, size: int = MS_SIZE) -> np.ndarray:
+    """``compute_albedo_table``, shipped."""
+    return _table(f"albedo_{ndf}_{visibility}", (size, size),
+                  lambda: compute_albedo_table(ndf, visibility, size))
+
+
+def average_albedo(size: int = MS_SIZE) -> np.ndarray:
+    """``compute_average_albedo``, shipped."""
+    return _table("average_albedo", (size,), lambda: compute_average_albedo(size))
+
+
+def principled_s_table(size: int = S_SIZE) -> np.ndarray:
+    """``compute_principled_s_table``, shipped."""
+    return _table("principled_s", (size, size, size), lambda: compute_principled_s_table(size))
+
+
+def compute_all() -> dict[str, np.ndarray]:
+    """Every table the engine uses, by its name in ``tables.npz``."""
+    out = {}
+    for ndf in TERM_CHOICES["ndf"]:
+        for visibility in TERM_CHOICES["visibility"]:
+            out[f"albedo_{ndf}_{visibility}"] = compute_albedo_table(ndf, visibility)
+            out[f"split_{ndf}_{visibility}"] = compute_split_sum_table(ndf, visibility)
+    out["average_albedo"] = compute_average_albedo()
+    out["principled_s"] = compute_principled_s_table()
+    return out
+
+
+@lru_cache(maxsize=16)
+def compute_split_sum_table(ndf: str, visibility: str, size: int = MS_SIZE) -> np.ndarray:
     """(size, size, 4) float32 on the grid of ``albedo_table``: E(mu, r) and B(mu, r), the part of
     the albedo carried by Schlick's (1 - v.h)^5, so that a Schlick-Fresnel lobe reflects
     F0 (E - B) + F90 B of a uniform environment (Karis 2013's split sum, second factor)."""
@@ -75,7 +134,7 @@ def split_sum_table(ndf: str, visibility: str, size: int = MS_SIZE) -> np.ndarra
 
 
 @lru_cache(maxsize=16)
-def albedo_table(ndf: str, visibility: str, size: int = MS_SIZE) -> np.ndarray:
+def compute_albedo_table(ndf: str, visibility: str, size: int = MS_SIZE) -> np.ndarray:
     """(size, size) float32: row j = roughness j / (size - 1), column i = mu i / (size - 1)."""
     grid = np.arange(size) / (size - 1)
     mu = np.maximum(grid, brdf.MIN_COS)
@@ -106,7 +165,7 @@ def interpolate(table: np.ndarray, mu, roughness) -> np.ndarray:
 # defines its tables (scene/shader.tables, app/cycles_precompute.cpp) and computed here.
 
 @lru_cache(maxsize=4)
-def average_albedo(size: int = MS_SIZE, samples: int = 64) -> np.ndarray:
+def compute_average_albedo(size: int = MS_SIZE, samples: int = 64) -> np.ndarray:
     """Eavg(r) = integral_0^1 2 mu E(mu) dmu for GGX + Smith height-correlated, on r = j / (N - 1)."""
     grid = np.arange(size) / (size - 1)
     mu = (np.arange(samples) + 0.5) / samples  # midpoint rule in mu
@@ -135,7 +194,7 @@ def _vndf_half_vectors(alpha: float, mu: float, n: int) -> np.ndarray:
 
 
 @lru_cache(maxsize=2)
-def principled_s_table(size: int = S_SIZE, strata: int = 48) -> np.ndarray:
+def compute_principled_s_table(size: int = S_SIZE, strata: int = 48) -> np.ndarray:
     """S[k, j, i] (z, mu, r): the VNDF expectation of saturate((F(wi.h, ior) - F0) / (1 - F0)) over
     half vectors whose reflection stays above the surface, with ior = (1 + z^2) / (1 - z^2); grid
     r, mu = i / (N - 1) clamped to [1e-4, 1], z = k / (N - 1) clamped to [1e-4, 0.99]."""
