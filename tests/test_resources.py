@@ -185,7 +185,6 @@ SUBPROCESS = textwrap.dedent("""
     import addon
     addon.register()
     import scenes
-from gpu_census import Census
     from test_resources import CONFIGS, _configure, _scene
 
     scene = _scene()
