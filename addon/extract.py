@@ -13,7 +13,7 @@ from collections import Counter
 import bpy
 import numpy as np
 
-from . import shadows
+from . import light_tiles, shadows
 from . import snapshot as S
 
 LIGHT_KIND = {"POINT": "POINT", "SPOT": "SPOT", "SUN": "SUN", "AREA": "AREA"}
@@ -512,7 +512,9 @@ def light_strength(light: bpy.types.Light) -> np.ndarray:
     return color * float(light.energy) * 2.0 ** float(getattr(light, "exposure", 0.0))
 
 
-def make_light(light: bpy.types.Light, matrix) -> S.Light:
+def make_light(light: bpy.types.Light, matrix, threshold: float = 0.0) -> S.Light:
+    """The light as the shaders see it; ``threshold`` (W/m^2, the scene's Light Threshold) sets how
+    far it reaches unless its Custom Distance does."""
     m = np.array(matrix, np.float64)
     position = tuple(float(x) for x in m[:3, 3])
     axis = -m[:3, 2]
@@ -553,6 +555,9 @@ def make_light(light: bpy.types.Light, matrix) -> S.Light:
     else:
         extra["radius"] = max(float(light.shadow_soft_size), 0.0)
         extra["soft_falloff"] = bool(getattr(light, "use_soft_falloff", False))
+    custom = float(light.cutoff_distance) if getattr(light, "use_custom_distance", False) else None
+    factor = max(1.0, float(light.diffuse_factor), float(light.specular_factor))
+    extra["influence"] = light_tiles.influence_radius(kind, np.asarray(intensity) * factor, threshold, custom)
     return S.Light(
         kind=kind,
         position=position,
@@ -807,6 +812,7 @@ def scene_settings(scene) -> S.Settings:
                       occlusion_distance=float(props.occlusion_distance),
                       shadows=bool(props.shadows), shadow_map_size=int(props.shadow_map_size),
                       soft_shadows=bool(props.soft_shadows),
+                      light_threshold=float(props.light_threshold), light_culling=bool(props.light_culling),
                       environment_samples=(int(props.world_samples) if props.world_specular == "SAMPLED"
                                            else 0))
 
@@ -897,7 +903,7 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
         obj = inst.object
         if obj.type == "LIGHT":
             if obj.data.type in LIGHT_KIND:
-                snap.lights.append(make_light(obj.data, inst.matrix_world))
+                snap.lights.append(make_light(obj.data, inst.matrix_world, snap.settings.light_threshold))
             continue
         # Curves, surfaces, text, metaballs and geometry-node output reach the depsgraph as mesh
         # instances of their own, beside the source object: take geometry from meshes only, or

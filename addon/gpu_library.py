@@ -178,6 +178,8 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
         info.sampler(13, "FLOAT_2D_ARRAY", "shadow_maps")
         info.uniform_buf(len(_BLOCKS) + 2, "ShadowBlock", "shadow")
     info.sampler(14, "FLOAT_2D", "light_data")
+    if features.light_tiles:
+        info.sampler(15, "FLOAT_2D", "light_tiles")
     for binding, block in enumerate(_BLOCKS):
         if block is not None:
             info.uniform_buf(binding, *block)

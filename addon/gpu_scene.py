@@ -29,7 +29,7 @@ from dataclasses import dataclass, replace
 import gpu
 import numpy as np
 
-from . import gpu_library, programs, shadows
+from . import gpu_library, light_tiles, programs, shadows
 from .snapshot import MAX_ENVIRONMENT_IMAGES, ImageData, MeshGeometry, Snapshot, World
 
 #: GPU texture format per ``ImageData.storage``: byte images keep their bytes (an sRGB one is
@@ -121,9 +121,10 @@ class _RowTexture:
     ``put`` makes a new texture only for different bytes (Python's textures take data only when
     made). Holds what a uniform block cannot: the lights, any number of them."""
 
-    def __init__(self):
+    def __init__(self, channels: int = 4):
         self.data: bytes | None = None
         self.texture: gpu.types.GPUTexture | None = None
+        self.channels = channels  # floats per texel: RGBA32F or RG32F
 
     def put(self, rows: np.ndarray) -> bool:
         data = np.ascontiguousarray(rows, np.float32)
@@ -132,7 +133,8 @@ class _RowTexture:
             return False
         height, floats = data.shape
         buffer = gpu.types.Buffer("FLOAT", height * floats, data.ravel())
-        self.texture = gpu.types.GPUTexture((floats // 4, height), format="RGBA32F", data=buffer)
+        self.texture = gpu.types.GPUTexture((floats // self.channels, height),
+                                            format="RGBA32F" if self.channels == 4 else "RG32F", data=buffer)
         self.data = raw
         return True
 
@@ -144,6 +146,7 @@ class SceneResources:
         self._batches: dict[str, list[tuple[int, gpu.types.GPUBatch]]] = {}
         self._materials: dict[str, _Block] = {}
         self._lights = _RowTexture()
+        self._light_tiles = _RowTexture(channels=2)  # light culling's tiles and lists (per view)
         self._objects: list[_Block] = []
         self._frame = _Block()
         self._world_camera = _Block()
@@ -230,9 +233,21 @@ class SceneResources:
         return [draw for _features, draws in self.draw_lists(None, False).opaque for draw in draws
                 if items[draw.order].casts_shadow]
 
-    def put_frame(self, view_projection: np.ndarray | None) -> None:
-        """The frame block for a view (the camera's, unless the viewport passes its own)."""
-        self.uploads["frame"] += self._frame.put(programs.pack_frame(self.snapshot, view_projection))
+    def put_frame(self, view_projection: np.ndarray | None, width: int, height: int,
+                  samples: int = 1) -> None:
+        """The frame block for a view (the camera's, unless the viewport passes its own) of
+        ``width`` x ``height`` pixels at ``samples`` x ``samples``, and its light tiles when light
+        culling is on (``light_tiles``)."""
+        tiles = None
+        if programs.uses_light_tiles(self.snapshot):
+            lights = self.snapshot.lights
+            vp = self.snapshot.camera.view_projection if view_projection is None else view_projection
+            tiles = light_tiles.tile_lists([light.position for light in lights],
+                                           [light.influence for light in lights], vp,
+                                           width * samples, height * samples, light_tiles.TILE * samples)
+            texels = tiles.texels()
+            self.uploads["light tiles"] += self._light_tiles.put(texels.reshape(len(texels), -1))
+        self.uploads["frame"] += self._frame.put(programs.pack_frame(self.snapshot, view_projection, tiles))
 
     @property
     def geometry_count(self) -> int:
@@ -292,6 +307,8 @@ class SceneResources:
         shader.bind()
         shader.uniform_block("frame", self._frame.ubo)
         gpu_library.bind_sampler(shader, "light_data", self._lights.texture)
+        if features.light_tiles:
+            gpu_library.bind_sampler(shader, "light_tiles", self._light_tiles.texture)
         shader.uniform_float("lobes", lobes)
         if features.uses_albedo_table:
             gpu_library.bind_sampler(shader, "ms_table", gpu_library.albedo_table(features.terms))
@@ -352,6 +369,7 @@ class SceneResources:
         self._draw_lists.clear()
         self._programs.clear()
         self._lights = _RowTexture()
+        self._light_tiles = _RowTexture(channels=2)
         self._frame = _Block()
         self._world_camera = _Block()
         self._world_lighting = _Block()

@@ -295,7 +295,7 @@ class OcclusionPass(Pass):
         self.back = _fitted(self.back, w, h, "R16F", depth=True)
         self.depths = _fitted(self.depths, w, h, "RG32F")
         self.target = _fitted(self.target, w, h, "RGBA16F")
-        frame.scene.put_frame(view.view_projection)
+        frame.scene.put_frame(view.view_projection, view.width, view.height, view.samples)
         for target, back_faces in ((self.prepass, False), (self.back, True)):
             with target.bind():
                 target.framebuffer.clear(color=(0.0, 0.0, 1.0, 0.0), depth=1.0)
@@ -354,7 +354,7 @@ class OpaquePass(TargetPass):
         s = view.samples
         target = self.fit(view.width * s, view.height * s, view.format, depth=True)
         frame.outputs[view.output("scene")] = target
-        frame.scene.put_frame(view.view_projection)
+        frame.scene.put_frame(view.view_projection, view.width, view.height, view.samples)
         lists = frame.scene.draw_lists(view.model, view.half_target)
         occlusion = frame.outputs.get(view.output("occlusion"))
 

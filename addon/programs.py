@@ -5,13 +5,14 @@ uniform-buffer packers. Pure Python (no ``bpy``/``gpu``): the renderer feeds the
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
-from . import shadows
+from . import light_tiles, shadows
 from .snapshot import (
     LIGHT_KINDS,
     MAX_ENVIRONMENT_IMAGES,
@@ -87,6 +88,7 @@ class Features:
     shadow_layers: int = 0  # shadow-map layers the uniform block holds (0: no shadows)
     shadow_size: int = 0  # their texels per side
     soft_shadows: bool = False  # penumbrae from the lights' sizes
+    light_tiles: bool = False  # loop over the fragment's screen tile's lights (light_tiles.py)
 
     def has_map(self, name: str) -> bool:
         return name in self.maps or name + "_CLOSEST" in self.maps
@@ -153,6 +155,7 @@ class Features:
             shadow_layers=light_slots(shadow_layers) if shadow_layers else 0,
             shadow_size=int(snapshot.settings.shadow_map_size),
             soft_shadows=snapshot.settings.soft_shadows,
+            light_tiles=uses_light_tiles(snapshot),
         )
 
     @property
@@ -198,6 +201,8 @@ class Features:
             out.append(("SL_AMBIENT_WORLD", "1"))
         if self.occlusion:
             out.append(("SL_ENV_OCCLUSION", "1"))
+        if self.light_tiles:
+            out += [("SL_LIGHT_TILES", "1"), ("SL_LIGHT_LIST_WIDTH", str(light_tiles.LIST_WIDTH))]
         if self.shadow_layers:
             out += [("SL_SHADOWS", "1"), ("SL_SHADOW_LAYERS", str(self.shadow_layers)),
                     ("SL_SHADOW_SIZE", str(self.shadow_size))]
@@ -437,7 +442,9 @@ def _mat(m: np.ndarray) -> np.ndarray:
 ALL_LOBES = (1.0, 1.0, 1.0, 1.0)
 
 
-def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None) -> bytes:
+def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None,
+               tiles: light_tiles.TileLists | None = None) -> bytes:
+    """The FrameData block; ``tiles``: the view's light tiles (light culling)."""
     cam = snapshot.camera
     vp = cam.view_projection if view_projection is None else view_projection
     ambient = snapshot.settings.ambient
@@ -446,13 +453,20 @@ def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None) ->
         [*cam.position, 1.0 if cam.is_perspective else 0.0],
         [*cam.forward, 0.0],
         [ambient, ambient, ambient, 0.0],
-        [float(len(snapshot.lights)), 0.0, 0.0, 0.0],
+        [float(len(snapshot.lights)), *((float(tiles.tile), float(tiles.columns), float(tiles.header_texels))
+                                         if tiles is not None else (0.0, 0.0, 0.0))],
     ]
     return np.concatenate([np.asarray(r, np.float32) for r in rows]).tobytes()
 
 
-#: Floats per light: LightData's six vec4 (glsl/uniforms.glsl), one row of the light texture.
-LIGHT_FLOATS = 24
+#: Floats per light: LightData's seven vec4 (glsl/uniforms.glsl), one row of the light texture.
+LIGHT_FLOATS = 28
+
+
+def uses_light_tiles(snapshot: Snapshot) -> bool:
+    """Light culling pays: it is on and some light reaches less than everywhere."""
+    lights = snapshot.lights
+    return snapshot.settings.light_culling and any(math.isfinite(light.influence) for light in lights)
 
 
 def pack_lights(snapshot: Snapshot, max_lights: int, first_layer: tuple[int, ...]) -> np.ndarray:
@@ -467,6 +481,7 @@ def pack_lights(snapshot: Snapshot, max_lights: int, first_layer: tuple[int, ...
             light.diffuse_factor, light.specular_factor, 1.0 if light.world else 0.0, first_layer[i],
             light.sphere_radius, 1.0 if light.soft_falloff else 0.0, *light.half_size,
             *light.axis_x, 1.0 if light.ellipse else 0.0,
+            1.0 / light.influence ** 2 if math.isfinite(light.influence) else 0.0, 0.0, 0.0, 0.0,
         ]
     return data
 

@@ -79,6 +79,16 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
         description="Who turns radiance into display values. The engine's own tone mappers write "
                     "display-linear Combined (and raw radiance to a Radiance pass) and expect the "
                     "Standard view transform")
+    light_threshold: FloatProperty(
+        name="Light Threshold", default=0.01, min=0.0, soft_max=1.0, precision=4, update=_redraw,
+        description="Irradiance (W/m^2) below which a light stops: each light reaches the distance where "
+                    "its inverse-square irradiance falls to this (unless its Custom Distance is set) and is "
+                    "faded to nothing there, dropping at most this much irradiance anywhere. 0: every light "
+                    "reaches everywhere")
+    light_culling: BoolProperty(
+        name="Light Culling", default=True, update=_redraw,
+        description="Shade each part of the screen with only the lights that reach it (the image is the "
+                    "same; off is slower with many lights)")
     exposure_mode: EnumProperty(
         name="Exposure", default="MANUAL", update=_redraw, items=(
             ("MANUAL", "Manual", "The exposure set below"),

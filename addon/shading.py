@@ -169,9 +169,22 @@ def E_Area(light: Light, p):
     return E, l
 
 
+def light_window(light: Light, p):
+    """The light's reach as a window on its irradiance (lights.glsl light_window): (1 - (d/r)^4)^2,
+    0 from r on; 1 for a light that reaches everywhere."""
+    if not math.isfinite(light.influence):
+        return np.ones(np.shape(p)[:-1])
+    d = np.asarray(light.position) - p
+    x = _dot(d, d) / light.influence ** 2
+    return saturate(1.0 - x * x) ** 2
+
+
 def light_irradiance(light: Light, p):
     """(E, l): irradiance on a surface facing the light (W/m^2, rgb) and the unit light direction."""
-    return {"POINT": E_Point, "SPOT": E_Spot, "SUN": E_Sun, "AREA": E_Area}[light.kind](light, p)
+    E, l = {"POINT": E_Point, "SPOT": E_Spot, "SUN": E_Sun, "AREA": E_Area}[light.kind](light, p)
+    if light.kind != "SUN":
+        E = E * light_window(light, p)[..., None]
+    return E, l
 
 
 # --- models (glsl/surface.glsl, pbr_terms.glsl, multiscatter.glsl, model_*.glsl) ----------------

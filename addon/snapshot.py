@@ -316,6 +316,8 @@ class Light:
     axis_x: tuple[float, float, float] = (1.0, 0.0, 0.0)  # an area light's local X axis (unit)
     half_size: tuple[float, float] = (0.0, 0.0)  # an area light's half width and height (m, scaled)
     ellipse: bool = False  # an area light's shape: disk or ellipse (else square or rectangle)
+    influence: float = math.inf  # how far it reaches (m; light_tiles.influence_radius): windowed
+    #                              to nothing there, and culled from the screen tiles beyond it
 
     @property
     def sphere_radius(self) -> float:
@@ -369,6 +371,8 @@ class Settings:
     shadows: bool = True  # lights whose Cast Shadow is on cast shadows (shadow maps)
     shadow_map_size: int = 1024  # texels per side of each shadow map (a point light has six)
     soft_shadows: bool = True  # penumbrae from the lights' sizes (else hard, filtered over a texel)
+    light_threshold: float = 0.01  # W/m^2: a light reaches where its irradiance is above this
+    light_culling: bool = True  # each screen tile shades only the lights that reach it
 
 
 @dataclass

@@ -122,6 +122,9 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
         sub.active = props.shadows
         sub.prop(props, "shadow_map_size", text="Map Size")
         sub.prop(props, "soft_shadows")
+        col = layout.column(heading="Lights")
+        col.prop(props, "light_threshold", text="Threshold")
+        col.prop(props, "light_culling", text="Culling")
         layout.prop(props, "samples")
         layout.prop(props, "transparency_layers")
         layout.separator()

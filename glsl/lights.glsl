@@ -192,18 +192,30 @@ vec3 light_specular_direction(LightData light, vec3 p, vec3 r_dir, float alpha, 
 #endif
 
 /* Dispatch on the light kind; only the kinds the scene has are compiled in. */
+/* A light's reach r (Blender's Custom Distance, else where I / d^2 falls to the scene's Light
+ * Threshold t: addon/light_tiles.py) as a window on its irradiance, (1 - (d / r)^4)^2 clamped
+ * (EEVEE's and Unreal's): 1 near the light, exactly 0 from r on, where light culling leaves the
+ * light out. Below a threshold-derived r it removes at most t of irradiance anywhere. */
+float light_window(LightData light, vec3 p)
+{
+  vec3 d = light.position_kind.xyz - p;
+  float x = dot(d, d) * light.influence.x;
+  float w = saturate(1.0 - x * x);
+  return w * w;
+}
+
 vec3 light_irradiance(LightData light, vec3 p, out vec3 l)
 {
   int kind = int(light.position_kind.w);
   l = vec3(0.0, 0.0, 1.0);
 #ifdef SL_HAS_POINT
   if (kind == LIGHT_POINT) {
-    return E_Point(light, p, l);
+    return E_Point(light, p, l) * light_window(light, p);
   }
 #endif
 #ifdef SL_HAS_SPOT
   if (kind == LIGHT_SPOT) {
-    return E_Spot(light, p, l);
+    return E_Spot(light, p, l) * light_window(light, p);
   }
 #endif
 #ifdef SL_HAS_SUN
@@ -213,7 +225,7 @@ vec3 light_irradiance(LightData light, vec3 p, out vec3 l)
 #endif
 #ifdef SL_HAS_AREA
   if (kind == LIGHT_AREA) {
-    return E_Area(light, p, l);
+    return E_Area(light, p, l) * light_window(light, p);
   }
 #endif
   return vec3(0.0);

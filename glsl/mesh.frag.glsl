@@ -32,8 +32,30 @@ LightData load_light(int i)
   light.factors = texelFetch(light_data, ivec2(3, i), 0);
   light.shape = texelFetch(light_data, ivec2(4, i), 0);
   light.area = texelFetch(light_data, ivec2(5, i), 0);
+  light.influence = texelFetch(light_data, ivec2(6, i), 0);
   return light;
 }
+
+#ifdef SL_LIGHT_TILES
+/* Light culling (addon/light_tiles.py): light_tiles holds each screen tile's (first, count), row
+ * by row (frame.counts.z tiles a row of frame.counts.y pixels), then from texel frame.counts.w on
+ * the tiles' light indices; a tile lists every light whose reach covers it, in light order. */
+vec4 tile_texel(int i)
+{
+  return texelFetch(light_tiles, ivec2(i % SL_LIGHT_LIST_WIDTH, i / SL_LIGHT_LIST_WIDTH), 0);
+}
+
+ivec2 tile_lights()
+{
+  ivec2 t = ivec2(gl_FragCoord.xy) / int(frame.counts.y);
+  return ivec2(tile_texel(t.y * int(frame.counts.z) + t.x).xy);
+}
+
+int tile_light(int first, int k)
+{
+  return int(tile_texel(int(frame.counts.w) + first + k).x);
+}
+#endif
 
 void main()
 {
@@ -64,12 +86,21 @@ void main()
   vec3 c = (shade_ambient(s, frame.ambient.rgb) + m.emission.rgb) * lobes.z;
   /* the world is a light: its diffuse and specular parts go to the lobes' passes */
   c += shade_environment(s, lobes.xy);
+#ifdef SL_LIGHT_TILES
+  ivec2 listed = tile_lights();
+  int count = listed.y;
+#else
   int count = int(frame.counts.x);
-  for (int i = 0; i < SL_MAX_LIGHTS; i++) {
-    if (i >= count) {
+#endif
+  for (int k = 0; k < SL_MAX_LIGHTS; k++) {
+    if (k >= count) {
       break;
     }
-    LightData light = load_light(i);
+#ifdef SL_LIGHT_TILES
+    LightData light = load_light(tile_light(listed.x, k));
+#else
+    LightData light = load_light(k);
+#endif
     vec4 factors = light.factors * vec4(lobes.xy, 1.0, 1.0);
     if (light.factors.z > 0.5) {
       /* a sun split off the world */

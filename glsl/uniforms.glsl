@@ -7,7 +7,8 @@ struct FrameData {
   vec4 camera_position;  /* xyz: camera origin in world space; w: 1 perspective, 0 orthographic */
   vec4 camera_forward;   /* xyz: unit view axis (camera -Z) in world space */
   vec4 ambient;          /* rgb: Blinn-Phong/Phong ambient constant x (eq. 1.4) */
-  vec4 counts;           /* x: number of lights in use */
+  vec4 counts;           /* x: number of lights in use; light culling: y the tiles' side in pixels,
+                          * z tiles per row, w where the light indices start in light_tiles */
 };
 
 struct LightData {
@@ -20,10 +21,13 @@ struct LightData {
                           * (Cycles' disc facing the point: E = I / (d^2 + r^2)), 0 a sphere;
                           * zw: an area light's half width and height (m) */
   vec4 area;             /* xyz: an area light's local X axis; w: 1 disk or ellipse, 0 rectangle */
+  vec4 influence;        /* x: 1 / r^2 of the distance r the light reaches (0: everywhere) */
 };
 
-/* The lights are not a uniform block (64 KiB would hold 682 of them): each is a row of a texture,
- * light_data, its six vec4 in LightData's order (mesh.frag.glsl's load_light). */
+/* The lights are not a uniform block (64 KiB would hold 585 of them): each is a row of a texture,
+ * light_data, its seven vec4 in LightData's order (mesh.frag.glsl's load_light). With light
+ * culling (SL_LIGHT_TILES, addon/light_tiles.py), light_tiles holds each screen tile's (first,
+ * count) and then the tiles' light indices, SL_LIGHT_LIST_WIDTH texels per row. */
 
 struct MaterialData {
   vec4 base_color;       /* rgb: PBR base colour */

@@ -92,6 +92,7 @@ L.intensity_blend = vec4(vec3(lpos.w), 1e20);
 L.factors = vec4(1.0, 1.0, 0.0, 0.0);
 L.shape = vec4(0.0);
 L.area = vec4(1.0, 0.0, 0.0, 0.0);
+L.influence = vec4(0.0);
 vec3 l;
 vec3 E = light_irradiance(L, s.p, l);
 result = vec4(write_target(shade_finish(shade_direct(s, l, E, L.factors))), 0.0);

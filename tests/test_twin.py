@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import scenes
 
-from addon import shading
+from addon import light_tiles, shading
 from addon import snapshot as S
 
 SIZE = 48
@@ -68,10 +68,13 @@ def _twin_light(props) -> S.Light:
         sy = props["size_y"] if props["shape"] in ("RECTANGLE", "ELLIPSE") else props["size"]
         extra = dict(axis_x=tuple(m[:, 0]), half_size=(props["size"] / 2, sy / 2),
                      ellipse=props["shape"] in ("DISK", "ELLIPSE"))
+    # the reach the scene's default Light Threshold gives it (faded to nothing there)
+    factor = max(1.0, props["diffuse_factor"], props["specular_factor"])
+    influence = light_tiles.influence_radius(kind, intensity * factor, S.Settings().light_threshold)
     return S.Light(kind, tuple(props["location"]), direction, tuple(intensity),
                    diffuse_factor=props["diffuse_factor"], specular_factor=props["specular_factor"],
                    radius=props.get("shadow_soft_size", 0.0),
-                   soft_falloff=props.get("use_soft_falloff", False),
+                   soft_falloff=props.get("use_soft_falloff", False), influence=influence,
                    **extra)
 
 

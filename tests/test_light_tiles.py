@@ -1,0 +1,180 @@
+"""Light culling's tile lists (addon/light_tiles.py), against a brute-force expectation: every pixel
+of a ground plane lists, in light order, every light whose influence sphere holds the plane's
+point under that pixel."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from addon import light_tiles
+
+
+def _perspective(fov_deg: float, aspect: float, near=0.1, far=100.0) -> np.ndarray:
+    f = 1.0 / math.tan(math.radians(fov_deg) / 2.0)
+    return np.array([[f / aspect, 0, 0, 0], [0, f, 0, 0],
+                     [0, 0, (far + near) / (near - far), 2 * far * near / (near - far)], [0, 0, -1, 0]])
+
+
+def _look_at(eye, target) -> np.ndarray:
+    eye, target = np.asarray(eye, float), np.asarray(target, float)
+    f = target - eye
+    f /= np.linalg.norm(f)
+    s = np.cross(f, [0.0, 0.0, 1.0])
+    s /= np.linalg.norm(s)
+    u = np.cross(s, f)
+    m = np.eye(4)
+    m[0, :3], m[1, :3], m[2, :3] = s, u, -f
+    m[:3, 3] = -m[:3, :3] @ eye
+    return m
+
+
+def _ground_points(vp: np.ndarray, width: int, height: int) -> np.ndarray:
+    """World points on z = 0 under each pixel centre (nan where the ray misses the ground)."""
+    inv = np.linalg.inv(vp)
+    xs = (np.arange(width) + 0.5) / width * 2 - 1
+    ys = (np.arange(height) + 0.5) / height * 2 - 1
+    gx, gy = np.meshgrid(xs, ys)
+    near = np.stack([gx, gy, -np.ones_like(gx), np.ones_like(gx)], -1) @ inv.T
+    far = np.stack([gx, gy, np.ones_like(gx), np.ones_like(gx)], -1) @ inv.T
+    near, far = near[..., :3] / near[..., 3:], far[..., :3] / far[..., 3:]
+    t = near[..., 2] / (near[..., 2] - far[..., 2])
+    p = near + (far - near) * t[..., None]
+    p[(t < 0) | (t > 1)] = np.nan
+    return p
+
+
+@pytest.mark.parametrize("eye", [(0.0, -12.0, 6.0), (3.0, -2.0, 20.0), (0.0, -3.0, 0.5)])
+def test_every_pixel_lists_every_light_that_reaches_it_in_order(eye):
+    rng = np.random.default_rng(len(str(eye)))
+    width, height, tile = 160, 96, 16
+    vp = _perspective(50.0, width / height) @ _look_at(eye, (0.0, 0.0, 0.0))
+    n = 60
+    centres = np.column_stack([rng.uniform(-10, 10, n), rng.uniform(-10, 10, n), rng.uniform(-1, 3, n)])
+    radii = rng.uniform(0.3, 4.0, n)
+    radii[::13] = np.inf  # some lights reach everywhere
+    lists = light_tiles.tile_lists(centres, radii, vp, width, height, tile)
+    points = _ground_points(vp, width, height)
+    missing = listed_extra = 0
+    for y in range(height):
+        for x in range(width):
+            first, count = lists.header[y // tile, x // tile].astype(int)
+            listed = lists.entries.reshape(-1)[first:first + count].astype(int)
+            assert np.all(np.diff(listed) > 0), "a tile lists its lights in light order"
+            p = points[y, x]
+            if np.isnan(p).any():
+                continue
+            reach = np.nonzero(np.linalg.norm(centres - p, axis=1) < radii)[0]
+            missing += len(np.setdiff1d(reach, listed))
+            listed_extra += len(listed) - len(reach)
+    assert missing == 0, f"{missing} (pixel, light) pairs within reach but not listed"
+    total = lists.entry_count
+    every = n * lists.header.shape[0] * lists.header.shape[1]
+    print(f"\n{total} entries of {every} without culling")
+    assert total < every, "culling must leave some lights out of some tiles"
+
+
+def test_unbounded_lights_are_in_every_tile_and_too_many_entries_make_one_list():
+    vp = _perspective(60.0, 1.0) @ _look_at((0, -5, 5), (0, 0, 0))
+    lists = light_tiles.tile_lists(np.zeros((3, 3)), [np.inf] * 3, vp, 64, 64, 16)
+    assert lists.header.shape == (4, 4, 2)
+    assert np.all(lists.header[..., 1] == 3)
+    many = light_tiles.MAX_ENTRIES // 16 + 1  # every one of them in all 16 tiles
+    lists = light_tiles.tile_lists(np.zeros((many, 3)), np.full(many, np.inf), vp, 64, 64, 16)
+    assert lists.header.shape == (1, 1, 2) and lists.header[0, 0, 1] == many
+    assert lists.tile >= 1 << 24  # every fragment reads tile (0, 0)
+
+
+def test_influence_radius():
+    assert light_tiles.influence_radius("POINT", (100.0, 50.0, 0.0), 0.01) == pytest.approx(100.0)
+    assert light_tiles.influence_radius("POINT", (100.0, 50.0, 0.0), 0.01, custom=3.0) == 3.0
+    assert light_tiles.influence_radius("SUN", (1.0, 1.0, 1.0), 0.01) == math.inf
+    assert light_tiles.influence_radius("AREA", (1.0, 1.0, 1.0), 0.0) == math.inf
+
+
+# --- in the renderer ------------------------------------------------------------------------------
+
+import scenes  # noqa: E402
+
+
+def _lights_over_a_plane(size: int, count: int, cutoff: float | None, seed: int = 2):
+    """An orthographic view of a Lambert plane (rho 0.5, no specular) 4 m across, under ``count``
+    point lights at random (with Custom Distance ``cutoff`` if given) and a sun."""
+    scene = scenes.lambert_scene(size)
+    scene.camera.data.ortho_scale = 4.0
+    rng = np.random.default_rng(seed)
+    for _ in range(count):
+        x, y = rng.uniform(-2.2, 2.2, 2)
+        light = scenes.light(scene, "POINT", energy=float(rng.uniform(5, 50)), location=(x, y, 0.4),
+                             color=tuple(rng.uniform(0.3, 1.0, 3)))
+        if cutoff is not None:
+            light.data.use_custom_distance = True
+            light.data.cutoff_distance = cutoff
+    return scene
+
+
+@pytest.mark.parametrize("model", ["BLINN_PHONG", "PBR"])
+def test_culling_on_equals_off_bit_for_bit(model, tmp_path):
+    """40 lights that each reach 0.8 m (a tenth of the view's width), a sun that reaches
+    everywhere: the frame shading each tile's lights equals the frame shading every light, to the
+    bit, and its tiles list far fewer lights than there are."""
+    from addon import engine
+
+    scene = _lights_over_a_plane(96, 40, cutoff=0.8)
+    scene.shading_lab.model = model
+    culled = scenes.render(scene, tmp_path / "culled.exr")
+    scene.shading_lab.light_culling = False
+    every = scenes.render(scene, tmp_path / "every.exr")
+    assert np.array_equal(culled, every), f"max difference {np.abs(culled - every).max():.3g}"
+    assert every[..., :3].max() > 2.0 * scenes.LAMBERT, "the point lights must light the plane"
+    assert engine.last_timings  # rendered by the engine
+
+
+def test_a_light_reaches_exactly_its_custom_distance(tmp_path):
+    scene = scenes.reset(size=64)
+    scenes.ortho_camera(scene, scale=4.0)
+    scenes.plane(scene, size=6.0, material=scenes.material(base_color=(0.5, 0.5, 0.5), f0=0.0,
+                                                            specular_color=(0.0, 0.0, 0.0)))
+    light = scenes.light(scene, "POINT", energy=100.0, location=(0.0, 0.0, 0.5))
+    light.data.use_custom_distance, light.data.cutoff_distance = True, 1.0
+    image = scenes.render(scene, tmp_path / "cut.exr")[..., 0]
+    xs = (np.arange(64) + 0.5) / 64 * 4.0 - 2.0
+    gx, gy = np.meshgrid(xs, -xs)  # top row first
+    d = np.sqrt(gx ** 2 + gy ** 2 + 0.25)
+    assert np.all(image[d >= 1.0] == 0.0), "lit beyond the custom distance"
+    assert np.all(image[d < 0.95] > 0.0)
+
+
+def test_the_threshold_drops_at_most_its_irradiance(tmp_path):
+    """A Lambert plane under one point light: against the closed form without a reach, the
+    irradiance removed is the window's, I cos(theta) / d^2 (1 - (1 - (d/r)^4)^2), and stays below
+    the Light Threshold everywhere."""
+    threshold = 0.1
+    scene = scenes.reset(size=96)
+    scenes.ortho_camera(scene, scale=8.0)
+    rho = 0.5
+    scenes.plane(scene, size=10.0, material=scenes.material(base_color=(rho, rho, rho), f0=0.0,
+                                                             specular_color=(0.0, 0.0, 0.0)))
+    energy, height = 15.0, 2.0
+    scenes.light(scene, "POINT", energy=energy, location=(0.0, 0.0, height))
+    scene.shading_lab.model = "PBR"
+    scene.shading_lab.light_threshold = threshold
+    image = scenes.render(scene, tmp_path / "window.exr")[..., 0].astype(np.float64)
+    xs = (np.arange(96) + 0.5) / 96 * 8.0 - 4.0
+    gx, gy = np.meshgrid(xs, -xs)
+    d2 = gx ** 2 + gy ** 2 + height ** 2
+    intensity = energy / (4 * math.pi)
+    irradiance = intensity * (height / np.sqrt(d2)) / d2  # I cos(theta) / d^2
+    reach = math.sqrt(intensity / threshold)
+    assert height < reach < math.hypot(4.0, height), "the reach must end inside the view"
+    window = np.clip(1.0 - (d2 / reach ** 2) ** 2, 0.0, 1.0) ** 2
+    dropped = irradiance - image * math.pi / rho
+    err = np.abs(dropped - irradiance * (1.0 - window)).max()
+    worst = dropped.max()
+    print(f"\nreach {reach:.2f} m: most irradiance dropped {worst:.4f} W/m^2 (threshold {threshold}); "
+          f"against the window's closed form {err:.2e}")
+    assert err < 1e-5 * irradiance.max(), f"dropped irradiance off the window's closed form by {err:.2e}"
+    assert worst <= threshold, f"dropped {worst:.4f} W/m^2, threshold {threshold}"
+    assert np.all(image[d2 >= reach ** 2] == 0.0)
