@@ -179,6 +179,11 @@ def add_shadow_options(parser) -> None:
                          help="texels per side of each shadow map")
     shadows.add_argument("--soft-shadows", action=argparse.BooleanOptionalAction, default=None,
                          help="penumbrae from the lights' sizes")
+    lights = parser.add_argument_group("lights (default: the scene's settings)")
+    lights.add_argument("--light-threshold", type=float, metavar="W/M2",
+                        help="irradiance below which a light stops (0: every light reaches everywhere)")
+    lights.add_argument("--light-culling", action=argparse.BooleanOptionalAction, default=None,
+                        help="shade each screen tile with only the lights that reach it")
 
 
 def configure(scene, args) -> None:
@@ -205,11 +210,16 @@ def configure(scene, args) -> None:
         props.exposure_method = metering.upper().replace("-", "_")
     if args.principled is not None:
         props.term_set = "PRINCIPLED" if args.principled else "CUSTOM"
-    for name in ("shadows", "soft_shadows"):
+    for name in ("shadows", "soft_shadows", "light_culling"):
         if getattr(args, name, None) is not None:
             setattr(props, name, getattr(args, name))
     if getattr(args, "shadow_map_size", None) is not None:
         props.shadow_map_size = str(args.shadow_map_size)
+    threshold = getattr(args, "light_threshold", None)
+    if threshold is not None:
+        if not threshold >= 0.0:  # also refuses NaN
+            raise CliError(f"--light-threshold must be 0 or more (W/m^2), got {threshold}")
+        props.light_threshold = threshold
     if args.samples is not None and not 1 <= args.samples <= 8:
         raise CliError(f"--samples must be between 1 and 8, got {args.samples}")
     if args.transparency_layers is not None:

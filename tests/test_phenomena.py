@@ -59,9 +59,13 @@ def test_fresnel_follows_schlick_and_blinn_phong_has_none(tmp_path):
 
 
 def _hdr_scene(model: str, weak: bool):
+    """A 2000 W and a 2 W light over a plane. Light Threshold 0: the test is about the weak light's
+    exact contribution next to a strong one, and at the default threshold the 2 W light would reach
+    only 4 m, fading from well before (tests/test_light_tiles.py tests that fade)."""
     scene = scenes.reset(size=64)
     scene.shading_lab.model = model
     scene.shading_lab.ambient = 0.0
+    scene.shading_lab.light_threshold = 0.0
     scenes.ortho_camera(scene, scale=4.0)
     scenes.plane(scene, size=4.0, material=scenes.material(base_color=(0.8, 0.8, 0.8), f0=0.0))
     scenes.light(scene, "POINT", energy=2000.0, location=(-1.0, 0.0, 1.0))

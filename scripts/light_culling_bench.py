@@ -1,0 +1,115 @@
+"""Light culling: frame time against the number of lights that each reach a sixteenth of the
+screen, with culling on and off (a benchmark, not a test).
+
+    .venv/bin/python scripts/light_culling_bench.py [--resolution 1280x720] [--frames 5]
+        [--table docs/bench/light_culling.md]
+
+A plane fills an orthographic view; N point lights (N = 4, 16, 64, on a grid over the view, 0.25 m
+above the plane) each reach, by their Custom Distance, a disc of a sixteenth of the view's area.
+Every configuration (model x N x culling) is rendered round-robin after a warm-up round, in one
+process; the table gives medians of the engine's draw time (GPU work fenced by the read-back) and
+the ratio to 4 lights. Times are CPU-rasteriser times (Mesa llvmpipe): compare ratios.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
+
+COUNTS = (4, 16, 64)
+HEIGHT = 0.25  # the lights above the plane (m)
+VIEW = 8.0  # the view's width (m)
+
+
+def build(w: int, h: int):
+    import bpy
+    import render
+
+    render.ensure_addon()
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.engine = "SHADING_LAB"
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = w, h, 100
+    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    cam.data.type, cam.data.ortho_scale = "ORTHO", VIEW
+    cam.location = (0.0, 0.0, 5.0)
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    bpy.ops.mesh.primitive_plane_add(size=2 * VIEW)
+    view_h = VIEW * h / w
+    disc = math.sqrt(VIEW * view_h / 16.0 / math.pi)  # a sixteenth of the view's area
+    reach = math.hypot(disc, HEIGHT)
+    groups = {}
+    for n in COUNTS:
+        side = int(math.sqrt(n))
+        objs = []
+        for i in range(n):
+            x = ((i % side) + 0.5) / side * VIEW - VIEW / 2
+            y = ((i // side) + 0.5) / side * view_h - view_h / 2
+            data = bpy.data.lights.new(f"L{n}_{i}", "POINT")
+            data.energy, data.shadow_soft_size, data.use_shadow = 20.0, 0.0, False
+            data.use_custom_distance, data.cutoff_distance = True, reach
+            obj = bpy.data.objects.new(data.name, data)
+            obj.location = (x, y, HEIGHT)
+            scene.collection.objects.link(obj)
+            objs.append(obj)
+        groups[n] = objs
+    return scene, groups
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--resolution", default="1280x720")
+    parser.add_argument("--frames", type=int, default=5)
+    parser.add_argument("--table", type=Path, default=ROOT / "docs" / "bench" / "light_culling.md")
+    args = parser.parse_args()
+    w, h = (int(x) for x in args.resolution.split("x"))
+
+    import bpy
+
+    from addon import engine
+
+    scene, groups = build(w, h)
+    configs = [(model, n, culling) for model in ("BLINN_PHONG", "PBR") for n in COUNTS
+               for culling in (True, False)]
+    times = {c: [] for c in configs}
+    for round_index in range(args.frames + 1):
+        for model, n, culling in configs:
+            for count, objs in groups.items():
+                for obj in objs:
+                    obj.hide_render = count != n
+            scene.shading_lab.model, scene.shading_lab.light_culling = model, culling
+            bpy.ops.render.render()
+            if round_index > 0:  # round 0 compiles the programs
+                times[model, n, culling].append(engine.last_timings["draw_ms"])
+        print(f"\rround {round_index}/{args.frames}", end="", file=sys.stderr, flush=True)
+    print(file=sys.stderr)
+    med = {c: statistics.median(t) for c, t in times.items()}
+    rows = []
+    for model in ("BLINN_PHONG", "PBR"):
+        for n in COUNTS:
+            on, off = med[model, n, True], med[model, n, False]
+            rows.append(f"| {model} | {n} | {on:.1f} | {on / med[model, COUNTS[0], True]:.2f}x | {off:.1f} | "
+                        f"{off / med[model, COUNTS[0], False]:.2f}x | {off / on:.2f}x |")
+    table = "\n".join([
+        f"Light culling, {w}x{h}: a plane under N point lights that each reach a sixteenth of the view "
+        f"(`scripts/light_culling_bench.py`, {args.frames} frames per configuration after a warm-up, "
+        "round-robin; draw + read-back ms, medians).",
+        "",
+        "| model | lights | culled ms | vs 4 lights | every light ms | vs 4 lights | culling speed-up |",
+        "|---|---:|---:|---:|---:|---:|---:|",
+        *rows, ""])
+    print(table)
+    args.table.parent.mkdir(parents=True, exist_ok=True)
+    args.table.write_text(table)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
