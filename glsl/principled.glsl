@@ -50,28 +50,28 @@ vec3 principled_M(vec3 Fss, float E, float Eavg)
   return 1.0 + Fms * (1.0 - E) / E;
 }
 
-/* What both lobes' compensation and the layering need, at the view direction: the metal
- * lobe's compensation (for its F0 = base colour), the dielectric lobe's, and the dielectric
- * layer's albedo estimate E M mix(F0, 1, S) that the Lambert base sits under. */
-struct PrincipledLayers {
-  vec3 metal_M;
-  float dielectric_M;
-  float layer;
-};
+/* What both lobes' compensation and the layering need, at the view direction (surface.glsl's
+ * PrincipledLayers, made once per shading point by make_surface): the metal lobe's compensation
+ * (for its F0 = base colour), the dielectric lobe's, and the dielectric layer's albedo estimate
+ * E M mix(F0, 1, S) that the Lambert base sits under. */
+PrincipledLayers principled_layers_at(float NoV, float roughness, vec3 base_color, float eta)
+{
+  PrincipledLayers p;
+  float E_mu = max(ms_albedo(NoV, roughness), 1e-3);
+  float Eavg = principled_Eavg(roughness);
+  vec3 F0m = min(base_color, vec3(1.0));
+  p.metal_M = principled_M(F0m + (1.0 - F0m) / 21.0, E_mu, Eavg);
+  p.dielectric_M = principled_M(vec3(principled_Fss(eta)), E_mu, Eavg).x;
+  float ratio = (eta - 1.0) / (eta + 1.0);
+  p.layer = eta > 1.0 ? E_mu * p.dielectric_M *
+                            mix(ratio * ratio, 1.0, principled_S(roughness, NoV, sqrt(abs(ratio))))
+                      : 0.0;
+  return p;
+}
 
 PrincipledLayers principled_layers(Surface s)
 {
-  PrincipledLayers p;
-  float E_mu = max(ms_albedo(s.NoV, s.roughness), 1e-3);
-  float Eavg = principled_Eavg(s.roughness);
-  vec3 F0m = min(s.base_color, vec3(1.0));
-  p.metal_M = principled_M(F0m + (1.0 - F0m) / 21.0, E_mu, Eavg);
-  p.dielectric_M = principled_M(vec3(principled_Fss(s.eta)), E_mu, Eavg).x;
-  float ratio = (s.eta - 1.0) / (s.eta + 1.0);
-  p.layer = s.eta > 1.0 ? E_mu * p.dielectric_M *
-                              mix(ratio * ratio, 1.0, principled_S(s.roughness, s.NoV, sqrt(abs(ratio))))
-                        : 0.0;
-  return p;
+  return s.layers;
 }
 
 /* f * E * NoL for the Principled set: a metal lobe (F82-tint Fresnel, which is Schlick for a

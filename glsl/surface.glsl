@@ -1,5 +1,18 @@
 /* The shading point: geometry and material inputs every model reads. */
 
+#ifdef SL_PRINCIPLED
+/* What the Principled set needs at the view direction (principled.glsl): the metal lobe's and the
+ * dielectric lobe's multiple-scattering compensation and the dielectric layer's albedo estimate
+ * that the diffuse base sits under. They depend on the view only, so make_surface computes them
+ * once per shading point, not once per light. */
+struct PrincipledLayers {
+  vec3 metal_M;
+  float dielectric_M;
+  float layer;
+};
+PrincipledLayers principled_layers_at(float NoV, float roughness, vec3 base_color, float eta);
+#endif
+
 struct Surface {
   vec3 p;             /* world position */
   vec3 n;             /* unit shading normal, flipped towards the viewer on back faces */
@@ -21,6 +34,9 @@ struct Surface {
   bool has_complex_ior;
   vec3 ior_n;         /* conductor's complex IOR n + ik per channel (exact Fresnel) */
   vec3 ior_k;
+#ifdef SL_PRINCIPLED
+  PrincipledLayers layers;
+#endif
 };
 
 /* Unit half vector of eq. 1.6; l + v = 0 only when the light is exactly behind the viewer's
@@ -58,6 +74,9 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
   s.has_complex_ior = m.fresnel.z > 0.5;
   s.ior_n = m.ior_n.rgb;
   s.ior_k = m.ior_k.rgb;
+#ifdef SL_PRINCIPLED
+  s.layers = principled_layers_at(s.NoV, s.roughness, s.base_color, s.eta);
+#endif
   return s;
 }
 
