@@ -7,11 +7,12 @@ and Unreal use; the irradiance it removes is below the threshold everywhere: I /
 t (2 x^2 - x^6) <= t with x = d / r <= 1). So a light needs shading only where the surface lies
 within r of it: on the screen, inside the projection of the box around its sphere. Per view the
 screen is cut into tiles of TILE pixels; each tile lists, in light order, the lights whose box
-covers it (lights without a radius cover every tile), and each fragment loops over its tile's
-list instead of every light. Skipped lights would have added exactly 0, so a culled frame equals
-the unculled one bit for bit.
+covers it and whose sphere meets the tile's frustum (its four side planes, from the
+view-projection matrix: the box's corners drop out), lights without a radius in every tile; each
+fragment loops over its tile's list instead of every light. Skipped lights would have added
+exactly 0, so a culled frame equals the unculled one bit for bit.
 
-Pure numpy (no ``bpy``, no ``gpu``): ``tile_lists`` builds the two arrays the shaders read.
+Pure numpy (no ``bpy``, no ``gpu``): ``tile_lists`` builds what the shaders read.
 """
 
 from __future__ import annotations
@@ -22,11 +23,13 @@ from dataclasses import dataclass
 import numpy as np
 
 #: Pixels per tile side, in final-image pixels (a supersampled target scales it).
-TILE = 16
+TILE = 8
 #: Light indices per texture row (the index list is a width x rows float texture).
 LIST_WIDTH = 4096
 #: The most list entries a frame holds; beyond, one list of every light serves all fragments.
 MAX_ENTRIES = LIST_WIDTH * 2048
+#: Up to this many (light, tile) pairs from the boxes are also tested sphere against tile.
+SPHERE_TESTED = 1 << 21
 
 
 @dataclass(frozen=True)
@@ -122,12 +125,34 @@ def tile_lists(centres, radii, view_projection, width: int, height: int, tile: i
     light = np.repeat(np.arange(n), counts)
     k = np.arange(total) - np.repeat(np.cumsum(counts) - counts, counts)  # index within the box
     span = np.repeat(np.maximum(spans_x, 1), counts)
-    tiles = (np.repeat(y0, counts) + k // span) * columns + np.repeat(x0, counts) + k % span
+    tx, ty = np.repeat(x0, counts) + k % span, np.repeat(y0, counts) + k // span
+    if total <= SPHERE_TESTED:
+        keep = ~np.isfinite(radii[light]) | _meets_tile(centres[light], radii[light], tx, ty, tile, width,
+                                                        height, np.asarray(view_projection, np.float64))
+        light, tx, ty = light[keep], tx[keep], ty[keep]
+    tiles = ty * columns + tx
     order = np.argsort(tiles, kind="stable")  # by tile; lights in their own order within one
     per_tile = np.bincount(tiles, minlength=columns * rows)
     first = np.concatenate([[0], np.cumsum(per_tile)[:-1]])
     header = np.stack([first, per_tile], axis=-1).reshape(rows, columns, 2).astype(np.float32)
     return TileLists(tile, header, _padded(light[order]))
+
+
+def _meets_tile(centres, radii, tx, ty, tile: int, width: int, height: int, vp: np.ndarray) -> np.ndarray:
+    """Whether each sphere reaches the frustum of its tile: inside or within r of each of the
+    tile's four side planes (x = x0 w, x = x1 w, y = y0 w, y = y1 w in clip space, as world planes
+    from the view-projection's rows). Conservative: near a frustum's edges a sphere outside it can
+    pass; none inside fails."""
+    x0 = tx * tile / width * 2.0 - 1.0
+    x1 = np.minimum((tx + 1) * tile, width) / width * 2.0 - 1.0
+    y0 = ty * tile / height * 2.0 - 1.0
+    y1 = np.minimum((ty + 1) * tile, height) / height * 2.0 - 1.0
+    point = np.concatenate([centres, np.ones((len(centres), 1))], axis=1)
+    rx, ry, rw = (point @ vp[i] for i in (0, 1, 3))  # the centres' clip x, y, w
+    norms = [np.linalg.norm(vp[i, :3] - s[:, None] * vp[3, :3], axis=1) for i, s in
+             ((0, x0), (0, x1), (1, y0), (1, y1))]
+    return ((rx - x0 * rw >= -radii * norms[0]) & (x1 * rw - rx >= -radii * norms[1])
+            & (ry - y0 * rw >= -radii * norms[2]) & (y1 * rw - ry >= -radii * norms[3]))
 
 
 def _one_list(n: int) -> TileLists:
