@@ -59,7 +59,8 @@ def F_SchlickGeneral(f0, f90, p, LoH):
 
 
 def F_Dielectric(eta, cos_i):
-    """Exact unpolarised dielectric Fresnel (Walter et al. 2007, eq. 22); 1 under total reflection."""
+    """Exact unpolarised dielectric Fresnel (Walter et al. 2007, eq. 22); 1 under total internal
+    reflection, 0 for eta = 1 (no interface) even at c = 0."""
     c = np.abs(np.asarray(cos_i, np.float64))
     g2 = np.asarray(eta, np.float64) ** 2 - 1.0 + c * c
     g = np.sqrt(np.maximum(g2, 0.0))
@@ -67,7 +68,7 @@ def F_Dielectric(eta, cos_i):
         a = (g - c) / (g + c)
         b = (c * (g + c) - 1.0) / (c * (g - c) + 1.0)
         f = 0.5 * a * a * (1.0 + b * b)
-    return np.where(g2 <= 0.0, 1.0, f)
+    return np.where(g2 <= 0.0, np.where(np.asarray(eta) < 1.0, 1.0, 0.0), f)  # eta = 1, c = 0: no interface
 
 
 def F_Conductor(n, k, cos_i):

@@ -62,6 +62,7 @@ def E_Point(light: Light, p):
 def size_lobe_weights(theta, alpha):
     """(alpha_wide, wide_weight, point_weight) of a light of angular radius ``theta`` (half-vector
     space) against a lobe of width ``alpha`` (lights.glsl's size_lobe_weights)."""
+    theta = np.minimum(theta, 0.25 * np.pi)  # no light spans more than the hemisphere
     k2 = theta * theta / np.maximum(alpha * alpha, 1e-12)
     wide_weight = 1.0 / (1.0 + k2)
     point_weight = (1.0 - wide_weight) / (1.0 + 0.5 * np.pi * np.sqrt(k2) + k2)
@@ -70,6 +71,14 @@ def size_lobe_weights(theta, alpha):
 
 def _unit(v):
     return v / np.sqrt(np.maximum(_dot(v, v), 1e-30))[..., None]
+
+
+def _unit_or(v, fallback):
+    """``v`` normalised, or ``fallback`` where it is too short to have a direction (lights.glsl's
+    representative points)."""
+    len2 = _dot(v, v)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where((len2 > 1e-30)[..., None], v / np.sqrt(len2)[..., None], fallback)
 
 
 def sphere_light_specular(light: Light, p, r_dir, alpha):
@@ -83,8 +92,9 @@ def sphere_light_specular(light: Light, p, r_dir, alpha):
     centre_to_ray = _dot(to_light, r_dir)[..., None] * r_dir - to_light
     gap = np.sqrt(_dot(centre_to_ray, centre_to_ray))
     with np.errstate(divide="ignore", invalid="ignore"):
-        closest = to_light + centre_to_ray * np.where(gap > radius, radius / gap, 1.0)[..., None]
-    return (_unit(closest), *size_lobe_weights(theta, alpha))
+        edge = to_light + centre_to_ray * (radius / gap)[..., None]
+    closest = np.where((gap > radius)[..., None], edge, _dot(to_light, r_dir)[..., None] * r_dir)
+    return (_unit_or(closest, r_dir), *size_lobe_weights(theta, alpha))
 
 
 def area_light_specular(light: Light, p, r_dir, alpha):
@@ -106,7 +116,7 @@ def area_light_specular(light: Light, p, r_dir, alpha):
     else:
         uv = np.clip(uv, -1.0, 1.0)
     closest = centre + uv[..., :1] * hx * x + uv[..., 1:] * hy * y - p
-    return (_unit(closest), *size_lobe_weights(radius / (2.0 * np.maximum(d, 1e-4)), alpha))
+    return (_unit_or(closest, r_dir), *size_lobe_weights(radius / (2.0 * np.maximum(d, 1e-4)), alpha))
 
 
 def E_Spot(light: Light, p):
@@ -125,10 +135,12 @@ def E_Sun(light: Light, p):
 AREA_ELLIPSE_SIDES = 16
 #: Radius scale of a 16-gon with the area of its circle: sqrt(2 pi / (n sin(2 pi / n))).
 ELLIPSE_SCALE = math.sqrt(2.0 * math.pi / (AREA_ELLIPSE_SIDES * math.sin(2.0 * math.pi / AREA_ELLIPSE_SIDES)))
+#: Beyond this many equal-area radii an area light is a point emitter of intensity I cos (lights.glsl).
+AREA_FAR_FIELD = 200.0
 
 
-def area_corners(light: Light) -> np.ndarray:
-    """(n, 3): the area light's polygon (a disk or ellipse: a 16-gon of its area)."""
+def area_offsets(light: Light) -> np.ndarray:
+    """(n, 3): the area light's polygon (a disk or ellipse: a 16-gon of its area) relative to its centre."""
     x = np.asarray(light.axis_x, np.float64)
     y = np.cross(-np.asarray(light.direction, np.float64), x)
     hx, hy = light.half_size
@@ -137,36 +149,38 @@ def area_corners(light: Light) -> np.ndarray:
         uv = ELLIPSE_SCALE * np.stack([np.cos(phi), np.sin(phi)], -1)
     else:
         uv = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
-    return np.asarray(light.position) + uv[:, :1] * hx * x + uv[:, 1:] * hy * y
+    return uv[:, :1] * hx * x + uv[:, 1:] * hy * y
 
 
 def E_Area(light: Light, p):
-    """The polygon's vector form factor V = 1/2 sum theta_i g_i: E = L |V|, l = V / |V| (lights.glsl)."""
-    centre = np.asarray(light.position, np.float64)
-    to_centre = centre - p
-    corners = area_corners(light)
+    """The polygon's vector form factor V = 1/2 sum theta_i g_i: E = L |V|, l = V / |V|; beyond
+    AREA_FAR_FIELD equal-area radii a point of intensity I cos (lights.glsl)."""
+    to_centre = np.asarray(light.position, np.float64) - p
+    d2 = _dot(to_centre, to_centre)
+    normal = np.asarray(light.direction, np.float64)
+    hx, hy = light.half_size
+    area = 4.0 * hx * hy * (np.pi / 4.0 if light.ellipse else 1.0)
+    offsets = area_offsets(light)
     V = np.zeros(np.shape(p))
-    for i in range(len(corners)):
-        a = corners[i - 1] - p
-        b = corners[i] - p
-        a = a / np.linalg.norm(a, axis=-1, keepdims=True)
-        b = b / np.linalg.norm(b, axis=-1, keepdims=True)
-        c = np.cross(a, b)
+    for i in range(len(offsets)):
+        oa, ob = offsets[i - 1], offsets[i]
+        c = np.cross(to_centre, ob - oa) + np.cross(oa, ob)  # (t + oa) x (t + ob)
         sin = np.linalg.norm(c, axis=-1)
         with np.errstate(divide="ignore", invalid="ignore"):
-            edge = c * (np.arctan2(sin, _dot(a, b)) / sin)[..., None]
-            V = V + np.where((sin > 1e-12)[..., None], edge, 0.0)
+            edge = c * (np.arctan2(sin, _dot(to_centre + oa, to_centre + ob)) / sin)[..., None]
+        V = V + np.where((sin > 0.0)[..., None], edge, 0.0)
     V = 0.5 * V
     V = np.where((_dot(V, to_centre) < 0.0)[..., None], -V, V)
     length = np.linalg.norm(V, axis=-1)
-    front = _dot(-to_centre, np.asarray(light.direction)) > 0.0
-    hx, hy = light.half_size
-    area = 4.0 * hx * hy * (np.pi / 4.0 if light.ellipse else 1.0)
+    front = _dot(-to_centre, normal) > 0.0
     with np.errstate(divide="ignore", invalid="ignore"):
-        l = np.where((length > 0.0)[..., None], V / length[..., None],
-                     to_centre / np.linalg.norm(to_centre, axis=-1, keepdims=True))
+        l = np.where((length > 0.0)[..., None], V / length[..., None], _unit(to_centre))
     E = np.asarray(light.intensity) / max(area, 1e-12) * np.where(front, length, 0.0)[..., None]
-    return E, l
+    far = (area > 0.0) & (area * AREA_FAR_FIELD ** 2 < np.pi * d2)
+    l_far = _unit(to_centre)
+    E_far = np.asarray(light.intensity) * (np.where(front, _dot(-l_far, normal), 0.0)
+                                           / np.maximum(d2, MIN_DIST2))[..., None]
+    return np.where(far[..., None], E_far, E), np.where(far[..., None], l_far, l)
 
 
 def light_window(light: Light, p):
@@ -339,29 +353,35 @@ MODELS = {
 }
 
 
+def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAULT_TERMS):
+    """One light's reflected radiance (rgb, before the model's final clamp) from its irradiance
+    ``E`` and direction ``l`` (``light_irradiance``): the body of mesh.frag.glsl's light loop."""
+    direct, _ = MODELS[model]
+    area = light.kind == "AREA" and light.half_size[0] > 0.0
+    if model == "PBR" and (light.sphere_radius > 0.0 or area):
+        # a light with a size: the diffuse lobe as its irradiance says; the specular from its
+        # nearest point and, widened, from its centre
+        r_dir = 2.0 * _dot(s.n, s.v)[..., None] * s.n - s.v
+        shape = area_light_specular if area else sphere_light_specular
+        l_specular, alpha_wide, wide_weight, point_weight = shape(light, s.p, r_dir, s.alpha)
+        wide = copy.copy(s)
+        wide.alpha = alpha_wide
+        specular = (0.0, light.specular_factor)
+        return (direct(s, l, E, (light.diffuse_factor, 0.0), terms)
+                + direct(wide, l, E * np.asarray(wide_weight)[..., None], specular, terms)
+                + direct(s, l_specular, E * np.asarray(point_weight)[..., None], specular, terms))
+    return direct(s, l, E, (light.diffuse_factor, light.specular_factor), terms)
+
+
 def shade(model: str, s: Surface, lights: list[Light], ambient: float = 0.0,
           terms: Terms = DEFAULT_TERMS):
     """Outgoing radiance (rgb) at every point of ``s``: the twin of mesh.frag.glsl's main()."""
-    direct, ldr = MODELS[model]
+    ldr = MODELS[model][1]
     c = np.zeros(np.shape(s.p), np.float64)
     c = c + s.emission
     if ldr:
         c = c + s.ambient_color * ambient  # eq. 1.4
     for light in lights:
         E, l = light_irradiance(light, s.p)
-        area = light.kind == "AREA" and light.half_size[0] > 0.0
-        if model == "PBR" and (light.sphere_radius > 0.0 or area):
-            # a light with a size: the diffuse lobe as its irradiance says; the specular from its
-            # nearest point and, widened, from its centre
-            r_dir = 2.0 * _dot(s.n, s.v)[..., None] * s.n - s.v
-            shape = area_light_specular if area else sphere_light_specular
-            l_specular, alpha_wide, wide_weight, point_weight = shape(light, s.p, r_dir, s.alpha)
-            wide = copy.copy(s)
-            wide.alpha = alpha_wide
-            specular = (0.0, light.specular_factor)
-            c = c + direct(s, l, E, (light.diffuse_factor, 0.0), terms)
-            c = c + direct(wide, l, E * np.asarray(wide_weight)[..., None], specular, terms)
-            c = c + direct(s, l_specular, E * np.asarray(point_weight)[..., None], specular, terms)
-            continue
-        c = c + direct(s, l, E, (light.diffuse_factor, light.specular_factor), terms)
+        c = c + shade_light(model, s, light, E, l, terms)
     return np.clip(c, 0.0, 1.0) if ldr else c

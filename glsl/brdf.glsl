@@ -34,7 +34,9 @@ float F_Dielectric(float eta, float cos_i)
   float c = abs(cos_i);
   float g2 = eta * eta - 1.0 + c * c;
   if (g2 <= 0.0) {
-    return 1.0;
+    /* total internal reflection (eta < 1); eta = 1 (F0 = 0) at c = 0 is no interface at all: it
+     * returned 1 there, a specular spike from a material without specular when l.h rounds to 0 */
+    return eta < 1.0 ? 1.0 : 0.0;
   }
   float g = sqrt(g2);
   float a = (g - c) / (g + c);

@@ -45,6 +45,11 @@ vec3 E_Point(LightData light, vec3 p, out vec3 l)
 void size_lobe_weights(float theta, float alpha, out float alpha_wide, out float wide_weight,
                        out float point_weight)
 {
+  /* r / (2 d) grows without bound as p nears the light (d -> 0 inside a sphere, on an area light);
+   * no light spans more than the hemisphere, pi / 4 in half-vector space. Unbounded, alpha_wide
+   * reached 5e7 and the visibility terms' NoV^2 (1 - a^2) + a^2 cancelled to 0 at n.v = 1: Inf
+   * (tests/test_stability.py's sphere and area lights at 1e-6 m). */
+  theta = min(theta, 0.78539816);
   float k2 = theta * theta / max(alpha * alpha, 1e-12);
   alpha_wide = sqrt(alpha * alpha + theta * theta);
   wide_weight = 1.0 / (1.0 + k2);
@@ -61,7 +66,9 @@ vec3 sphere_light_specular(LightData light, vec3 p, vec3 r_dir, float alpha, out
   size_lobe_weights(theta, alpha, alpha_wide, wide_weight, point_weight);
   vec3 centre_to_ray = dot(to_light, r_dir) * r_dir - to_light;
   float gap = length(centre_to_ray);
-  vec3 closest = to_light + centre_to_ray * (gap > radius ? radius / gap : 1.0);
+  /* a ray that meets the sphere: the point is on the ray itself, taken as such -- as to_light +
+   * centre_to_ray it cancelled to the light's centre in float32 (n.v = 1e-4, light 1e-6 m away) */
+  vec3 closest = gap > radius ? to_light + centre_to_ray * (radius / gap) : dot(to_light, r_dir) * r_dir;
   float len2 = dot(closest, closest);
   return len2 > 1e-30 ? closest * inversesqrt(len2) : r_dir;
 }
@@ -97,7 +104,14 @@ vec3 E_Sun(LightData light, out vec3 l)
  * the unit normal of the plane through p and the edge), E . (n.l) = L n.V with l = V / |V| and
  * E = L |V|: exact for every diffuse term's n.l, the polygon not clipped by p's horizon. */
 #define AREA_ELLIPSE_SIDES 16
-vec3 area_corner(LightData light, int i, vec3 y_axis)
+/* Beyond this many equal-area radii R the polygon is shaded as a point emitter of intensity I cos
+ * (the emitter's cosine): the form factor's edge terms (~R/d each) cancel to |V| ~ (R/d)^2, which
+ * costs about 2 eps d / R of relative precision in float32 (a 0.1 m light at 1 km: 1e-3, at 1e6 m:
+ * all of it), while the point's own error is (R/d)^2: the two meet at 2.5e-5 at d = 200 R. */
+#define AREA_FAR_FIELD 200.0
+
+/* Corner i of the polygon relative to the light's centre. */
+vec3 area_offset(LightData light, int i, vec3 y_axis)
 {
   vec2 half_size = light.shape.zw;
   vec2 uv;
@@ -109,32 +123,42 @@ vec3 area_corner(LightData light, int i, vec3 y_axis)
   else {
     uv = vec2(i == 0 || i == 3 ? -1.0 : 1.0, i < 2 ? -1.0 : 1.0);
   }
-  return light.position_kind.xyz + light.area.xyz * (uv.x * half_size.x) + y_axis * (uv.y * half_size.y);
+  return light.area.xyz * (uv.x * half_size.x) + y_axis * (uv.y * half_size.y);
 }
 
 vec3 E_Area(LightData light, vec3 p, out vec3 l)
 {
   vec3 centre = light.position_kind.xyz;
   vec3 to_centre = centre - p;
-  l = normalize(to_centre);
+  float d2 = dot(to_centre, to_centre);
+  /* as a point light's: no direction (l = 0, no light) for p exactly at the centre, where
+   * normalize() gave NaN and NaN * 0 reached the shaded colour */
+  l = to_centre * inversesqrt(max(d2, 1e-30));
   if (dot(-to_centre, light.direction_cone.xyz) <= 0.0) {
     return vec3(0.0); /* behind the emitting side */
+  }
+  float area = 4.0 * light.shape.z * light.shape.w * (light.area.w > 0.5 ? 0.78539816 : 1.0);
+  if (area > 0.0 && area * (AREA_FAR_FIELD * AREA_FAR_FIELD) < PI * d2) {
+    return light.intensity_blend.rgb * (dot(-l, light.direction_cone.xyz) / max(d2, MIN_DIST2));
   }
   vec3 y_axis = cross(-light.direction_cone.xyz, light.area.xyz);
   int n = light.area.w > 0.5 ? AREA_ELLIPSE_SIDES : 4;
   vec3 V = vec3(0.0);
-  vec3 a = normalize(area_corner(light, n - 1, y_axis) - p);
+  vec3 oa = area_offset(light, n - 1, y_axis);
   for (int i = 0; i < AREA_ELLIPSE_SIDES; i++) {
     if (i >= n) {
       break;
     }
-    vec3 b = normalize(area_corner(light, i, y_axis) - p);
-    vec3 c = cross(a, b);
+    vec3 ob = area_offset(light, i, y_axis);
+    /* corners a = t + oa, b = t + ob (t = to_centre), a x b = t x (ob - oa) + oa x ob: taken from
+     * unit vectors towards the corners it cancelled, since they nearly coincide seen from afar */
+    vec3 c = cross(to_centre, ob - oa) + cross(oa, ob);
     float s = length(c);
-    if (s > 1e-12) {
-      V += c * (atan(s, dot(a, b)) / s); /* theta g, with theta from atan2: acos loses precision */
+    if (s > 0.0) {
+      /* theta g, with theta from atan2 (acos loses precision), to float precision */
+      V += c * (atan2_accurate(s, dot(to_centre + oa, to_centre + ob)) / s);
     }
-    a = b;
+    oa = ob;
   }
   V *= 0.5;
   if (dot(V, to_centre) < 0.0) {
@@ -145,7 +169,6 @@ vec3 E_Area(LightData light, vec3 p, out vec3 l)
     return vec3(0.0);
   }
   l = V / len;
-  float area = 4.0 * light.shape.z * light.shape.w * (light.area.w > 0.5 ? 0.78539816 : 1.0);
   return light.intensity_blend.rgb / max(area, 1e-12) * len;
 }
 

@@ -25,13 +25,14 @@ WIDTH = 256
 def _texture(rows: np.ndarray, w: int, h: int) -> gpu.types.GPUTexture:
     padded = np.zeros((w * h, 4), np.float32)
     padded[: len(rows)] = rows
-    data = gpu.types.Buffer("FLOAT", w * h * 4, padded.ravel().tolist())
+    data = gpu.types.Buffer("FLOAT", w * h * 4, padded.ravel())  # numpy's buffer: one copy, no list
     return gpu.types.GPUTexture((w, h), format="RGBA32F", data=data)
 
 
 def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] | None = None,
-             extra: tuple[str, ...] = (), terms=None) -> np.ndarray:
-    """(N, 4) float32: ``result`` of ``body`` for each row of the inputs."""
+             extra: tuple[str, ...] = (), terms=None, source: str = "") -> np.ndarray:
+    """(N, 4) float32: ``result`` of ``body`` for each row of the inputs; ``source`` is GLSL
+    placed after the ``extra`` files, before main()."""
     arrays = {name: np.asarray(a, np.float32).reshape(-1, 4) for name, a in inputs.items()}
     n = len(next(iter(arrays.values())))
     w = min(n, WIDTH)
@@ -40,7 +41,7 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
     fetch = "\n".join(f"  vec4 {name} = texelFetch(in_{name}, px, 0);" for name in arrays)
     main = f"void main()\n{{\n  ivec2 px = ivec2(gl_FragCoord.xy);\n{fetch}\n  vec4 result = vec4(0.0);\n" \
            f"  {body}\n  frag_color = result;\n}}\n"
-    fragment = "\n".join([programs.read_glsl(f) for f in LIBRARY + tuple(extra)] + [main])
+    fragment = "\n".join([programs.read_glsl(f) for f in LIBRARY + tuple(extra)] + [source, main])
 
     def job(_depsgraph):
         info = gpu.types.GPUShaderCreateInfo()

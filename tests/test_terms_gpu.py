@@ -128,6 +128,16 @@ def test_fresnel_terms():
     _check(got, S.F_Conductor(n, k, loh), rtol=1e-4, atol=1e-5)
 
 
+def test_atan2_accurate():
+    """common.glsl's atan2_accurate against float64 in every quadrant, over 60 decades of scale:
+    to float precision (measured 2.2e-7 relative; Mesa llvmpipe's own atan(y, x): 2.1e-5)."""
+    theta, r = RNG.uniform(-np.pi, np.pi, N), 10.0 ** RNG.uniform(-30, 30, N)
+    y, x = f32(np.sin(theta) * r), f32(np.cos(theta) * r)
+    y[:6], x[:6] = [0.0, 0.0, 1.0, -1.0, 0.0, 1e-30], [1.0, -1.0, 0.0, 0.0, 0.0, 0.0]
+    got = evaluate("result = vec4(atan2_accurate(a.x, a.y));", {"a": _rows(y, x)})[:, 0]
+    _check(got, np.arctan2(y, x), rtol=6e-7, atol=1e-12, label="atan2_accurate")
+
+
 def test_diffuse_terms():
     nv, nl, loh, nh = (np.maximum(_cosines(N), 1e-4) for _ in range(4))
     r = _u(0, 1, N)
