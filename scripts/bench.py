@@ -171,8 +171,8 @@ def save_result(scene, path: Path):
 def generic_from_snapshot(original):
     """A Features.from_snapshot that compiles every light kind in and 64 light slots."""
 
-    def generic(cls, snapshot, model=None, material=None, half_target=False):
-        f = original.__func__(cls, snapshot, model=model, material=material, half_target=half_target)
+    def generic(cls, snapshot, **options):
+        f = original.__func__(cls, snapshot, **options)
         return dataclasses.replace(f, light_kinds=frozenset(LIGHT_KINDS),
                                    max_lights=max(GENERIC_MAX_LIGHTS, f.max_lights))
 
