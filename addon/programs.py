@@ -245,6 +245,7 @@ def program_source(features: Features) -> ProgramSource:
     if features.model == "PBR":
         fragment += [read_glsl(name) for name in PBR_LIBRARY]
     fragment.append(read_glsl(MODEL_FILES[features.model]))
+    fragment.append(read_glsl("light_shading.glsl"))  # after the model: it calls shade_direct
     fragment.append(read_glsl("facing.glsl"))  # reads the object block: mesh programs only
     fragment.append(read_glsl("shadows.glsl"))  # reads the shadow block (SL_SHADOWS)
     fragment.append(read_glsl("mesh.frag.glsl"))

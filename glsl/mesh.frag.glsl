@@ -119,24 +119,7 @@ void main()
       E *= light_visibility(light, s.p, ng);
     }
 #endif
-#ifdef SL_MODEL_PBR
-#  if defined(SL_HAS_POINT) || defined(SL_HAS_SPOT) || defined(SL_HAS_AREA)
-    if (light.shape.x > 0.0 || light.shape.z > 0.0) {
-      /* a light with a size (lights.glsl): the diffuse lobe as its irradiance says; the specular
-       * from its nearest point and, widened, from its centre */
-      Surface wide = s;
-      float wide_weight, point_weight;
-      vec3 l_specular = light_specular_direction(light, s.p, reflect(-s.v, s.n), s.alpha, wide.alpha,
-                                                 wide_weight, point_weight);
-      vec4 specular = factors * vec4(0.0, 1.0, 1.0, 1.0);
-      c += shade_direct(s, l, E, factors * vec4(1.0, 0.0, 1.0, 1.0));
-      c += shade_direct(wide, l, E * wide_weight, specular);
-      c += shade_direct(s, l_specular, E * point_weight, specular);
-      continue;
-    }
-#  endif
-#endif
-    c += shade_direct(s, l, E, factors);
+    c += shade_light(s, light, l, E, factors);
   }
   /* alpha: coverage, blended over what is behind (L = a L_surface + (1 - a) L_behind, as Cycles'
    * transparency); the renderer peels partly transparent surfaces and composites them in depth order */

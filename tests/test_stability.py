@@ -288,26 +288,9 @@ vec3 l;
 vec3 E = light_irradiance(light, s.p, l);
 vec3 c = vec3(0.0);
 """
-#: mesh.frag.glsl's light loop, for one light (after its shadow test): lights with a size shade
-#: three lobes, the others one
-LIGHT_LOOP = """
-#ifdef SL_MODEL_PBR
-if (light.shape.x > 0.0 || light.shape.z > 0.0) {
-  Surface wide = s;
-  float wide_weight, point_weight;
-  vec3 l_specular = light_specular_direction(light, s.p, reflect(-s.v, s.n), s.alpha, wide.alpha,
-                                             wide_weight, point_weight);
-  vec4 specular = factors * vec4(0.0, 1.0, 1.0, 1.0);
-  c += shade_direct(s, l, E, factors * vec4(1.0, 0.0, 1.0, 1.0));
-  c += shade_direct(wide, l, E * wide_weight, specular);
-  c += shade_direct(s, l_specular, E * point_weight, specular);
-}
-else
-#endif
-{
-  c += shade_direct(s, l, E, factors);
-}
-"""
+#: mesh.frag.glsl's light loop, for one light (after its shadow test): light_shading.glsl's
+#: shade_light, the product's own
+LIGHT_LOOP = "c = shade_light(s, light, l, E, factors);\n"
 BODY_TAIL = """
 result = vec4(write_target(shade_finish(c)), 0.0);
 """
@@ -317,8 +300,8 @@ BODY = BODY_HEAD + LIGHT_LOOP + BODY_TAIL
 def gpu_values(model: str, terms: S.Terms, sw: Sweep, half_target: bool = False) -> np.ndarray:
     kinds = frozenset(LIGHTS[name].kind for name in sw.lights)
     features = programs.Features(model, 1, kinds, terms, half_target=half_target)
-    return evaluate(BODY, sw.gpu_inputs(), dict(features.defines()), extra=(programs.MODEL_FILES[model],),
-                    terms=terms)[:, :3]
+    return evaluate(BODY, sw.gpu_inputs(), dict(features.defines()),
+                    extra=(programs.MODEL_FILES[model], "light_shading.glsl"), terms=terms)[:, :3]
 
 
 #: The functions pbr_terms.glsl and model_pbr.glsl define: renamed per variant in grouped programs.
