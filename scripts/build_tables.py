@@ -4,9 +4,12 @@
 
 The directional-albedo and split-sum tables of every distribution and masking-shadowing pair,
 the average albedo and the Principled set's S table, computed by ``addon/multiscatter.py``'s
-``compute_*`` functions (pure numpy, deterministic) and saved compressed. The engine loads them
-instead of computing them at its first render; tests/test_tables.py checks that the shipped file
-equals what this computes. Run it after changing a table's definition or size.
+``compute_*`` functions, and the area lights' linearly-transformed-cosine fits ("ltc_GGX",
+"ltc_BECKMANN") and horizon-clipping sphere table ("ltc_sphere") by ``addon/ltc.py``'s (pure
+numpy, deterministic; the LTC fits take about two minutes), saved compressed. The engine loads
+them instead of computing them at its first render; tests/test_tables.py checks that the shipped
+file equals what this computes (tests/test_ltc.py refits sample LTC cells). Run it after changing
+a table's definition or size.
 """
 
 from __future__ import annotations
@@ -21,7 +24,7 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
-from addon import multiscatter  # noqa: E402
+from addon import ltc, multiscatter  # noqa: E402
 
 
 def main() -> int:
@@ -30,6 +33,7 @@ def main() -> int:
     args = parser.parse_args()
     start = time.perf_counter()
     tables = multiscatter.compute_all()
+    tables.update(ltc.compute_all())
     partial = args.out.with_name(f".{args.out.stem}.partial.npz")
     np.savez_compressed(partial, **tables)
     partial.replace(args.out)

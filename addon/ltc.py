@@ -1,0 +1,551 @@
+"""Linearly transformed cosines for area lights' specular lobe: the fitted tables and the numpy
+twin of glsl/ltc.glsl (Heitz, Dupuy, Hill & Neubelt 2016, "Real-Time Polygonal-Light Shading
+with Linearly Transformed Cosines"; horizon clipping by Heitz & Hill 2017, "Real-time area
+lighting: a journey from research to production"). Pure numpy: no ``bpy``, no ``gpu``.
+
+**What it is.** A clamped cosine D_o(w) = max(w.z, 0) / pi moved by a 3 x 3 matrix M is the
+distribution D(w) = D_o(M^-1 w / |M^-1 w|) |det M^-1| / |M^-1 w|^3; it still integrates to 1,
+and its integral over a polygon P is D_o's over the polygon M^-1 P: a form factor, in closed form.
+Each (n.v, roughness) cell gets the M whose D best matches the BRDF lobe normalised to 1,
+f(v, l) (n.l) / E(mu, r) with E = integral of f (n.l) (F = 1, height-correlated Smith, brdf.py's
+D_GGX or D_Beckmann; E is the engine's own albedo table, multiscatter.albedo_table(ndf,
+"SMITH_CORRELATED")), so that  integral_P f (n.l) dl ~= E(mu, r) * ltc_integral(M^-1, P).
+The table carries the lobe's shape only, not its magnitude.
+
+**Frame.** Local to the shading point: z = n, x = the tangent towards v, y = z x x, so that
+v = (sqrt(1 - mu^2), 0, mu). The lobe is symmetric about the xz plane, so
+M^-1 = [[a, 0, b], [0, c, 0], [d, 0, e]]; D does not depend on M^-1's scale, and it is stored
+with c = 1 as the four floats (a, b, d, e) = (m00, m02, m20, m22), m[row][column]. In GLSL
+(column-major): ``mat3 Minv = mat3(vec3(a, 0, d), vec3(0, 1, 0), vec3(b, 0, e));`` so that
+Minv * p = (a p.x + b p.z, p.y, d p.x + e p.z). Every fitted cell has det = ae - bd > 0
+(tests/test_ltc.py), so M ~ adj(M^-1) = [[e, 0, -b], [0, ae - bd, 0], [-d, 0, a]] up to a
+positive factor, which is how ``ltc_integral`` maps the mean direction back.
+
+**Grids.** LTC table (LTC_SIZE = 64)^2 x 4 float32, [j, i]: row j <-> perceptual roughness
+r = j / (N - 1) (fitted at max(r, MIN_PERCEPTUAL_ROUGHNESS)), column i <-> t = i / (N - 1) with
+mu = n.v = 1 - t^2 (Heitz's sqrt(1 - cos) parametrisation, mu floored at MIN_COS); both ends on the
+grid, bilinear lookup at (sqrt(1 - mu) (N - 1), r (N - 1)), clamped (``lookup``). Sphere table
+(SPHERE_SIZE = 32)^2 float32, [j, i]: row j <-> |F| = j / (N - 1), column i <->
+z = 2 i / (N - 1) - 1, bilinear at ((z + 1) / 2 (N - 1), |F| (N - 1)) (``sphere_lookup``); the
+value is the form factor itself (not divided by |F|). Shipped in tables.npz as "ltc_GGX",
+"ltc_BECKMANN", "ltc_sphere" (scripts/build_tables.py).
+
+**Form factors.** ``polygon_form_factor_vector`` returns F = 1 / (2 pi) sum_i theta_i g_i (g_i
+the unit normal of the plane through corners i, i + 1, theta_i the angle between them), oriented
+towards the polygon whatever its winding: |F| <= 1 is the polygon's form factor towards a
+surface facing F, F.z towards the surface of normal z when the polygon is wholly above its
+horizon. glsl/lights.glsl's E_Area sums V = 1/2 sum theta_i g_i = pi F (irradiance L |V|).
+Horizon clipping (``ltc_integral``): in the cosine space, the polygon is replaced by the
+spherical cap of the same F, sin^2 sigma = |F| centred at z = F.z / |F|, whose clipped form
+factor is Snyder's closed form (``cap_form_factor``), tabulated.
+
+**Fitting** (``compute_ltc_table``). M = R(theta) [[p0, 0, p0 s], [0, p1, 0], [0, 0, 1]] with
+theta fixed at the BRDF lobe's mean direction (R the rotation about y taking z there) and three
+parameters (ln p0, ln p1, s) minimising Heitz et al.'s L3 error  integral |D - f (n.l) / E|^3,
+estimated deterministically: the balance-heuristic combination of a stratified midpoint grid of
+the BRDF's half-vector sampling (48 x 16) and a cosine grid (32 x 16) mapped by the current M (so
+the LTC's own mass is always sampled), over the half space y >= 0. Nelder-Mead (written here,
+run on a whole row in lockstep: a cell fitted alone follows the same path, bit for bit), twice
+from the last result. Sweep: the roughest row from n.v = 1 (seeded with the cosine) towards
+grazing, each cell from its neighbour; then each smoother row from the row above, its widths
+scaled by the ratio of the alphas. The seeds are read back from the float32 table, so any cell
+can be refitted alone (``seed_for``, ``fit_cells``). Both distributions: ~65 s each on one core.
+
+**Measured** (tests/test_ltc.py: ``area_specular`` against adaptive brute-force quadrature of
+brdf.py's D V (n.l) over the polygon's area, 6 lights: small and large at the mirror direction,
+off to the side, straddling the horizon, a triangle, a pentagon; n.v = 0.2, 0.5, 0.9). GGX, over
+the lights receiving >= 1 % of E: worst / mean |relative error| 9.6 % / 0.9 % at r = 0.1,
+41 % / 7.8 % at r = 0.3, 57 % / 17 % at r = 0.6, 19 % / 4.9 % at r = 1; worst |error| / E 0.3 %,
+12.8 %, 18.9 %, 0.7 %. The large errors are lights straddling the horizon seen at n.v = 0.2 (the
+cosine lobe, tilted to the BRDF's mean direction, leaks below the horizon where the BRDF has
+nothing) and lights in the lobe's tails; a small light at the mirror direction is within 0.3 %
+at r = 0.1, 2 % at r = 0.3, 5 % at r = 0.6 (but -39 % at n.v = 0.2). Beckmann's Gaussian
+peak is not a cosine's shape: a small light at the mirror direction gets 13-19 % too little at
+r = 0.1 (worst |error| / E 17 % at r = 0.1, 9 % at r = 0.6). The sphere approximation, for
+the diffuse form factor (M = identity) of lights straddling the horizon: errors 0.0006-0.018 in
+form factors 0.04-0.12 (-15 % to +7 %), 0.0009 for one almost wholly below (form factor 0.0009);
+its table's interpolation error <= 0.029 (mean 7e-4); exact for lights wholly above. Of the
+LTC errors above its share is <= 0.1 % of E (against exact clipping of the mapped polygon).
+Fitted lobes integrate to 1 (to the test's quadrature, 1e-4); the mass above the horizon is
+>= 0.999 along r = 1, down to 0.96 at r = 0.75 and 0.89 at r = 0.5 at grazing incidence.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+
+import numpy as np
+
+from . import brdf, multiscatter
+
+LTC_SIZE = 64
+SPHERE_SIZE = 32
+NDFS = ("GGX", "BECKMANN")
+
+# --- the lobe to fit ---------------------------------------------------------------------------
+
+# The quadrature of a cell's error: a stratified midpoint grid of the BRDF's half-vector sampling
+# (BRDF_STRATA values of xi by AZIMUTHS azimuths) and one of the clamped cosine's, mapped by the
+# current M (LTC_STRATA by AZIMUTHS), both over the half space y >= 0: the BRDF lobe and every LTC
+# of the family are symmetric about the plane of n and v.
+BRDF_STRATA = 48
+LTC_STRATA = 32
+AZIMUTHS = 16
+NM_STEPS = (0.1, 0.02)  # Nelder-Mead runs per cell, each from the last one's result
+NM_ITERATIONS = 300
+NM_XTOL = 1e-5
+NM_FTOL = 1e-7
+
+
+def _alpha(roughness):
+    r = np.maximum(np.asarray(roughness, np.float64), brdf.MIN_PERCEPTUAL_ROUGHNESS)
+    return r * r
+
+
+def _terms(ndf: str):
+    D = brdf.D_Beckmann if ndf == "BECKMANN" else brdf.D_GGX
+    V = brdf.V_SmithBeckmannCorrelated if ndf == "BECKMANN" else brdf.V_SmithGGXCorrelated
+    return D, V
+
+
+def lobe(ndf: str, mu, alpha, l):
+    """(f(v, l) (n.l), the density of l = reflect(-v, h) for h drawn by D(h) (n.h)) in the local
+    frame, v = (sqrt(1 - mu^2), 0, mu): F = 1, height-correlated Smith, f = 0 below the horizon;
+    both per solid angle over the whole sphere. l (..., 3) unit; mu, alpha broadcast with
+    l[..., 0]."""
+    D, V = _terms(ndf)
+    mu = np.asarray(mu, np.float64)
+    alpha = np.asarray(alpha, np.float64)
+    hx, hy, hz = l[..., 0] + np.sqrt(np.maximum(1.0 - mu * mu, 0.0)), l[..., 1], l[..., 2] + mu
+    hlen = np.sqrt(hx * hx + hy * hy + hz * hz)
+    ok = hlen > 1e-12  # l = -v: no half vector
+    NoL = l[..., 2]
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore", under="ignore"):
+        inv = 1.0 / np.where(ok, hlen, 1.0)
+        NoH = hz * inv
+        VoH = 0.5 * hlen  # v.h = (1 + v.l) / |v + l| = |v + l| / 2
+        d = np.where(ok & (NoH > 0.0), D(NoH, np.maximum(1.0 - NoH * NoH, 0.0), alpha), 0.0)
+        NoLs = np.maximum(NoL, 1e-12)
+        f = np.where(NoL > 0.0, d * V(mu, NoLs, alpha) * NoLs, 0.0)
+        pdf = d * np.maximum(NoH, 0.0) / (4.0 * np.maximum(VoH, 1e-12))
+    return f, pdf
+
+
+def _brdf_samples(ndf: str, mu: float, alpha: float) -> np.ndarray:
+    """Directions l (K, 3) on the BRDF's stratified half-vector grid (y >= 0)."""
+    xi = (np.arange(BRDF_STRATA) + 0.5) / BRDF_STRATA
+    tan2 = alpha * alpha * (xi / (1.0 - xi) if ndf == "GGX" else -np.log1p(-xi))
+    cos_t = 1.0 / np.sqrt(1.0 + tan2)
+    sin_t = np.sqrt(np.maximum(1.0 - cos_t * cos_t, 0.0))
+    phi = (np.arange(AZIMUTHS) + 0.5) / AZIMUTHS * np.pi
+    h = np.stack([np.outer(sin_t, np.cos(phi)), np.outer(sin_t, np.sin(phi)),
+                  np.outer(cos_t, np.ones_like(phi))], axis=-1).reshape(-1, 3)
+    v = np.array([np.sqrt(max(1.0 - mu * mu, 0.0)), 0.0, mu])
+    return 2.0 * (h @ v)[:, None] * h - v
+
+
+def _cosine_samples() -> np.ndarray:
+    """Clamped-cosine distributed directions (K, 3) (y >= 0) on a stratified midpoint grid."""
+    u = (np.arange(LTC_STRATA) + 0.5) / LTC_STRATA
+    phi = (np.arange(AZIMUTHS) + 0.5) / AZIMUTHS * np.pi
+    r = np.sqrt(u)
+    return np.stack([np.outer(r, np.cos(phi)), np.outer(r, np.sin(phi)),
+                     np.outer(np.sqrt(1.0 - u), np.ones_like(phi))], axis=-1).reshape(-1, 3)
+
+
+# --- the LTC family --------------------------------------------------------------------------------
+#
+# Parameters q = (ln p0, ln p1, s, theta): M = R(theta) S, S = [[p0, 0, p0 s], [0, p1, 0], [0, 0, 1]],
+# R(theta) the rotation about y that takes z to (sin theta, 0, cos theta). p0, p1 are the lobe's
+# widths in and across the plane of incidence, s a shear in units of the width (Heitz et al.'s
+# m11, m22, m13); theta is not fitted but fixed at the BRDF lobe's mean direction, as Heitz et al.
+# do: fitting it too (a fourth free parameter) lowered the worst polygon error at r = 0.6,
+# n.v = 0.2 from 19 % to 5 % of E, but narrow lobes then have a valley of nearly equal fits along
+# theta and the shear, and the fits jumped between its ends from one cell to the next (a table
+# that cannot be interpolated). The stored entries hold all four (``params_from_entries``).
+
+def _minv(q: np.ndarray) -> np.ndarray:
+    """M^-1 (..., 3, 3) of parameters q (..., 4)."""
+    p0, p1, s = np.exp(q[..., 0]), np.exp(q[..., 1]), q[..., 2]
+    c, sn = np.cos(q[..., 3]), np.sin(q[..., 3])
+    out = np.zeros(q.shape[:-1] + (3, 3))
+    # inv(S) = [[1/p0, 0, -s], [0, 1/p1, 0], [0, 0, 1]], M^-1 = inv(S) R^T
+    out[..., 0, 0] = c / p0 - s * sn
+    out[..., 0, 2] = -sn / p0 - s * c
+    out[..., 1, 1] = 1.0 / p1
+    out[..., 2, 0] = sn
+    out[..., 2, 2] = c
+    return out
+
+
+def _m(q: np.ndarray) -> np.ndarray:
+    """M (..., 3, 3) = R(theta) S of parameters q (..., 4)."""
+    p0, p1, s = np.exp(q[..., 0]), np.exp(q[..., 1]), q[..., 2]
+    c, sn = np.cos(q[..., 3]), np.sin(q[..., 3])
+    out = np.zeros(q.shape[:-1] + (3, 3))
+    out[..., 0, 0], out[..., 0, 2] = c * p0, c * p0 * s + sn
+    out[..., 1, 1] = p1
+    out[..., 2, 0], out[..., 2, 2] = -sn * p0, -sn * p0 * s + c
+    return out
+
+
+def entries_from_params(q: np.ndarray) -> np.ndarray:
+    """The stored (a, b, d, e) = (m00, m02, m20, m22) of M^-1 scaled so that m11 = 1."""
+    m = _minv(q) * np.exp(q[..., 1])[..., None, None]
+    return np.stack([m[..., 0, 0], m[..., 0, 2], m[..., 2, 0], m[..., 2, 2]], axis=-1)
+
+
+def params_from_entries(entries: np.ndarray) -> np.ndarray:
+    """q of stored entries: the inverse of ``entries_from_params`` (d = p1 sin theta,
+    e = p1 cos theta, and [a, b] R = [p1 / p0, -s p1])."""
+    e = np.asarray(entries, np.float64)
+    a, b, d, ee = e[..., 0], e[..., 1], e[..., 2], e[..., 3]
+    p1 = np.hypot(d, ee)
+    c, sn = ee / p1, d / p1
+    inv_p0 = (a * c - b * sn) / p1
+    s = -(a * sn + b * c) / p1
+    return np.stack([-np.log(inv_p0), np.log(p1), s, np.arctan2(d, ee)], axis=-1)
+
+
+def ltc_density(minv: np.ndarray, w: np.ndarray) -> np.ndarray:
+    """D(w) = D_o(M^-1 w / |M^-1 w|) |det M^-1| / |M^-1 w|^3, D_o = max(z, 0) / pi; w (..., 3)
+    unit, minv (3, 3) or broadcastable (..., 3, 3) (any scale: D does not depend on it)."""
+    y = np.einsum("...ij,...j->...i", minv, w)
+    len2 = np.sum(y * y, axis=-1)
+    return np.maximum(y[..., 2], 0.0) * np.abs(np.linalg.det(minv)) / (np.pi * len2 * len2)
+
+
+def _cells(ndf: str, mu: np.ndarray, roughness: np.ndarray) -> dict:
+    """The fixed part of each cell's quadrature, stacked: the BRDF samples (B, K_b) and the
+    lobe's value and density there, normalised by E (the engine's albedo-table quadrature, finer
+    than this grid), and the cosine grid the LTC samples are mapped from."""
+    alpha = _alpha(roughness)
+    E = np.array([multiscatter.directional_albedo(ndf, "SMITH_CORRELATED", [m], r)[0]
+                  for m, r in zip(mu, roughness)])
+    lb = np.stack([_brdf_samples(ndf, m, a) for m, a in zip(mu, alpha)])
+    fb, pb = lobe(ndf, mu[:, None], alpha[:, None], lb)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(pb > 0.0, fb / pb, 0.0)
+    mean = np.sum(ratio[..., None] * lb, axis=1)  # the lobe's mean direction (its y cancels)
+    return {"ndf": ndf, "mu": mu, "alpha": alpha, "E": E, "wo": _cosine_samples(),
+            "theta": np.arctan2(mean[:, 0], mean[:, 2]),
+            "bx": np.ascontiguousarray(lb[..., 0]), "by": np.ascontiguousarray(lb[..., 1]),
+            "bz": np.ascontiguousarray(lb[..., 2]), "bf": fb / E[:, None], "bp": pb}
+
+
+def _l3(D, f, density):
+    """sum |D - f|^3 / density over the last axis (a sample neither strategy draws counts 0)."""
+    diff = np.abs(D - f)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.sum(np.where(density > 0.0, diff * diff * diff / density, 0.0), axis=-1)
+
+
+def _errors(data: dict, idx: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """The L3 error  integral |D - f (n.l) / E|^3  of parameters q = (ln p0, ln p1, s) (m, 3) in
+    the frames theta of the cells idx (m) of ``_cells``: the balance-heuristic estimate from the
+    BRDF's samples and the LTC's own (the cosine grid mapped by this M), Heitz et al.'s error."""
+    nb, nl = data["bx"].shape[1], len(data["wo"])
+    q = np.concatenate([q, data["theta"][idx, None]], axis=-1)
+    minv = _minv(q)
+    det = (minv[:, 0, 0] * minv[:, 2, 2] - minv[:, 0, 2] * minv[:, 2, 0]) * minv[:, 1, 1]
+    # the LTC at the BRDF's samples
+    bx, by, bz = data["bx"][idx], data["by"][idx], data["bz"][idx]
+    y0 = minv[:, 0, 0, None] * bx + minv[:, 0, 2, None] * bz
+    y1 = minv[:, 1, 1, None] * by
+    y2 = minv[:, 2, 0, None] * bx + minv[:, 2, 2, None] * bz
+    len2 = y0 * y0 + y1 * y1 + y2 * y2
+    with np.errstate(over="ignore", divide="ignore", invalid="ignore"):
+        Db = np.maximum(y2, 0.0) * (np.abs(det) / np.pi)[:, None] / (len2 * len2)
+    err = _l3(Db, data["bf"][idx], nb * data["bp"][idx] + nl * Db)
+    # the LTC's samples w = M w_o / |M w_o|, where D = D_o(w_o) |det M^-1| |M w_o|^3
+    wo = data["wo"]
+    mw = np.einsum("mij,kj->mki", _m(q), wo)
+    length = np.linalg.norm(mw, axis=-1)
+    w = mw / length[..., None]
+    Dl = (wo[:, 2] / np.pi)[None, :] * np.abs(det)[:, None] * length ** 3
+    fl, pl = lobe(data["ndf"], data["mu"][idx, None], data["alpha"][idx, None], w)
+    err += _l3(Dl, fl / data["E"][idx, None], nb * pl + nl * Dl)
+    return err
+
+
+def _nelder_mead(fun, x0: np.ndarray, step: float) -> np.ndarray:
+    """Nelder-Mead (standard coefficients 1, 2, 1/2, 1/2) run on B independent problems in
+    lockstep: fun(idx, points (m, n)) -> values (m,) for problems idx. Each problem's sequence of
+    points depends on its own values only, so a problem fitted alone follows the same path. Stops
+    per problem when its simplex is within NM_XTOL and its values within NM_FTOL relative, or
+    after NM_ITERATIONS."""
+    B, n = x0.shape
+    simplex = np.repeat(x0[:, None, :], n + 1, axis=1)
+    for k in range(n):
+        simplex[:, k + 1, k] += step
+    all_idx = np.arange(B)
+    values = fun(np.repeat(all_idx, n + 1), simplex.reshape(-1, n)).reshape(B, n + 1)
+    active = np.ones(B, bool)
+    for _ in range(NM_ITERATIONS):
+        order = np.argsort(values, axis=1, kind="stable")
+        simplex = np.take_along_axis(simplex, order[..., None], axis=1)
+        values = np.take_along_axis(values, order, axis=1)
+        spread = np.abs(simplex[:, 1:] - simplex[:, :1]).max(axis=(1, 2))
+        fspread = values[:, -1] - values[:, 0]
+        active &= ~((spread <= NM_XTOL) & (fspread <= NM_FTOL * np.abs(values[:, 0])))
+        ia = all_idx[active]
+        if len(ia) == 0:
+            break
+        s, fv = simplex[ia], values[ia]
+        centroid = s[:, :n].mean(axis=1)
+        worst = s[:, n]
+        xr = 2.0 * centroid - worst
+        fr = fun(ia, xr)
+        expand = fr < fv[:, 0]
+        accept_r = (~expand) & (fr < fv[:, n - 1])
+        outside = (~expand) & (~accept_r) & (fr < fv[:, n])
+        inside = (~expand) & (~accept_r) & (~outside)
+        x2 = np.where(expand[:, None], 3.0 * centroid - 2.0 * worst,
+                      np.where(outside[:, None], 0.5 * (centroid + xr), 0.5 * (centroid + worst)))
+        need = ~accept_r
+        f2 = np.full(len(ia), np.inf)
+        if need.any():
+            f2[need] = fun(ia[need], x2[need])
+        new_x, new_f = xr.copy(), fr.copy()
+        take2 = (expand & (f2 < fr)) | (outside & (f2 <= fr)) | (inside & (f2 < fv[:, n]))
+        new_x[take2], new_f[take2] = x2[take2], f2[take2]
+        shrink = (outside | inside) & ~take2
+        keep = ~shrink
+        s[keep, n], fv[keep, n] = new_x[keep], new_f[keep]
+        if shrink.any():
+            si = np.nonzero(shrink)[0]
+            pts = 0.5 * (s[si, :1] + s[si, 1:])  # (k, n, n)
+            s[si, 1:] = pts
+            fv[si, 1:] = fun(np.repeat(ia[si], n), pts.reshape(-1, n)).reshape(len(si), n)
+        simplex[ia], values[ia] = s, fv
+    best = np.argmin(values, axis=1)
+    return simplex[all_idx, best]
+
+
+def fit_cells(ndf: str, mu, roughness, seeds):
+    """Fit the LTC of each (mu, roughness) from its seed (ln p0, ln p1, s) (m, 3), all cells at
+    once in lockstep: Nelder-Mead minimisations of ``_errors``, one per step of NM_STEPS, each
+    from the last one's result, in the frame of each cell's mean direction. Returns (table entries
+    (m, 4) float32, parameters q (m, 4) with theta last, E (m,))."""
+    mu = np.atleast_1d(np.asarray(mu, np.float64))
+    roughness = np.broadcast_to(np.asarray(roughness, np.float64), mu.shape)
+    q = np.array(seeds, np.float64).reshape(len(mu), 3)
+    data = _cells(ndf, mu, roughness)
+    for step in NM_STEPS:
+        q = _nelder_mead(lambda idx, pts: _errors(data, idx, pts), q, step)
+    q = np.concatenate([q, data["theta"][:, None]], axis=-1)
+    return entries_from_params(q).astype(np.float32), q, data["E"]
+
+
+def table_grid(size: int = LTC_SIZE) -> tuple[np.ndarray, np.ndarray]:
+    """(mu of each column, roughness of each row): column i <-> t = i / (size - 1), mu = 1 - t^2
+    (floored at MIN_COS); row j <-> r = j / (size - 1) (fitted at max(r, MIN_PERCEPTUAL_ROUGHNESS))."""
+    t = np.arange(size) / (size - 1)
+    return np.maximum(1.0 - t * t, brdf.MIN_COS), np.arange(size) / (size - 1)
+
+
+IDENTITY_SEED = np.zeros(3)  # p0 = p1 = 1, s = 0: the first cell's (n.v = 1, r = 1) seed, the cosine
+
+
+def seed_for(table: np.ndarray, j: int, i: int) -> np.ndarray:
+    """The seed of cell (j, i) as the build uses it, from the (float32) table entries already
+    fitted: the last row (r = 1) from its left neighbour (the first cell from the identity), every
+    other row from the cell above it (rougher), its widths scaled by the ratio of the alphas."""
+    size = table.shape[0]
+    if j == size - 1:
+        return IDENTITY_SEED.copy() if i == 0 else params_from_entries(table[j, i - 1])[:3]
+    _, rough = table_grid(size)
+    q = params_from_entries(table[j + 1, i])[:3]
+    q[:2] += np.log(_alpha(rough[j]) / _alpha(rough[j + 1]))
+    return q
+
+
+@lru_cache(maxsize=4)
+def compute_ltc_table(ndf: str, size: int = LTC_SIZE) -> np.ndarray:
+    """(size, size, 4) float32: [j, i] = (a, b, d, e) of M^-1 (normalised to m11 = 1) for
+    roughness row j and mu column i (``table_grid``), fitted as the module's "Fitting" says: the
+    roughest row cell by cell from n.v = 1, then each smoother row from the row above, its cells
+    fitted together in lockstep."""
+    mu, rough = table_grid(size)
+    table = np.zeros((size, size, 4), np.float32)
+    j = size - 1
+    for i in range(size):  # the roughest row along mu, each cell from its neighbour
+        table[j, i] = fit_cells(ndf, mu[i:i + 1], rough[j], seed_for(table, j, i)[None])[0][0]
+    for j in range(size - 2, -1, -1):
+        seeds = np.stack([seed_for(table, j, i) for i in range(size)])
+        table[j] = fit_cells(ndf, mu, rough[j], seeds)[0]
+    return table
+
+
+# --- horizon clipping by a sphere (Heitz & Hill 2017) ---------------------------------------------
+
+def cap_form_factor(sin2_sigma, z) -> np.ndarray:
+    """Form factor (integral of max(w.z, 0) / pi) of a spherical cap of angular radius sigma whose
+    centre is at cos(angle to the normal) = z, clipped by the horizon: sin^2 sigma z when the cap
+    is wholly above (z >= sin sigma), 0 wholly below, in between Snyder 1996's closed form
+    (as in Lagarde & de Rousiers 2014, "Moving Frostbite to PBR", eq. 15)."""
+    s2 = np.clip(np.asarray(sin2_sigma, np.float64), 0.0, 1.0)
+    z = np.clip(np.asarray(z, np.float64), -1.0, 1.0)
+    s2, z = np.broadcast_arrays(s2, z)
+    sin_s = np.sqrt(s2)
+    partial = np.abs(z) < sin_s
+    zp = np.where(partial, z, 0.0)
+    sp = np.where(partial, s2, 1.0)
+    sin_w = np.sqrt(1.0 - zp * zp)
+    cot_s = np.sqrt(1.0 - sp) / np.sqrt(sp)  # x in Snyder's notation
+    y = -cot_s * zp / sin_w  # -cot sigma cot omega, |y| < 1 inside the partial range
+    g = sin_w * np.sqrt(np.maximum(1.0 - y * y, 0.0))
+    clipped = ((zp * np.arccos(np.clip(y, -1.0, 1.0)) - cot_s * g) * sp + np.arctan2(g, cot_s)) / np.pi
+    return np.where(partial, clipped, np.where(z >= sin_s, s2 * z, 0.0))
+
+
+def sphere_grid(size: int = SPHERE_SIZE) -> tuple[np.ndarray, np.ndarray]:
+    """(|F| of each row, z of each column): row j <-> |F| = j / (size - 1), column i <->
+    z = 2 i / (size - 1) - 1."""
+    g = np.arange(size) / (size - 1)
+    return g, 2.0 * g - 1.0
+
+
+@lru_cache(maxsize=2)
+def compute_sphere_table(size: int = SPHERE_SIZE) -> np.ndarray:
+    """(size, size) float32: [j, i] = the horizon-clipped form factor of the cap with
+    sin^2 sigma = |F| = j / (size - 1) centred at z = 2 i / (size - 1) - 1 (``sphere_grid``)."""
+    length, z = sphere_grid(size)
+    return cap_form_factor(length[:, None], z[None, :]).astype(np.float32)
+
+
+def sphere_lookup(table: np.ndarray, length, z) -> np.ndarray:
+    """Bilinear lookup of ``compute_sphere_table`` at |F| = length, z (clamped to the grid)."""
+    n = table.shape[0]
+    x = np.clip((np.asarray(z, np.float64) + 1.0) * 0.5 * (n - 1), 0.0, n - 1.0)
+    y = np.clip(np.asarray(length, np.float64) * (n - 1), 0.0, n - 1.0)
+    return _bilinear(table.astype(np.float64), x, y)
+
+
+def _bilinear(t: np.ndarray, x, y) -> np.ndarray:
+    """t[j, i, ...] at column coordinate x, row coordinate y (in texels, already clamped)."""
+    n_rows, n_cols = t.shape[:2]
+    i0, j0 = np.floor(x).astype(int), np.floor(y).astype(int)
+    i1, j1 = np.minimum(i0 + 1, n_cols - 1), np.minimum(j0 + 1, n_rows - 1)
+    trailing = (1,) * (t.ndim - 2)
+    tx = np.reshape(x - i0, np.shape(x) + trailing)
+    ty = np.reshape(y - j0, np.shape(y) + trailing)
+    top = t[j0, i0] * (1.0 - tx) + t[j0, i1] * tx
+    bottom = t[j1, i0] * (1.0 - tx) + t[j1, i1] * tx
+    return top * (1.0 - ty) + bottom * ty
+
+
+# --- evaluation (the twin of glsl/ltc.glsl) --------------------------------------------------------
+
+def lookup(table: np.ndarray, mu, roughness) -> np.ndarray:
+    """Bilinear lookup of an LTC table at n.v = mu, perceptual roughness: (..., 4) entries
+    (a, b, d, e); column coordinate sqrt(1 - mu) (N - 1), row roughness (N - 1), clamped."""
+    n = table.shape[0]
+    t = np.sqrt(np.clip(1.0 - np.asarray(mu, np.float64), 0.0, 1.0))
+    x = np.clip(t * (n - 1), 0.0, n - 1.0)
+    y = np.clip(np.asarray(roughness, np.float64) * (n - 1), 0.0, n - 1.0)
+    x, y = np.broadcast_arrays(x, y)
+    return _bilinear(table.astype(np.float64), x, y)
+
+
+def polygon_form_factor_vector(corners) -> np.ndarray:
+    """F = 1 / (2 pi) sum_i theta_i g_i of a planar polygon, corners (..., n, 3) relative to the
+    shading point (any frame, any winding): theta_i the angle between corners i and i + 1, g_i the
+    unit normal of the plane through them. F is oriented towards the polygon (the integral of
+    w / pi over the directions w it subtends, whatever its winding), |F| its form factor towards
+    a surface facing F, F.z its form factor towards a surface of normal z when it lies wholly
+    above that surface's horizon. (glsl/lights.glsl's E_Area sums V = 1/2 sum theta_i g_i = pi F.)"""
+    p = np.asarray(corners, np.float64)
+    q = np.roll(p, -1, axis=-2)
+    c = np.cross(p, q)
+    s = np.linalg.norm(c, axis=-1)
+    theta = np.arctan2(s, np.sum(p * q, axis=-1))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        F = np.sum(c * np.where(s > 0.0, theta / np.where(s > 0.0, s, 1.0), 0.0)[..., None], axis=-2)
+    # the winding: the polygon's normal by its fan of triangles from corner 0 (differences of
+    # corners, exact for a far polygon), against corner 0's offset
+    rel = p - p[..., :1, :]
+    normal = np.sum(np.cross(rel, np.roll(rel, -1, axis=-2)), axis=-2)
+    sign = np.where(np.sum(normal * p[..., 0, :], axis=-1) < 0.0, -1.0, 1.0)
+    return F * (sign / (2.0 * np.pi))[..., None]
+
+
+def ltc_integral(minv_entries, corners_local, sphere: np.ndarray | None = None):
+    """The integral over a polygon of the LTC of entries (a, b, d, e) (..., 4), corners
+    (..., n, 3) in the local frame (z = n, x = the tangent towards v): the polygon is mapped by
+    M^-1, its vector form factor F taken there and clipped to the horizon by the sphere of the same
+    F (``sphere_lookup``). Returns (form factor in [0, 1], the unit mean direction normalize(M F)
+    in the local frame). Entries (1, 0, 0, 1) (M = identity) give the clipped diffuse form factor.
+    M F is taken as adj(M^-1) F = [[e, 0, -b], [0, ae - bd, 0], [-d, 0, a]] F, the same direction
+    while det M^-1 = ae - bd > 0 (every fitted cell's is)."""
+    sphere = sphere_table() if sphere is None else sphere
+    m = np.asarray(minv_entries, np.float64)
+    a, b, d, e = (m[..., k, None] for k in range(4))
+    p = np.asarray(corners_local, np.float64)
+    x, y, z = p[..., 0], p[..., 1], p[..., 2]
+    F = polygon_form_factor_vector(np.stack([a * x + b * z, y, d * x + e * z], axis=-1))
+    length = np.linalg.norm(F, axis=-1)
+    safe = np.where(length > 0.0, length, 1.0)
+    form_factor = np.where(length > 0.0, sphere_lookup(sphere, np.minimum(length, 1.0),
+                                                      F[..., 2] / safe), 0.0)
+    a, b, d, e = (m[..., k] for k in range(4))
+    back = np.stack([e * F[..., 0] - b * F[..., 2], (a * e - b * d) * F[..., 1],
+                     a * F[..., 2] - d * F[..., 0]], axis=-1)
+    blen = np.linalg.norm(back, axis=-1)
+    direction = np.where((blen > 0.0)[..., None], back / np.where(blen > 0.0, blen, 1.0)[..., None],
+                         np.array([0.0, 0.0, 1.0]))
+    return form_factor, direction
+
+
+def shading_frame(n, v):
+    """(x, y, z) unit axes (..., 3) of the local frame: z = n, x = the tangent towards v (any
+    tangent when v is along n), y = z x x; and mu = n.v floored at MIN_COS."""
+    z = np.asarray(n, np.float64)
+    v = np.asarray(v, np.float64)
+    NoV = np.sum(z * v, axis=-1)
+    t = v - NoV[..., None] * z
+    tlen = np.linalg.norm(t, axis=-1)
+    other = np.where((np.abs(z[..., 0]) < 0.9)[..., None], np.array([1.0, 0.0, 0.0]),
+                     np.array([0.0, 1.0, 0.0]))
+    fallback = np.cross(other, z)
+    fallback /= np.linalg.norm(fallback, axis=-1, keepdims=True)
+    x = np.where((tlen > 1e-9)[..., None], t / np.where(tlen > 1e-9, tlen, 1.0)[..., None], fallback)
+    return x, np.cross(z, x), z, np.clip(NoV, brdf.MIN_COS, 1.0)
+
+
+def area_specular(p, n, v, corners, roughness, ndf: str = "GGX", light_normal=None) -> np.ndarray:
+    """The specular integral  int_P f(v, l) (n.l) dl  (F = 1, height-correlated Smith) of a
+    polygon P: E(mu, r) (multiscatter's albedo table) times the LTC's integral over P. p, n, v
+    (..., 3): shading points, unit normals, unit directions towards the viewer; corners (k, 3) or
+    (..., k, 3) in the same (world) frame; light_normal (3,) or (..., 3), optional: the emitting
+    side of a one-sided light (0 behind it)."""
+    x, y, z, mu = shading_frame(n, v)
+    rel = np.asarray(corners, np.float64) - np.asarray(p, np.float64)[..., None, :]
+    local = np.stack([np.sum(rel * x[..., None, :], axis=-1), np.sum(rel * y[..., None, :], axis=-1),
+                      np.sum(rel * z[..., None, :], axis=-1)], axis=-1)
+    form_factor, _ = ltc_integral(lookup(ltc_table(ndf), mu, roughness), local)
+    E = multiscatter.interpolate(multiscatter.albedo_table(ndf, "SMITH_CORRELATED"), mu, roughness)
+    out = E * form_factor
+    if light_normal is not None:
+        front = np.sum(-rel.mean(axis=-2) * np.asarray(light_normal, np.float64), axis=-1) > 0.0
+        out = np.where(front, out, 0.0)
+    return out
+
+
+# --- the shipped tables ------------------------------------------------------------------------------
+
+def ltc_table(ndf: str, size: int = LTC_SIZE) -> np.ndarray:
+    """``compute_ltc_table``, shipped in tables.npz as "ltc_<ndf>"."""
+    return multiscatter._table(f"ltc_{ndf}", (size, size, 4), lambda: compute_ltc_table(ndf, size))
+
+
+def sphere_table(size: int = SPHERE_SIZE) -> np.ndarray:
+    """``compute_sphere_table``, shipped in tables.npz as "ltc_sphere"."""
+    return multiscatter._table("ltc_sphere", (size, size), lambda: compute_sphere_table(size))
+
+
+def compute_all() -> dict[str, np.ndarray]:
+    """The LTC tables by their names in ``tables.npz``."""
+    out = {f"ltc_{ndf}": compute_ltc_table(ndf) for ndf in NDFS}
+    out["ltc_sphere"] = compute_sphere_table()
+    return out
