@@ -180,6 +180,8 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     info.sampler(14, "FLOAT_2D", "light_data")
     if features.light_tiles:
         info.sampler(15, "FLOAT_2D", "light_tiles")
+    if features.uses_area_ltc:
+        info.sampler(16, "FLOAT_2D", "ltc_table")
     for binding, block in enumerate(_BLOCKS):
         if block is not None:
             info.uniform_buf(binding, *block)
@@ -388,6 +390,27 @@ def albedo_table(terms) -> gpu.types.GPUTexture:
         return r32f_texture(multiscatter.albedo_table(terms.ndf, terms.visibility))
 
     return LIBRARY.table(("PRINCIPLED",) if terms.principled else (terms.ndf, terms.visibility), build)
+
+
+def ltc_table(terms) -> gpu.types.GPUTexture:
+    """Area lights' linearly transformed cosines for ``terms``' distribution (the Principled set:
+    GGX) with the horizon-clipping sphere table below them, as one RGBA32F texture
+    (glsl/ltc.glsl)."""
+    from . import ltc
+
+    ndf = "GGX" if terms.principled else terms.ndf
+
+    def build():
+        table = ltc.ltc_table(ndf)
+        sphere = ltc.sphere_table()
+        rows = np.zeros((sphere.shape[0], table.shape[1], 4), np.float32)
+        rows[:, :sphere.shape[1], 0] = sphere
+        atlas = np.ascontiguousarray(np.concatenate([table, rows]), np.float32)
+        h, w = atlas.shape[:2]
+        data = gpu.types.Buffer("FLOAT", w * h * 4, atlas.ravel())
+        return gpu.types.GPUTexture((w, h), format="RGBA32F", data=data)
+
+    return LIBRARY.table(("LTC", ndf), build)
 
 
 def s_table() -> gpu.types.GPUTexture:

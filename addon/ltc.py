@@ -39,35 +39,43 @@ Horizon clipping (``ltc_integral``): in the cosine space, the polygon is replace
 spherical cap of the same F, sin^2 sigma = |F| centred at z = F.z / |F|, whose clipped form
 factor is Snyder's closed form (``cap_form_factor``), tabulated.
 
-**Fitting** (``compute_ltc_table``). M = R(theta) [[p0, 0, p0 s], [0, p1, 0], [0, 0, 1]] with
-theta fixed at the BRDF lobe's mean direction (R the rotation about y taking z there) and three
-parameters (ln p0, ln p1, s) minimising Heitz et al.'s L3 error  integral |D - f (n.l) / E|^3,
-estimated deterministically: the balance-heuristic combination of a stratified midpoint grid of
-the BRDF's half-vector sampling (48 x 16) and a cosine grid (32 x 16) mapped by the current M (so
-the LTC's own mass is always sampled), over the half space y >= 0. Nelder-Mead (written here,
-run on a whole row in lockstep: a cell fitted alone follows the same path, bit for bit), twice
-from the last result. Sweep: the roughest row from n.v = 1 (seeded with the cosine) towards
-grazing, each cell from its neighbour; then each smoother row from the row above, its widths
-scaled by the ratio of the alphas. The seeds are read back from the float32 table, so any cell
-can be refitted alone (``seed_for``, ``fit_cells``). Both distributions: ~65 s each on one core.
+**Fitting** (``compute_ltc_table``). M = R(theta) [[p0, 0, p0 s], [0, p1, 0], [0, 0, 1]] (R the
+rotation about y taking z to the lobe's axis) with four parameters (ln p0, ln p1, s, theta)
+minimising Heitz et al.'s L3 error  integral |D - f (n.l) / E|^3, times a price on turning the
+axis away from the BRDF lobe's mean direction, 1 + TILT_PENALTY (dtheta / alpha)^2 (Heitz et al.
+fix the axis there; a clamped cosine has nothing behind its horizon, so a rough lobe tilted to
+its mean direction lost its backward tail: see "the LTC family" below). The error is estimated
+deterministically: the balance-heuristic combination of a stratified midpoint grid of the BRDF's
+half-vector sampling (48 x 16) and a cosine grid (32 x 16) mapped by the current M (so the LTC's
+own mass is always sampled), over the half space y >= 0. Nelder-Mead (written here, run on a
+whole row in lockstep: a cell fitted alone follows the same path, bit for bit), twice from the
+last result. Sweep: the roughest row from n.v = 1 (seeded with the cosine) towards grazing, each
+cell from its neighbour; then each smoother row from the row above, its widths scaled by the
+ratio of the alphas. The seeds are read back from the float32 table, so any cell can be refitted
+alone (``seed_for``, ``fit_cells``). Both distributions: ~2 min each on one core.
+
+**The estimate** (``lobe_integral``): E I is right only where the LTC has the BRDF's shape; a
+ratio estimator takes the BRDF itself towards the light, exact for small lights, blended by I
+towards E I, exact for a light that holds the whole lobe.
 
 **Measured** (tests/test_ltc.py: ``area_specular`` against adaptive brute-force quadrature of
 brdf.py's D V (n.l) over the polygon's area, 6 lights: small and large at the mirror direction,
 off to the side, straddling the horizon, a triangle, a pentagon; n.v = 0.2, 0.5, 0.9). GGX, over
-the lights receiving >= 1 % of E: worst / mean |relative error| 9.6 % / 0.9 % at r = 0.1,
-41 % / 7.8 % at r = 0.3, 57 % / 17 % at r = 0.6, 19 % / 4.9 % at r = 1; worst |error| / E 0.3 %,
-12.8 %, 18.9 %, 0.7 %. The large errors are lights straddling the horizon seen at n.v = 0.2 (the
-cosine lobe, tilted to the BRDF's mean direction, leaks below the horizon where the BRDF has
-nothing) and lights in the lobe's tails; a small light at the mirror direction is within 0.3 %
-at r = 0.1, 2 % at r = 0.3, 5 % at r = 0.6 (but -39 % at n.v = 0.2). Beckmann's Gaussian
-peak is not a cosine's shape: a small light at the mirror direction gets 13-19 % too little at
-r = 0.1 (worst |error| / E 17 % at r = 0.1, 9 % at r = 0.6). The sphere approximation, for
-the diffuse form factor (M = identity) of lights straddling the horizon: errors 0.0006-0.018 in
-form factors 0.04-0.12 (-15 % to +7 %), 0.0009 for one almost wholly below (form factor 0.0009);
-its table's interpolation error <= 0.029 (mean 7e-4); exact for lights wholly above. Of the
-LTC errors above its share is <= 0.1 % of E (against exact clipping of the mapped polygon).
-Fitted lobes integrate to 1 (to the test's quadrature, 1e-4); the mass above the horizon is
->= 0.999 along r = 1, down to 0.96 at r = 0.75 and 0.89 at r = 0.5 at grazing incidence.
+the lights receiving >= 1 % of E: worst / mean |relative error| 11 % / 1.0 % at r = 0.1,
+26 % / 5.5 % at r = 0.3, 39 % / 11 % at r = 0.6, 29 % / 5.9 % at r = 1; worst |error| / E 0.2 %,
+10 %, 11 %, 1.9 % (the axis fixed and E I alone: 9.6 / 0.9, 41 / 7.8, 57 / 17, 19 / 4.9 %; 0.3,
+12.8, 18.9, 0.7 %). The large errors are lights straddling the horizon seen at n.v = 0.2 and
+lights in the lobe's tails; a small light at the mirror direction is within 2e-4. Beckmann's
+Gaussian peak is not a cosine's shape: a small light at the mirror direction gets 18-22 % too
+little at r = 0.1 (1-3 % at r = 0.3; worst |error| / E 20 % at r = 0.1, 11 % at r = 0.6). Against
+Cycles (tests/test_light_shapes.py, a white GGX metal sphere under each area shape): 2.6-3.0 % /
+5.9-6.5 % / 4.7-5.2 % / 1.0-1.4 % at r = 0.1 / 0.3 / 0.6 / 1. The sphere approximation, for the
+diffuse form factor (M = identity) of lights straddling the horizon: errors 0.0006-0.018 in form
+factors 0.04-0.12 (-15 % to +7 %), 0.0009 for one almost wholly below (form factor 0.0009); its
+table's interpolation error <= 0.029 (mean 7e-4); exact for lights wholly above. Fitted lobes
+integrate to 1 (to the test's quadrature, 1e-4); the mass above the horizon is >= 0.997 along
+r = 1, down to 0.995 at r = 0.75 and 0.990 at r = 0.5 at grazing incidence (0.96 and 0.89 with
+the axis fixed).
 """
 
 from __future__ import annotations
@@ -92,6 +100,9 @@ BRDF_STRATA = 48
 LTC_STRATA = 32
 AZIMUTHS = 16
 NM_STEPS = (0.1, 0.02)  # Nelder-Mead runs per cell, each from the last one's result
+#: The price of turning the lobe's axis away from the BRDF's mean direction by dtheta: the error
+#: is multiplied by 1 + TILT_PENALTY dtheta^2 / alpha^2 (see ``_errors``).
+TILT_PENALTY = 0.01
 NM_ITERATIONS = 300
 NM_XTOL = 1e-5
 NM_FTOL = 1e-7
@@ -158,11 +169,15 @@ def _cosine_samples() -> np.ndarray:
 # Parameters q = (ln p0, ln p1, s, theta): M = R(theta) S, S = [[p0, 0, p0 s], [0, p1, 0], [0, 0, 1]],
 # R(theta) the rotation about y that takes z to (sin theta, 0, cos theta). p0, p1 are the lobe's
 # widths in and across the plane of incidence, s a shear in units of the width (Heitz et al.'s
-# m11, m22, m13); theta is not fitted but fixed at the BRDF lobe's mean direction, as Heitz et al.
-# do: fitting it too (a fourth free parameter) lowered the worst polygon error at r = 0.6,
-# n.v = 0.2 from 19 % to 5 % of E, but narrow lobes then have a valley of nearly equal fits along
-# theta and the shear, and the fits jumped between its ends from one cell to the next (a table
-# that cannot be interpolated). The stored entries hold all four (``params_from_entries``).
+# m11, m22, m13), and the axis theta. Heitz et al. fix the axis at the BRDF lobe's mean direction;
+# but the clamped cosine's support is the hemisphere about its axis, so a rough lobe tilted there
+# has nothing behind it (at r = 0.6, n.v = 0.77 the LTC fell to zero 60 degrees from the normal
+# towards the viewer, where GGX is still a tenth of its peak), and a rough sphere under an area
+# light lost its outer ring (14 % from Cycles). Here theta is fitted too, as a turn dtheta from
+# the mean direction priced by 1 + TILT_PENALTY (dtheta / alpha)^2 (``_errors``): free for rough
+# lobes, held near the mean direction for narrow ones, whose fits otherwise wander along a valley
+# of nearly equal fits between the axis and the shear from one cell to the next.
+
 
 def _minv(q: np.ndarray) -> np.ndarray:
     """M^-1 (..., 3, 3) of parameters q (..., 4)."""
@@ -207,6 +222,15 @@ def params_from_entries(entries: np.ndarray) -> np.ndarray:
     return np.stack([-np.log(inv_p0), np.log(p1), s, np.arctan2(d, ee)], axis=-1)
 
 
+def minv_from_entries(entries) -> np.ndarray:
+    """M^-1 (..., 3, 3) = [[a, 0, b], [0, 1, 0], [d, 0, e]] of stored entries (a, b, d, e)."""
+    e = np.asarray(entries, np.float64)
+    minv = np.zeros(e.shape[:-1] + (3, 3))
+    minv[..., 0, 0], minv[..., 0, 2], minv[..., 1, 1] = e[..., 0], e[..., 1], 1.0
+    minv[..., 2, 0], minv[..., 2, 2] = e[..., 2], e[..., 3]
+    return minv
+
+
 def ltc_density(minv: np.ndarray, w: np.ndarray) -> np.ndarray:
     """D(w) = D_o(M^-1 w / |M^-1 w|) |det M^-1| / |M^-1 w|^3, D_o = max(z, 0) / pi; w (..., 3)
     unit, minv (3, 3) or broadcastable (..., 3, 3) (any scale: D does not depend on it)."""
@@ -241,11 +265,13 @@ def _l3(D, f, density):
 
 
 def _errors(data: dict, idx: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """The L3 error  integral |D - f (n.l) / E|^3  of parameters q = (ln p0, ln p1, s) (m, 3) in
-    the frames theta of the cells idx (m) of ``_cells``: the balance-heuristic estimate from the
-    BRDF's samples and the LTC's own (the cosine grid mapped by this M), Heitz et al.'s error."""
+    """The L3 error  integral |D - f (n.l) / E|^3  of parameters q = (ln p0, ln p1, s, dtheta)
+    (m, 4), dtheta the axis's turn from the mean direction of the cells idx (m) of ``_cells``: the
+    balance-heuristic estimate from the BRDF's samples and the LTC's own (the cosine grid mapped by
+    this M), Heitz et al.'s error, times the tilt's price."""
     nb, nl = data["bx"].shape[1], len(data["wo"])
-    q = np.concatenate([q, data["theta"][idx, None]], axis=-1)
+    dtheta = q[:, 3]
+    q = np.concatenate([q[:, :3], (data["theta"][idx] + dtheta)[:, None]], axis=-1)
     minv = _minv(q)
     det = (minv[:, 0, 0] * minv[:, 2, 2] - minv[:, 0, 2] * minv[:, 2, 0]) * minv[:, 1, 1]
     # the LTC at the BRDF's samples
@@ -265,7 +291,11 @@ def _errors(data: dict, idx: np.ndarray, q: np.ndarray) -> np.ndarray:
     Dl = (wo[:, 2] / np.pi)[None, :] * np.abs(det)[:, None] * length ** 3
     fl, pl = lobe(data["ndf"], data["mu"][idx, None], data["alpha"][idx, None], w)
     err += _l3(Dl, fl / data["E"][idx, None], nb * pl + nl * Dl)
-    return err
+    # the axis may turn away from the mean direction, at a price that grows as the lobe narrows:
+    # a narrow lobe has a valley of nearly equal fits along the axis and the shear, and without it
+    # the fits jumped along the valley from cell to cell (a table that cannot be interpolated)
+    tilt = TILT_PENALTY / np.maximum(data["alpha"][idx], 1e-3) ** 2
+    return err * (1.0 + tilt * dtheta * dtheta)
 
 
 def _nelder_mead(fun, x0: np.ndarray, step: float) -> np.ndarray:
@@ -323,17 +353,18 @@ def _nelder_mead(fun, x0: np.ndarray, step: float) -> np.ndarray:
 
 
 def fit_cells(ndf: str, mu, roughness, seeds):
-    """Fit the LTC of each (mu, roughness) from its seed (ln p0, ln p1, s) (m, 3), all cells at
-    once in lockstep: Nelder-Mead minimisations of ``_errors``, one per step of NM_STEPS, each
-    from the last one's result, in the frame of each cell's mean direction. Returns (table entries
-    (m, 4) float32, parameters q (m, 4) with theta last, E (m,))."""
+    """Fit the LTC of each (mu, roughness) from its seed (ln p0, ln p1, s, theta) (m, 4), all
+    cells at once in lockstep: Nelder-Mead minimisations of ``_errors``, one per step of NM_STEPS,
+    each from the last one's result. Returns (table entries (m, 4) float32, parameters q (m, 4)
+    with theta last, E (m,))."""
     mu = np.atleast_1d(np.asarray(mu, np.float64))
     roughness = np.broadcast_to(np.asarray(roughness, np.float64), mu.shape)
-    q = np.array(seeds, np.float64).reshape(len(mu), 3)
+    q = np.array(seeds, np.float64).reshape(len(mu), 4)
     data = _cells(ndf, mu, roughness)
+    q[:, 3] -= data["theta"]  # the seeds' axes, fitted as a turn from each cell's mean direction
     for step in NM_STEPS:
         q = _nelder_mead(lambda idx, pts: _errors(data, idx, pts), q, step)
-    q = np.concatenate([q, data["theta"][:, None]], axis=-1)
+    q = np.concatenate([q[:, :3], (data["theta"] + q[:, 3])[:, None]], axis=-1)
     return entries_from_params(q).astype(np.float32), q, data["E"]
 
 
@@ -344,7 +375,7 @@ def table_grid(size: int = LTC_SIZE) -> tuple[np.ndarray, np.ndarray]:
     return np.maximum(1.0 - t * t, brdf.MIN_COS), np.arange(size) / (size - 1)
 
 
-IDENTITY_SEED = np.zeros(3)  # p0 = p1 = 1, s = 0: the first cell's (n.v = 1, r = 1) seed, the cosine
+IDENTITY_SEED = np.zeros(4)  # p0 = p1 = 1, s = 0, theta = 0: the first cell's (n.v = 1, r = 1) seed
 
 
 def seed_for(table: np.ndarray, j: int, i: int) -> np.ndarray:
@@ -353,9 +384,9 @@ def seed_for(table: np.ndarray, j: int, i: int) -> np.ndarray:
     other row from the cell above it (rougher), its widths scaled by the ratio of the alphas."""
     size = table.shape[0]
     if j == size - 1:
-        return IDENTITY_SEED.copy() if i == 0 else params_from_entries(table[j, i - 1])[:3]
+        return IDENTITY_SEED.copy() if i == 0 else params_from_entries(table[j, i - 1])
     _, rough = table_grid(size)
-    q = params_from_entries(table[j + 1, i])[:3]
+    q = params_from_entries(table[j + 1, i])
     q[:2] += np.log(_alpha(rough[j]) / _alpha(rough[j + 1]))
     return q
 
@@ -470,31 +501,37 @@ def polygon_form_factor_vector(corners) -> np.ndarray:
     return F * (sign / (2.0 * np.pi))[..., None]
 
 
-def ltc_integral(minv_entries, corners_local, sphere: np.ndarray | None = None):
+def ltc_integral(minv_entries, corners_local, sphere: np.ndarray | None = None, jitter=None):
     """The integral over a polygon of the LTC of entries (a, b, d, e) (..., 4), corners
     (..., n, 3) in the local frame (z = n, x = the tangent towards v): the polygon is mapped by
     M^-1, its vector form factor F taken there and clipped to the horizon by the sphere of the same
-    F (``sphere_lookup``). Returns (form factor in [0, 1], the unit mean direction normalize(M F)
-    in the local frame). Entries (1, 0, 0, 1) (M = identity) give the clipped diffuse form factor.
-    M F is taken as adj(M^-1) F = [[e, 0, -b], [0, ae - bd, 0], [-d, 0, a]] F, the same direction
-    while det M^-1 = ae - bd > 0 (every fitted cell's is)."""
+    F (``sphere_lookup``): a form factor in [0, 1]. Entries (1, 0, 0, 1) (M = identity) give the
+    clipped diffuse form factor. ``jitter`` (roundings, unit directions (..., 3)), for tests: the
+    mapped corners moved along the directions (alternately +-) by that many float32 roundings of
+    each coordinate's product with M^-1, and F by as many of its terms (sum theta_i / 2 pi): the
+    errors float32 leaves there, to measure how far they move the result
+    (tests/test_stability.py)."""
     sphere = sphere_table() if sphere is None else sphere
     m = np.asarray(minv_entries, np.float64)
     a, b, d, e = (m[..., k, None] for k in range(4))
     p = np.asarray(corners_local, np.float64)
     x, y, z = p[..., 0], p[..., 1], p[..., 2]
-    F = polygon_form_factor_vector(np.stack([a * x + b * z, y, d * x + e * z], axis=-1))
+    mapped = np.stack([a * x + b * z, y, d * x + e * z], axis=-1)
+    if jitter is not None:  # each mapped coordinate a product with M^-1's row: as many roundings of it
+        roundings, direction = jitter
+        unit = roundings * float(np.finfo(np.float32).eps) / 2.0
+        rows = np.stack([np.hypot(a, b), np.ones_like(a), np.hypot(d, e)], axis=-1)  # (..., 1, 3)
+        sign = np.where(np.arange(p.shape[-2]) % 2 == 0, 1.0, -1.0)[:, None]  # corners apart
+        mapped = mapped + (unit * rows * np.linalg.norm(p, axis=-1, keepdims=True) * sign
+                           * np.asarray(direction, np.float64)[..., None, :])
+    F = polygon_form_factor_vector(mapped)
+    if jitter is not None:
+        nxt = np.roll(mapped, -1, axis=-2)
+        angles = np.arctan2(np.linalg.norm(np.cross(mapped, nxt), axis=-1), np.sum(mapped * nxt, axis=-1))
+        F = F + (unit * angles.sum(axis=-1) / (2.0 * np.pi))[..., None] * np.asarray(direction, np.float64)
     length = np.linalg.norm(F, axis=-1)
     safe = np.where(length > 0.0, length, 1.0)
-    form_factor = np.where(length > 0.0, sphere_lookup(sphere, np.minimum(length, 1.0),
-                                                      F[..., 2] / safe), 0.0)
-    a, b, d, e = (m[..., k] for k in range(4))
-    back = np.stack([e * F[..., 0] - b * F[..., 2], (a * e - b * d) * F[..., 1],
-                     a * F[..., 2] - d * F[..., 0]], axis=-1)
-    blen = np.linalg.norm(back, axis=-1)
-    direction = np.where((blen > 0.0)[..., None], back / np.where(blen > 0.0, blen, 1.0)[..., None],
-                         np.array([0.0, 0.0, 1.0]))
-    return form_factor, direction
+    return np.where(length > 0.0, sphere_lookup(sphere, np.minimum(length, 1.0), F[..., 2] / safe), 0.0)
 
 
 def shading_frame(n, v):
@@ -513,19 +550,48 @@ def shading_frame(n, v):
     return x, np.cross(z, x), z, np.clip(NoV, brdf.MIN_COS, 1.0)
 
 
+#: The most the lobe's shape correction may scale the LTC's integral, in units of the albedo
+#: (``lobe_integral``): where the fitted cosine has almost nothing (far in the BRDF's tails) the
+#: ratio of the two is unbounded.
+MAX_SHAPE_RATIO = 10.0
+
+
+def lobe_integral(form_factor, albedo, lobe_at_mean, density_at_mean):
+    """The specular integral over a polygon, int_P f (n.l), from the LTC's integral I over it
+    (``form_factor``) and the albedo E: E I would be right if the LTC were the BRDF's shape; it
+    is not, in the tails of rough lobes. A ratio estimator takes the BRDF itself towards the light
+    (its irradiance-weighted direction l, well conditioned where the lobe's own mean direction
+    M F is not), c = f (n.l) / D there, exact for a small light (I -> D dw);
+    a light that holds the whole lobe (I -> 1) is E exactly. The two limits are blended by I:
+    I (c + (E - c) I), with c <= MAX_SHAPE_RATIO E.
+    Against Cycles, a white GGX metal sphere at roughness 0.6 under a square light: E I 14 %, this
+    6.5 % (tests/test_light_shapes.py)."""
+    I = np.asarray(form_factor, np.float64)
+    E = np.asarray(albedo, np.float64)
+    D = np.asarray(density_at_mean, np.float64)
+    c = np.minimum(np.asarray(lobe_at_mean, np.float64) / np.maximum(D, 1e-30), MAX_SHAPE_RATIO * E)
+    return I * (c + (E - c) * np.minimum(I, 1.0))
+
+
 def area_specular(p, n, v, corners, roughness, ndf: str = "GGX", light_normal=None) -> np.ndarray:
     """The specular integral  int_P f(v, l) (n.l) dl  (F = 1, height-correlated Smith) of a
-    polygon P: E(mu, r) (multiscatter's albedo table) times the LTC's integral over P. p, n, v
-    (..., 3): shading points, unit normals, unit directions towards the viewer; corners (k, 3) or
-    (..., k, 3) in the same (world) frame; light_normal (3,) or (..., 3), optional: the emitting
-    side of a one-sided light (0 behind it)."""
+    polygon P: ``lobe_integral`` of the LTC's integral over P, the albedo E(mu, r) (multiscatter's
+    albedo table) and the BRDF and the LTC towards the polygon's irradiance-weighted direction. p, n,
+    v (..., 3): shading
+    points, unit normals, unit directions towards the viewer; corners (k, 3) or (..., k, 3) in
+    the same (world) frame; light_normal (3,) or (..., 3), optional: the emitting side of a
+    one-sided light (0 behind it)."""
     x, y, z, mu = shading_frame(n, v)
     rel = np.asarray(corners, np.float64) - np.asarray(p, np.float64)[..., None, :]
     local = np.stack([np.sum(rel * x[..., None, :], axis=-1), np.sum(rel * y[..., None, :], axis=-1),
                       np.sum(rel * z[..., None, :], axis=-1)], axis=-1)
-    form_factor, _ = ltc_integral(lookup(ltc_table(ndf), mu, roughness), local)
+    entries = lookup(ltc_table(ndf), mu, roughness)
+    form_factor = ltc_integral(entries, local)
     E = multiscatter.interpolate(multiscatter.albedo_table(ndf, "SMITH_CORRELATED"), mu, roughness)
-    out = E * form_factor
+    F = polygon_form_factor_vector(local)  # the light's irradiance-weighted direction l
+    l = F / np.maximum(np.linalg.norm(F, axis=-1, keepdims=True), 1e-300)
+    out = lobe_integral(form_factor, E, lobe(ndf, mu, _alpha(roughness), l)[0],
+                        ltc_density(minv_from_entries(entries), l))
     if light_normal is not None:
         front = np.sum(-rel.mean(axis=-2) * np.asarray(light_normal, np.float64), axis=-1) > 0.0
         out = np.where(front, out, 0.0)

@@ -28,6 +28,10 @@ from .snapshot import (
 MS_SIZE = 32
 #: Side of the Principled set's 3D table S(r, mu, z), as Cycles' (16^3).
 S_SIZE = 16
+#: Sides of the linearly transformed cosines' table and of its horizon-clipping sphere table
+#: (addon/ltc.py, glsl/ltc.glsl), in texels.
+LTC_SIZE = 64
+LTC_SPHERE_SIZE = 32
 #: Objects per uniform block of object data (128 bytes each: 32 KiB, within every GPU's limit);
 #: a scene with more objects uses several blocks, a draw names its object by block and index.
 OBJECT_BLOCK = 256
@@ -39,7 +43,7 @@ MODEL_FILES = {
 }
 FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "textures.glsl",
                     "environment.glsl", "ibl.glsl")
-PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "principled.glsl")
+PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "principled.glsl", "ltc.glsl")
 #: How the world lights a program: "" not at all (a black world), "UNIFORM" a constant radiance,
 #: "MAP" environment images (glsl/ibl.glsl).
 ENVIRONMENTS = ("", "UNIFORM", "MAP")
@@ -159,9 +163,17 @@ class Features:
         )
 
     @property
+    def uses_area_ltc(self) -> bool:
+        """The program shades area lights' specular lobe by linearly transformed cosines
+        (glsl/ltc.glsl): it samples ``ltc_table``, and ``ms_table`` for the lobe's magnitude."""
+        return self.model == "PBR" and "AREA" in self.light_kinds
+
+    @property
     def uses_albedo_table(self) -> bool:
-        """The program samples ``ms_table`` (multiple-scattering compensation, Principled set)."""
-        return self.model == "PBR" and (self.terms.multiscatter or self.terms.principled)
+        """The program samples ``ms_table`` (multiple-scattering compensation, Principled set, the
+        magnitude of area lights' specular lobe)."""
+        return self.model == "PBR" and (self.terms.multiscatter or self.terms.principled
+                                        or self.uses_area_ltc)
 
     @property
     def uses_env_chain(self) -> bool:
@@ -189,6 +201,11 @@ class Features:
                     ("SL_VISIBILITY_" + t.visibility, "1"), ("SL_DIFFUSE_" + t.diffuse, "1")]
             if t.multiscatter:
                 out += [("SL_MULTISCATTER", "1"), ("SL_MS_SIZE", str(MS_SIZE))]
+        if self.uses_area_ltc:
+            out += [("SL_AREA_LTC", "1"), ("SL_LTC_SIZE", str(LTC_SIZE)),
+                    ("SL_LTC_SPHERE_SIZE", str(LTC_SPHERE_SIZE))]
+            if ("SL_MS_SIZE", str(MS_SIZE)) not in out:
+                out.append(("SL_MS_SIZE", str(MS_SIZE)))
         if t.normalized_blinn_phong:
             out.append(("SL_BLINN_PHONG_NORMALIZED", "1"))
         if self.half_target:

@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from . import ltc
 from . import multiscatter as M
 from .brdf import (
     D_GGX,
@@ -97,28 +98,6 @@ def sphere_light_specular(light: Light, p, r_dir, alpha):
     return (_unit_or(closest, r_dir), *size_lobe_weights(theta, alpha))
 
 
-def area_light_specular(light: Light, p, r_dir, alpha):
-    """The same for an area light: its point nearest where the reflected ray meets its plane."""
-    centre = np.asarray(light.position, np.float64)
-    normal = np.asarray(light.direction, np.float64)
-    x = np.asarray(light.axis_x, np.float64)
-    y = np.cross(-normal, x)
-    d = np.sqrt(_dot(centre - p, centre - p))
-    hx, hy = light.half_size
-    radius = math.sqrt(hx * hy * (1.0 if light.ellipse else 4.0 / math.pi))
-    towards = _dot(r_dir, normal)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        t = np.where(towards < -1e-6, _dot(centre - p, normal) / towards, d)
-    hit = p + r_dir * t[..., None]
-    uv = np.stack([_dot(hit - centre, x) / max(hx, 1e-8), _dot(hit - centre, y) / max(hy, 1e-8)], -1)
-    if light.ellipse:
-        uv = uv / np.maximum(np.linalg.norm(uv, axis=-1, keepdims=True), 1.0)
-    else:
-        uv = np.clip(uv, -1.0, 1.0)
-    closest = centre + uv[..., :1] * hx * x + uv[..., 1:] * hy * y - p
-    return (_unit_or(closest, r_dir), *size_lobe_weights(radius / (2.0 * np.maximum(d, 1e-4)), alpha))
-
-
 def E_Spot(light: Light, p):
     E, l = E_Point(light, p)
     cos_theta = _dot(-l, np.asarray(light.direction))
@@ -152,16 +131,11 @@ def area_offsets(light: Light) -> np.ndarray:
     return uv[:, :1] * hx * x + uv[:, 1:] * hy * y
 
 
-def E_Area(light: Light, p):
-    """The polygon's vector form factor V = 1/2 sum theta_i g_i: E = L |V|, l = V / |V|; beyond
-    AREA_FAR_FIELD equal-area radii a point of intensity I cos (lights.glsl)."""
-    to_centre = np.asarray(light.position, np.float64) - p
-    d2 = _dot(to_centre, to_centre)
-    normal = np.asarray(light.direction, np.float64)
-    hx, hy = light.half_size
-    area = 4.0 * hx * hy * (np.pi / 4.0 if light.ellipse else 1.0)
+def polygon_form_factor(light: Light, to_centre):
+    """V = 1/2 sum theta_i g_i of the light's polygon seen from the points at -to_centre from its
+    centre, oriented towards the polygon (lights.glsl's polygon_form_factor with the identity)."""
     offsets = area_offsets(light)
-    V = np.zeros(np.shape(p))
+    V = np.zeros(np.shape(to_centre))
     for i in range(len(offsets)):
         oa, ob = offsets[i - 1], offsets[i]
         c = np.cross(to_centre, ob - oa) + np.cross(oa, ob)  # (t + oa) x (t + ob)
@@ -170,13 +144,34 @@ def E_Area(light: Light, p):
             edge = c * (np.arctan2(sin, _dot(to_centre + oa, to_centre + ob)) / sin)[..., None]
         V = V + np.where((sin > 0.0)[..., None], edge, 0.0)
     V = 0.5 * V
-    V = np.where((_dot(V, to_centre) < 0.0)[..., None], -V, V)
+    return np.where((_dot(V, to_centre) < 0.0)[..., None], -V, V)
+
+
+def area_light_area(light: Light) -> float:
+    hx, hy = light.half_size
+    return 4.0 * hx * hy * (np.pi / 4.0 if light.ellipse else 1.0)
+
+
+def area_far_field(light: Light, d2):
+    """Seen from farther than AREA_FAR_FIELD equal-area radii, a light is shaded as a point."""
+    area = area_light_area(light)
+    return (area > 0.0) & (area * AREA_FAR_FIELD ** 2 < np.pi * d2)
+
+
+def E_Area(light: Light, p):
+    """The polygon's vector form factor V = 1/2 sum theta_i g_i: E = L |V|, l = V / |V|; beyond
+    AREA_FAR_FIELD equal-area radii a point of intensity I cos (lights.glsl)."""
+    to_centre = np.asarray(light.position, np.float64) - p
+    d2 = _dot(to_centre, to_centre)
+    normal = np.asarray(light.direction, np.float64)
+    area = area_light_area(light)
+    V = polygon_form_factor(light, to_centre)
     length = np.linalg.norm(V, axis=-1)
     front = _dot(-to_centre, normal) > 0.0
     with np.errstate(divide="ignore", invalid="ignore"):
         l = np.where((length > 0.0)[..., None], V / length[..., None], _unit(to_centre))
     E = np.asarray(light.intensity) / max(area, 1e-12) * np.where(front, length, 0.0)[..., None]
-    far = (area > 0.0) & (area * AREA_FAR_FIELD ** 2 < np.pi * d2)
+    far = area_far_field(light, d2)
     l_far = _unit(to_centre)
     E_far = np.asarray(light.intensity) * (np.where(front, _dot(-l_far, normal), 0.0)
                                            / np.maximum(d2, MIN_DIST2))[..., None]
@@ -301,11 +296,9 @@ def specular_energy_compensation(s: Surface, terms: Terms):
     return 1.0 + s.f0 * _rgb_scalar(1.0 / E - 1.0)
 
 
-def principled_direct(s: Surface, NoL, NoH, NxH2, LoH):
-    """glsl/principled.glsl's principled_direct without E, NoL and the light factors: (diffuse,
-    specular) f for the Principled set."""
-    D = D_GGX(NoH, NxH2, s.alpha)
-    V = V_SmithGGXCorrelated(s.NoV, NoL, s.alpha)
+def principled_specular_tint(s: Surface, LoH):
+    """What multiplies D V in the Principled set's specular lobe (principled.glsl): its metal and
+    dielectric lobes' Fresnel and compensation, weighted by metalness."""
     rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
     E_mu = np.maximum(M.interpolate(M.albedo_table("GGX", "SMITH_CORRELATED"), s.NoV, rough), 1e-3)
     e_avg = M.interpolate_1d(M.average_albedo(), rough)
@@ -314,7 +307,43 @@ def principled_direct(s: Surface, NoL, NoH, NxH2, LoH):
              * F_Schlick(F0m, np.ones(np.shape(LoH)), LoH))
     Md = M.principled_compensation(M.principled_fss(s.eta), E_mu, e_avg)
     dielectric = Md * F_Dielectric(s.eta, LoH)
-    specular = (s.metal3 * metal + (1.0 - s.metal3) * _rgb_scalar(dielectric)) * _rgb_scalar(D * V)
+    return s.metal3 * metal + (1.0 - s.metal3) * _rgb_scalar(dielectric)
+
+
+def pbr_specular_tint(s: Surface, LoH, terms: Terms):
+    """model_pbr.glsl's pbr_specular_tint: F with the energy compensation, or the Principled set's."""
+    if terms.principled:
+        return principled_specular_tint(s, LoH)
+    return pbr_fresnel(s, LoH, terms) * specular_energy_compensation(s, terms)
+
+
+def pbr_lobe(s: Surface, l, terms: Terms):
+    """model_pbr.glsl's pbr_lobe: D V (n.l) with F = 1 towards l (the Principled set: GGX, Smith)."""
+    terms = DEFAULT_TERMS if terms.principled else terms
+    NoL, NoL_pos, NoH, NxH, LoH = _light_geometry(s, l)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        out = (pbr_distribution(NoH, _dot(NxH, NxH), s.alpha, terms)
+               * pbr_visibility(s.NoV, NoL_pos, NoH, LoH, s.alpha, terms) * NoL_pos)
+    return np.where(NoL > 0.0, out, 0.0)
+
+
+def _light_geometry(s: Surface, l):
+    """n.l, max(n.l, 0), n.h, n x h and l.h for the half vector of l and the view."""
+    NoL = _dot(s.n, l)
+    h = half_vector(l, s.v, s.n)
+    return NoL, np.maximum(NoL, 0.0), saturate(_dot(s.n, h)), np.cross(s.n, h), saturate(_dot(l, h))
+
+
+def principled_direct(s: Surface, NoL, NoH, NxH2, LoH):
+    """glsl/principled.glsl's principled_direct without E, NoL and the light factors: (diffuse,
+    specular) f for the Principled set."""
+    D = D_GGX(NoH, NxH2, s.alpha)
+    V = V_SmithGGXCorrelated(s.NoV, NoL, s.alpha)
+    rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
+    E_mu = np.maximum(M.interpolate(M.albedo_table("GGX", "SMITH_CORRELATED"), s.NoV, rough), 1e-3)
+    e_avg = M.interpolate_1d(M.average_albedo(), rough)
+    Md = M.principled_compensation(M.principled_fss(s.eta), E_mu, e_avg)
+    specular = principled_specular_tint(s, LoH) * _rgb_scalar(D * V)
     ratio = (s.eta - 1.0) / (s.eta + 1.0)
     S = M.interpolate_s(M.principled_s_table(), rough, s.NoV, np.broadcast_to(np.sqrt(np.abs(ratio)),
                                                                                 np.shape(s.NoV)))
@@ -324,12 +353,7 @@ def principled_direct(s: Surface, NoL, NoH, NxH2, LoH):
 
 
 def pbr_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
-    NoL = _dot(s.n, l)
-    NoL_pos = np.maximum(NoL, 0.0)
-    h = half_vector(l, s.v, s.n)
-    NoH = saturate(_dot(s.n, h))
-    NxH = np.cross(s.n, h)
-    LoH = saturate(_dot(l, h))
+    NoL, NoL_pos, NoH, NxH, LoH = _light_geometry(s, l)
     LoV = _dot(l, s.v)
     if terms.principled:
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -353,17 +377,58 @@ MODELS = {
 }
 
 
-def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAULT_TERMS):
+def shade_area_light(s: Surface, light: Light, E, l, visibility, terms: Terms, ltc_jitter=None):
+    """light_shading.glsl's shade_area_light: an area light on the physically based model, the
+    diffuse lobe from the horizon-clipped irradiance, the specular from the linearly transformed
+    cosine's integral over the polygon (addon/ltc.py); the point emitter in its far field.
+    ``ltc_jitter``: ltc.ltc_integral's, for tests."""
+    factors = (light.diffuse_factor, light.specular_factor)
+    to_centre = np.asarray(light.position, np.float64) - s.p
+    window = light_window(light, s.p)
+    L = np.asarray(light.intensity, np.float64) * (np.asarray(visibility) * window
+                                                    / max(area_light_area(light), 1e-12))[..., None]
+    L_max, E_max = L.max(axis=-1), np.asarray(E).max(axis=-1)
+    lit = (L_max > 0.0) & (E_max > 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        form_factor = np.where(lit, E_max / (np.pi * np.where(lit, L_max, 1.0)), 0.0)
+        NoL = _dot(s.n, l)
+        clipped = ltc.sphere_lookup(ltc.sphere_table(), form_factor, NoL)
+        E_clipped = L * np.where(NoL > 0.0, np.pi * clipped / np.where(NoL > 0.0, NoL, 1.0), 0.0)[..., None]
+    diffuse = pbr_direct(s, l, E_clipped, (factors[0], 0.0), terms)
+    x, y, z, _ = ltc.shading_frame(s.n, s.v)
+    corners = np.asarray(to_centre)[..., None, :] + area_offsets(light)
+    local = np.stack([np.sum(corners * a[..., None, :], axis=-1) for a in (x, y, z)], axis=-1)
+    ndf = "GGX" if terms.principled else terms.ndf
+    rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
+    entries = ltc.lookup(ltc.ltc_table(ndf), s.NoV, rough)
+    form_factor_lobe = ltc.ltc_integral(entries, local, jitter=ltc_jitter)
+    LoH = saturate(_dot(l, half_vector(l, s.v, s.n)))
+    albedo_terms = ("GGX", "SMITH_CORRELATED") if terms.principled else (terms.ndf, terms.visibility)
+    albedo = M.interpolate(M.albedo_table(*albedo_terms), s.NoV, rough)
+    l_local = np.stack([_dot(l, x), _dot(l, y), _dot(l, z)], axis=-1)
+    density = ltc.ltc_density(ltc.minv_from_entries(entries), l_local)
+    lobe = ltc.lobe_integral(form_factor_lobe, albedo, pbr_lobe(s, l, terms), density)
+    specular = pbr_specular_tint(s, LoH, terms) * L * (lobe * factors[1])[..., None]
+    specular = np.where((form_factor_lobe > 0.0)[..., None], specular, 0.0)
+    out = np.where(lit[..., None], diffuse + specular, 0.0)
+    far = area_far_field(light, _dot(to_centre, to_centre))
+    return np.where(far[..., None], pbr_direct(s, l, E, factors, terms), out)
+
+
+def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAULT_TERMS,
+                visibility=1.0, ltc_jitter=None):
     """One light's reflected radiance (rgb, before the model's final clamp) from its irradiance
-    ``E`` and direction ``l`` (``light_irradiance``): the body of mesh.frag.glsl's light loop."""
+    ``E`` and direction ``l`` (``light_irradiance``, times ``visibility``, the light's shadow
+    factor): the body of mesh.frag.glsl's light loop. ``ltc_jitter``: for tests (ltc.ltc_integral)."""
     direct, _ = MODELS[model]
     area = light.kind == "AREA" and light.half_size[0] > 0.0
-    if model == "PBR" and (light.sphere_radius > 0.0 or area):
-        # a light with a size: the diffuse lobe as its irradiance says; the specular from its
-        # nearest point and, widened, from its centre
+    if model == "PBR" and area:
+        return shade_area_light(s, light, E, l, visibility, terms, ltc_jitter)
+    if model == "PBR" and light.sphere_radius > 0.0:
+        # a sphere light: the diffuse lobe as its irradiance says; the specular from its nearest
+        # point and, widened, from its centre
         r_dir = 2.0 * _dot(s.n, s.v)[..., None] * s.n - s.v
-        shape = area_light_specular if area else sphere_light_specular
-        l_specular, alpha_wide, wide_weight, point_weight = shape(light, s.p, r_dir, s.alpha)
+        l_specular, alpha_wide, wide_weight, point_weight = sphere_light_specular(light, s.p, r_dir, s.alpha)
         wide = copy.copy(s)
         wide.alpha = alpha_wide
         specular = (0.0, light.specular_factor)

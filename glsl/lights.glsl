@@ -126,6 +126,48 @@ vec3 area_offset(LightData light, int i, vec3 y_axis)
   return light.area.xyz * (uv.x * half_size.x) + y_axis * (uv.y * half_size.y);
 }
 
+/* V = 1/2 sum_i theta_i g_i of the light's polygon seen from the point at -to_centre from its
+ * centre, each corner mapped by `map` first (the identity for the irradiance; an LTC's M^-1,
+ * glsl/ltc.glsl), oriented towards the polygon. */
+vec3 polygon_form_factor(LightData light, mat3 map, vec3 to_centre)
+{
+  vec3 y_axis = cross(-light.direction_cone.xyz, light.area.xyz);
+  int n = light.area.w > 0.5 ? AREA_ELLIPSE_SIDES : 4;
+  vec3 t = map * to_centre;
+  vec3 V = vec3(0.0);
+  vec3 oa = map * area_offset(light, n - 1, y_axis);
+  for (int i = 0; i < AREA_ELLIPSE_SIDES; i++) {
+    if (i >= n) {
+      break;
+    }
+    vec3 ob = map * area_offset(light, i, y_axis);
+    /* corners a = t + oa, b = t + ob, a x b = t x (ob - oa) + oa x ob: taken from unit vectors
+     * towards the corners it cancelled, since they nearly coincide seen from afar */
+    vec3 c = cross(t, ob - oa) + cross(oa, ob);
+    float s = length(c);
+    if (s > 0.0) {
+      /* theta g, with theta from atan2 (acos loses precision), to float precision */
+      V += c * (atan2_accurate(s, dot(t + oa, t + ob)) / s);
+    }
+    oa = ob;
+  }
+  V *= 0.5;
+  return dot(V, t) < 0.0 ? -V : V; /* the corners' winding as seen from the point */
+}
+
+/* The light's area (a disk or ellipse: of the ellipse, not of its 16-gon, which has the same). */
+float area_light_area(LightData light)
+{
+  return 4.0 * light.shape.z * light.shape.w * (light.area.w > 0.5 ? 0.78539816 : 1.0);
+}
+
+/* Seen from farther than AREA_FAR_FIELD equal-area radii, a light is shaded as a point. */
+bool area_far_field(LightData light, float d2)
+{
+  float area = area_light_area(light);
+  return area > 0.0 && area * (AREA_FAR_FIELD * AREA_FAR_FIELD) < PI * d2;
+}
+
 vec3 E_Area(LightData light, vec3 p, out vec3 l)
 {
   vec3 centre = light.position_kind.xyz;
@@ -137,81 +179,18 @@ vec3 E_Area(LightData light, vec3 p, out vec3 l)
   if (dot(-to_centre, light.direction_cone.xyz) <= 0.0) {
     return vec3(0.0); /* behind the emitting side */
   }
-  float area = 4.0 * light.shape.z * light.shape.w * (light.area.w > 0.5 ? 0.78539816 : 1.0);
-  if (area > 0.0 && area * (AREA_FAR_FIELD * AREA_FAR_FIELD) < PI * d2) {
+  if (area_far_field(light, d2)) {
     return light.intensity_blend.rgb * (dot(-l, light.direction_cone.xyz) / max(d2, MIN_DIST2));
   }
-  vec3 y_axis = cross(-light.direction_cone.xyz, light.area.xyz);
-  int n = light.area.w > 0.5 ? AREA_ELLIPSE_SIDES : 4;
-  vec3 V = vec3(0.0);
-  vec3 oa = area_offset(light, n - 1, y_axis);
-  for (int i = 0; i < AREA_ELLIPSE_SIDES; i++) {
-    if (i >= n) {
-      break;
-    }
-    vec3 ob = area_offset(light, i, y_axis);
-    /* corners a = t + oa, b = t + ob (t = to_centre), a x b = t x (ob - oa) + oa x ob: taken from
-     * unit vectors towards the corners it cancelled, since they nearly coincide seen from afar */
-    vec3 c = cross(to_centre, ob - oa) + cross(oa, ob);
-    float s = length(c);
-    if (s > 0.0) {
-      /* theta g, with theta from atan2 (acos loses precision), to float precision */
-      V += c * (atan2_accurate(s, dot(to_centre + oa, to_centre + ob)) / s);
-    }
-    oa = ob;
-  }
-  V *= 0.5;
-  if (dot(V, to_centre) < 0.0) {
-    V = -V; /* the corners' winding as seen from p */
-  }
+  vec3 V = polygon_form_factor(light, mat3(1.0), to_centre);
   float len = length(V);
   if (len <= 0.0) {
     return vec3(0.0);
   }
   l = V / len;
-  return light.intensity_blend.rgb / max(area, 1e-12) * len;
+  return light.intensity_blend.rgb / max(area_light_area(light), 1e-12) * len;
 }
 
-/* An area light's specular lobe: the representative point (Karis 2013) is the point of the light
- * nearest where the reflected ray meets its plane, mixed with the widened lobe as a sphere light's
- * is (size_lobe_weights), the light's size being its equal-area disc's radius. */
-vec3 area_light_specular(LightData light, vec3 p, vec3 r_dir, float alpha, out float alpha_wide,
-                         out float wide_weight, out float point_weight)
-{
-  vec3 centre = light.position_kind.xyz;
-  vec3 normal = light.direction_cone.xyz;
-  vec3 y_axis = cross(-normal, light.area.xyz);
-  float d = length(centre - p);
-  vec2 half_size = light.shape.zw;
-  float radius = sqrt(half_size.x * half_size.y * (light.area.w > 0.5 ? 1.0 : 1.2732395));
-  size_lobe_weights(radius / (2.0 * max(d, 1e-4)), alpha, alpha_wide, wide_weight, point_weight);
-  float towards = dot(r_dir, normal);
-  vec3 hit = towards < -1e-6 ? p + r_dir * (dot(centre - p, normal) / towards) : p + r_dir * d;
-  vec2 uv = vec2(dot(hit - centre, light.area.xyz), dot(hit - centre, y_axis)) / max(half_size, vec2(1e-8));
-  if (light.area.w > 0.5) {
-    uv /= max(length(uv), 1.0);
-  }
-  else {
-    uv = clamp(uv, -1.0, 1.0);
-  }
-  vec3 closest = centre + light.area.xyz * (uv.x * half_size.x) + y_axis * (uv.y * half_size.y) - p;
-  float len2 = dot(closest, closest);
-  return len2 > 1e-30 ? closest * inversesqrt(len2) : r_dir;
-}
-#endif
-
-#if defined(SL_HAS_POINT) || defined(SL_HAS_SPOT) || defined(SL_HAS_AREA)
-/* The specular lobe of a light with a size: a sphere (point, spot) or an area light. */
-vec3 light_specular_direction(LightData light, vec3 p, vec3 r_dir, float alpha, out float alpha_wide,
-                              out float wide_weight, out float point_weight)
-{
-#  ifdef SL_HAS_AREA
-  if (int(light.position_kind.w) == LIGHT_AREA) {
-    return area_light_specular(light, p, r_dir, alpha, alpha_wide, wide_weight, point_weight);
-  }
-#  endif
-  return sphere_light_specular(light, p, r_dir, alpha, alpha_wide, wide_weight, point_weight);
-}
 #endif
 
 /* Dispatch on the light kind; only the kinds the scene has are compiled in. */

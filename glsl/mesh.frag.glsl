@@ -22,17 +22,32 @@ vec3 shading_normal(vec3 p)
   return flen2 > 0.0 ? face * inversesqrt(flen2) : vec3(0.0, 0.0, 1.0);
 }
 
-/* Light i's data: row i of the light texture, one texel per vec4 of LightData. */
-LightData load_light(int i)
+/* Light i's data: row i of the light texture, one texel per vec4 of LightData. The position and
+ * reach first (light culling tests them alone), then the texels the light's kind reads: a point
+ * light has no direction, only an area light has axes (fetches are most of a light's cost on a
+ * software rasteriser). */
+LightData load_light_reach(int i)
 {
   LightData light;
   light.position_kind = texelFetch(light_data, ivec2(0, i), 0);
-  light.direction_cone = texelFetch(light_data, ivec2(1, i), 0);
+  light.influence = texelFetch(light_data, ivec2(6, i), 0);
+  return light;
+}
+
+LightData load_light_rest(LightData light, int i)
+{
   light.intensity_blend = texelFetch(light_data, ivec2(2, i), 0);
   light.factors = texelFetch(light_data, ivec2(3, i), 0);
   light.shape = texelFetch(light_data, ivec2(4, i), 0);
-  light.area = texelFetch(light_data, ivec2(5, i), 0);
-  light.influence = texelFetch(light_data, ivec2(6, i), 0);
+  int kind = int(light.position_kind.w);
+  light.direction_cone = vec4(0.0, 0.0, -1.0, 1.0);
+  if (kind != LIGHT_POINT) {
+    light.direction_cone = texelFetch(light_data, ivec2(1, i), 0);
+  }
+  light.area = vec4(1.0, 0.0, 0.0, 0.0);
+  if (kind == LIGHT_AREA) {
+    light.area = texelFetch(light_data, ivec2(5, i), 0);
+  }
   return light;
 }
 
@@ -97,10 +112,19 @@ void main()
       break;
     }
 #ifdef SL_LIGHT_TILES
-    LightData light = load_light(tile_light(listed.x, k));
+    int index = tile_light(listed.x, k);
 #else
-    LightData light = load_light(k);
+    int index = k;
 #endif
+    LightData light = load_light_reach(index);
+#ifdef SL_LIGHT_TILES
+    /* a tile lists every light whose reach meets some of its pixels: at the others the light's
+     * window is exactly 0 (light_window), known before the rest of its texels are read */
+    if (light_window(light, s.p) <= 0.0) {
+      continue;
+    }
+#endif
+    light = load_light_rest(light, index);
     vec4 factors = light.factors * vec4(lobes.xy, 1.0, 1.0);
     if (light.factors.z > 0.5) {
       /* a sun split off the world */
@@ -114,12 +138,14 @@ void main()
     }
     vec3 l;
     vec3 E = light_irradiance(light, s.p, l);
+    float visibility = 1.0;
 #ifdef SL_SHADOWS
     if (dot(s.n, l) > 0.0 && max(E.r, max(E.g, E.b)) > 0.0) {
-      E *= light_visibility(light, s.p, ng);
+      visibility = light_visibility(light, s.p, ng);
+      E *= visibility;
     }
 #endif
-    c += shade_light(s, light, l, E, factors);
+    c += shade_light(s, light, l, E, visibility, factors);
   }
   /* alpha: coverage, blended over what is behind (L = a L_surface + (1 - a) L_behind, as Cycles'
    * transparency); the renderer peels partly transparent surfaces and composites them in depth order */

@@ -5,6 +5,33 @@
  * it: 1 for any real material (F0 >= 0.02), fading the Fresnel tail out as F0 -> 0 so that "no
  * specular" (F0 = 0) means none at grazing angles either (Schueler 2012, used by Filament). */
 
+/* What multiplies D V in the specular lobe at l.h = LoH: F (eq. 1.10) with the energy
+ * compensation; for the Principled set, its metal and dielectric lobes' Fresnel and compensation,
+ * weighted by metalness. An area light's lobe (light_shading.glsl) shares it. */
+vec3 pbr_specular_tint(Surface s, float LoH)
+{
+#ifdef SL_PRINCIPLED
+  return principled_specular_tint(s, LoH);
+#else
+  return pbr_fresnel(s, LoH) * specular_energy_compensation(s);
+#endif
+}
+
+/* The specular lobe's shape towards l, D V (n.l) with F = 1 (the program's distribution and
+ * visibility; the Principled set's GGX and Smith). */
+float pbr_lobe(Surface s, vec3 l)
+{
+  float NoL = dot(s.n, l);
+  if (NoL <= 0.0) {
+    return 0.0;
+  }
+  vec3 h = half_vector(l, s.v, s.n);
+  float NoH = saturate(dot(s.n, h));
+  vec3 NxH = cross(s.n, h);
+  float LoH = saturate(dot(l, h));
+  return pbr_distribution(NoH, dot(NxH, NxH), s.alpha) * pbr_visibility(s.NoV, NoL, NoH, LoH, s.alpha) * NoL;
+}
+
 vec3 shade_direct(Surface s, vec3 l, vec3 E, vec4 factors)
 {
   float NoL = dot(s.n, l);

@@ -78,14 +78,20 @@ PrincipledLayers principled_layers(Surface s)
  * white tint) weighted by metalness, a dielectric lobe with exact Fresnel weighted by
  * 1 - metalness, each with its own compensation, and a Lambert base weighted by
  * 1 - the dielectric layer's albedo. */
+vec3 principled_specular_tint(Surface s, float LoH)
+{
+  PrincipledLayers p = principled_layers(s);
+  vec3 metal = p.metal_M * F_Schlick(min(s.base_color, vec3(1.0)), 1.0, LoH);
+  float dielectric = p.dielectric_M * F_Dielectric(s.eta, LoH);
+  return s.metalness * metal + (1.0 - s.metalness) * dielectric;
+}
+
 vec3 principled_direct(Surface s, float NoL, float NoH, float NxH2, float LoH, vec3 E, vec4 factors)
 {
   float D = D_GGX(NoH, NxH2, s.alpha);
   float V = V_SmithGGXCorrelated(s.NoV, NoL, s.alpha);
   PrincipledLayers p = principled_layers(s);
-  vec3 metal = p.metal_M * F_Schlick(min(s.base_color, vec3(1.0)), 1.0, LoH);
-  float dielectric = p.dielectric_M * F_Dielectric(s.eta, LoH);
-  vec3 specular = (s.metalness * metal + (1.0 - s.metalness) * dielectric) * (D * V);
+  vec3 specular = principled_specular_tint(s, LoH) * (D * V);
   vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) * INV_PI;
   return (diffuse * factors.x + specular * factors.y) * E * NoL;
 }

@@ -25,9 +25,10 @@ struct LightData {
 };
 
 /* The lights are not a uniform block (64 KiB would hold 585 of them): each is a row of a texture,
- * light_data, its seven vec4 in LightData's order (mesh.frag.glsl's load_light). With light
- * culling (SL_LIGHT_TILES, addon/light_tiles.py), light_tiles holds each screen tile's (first,
- * count) and then the tiles' light indices, SL_LIGHT_LIST_WIDTH texels per row. */
+ * light_data, its seven vec4 in LightData's order (mesh.frag.glsl's load_light_reach and
+ * load_light_rest). With light culling (SL_LIGHT_TILES, addon/light_tiles.py), light_tiles holds
+ * each screen tile's (first, count) and then the tiles' light indices, SL_LIGHT_LIST_WIDTH texels
+ * per row. */
 
 struct MaterialData {
   vec4 base_color;       /* rgb: PBR base colour */

@@ -240,9 +240,10 @@ def _errors(ndf, roughness, mus):
 
 # measured (GGX): worst and mean |relative error| over the lights that receive at least 1 % of
 # the albedo, and worst |error| / E over all of them (the largest: lights straddling the horizon
-# seen at n.v = 0.2, where the cosine leaks below the horizon the BRDF does not have)
-GGX_MEASURED = {0.1: (0.096, 0.0093, 0.0028), 0.3: (0.413, 0.078, 0.128),
-                0.6: (0.573, 0.171, 0.189), 1.0: (0.190, 0.049, 0.0072)}
+# seen at n.v = 0.2). With the axis fixed at the mean direction and E I alone they were
+# (0.096, 0.0093, 0.0028), (0.413, 0.078, 0.128), (0.573, 0.171, 0.189), (0.190, 0.049, 0.0072).
+GGX_MEASURED = {0.1: (0.1055, 0.0095, 0.0023), 0.3: (0.264, 0.0552, 0.1015),
+                0.6: (0.390, 0.110, 0.113), 1.0: (0.290, 0.0592, 0.0187)}
 
 
 @pytest.mark.parametrize("roughness", ROUGHNESS)
@@ -262,15 +263,16 @@ def test_area_specular_against_brute_force_ggx(roughness):
 
 def test_area_specular_against_brute_force_beckmann():
     """Beckmann's Gaussian peak is not a cosine's shape: the L3 fit matches its height and leaves
-    mass in the tails, so a small light at the mirror direction gets 13-19 % too little at r = 0.1."""
+    mass in the tails, so a small light at the mirror direction gets 18-22 % too little at r = 0.1
+    (1-3 % at r = 0.3; GGX's: within 2e-4, by the ratio estimator of ltc.lobe_integral)."""
     worst = {}
     for roughness in (0.1, 0.6):
         err = _errors("BECKMANN", roughness, (0.5, 0.9))
         lit = err[:, 2] >= 0.01
         worst[roughness] = (float(np.abs(err[lit, 0]).max()), float(np.abs(err[:, 1]).max()))
     got = ", ".join(f"r = {r}: worst |rel| {a:.4f}, worst |err| / E {b:.4f}" for r, (a, b) in worst.items())
-    assert worst[0.1][0] <= 0.28 and worst[0.1][1] <= 0.25, got  # measured 0.189, 0.166
-    assert worst[0.6][0] <= 0.8 and worst[0.6][1] <= 0.13, got  # measured 0.536, 0.088
+    assert worst[0.1][0] <= 0.37 and worst[0.1][1] <= 0.31, got  # measured 0.244, 0.203
+    assert worst[0.6][0] <= 0.41 and worst[0.6][1] <= 0.17, got  # measured 0.269, 0.109
 
 
 def test_one_sided_light_is_dark_behind():
@@ -333,9 +335,8 @@ def test_form_factor_vector_of_polygons_above_the_horizon_is_exact():
         for c in (corners, corners[::-1]):
             F = ltc.polygon_form_factor_vector(c)
             assert F @ c.mean(axis=0) > 0.0  # oriented towards the light
-            ff, direction = ltc.ltc_integral(identity, c)
+            ff = ltc.ltc_integral(identity, c)
             worst = max(worst, abs(F[2] - reference) / reference, abs(ff - reference) / reference)
-            np.testing.assert_allclose(direction, F / np.linalg.norm(F), atol=1e-12)
     # F.z is exact and the table reproduces |F| z where its whole bilinear cell is unclipped
     # (to float32): measured 1.4e-5, the brute force's own error
     assert worst <= 4e-5, f"form factor differs from brute force by {worst:.3g} (relative)"
@@ -353,7 +354,7 @@ def test_sphere_clipping_of_polygons_straddling_the_horizon():
     errors = []
     for corners in cases:
         reference = brute_form_factor(corners)
-        ff, _ = ltc.ltc_integral(identity, corners)
+        ff = ltc.ltc_integral(identity, corners)
         errors.append(float(ff) - reference)
     errors = np.abs(errors)
     # measured |error| 0.0006, 0.018, 0.0045, 0.0008, 0.0009 for form factors 0.037, 0.117, 0.064,
@@ -384,7 +385,9 @@ def test_ltc_integrates_to_one_and_stays_above_the_horizon_when_rough():
     # error (1.2e-5 on a grid twice as fine)
     assert max(abs(t - 1.0) for t in total) <= 3e-4, f"LTC integrals {np.round(total, 5)}"
     upper = np.array([_lobe_integrals(table[63, i])[1] for i in range(0, 64, 7)])
-    # measured along r = 1 from normal to grazing incidence: 1.0001 ... 0.9992 (grazing); the
-    # smoother lobes lean further below: at r = 0.75 down to 0.961, at r = 0.5 to 0.892 (grazing)
-    assert upper.min() >= 0.998 and upper.max() <= 1.0003, \
+    # measured along r = 1 from normal to grazing incidence: 1.0001 ... 0.9977 (grazing); the
+    # smoother lobes lean further below: at r = 0.75 down to 0.995, at r = 0.5 to 0.990 (grazing;
+    # 0.961 and 0.892 with the axis held at the mean direction)
+    assert upper.min() >= 0.996 and upper.max() <= 1.0003, \
         f"LTC mass above the horizon at r = 1: {np.round(upper, 5)}"
+

@@ -1,6 +1,6 @@
 """Numerical stability at the extremes (SPEC 9): crossed sweeps of every axis's extreme values
 through every model, term combination and light kind, on the GPU (the shaders' own make_surface,
-light_irradiance, light_specular_direction and shade_direct, composed as mesh.frag.glsl's light
+light_irradiance and light_shading.glsl's shade_light, composed as mesh.frag.glsl's light
 loop composes them, the lights packed by programs.pack_lights) and in the numpy twin
 (shading.light_irradiance + shading.shade_light). Every row must be finite and non-negative on
 both sides, and the two must agree on every row -- no share of rows may disagree. Then whole
@@ -37,16 +37,17 @@ multiple-scattering and Principled tables that the rest of the suite shares.
 Agreement, on every row: |gpu - twin| <= REL_TOL max(twin, 1e-4) + SPREAD_FACTOR x the row's
 spread: the twin's own largest change, relative to the same max, when the shading point, the view
 or a sun's direction moves by JITTER float32 roundings of its length (along +-x, +-y, +-z), when an
-area light's form factor moves by as many roundings of its terms, or when an empirical lobe's
-cosine does (twin_spread). A float32 pipeline cannot do better than its inputs and roundings allow:
-n.l or n.v of 1e-7 carried by unit vectors, a polygon light seen edge-on or straddling the horizon
-(its form factor a sum of terms that cancel), a mirror lobe (alpha = 2e-3) at n.v = 1e-4 whose half
-vector l + v is 2e-4 long, (n.h)^1e6 from an n.h that float32 holds to 6e-8, a shading point a
-rounding away from a spot's cone edge. The spread is measured only on rows that disagree by more
-than REL_TOL / 3. Measured over all 347 sweeps: 8.0e-5 on rows whose spread cannot account for it
-(Hammon's diffuse at the n.v floor, 1 - (1 - 1e-4)^5 in float32), and at most 1.34 x the spread
-beyond REL_TOL: REL_TOL = 1e-4 and SPREAD_FACTOR = 2 (test_bounds_are_tight holds both within 3x
-of what the session measured, and prints it).
+area light's form factor moves by as many roundings of its terms (and its linearly transformed
+cosine's mapped corners and form factor by LTC_JITTER roundings, along the axes and the diagonals),
+or when an empirical lobe's cosine does (twin_spread). A float32 pipeline cannot do better than its
+inputs and roundings allow: n.l or n.v of 1e-7 carried by unit vectors, a polygon light seen edge-
+on or straddling the horizon (its form factor a sum of terms that cancel), a mirror lobe (alpha =
+2e-3) at n.v = 1e-4 whose half vector l + v is 2e-4 long, (n.h)^1e6 from an n.h that float32 holds
+to 6e-8, a shading point a rounding away from a spot's cone edge. The spread is measured only on
+rows that disagree by more than REL_TOL / 3. Measured over all 347 sweeps: 8.0e-5 on rows whose
+spread cannot account for it (Hammon's diffuse at the n.v floor, 1 - (1 - 1e-4)^5 in float32), and
+at most 1.34 x the spread beyond REL_TOL: REL_TOL = 1e-4 and SPREAD_FACTOR = 2
+(test_bounds_are_tight holds both within 3x of what the session measured, and prints it).
 
 What the sweeps found (fixed in glsl/ and the twin): an area light's l = normalize(0) for a point
 at its centre (NaN); a sphere or area light's widened lobe alpha up to 5e7 at 1e-6 m, whose
@@ -151,9 +152,15 @@ REL_TOL = 1e-4
 MODERATE_LOW = 1e-4
 #: The perturbation of twin_spread, in float32 unit roundoffs (of each vector's length).
 JITTER = 4.0
+#: The same for an area light's linearly transformed cosine (its mapped corners and form factor,
+#: ltc.ltc_integral's jitter): each corner is first multiplied by M^-1, whose entries lie up to 1e7
+#: apart at grazing incidence, and the sum follows. Measured: at 4 x JITTER 81 rows of a 2 km
+#: ellipse seen at n.v = 1e-7 disagreed by up to 1.03 x the bound; 8 x holds every row.
+LTC_JITTER = 8.0 * JITTER
 #: Beyond REL_TOL a row may differ by this many times its spread under JITTER.
 SPREAD_FACTOR = 2.0
 UNIT_ROUNDOFF = float(np.finfo(np.float32).eps) / 2.0
+DIAGONALS = [np.array(d) / math.sqrt(3.0) for d in itertools.product((1.0, -1.0), repeat=3)]
 
 
 def _f32(light: S.Light) -> S.Light:
@@ -290,7 +297,7 @@ vec3 c = vec3(0.0);
 """
 #: mesh.frag.glsl's light loop, for one light (after its shadow test): light_shading.glsl's
 #: shade_light, the product's own
-LIGHT_LOOP = "c = shade_light(s, light, l, E, factors);\n"
+LIGHT_LOOP = "c = shade_light(s, light, l, E, 1.0, factors);\n"
 BODY_TAIL = """
 result = vec4(write_target(shade_finish(c)), 0.0);
 """
@@ -305,8 +312,8 @@ def gpu_values(model: str, terms: S.Terms, sw: Sweep, half_target: bool = False)
 
 
 #: The functions pbr_terms.glsl and model_pbr.glsl define: renamed per variant in grouped programs.
-RENAMED = ("pbr_fresnel", "pbr_distribution", "pbr_visibility", "pbr_diffuse", "shade_direct",
-           "shade_environment", "shade_ambient", "shade_finish")
+RENAMED = ("pbr_fresnel", "pbr_distribution", "pbr_visibility", "pbr_diffuse", "pbr_specular_tint",
+           "pbr_lobe", "shade_direct", "shade_environment", "shade_ambient", "shade_finish")
 
 
 def grouped_gpu_values(variants: list[S.Terms], sw: Sweep) -> list[np.ndarray]:
@@ -407,8 +414,8 @@ def twin_spread(model: str, terms: S.Terms, sw: Sweep, rows: np.ndarray,
         moves += [(p, v + step * np.linalg.norm(v, axis=1, keepdims=True) * u, sun, zero, 0.0) for u in axes]
         if kind == "SUN":
             moves += [(p, v, sun + step * u, zero, 0.0) for u in axes]
-        if kind == "AREA":
-            moves += [(p, v, sun, zero + u, 0.0) for u in axes]
+        if kind == "AREA":  # along the axes and the diagonals: the LTC's lobe is steep in some
+            moves += [(p, v, sun, zero + u, 0.0) for u in axes + DIAGONALS]
         if ldr:
             moves += [(p, v, sun, zero, sign) for sign in (1.0, -1.0)]
         count = len(moves)
@@ -419,9 +426,14 @@ def twin_spread(model: str, terms: S.Terms, sw: Sweep, rows: np.ndarray,
                               sun_direction=np.concatenate([m[2] for m in moves]))
         with np.errstate(all="ignore"):
             E, l = shading.light_irradiance(light, s.p)
+            jitter = None
             if kind == "AREA":
-                E, l = _jitter_form_factor(light, s.p, E, l, np.concatenate([m[3] for m in moves]))
-            c = shading.shade_light(model, s, light, E, l, terms)
+                u = np.concatenate([m[3] for m in moves])
+                E, l = _jitter_form_factor(light, s.p, E, l, u)
+                # and the linearly transformed cosine's form factor likewise, with the roundings of
+                # mapping its corners by M^-1 (three products and sums a coordinate) besides
+                jitter = (LTC_JITTER, u)
+            c = shading.shade_light(model, s, light, E, l, terms, ltc_jitter=jitter)
             if ldr:  # (cos + d)^s = cos^s e^(s d) for a cosine near 1, d = JITTER roundings
                 lobe = np.repeat([m[4] for m in moves], len(sub))
                 specular = shading.MODELS[model][0](s, l, E, (0.0, light.specular_factor), terms)
