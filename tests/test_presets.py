@@ -28,6 +28,7 @@ SHIPPED = {
     "long_tail": (5, 1),
     "hdr": (4, 2),
     "roughness_sweep": (13, 2),
+    "softbox": (13, 2),
     "material_grid": (12, 2),
     "portability": (6, 3),
     "furnace": (12, 42),

@@ -1,0 +1,101 @@
+"""The first render of each term set on each benchmark preset, against the second (a benchmark,
+not a test): what an artist waits for the first time a term set is used in a session.
+
+    .venv/bin/python scripts/first_render_bench.py [--presets a,b] [--resolution 1280x720]
+        [--table docs/bench/first_render.md]
+
+Each (preset, term set) runs in a fresh Python process, so that nothing is cached in memory:
+compiled programs, lookup tables (shipped in addon/tables.npz, loaded and uploaded at first use),
+world precomputation. The process loads the preset, renders it twice with the term set (wall time
+of ``bpy.ops.render.render``) and prints both; the difference is what the first render costs
+extra. Mesa's on-disk shader cache is disabled (MESA_SHADER_CACHE_DISABLE) so that every process
+compiles its programs, as on a first start. Times are CPU-rasteriser times (Mesa llvmpipe):
+compare them within one run.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
+
+TERM_SETS = {"default": "CUSTOM", "principled": "PRINCIPLED", "multiscatter": "MULTISCATTER"}
+
+
+def child(preset: str, term_set: str, width: int, height: int) -> None:
+    """Render ``preset`` twice with ``term_set``; print one JSON line of wall times (ms)."""
+    import bpy
+    import render as cli
+
+    cli.ensure_addon()
+    scene, _ = cli.load_scene(preset, None)
+    scene.render.resolution_x, scene.render.resolution_y = width, height
+    scene.render.resolution_percentage = 100
+    scene.render.engine = "SHADING_LAB"
+    props = scene.shading_lab
+    props.model = "PBR"
+    props.term_set = "PRINCIPLED" if term_set == "PRINCIPLED" else "CUSTOM"
+    props.multiscatter = term_set == "MULTISCATTER"
+    times = []
+    for _ in range(2):
+        start = time.perf_counter()
+        bpy.ops.render.render()
+        times.append(1e3 * (time.perf_counter() - start))
+    print("RESULT " + json.dumps({"first_ms": times[0], "second_ms": times[1]}), flush=True)
+
+
+def measure(preset: str, term_set: str, size: tuple[int, int]) -> dict:
+    env = {**os.environ, "MESA_SHADER_CACHE_DISABLE": "true"}
+    out = subprocess.run([sys.executable, __file__, "--child", preset, term_set, str(size[0]), str(size[1])],
+                         capture_output=True, text=True, env=env, timeout=900, check=False)
+    for line in out.stdout.splitlines():
+        if line.startswith("RESULT "):
+            return json.loads(line[len("RESULT "):])
+    raise RuntimeError(f"{preset} / {term_set}: no result\n{out.stdout[-2000:]}\n{out.stderr[-2000:]}")
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else argv
+    if argv and argv[0] == "--child":
+        child(argv[1], argv[2], int(argv[3]), int(argv[4]))
+        return 0
+    from addon import presets
+
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--presets", default=None, help="comma-separated preset names (default: all shipped)")
+    parser.add_argument("--resolution", default="1280x720", metavar="WxH")
+    parser.add_argument("--table", type=Path, default=ROOT / "docs" / "bench" / "first_render.md")
+    args = parser.parse_args(argv)
+    size = tuple(int(x) for x in args.resolution.lower().split("x"))
+    names = args.presets.split(",") if args.presets else presets.scene_preset_names()
+    rows = []
+    for name in names:
+        for label, term_set in TERM_SETS.items():
+            result = measure(name, term_set, size)
+            extra = result["first_ms"] - result["second_ms"]
+            rows.append((name, label, result["first_ms"], result["second_ms"], extra))
+            print(f"{name:16s} {label:12s} first {result['first_ms']:8.1f} ms  second "
+                  f"{result['second_ms']:8.1f} ms  first costs +{extra:.1f} ms", flush=True)
+    lines = [f"The first render of each term set in a fresh process against the second, "
+             f"{size[0]}x{size[1]}, physically based model (`scripts/first_render_bench.py`; Mesa's "
+             f"shader cache off, so programs compile as on a first start; wall time of the render "
+             f"operator).", "", "| preset | term set | first ms | second ms | first costs |",
+             "|---|---|---:|---:|---:|"]
+    lines += [f"| {n} | {t} | {a:.0f} | {b:.0f} | +{c:.0f} ms |" for n, t, a, b, c in rows]
+    worst = max(rows, key=lambda r: r[4])
+    lines += ["", f"Largest extra cost of a first render: **+{worst[4]:.0f} ms** ({worst[0]}, {worst[1]})."]
+    args.table.parent.mkdir(parents=True, exist_ok=True)
+    args.table.write_text("\n".join(lines) + "\n")
+    print(f"wrote {args.table}")
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
