@@ -28,14 +28,14 @@ vec3 shade_area_light(Surface s, LightData light, vec3 l, vec3 E, float visibili
   float NoL = dot(s.n, l);
   vec3 c = vec3(0.0);
   if (NoL > 0.0) {
-    float clipped = ltc_horizon_clip(form_factor, NoL, 1.0 + NoL);
+    float clipped = ltc_horizon_clip(form_factor, 1.0 + NoL);
     c = shade_direct(s, l, L * (PI * clipped / NoL), factors * vec4(1.0, 0.0, 1.0, 1.0));
   }
   float density;
-  float form_factor_lobe = ltc_polygon(s, light, ltc_entries(s.NoV, s.roughness), l, density);
+  float form_factor_lobe = ltc_polygon(s, light, l, density);
   if (form_factor_lobe > 0.0) {
     float LoH = saturate(dot(l, half_vector(l, s.v, s.n)));
-    float lobe = ltc_lobe_integral(form_factor_lobe, ms_albedo(s.NoV, s.roughness), pbr_lobe(s, l), density);
+    float lobe = ltc_lobe_integral(form_factor_lobe, s.ltc.albedo, pbr_lobe(s, l), density);
     c += pbr_specular_tint(s, LoH) * L * (lobe * factors.y);
   }
   return c;

@@ -11,9 +11,9 @@
  * distance 0 gives a large finite irradiance instead of Inf (Filament does the same). */
 #define MIN_DIST2 1e-4
 
-#if defined(SL_HAS_POINT) || defined(SL_HAS_SPOT) || defined(SL_HAS_AREA)
+#if defined(SL_HAS_POINT) || defined(SL_HAS_SPOT)
 /* Point light: radiant intensity I = P / (4 pi) W/sr (packed on the CPU), inverse-square falloff.
- * Spot and area lights build on it. With a radius r, Cycles' light is a sphere of radiance
+ * Spot lights build on it. With a radius r, Cycles' light is a sphere of radiance
  * I / (pi r^2): seen whole it delivers what the point does, I / d^2; with soft falloff (Blender's
  * default) it is instead a disc of that radiance facing the point, I / (d^2 + r^2) on its axis. */
 vec3 E_Point(LightData light, vec3 p, out vec3 l)
@@ -41,14 +41,14 @@ vec3 E_Point(LightData light, vec3 p, out vec3 l)
  * white GGX metal sphere, unshadowed, mean |error| / mean): mirror 0.05 under a 0.1 / 0.5 m light
  * 8 % / 7 % (a point: 93 % / 98 %), roughness 0.2: 8 % / 28 % (11 % / 98 %), 0.5: 0.3 % / 4 %
  * (0.3 % / 7 %). sphere_light_specular returns the representative direction; alpha_wide and the
- * weights by `out` (size_lobe_weights: shared with area lights). */
+ * weights by `out` (size_lobe_weights). */
 void size_lobe_weights(float theta, float alpha, out float alpha_wide, out float wide_weight,
                        out float point_weight)
 {
-  /* r / (2 d) grows without bound as p nears the light (d -> 0 inside a sphere, on an area light);
+  /* r / (2 d) grows without bound as p nears the light (d -> 0 inside a sphere);
    * no light spans more than the hemisphere, pi / 4 in half-vector space. Unbounded, alpha_wide
    * reached 5e7 and the visibility terms' NoV^2 (1 - a^2) + a^2 cancelled to 0 at n.v = 1: Inf
-   * (tests/test_stability.py's sphere and area lights at 1e-6 m). */
+   * (tests/test_stability.py's sphere lights at 1e-6 m). */
   theta = min(theta, 0.78539816);
   float k2 = theta * theta / max(alpha * alpha, 1e-12);
   alpha_wide = sqrt(alpha * alpha + theta * theta);

@@ -8,8 +8,8 @@
  * D_o moved by a linear map M: D(w) = D_o(M^-1 w / |M^-1 w|) |det M^-1| / |M^-1 w|^3. Its
  * integral over a polygon is the clamped cosine's over the polygon mapped by M^-1: a form factor,
  * in closed form. E(mu, r), the directional albedo of the program's own D and V with F = 1, is
- * ms_table's; the Fresnel term is taken once, at the half vector of the lobe's mean direction
- * towards the light.
+ * ms_table's; the Fresnel term is taken once, at the half vector of the light's irradiance-weighted
+ * direction l.
  *
  * ltc_table (RGBA32F, SL_LTC_SIZE wide): rows 0 .. SL_LTC_SIZE - 1 hold M^-1 per (mu, roughness),
  * scaled so that its middle entry is 1, as (m00, m02, m20, m22) in the shading frame x = the
@@ -40,12 +40,12 @@ vec4 ltc_entries(float NoV, float roughness)
 }
 
 /* The form factor of a polygon whose vector form factor has length len (<= 1) and height z
- * (its unit direction's, towards the surface's normal; one_plus_z = 1 + z, which the caller can
- * take without cancelling when z is near -1), clipped to the horizon as the cap of the same vector
- * form factor would be (sin^2 sigma = len): len z when the cap lies wholly above (z >= sin sigma:
- * the table's bilinear lookup of len z is exact there), 0 wholly below, between Snyder's closed
- * form as tabulated. */
-float ltc_horizon_clip(float len, float z, float one_plus_z)
+ * (its unit direction's, towards the surface's normal), given as one_plus_z = 1 + z, which the
+ * caller can take without cancelling when z is near -1; clipped to the horizon as the cap of the
+ * same vector form factor would be (sin^2 sigma = len): len z when the cap lies wholly above
+ * (z >= sin sigma: the table's bilinear lookup of len z is exact there), 0 wholly below, between
+ * Snyder's closed form as tabulated. */
+float ltc_horizon_clip(float len, float one_plus_z)
 {
   float n = float(SL_LTC_SPHERE_SIZE - 1);
   vec2 x = clamp(vec2(one_plus_z * 0.5, len) * n, vec2(0.0), vec2(n));
@@ -61,17 +61,29 @@ float ltc_density(vec4 m, vec3 w)
   return max(y.z, 0.0) * abs(m.x * m.w - m.y * m.z) / (PI * len2 * len2);
 }
 
-/* The integral of the LTC with entries m over an area light's polygon seen from s.p, and (out)
- * the LTC's density towards l (the light's irradiance-weighted direction, E_Area's). Corners as
+/* surface.glsl's LtcFrame at a view: the shading frame, M^-1 and the lobe's albedo. */
+LtcFrame ltc_frame_at(vec3 n, vec3 v, float NoV, float roughness)
+{
+  LtcFrame f;
+  vec3 x_axis = v - n * dot(n, v);
+  float x_len2 = dot(x_axis, x_axis);
+  vec3 other = abs(n.x) < 0.9 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
+  f.x_axis = x_len2 > 1e-18 ? x_axis * inversesqrt(x_len2) : normalize(cross(other, n));
+  f.y_axis = cross(n, f.x_axis);
+  f.m = ltc_entries(NoV, roughness);
+  f.albedo = ms_albedo(NoV, roughness);
+  return f;
+}
+
+/* The integral of the surface's LTC over an area light's polygon seen from s.p, and (out) the
+ * LTC's density towards l (the light's irradiance-weighted direction, E_Area's). Corners as
  * E_Area takes them (offsets from the light's centre, edges' cross products from offsets: precise
  * for small or far lights), each mapped by M^-1 first. */
-float ltc_polygon(Surface s, LightData light, vec4 m, vec3 l, out float density_l)
+float ltc_polygon(Surface s, LightData light, vec3 l, out float density_l)
 {
-  vec3 x_axis = s.v - s.n * dot(s.n, s.v);
-  float x_len2 = dot(x_axis, x_axis);
-  vec3 other = abs(s.n.x) < 0.9 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
-  x_axis = x_len2 > 1e-18 ? x_axis * inversesqrt(x_len2) : normalize(cross(other, s.n));
-  vec3 y_axis = cross(s.n, x_axis);
+  vec4 m = s.ltc.m;
+  vec3 x_axis = s.ltc.x_axis;
+  vec3 y_axis = s.ltc.y_axis;
   /* M^-1 in the world: rows (m00 x + m02 n), y, (m20 x + m22 n) */
   mat3 to_cosine = transpose(mat3(m.x * x_axis + m.y * s.n, y_axis, m.z * x_axis + m.w * s.n));
   vec3 F = polygon_form_factor(light, to_cosine, light.position_kind.xyz - s.p) * INV_PI;
@@ -84,7 +96,7 @@ float ltc_polygon(Surface s, LightData light, vec4 m, vec3 l, out float density_
    * where the table is steep in z): (F.x^2 + F.y^2) / (|F| (|F| - F.z)) */
   float z = F.z / len;
   float one_plus_z = z < 0.0 ? (F.x * F.x + F.y * F.y) / (len * (len - F.z)) : 1.0 + z;
-  return ltc_horizon_clip(min(len, 1.0), z, one_plus_z);
+  return ltc_horizon_clip(min(len, 1.0), one_plus_z);
 }
 
 /* The specular integral over the polygon, int_P f (n.l) (F = 1), from the LTC's integral I over

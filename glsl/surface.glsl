@@ -13,6 +13,20 @@ struct PrincipledLayers {
 PrincipledLayers principled_layers_at(float NoV, float roughness, vec3 base_color, float eta);
 #endif
 
+#ifdef SL_AREA_LTC
+/* What area lights' linearly transformed cosines need at the view direction (ltc.glsl): the
+ * shading frame (x the tangent towards v, y = n x x), the LTC's M^-1 entries and the lobe's
+ * albedo. They depend on the view only, so make_surface computes them once per shading point,
+ * not once per area light. */
+struct LtcFrame {
+  vec3 x_axis;
+  vec3 y_axis;
+  vec4 m;
+  float albedo;
+};
+LtcFrame ltc_frame_at(vec3 n, vec3 v, float NoV, float roughness);
+#endif
+
 struct Surface {
   vec3 p;             /* world position */
   vec3 n;             /* unit shading normal, flipped towards the viewer on back faces */
@@ -36,6 +50,9 @@ struct Surface {
   vec3 ior_k;
 #ifdef SL_PRINCIPLED
   PrincipledLayers layers;
+#endif
+#ifdef SL_AREA_LTC
+  LtcFrame ltc;
 #endif
 };
 
@@ -76,6 +93,9 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
   s.ior_k = m.ior_k.rgb;
 #ifdef SL_PRINCIPLED
   s.layers = principled_layers_at(s.NoV, s.roughness, s.base_color, s.eta);
+#endif
+#ifdef SL_AREA_LTC
+  s.ltc = ltc_frame_at(n, v, s.NoV, s.roughness);
 #endif
   return s;
 }
