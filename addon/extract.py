@@ -552,6 +552,7 @@ def make_light(light: bpy.types.Light, matrix, threshold: float = 0.0) -> S.Ligh
         extra["axis_x"] = tuple(float(x) for x in m[:3, 0] / max(scale_x, 1e-30))
         extra["half_size"] = half
         extra["ellipse"] = ellipse
+        extra["spread"] = min(max(float(getattr(light, "spread", math.pi)), 0.0), math.pi)
     else:
         extra["radius"] = max(float(light.shadow_soft_size), 0.0)
         extra["soft_falloff"] = bool(getattr(light, "use_soft_falloff", False))

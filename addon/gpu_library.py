@@ -180,7 +180,7 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     info.sampler(14, "FLOAT_2D", "light_data")
     if features.light_tiles:
         info.sampler(15, "FLOAT_2D", "light_tiles")
-    if features.uses_area_ltc:
+    if features.uses_ltc:
         info.sampler(16, "FLOAT_2D", "ltc_table")
     for binding, block in enumerate(_BLOCKS):
         if block is not None:

@@ -314,7 +314,7 @@ class SceneResources:
             gpu_library.bind_sampler(shader, "ms_table", gpu_library.albedo_table(features.terms))
         if features.uses_s_table:
             gpu_library.bind_sampler(shader, "s_table", gpu_library.s_table())
-        if features.uses_area_ltc:
+        if features.uses_ltc:
             gpu_library.bind_sampler(shader, "ltc_table", gpu_library.ltc_table(features.terms))
         if features.environment:
             shader.uniform_block("env", self.environment.block)

@@ -231,12 +231,14 @@ def minv_from_entries(entries) -> np.ndarray:
     return minv
 
 
-def ltc_density(minv: np.ndarray, w: np.ndarray) -> np.ndarray:
-    """D(w) = D_o(M^-1 w / |M^-1 w|) |det M^-1| / |M^-1 w|^3, D_o = max(z, 0) / pi; w (..., 3)
-    unit, minv (3, 3) or broadcastable (..., 3, 3) (any scale: D does not depend on it)."""
+def ltc_density(minv: np.ndarray, w: np.ndarray, floor=0.0) -> np.ndarray:
+    """D(w) = D_o(M^-1 w / |M^-1 w|) |det M^-1| / |M^-1 w|^3, D_o = max(z, floor) / pi; w (..., 3)
+    unit, minv (3, 3) or broadcastable (..., 3, 3) (any scale: D does not depend on it). ``floor``
+    (0: the clamped cosine's own): ``density_floor``'s, for a small light."""
     y = np.einsum("...ij,...j->...i", minv, w)
-    len2 = np.sum(y * y, axis=-1)
-    return np.maximum(y[..., 2], 0.0) * np.abs(np.linalg.det(minv)) / (np.pi * len2 * len2)
+    len2 = np.maximum(np.sum(y * y, axis=-1), 1e-30)
+    cosine = np.maximum(y[..., 2] / np.sqrt(len2), floor)
+    return cosine * np.abs(np.linalg.det(minv)) / (np.pi * len2 * np.sqrt(len2))
 
 
 def _cells(ndf: str, mu: np.ndarray, roughness: np.ndarray) -> dict:
@@ -501,7 +503,8 @@ def polygon_form_factor_vector(corners) -> np.ndarray:
     return F * (sign / (2.0 * np.pi))[..., None]
 
 
-def ltc_integral(minv_entries, corners_local, sphere: np.ndarray | None = None, jitter=None):
+def ltc_integral(minv_entries, corners_local, sphere: np.ndarray | None = None, jitter=None,
+                 with_length: bool = False):
     """The integral over a polygon of the LTC of entries (a, b, d, e) (..., 4), corners
     (..., n, 3) in the local frame (z = n, x = the tangent towards v): the polygon is mapped by
     M^-1, its vector form factor F taken there and clipped to the horizon by the sphere of the same
@@ -531,7 +534,27 @@ def ltc_integral(minv_entries, corners_local, sphere: np.ndarray | None = None, 
         F = F + (unit * angles.sum(axis=-1) / (2.0 * np.pi))[..., None] * np.asarray(direction, np.float64)
     length = np.linalg.norm(F, axis=-1)
     safe = np.where(length > 0.0, length, 1.0)
-    return np.where(length > 0.0, sphere_lookup(sphere, np.minimum(length, 1.0), F[..., 2] / safe), 0.0)
+    out = np.where(length > 0.0, sphere_lookup(sphere, np.minimum(length, 1.0), F[..., 2] / safe), 0.0)
+    return (out, np.minimum(length, 1.0)) if with_length else out
+
+
+#: Below this length of the mapped polygon's vector form factor (fading out linearly towards it)
+#: a light's density is floored at its mean over the polygon (``density_floor``).
+SMALL_POLYGON = 0.1
+
+
+def density_floor(form_factor, length):
+    """The cosine a light's density is floored at (``ltc_density``) where its polygon, mapped by
+    M^-1, is small: the mean over it, I / |F| (the cap of the same vector form factor F: z when
+    wholly above the horizon, the clipped integral's own across it), faded out as |F| grows to
+    SMALL_POLYGON (ltc.glsl's ltc_density_floor, with the measurements). The density at the light's
+    direction alone is 0 below the cosine's horizon, where the clipped cap still holds some of it,
+    and far below the mean where the lobe's tail is steep: the ratio estimator (``lobe_integral``)
+    overshot such tails 3-30x under a small light."""
+    length = np.asarray(length, np.float64)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        own = np.where(length > 0.0, np.asarray(form_factor) / np.where(length > 0.0, length, 1.0), 0.0)
+    return own * np.clip(1.0 - length / SMALL_POLYGON, 0.0, 1.0)
 
 
 def shading_frame(n, v):
@@ -586,12 +609,12 @@ def area_specular(p, n, v, corners, roughness, ndf: str = "GGX", light_normal=No
     local = np.stack([np.sum(rel * x[..., None, :], axis=-1), np.sum(rel * y[..., None, :], axis=-1),
                       np.sum(rel * z[..., None, :], axis=-1)], axis=-1)
     entries = lookup(ltc_table(ndf), mu, roughness)
-    form_factor = ltc_integral(entries, local)
+    form_factor, length = ltc_integral(entries, local, with_length=True)
     E = multiscatter.interpolate(multiscatter.albedo_table(ndf, "SMITH_CORRELATED"), mu, roughness)
     F = polygon_form_factor_vector(local)  # the light's irradiance-weighted direction l
     l = F / np.maximum(np.linalg.norm(F, axis=-1, keepdims=True), 1e-300)
-    out = lobe_integral(form_factor, E, lobe(ndf, mu, _alpha(roughness), l)[0],
-                        ltc_density(minv_from_entries(entries), l))
+    density = ltc_density(minv_from_entries(entries), l, density_floor(form_factor, length))
+    out = lobe_integral(form_factor, E, lobe(ndf, mu, _alpha(roughness), l)[0], density)
     if light_normal is not None:
         front = np.sum(-rel.mean(axis=-2) * np.asarray(light_normal, np.float64), axis=-1) > 0.0
         out = np.where(front, out, 0.0)

@@ -93,6 +93,7 @@ class Features:
     shadow_size: int = 0  # their texels per side
     soft_shadows: bool = False  # penumbrae from the lights' sizes
     light_tiles: bool = False  # loop over the fragment's screen tile's lights (light_tiles.py)
+    sphere_lights: bool = False  # a point or spot light has a radius (the physically based model)
 
     def has_map(self, name: str) -> bool:
         return name in self.maps or name + "_CLOSEST" in self.maps
@@ -109,6 +110,8 @@ class Features:
             object.__setattr__(self, "ambient_world", False)
         elif not self.ambient_world:  # the empirical models see the world only through their ambient term
             object.__setattr__(self, "environment", "")
+        if self.model != "PBR" or not {"POINT", "SPOT"} & set(self.light_kinds):
+            object.__setattr__(self, "sphere_lights", False)  # shaded by their irradiance alone
         if self.peel or not self.environment:  # a transparent surface lies in front of what the
             object.__setattr__(self, "occlusion", False)  # occlusion pass saw
         if not self.shadow_layers:
@@ -146,6 +149,8 @@ class Features:
             model=model or snapshot.settings.model,
             max_lights=light_slots(len(snapshot.lights)),
             light_kinds=frozenset(light.kind for light in snapshot.lights),
+            sphere_lights=any(light.kind in ("POINT", "SPOT") and light.sphere_radius > 0.0
+                              for light in snapshot.lights),
             terms=terms,
             half_target=half_target,
             maps=maps,
@@ -163,17 +168,18 @@ class Features:
         )
 
     @property
-    def uses_area_ltc(self) -> bool:
-        """The program shades area lights' specular lobe by linearly transformed cosines
-        (glsl/ltc.glsl): it samples ``ltc_table``, and ``ms_table`` for the lobe's magnitude."""
-        return self.model == "PBR" and "AREA" in self.light_kinds
+    def uses_ltc(self) -> bool:
+        """The program shades area and sphere lights' specular lobe by linearly transformed
+        cosines (glsl/ltc.glsl): it samples ``ltc_table``, and ``ms_table`` for the lobe's
+        magnitude."""
+        return self.model == "PBR" and ("AREA" in self.light_kinds or self.sphere_lights)
 
     @property
     def uses_albedo_table(self) -> bool:
         """The program samples ``ms_table`` (multiple-scattering compensation, Principled set, the
         magnitude of area lights' specular lobe)."""
         return self.model == "PBR" and (self.terms.multiscatter or self.terms.principled
-                                        or self.uses_area_ltc)
+                                        or self.uses_ltc)
 
     @property
     def uses_env_chain(self) -> bool:
@@ -201,8 +207,8 @@ class Features:
                     ("SL_VISIBILITY_" + t.visibility, "1"), ("SL_DIFFUSE_" + t.diffuse, "1")]
             if t.multiscatter:
                 out += [("SL_MULTISCATTER", "1"), ("SL_MS_SIZE", str(MS_SIZE))]
-        if self.uses_area_ltc:
-            out += [("SL_AREA_LTC", "1"), ("SL_LTC_SIZE", str(LTC_SIZE)),
+        if self.uses_ltc:
+            out += [("SL_LTC", "1"), ("SL_LTC_SIZE", str(LTC_SIZE)),
                     ("SL_LTC_SPHERE_SIZE", str(LTC_SPHERE_SIZE))]
             if ("SL_MS_SIZE", str(MS_SIZE)) not in out:
                 out.append(("SL_MS_SIZE", str(MS_SIZE)))
@@ -499,9 +505,10 @@ def pack_lights(snapshot: Snapshot, max_lights: int, first_layer: tuple[int, ...
             light.diffuse_factor, light.specular_factor, 1.0 if light.world else 0.0, first_layer[i],
             light.sphere_radius, 1.0 if light.soft_falloff else 0.0, *light.half_size,
             *light.axis_x, 1.0 if light.ellipse else 0.0,
-            1.0 / light.influence ** 2 if math.isfinite(light.influence) else 0.0, 0.0, 0.0, 0.0,
+            1.0 / light.influence ** 2 if math.isfinite(light.influence) else 0.0, *light.spread_terms, 0.0,
         ]
     return data
+
 
 
 def pack_shadows(plan: shadows.ShadowPlan, slots: int) -> bytes:

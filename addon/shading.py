@@ -82,14 +82,27 @@ def _unit_or(v, fallback):
         return np.where((len2 > 1e-30)[..., None], v / np.sqrt(len2)[..., None], fallback)
 
 
+#: Between these k = theta / alpha the physically based model turns from the representative point
+#: to the linearly transformed cosines over a sphere light's disc (lights.glsl).
+SPHERE_LTC_FROM = 0.1
+SPHERE_LTC_FULL = 0.2
+
+
+def sphere_light_theta(light: Light, p):
+    """The sphere light's angular radius in half-vector space seen from ``p``, r / (2 d')."""
+    to_light = np.asarray(light.position) - p
+    radius = light.sphere_radius
+    d2 = _dot(to_light, to_light) + (radius * radius if light.soft_falloff else 0.0)
+    return radius * 0.5 / np.sqrt(np.maximum(d2, 1e-8))
+
+
 def sphere_light_specular(light: Light, p, r_dir, alpha):
     """(direction, alpha_wide, wide_weight, point_weight): a sphere light's specular lobe as
     glsl/lights.glsl's sphere_light_specular mixes it -- the representative point (Karis 2013)
     renormalised by 1 + (pi/2) k + k^2, and the lobe widened in quadrature, k = theta / alpha."""
     to_light = np.asarray(light.position) - p
-    d2 = _dot(to_light, to_light)
     radius = light.sphere_radius
-    theta = radius * 0.5 / np.sqrt(np.maximum(d2 + (radius * radius if light.soft_falloff else 0.0), 1e-8))
+    theta = sphere_light_theta(light, p)
     centre_to_ray = _dot(to_light, r_dir)[..., None] * r_dir - to_light
     gap = np.sqrt(_dot(centre_to_ray, centre_to_ray))
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -131,13 +144,39 @@ def area_offsets(light: Light) -> np.ndarray:
     return uv[:, :1] * hx * x + uv[:, 1:] * hy * y
 
 
-def polygon_form_factor(light: Light, to_centre):
-    """V = 1/2 sum theta_i g_i of the light's polygon seen from the points at -to_centre from its
-    centre, oriented towards the polygon (lights.glsl's polygon_form_factor with the identity)."""
-    offsets = area_offsets(light)
-    V = np.zeros(np.shape(to_centre))
-    for i in range(len(offsets)):
-        oa, ob = offsets[i - 1], offsets[i]
+def sphere_offsets(light: Light, p) -> np.ndarray:
+    """(..., 16, 3): a sphere light seen from the points ``p`` as the disc through its centre facing
+    each point with the same solid angle, relative to its centre (lights.glsl's sphere_polygon):
+    radius r with soft falloff, r d / sqrt(d^2 - r^2) for the sphere (89.4 degrees inside it)."""
+    to_centre = np.asarray(light.position, np.float64) - p
+    d2 = _dot(to_centre, to_centre)
+    r = light.sphere_radius
+    gap = np.maximum(np.maximum(d2 - r * r, 1e-4 * d2), 1e-30)
+    radius = r if light.soft_falloff else r * np.sqrt(d2 / gap)
+    w = to_centre / np.sqrt(np.maximum(d2, 1e-30))[..., None]
+    other = np.where((np.abs(w[..., :1]) < 0.9), [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    x = _unit_or(np.cross(other, w), other)  # p at the centre (w = 0): any frame
+    y = np.cross(w, x)
+    phi = 2.0 * np.pi * np.arange(AREA_ELLIPSE_SIDES) / AREA_ELLIPSE_SIDES
+    uv = ELLIPSE_SCALE * np.stack([np.cos(phi), np.sin(phi)], -1)
+    scale = np.asarray(radius)[..., None, None]
+    return scale * (uv[:, :1] * x[..., None, :] + uv[:, 1:] * y[..., None, :])
+
+
+def sphere_far_field(light: Light, d2):
+    """Seen from farther than AREA_FAR_FIELD radii, a sphere light is shaded from its centre and
+    its nearest point (lights.glsl's sphere_far_field)."""
+    return (light.sphere_radius * AREA_FAR_FIELD) ** 2 < d2
+
+
+def polygon_form_factor(offsets, to_centre):
+    """V = 1/2 sum theta_i g_i of the polygon of corners ``offsets`` ((n, 3), or (..., n, 3) per
+    point) from its centre, seen from the points at -to_centre from it, oriented towards the
+    polygon (lights.glsl's polygon_form_factor with the identity)."""
+    offsets = np.asarray(offsets, np.float64)
+    V = np.zeros(np.broadcast_shapes(np.shape(to_centre), offsets.shape[:-2] + (3,)))
+    for i in range(offsets.shape[-2]):
+        oa, ob = offsets[..., i - 1, :], offsets[..., i, :]
         c = np.cross(to_centre, ob - oa) + np.cross(oa, ob)  # (t + oa) x (t + ob)
         sin = np.linalg.norm(c, axis=-1)
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -145,6 +184,100 @@ def polygon_form_factor(light: Light, to_centre):
         V = V + np.where((sin > 0.0)[..., None], edge, 0.0)
     V = 0.5 * V
     return np.where((_dot(V, to_centre) < 0.0)[..., None], -V, V)
+
+
+SPREAD_GAUSS = 1.0 / math.sqrt(3.0)  # 2-point Gauss-Legendre nodes on [-1, 1]
+
+
+def spread_weight(light: Light, tan_a):
+    """W(a) = max(tan h - tan a, 0) / (tan h - h): the emitter's radiance scale towards a
+    direction at angle a from its normal under its Spread (lights.glsl's spread_weight)."""
+    tan_h, norm = light.spread_terms
+    return np.maximum(tan_h - np.asarray(tan_a), 0.0) * norm
+
+
+def area_spread(light: Light, to_centre, lobe=None):
+    """(W's mean, offsets, to_centre) of what of an area light reaches the points at -to_centre
+    from its centre through its spread (lights.glsl's area_spread): the light's box clipped to
+    the square of half-size z tan h about each point's foot on its plane, offsets (..., n, 3)
+    about the clipped centre (a rectangle's corners repeated to an ellipse's n: zero edges add
+    nothing; an ellipse the square holds whole is kept), and W's mean over it as a surface facing
+    the light receives it, by 2 x 2 Gauss points per quarter about the foot -- an ellipse's W
+    times each point's cell's share inside it (the share of a clipped ellipse's box it lights).
+    ``lobe`` = (M^-1, x, y, z), the LTC and its shading frame: W's mean for the specular lobe,
+    weighted by the LTC's density instead, is returned fourth."""
+    normal = np.asarray(light.direction, np.float64)
+    x_axis = np.asarray(light.axis_x, np.float64)
+    y_axis = np.cross(-normal, x_axis)
+    q = -np.asarray(to_centre, np.float64)
+    z = _dot(q, normal)
+    foot = np.stack([_dot(q, x_axis), _dot(q, y_axis)], axis=-1)
+    R = (z * light.spread_terms[0])[..., None]
+    half = np.asarray(light.half_size, np.float64)
+    holds_all = np.all(foot - R <= -half, axis=-1) & np.all(foot + R >= half, axis=-1)
+    lo, hi = np.maximum(-half, foot - R), np.minimum(half, foot + R)
+    empty = np.any(hi <= lo, axis=-1) | (z <= 0.0)
+    centre = 0.5 * (lo + hi)
+    size = 0.5 * (hi - lo)
+    uv = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    corners = np.repeat(uv, AREA_ELLIPSE_SIDES // 4, axis=0) if light.ellipse else uv
+    rect = (corners[:, :1] * size[..., None, :1]) * x_axis + (corners[:, 1:] * size[..., None, 1:]) * y_axis
+    keep = holds_all[..., None, None]
+    offsets = np.where(keep, area_offsets(light), rect)
+    shift = centre[..., :1] * x_axis + centre[..., 1:] * y_axis
+    clipped_to_centre = np.where(holds_all[..., None], to_centre, to_centre + shift)
+    split = np.clip(foot, lo, hi)
+    total = np.zeros(np.shape(z))
+    weights = np.zeros(np.shape(z))
+    lobe_total = np.zeros(np.shape(z))
+    lobe_weights = np.zeros(np.shape(z))
+    for i in range(4):
+        a = np.stack([(split if i & 1 else lo)[..., 0], (split if i & 2 else lo)[..., 1]], -1)
+        b = np.stack([(hi if i & 1 else split)[..., 0], (hi if i & 2 else split)[..., 1]], -1)
+        extent = b - a
+        ok = (extent[..., 0] > 0.0) & (extent[..., 1] > 0.0)
+        for j in range(4):
+            g = np.array([SPREAD_GAUSS if j & 1 else -SPREAD_GAUSS, SPREAD_GAUSS if j & 2 else -SPREAD_GAUSS])
+            d = 0.5 * (a + b + extent * g) - foot
+            r2 = _dot(d, d) + z * z
+            with np.errstate(divide="ignore", invalid="ignore"):
+                w = np.where(ok, z * z / (r2 * r2) * extent[..., 0] * extent[..., 1], 0.0)
+                tan_a = np.where(ok, np.sqrt(_dot(d, d)) / np.where(z > 0.0, z, 1.0), 0.0)
+            W = spread_weight(light, tan_a)
+            if light.ellipse:  # the share of the point's cell inside the ellipse: the coverage of
+                # a box by the boundary's tangent line, its signed distance over the box's width
+                q2 = 0.5 * (a + b + extent * g) / half
+                rho = np.sqrt(_dot(q2, q2))
+                across = 0.5 * (np.abs(q2[..., 0]) * extent[..., 0] / half[0]
+                                + np.abs(q2[..., 1]) * extent[..., 1] / half[1])
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    cover = np.clip(0.5 + (1.0 - rho) * rho / np.where(across > 0.0, across, 1.0), 0.0, 1.0)
+                cover = np.where(across > 0.0, cover, (rho < 1.0).astype(np.float64))
+                W = W * cover
+                w_mean = w * np.where(holds_all, cover, 1.0)  # the ellipse itself: W's mean over it
+            else:
+                w_mean = w
+            total = total + w * W
+            weights = weights + w_mean
+            if lobe is not None:  # the LTC's density towards the point over its cell's solid angle
+                minv, fx, fy, fz = lobe
+                at = 0.5 * (a + b + extent * g)
+                to_point = _unit(to_centre + at[..., :1] * x_axis + at[..., 1:] * y_axis)
+                local = np.stack([_dot(to_point, fx), _dot(to_point, fy), _dot(to_point, fz)], axis=-1)
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    lobe_w = np.where(ok, ltc.ltc_density(minv, local) * w * np.sqrt(r2)
+                                      / np.where(z > 0.0, z, 1.0), 0.0)
+                    share = np.where(w > 0.0, w_mean / np.where(w > 0.0, w, 1.0), 0.0)
+                lobe_total = lobe_total + lobe_w * W
+                lobe_weights = lobe_weights + lobe_w * share
+    with np.errstate(divide="ignore", invalid="ignore"):
+        mean = np.where((weights > 0.0) & ~empty, total / np.where(weights > 0.0, weights, 1.0), 0.0)
+        lobe_mean = np.where(lobe_weights > 0.0, lobe_total / np.where(lobe_weights > 0.0, lobe_weights, 1.0),
+                             mean)
+    lobe_mean = np.where(empty, 0.0, lobe_mean)
+    if lobe is None:
+        return mean, offsets, clipped_to_centre
+    return mean, offsets, clipped_to_centre, lobe_mean
 
 
 def area_light_area(light: Light) -> float:
@@ -165,16 +298,21 @@ def E_Area(light: Light, p):
     d2 = _dot(to_centre, to_centre)
     normal = np.asarray(light.direction, np.float64)
     area = area_light_area(light)
-    V = polygon_form_factor(light, to_centre)
+    spread, offsets, clipped = (area_spread(light, to_centre) if light.spread_terms[1] > 0.0
+                                else (1.0, area_offsets(light), to_centre))
+    V = polygon_form_factor(offsets, clipped)
     length = np.linalg.norm(V, axis=-1)
     front = _dot(-to_centre, normal) > 0.0
     with np.errstate(divide="ignore", invalid="ignore"):
         l = np.where((length > 0.0)[..., None], V / length[..., None], _unit(to_centre))
-    E = np.asarray(light.intensity) / max(area, 1e-12) * np.where(front, length, 0.0)[..., None]
+    E = np.asarray(light.intensity) / max(area, 1e-12) * np.where(front, length * spread, 0.0)[..., None]
     far = area_far_field(light, d2)
     l_far = _unit(to_centre)
-    E_far = np.asarray(light.intensity) * (np.where(front, _dot(-l_far, normal), 0.0)
-                                           / np.maximum(d2, MIN_DIST2))[..., None]
+    cos_a = _dot(-l_far, normal)
+    if light.spread_terms[1] > 0.0:  # the point emitter's profile under its spread
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cos_a = cos_a * spread_weight(light, np.sqrt(np.maximum(1.0 - cos_a * cos_a, 0.0)) / cos_a)
+    E_far = np.asarray(light.intensity) * (np.where(front, cos_a, 0.0) / np.maximum(d2, MIN_DIST2))[..., None]
     return np.where(far[..., None], E_far, E), np.where(far[..., None], l_far, l)
 
 
@@ -377,42 +515,76 @@ MODELS = {
 }
 
 
-def shade_area_light(s: Surface, light: Light, E, l, visibility, terms: Terms, ltc_jitter=None):
-    """light_shading.glsl's shade_area_light: an area light on the physically based model, the
-    diffuse lobe from the horizon-clipped irradiance, the specular from the linearly transformed
-    cosine's integral over the polygon (addon/ltc.py); the point emitter in its far field.
-    ``ltc_jitter``: ltc.ltc_integral's, for tests."""
-    factors = (light.diffuse_factor, light.specular_factor)
-    to_centre = np.asarray(light.position, np.float64) - s.p
-    window = light_window(light, s.p)
-    L = np.asarray(light.intensity, np.float64) * (np.asarray(visibility) * window
-                                                    / max(area_light_area(light), 1e-12))[..., None]
-    L_max, E_max = L.max(axis=-1), np.asarray(E).max(axis=-1)
-    lit = (L_max > 0.0) & (E_max > 0.0)
+def shade_polygon_light(s: Surface, offsets, to_centre, L, form_factor, l, factors, terms: Terms,
+                        ltc_jitter=None, specular_scale=1.0):
+    """light_shading.glsl's shade_polygon_light: a light of radiance ``L`` (rgb, as it arrives)
+    over the polygon of corners ``offsets`` about its centre at ``to_centre`` from the points, of
+    unclipped form factor ``form_factor``, on the physically based model: the diffuse lobe from
+    the horizon-clipped irradiance, the specular from the linearly transformed cosine's integral
+    over the polygon (addon/ltc.py). ``ltc_jitter``: ltc.ltc_integral's, for tests."""
+    L = np.asarray(L, np.float64)
+    lit = (L.max(axis=-1) > 0.0) & (form_factor > 0.0)
     with np.errstate(divide="ignore", invalid="ignore"):
-        form_factor = np.where(lit, E_max / (np.pi * np.where(lit, L_max, 1.0)), 0.0)
         NoL = _dot(s.n, l)
-        clipped = ltc.sphere_lookup(ltc.sphere_table(), form_factor, NoL)
+        clipped = ltc.sphere_lookup(ltc.sphere_table(), np.minimum(form_factor, 1.0), NoL)
         E_clipped = L * np.where(NoL > 0.0, np.pi * clipped / np.where(NoL > 0.0, NoL, 1.0), 0.0)[..., None]
     diffuse = pbr_direct(s, l, E_clipped, (factors[0], 0.0), terms)
     x, y, z, _ = ltc.shading_frame(s.n, s.v)
-    corners = np.asarray(to_centre)[..., None, :] + area_offsets(light)
+    corners = np.asarray(to_centre)[..., None, :] + offsets
     local = np.stack([np.sum(corners * a[..., None, :], axis=-1) for a in (x, y, z)], axis=-1)
     ndf = "GGX" if terms.principled else terms.ndf
     rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
     entries = ltc.lookup(ltc.ltc_table(ndf), s.NoV, rough)
-    form_factor_lobe = ltc.ltc_integral(entries, local, jitter=ltc_jitter)
+    form_factor_lobe, length = ltc.ltc_integral(entries, local, jitter=ltc_jitter, with_length=True)
     LoH = saturate(_dot(l, half_vector(l, s.v, s.n)))
     albedo_terms = ("GGX", "SMITH_CORRELATED") if terms.principled else (terms.ndf, terms.visibility)
     albedo = M.interpolate(M.albedo_table(*albedo_terms), s.NoV, rough)
     l_local = np.stack([_dot(l, x), _dot(l, y), _dot(l, z)], axis=-1)
-    density = ltc.ltc_density(ltc.minv_from_entries(entries), l_local)
+    density = ltc.ltc_density(ltc.minv_from_entries(entries), l_local,
+                              ltc.density_floor(form_factor_lobe, length))
     lobe = ltc.lobe_integral(form_factor_lobe, albedo, pbr_lobe(s, l, terms), density)
-    specular = pbr_specular_tint(s, LoH, terms) * L * (lobe * factors[1])[..., None]
+    specular = pbr_specular_tint(s, LoH, terms) * L * (lobe * factors[1] * specular_scale)[..., None]
     specular = np.where((form_factor_lobe > 0.0)[..., None], specular, 0.0)
-    out = np.where(lit[..., None], diffuse + specular, 0.0)
+    return np.where(lit[..., None], diffuse + specular, 0.0)
+
+
+def shade_area_light(s: Surface, light: Light, E, l, visibility, terms: Terms, ltc_jitter=None):
+    """light_shading.glsl's shade_area_light: an area light's polygon of radiance I / A
+    (shade_polygon_light); the point emitter in its far field."""
+    factors = (light.diffuse_factor, light.specular_factor)
+    to_centre = np.asarray(light.position, np.float64) - s.p
+    window = light_window(light, s.p)
+    spread, offsets, clipped, lobe_spread = 1.0, area_offsets(light), to_centre, 1.0
+    if light.spread_terms[1] > 0.0:
+        x, y, z, _ = ltc.shading_frame(s.n, s.v)
+        ndf = "GGX" if terms.principled else terms.ndf
+        entries = ltc.lookup(ltc.ltc_table(ndf), s.NoV, np.broadcast_to(s.roughness, np.shape(s.NoV)))
+        spread, offsets, clipped, lobe_spread = area_spread(
+            light, to_centre, (ltc.minv_from_entries(entries), x, y, z))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        specular_scale = np.where(spread > 0.0, lobe_spread / np.where(spread > 0.0, spread, 1.0), 0.0)
+    L = np.asarray(light.intensity, np.float64) * (spread * np.asarray(visibility) * window
+                                                    / max(area_light_area(light), 1e-12))[..., None]
+    L_max, E_max = L.max(axis=-1), np.asarray(E).max(axis=-1)
+    lit = (L_max > 0.0) & (E_max > 0.0)
+    form_factor = np.where(lit, E_max / (np.pi * np.where(lit, L_max, 1.0)), 0.0)
+    out = shade_polygon_light(s, offsets, clipped, L, form_factor, l, factors, terms, ltc_jitter,
+                              specular_scale)
     far = area_far_field(light, _dot(to_centre, to_centre))
     return np.where(far[..., None], pbr_direct(s, l, E, factors, terms), out)
+
+
+def shade_sphere_light(s: Surface, light: Light, E, l, terms: Terms, ltc_jitter=None):
+    """light_shading.glsl's shade_sphere_light: radiance I / (pi r^2) over the sphere light's disc
+    (sphere_offsets), L = E (d^2 [+ r^2]) / (pi r^2), form factor r^2 / (d^2 [+ r^2])."""
+    to_centre = np.asarray(light.position, np.float64) - s.p
+    r2 = light.sphere_radius ** 2
+    falloff = _dot(to_centre, to_centre) + (r2 if light.soft_falloff else 0.0)
+    L = np.asarray(E, np.float64) * (np.maximum(falloff, MIN_DIST2) / (np.pi * r2))[..., None]
+    out = shade_polygon_light(s, sphere_offsets(light, s.p), to_centre, L, r2 / np.maximum(falloff, 1e-30),
+                              l, (light.diffuse_factor, light.specular_factor), terms, ltc_jitter)
+    # at the centre: no direction to the light (E_Point's l = 0), no light
+    return np.where((_dot(to_centre, to_centre) > 0.0)[..., None], out, 0.0)
 
 
 def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAULT_TERMS,
@@ -425,16 +597,27 @@ def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAU
     if model == "PBR" and area:
         return shade_area_light(s, light, E, l, visibility, terms, ltc_jitter)
     if model == "PBR" and light.sphere_radius > 0.0:
-        # a sphere light: the diffuse lobe as its irradiance says; the specular from its nearest
-        # point and, widened, from its centre
+        # by the LTC over its disc where it is large against the lobe, by its nearest point and the
+        # lobe widened by it where small, blended between (light_shading.glsl's shade_light)
+        to_light = np.asarray(light.position, np.float64) - s.p
+        near = ~sphere_far_field(light, _dot(to_light, to_light))
+        k = sphere_light_theta(light, s.p) / np.maximum(s.alpha, 1e-12)
+        share = np.where(near, np.clip((k - SPHERE_LTC_FROM) / (SPHERE_LTC_FULL - SPHERE_LTC_FROM), 0.0, 1.0),
+                         0.0)
+        if np.any(share > 0.0):
+            polygon = shade_sphere_light(s, light, E, l, terms, ltc_jitter)
         r_dir = 2.0 * _dot(s.n, s.v)[..., None] * s.n - s.v
         l_specular, alpha_wide, wide_weight, point_weight = sphere_light_specular(light, s.p, r_dir, s.alpha)
         wide = copy.copy(s)
         wide.alpha = alpha_wide
         specular = (0.0, light.specular_factor)
-        return (direct(s, l, E, (light.diffuse_factor, 0.0), terms)
-                + direct(wide, l, E * np.asarray(wide_weight)[..., None], specular, terms)
-                + direct(s, l_specular, E * np.asarray(point_weight)[..., None], specular, terms))
+        far = (direct(s, l, E, (light.diffuse_factor, 0.0), terms)
+               + direct(wide, l, E * np.asarray(wide_weight)[..., None], specular, terms)
+               + direct(s, l_specular, E * np.asarray(point_weight)[..., None], specular, terms))
+        if not np.any(share > 0.0):
+            return far
+        share = np.asarray(share)[..., None]
+        return np.where(share >= 1.0, polygon, far + (np.where(share > 0.0, polygon, 0.0) - far) * share)
     return direct(s, l, E, (light.diffuse_factor, light.specular_factor), terms)
 
 

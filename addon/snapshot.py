@@ -290,6 +290,11 @@ def normal_matrices(matrices: np.ndarray) -> np.ndarray:
     return out
 
 
+
+#: The narrowest half spread shaded (radians): narrower, the cone's normalisation (~3 / h^3) and the
+#: light it lets through (~z h) leave float32's range.
+MIN_HALF_SPREAD = 5e-4
+
 @dataclass(frozen=True)
 class Light:
     """A light in Blender's units, reduced to what the shaders need.
@@ -316,8 +321,21 @@ class Light:
     axis_x: tuple[float, float, float] = (1.0, 0.0, 0.0)  # an area light's local X axis (unit)
     half_size: tuple[float, float] = (0.0, 0.0)  # an area light's half width and height (m, scaled)
     ellipse: bool = False  # an area light's shape: disk or ellipse (else square or rectangle)
+    spread: float = math.pi  # an area light's Spread (radians): the cone its radiance is limited to
     influence: float = math.inf  # how far it reaches (m; light_tiles.influence_radius): windowed
     #                              to nothing there, and culled from the screen tiles beyond it
+
+    @property
+    def spread_terms(self) -> tuple[float, float]:
+        """(tan h, 1 / (tan h - h)) of an area light's spread, h its half angle (glsl/lights.glsl's
+        spread_weight), (0, 0) for none (180 degrees, or not an area light); below 0.05 rad the
+        denominator by its Taylor series h^3 / 3 + 2 h^5 / 15 (tan h - h cancels in float64 too);
+        h at least MIN_HALF_SPREAD."""
+        if self.kind != "AREA" or self.spread >= math.pi * (1.0 - 1e-7):
+            return 0.0, 0.0
+        h = max(0.5 * self.spread, MIN_HALF_SPREAD)
+        gap = h ** 3 / 3.0 + 2.0 * h ** 5 / 15.0 if h < 0.05 else math.tan(h) - h
+        return math.tan(h), 1.0 / gap
 
     @property
     def sphere_radius(self) -> float:

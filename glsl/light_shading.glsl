@@ -3,65 +3,125 @@
  * with the term harness (tests/test_stability.py). Twin: shading.shade_light. Needs the model
  * file's shade_direct (and, for the physically based model, pbr_specular_tint). */
 
-#ifdef SL_AREA_LTC
-/* An area light (the physically based model): the diffuse lobe from the polygon's irradiance cut
- * by the horizon (the sphere of the same vector form factor, ltc.glsl), the specular lobe from the
- * linearly transformed cosine's integral over the polygon (ltc_lobe_integral), with the Fresnel
- * term at the half vector of the light's irradiance-weighted direction l. Behind the light, or
- * seen from its far field, it is the point emitter E_Area shades. */
+#ifdef SL_LTC
+/* A light of radiance L (rgb, as it arrives: windowed and shadowed) over a polygon of unclipped
+ * form factor `form_factor` whose irradiance-weighted direction is l, on the physically based
+ * model: the diffuse lobe from the polygon's irradiance cut by the horizon (the sphere of the same
+ * vector form factor, ltc.glsl), the specular lobe from the linearly transformed cosine's
+ * integral over the polygon (ltc_lobe_integral), with the Fresnel term at the half vector of l. */
+vec3 shade_polygon_light(Surface s, LightPolygon poly, vec3 L, float form_factor, vec3 l,
+                         vec4 factors, float specular_scale)
+{
+  if (max(L.r, max(L.g, L.b)) <= 0.0 || form_factor <= 0.0) {
+    return vec3(0.0); /* behind the emitting side, shadowed, or out of reach */
+  }
+  float NoL = dot(s.n, l);
+  vec3 c = vec3(0.0);
+  if (NoL > 0.0) {
+    float clipped = ltc_horizon_clip(min(form_factor, 1.0), 1.0 + NoL);
+    c = shade_direct(s, l, L * (PI * clipped / NoL), factors * vec4(1.0, 0.0, 1.0, 1.0));
+  }
+  float density;
+  float form_factor_lobe = ltc_polygon(s, poly, l, density);
+  if (form_factor_lobe > 0.0) {
+    float LoH = saturate(dot(l, half_vector(l, s.v, s.n)));
+    float lobe = ltc_lobe_integral(form_factor_lobe, s.ltc.albedo, pbr_lobe(s, l), density);
+    c += pbr_specular_tint(s, LoH) * L * (lobe * factors.y * specular_scale);
+  }
+  return c;
+}
+
+#  ifdef SL_HAS_AREA
+/* An area light: its polygon of radiance I / A; behind the light, or seen from its far field, the
+ * point emitter E_Area shades. */
 vec3 shade_area_light(Surface s, LightData light, vec3 l, vec3 E, float visibility, vec4 factors)
 {
-  vec3 to_centre = light.position_kind.xyz - s.p;
-  if (area_far_field(light, dot(to_centre, to_centre))) {
+  LightPolygon poly = area_polygon(light, s.p);
+  if (area_far_field(light, dot(poly.to_centre, poly.to_centre))) {
     return shade_direct(s, l, E, factors);
   }
-  /* the radiance as it arrives: the emitter's I / A, windowed and shadowed as E is */
-  vec3 L = light.intensity_blend.rgb * (visibility * light_window(light, s.p) /
+  /* the radiance as it arrives: the emitter's I / A, windowed and shadowed as E is, and what of
+   * the light its spread lets through (E_Area's) */
+  float spread = 1.0;
+  float lobe_spread = 1.0;
+  if (light.influence.z > 0.0) {
+    mat3 to_shading = transpose(mat3(s.ltc.x_axis, s.ltc.y_axis, s.n));
+    spread = area_spread(light, s.p, poly, true, s.ltc.m, to_shading, lobe_spread);
+  }
+  vec3 L = light.intensity_blend.rgb * (spread * visibility * light_window(light, s.p) /
                                         max(area_light_area(light), 1e-12));
   float L_max = max(L.r, max(L.g, L.b));
   float E_max = max(E.r, max(E.g, E.b));
   if (L_max <= 0.0 || E_max <= 0.0) {
-    return vec3(0.0); /* behind the emitting side, shadowed, or out of reach */
+    return vec3(0.0);
   }
-  /* E = L pi |F| along l: the form factor's length from E, its height from n.l */
-  float form_factor = E_max / (PI * L_max);
-  float NoL = dot(s.n, l);
-  vec3 c = vec3(0.0);
-  if (NoL > 0.0) {
-    float clipped = ltc_horizon_clip(form_factor, 1.0 + NoL);
-    c = shade_direct(s, l, L * (PI * clipped / NoL), factors * vec4(1.0, 0.0, 1.0, 1.0));
-  }
-  float density;
-  float form_factor_lobe = ltc_polygon(s, light, l, density);
-  if (form_factor_lobe > 0.0) {
-    float LoH = saturate(dot(l, half_vector(l, s.v, s.n)));
-    float lobe = ltc_lobe_integral(form_factor_lobe, s.ltc.albedo, pbr_lobe(s, l), density);
-    c += pbr_specular_tint(s, LoH) * L * (lobe * factors.y);
-  }
-  return c;
+  /* E = L pi |F| along l: the form factor's length from E */
+  return shade_polygon_light(s, poly, L, E_max / (PI * L_max), l, factors,
+                             spread > 0.0 ? lobe_spread / spread : 0.0);
 }
+#  endif
+
+#  if defined(SL_HAS_POINT) || defined(SL_HAS_SPOT)
+/* A sphere light of radius r: radiance I / (pi r^2) over its disc (sphere_polygon); E (E_Point's
+ * or E_Spot's, windowed and shadowed) is L pi r^2 / (d^2 + r^2 [soft falloff]), so L is E times
+ * that, with the spot's cone, window and shadow in it; the form factor r^2 / (d^2 [+ r^2]) is
+ * sin^2 of the cone's half-angle, whose horizon clipping is Snyder's exactly. */
+vec3 shade_sphere_light(Surface s, LightData light, vec3 l, vec3 E, vec4 factors)
+{
+  LightPolygon poly = sphere_polygon(light, s.p);
+  float d2 = dot(poly.to_centre, poly.to_centre);
+  if (d2 <= 0.0) {
+    return vec3(0.0); /* at the centre: no direction to the light (E_Point's l = 0), no light */
+  }
+  float r2 = light.shape.x * light.shape.x;
+  float falloff = d2 + light.shape.y * r2;
+  vec3 L = E * (max(falloff, MIN_DIST2) / (PI * r2));
+  return shade_polygon_light(s, poly, L, r2 / max(falloff, 1e-30), l, factors, 1.0);
+}
+#  endif
 #endif
 
 vec3 shade_light(Surface s, LightData light, vec3 l, vec3 E, float visibility, vec4 factors)
 {
-#ifdef SL_AREA_LTC
+#ifdef SL_LTC
+#  ifdef SL_HAS_AREA
   if (int(light.position_kind.w) == LIGHT_AREA && light.shape.z > 0.0) {
     return shade_area_light(s, light, l, E, visibility, factors);
   }
+#  endif
 #endif
 #ifdef SL_MODEL_PBR
 #  if defined(SL_HAS_POINT) || defined(SL_HAS_SPOT)
   if (light.shape.x > 0.0) {
-    /* a sphere light (lights.glsl): the diffuse lobe as its irradiance says; the specular from
-     * its nearest point and, widened, from its centre */
+    /* a sphere light: by linearly transformed cosines over its disc (shade_sphere_light) where it
+     * is large against the lobe, by its nearest point and the lobe widened by it where small
+     * (lights.glsl's sphere_light_specular: exact as k = theta / alpha -> 0, and 4-16x cheaper),
+     * blended between; and so beyond AREA_FAR_FIELD radii */
+    float ltc_share = 0.0;
+#    ifdef SL_LTC
+    vec3 to_light = light.position_kind.xyz - s.p;
+    if (!sphere_far_field(light, dot(to_light, to_light))) {
+      float k = sphere_light_theta(light, s.p) / max(s.alpha, 1e-12);
+      ltc_share = saturate((k - SPHERE_LTC_FROM) / (SPHERE_LTC_FULL - SPHERE_LTC_FROM));
+    }
+    vec3 c_ltc = ltc_share > 0.0 ? shade_sphere_light(s, light, l, E, factors) : vec3(0.0);
+    if (ltc_share >= 1.0) {
+      return c_ltc;
+    }
+#    endif
     Surface wide = s;
     float wide_weight, point_weight;
     vec3 l_specular = sphere_light_specular(light, s.p, reflect(-s.v, s.n), s.alpha, wide.alpha,
                                             wide_weight, point_weight);
     vec4 specular = factors * vec4(0.0, 1.0, 1.0, 1.0);
-    return shade_direct(s, l, E, factors * vec4(1.0, 0.0, 1.0, 1.0)) +
-           shade_direct(wide, l, E * wide_weight, specular) +
-           shade_direct(s, l_specular, E * point_weight, specular);
+    vec3 c_point = shade_direct(s, l, E, factors * vec4(1.0, 0.0, 1.0, 1.0)) +
+                   shade_direct(wide, l, E * wide_weight, specular) +
+                   shade_direct(s, l_specular, E * point_weight, specular);
+#    ifdef SL_LTC
+    return mix(c_point, c_ltc, ltc_share);
+#    else
+    return c_point;
+#    endif
   }
 #  endif
 #endif

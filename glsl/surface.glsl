@@ -13,7 +13,7 @@ struct PrincipledLayers {
 PrincipledLayers principled_layers_at(float NoV, float roughness, vec3 base_color, float eta);
 #endif
 
-#ifdef SL_AREA_LTC
+#ifdef SL_LTC
 /* What area lights' linearly transformed cosines need at the view direction (ltc.glsl): the
  * shading frame (x the tangent towards v, y = n x x), the LTC's M^-1 entries and the lobe's
  * albedo. They depend on the view only, so make_surface computes them once per shading point,
@@ -51,7 +51,7 @@ struct Surface {
 #ifdef SL_PRINCIPLED
   PrincipledLayers layers;
 #endif
-#ifdef SL_AREA_LTC
+#ifdef SL_LTC
   LtcFrame ltc;
 #endif
 };
@@ -94,7 +94,7 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
 #ifdef SL_PRINCIPLED
   s.layers = principled_layers_at(s.NoV, s.roughness, s.base_color, s.eta);
 #endif
-#ifdef SL_AREA_LTC
+#ifdef SL_LTC
   s.ltc = ltc_frame_at(n, v, s.NoV, s.roughness);
 #endif
   return s;

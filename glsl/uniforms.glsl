@@ -21,7 +21,9 @@ struct LightData {
                           * (Cycles' disc facing the point: E = I / (d^2 + r^2)), 0 a sphere;
                           * zw: an area light's half width and height (m) */
   vec4 area;             /* xyz: an area light's local X axis; w: 1 disk or ellipse, 0 rectangle */
-  vec4 influence;        /* x: 1 / r^2 of the distance r the light reaches (0: everywhere) */
+  vec4 influence;        /* x: 1 / r^2 of the distance r the light reaches (0: everywhere); an area
+                          * light's spread: y tan(h), z 1 / (tan h - h), h half its angle (z = 0:
+                          * 180 degrees, none) */
 };
 
 /* The lights are not a uniform block (64 KiB would hold 585 of them): each is a row of a texture,

@@ -49,14 +49,14 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
             info.define(name, value)
         info.typedef_source(programs.read_glsl("uniforms.glsl"))
         slot = 0
-        albedo_table = "SL_MULTISCATTER" in defs or "SL_PRINCIPLED" in defs or "SL_AREA_LTC" in defs
+        albedo_table = "SL_MULTISCATTER" in defs or "SL_PRINCIPLED" in defs or "SL_LTC" in defs
         if albedo_table:
             info.sampler(slot, "FLOAT_2D", "ms_table")
             slot += 1
         if "SL_PRINCIPLED" in defs:
             info.sampler(slot, "FLOAT_2D", "s_table")
             slot += 1
-        if "SL_AREA_LTC" in defs:
+        if "SL_LTC" in defs:
             info.sampler(slot, "FLOAT_2D", "ltc_table")
             slot += 1
         for name in arrays:
@@ -83,7 +83,7 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
                     shader.uniform_sampler("ms_table", gpu_library.albedo_table(terms))
                 if "SL_PRINCIPLED" in defs:
                     shader.uniform_sampler("s_table", gpu_library.s_table())
-                if "SL_AREA_LTC" in defs:
+                if "SL_LTC" in defs:
                     shader.uniform_sampler("ltc_table", gpu_library.ltc_table(terms))
                 for name, texture in textures.items():
                     shader.uniform_sampler(f"in_{name}", texture)

@@ -121,6 +121,8 @@ LIGHTS = {
                              **WIDE_CONE),
     "square-0.1": _area((0.05, 0.05), False),
     "square-0.1-tilted": _area((0.05, 0.05), False, tilted=True),
+    "square-0.1-spread": dataclasses.replace(_area((0.05, 0.05), False), spread=math.radians(30.0)),
+    "ellipse-2km-spread": dataclasses.replace(_area((1e3, 10.0), True), spread=math.radians(10.0)),
     "square-0.01": _area((0.005, 0.005), False),  # 177 equal-area radii at 1 m, just inside the far field
     "rectangle-2km": _area((1e3, 10.0), False),
     "rectangle-0": _area((0.0, 0.0), False),
@@ -132,8 +134,8 @@ LIGHTS = {
 #: The lights split four ways for PAIRWISE: each group mixes kinds, so each program meets several.
 LIGHT_GROUPS = (
     ("point", "sphere-0.1", "square-0.1", "ellipse-0"),
-    ("spot", "sphere-1e4-soft", "rectangle-2km", "disk-0.1"),
-    ("spot-tiny", "spot-0.1-soft", "square-0.1-tilted", "rectangle-0"),
+    ("spot", "sphere-1e4-soft", "rectangle-2km", "disk-0.1", "ellipse-2km-spread"),
+    ("spot-tiny", "spot-0.1-soft", "square-0.1-tilted", "rectangle-0", "square-0.1-spread"),
     ("sun", "ellipse-2km", "ellipse-2km-tilted", "square-0.01"),
 )
 assert sorted(itertools.chain(*LIGHT_GROUPS)) == sorted(LIGHTS)
@@ -306,7 +308,8 @@ BODY = BODY_HEAD + LIGHT_LOOP + BODY_TAIL
 
 def gpu_values(model: str, terms: S.Terms, sw: Sweep, half_target: bool = False) -> np.ndarray:
     kinds = frozenset(LIGHTS[name].kind for name in sw.lights)
-    features = programs.Features(model, 1, kinds, terms, half_target=half_target)
+    features = programs.Features(model, 1, kinds, terms, half_target=half_target,
+                                 sphere_lights=any(LIGHTS[name].sphere_radius > 0.0 for name in sw.lights))
     return evaluate(BODY, sw.gpu_inputs(), dict(features.defines()),
                     extra=(programs.MODEL_FILES[model], "light_shading.glsl"), terms=terms)[:, :3]
 
@@ -414,7 +417,8 @@ def twin_spread(model: str, terms: S.Terms, sw: Sweep, rows: np.ndarray,
         moves += [(p, v + step * np.linalg.norm(v, axis=1, keepdims=True) * u, sun, zero, 0.0) for u in axes]
         if kind == "SUN":
             moves += [(p, v, sun + step * u, zero, 0.0) for u in axes]
-        if kind == "AREA":  # along the axes and the diagonals: the LTC's lobe is steep in some
+        polygon = kind == "AREA" or LIGHTS[sw.lights[j]].sphere_radius > 0.0  # an LTC's polygon
+        if polygon:  # along the axes and the diagonals: the LTC's lobe is steep in some
             moves += [(p, v, sun, zero + u, 0.0) for u in axes + DIAGONALS]
         if ldr:
             moves += [(p, v, sun, zero, sign) for sign in (1.0, -1.0)]
@@ -433,6 +437,8 @@ def twin_spread(model: str, terms: S.Terms, sw: Sweep, rows: np.ndarray,
                 # and the linearly transformed cosine's form factor likewise, with the roundings of
                 # mapping its corners by M^-1 (three products and sums a coordinate) besides
                 jitter = (LTC_JITTER, u)
+            elif polygon and not ldr:  # a sphere light's disc (its irradiance is in closed form)
+                jitter = (LTC_JITTER, np.concatenate([m[3] for m in moves]))
             c = shading.shade_light(model, s, light, E, l, terms, ltc_jitter=jitter)
             if ldr:  # (cos + d)^s = cos^s e^(s d) for a cosine near 1, d = JITTER roundings
                 lobe = np.repeat([m[4] for m in moves], len(sub))

@@ -45,7 +45,8 @@ def _random_case(rng, sizes: bool = False):
             props.update(spot_size=float(rng.uniform(0.5, 2.5)), spot_blend=float(rng.uniform(0.0, 1.0)))
         if kind == "AREA":
             shape = str(rng.choice(["SQUARE", "RECTANGLE", "DISK", "ELLIPSE"]))
-            props.update(shape=shape, size=float(rng.uniform(0.1, 1.0)), size_y=float(rng.uniform(0.1, 1.0)))
+            props.update(shape=shape, size=float(rng.uniform(0.1, 1.0)), size_y=float(rng.uniform(0.1, 1.0)),
+                         spread=float(rng.uniform(0.2, 2.5)) if rng.integers(2) else math.pi)
         if sizes and kind in ("POINT", "SPOT"):  # sphere lights
             props.update(shadow_soft_size=float(rng.uniform(0.05, 0.6)),
                          use_soft_falloff=bool(rng.integers(2)))
@@ -67,7 +68,7 @@ def _twin_light(props) -> S.Light:
     if kind == "AREA":
         sy = props["size_y"] if props["shape"] in ("RECTANGLE", "ELLIPSE") else props["size"]
         extra = dict(axis_x=tuple(m[:, 0]), half_size=(props["size"] / 2, sy / 2),
-                     ellipse=props["shape"] in ("DISK", "ELLIPSE"))
+                     ellipse=props["shape"] in ("DISK", "ELLIPSE"), spread=props["spread"])
     # the reach the scene's default Light Threshold gives it (faded to nothing there)
     factor = max(1.0, props["diffuse_factor"], props["specular_factor"])
     influence = light_tiles.influence_radius(kind, intensity * factor, S.Settings().light_threshold)

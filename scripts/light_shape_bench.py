@@ -1,0 +1,124 @@
+"""Light shapes: frame time per light shape, with each model (a benchmark, not a test).
+
+    .venv/bin/python scripts/light_shape_bench.py [--resolution 1280x720] [--frames 5]
+        [--table docs/bench/light_shapes.md]
+
+Nine spheres of roughness 0.1 to 0.9 on a ground, under four lights of one shape at a time: point
+lights of radius 0, sphere lights of radius 0.25 m (soft falloff on, then off), square area lights
+of 1 m (spread 180 degrees, then 30 degrees). Shadows off, the world black: the shading's own cost
+(glsl/light_shading.glsl; in the physically based model sphere and area lights are linearly
+transformed cosines). Every configuration is rendered round-robin after a warm-up round, in one
+process; the table gives medians of the engine's draw time (GPU work fenced by the read-back) and
+the ratio to point lights. Times are CPU-rasteriser times (Mesa llvmpipe): compare ratios.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import statistics
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
+
+MODELS = ("BLINN_PHONG", "PBR")
+#: (label, light type, radius or size, soft falloff, spread in degrees)
+SHAPES = (("point", "POINT", 0.0, True, 180.0), ("sphere 0.25 m, soft falloff", "POINT", 0.25, True, 180.0),
+          ("sphere 0.25 m", "POINT", 0.25, False, 180.0), ("square 1 m", "AREA", 1.0, False, 180.0),
+          ("square 1 m, spread 30 deg", "AREA", 1.0, False, 30.0))
+LIGHTS = ((-2.0, -1.5, 2.5), (2.0, -1.5, 2.5), (-2.0, 2.0, 2.0), (2.0, 2.0, 3.0))
+
+
+def build(w: int, h: int):
+    import bpy
+    import render
+
+    render.ensure_addon()
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.engine = "SHADING_LAB"
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = w, h, 100
+    scene.shading_lab.shadows = False
+    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    cam.location, cam.rotation_euler = (0.0, -7.5, 5.0), (math.radians(56.0), 0.0, 0.0)
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    bpy.ops.mesh.primitive_plane_add(size=20.0)
+    for i in range(9):
+        location = ((i % 3 - 1) * 1.4, (i // 3 - 1) * 1.4, 0.5)
+        bpy.ops.mesh.primitive_uv_sphere_add(radius=0.5, location=location)
+        mat = bpy.data.materials.new(f"Rough{i}")
+        mat.use_nodes = True
+        bsdf = mat.node_tree.nodes["Principled BSDF"]
+        bsdf.inputs["Roughness"].default_value = 0.1 + 0.1 * i
+        bsdf.inputs["Metallic"].default_value = float(i % 2)
+        bpy.context.object.data.materials.append(mat)
+    groups = {}
+    for label, kind, size, soft, spread in SHAPES:
+        objs = []
+        for j, location in enumerate(LIGHTS):
+            data = bpy.data.lights.new(f"{label}_{j}", kind)
+            data.energy = 300.0
+            if kind == "AREA":
+                data.size, data.spread = size, math.radians(spread)
+            else:
+                data.shadow_soft_size, data.use_soft_falloff = size, soft
+            obj = bpy.data.objects.new(data.name, data)
+            obj.location = location
+            obj.rotation_euler = (0.3 * (j - 1.5), 0.2 * (1.5 - j), 0.0)
+            scene.collection.objects.link(obj)
+            objs.append(obj)
+        groups[label] = objs
+    return scene, groups
+
+
+def main() -> int:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--resolution", default="1280x720")
+    parser.add_argument("--frames", type=int, default=5)
+    parser.add_argument("--table", type=Path, default=ROOT / "docs" / "bench" / "light_shapes.md")
+    args = parser.parse_args()
+    w, h = (int(x) for x in args.resolution.split("x"))
+
+    import bpy
+
+    from addon import engine
+
+    scene, groups = build(w, h)
+    if scene.world is not None:
+        scene.world = None
+    configs = [(model, label) for model in MODELS for label, *_ in SHAPES]
+    times = {c: [] for c in configs}
+    for round_index in range(args.frames + 1):
+        for model, label in configs:
+            for name, objs in groups.items():
+                for obj in objs:
+                    obj.hide_render = name != label
+            scene.shading_lab.model = model
+            bpy.ops.render.render()
+            if round_index > 0:  # round 0 compiles the programs
+                times[model, label].append(engine.last_timings["draw_ms"])
+        print(f"\rround {round_index}/{args.frames}", end="", file=sys.stderr, flush=True)
+    print(file=sys.stderr)
+    med = {c: statistics.median(t) for c, t in times.items()}
+    point = SHAPES[0][0]
+    rows = [f"| {label} | " + " | ".join(f"{med[m, label]:.1f} | {med[m, label] / med[m, point]:.2f}x"
+                                         for m in MODELS) + " |" for label, *_ in SHAPES]
+    table = "\n".join([
+        f"Light shapes, {w}x{h}: nine spheres on a ground under four lights of one shape, shadows off, "
+        f"black world (`scripts/light_shape_bench.py`, {args.frames} frames per configuration after a "
+        "warm-up, round-robin; draw + read-back ms, medians; ratios to point lights).",
+        "",
+        "| lights | Blinn-Phong ms | vs points | Physically based ms | vs points |",
+        "|---|---:|---:|---:|---:|",
+        *rows, ""])
+    print(table)
+    args.table.parent.mkdir(parents=True, exist_ok=True)
+    args.table.write_text(table)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
