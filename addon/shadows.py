@@ -4,7 +4,10 @@ projection per layer, chosen from the lights and the scene's bounds. Pure numpy 
 (glsl/shadows.glsl) read them.
 
 - A **sun** has one orthographic map along its direction, fitted to the bounds of everything
-  that casts or receives (so it does not change while the camera moves).
+  that casts or receives (so it does not change while the camera moves) -- or, where the camera
+  sees deep into the scene (the drawn box's far depth over its near one above
+  ``CASCADE_DEPTH_RATIO``), ``CASCADES`` maps, each fitted to one slice of the view's depth
+  (cascaded shadow maps: fine texels near the camera, coarse far away), which follow the camera.
 - A **spot** whose cone fits in 120 degrees has one perspective map over its cone; a wider spot,
   a **point** light and an **area** light have six (a cube's faces, each widened by
   ``FACE_MARGIN`` so that filter taps near a face's edge stay on it).
@@ -35,6 +38,13 @@ MAX_SPOT_ANGLE = math.radians(120.0)
 CUBE_FACES = (((1, 0, 0), (0, -1, 0)), ((-1, 0, 0), (0, -1, 0)), ((0, 1, 0), (0, 0, 1)),
               ((0, -1, 0), (0, 0, -1)), ((0, 0, 1), (0, -1, 0)), ((0, 0, -1), (0, -1, 0)))
 KIND_CUBE, KIND_PERSPECTIVE, KIND_ORTHOGRAPHIC = 0.0, 1.0, 2.0
+#: A sun's maps when the view is deep, and how deep that is: the far depth of what is drawn over its
+#: near depth (the camera's clip start, or the nearest drawn point).
+CASCADES = 4
+CASCADE_DEPTH_RATIO = 8.0
+#: The cascades' split between logarithmic (1) and uniform (0) depths (Zhang et al. 2006's
+#: practical split scheme).
+CASCADE_SPLIT_LOG = 0.8
 
 
 @dataclass(frozen=True)
@@ -132,24 +142,90 @@ def _far_near(position, lo, hi) -> tuple[float, float]:
     return near, far
 
 
-def _sun_layer(light: Light, lo, hi, size: int):
+def _sun_view(light: Light, lo, hi) -> np.ndarray:
+    return look_at(0.5 * (lo + hi), np.asarray(light.direction, np.float64), (0.0, 0.0, 1.0))
+
+
+def _sun_layer(light: Light, lo, hi, size: int, region=None, cascades: int = 1):
+    """One orthographic map along the sun over the box (lo, hi), or over ``region`` (points, world)
+    where it lies within the box's shadow of the sun; its depth always spans the whole box (every
+    caster upstream). ``cascades``: the sun's number of maps, kept in its first map's extents."""
     direction = np.asarray(light.direction, np.float64)
-    centre = 0.5 * (lo + hi)
-    view = look_at(centre, direction, (0.0, 0.0, 1.0))
+    view = _sun_view(light, lo, hi)
     points = (view[:3, :3] @ _box_corners(lo, hi).T).T + view[:3, 3]
-    half_x = max(np.abs(points[:, 0]).max(), 1e-3)
-    half_y = max(np.abs(points[:, 1]).max(), 1e-3)
+    x_lo, x_hi = points[:, 0].min(), points[:, 0].max()
+    y_lo, y_hi = points[:, 1].min(), points[:, 1].max()
+    if region is not None:
+        seen = (view[:3, :3] @ np.asarray(region, np.float64).T).T + view[:3, 3]
+        x_lo, x_hi = max(x_lo, seen[:, 0].min()), min(x_hi, seen[:, 0].max())
+        y_lo, y_hi = max(y_lo, seen[:, 1].min()), min(y_hi, seen[:, 1].max())
+        x_hi, y_hi = max(x_hi, x_lo + 1e-3), max(y_hi, y_lo + 1e-3)
+    centre_x, centre_y = 0.5 * (x_lo + x_hi), 0.5 * (y_lo + y_hi)
+    half_x = max(0.5 * (x_hi - x_lo), 1e-3)
+    half_y = max(0.5 * (y_hi - y_lo), 1e-3)
     # room for the filter at the box's edge: a few texels
     half_x *= 1.0 + 8.0 / size
     half_y *= 1.0 + 8.0 / size
     top = float(points[:, 2].max()) + 1e-3  # view space looks down -Z: the box's side nearest the sun
     depth = max(top - float(points[:, 2].min()) + 2e-3, 1e-3)
-    near_centre = centre - direction * top  # the map's near plane passes here
+    to_world = np.linalg.inv(view)
+    near_centre = (to_world @ np.array([centre_x, centre_y, top, 1.0]))[:3]  # the map's near plane
     view = look_at(near_centre, direction, (0.0, 0.0, 1.0))
     matrix = orthographic(half_x, half_y, depth) @ view
     texel = 2.0 * max(half_x, half_y) / size
     return [(matrix, (depth, texel, math.tan(0.5 * light.angle), KIND_ORTHOGRAPHIC),
-             (*near_centre, KIND_ORTHOGRAPHIC), view, (half_x, half_y, 0.0, 0.0))]
+             (*near_centre, KIND_ORTHOGRAPHIC), view, (half_x, half_y, float(cascades), 0.0))]
+
+
+def view_depths(camera, lo, hi) -> tuple[float, float] | None:
+    """(near, far) depth along a perspective camera of what lies in the box (lo, hi), within its
+    clip range; None for an orthographic camera (its view is never deep)."""
+    if camera is None or not camera.is_perspective:
+        return None
+    projection = np.asarray(camera.projection, np.float64)
+    a, b = projection[2, 2], projection[2, 3]
+    clip_start, clip_end = b / (a - 1.0), b / (a + 1.0)
+    corners = _box_corners(lo, hi)
+    view = np.asarray(camera.view, np.float64)
+    depth = -((view[:3, :3] @ corners.T).T + view[:3, 3])[:, 2]
+    far = min(float(depth.max()), clip_end)
+    near = max(float(depth.min()), clip_start, 1e-4 * far)
+    return (near, far) if far > near else None
+
+
+def cascade_splits(near: float, far: float, count: int = CASCADES) -> np.ndarray:
+    """count + 1 depths from near to far: the practical split scheme, CASCADE_SPLIT_LOG between
+    logarithmic and uniform."""
+    i = np.arange(count + 1) / count
+    uniform = near + (far - near) * i
+    return CASCADE_SPLIT_LOG * near * (far / near) ** i + (1.0 - CASCADE_SPLIT_LOG) * uniform
+
+
+def _frustum_slice(camera, near: float, far: float) -> np.ndarray:
+    """(8, 3): the world corners of a perspective camera's view between two depths."""
+    projection = np.asarray(camera.projection, np.float64)
+    # x_ndc = (P00 x + P02 z) / -z: at depth d the view spans x in d (-1 -+ P02) / P00
+    corners = []
+    for d in (near, far):
+        for sx in (-1.0, 1.0):
+            for sy in (-1.0, 1.0):
+                x = d * (sx + projection[0, 2]) / projection[0, 0]
+                y = d * (sy + projection[1, 2]) / projection[1, 1]
+                corners.append((x, y, -d, 1.0))
+    to_world = np.linalg.inv(np.asarray(camera.view, np.float64))
+    return (to_world @ np.array(corners).T).T[:, :3]
+
+
+def _sun_layers(light: Light, lo, hi, size: int, camera, depths) -> list:
+    """A sun's maps: one over the box, or CASCADES over the slices of the view's depths."""
+    if depths is None:
+        return _sun_layer(light, lo, hi, size)
+    splits = cascade_splits(*depths)
+    layers = []
+    for i in range(CASCADES):
+        region = _frustum_slice(camera, splits[i], splits[i + 1])
+        layers += _sun_layer(light, lo, hi, size, region, CASCADES if i == 0 else 0)
+    return layers
 
 
 def _perspective_layers(light: Light, lo, hi, size: int, cube: bool):
@@ -178,10 +254,17 @@ def _cube(light: Light) -> bool:
     return light.kind != "SPOT" or 2.0 * math.acos(max(min(light.spot_cos_half, 1.0), -1.0)) > MAX_SPOT_ANGLE
 
 
-def assign(snapshot: Snapshot) -> tuple[tuple[int, ...], int, int]:
+def _layer_count(light: Light, deep: bool) -> int:
+    if light.kind == "SUN":
+        return CASCADES if deep else 1
+    return 6 if _cube(light) else 1
+
+
+def assign(snapshot: Snapshot, deep: bool = False) -> tuple[tuple[int, ...], int, int]:
     """(each light's first layer or -1, layers used, shadowed lights dropped): nothing when shadows
     are off, no light casts or nothing casts; else the shadowed lights in order while
-    ``MAX_SHADOW_LAYERS`` last (a sun or a spot up to 120 degrees takes one, the others six)."""
+    ``MAX_SHADOW_LAYERS`` last (a sun one, or CASCADES where the view is ``deep``; a spot up to 120
+    degrees one; the others six)."""
     first = [-1] * len(snapshot.lights)
     if not snapshot.settings.shadows or not any(item.casts_shadow for item in snapshot.items):
         return tuple(first), 0, 0
@@ -189,7 +272,7 @@ def assign(snapshot: Snapshot) -> tuple[tuple[int, ...], int, int]:
     for i, light in enumerate(snapshot.lights):
         if not light.shadow:
             continue
-        count = 6 if light.kind != "SUN" and _cube(light) else 1
+        count = _layer_count(light, deep)
         if used + count > MAX_SHADOW_LAYERS:
             dropped += 1
             continue
@@ -197,9 +280,18 @@ def assign(snapshot: Snapshot) -> tuple[tuple[int, ...], int, int]:
     return tuple(first), used, dropped
 
 
+def deep_view(snapshot: Snapshot, lo, hi):
+    """The view's (near, far) depths over the drawn box where it is deep enough for a sun's
+    cascades (far / near > CASCADE_DEPTH_RATIO, a perspective camera, a sun that casts), else None."""
+    if not any(light.kind == "SUN" and light.shadow for light in snapshot.lights):
+        return None
+    depths = view_depths(snapshot.camera, lo, hi)
+    return depths if depths is not None and depths[1] > CASCADE_DEPTH_RATIO * depths[0] else None
+
+
 def plan(snapshot: Snapshot, bounds: dict[str, np.ndarray]) -> ShadowPlan:
     """The shadow maps ``snapshot`` needs (see ``assign``), fitted to the scene's bounds
-    (``bounds[key]``: each geometry's object-space (min, max))."""
+    (``bounds[key]``: each geometry's object-space (min, max)) and, for cascaded suns, to the view."""
     size = int(snapshot.settings.shadow_map_size)
     first, used, dropped = assign(snapshot)
     box = scene_bounds(snapshot, bounds) if used else None
@@ -211,12 +303,15 @@ def plan(snapshot: Snapshot, bounds: dict[str, np.ndarray]) -> ShadowPlan:
     lo, hi = box
     pad = 1e-3 * max(float(np.max(hi - lo)), 1.0)
     lo, hi = lo - pad, hi + pad
+    depths = deep_view(snapshot, lo, hi)
+    if depths is not None:
+        first, used, dropped = assign(snapshot, deep=True)
     layers = []
     for light, start in zip(snapshot.lights, first):
         if start < 0:
             continue
         if light.kind == "SUN":
-            layers += _sun_layer(light, lo, hi, size)
+            layers += _sun_layers(light, lo, hi, size, snapshot.camera, depths)
         else:
             layers += _perspective_layers(light, lo, hi, size, _cube(light))
     matrices, info, origins, views, extents = zip(*layers)

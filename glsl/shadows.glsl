@@ -20,6 +20,7 @@
 #define SHADOW_SEARCH_TAPS 16 /* half of them for a search within 2 texels */
 #define SHADOW_FILTER_TAPS 24 /* half of them for a penumbra within 3 texels */
 #define SHADOW_MAX_RADIUS 48.0 /* texels */
+#define SHADOW_CASCADE_ROOM 32.0 /* texels: a cascade is left this far inside its edge */
 
 /* The cube face holding direction d (from the light), in addon/shadows.py's CUBE_FACES order. */
 int shadow_face(vec3 d)
@@ -104,6 +105,18 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
   int kind = int(shadow.layer_origin[first].w + 0.5);
   if (kind == SHADOW_CUBE) {
     layer += shadow_face(from_light);
+  }
+  else if (kind == SHADOW_ORTHOGRAPHIC) {
+    /* a sun's cascades (addon/shadows.py), finest first: the first whose map holds p with room
+     * for the filter, else the last */
+    int cascades = int(shadow.layer_extent[first].z + 0.5);
+    for (int c = 1; c < cascades; c++) {
+      vec2 at = (shadow.layer_matrix[layer] * vec4(p, 1.0)).xy;
+      if (all(lessThan(abs(at), vec2(1.0 - SHADOW_CASCADE_ROOM / float(SL_SHADOW_SIZE))))) {
+        break;
+      }
+      layer++;
+    }
   }
   vec4 clip = shadow.layer_matrix[layer] * vec4(p, 1.0);
   if (clip.w <= 0.0) {
