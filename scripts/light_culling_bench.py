@@ -13,9 +13,7 @@ the ratio to 4 lights. Times are CPU-rasteriser times (Mesa llvmpipe): compare r
 
 from __future__ import annotations
 
-import argparse
 import math
-import statistics
 import sys
 from pathlib import Path
 
@@ -64,33 +62,20 @@ def build(w: int, h: int):
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--resolution", default="1280x720")
-    parser.add_argument("--frames", type=int, default=5)
-    parser.add_argument("--table", type=Path, default=ROOT / "docs" / "bench" / "light_culling.md")
-    args = parser.parse_args()
-    w, h = (int(x) for x in args.resolution.split("x"))
+    import round_robin
 
-    import bpy
-
-    from addon import engine
+    args, w, h = round_robin.parse_args(__doc__, "light_culling.md")
 
     scene, groups = build(w, h)
     configs = [(model, n, culling) for model in ("BLINN_PHONG", "PBR") for n in COUNTS
                for culling in (True, False)]
-    times = {c: [] for c in configs}
-    for round_index in range(args.frames + 1):
-        for model, n, culling in configs:
-            for count, objs in groups.items():
-                for obj in objs:
-                    obj.hide_render = count != n
-            scene.shading_lab.model, scene.shading_lab.light_culling = model, culling
-            bpy.ops.render.render()
-            if round_index > 0:  # round 0 compiles the programs
-                times[model, n, culling].append(engine.last_timings["draw_ms"])
-        print(f"\rround {round_index}/{args.frames}", end="", file=sys.stderr, flush=True)
-    print(file=sys.stderr)
-    med = {c: statistics.median(t) for c, t in times.items()}
+
+    def apply(config):
+        model, n, culling = config
+        round_robin.show_only(groups, n)
+        scene.shading_lab.model, scene.shading_lab.light_culling = model, culling
+
+    med = round_robin.median_draw_ms(configs, apply, args.frames)
     rows = []
     for model in ("BLINN_PHONG", "PBR"):
         for n in COUNTS:
@@ -105,9 +90,7 @@ def main() -> int:
         "| model | lights | culled ms | vs 4 lights | every light ms | vs 4 lights | culling speed-up |",
         "|---|---:|---:|---:|---:|---:|---:|",
         *rows, ""])
-    print(table)
-    args.table.parent.mkdir(parents=True, exist_ok=True)
-    args.table.write_text(table)
+    round_robin.write_table(args.table, table)
     return 0
 
 

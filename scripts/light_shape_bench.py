@@ -14,9 +14,7 @@ the ratio to point lights. Times are CPU-rasteriser times (Mesa llvmpipe): compa
 
 from __future__ import annotations
 
-import argparse
 import math
-import statistics
 import sys
 from pathlib import Path
 
@@ -75,34 +73,21 @@ def build(w: int, h: int):
 
 
 def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--resolution", default="1280x720")
-    parser.add_argument("--frames", type=int, default=5)
-    parser.add_argument("--table", type=Path, default=ROOT / "docs" / "bench" / "light_shapes.md")
-    args = parser.parse_args()
-    w, h = (int(x) for x in args.resolution.split("x"))
+    import round_robin
 
-    import bpy
-
-    from addon import engine
+    args, w, h = round_robin.parse_args(__doc__, "light_shapes.md")
 
     scene, groups = build(w, h)
     if scene.world is not None:
         scene.world = None
     configs = [(model, label) for model in MODELS for label, *_ in SHAPES]
-    times = {c: [] for c in configs}
-    for round_index in range(args.frames + 1):
-        for model, label in configs:
-            for name, objs in groups.items():
-                for obj in objs:
-                    obj.hide_render = name != label
-            scene.shading_lab.model = model
-            bpy.ops.render.render()
-            if round_index > 0:  # round 0 compiles the programs
-                times[model, label].append(engine.last_timings["draw_ms"])
-        print(f"\rround {round_index}/{args.frames}", end="", file=sys.stderr, flush=True)
-    print(file=sys.stderr)
-    med = {c: statistics.median(t) for c, t in times.items()}
+
+    def apply(config):
+        model, label = config
+        round_robin.show_only(groups, label)
+        scene.shading_lab.model = model
+
+    med = round_robin.median_draw_ms(configs, apply, args.frames)
     point = SHAPES[0][0]
     rows = [f"| {label} | " + " | ".join(f"{med[m, label]:.1f} | {med[m, label] / med[m, point]:.2f}x"
                                          for m in MODELS) + " |" for label, *_ in SHAPES]
@@ -114,9 +99,7 @@ def main() -> int:
         "| lights | Blinn-Phong ms | vs points | Physically based ms | vs points |",
         "|---|---:|---:|---:|---:|",
         *rows, ""])
-    print(table)
-    args.table.parent.mkdir(parents=True, exist_ok=True)
-    args.table.write_text(table)
+    round_robin.write_table(args.table, table)
     return 0
 
 

@@ -250,9 +250,9 @@ def test_layers_per_light_kind():
     assert shadows.assign(extract.snapshot(bpy.context.evaluated_depsgraph_get()))[1] == 6
 
 
-def test_viewport_redraws_shadow_maps_only_when_lights_or_casters_move():
-    scene, light = _scene("SUN", resolution=16)
-    r = renderer.Renderer()
+def _drawing(r):
+    """A function that renders the current scene with renderer ``r`` (as the viewport does) and
+    returns how many shadow-map layers that render drew."""
     depsgraph = bpy.context.evaluated_depsgraph_get
 
     def draw():
@@ -260,6 +260,13 @@ def test_viewport_redraws_shadow_maps_only_when_lights_or_casters_move():
             r.render(extract.snapshot(depsgraph(), 16, 16))
             return r.shadow_layers_drawn
         return run_on_gpu(job)
+    return draw
+
+
+def test_viewport_redraws_shadow_maps_only_when_lights_or_casters_move():
+    scene, light = _scene("SUN", resolution=16)
+    r = renderer.Renderer()
+    draw = _drawing(r)
 
     try:
         counts = [draw(), draw()]
@@ -363,13 +370,7 @@ def test_cascades_follow_the_camera_and_nothing_else():
     its view), not for a redraw or a material edit."""
     scene = _deep_scene(resolution=16)
     r = renderer.Renderer()
-    depsgraph = bpy.context.evaluated_depsgraph_get
-
-    def draw():
-        def job(_depsgraph):
-            r.render(extract.snapshot(depsgraph(), 16, 16))
-            return r.shadow_layers_drawn
-        return run_on_gpu(job)
+    draw = _drawing(r)
 
     try:
         counts = [draw(), draw()]
