@@ -63,6 +63,7 @@ def test_light_kinds_specialise_the_program():
     spot = programs.Features(model="PBR", max_lights=1, light_kinds=frozenset({"SPOT"}))
     assert ("SL_HAS_POINT", "1") in point.defines() and ("SL_HAS_SPOT", "1") not in point.defines()
     assert point.defines() != spot.defines()
+    run_on_gpu(lambda _d: gpu_library.LIBRARY.clear())  # whatever programs earlier tests left
     _lit_scene(("POINT",))
     run_on_gpu(lambda d: renderer.Renderer().render(extract.snapshot(d, 16, 16)))
     count = gpu_library.LIBRARY.program_count()
