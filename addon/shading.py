@@ -86,6 +86,9 @@ def _unit_or(v, fallback):
 #: to the linearly transformed cosines over a sphere light's disc (lights.glsl).
 SPHERE_LTC_FROM = 0.1
 SPHERE_LTC_FULL = 0.2
+#: Beyond this k the disc is a 16-gon, below it an octagon (lights.glsl's SPHERE_FINE_K).
+SPHERE_FINE_K = 2.0
+SPHERE_COARSE_SIDES = 8
 
 
 def sphere_light_theta(light: Light, p):
@@ -144,7 +147,7 @@ def area_offsets(light: Light) -> np.ndarray:
     return uv[:, :1] * hx * x + uv[:, 1:] * hy * y
 
 
-def sphere_offsets(light: Light, p) -> np.ndarray:
+def sphere_offsets(light: Light, p, sides: int = AREA_ELLIPSE_SIDES) -> np.ndarray:
     """(..., 16, 3): a sphere light seen from the points ``p`` as the disc through its centre facing
     each point with the same solid angle, relative to its centre (lights.glsl's sphere_polygon):
     radius r with soft falloff, r d / sqrt(d^2 - r^2) for the sphere (89.4 degrees inside it)."""
@@ -157,8 +160,9 @@ def sphere_offsets(light: Light, p) -> np.ndarray:
     other = np.where((np.abs(w[..., :1]) < 0.9), [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
     x = _unit_or(np.cross(other, w), other)  # p at the centre (w = 0): any frame
     y = np.cross(w, x)
-    phi = 2.0 * np.pi * np.arange(AREA_ELLIPSE_SIDES) / AREA_ELLIPSE_SIDES
-    uv = ELLIPSE_SCALE * np.stack([np.cos(phi), np.sin(phi)], -1)
+    phi = 2.0 * np.pi * np.arange(sides) / sides
+    scale_n = math.sqrt(2.0 * math.pi / (sides * math.sin(2.0 * math.pi / sides)))  # the n-gon of its area
+    uv = scale_n * np.stack([np.cos(phi), np.sin(phi)], -1)
     scale = np.asarray(radius)[..., None, None]
     return scale * (uv[:, :1] * x[..., None, :] + uv[:, 1:] * y[..., None, :])
 
@@ -574,15 +578,21 @@ def shade_area_light(s: Surface, light: Light, E, l, visibility, terms: Terms, l
     return np.where(far[..., None], pbr_direct(s, l, E, factors, terms), out)
 
 
-def shade_sphere_light(s: Surface, light: Light, E, l, terms: Terms, ltc_jitter=None):
+def shade_sphere_light(s: Surface, light: Light, E, l, terms: Terms, ltc_jitter=None, k=None):
     """light_shading.glsl's shade_sphere_light: radiance I / (pi r^2) over the sphere light's disc
     (sphere_offsets), L = E (d^2 [+ r^2]) / (pi r^2), form factor r^2 / (d^2 [+ r^2])."""
     to_centre = np.asarray(light.position, np.float64) - s.p
     r2 = light.sphere_radius ** 2
     falloff = _dot(to_centre, to_centre) + (r2 if light.soft_falloff else 0.0)
     L = np.asarray(E, np.float64) * (np.maximum(falloff, MIN_DIST2) / (np.pi * r2))[..., None]
-    out = shade_polygon_light(s, sphere_offsets(light, s.p), to_centre, L, r2 / np.maximum(falloff, 1e-30),
-                              l, (light.diffuse_factor, light.specular_factor), terms, ltc_jitter)
+    factors = (light.diffuse_factor, light.specular_factor)
+    fine = np.ones(np.shape(s.NoV), bool) if k is None else np.asarray(k) > SPHERE_FINE_K
+    out = 0.0
+    for sides, use in ((AREA_ELLIPSE_SIDES, fine), (SPHERE_COARSE_SIDES, ~fine)):
+        if np.any(use):
+            c = shade_polygon_light(s, sphere_offsets(light, s.p, sides), to_centre, L,
+                                    r2 / np.maximum(falloff, 1e-30), l, factors, terms, ltc_jitter)
+            out = out + np.where(use[..., None], c, 0.0)
     # at the centre: no direction to the light (E_Point's l = 0), no light
     return np.where((_dot(to_centre, to_centre) > 0.0)[..., None], out, 0.0)
 
@@ -605,7 +615,7 @@ def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAU
         share = np.where(near, np.clip((k - SPHERE_LTC_FROM) / (SPHERE_LTC_FULL - SPHERE_LTC_FROM), 0.0, 1.0),
                          0.0)
         if np.any(share > 0.0):
-            polygon = shade_sphere_light(s, light, E, l, terms, ltc_jitter)
+            polygon = shade_sphere_light(s, light, E, l, terms, ltc_jitter, k)
         r_dir = 2.0 * _dot(s.n, s.v)[..., None] * s.n - s.v
         l_specular, alpha_wide, wide_weight, point_weight = sphere_light_specular(light, s.p, r_dir, s.alpha)
         wide = copy.copy(s)

@@ -66,9 +66,10 @@ vec3 shade_area_light(Surface s, LightData light, vec3 l, vec3 E, float visibili
  * or E_Spot's, windowed and shadowed) is L pi r^2 / (d^2 + r^2 [soft falloff]), so L is E times
  * that, with the spot's cone, window and shadow in it; the form factor r^2 / (d^2 [+ r^2]) is
  * sin^2 of the cone's half-angle, whose horizon clipping is Snyder's exactly. */
-vec3 shade_sphere_light(Surface s, LightData light, vec3 l, vec3 E, vec4 factors)
+vec3 shade_sphere_light(Surface s, LightData light, vec3 l, vec3 E, vec4 factors, float k)
 {
-  LightPolygon poly = sphere_polygon(light, s.p);
+  int sides = k > SPHERE_FINE_K ? AREA_ELLIPSE_SIDES : SPHERE_COARSE_SIDES;
+  LightPolygon poly = sphere_polygon(light, s.p, sides);
   float d2 = dot(poly.to_centre, poly.to_centre);
   if (d2 <= 0.0) {
     return vec3(0.0); /* at the centre: no direction to the light (E_Point's l = 0), no light */
@@ -100,11 +101,11 @@ vec3 shade_light(Surface s, LightData light, vec3 l, vec3 E, float visibility, v
     float ltc_share = 0.0;
 #    ifdef SL_LTC
     vec3 to_light = light.position_kind.xyz - s.p;
+    float k = sphere_light_theta(light, s.p) / max(s.alpha, 1e-12);
     if (!sphere_far_field(light, dot(to_light, to_light))) {
-      float k = sphere_light_theta(light, s.p) / max(s.alpha, 1e-12);
       ltc_share = saturate((k - SPHERE_LTC_FROM) / (SPHERE_LTC_FULL - SPHERE_LTC_FROM));
     }
-    vec3 c_ltc = ltc_share > 0.0 ? shade_sphere_light(s, light, l, E, factors) : vec3(0.0);
+    vec3 c_ltc = ltc_share > 0.0 ? shade_sphere_light(s, light, l, E, factors, k) : vec3(0.0);
     if (ltc_share >= 1.0) {
       return c_ltc;
     }
