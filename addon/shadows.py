@@ -52,11 +52,12 @@ class ShadowPlan:
     """The layers of one frame's shadow maps.
 
     ``matrices`` (n, 4, 4): world -> clip of each layer (``views`` then the projection, whose
-    half extents ``extents`` holds); ``info`` (n, 4): far distance (metres
+    half extents ``extents`` holds, z a sun's number of cascades in its first layer, w the light's
+    shadow Filter in texels); ``info`` (n, 4): far distance (metres
     per unit of stored depth), the width of one texel per metre of distance (perspective) or in
     metres (orthographic), the light's size for penumbrae (radius in metres; a sun's tan of half
-    its angle), and the layer's kind; ``origins`` (n, 4): the light's position (perspective) or
-    the map's near-plane centre (orthographic), w the layer's kind again. ``first_layer[i]`` is
+    its angle), and the light's Resolution Limit (m); ``origins`` (n, 4): the light's position
+    (perspective) or the map's near-plane centre (orthographic), w the layer's kind. ``first_layer[i]`` is
     light i's first layer, -1 without shadows."""
 
     size: int
@@ -173,8 +174,8 @@ def _sun_layer(light: Light, lo, hi, size: int, region=None, cascades: int = 1):
     view = look_at(near_centre, direction, (0.0, 0.0, 1.0))
     matrix = orthographic(half_x, half_y, depth) @ view
     texel = 2.0 * max(half_x, half_y) / size
-    return [(matrix, (depth, texel, math.tan(0.5 * light.angle), KIND_ORTHOGRAPHIC),
-             (*near_centre, KIND_ORTHOGRAPHIC), view, (half_x, half_y, float(cascades), 0.0))]
+    return [(matrix, (depth, texel, math.tan(0.5 * light.angle), light.shadow_resolution_limit),
+             (*near_centre, KIND_ORTHOGRAPHIC), view, (half_x, half_y, float(cascades), light.shadow_filter))]
 
 
 def view_depths(camera, lo, hi) -> tuple[float, float] | None:
@@ -245,8 +246,8 @@ def _perspective_layers(light: Light, lo, hi, size: int, cube: bool):
     layers = []
     for forward, up in faces:
         view = look_at(position, forward, up)
-        layers.append((projection @ view, (far, texel, light.radius, kind), (*position, kind), view,
-                       (tan_half, tan_half, 0.0, 0.0)))
+        layers.append((projection @ view, (far, texel, light.radius, light.shadow_resolution_limit),
+                       (*position, kind), view, (tan_half, tan_half, 0.0, light.shadow_filter)))
     return layers
 
 

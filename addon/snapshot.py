@@ -314,6 +314,8 @@ class Light:
     angle: float = 0.0  # a sun's angular diameter (radians)
     world: bool = False  # split off the world's brightest texels: it lights what the world lights
     shadow: bool = False  # casts shadows (Blender's Cast Shadow, and the scene's Shadows setting)
+    shadow_filter: float = 1.0  # Blender's shadow Filter: the hard shadow's blur radius in map texels
+    shadow_resolution_limit: float = 0.001  # Blender's Resolution Limit: the smallest texel (m)
     radius: float = 0.0  # the emitter's size for soft shadows: a sphere's radius (point, spot),
     #                     an area light's equal-area disc radius (m); a sun uses ``angle``
     soft_falloff: bool = False  # a point or spot of radius r: Cycles' disc facing the point,

@@ -93,6 +93,21 @@ float shadow_bilinear(int layer, vec2 uv_texels, float d, vec2 gradient, float b
  * the last by the golden angle (a fixed rotation: no sine or cosine per tap). */
 const mat2 GOLDEN_TURN = mat2(-0.7373688, 0.6754903, -0.6754903, -0.7373688);
 
+/* Percentage-closer filter over a disc of `radius` texels (Vogel points from first_direction). */
+float shadow_pcf(int layer, vec2 uv_texels, float radius, vec2 first_direction, float d, vec2 gradient,
+                 float bias)
+{
+  float lit = 0.0;
+  vec2 direction = first_direction;
+  int taps = radius <= 3.0 ? SHADOW_FILTER_TAPS / 2 : SHADOW_FILTER_TAPS;
+  for (int k = 0; k < taps; k++) {
+    vec2 at = uv_texels + (radius * sqrt((float(k) + 0.5) / float(taps))) * direction;
+    direction = GOLDEN_TURN * direction;
+    lit += shadow_test(layer, ivec2(floor(at)), uv_texels, d, gradient, bias);
+  }
+  return lit / float(taps);
+}
+
 /* The fraction of `light` that reaches p (geometric normal ng): 1 unshadowed. */
 float light_visibility(LightData light, vec3 p, vec3 ng)
 {
@@ -138,11 +153,13 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
                   shadow_plane_distance(layer, uv_texels, p, ng);
   gradient = clamp(gradient, vec2(-64.0 * texel), vec2(64.0 * texel));
   float bias = 0.5 * texel + 1e-5 * d;
+  /* the light's Filter (texels) and Resolution Limit (the smallest texel, m): the narrowest filter */
+  float filter_radius = min(max(shadow.layer_extent[layer].w, info.w / texel), SHADOW_MAX_RADIUS);
+  float turn = 6.2831853 * fract(52.9829189 * fract(dot(gl_FragCoord.xy, vec2(0.06711056, 0.00583715))));
+  vec2 first_direction = vec2(cos(turn), sin(turn)); /* a per-pixel turn (interleaved gradient noise) */
 #ifdef SL_SOFT_SHADOWS
   float size = info.z;
   if (size > 0.0) {
-    float turn = 6.2831853 * fract(52.9829189 * fract(dot(gl_FragCoord.xy, vec2(0.06711056, 0.00583715))));
-    vec2 first_direction = vec2(cos(turn), sin(turn)); /* a per-pixel turn (interleaved gradient noise) */
     /* blocker search: casters between the receiver and a quarter of its distance (the sun: the
      * map's top) that hide some of the light */
     float search = ortho ? d * size / texel : 3.0 * size / info.y / d;
@@ -167,20 +184,15 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
     }
     float d_blocker = max(blocker_sum / blockers, 1e-4);
     float penumbra = ortho ? (d - d_blocker) * size : size * (d - d_blocker) / d_blocker;
-    float radius = min(max(penumbra, 0.0) / texel, SHADOW_MAX_RADIUS);
+    float radius = min(max(max(penumbra, 0.0) / texel, filter_radius), SHADOW_MAX_RADIUS);
     if (radius > 1.0) {
-      float lit = 0.0;
-      direction = first_direction;
-      taps = radius <= 3.0 ? SHADOW_FILTER_TAPS / 2 : SHADOW_FILTER_TAPS;
-      for (int k = 0; k < taps; k++) {
-        vec2 at = uv_texels + (radius * sqrt((float(k) + 0.5) / float(taps))) * direction;
-        direction = GOLDEN_TURN * direction;
-        lit += shadow_test(layer, ivec2(floor(at)), uv_texels, d, gradient, bias);
-      }
-      return lit / float(taps);
+      return shadow_pcf(layer, uv_texels, radius, first_direction, d, gradient, bias);
     }
   }
 #endif
+  if (filter_radius > 1.0) {
+    return shadow_pcf(layer, uv_texels, filter_radius, first_direction, d, gradient, bias);
+  }
   return shadow_bilinear(layer, uv_texels, d, gradient, bias);
 }
 

@@ -383,3 +383,35 @@ def test_cascades_follow_the_camera_and_nothing_else():
         run_on_gpu(lambda _d: r.free())
     n = shadows.CASCADES
     assert counts == [n, n, n, 2 * n], counts
+
+
+def test_a_lights_filter_and_resolution_limit_blur_its_shadow(tmp_path):
+    """Blender's per-light shadow Filter (the hard shadow's filter radius in map texels, 1 by
+    default) and Resolution Limit (the smallest texel, 1 mm by default): the point light's hard
+    shadow at the defaults is the bilinear filter's (unchanged); Filter 4 or a 2 cm limit (about 3
+    texels at the ground) widen its edge. Measured edge pixels (0.05 < visibility < 0.95) at
+    96 px: FILTER_EDGES (default, Filter 4, limit 2 cm)."""
+    scene, light = _scene("POINT")
+
+    def edges(tag):
+        visibility, unshadowed = _visibility(scene, tmp_path, tag)
+        seen = unshadowed > 0.02 * unshadowed.max()
+        return int((seen & (visibility > 0.05) & (visibility < 0.95)).sum()), visibility
+
+    default, v_default = edges("default")
+    light.data.shadow_filter_radius = 1.0
+    light.data.shadow_maximum_resolution = 0.001
+    same, v_same = edges("same")
+    light.data.shadow_filter_radius = 4.0
+    wide, _ = edges("filter4")
+    light.data.shadow_filter_radius = 1.0
+    light.data.shadow_maximum_resolution = 0.02
+    limited, _ = edges("limit")
+    print(f"edge pixels: default {default}, filter 4 {wide}, limit 2 cm {limited}")
+    assert np.array_equal(v_default, v_same)
+    for got, measured in zip((default, wide, limited), FILTER_EDGES):
+        assert abs(got - measured) <= 0.25 * measured + 3, (default, wide, limited, FILTER_EDGES)
+    assert wide > 3.0 * default and limited > 3.0 * default, (default, wide, limited)
+
+
+FILTER_EDGES = (15, 87, 68)
