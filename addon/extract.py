@@ -569,6 +569,7 @@ def make_light(light: bpy.types.Light, matrix, threshold: float = 0.0) -> S.Ligh
         shadow=bool(getattr(light, "use_shadow", True)),
         shadow_filter=max(float(getattr(light, "shadow_filter_radius", 1.0)), 0.0),
         shadow_resolution_limit=max(float(getattr(light, "shadow_maximum_resolution", 0.001)), 0.0),
+        shadow_jitter=bool(getattr(light, "use_shadow_jitter", False)),
         **extra,
     )
 

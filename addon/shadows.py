@@ -53,7 +53,7 @@ class ShadowPlan:
 
     ``matrices`` (n, 4, 4): world -> clip of each layer (``views`` then the projection, whose
     half extents ``extents`` holds, z a sun's number of cascades in its first layer, w the light's
-    shadow Filter in texels); ``info`` (n, 4): far distance (metres
+    shadow Filter in texels, -(Filter + 1) with Jitter on); ``info`` (n, 4): far distance (metres
     per unit of stored depth), the width of one texel per metre of distance (perspective) or in
     metres (orthographic), the light's size for penumbrae (radius in metres; a sun's tan of half
     its angle), and the light's Resolution Limit (m); ``origins`` (n, 4): the light's position
@@ -143,6 +143,12 @@ def _far_near(position, lo, hi) -> tuple[float, float]:
     return near, far
 
 
+def _filter_code(light: Light) -> float:
+    """A layer's extents.w: the light's shadow Filter (texels), stored as -(Filter + 1) with Jitter
+    on (glsl/shadows.glsl: twice the filter taps)."""
+    return -(light.shadow_filter + 1.0) if light.shadow_jitter else light.shadow_filter
+
+
 def _sun_view(light: Light, lo, hi) -> np.ndarray:
     return look_at(0.5 * (lo + hi), np.asarray(light.direction, np.float64), (0.0, 0.0, 1.0))
 
@@ -175,7 +181,7 @@ def _sun_layer(light: Light, lo, hi, size: int, region=None, cascades: int = 1):
     matrix = orthographic(half_x, half_y, depth) @ view
     texel = 2.0 * max(half_x, half_y) / size
     return [(matrix, (depth, texel, math.tan(0.5 * light.angle), light.shadow_resolution_limit),
-             (*near_centre, KIND_ORTHOGRAPHIC), view, (half_x, half_y, float(cascades), light.shadow_filter))]
+             (*near_centre, KIND_ORTHOGRAPHIC), view, (half_x, half_y, float(cascades), _filter_code(light)))]
 
 
 def view_depths(camera, lo, hi) -> tuple[float, float] | None:
@@ -247,7 +253,7 @@ def _perspective_layers(light: Light, lo, hi, size: int, cube: bool):
     for forward, up in faces:
         view = look_at(position, forward, up)
         layers.append((projection @ view, (far, texel, light.radius, light.shadow_resolution_limit),
-                       (*position, kind), view, (tan_half, tan_half, 0.0, light.shadow_filter)))
+                       (*position, kind), view, (tan_half, tan_half, 0.0, _filter_code(light))))
     return layers
 
 

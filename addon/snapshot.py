@@ -316,6 +316,7 @@ class Light:
     shadow: bool = False  # casts shadows (Blender's Cast Shadow, and the scene's Shadows setting)
     shadow_filter: float = 1.0  # Blender's shadow Filter: the hard shadow's blur radius in map texels
     shadow_resolution_limit: float = 0.001  # Blender's Resolution Limit: the smallest texel (m)
+    shadow_jitter: bool = False  # Blender's Jitter: soft shadows at higher precision (more filter taps)
     radius: float = 0.0  # the emitter's size for soft shadows: a sphere's radius (point, spot),
     #                     an area light's equal-area disc radius (m); a sun uses ``angle``
     soft_falloff: bool = False  # a point or spot of radius r: Cycles' disc facing the point,

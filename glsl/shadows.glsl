@@ -95,11 +95,11 @@ const mat2 GOLDEN_TURN = mat2(-0.7373688, 0.6754903, -0.6754903, -0.7373688);
 
 /* Percentage-closer filter over a disc of `radius` texels (Vogel points from first_direction). */
 float shadow_pcf(int layer, vec2 uv_texels, float radius, vec2 first_direction, float d, vec2 gradient,
-                 float bias)
+                 float bias, int tap_scale)
 {
   float lit = 0.0;
   vec2 direction = first_direction;
-  int taps = radius <= 3.0 ? SHADOW_FILTER_TAPS / 2 : SHADOW_FILTER_TAPS;
+  int taps = (radius <= 3.0 ? SHADOW_FILTER_TAPS / 2 : SHADOW_FILTER_TAPS) * tap_scale;
   for (int k = 0; k < taps; k++) {
     vec2 at = uv_texels + (radius * sqrt((float(k) + 0.5) / float(taps))) * direction;
     direction = GOLDEN_TURN * direction;
@@ -154,7 +154,10 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
   gradient = clamp(gradient, vec2(-64.0 * texel), vec2(64.0 * texel));
   float bias = 0.5 * texel + 1e-5 * d;
   /* the light's Filter (texels) and Resolution Limit (the smallest texel, m): the narrowest filter */
-  float filter_radius = min(max(shadow.layer_extent[layer].w, info.w / texel), SHADOW_MAX_RADIUS);
+  float filter_code = shadow.layer_extent[layer].w; /* -(Filter + 1) with Jitter: twice the taps */
+  int tap_scale = filter_code < 0.0 ? 2 : 1;
+  float filter_radius = min(max(filter_code < 0.0 ? -filter_code - 1.0 : filter_code, info.w / texel),
+                            SHADOW_MAX_RADIUS);
   float turn = 6.2831853 * fract(52.9829189 * fract(dot(gl_FragCoord.xy, vec2(0.06711056, 0.00583715))));
   vec2 first_direction = vec2(cos(turn), sin(turn)); /* a per-pixel turn (interleaved gradient noise) */
 #ifdef SL_SOFT_SHADOWS
@@ -168,7 +171,7 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
     float blocker_sum = 0.0;
     vec2 direction = first_direction;
     /* a search a few texels wide needs fewer taps (half of them within 2 texels) */
-    int taps = search <= 2.0 ? SHADOW_SEARCH_TAPS / 2 : SHADOW_SEARCH_TAPS;
+    int taps = (search <= 2.0 ? SHADOW_SEARCH_TAPS / 2 : SHADOW_SEARCH_TAPS) * tap_scale;
     for (int k = 0; k < taps; k++) {
       vec2 at = uv_texels + (search * sqrt((float(k) + 0.5) / float(taps))) * direction;
       direction = GOLDEN_TURN * direction;
@@ -186,12 +189,12 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
     float penumbra = ortho ? (d - d_blocker) * size : size * (d - d_blocker) / d_blocker;
     float radius = min(max(max(penumbra, 0.0) / texel, filter_radius), SHADOW_MAX_RADIUS);
     if (radius > 1.0) {
-      return shadow_pcf(layer, uv_texels, radius, first_direction, d, gradient, bias);
+      return shadow_pcf(layer, uv_texels, radius, first_direction, d, gradient, bias, tap_scale);
     }
   }
 #endif
   if (filter_radius > 1.0) {
-    return shadow_pcf(layer, uv_texels, filter_radius, first_direction, d, gradient, bias);
+    return shadow_pcf(layer, uv_texels, filter_radius, first_direction, d, gradient, bias, tap_scale);
   }
   return shadow_bilinear(layer, uv_texels, d, gradient, bias);
 }
