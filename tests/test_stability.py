@@ -154,7 +154,7 @@ REL_TOL = 1e-4
 MODERATE_LOW = 1e-4
 #: The perturbation of twin_spread, in float32 unit roundoffs (of each vector's length).
 JITTER = 4.0
-#: The same for an area light's linearly transformed cosine (its mapped corners and form factor,
+#: The same for an area or sphere light's linearly transformed cosine (its mapped corners and form factor,
 #: ltc.ltc_integral's jitter): each corner is first multiplied by M^-1, whose entries lie up to 1e7
 #: apart at grazing incidence, and the sum follows. Measured: at 4 x JITTER 81 rows of a 2 km
 #: ellipse seen at n.v = 1e-7 disagreed by up to 1.03 x the bound; 8 x holds every row.
