@@ -220,7 +220,7 @@ Measured one light at a time against Cycles (`tests/test_light_shapes.py`, shado
 |error| / mean over a white GGX metal sphere): area lights (square, rectangle, disk, ellipse) at
 roughness 0.1 / 0.3 / 0.6 / 1: 0.6-1.0 % / 1.0-1.7 % / 1.2-1.5 % / 1.0-1.4 % (shaded as a point:
 117-129 % / 45-59 % / 6-8 % / 5-6 %); sphere lights of 0.1 / 0.5 m at roughness 0.05: 0.6 % /
-1.0-1.4 %, 0.2: 0.2 % / 1.0 %, 0.5: 0.5 % / 1.4 % (as a point: 93 % / 98 %, 11 % / 98 %, 0.3 % /
+1.0-1.4 %, 0.2: 0.2 % / 1.0 %, 0.5: 0.3 % / 1.4 % (as a point: 93 % / 98 %, 11 % / 98 %, 0.3 % /
 7 %); an area light's Spread of 20-60 degrees over a Lambert plane 1.7-2.4 %, on the sphere 4-5 %.
 Shadows (`tests/test_shadows.py`): hard shadows' lit/shadowed state differs from Cycles' on
 0-0.03 % of the pixels away from their edges; penumbrae within -13 ... +12 % of Cycles' width.
