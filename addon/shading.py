@@ -519,6 +519,15 @@ MODELS = {
 }
 
 
+def ltc_frame(s: Surface, terms: Terms):
+    """(x, y, z, entries): the shading frame (x the tangent towards v, z = n) and the LTC's M^-1
+    entries at the view, for the program's distribution (surface.glsl's LtcFrame, ltc_frame_at)."""
+    x, y, z, _ = ltc.shading_frame(s.n, s.v)
+    ndf = "GGX" if terms.principled else terms.ndf
+    entries = ltc.lookup(ltc.ltc_table(ndf), s.NoV, np.broadcast_to(s.roughness, np.shape(s.NoV)))
+    return x, y, z, entries
+
+
 def shade_polygon_light(s: Surface, offsets, to_centre, L, form_factor, l, factors, terms: Terms,
                         ltc_jitter=None, specular_scale=1.0):
     """light_shading.glsl's shade_polygon_light: a light of radiance ``L`` (rgb, as it arrives)
@@ -533,12 +542,10 @@ def shade_polygon_light(s: Surface, offsets, to_centre, L, form_factor, l, facto
         clipped = ltc.sphere_lookup(ltc.sphere_table(), np.minimum(form_factor, 1.0), NoL)
         E_clipped = L * np.where(NoL > 0.0, np.pi * clipped / np.where(NoL > 0.0, NoL, 1.0), 0.0)[..., None]
     diffuse = pbr_direct(s, l, E_clipped, (factors[0], 0.0), terms)
-    x, y, z, _ = ltc.shading_frame(s.n, s.v)
+    x, y, z, entries = ltc_frame(s, terms)
     corners = np.asarray(to_centre)[..., None, :] + offsets
     local = np.stack([np.sum(corners * a[..., None, :], axis=-1) for a in (x, y, z)], axis=-1)
-    ndf = "GGX" if terms.principled else terms.ndf
     rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
-    entries = ltc.lookup(ltc.ltc_table(ndf), s.NoV, rough)
     form_factor_lobe, length = ltc.ltc_integral(entries, local, jitter=ltc_jitter, with_length=True)
     LoH = saturate(_dot(l, half_vector(l, s.v, s.n)))
     albedo_terms = ("GGX", "SMITH_CORRELATED") if terms.principled else (terms.ndf, terms.visibility)
@@ -560,9 +567,7 @@ def shade_area_light(s: Surface, light: Light, E, l, visibility, terms: Terms, l
     window = light_window(light, s.p)
     spread, offsets, clipped, lobe_spread = 1.0, area_offsets(light), to_centre, 1.0
     if light.spread_terms[1] > 0.0:
-        x, y, z, _ = ltc.shading_frame(s.n, s.v)
-        ndf = "GGX" if terms.principled else terms.ndf
-        entries = ltc.lookup(ltc.ltc_table(ndf), s.NoV, np.broadcast_to(s.roughness, np.shape(s.NoV)))
+        x, y, z, entries = ltc_frame(s, terms)
         spread, offsets, clipped, lobe_spread = area_spread(
             light, to_centre, (ltc.minv_from_entries(entries), x, y, z))
     with np.errstate(divide="ignore", invalid="ignore"):

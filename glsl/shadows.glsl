@@ -93,6 +93,13 @@ float shadow_bilinear(int layer, vec2 uv_texels, float d, vec2 gradient, float b
  * the last by the golden angle (a fixed rotation: no sine or cosine per tap). */
 const mat2 GOLDEN_TURN = mat2(-0.7373688, 0.6754903, -0.6754903, -0.7373688);
 
+/* The first Vogel point's direction, turned per pixel (interleaved gradient noise). */
+vec2 shadow_first_direction()
+{
+  float turn = 6.2831853 * fract(52.9829189 * fract(dot(gl_FragCoord.xy, vec2(0.06711056, 0.00583715))));
+  return vec2(cos(turn), sin(turn));
+}
+
 /* Percentage-closer filter over a disc of `radius` texels (Vogel points from first_direction). */
 float shadow_pcf(int layer, vec2 uv_texels, float radius, vec2 first_direction, float d, vec2 gradient,
                  float bias, int tap_scale)
@@ -158,11 +165,10 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
   int tap_scale = filter_code < 0.0 ? 2 : 1;
   float filter_radius = min(max(filter_code < 0.0 ? -filter_code - 1.0 : filter_code, info.w / texel),
                             SHADOW_MAX_RADIUS);
-  float turn = 6.2831853 * fract(52.9829189 * fract(dot(gl_FragCoord.xy, vec2(0.06711056, 0.00583715))));
-  vec2 first_direction = vec2(cos(turn), sin(turn)); /* a per-pixel turn (interleaved gradient noise) */
 #ifdef SL_SOFT_SHADOWS
   float size = info.z;
   if (size > 0.0) {
+    vec2 first_direction = shadow_first_direction();
     /* blocker search: casters between the receiver and a quarter of its distance (the sun: the
      * map's top) that hide some of the light */
     float search = ortho ? d * size / texel : 3.0 * size / info.y / d;
@@ -194,7 +200,8 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
   }
 #endif
   if (filter_radius > 1.0) {
-    return shadow_pcf(layer, uv_texels, filter_radius, first_direction, d, gradient, bias, tap_scale);
+    return shadow_pcf(layer, uv_texels, filter_radius, shadow_first_direction(), d, gradient, bias,
+                      tap_scale);
   }
   return shadow_bilinear(layer, uv_texels, d, gradient, bias);
 }
