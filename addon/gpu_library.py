@@ -252,6 +252,16 @@ def gtao_program() -> gpu.types.GPUShader:
     return LIBRARY.program(("gtao",), "ambient occlusion", programs.gtao_source(), declare)
 
 
+def occlusion_resolve_program() -> gpu.types.GPUShader:
+    def declare(info):
+        info.typedef_source(programs.read_glsl("chain_data.glsl"))
+        _declare_full_screen("raw", "depths", "normal_map")(info)
+        info.uniform_buf(0, "OcclusionData", "occlusion")
+
+    return LIBRARY.program(("occlusion resolve",), "ambient occlusion",
+                           programs.occlusion_resolve_source(), declare)
+
+
 def shading_program(features: programs.Features) -> gpu.types.GPUShader:
     """The shading program for ``features``, compiled once and cached by its sorted defines."""
     src = programs.program_source(features)

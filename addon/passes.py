@@ -282,6 +282,7 @@ class OcclusionPass(Pass):
         self.prepass: Target | None = None
         self.back: Target | None = None
         self.depths: Target | None = None
+        self.raw: Target | None = None  # the interleaved trace, before its resolve
         self.target: Target | None = None
 
     def run(self, frame: Frame, view: View) -> bool:
@@ -294,6 +295,7 @@ class OcclusionPass(Pass):
         self.prepass = _fitted(self.prepass, w, h, "RGBA16F", depth=True)
         self.back = _fitted(self.back, w, h, "R16F", depth=True)
         self.depths = _fitted(self.depths, w, h, "RG32F")
+        self.raw = _fitted(self.raw, w, h, "RGBA32F")
         self.target = _fitted(self.target, w, h, "RGBA16F")
         frame.scene.put_frame(view.view_projection, view.width, view.height, view.samples)
         for target, back_faces in ((self.prepass, False), (self.back, True)):
@@ -319,7 +321,7 @@ class OcclusionPass(Pass):
         perspective = 1.0 if camera.is_perspective else 0.0
         rows[48:52] = (frame.snapshot.settings.occlusion_distance, perspective, w, h)
         block = gpu.types.GPUUniformBuf(rows.tobytes())
-        prepass, back, depths = self.prepass, self.back, self.depths
+        prepass, back, depths, raw = self.prepass, self.back, self.depths, self.raw
 
         def bind_depths(shader):
             gpu_library.bind_sampler(shader, "depth_map", prepass.texture_depth)
@@ -333,15 +335,20 @@ class OcclusionPass(Pass):
 
         frame.draw_full_screen(gpu_library.occlusion_depths_program(), bind_depths, self.depths)
 
-        frame.draw_full_screen(gpu_library.gtao_program(), bind, self.target)
+        def bind_resolve(shader):
+            gpu_library.bind_sampler(shader, "raw", raw.texture_color)
+            bind(shader)
+
+        frame.draw_full_screen(gpu_library.gtao_program(), bind, self.raw)
+        frame.draw_full_screen(gpu_library.occlusion_resolve_program(), bind_resolve, self.target)
         frame.outputs[view.output("occlusion")] = self.target
         return True
 
     def free(self) -> None:
-        for target in (self.prepass, self.back, self.depths, self.target):
+        for target in (self.prepass, self.back, self.depths, self.raw, self.target):
             if target is not None:
                 target.free()
-        self.prepass = self.back = self.depths = self.target = None
+        self.prepass = self.back = self.depths = self.raw = self.target = None
 
 
 class OpaquePass(TargetPass):

@@ -406,7 +406,8 @@ def prepass_source(back_faces: bool = False) -> ProgramSource:
     )
 
 
-#: Slices and steps per horizon of the ambient occlusion pass (glsl/gtao.frag.glsl).
+#: Slices and steps per horizon of the ambient occlusion pass (glsl/gtao.frag.glsl); the slices
+#: are interleaved over 2 x 2 pixels (a multiple of 4).
 OCCLUSION_DIRECTIONS, OCCLUSION_STEPS = 8, 12
 
 
@@ -425,9 +426,16 @@ def exposure_source(stage: str) -> ProgramSource:
 
 @lru_cache(maxsize=1)
 def gtao_source() -> ProgramSource:
-    return _full_screen_source("common.glsl", "gtao.frag.glsl", typedefs=read_glsl("chain_data.glsl"),
+    return _full_screen_source("common.glsl", "occlusion.glsl", "gtao.frag.glsl",
+                               typedefs=read_glsl("chain_data.glsl"),
                                defines=(("SL_DIRECTIONS", str(OCCLUSION_DIRECTIONS)),
                                         ("SL_STEPS", str(OCCLUSION_STEPS))))
+
+
+@lru_cache(maxsize=1)
+def occlusion_resolve_source() -> ProgramSource:
+    return _full_screen_source("occlusion.glsl", "occlusion_resolve.frag.glsl",
+                               typedefs=read_glsl("chain_data.glsl"))
 
 
 @lru_cache(maxsize=1)

@@ -15,6 +15,19 @@
  * the visible directions (the same integrals with the direction inside), which says from where
  * the unoccluded light comes (the normal itself where nothing occludes).
  *
+ *
+ * Interleaved (Keller & Heidrich 2001, "Interleaved Sampling"; as in GTAO's spatial denoiser):
+ * each pixel of a 2 x 2 block traces SL_DIRECTIONS / 4 of the slices (its class c = x mod 2 +
+ * 2 (y mod 2) takes slices c, c + 4, ...: perpendicular ones), and glsl/occlusion_resolve.frag.glsl
+ * merges each pixel's 3 x 3 neighbourhood with tent weights, which give the four classes equal
+ * weight: every pixel ends with all SL_DIRECTIONS slices, a quarter of the tracing.
+ * The visibility is a ratio: the slices' cosine-weighted visible arcs over what the same slices
+ * give with nothing occluded (cos n + n sin n each, weighted alike), so a few slices estimate it
+ * without bias where nothing occludes (2 slices alone are off by up to 2 % of the hemisphere's
+ * cosine), and the resolve merges numerators and denominators.
+ * Output: xyz the world-space bent normal's unnormalised sum over the pixel's slices, w both
+ * sums of the ratio as two halves (packHalf2x16: visible, unoccluded) in an RGBA32F texel.
+ *
  * occlusion: inverse_projection, projection, view (world -> view rotation), params: x = the
  * occlusion distance in world units, y = 1 perspective / 0 orthographic, zw = target size.
  * normal_map: world normal; depths: x the nearest surface's depth, y the depth where the ray
@@ -24,21 +37,6 @@
  * facetted and quantised (a convex sphere would otherwise occlude itself at its rim). */
 #define HORIZON_BIAS 0.1 /* radians */
 #define SL_SECTORS 32
-
-vec3 view_position(vec2 uv, float d)
-{
-  vec4 p = occlusion.inverse_projection * vec4(uv * 2.0 - 1.0, d * 2.0 - 1.0, 1.0);
-  return p.xyz / p.w;
-}
-
-/* The view-space depth (z) at a depth-buffer value: perspective and orthographic projections
- * alike map depth to z without x and y. */
-float view_z(float d)
-{
-  mat4 ip = occlusion.inverse_projection;
-  float z = d * 2.0 - 1.0;
-  return (ip[2][2] * z + ip[3][2]) / (ip[2][3] * z + ip[3][3]);
-}
 
 /* acos to within 7e-5 radians, a fraction of a sector (Abramowitz & Stegun 4.4.45): the
  * occlusion pass takes two per sample. */
@@ -89,7 +87,7 @@ void main()
   vec2 uv = gl_FragCoord.xy / size;
   float depth = texelFetch(depths, texel, 0).r;
   if (depth >= 1.0) {
-    frag_color = vec4(1.0); /* the sky: nothing to occlude */
+    frag_color = vec4(0.0); /* the sky: nothing to occlude (the resolve leaves it out) */
     return;
   }
   vec3 P = view_position(uv, depth);
@@ -99,9 +97,10 @@ void main()
   vec4 edge = occlusion.projection * vec4(P + vec3(occlusion.params.x, 0.0, 0.0), 1.0);
   vec4 centre = occlusion.projection * vec4(P, 1.0);
   float radius_uv = abs(edge.x / edge.w - centre.x / centre.w) * 0.5;
-  float visibility = 0.0;
+  float visibility = 0.0, unoccluded = 0.0;
   vec3 bent = vec3(0.0);
-  for (int i = 0; i < SL_DIRECTIONS; i++) {
+  int pattern = (texel.x & 1) + 2 * (texel.y & 1);
+  for (int i = pattern; i < SL_DIRECTIONS; i += 4) {
     float phi = PI * (float(i) + 0.5) / float(SL_DIRECTIONS);
     vec2 dir = vec2(cos(phi), sin(phi));
     vec3 slice_dir = vec3(dir, 0.0);
@@ -167,12 +166,10 @@ void main()
       visible = last >= 32 ? 0u : visible & ~((1u << uint(last)) - 1u);
     }
     visibility += proj_len * arc;
+    unoccluded += proj_len * (cos(n) + n * sin(n)); /* the arc over [n - pi/2, n + pi/2] */
     bent += proj_len * (mean.x * V + mean.y * ortho);
   }
-  /* the bent normal in world space (view is a rotation: its transpose inverts it); the normal
-   * where nothing is visible */
-  float len2 = dot(bent, bent);
-  vec3 bent_world = len2 > 1e-12 ? transpose(mat3(occlusion.view)) * (bent * inversesqrt(len2)) :
-                                   texelFetch(normal_map, texel, 0).xyz;
-  frag_color = vec4(bent_world, clamp(visibility / float(SL_DIRECTIONS), 0.0, 1.0));
+  /* the bent normal's sum in world space (view is a rotation: its transpose inverts it) */
+  frag_color = vec4(transpose(mat3(occlusion.view)) * bent,
+                    uintBitsToFloat(packHalf2x16(vec2(visibility, unoccluded))));
 }

@@ -1,0 +1,55 @@
+/* The interleaved occlusion's resolve (glsl/gtao.frag.glsl traces a quarter of the slices per
+ * pixel, by a 2 x 2 pattern): each pixel merges its 3 x 3 neighbourhood with the tent weights
+ * 1, 1/2, 1/4 (centre, edge, corner), which weigh the pattern's four classes equally, so a pixel
+ * inside a surface ends with every slice. A neighbour on another surface (off the pixel's tangent
+ * plane by more than PLANE_TOLERANCE of its depth, or its normal turned by more than acos
+ * NORMAL_TOLERANCE) or the sky is left out, and the rest renormalised: at silhouettes a pixel
+ * keeps fewer slices rather than another surface's occlusion.
+ * The visibility is the ratio of the merged sums (visible over unoccluded arcs, glsl/gtao.frag.glsl).
+ * raw: the trace (xyz bent-normal sum, w the two sums packed); depths, normal_map as the trace's.
+ * Output: xyz the world-space bent normal (the normal where nothing is visible), w visibility. */
+
+#define PLANE_TOLERANCE 0.02
+#define NORMAL_TOLERANCE 0.9
+
+void main()
+{
+  ivec2 texel = ivec2(gl_FragCoord.xy);
+  ivec2 size = ivec2(occlusion.params.zw);
+  float depth = texelFetch(depths, texel, 0).r;
+  if (depth >= 1.0) {
+    frag_color = vec4(1.0); /* the sky: nothing to occlude */
+    return;
+  }
+  vec3 N = texelFetch(normal_map, texel, 0).xyz;
+  vec3 P = view_position((vec2(texel) + 0.5) / occlusion.params.zw, depth);
+  vec3 Nv = mat3(occlusion.view) * N;
+  float tolerance = PLANE_TOLERANCE * abs(P.z);
+  vec3 bent = vec3(0.0);
+  vec2 sums = vec2(0.0); /* visible, unoccluded */
+  for (int dy = -1; dy <= 1; dy++) {
+    for (int dx = -1; dx <= 1; dx++) {
+      ivec2 t = texel + ivec2(dx, dy);
+      if (any(lessThan(t, ivec2(0))) || any(greaterThanEqual(t, size))) {
+        continue;
+      }
+      float w = (dx == 0 ? 1.0 : 0.5) * (dy == 0 ? 1.0 : 0.5);
+      if (dx != 0 || dy != 0) {
+        float d = texelFetch(depths, t, 0).r;
+        if (d >= 1.0 || dot(texelFetch(normal_map, t, 0).xyz, N) < NORMAL_TOLERANCE) {
+          continue;
+        }
+        vec3 Q = view_position((vec2(t) + 0.5) / occlusion.params.zw, d);
+        if (abs(dot(Q - P, Nv)) > tolerance) {
+          continue;
+        }
+      }
+      vec4 s = texelFetch(raw, t, 0);
+      bent += w * s.xyz;
+      sums += w * unpackHalf2x16(floatBitsToUint(s.w));
+    }
+  }
+  float len2 = dot(bent, bent);
+  frag_color = vec4(len2 > 1e-12 ? bent * inversesqrt(len2) : N,
+                    sums.y > 1e-6 ? clamp(sums.x / sums.y, 0.0, 1.0) : 1.0);
+}
