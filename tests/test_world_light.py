@@ -332,8 +332,9 @@ def _occlusion_errors(scene, tmp_path, mask=None) -> dict[bool, float]:
 
 
 #: world -> (error bound with occlusion, bound on its ratio to the error without): about 2x and
-#: Within 2x of what was measured (uniform 1.2 % with, 4.9 % without; forest 1.7 %, 3.7 % since
-#: the forest's sun casts its shadow, 2.2 %, 4.4 % before)
+#: Within 2x of what was measured (uniform 1.1 % with, 4.9 % without; forest 1.8 %, 3.7 % since
+#: the forest's sun casts its shadow, 2.2 %, 4.4 % before; with every slice at every pixel, before
+#: the interleaved trace: 1.2 %, 1.7 %)
 OCCLUDED = {"uniform": (0.025, 0.3), "forest": (0.03, 0.6)}
 
 
@@ -353,7 +354,7 @@ def test_world_light_occluded_by_a_sphere_on_the_ground_against_cycles(world, tm
 #: (world, roughness) -> (bound with occlusion, bound on its ratio to the error without): about
 #: 1.3x what was measured over the sphere (Lagarde's non-directional estimate, used before:
 #: uniform 41 % / 31 %, forest 4.7 %)
-#: Measured: uniform r 0 16.3 % (58.6 % without), r 0.4 16.4 % (52.8 %), forest r 0 2.0 % (6.3 %).
+#: Measured: uniform r 0 16.6 % (58.6 % without), r 0.4 16.2 % (52.8 %), forest r 0 2.0 % (6.3 %).
 SPECULAR_OCCLUDED = {("uniform", 0.0): (0.21, 0.4), ("uniform", 0.4): (0.21, 0.45),
                      ("forest", 0.0): (0.027, 0.45)}
 
@@ -393,7 +394,7 @@ def test_neighbours_occlude_each_other_as_in_cycles(tmp_path):
     errors = _occlusion_errors(scene, tmp_path, np.any(_sphere_masks(), axis=0))
     print(f"five spheres in a row, uniform world: error without occlusion {errors[False]:.2%}, "
           f"with {errors[True]:.2%}")
-    assert errors[True] < 0.018 and errors[True] < 0.4 * errors[False], errors
+    assert errors[True] < 0.018 and errors[True] < 0.4 * errors[False], errors  # measured 0.80 %, 3.79 %
 
 
 def test_world_preset_occlusion_against_cycles(tmp_path):
@@ -418,7 +419,7 @@ def test_world_preset_occlusion_against_cycles(tmp_path):
     errors = _occlusion_errors(scene, tmp_path)
     print(f"world preset, white, uniform world: error without occlusion {errors[False]:.2%}, "
           f"with {errors[True]:.2%}")
-    assert errors[True] < 0.04 and errors[True] < 0.35 * errors[False], errors
+    assert errors[True] < 0.04 and errors[True] < 0.35 * errors[False], errors  # measured 3.17 %, 12.70 %
 
 
 SEQUENCE = """
@@ -475,7 +476,8 @@ def test_occlusion_leaves_a_lone_convex_sphere_lit(tmp_path):
     err = np.abs(image[inside] - 0.4) / 0.4  # rho L
     print(f"a lone sphere with World Occlusion: error mean {err.mean():.3%}, 99th percentile "
           f"{np.percentile(err, 99):.2%}, max {err.max():.1%} (its rim)")
-    assert err.mean() < 6e-4 and np.percentile(err, 99) < 3e-3
+    # measured 0.011 % / 0.10 % (0.026 % before the visible fraction became a ratio of arcs)
+    assert err.mean() < 3e-4 and np.percentile(err, 99) < 3e-3
 
 
 def test_the_viewport_is_lit_by_the_world_as_the_final_render(tmp_path):
