@@ -127,8 +127,11 @@ def tile_lists(centres, radii, view_projection, width: int, height: int, tile: i
     span = np.repeat(np.maximum(spans_x, 1), counts)
     tx, ty = np.repeat(x0, counts) + k % span, np.repeat(y0, counts) + k // span
     if total <= SPHERE_TESTED:
-        keep = ~np.isfinite(radii[light]) | _meets_tile(centres[light], radii[light], tx, ty, tile, width,
-                                                        height, np.asarray(view_projection, np.float64))
+        vp = np.asarray(view_projection, np.float64)
+        edges = _tile_edges(tile, width, height, columns, rows)
+        finite = np.where(np.isfinite(radii), radii, 0.0)
+        keep = ~np.isfinite(radii[light]) | (_meets_tile(centres, finite, light, tx, ty, edges, vp)
+                                             & _within_tile_bound(centres, finite, light, tx, ty, edges, vp))
         light, tx, ty = light[keep], tx[keep], ty[keep]
     tiles = ty * columns + tx
     order = np.argsort(tiles, kind="stable")  # by tile; lights in their own order within one
@@ -138,21 +141,73 @@ def tile_lists(centres, radii, view_projection, width: int, height: int, tile: i
     return TileLists(tile, header, _padded(light[order]))
 
 
-def _meets_tile(centres, radii, tx, ty, tile: int, width: int, height: int, vp: np.ndarray) -> np.ndarray:
-    """Whether each sphere reaches the frustum of its tile: inside or within r of each of the
-    tile's four side planes (x = x0 w, x = x1 w, y = y0 w, y = y1 w in clip space, as world planes
-    from the view-projection's rows). Conservative: near a frustum's edges a sphere outside it can
-    pass; none inside fails."""
-    x0 = tx * tile / width * 2.0 - 1.0
-    x1 = np.minimum((tx + 1) * tile, width) / width * 2.0 - 1.0
-    y0 = ty * tile / height * 2.0 - 1.0
-    y1 = np.minimum((ty + 1) * tile, height) / height * 2.0 - 1.0
-    point = np.concatenate([centres, np.ones((len(centres), 1))], axis=1)
-    rx, ry, rw = (point @ vp[i] for i in (0, 1, 3))  # the centres' clip x, y, w
-    norms = [np.linalg.norm(vp[i, :3] - s[:, None] * vp[3, :3], axis=1) for i, s in
-             ((0, x0), (0, x1), (1, y0), (1, y1))]
-    return ((rx - x0 * rw >= -radii * norms[0]) & (x1 * rw - rx >= -radii * norms[1])
-            & (ry - y0 * rw >= -radii * norms[2]) & (y1 * rw - ry >= -radii * norms[3]))
+def _tile_edges(tile: int, width: int, height: int, columns: int, rows: int):
+    """The tiles' edges in ndc: x of columns + 1 vertical edges, y of rows + 1 horizontal ones."""
+    xs = np.minimum(np.arange(columns + 1) * tile, width) / width * 2.0 - 1.0
+    ys = np.minimum(np.arange(rows + 1) * tile, height) / height * 2.0 - 1.0
+    return xs, ys
+
+
+def _meets_tile(centres, radii, light, tx, ty, edges, vp: np.ndarray) -> np.ndarray:
+    """Whether sphere ``light`` reaches the frustum of tile (tx, ty), for each pair: inside or
+    within r of each of the tile's four side planes (x = x0 w, x = x1 w, y = y0 w, y = y1 w in
+    clip space, as world planes from the view-projection's rows). Conservative: near a frustum's
+    edges a sphere outside it can pass; none inside fails."""
+    xs, ys = edges
+    # each edge's plane normal's length (per edge, not per pair)
+    nx = np.linalg.norm(vp[0, :3][None] - xs[:, None] * vp[3, :3][None], axis=1)
+    ny = np.linalg.norm(vp[1, :3][None] - ys[:, None] * vp[3, :3][None], axis=1)
+    clip = centres @ vp[(0, 1, 3), :3].T + vp[(0, 1, 3), 3]  # the centres' clip x, y, w, per light
+    rx, ry, rw = clip[light].T
+    r = radii[light]
+    return ((rx - xs[tx] * rw >= -r * nx[tx]) & (xs[tx + 1] * rw - rx >= -r * nx[tx + 1])
+            & (ry - ys[ty] * rw >= -r * ny[ty]) & (ys[ty + 1] * rw - ry >= -r * ny[ty + 1]))
+
+
+def _within_tile_bound(centres, radii, light, tx, ty, edges, vp: np.ndarray) -> np.ndarray:
+    """Whether sphere ``light`` meets a tighter bound of tile (tx, ty)'s frustum than its side
+    planes (which let a sphere near a corner through: it meets all four planes and misses the
+    tile), exactly: for a perspective view, the narrowest cone about the tile's centre ray that
+    holds its four corner rays (apex at the camera), met iff the angle between the cone's axis
+    and the sphere's centre is within the cone's half-angle plus the sphere's angular radius (two
+    cones with one apex meet iff so); for an orthographic view, the tile's rectangle in the view
+    plane, met iff the sphere's centre lies within its radius of it."""
+    xs, ys = edges
+    inverse = np.linalg.inv(vp)
+    if np.allclose(vp[3, :3], 0.0):  # orthographic: parallel rays, the rectangle is exact
+        w = centres @ vp[3, :3] + vp[3, 3]
+        cx, cy = ((centres @ vp[i, :3] + vp[i, 3]) / w for i in (0, 1))  # the centres' ndc
+        # world units per unit of ndc along the view's x and y (the camera's axes)
+        sx, sy = (1.0 / np.linalg.norm(vp[i, :3]) for i in (0, 1))
+        cx, cy = cx[light], cy[light]
+        dx = np.maximum(np.maximum(xs[tx] - cx, cx - xs[tx + 1]), 0.0) * sx
+        dy = np.maximum(np.maximum(ys[ty] - cy, cy - ys[ty + 1]), 0.0) * sy
+        return dx * dx + dy * dy <= radii[light] ** 2 * (1.0 + 1e-9)  # rounding keeps a tangent sphere
+
+    def unproject(x, y):  # points on the rays through ndc (x, y), at ndc depth 0
+        q = np.stack([x, y, np.zeros_like(x), np.ones_like(x)], axis=-1) @ inverse.T
+        return q[..., :3] / q[..., 3:]
+
+    eye = inverse @ np.array([0.0, 0.0, 1.0, 0.0])  # x = y = w = 0: the camera's centre
+    eye = eye[:3] / eye[3]
+    columns, rows = len(xs) - 1, len(ys) - 1
+    cx, cy = np.meshgrid(0.5 * (xs[:-1] + xs[1:]), 0.5 * (ys[:-1] + ys[1:]))  # (rows, columns)
+    axis = unproject(cx, cy) - eye
+    axis /= np.linalg.norm(axis, axis=-1, keepdims=True)
+    cos_half = np.ones(cx.shape)
+    for ix, iy in ((0, 0), (1, 0), (0, 1), (1, 1)):
+        gx, gy = np.meshgrid(xs[ix:columns + ix], ys[iy:rows + iy])
+        corner = unproject(gx, gy) - eye
+        corner /= np.linalg.norm(corner, axis=-1, keepdims=True)
+        cos_half = np.minimum(cos_half, np.sum(corner * axis, axis=-1))
+    half_angle = np.arccos(np.clip(cos_half, -1.0, 1.0))
+    v = centres - eye  # per light
+    dist = np.linalg.norm(v, axis=1)
+    reach = np.arcsin(np.clip(radii / np.maximum(dist, 1e-300), 0.0, 1.0))
+    unit = v / np.maximum(dist, 1e-300)[:, None]
+    angle = np.arccos(np.clip(np.sum(unit[light] * axis[ty, tx], axis=1), -1.0, 1.0))
+    inside = dist[light] <= radii[light]
+    return inside | (angle <= half_angle[ty, tx] + reach[light] + 1e-9)  # rounding, as above
 
 
 def _one_list(n: int) -> TileLists:

@@ -207,6 +207,8 @@ class Features:
                     ("SL_VISIBILITY_" + t.visibility, "1"), ("SL_DIFFUSE_" + t.diffuse, "1")]
             if t.multiscatter:
                 out += [("SL_MULTISCATTER", "1"), ("SL_MS_SIZE", str(MS_SIZE))]
+        if self.sphere_lights:
+            out.append(("SL_SPHERE_LIGHTS", "1"))
         if self.uses_ltc:
             out += [("SL_LTC", "1"), ("SL_LTC_SIZE", str(LTC_SIZE)),
                     ("SL_LTC_SPHERE_SIZE", str(LTC_SPHERE_SIZE))]
