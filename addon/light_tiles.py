@@ -7,8 +7,10 @@ and Unreal use; the irradiance it removes is below the threshold everywhere: I /
 t (2 x^2 - x^6) <= t with x = d / r <= 1). So a light needs shading only where the surface lies
 within r of it: on the screen, inside the projection of the box around its sphere. Per view the
 screen is cut into tiles of TILE pixels; each tile lists, in light order, the lights whose box
-covers it and whose sphere meets the tile's frustum (its four side planes, from the
-view-projection matrix: the box's corners drop out), lights without a radius in every tile; each
+covers it and whose sphere meets the tile's frustum (for a perspective view its four side
+planes and the cone about the tile, for an orthographic one its rectangle: the box's corners drop
+out, and the planes' own false positives at the tile's corners), lights without a radius in every
+tile; each
 fragment loops over its tile's list instead of every light. Skipped lights would have added
 exactly 0, so a culled frame equals the unculled one bit for bit.
 
@@ -130,8 +132,10 @@ def tile_lists(centres, radii, view_projection, width: int, height: int, tile: i
         vp = np.asarray(view_projection, np.float64)
         edges = _tile_edges(tile, width, height, columns, rows)
         finite = np.where(np.isfinite(radii), radii, 0.0)
-        keep = ~np.isfinite(radii[light]) | (_meets_tile(centres, finite, light, tx, ty, edges, vp)
-                                             & _within_tile_bound(centres, finite, light, tx, ty, edges, vp))
+        keep = _within_tile_bound(centres, finite, light, tx, ty, edges, vp)
+        if not _orthographic(vp):  # (orthographic: the rectangle is exact, the planes add nothing)
+            keep &= _meets_tile(centres, finite, light, tx, ty, edges, vp)
+        keep |= ~np.isfinite(radii[light])
         light, tx, ty = light[keep], tx[keep], ty[keep]
     tiles = ty * columns + tx
     order = np.argsort(tiles, kind="stable")  # by tile; lights in their own order within one
@@ -139,6 +143,10 @@ def tile_lists(centres, radii, view_projection, width: int, height: int, tile: i
     first = np.concatenate([[0], np.cumsum(per_tile)[:-1]])
     header = np.stack([first, per_tile], axis=-1).reshape(rows, columns, 2).astype(np.float32)
     return TileLists(tile, header, _padded(light[order]))
+
+
+def _orthographic(vp: np.ndarray) -> bool:
+    return bool(np.allclose(vp[3, :3], 0.0))
 
 
 def _tile_edges(tile: int, width: int, height: int, columns: int, rows: int):
@@ -174,7 +182,7 @@ def _within_tile_bound(centres, radii, light, tx, ty, edges, vp: np.ndarray) -> 
     plane, met iff the sphere's centre lies within its radius of it."""
     xs, ys = edges
     inverse = np.linalg.inv(vp)
-    if np.allclose(vp[3, :3], 0.0):  # orthographic: parallel rays, the rectangle is exact
+    if _orthographic(vp):  # parallel rays: the rectangle is exact
         w = centres @ vp[3, :3] + vp[3, 3]
         cx, cy = ((centres @ vp[i, :3] + vp[i, 3]) / w for i in (0, 1))  # the centres' ndc
         # world units per unit of ndc along the view's x and y (the camera's axes)
