@@ -147,7 +147,8 @@ def _build_maps(frame: Frame, terms, suns: bool) -> EnvironmentMaps:
     for k, rect in enumerate(rects):
         last = k == len(rects) - 1  # the irradiance map
         alpha = 0.0 if last else env.level_roughness(k) ** 2
-        params = (alpha, float(irradiance_source) if last else 0.0, 0.0, 0.0)
+        samples = 0.0 if last else float(max(env.PREFILTER_SAMPLES[k], 1))
+        params = (alpha, float(irradiance_source) if last else 0.0, samples, 0.0)
 
         source = clamped if last or k >= env.FIRST_CLAMPED_LEVEL else chain
 
@@ -157,7 +158,7 @@ def _build_maps(frame: Frame, terms, suns: bool) -> EnvironmentMaps:
             shader.uniform_float("rect", tuple(float(x) for x in rect))
             shader.uniform_float("params", params)
 
-        program = irradiance if last else gpu_library.env_prefilter_program(max(env.PREFILTER_SAMPLES[k], 1))
+        program = irradiance if last else gpu_library.env_prefilter_program()
         _draw(frame, program, bind, atlas, rect)
     atlas.fence()  # the time below is the GPU's too
     for target in {*levels, *clamped_levels}:

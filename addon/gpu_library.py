@@ -330,7 +330,7 @@ def env_downsample_program(copy: bool = False) -> gpu.types.GPUShader:
                            programs.env_downsample_source(copy), declare)
 
 
-def env_prefilter_program(samples: int) -> gpu.types.GPUShader:
+def env_prefilter_program() -> gpu.types.GPUShader:
     def declare(info):
         info.typedef_source(programs.read_glsl("chain_data.glsl"))
         _declare_full_screen("source")(info)
@@ -338,8 +338,8 @@ def env_prefilter_program(samples: int) -> gpu.types.GPUShader:
         info.push_constant("VEC4", "rect")
         info.push_constant("VEC4", "params")
 
-    return LIBRARY.program(("env_prefilter", samples), "environment prefilter",
-                           programs.env_prefilter_source(samples), declare)
+    return LIBRARY.program(("env_prefilter",), "environment prefilter", programs.env_prefilter_source(),
+                           declare)
 
 
 def env_irradiance_program() -> gpu.types.GPUShader:

@@ -331,7 +331,7 @@ def clear_source_caches() -> None:
     """Forget generated sources (and the GLSL files they were read from)."""
     for cached in (read_glsl, program_source, post_source, compare_source, occupancy_source, under_source,
                    background_source, env_bake_source, env_downsample_source, env_prefilter_source,
-                   env_irradiance_source, prepass_source, gtao_source,
+                   env_irradiance_source, prepass_source, gtao_source, occlusion_resolve_source,
                    occlusion_depths_source, shadow_source, exposure_source):
         cached.cache_clear()
 
@@ -388,11 +388,12 @@ def env_irradiance_source() -> ProgramSource:
                                typedefs=read_glsl("chain_data.glsl"))
 
 
-@lru_cache(maxsize=8)
-def env_prefilter_source(samples: int) -> ProgramSource:
+@lru_cache(maxsize=1)
+def env_prefilter_source() -> ProgramSource:
+    """Every prefiltered level's program (its sample count a uniform: one compile, not one per
+    level, most of a first world's set-up on a software rasteriser)."""
     return _full_screen_source("common.glsl", "environment.glsl", "env_prefilter.frag.glsl",
-                               defines=(("SL_SAMPLES", str(samples)), ("SL_CHAIN", "1")),
-                               typedefs=read_glsl("chain_data.glsl"))
+                               defines=(("SL_CHAIN", "1"),), typedefs=read_glsl("chain_data.glsl"))
 
 
 @lru_cache(maxsize=1)

@@ -1,6 +1,6 @@
 /* One prefiltered level of the atlas (rect: x, y, width, height in texels; drawn with the
  * viewport set to it): the environment seen by a GGX lobe of alpha = r^2 around each texel's
- * direction, with n = v = r as the split sum assumes (Karis 2013), from SL_SAMPLES samples of
+ * direction, with n = v = r as the split sum assumes (Karis 2013), from params.z samples of
  * the lobe (Hammersley points) weighted by n.l. Filtered importance sampling (Krivanek &
  * Colbert 2008, "Real-time Shading with Filtered Importance Sampling"): each sample reads the
  * downsampled level whose texels cover the solid angle the sample stands for, 1 / (N pdf),
@@ -20,10 +20,11 @@ void main()
   vec3 tx = normalize(cross(up, n));
   vec3 ty = cross(n, tx);
   float a2 = alpha * alpha;
+  int samples = int(params.z);
   vec3 sum = vec3(0.0);
   float weight = 0.0;
-  for (int i = 0; i < SL_SAMPLES; i++) {
-    float xi1 = float(i) / float(SL_SAMPLES);
+  for (int i = 0; i < samples; i++) {
+    float xi1 = float(i) / float(samples);
     float xi2 = radical_inverse(uint(i));
     /* GGX half vectors (Walter et al. 2007, eq. 35-36) */
     float phi = 2.0 * PI * xi1;
@@ -36,7 +37,7 @@ void main()
       /* pdf of l with n = v: D(h) / 4 */
       float t = cos_t * cos_t * (a2 - 1.0) + 1.0;
       float pdf = a2 / (PI * t * t) * 0.25;
-      sum += chain_lookup(source, l, chain_lod(l, pdf, SL_SAMPLES, 1.0)) * NoL;
+      sum += chain_lookup(source, l, chain_lod(l, pdf, samples, 1.0)) * NoL;
       weight += NoL;
     }
   }
