@@ -233,6 +233,14 @@ class SceneResources:
         return [draw for _features, draws in self.draw_lists(None, False).opaque for draw in draws
                 if items[draw.order].casts_shadow]
 
+    def caster_spheres(self, draws: list[Draw]) -> np.ndarray:
+        """(n, 4) world-space bounding spheres of ``draws``' items (``shadows.bounding_spheres``)."""
+        items = self.snapshot.items
+        if not draws:
+            return np.zeros((0, 4))
+        boxes = np.stack([self._bounds[items[d.order].geometry] for d in draws])
+        return shadows.bounding_spheres(boxes, np.stack([items[d.order].matrix for d in draws]))
+
     def put_frame(self, view_projection: np.ndarray | None, width: int, height: int,
                   samples: int = 1) -> None:
         """The frame block for a view (the camera's, unless the viewport passes its own) of

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field
 import gpu
 import numpy as np
 
-from . import exposure, gpu_library, programs
+from . import exposure, gpu_library, programs, shadows
 from .gpu_scene import SceneResources
 from .snapshot import MAX_ENVIRONMENT_IMAGES, Snapshot, World
 
@@ -216,6 +216,7 @@ class ShadowPass(Pass):
         self.key = None
         self._shape = None
         self.renders = 0  # layers drawn since the pass was made (tests count them)
+        self.drawn_casters = 0  # (layer, caster) pairs the last drawing of the maps drew
 
     def run(self, frame: Frame, _spec=None) -> bool:
         scene = frame.scene
@@ -239,6 +240,9 @@ class ShadowPass(Pass):
         self.key = None  # until every layer is drawn
         shader = gpu_library.shadow_program()
         casters = scene.shadow_casters()
+        # each layer draws only the casters that reach its volume (a cube face sees a sixth)
+        reach = shadows.layer_casters(plan.matrices, scene.caster_spheres(casters))
+        self.drawn_casters = int(reach.sum())
         for layer, framebuffer in enumerate(self.framebuffers):
             if frame.should_stop is not None and frame.should_stop():
                 return False
@@ -255,7 +259,8 @@ class ShadowPass(Pass):
                     shader.bind()
                     shader.uniform_float("shadow_view_projection", plan.matrices[layer].T.ravel().tolist())
                     shader.uniform_float("light_origin", light_origin)
-                    scene.draw_positions(casters, shader, frame_block=False)
+                    scene.draw_positions([c for c, r in zip(casters, reach[layer]) if r], shader,
+                                         frame_block=False)
                 finally:
                     gpu.state.depth_test_set("NONE")
                     gpu.state.depth_mask_set(False)

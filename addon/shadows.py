@@ -325,3 +325,30 @@ def plan(snapshot: Snapshot, bounds: dict[str, np.ndarray]) -> ShadowPlan:
     return ShadowPlan(size, np.stack(matrices).astype(np.float32), np.array(info, np.float32),
                       np.array(origins, np.float32), first, views=np.stack(views).astype(np.float32),
                       extents=np.array(extents, np.float32), dropped=dropped)
+
+
+def bounding_spheres(boxes: np.ndarray, matrices: np.ndarray) -> np.ndarray:
+    """(n, 4) world-space spheres (centre, radius) holding object-space boxes ``boxes`` (n, 2, 3:
+    min, max) under ``matrices`` (n, 4, 4, object -> world): the box's centre moved, its half
+    diagonal scaled by the matrix's largest axis scale."""
+    boxes = np.asarray(boxes, np.float64).reshape(-1, 2, 3)
+    matrices = np.asarray(matrices, np.float64).reshape(-1, 4, 4)
+    centre = 0.5 * (boxes[:, 0] + boxes[:, 1])
+    half = 0.5 * np.linalg.norm(boxes[:, 1] - boxes[:, 0], axis=1)
+    world = np.einsum("nij,nj->ni", matrices[:, :3, :3], centre) + matrices[:, :3, 3]
+    scale = np.linalg.norm(matrices[:, :3, :3], axis=1).max(axis=1)  # the columns' lengths
+    return np.column_stack([world, half * scale])
+
+
+def layer_casters(matrices: np.ndarray, spheres: np.ndarray) -> np.ndarray:
+    """(layers, n) bool: which casters (world spheres, ``bounding_spheres``) reach each layer's
+    clip volume (``matrices``, world -> clip): not wholly outside one of its six planes (Gribb &
+    Hartmann 2001, the planes from the matrix's rows: w +- x, w +- y, w +- z >= 0). A caster
+    wholly outside would be clipped away in the layer's map, so leaving it out draws the same
+    map; a sphere meeting a plane's outside near a corner is kept (conservative)."""
+    m = np.asarray(matrices, np.float64).reshape(-1, 4, 4)
+    spheres = np.asarray(spheres, np.float64).reshape(-1, 4)
+    planes = np.concatenate([m[:, 3:4] + m[:, :3], m[:, 3:4] - m[:, :3]], axis=1)  # (layers, 6, 4)
+    norms = np.linalg.norm(planes[..., :3], axis=-1)  # (layers, 6)
+    signed = np.einsum("lpk,nk->lpn", planes[..., :3], spheres[:, :3]) + planes[..., 3:4]
+    return np.all(signed >= -(spheres[:, 3][None, None] * norms[..., None]), axis=1)

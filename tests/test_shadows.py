@@ -436,3 +436,69 @@ def test_jitter_filters_soft_shadows_with_more_taps(tmp_path):
 
 
 JITTER_ERRORS = (0.0614, 0.0570)
+
+
+# --- which casters each layer draws -----------------------------------------------------------
+
+
+def _inside_clip(matrix: np.ndarray, points: np.ndarray) -> np.ndarray:
+    clip = np.column_stack([points, np.ones(len(points))]) @ matrix.T
+    w = clip[:, 3]
+    return (w > 0) & np.all(np.abs(clip[:, :3]) <= w[:, None], axis=1)
+
+
+def test_layer_casters_keeps_every_caster_that_reaches_a_layer():
+    """Against brute force: 3000 points in each of 200 random spheres, projected by a cube face's
+    and a sun map's matrix; a sphere with any point inside the clip volume must be kept. Most
+    of those kept reach the volume (the plane test keeps a few near its edges)."""
+    rng = np.random.default_rng(3)
+    face = shadows.perspective(1.0, 0.05, 12.0) @ shadows.look_at((0.0, 0.0, 1.0), (1.0, 0.2, -0.1),
+                                                                  (0.0, 0.0, 1.0))
+    sun = shadows.orthographic(3.0, 2.0, 9.0) @ shadows.look_at((0.5, -0.5, 6.0), (0.3, 0.2, -1.0),
+                                                                      (0.0, 0.0, 1.0))
+    spheres = np.column_stack([rng.uniform(-10, 10, (200, 3)), rng.uniform(0.05, 2.0, 200)])
+    directions = rng.normal(size=(3000, 3))
+    offsets = directions / np.linalg.norm(directions, axis=1, keepdims=True) * rng.uniform(0, 1, (3000, 1)) ** (1 / 3)
+    kept = shadows.layer_casters(np.stack([face, sun]), spheres)
+    for layer, matrix in enumerate((face, sun)):
+        reach = np.array([_inside_clip(matrix, c[:3] + c[3] * offsets).any() for c in spheres])
+        assert not np.any(reach & ~kept[layer]), "a caster that reaches the layer was left out"
+        print(f"layer {layer}: {reach.sum()} spheres reach it, {kept[layer].sum()} kept of {len(spheres)}")
+        # measured: 48 reach / 48 kept (the face), 16 / 18 (the sun's box)
+        assert kept[layer].sum() <= 1.2 * reach.sum() and kept[layer].sum() < len(spheres) / 4
+
+
+def test_culled_casters_draw_the_same_shadows(tmp_path, monkeypatch):
+    """Spheres all around a point light (each cube face sees a few) and a sun over them: the
+    image with each layer drawing only the casters that reach it equals, bit for bit, the image
+    with every caster drawn into every layer, and the layers drew far fewer casters."""
+    from addon import passes
+
+    scene = scenes.reset(size=48)
+    scene.shading_lab.model = "PBR"
+    scenes.ortho_camera(scene, location=(0.0, -8.0, 8.0), rotation=(math.radians(45.0), 0.0, 0.0), scale=9.0)
+    mat = _white()
+    scenes.plane(scene, size=12.0, material=mat)
+    for i in range(12):
+        angle = 2 * math.pi * i / 12
+        _sphere(scene, 0.3, (2.5 * math.cos(angle), 2.5 * math.sin(angle), 0.4 + 0.3 * (i % 3)), mat)
+    point = scenes.light(scene, "POINT", energy=400.0, location=(0.0, 0.0, 1.0))
+    sun = scenes.light(scene, "SUN", energy=2.0, rotation=(math.radians(-30.0), math.radians(20.0), 0.0))
+    point.data.use_shadow = sun.data.use_shadow = True
+    drawn = []
+    original = passes.ShadowPass.run
+
+    def run(self, frame, spec=None):
+        done = original(self, frame, spec)
+        drawn.append((self.drawn_casters, frame.scene.shadow_plan.layers, len(frame.scene.shadow_casters())))
+        return done
+
+    monkeypatch.setattr(passes.ShadowPass, "run", run)
+    culled = scenes.render(scene, tmp_path / "culled.exr")
+    monkeypatch.setattr(shadows, "layer_casters",
+                        lambda matrices, spheres: np.ones((len(matrices), len(spheres)), bool))
+    every = scenes.render(scene, tmp_path / "every.exr")
+    (pairs, layers, casters), (all_pairs, _, _) = drawn
+    print(f"layers x casters {layers} x {casters} = {all_pairs}; drawn with culling {pairs}")
+    assert all_pairs == layers * casters and pairs < 0.5 * all_pairs  # measured 31 of 91
+    assert np.array_equal(culled, every)
