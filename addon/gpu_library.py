@@ -219,23 +219,26 @@ def prepass_program(back_faces: bool = False) -> gpu.types.GPUShader:
     return LIBRARY.program(("prepass", back_faces), "depth and normal", src, declare)
 
 
-def shadow_program() -> gpu.types.GPUShader:
-    """A shadow map's layer: the casters' distances from the light."""
-    src = programs.shadow_source()
+def shadow_program(orthographic: bool = False) -> gpu.types.GPUShader:
+    """A shadow map's layer: the casters' distances from the light (``orthographic``: a sun's
+    layer, the rasteriser's depth)."""
+    src = programs.shadow_source(orthographic)
 
     def declare(info):
         info.typedef_source(src.typedefs)
         info.uniform_buf(3, "ObjectBlock", "objects")
         info.push_constant("MAT4", "shadow_view_projection")
-        info.push_constant("VEC4", "light_origin")
+        if not orthographic:
+            info.push_constant("VEC4", "light_origin")
         info.push_constant("INT", "object_index")
         info.vertex_in(0, "VEC3", "pos")
         iface = gpu.types.GPUStageInterfaceInfo("shading_lab_shadow_iface")
         iface.smooth("VEC3", "world_position")
         info.vertex_out(iface)
-        info.depth_write("ANY")
+        if not orthographic:
+            info.depth_write("ANY")
 
-    return LIBRARY.program(("shadow",), "shadow map", src, declare)
+    return LIBRARY.program(("shadow", orthographic), "shadow map", src, declare)
 
 
 def occlusion_depths_program() -> gpu.types.GPUShader:

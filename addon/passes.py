@@ -238,7 +238,6 @@ class ShadowPass(Pass):
         if key == self.key:
             return True
         self.key = None  # until every layer is drawn
-        shader = gpu_library.shadow_program()
         casters = scene.shadow_casters()
         # each layer draws only the casters that reach its volume (a cube face sees a sixth)
         reach = shadows.layer_casters(plan.matrices, scene.caster_spheres(casters))
@@ -247,7 +246,9 @@ class ShadowPass(Pass):
             if frame.should_stop is not None and frame.should_stop():
                 return False
             origin = plan.origins[layer]
-            inverse_far = 1.0 / float(plan.info[layer][0]) if origin[3] < 1.5 else 0.0  # 0: orthographic
+            orthographic = origin[3] == shadows.KIND_ORTHOGRAPHIC
+            inverse_far = 0.0 if orthographic else 1.0 / float(plan.info[layer][0])
+            shader = gpu_library.shadow_program(orthographic)
             light_origin = (*(float(x) for x in origin[:3]), inverse_far)
             with framebuffer.bind():
                 framebuffer.clear(depth=1.0)
@@ -258,7 +259,8 @@ class ShadowPass(Pass):
                 try:
                     shader.bind()
                     shader.uniform_float("shadow_view_projection", plan.matrices[layer].T.ravel().tolist())
-                    shader.uniform_float("light_origin", light_origin)
+                    if not orthographic:  # (an orthographic layer's program has no use for it)
+                        shader.uniform_float("light_origin", light_origin)
                     scene.draw_positions([c for c, r in zip(casters, reach[layer]) if r], shader,
                                          frame_block=False)
                 finally:
