@@ -481,26 +481,37 @@ def lookup(table: np.ndarray, mu, roughness) -> np.ndarray:
     return _bilinear(table.astype(np.float64), x, y)
 
 
+def polygon_form_factor(offsets, to_centre):
+    """V = 1/2 sum theta_i g_i of the polygon of corners ``offsets`` ((n, 3), or (..., n, 3) per
+    point) from its centre, seen from the points at -to_centre from it, oriented towards the
+    polygon (glsl/lights.glsl's polygon_form_factor with the identity map; with an LTC's M^-1,
+    offsets and to_centre mapped first). The corners' cross products as the shader forms them:
+    (t + oa) x (t + ob) = t x (ob - oa) + oa x ob."""
+    offsets = np.asarray(offsets, np.float64)
+    to_centre = np.asarray(to_centre, np.float64)
+    V = np.zeros(np.broadcast_shapes(np.shape(to_centre), offsets.shape[:-2] + (3,)))
+    for i in range(offsets.shape[-2]):
+        oa, ob = offsets[..., i - 1, :], offsets[..., i, :]
+        c = np.cross(to_centre, ob - oa) + np.cross(oa, ob)
+        sin = np.linalg.norm(c, axis=-1)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            edge = c * (np.arctan2(sin, np.sum((to_centre + oa) * (to_centre + ob), axis=-1)) / sin)[..., None]
+        V = V + np.where((sin > 0.0)[..., None], edge, 0.0)
+    V = 0.5 * V
+    return np.where((np.sum(V * to_centre, axis=-1) < 0.0)[..., None], -V, V)
+
+
 def polygon_form_factor_vector(corners) -> np.ndarray:
-    """F = 1 / (2 pi) sum_i theta_i g_i of a planar polygon, corners (..., n, 3) relative to the
-    shading point (any frame, any winding): theta_i the angle between corners i and i + 1, g_i the
-    unit normal of the plane through them. F is oriented towards the polygon (the integral of
-    w / pi over the directions w it subtends, whatever its winding), |F| its form factor towards
-    a surface facing F, F.z its form factor towards a surface of normal z when it lies wholly
-    above that surface's horizon. (glsl/lights.glsl's E_Area sums V = 1/2 sum theta_i g_i = pi F.)"""
+    """F = 1 / (2 pi) sum_i theta_i g_i = V / pi of a planar polygon, corners (..., n, 3) relative
+    to the shading point (any frame, any winding): theta_i the angle between corners i and i + 1,
+    g_i the unit normal of the plane through them. F is oriented towards the polygon (the integral
+    of w / pi over the directions w it subtends), |F| its form factor towards a surface facing F,
+    F.z its form factor towards a surface of normal z when it lies wholly above that surface's
+    horizon. ``polygon_form_factor`` about the corners' mean (the light's centre, for the
+    symmetric polygons the shaders make, and for their images under a linear map)."""
     p = np.asarray(corners, np.float64)
-    q = np.roll(p, -1, axis=-2)
-    c = np.cross(p, q)
-    s = np.linalg.norm(c, axis=-1)
-    theta = np.arctan2(s, np.sum(p * q, axis=-1))
-    with np.errstate(divide="ignore", invalid="ignore"):
-        F = np.sum(c * np.where(s > 0.0, theta / np.where(s > 0.0, s, 1.0), 0.0)[..., None], axis=-2)
-    # the winding: the polygon's normal by its fan of triangles from corner 0 (differences of
-    # corners, exact for a far polygon), against corner 0's offset
-    rel = p - p[..., :1, :]
-    normal = np.sum(np.cross(rel, np.roll(rel, -1, axis=-2)), axis=-2)
-    sign = np.where(np.sum(normal * p[..., 0, :], axis=-1) < 0.0, -1.0, 1.0)
-    return F * (sign / (2.0 * np.pi))[..., None]
+    centre = p.mean(axis=-2)
+    return polygon_form_factor(p - centre[..., None, :], centre) / np.pi
 
 
 def ltc_integral(minv_entries, corners_local, sphere: np.ndarray | None = None, jitter=None,

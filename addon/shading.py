@@ -173,21 +173,7 @@ def sphere_far_field(light: Light, d2):
     return (light.sphere_radius * AREA_FAR_FIELD) ** 2 < d2
 
 
-def polygon_form_factor(offsets, to_centre):
-    """V = 1/2 sum theta_i g_i of the polygon of corners ``offsets`` ((n, 3), or (..., n, 3) per
-    point) from its centre, seen from the points at -to_centre from it, oriented towards the
-    polygon (lights.glsl's polygon_form_factor with the identity)."""
-    offsets = np.asarray(offsets, np.float64)
-    V = np.zeros(np.broadcast_shapes(np.shape(to_centre), offsets.shape[:-2] + (3,)))
-    for i in range(offsets.shape[-2]):
-        oa, ob = offsets[..., i - 1, :], offsets[..., i, :]
-        c = np.cross(to_centre, ob - oa) + np.cross(oa, ob)  # (t + oa) x (t + ob)
-        sin = np.linalg.norm(c, axis=-1)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            edge = c * (np.arctan2(sin, _dot(to_centre + oa, to_centre + ob)) / sin)[..., None]
-        V = V + np.where((sin > 0.0)[..., None], edge, 0.0)
-    V = 0.5 * V
-    return np.where((_dot(V, to_centre) < 0.0)[..., None], -V, V)
+polygon_form_factor = ltc.polygon_form_factor  # (lights.glsl's polygon_form_factor, one twin for both)
 
 
 SPREAD_GAUSS = 1.0 / math.sqrt(3.0)  # 2-point Gauss-Legendre nodes on [-1, 1]
