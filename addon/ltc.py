@@ -495,7 +495,8 @@ def polygon_form_factor(offsets, to_centre):
         c = np.cross(to_centre, ob - oa) + np.cross(oa, ob)
         sin = np.linalg.norm(c, axis=-1)
         with np.errstate(divide="ignore", invalid="ignore"):
-            edge = c * (np.arctan2(sin, np.sum((to_centre + oa) * (to_centre + ob), axis=-1)) / sin)[..., None]
+            cosine = np.sum((to_centre + oa) * (to_centre + ob), axis=-1)
+            edge = c * (np.arctan2(sin, cosine) / sin)[..., None]
         V = V + np.where((sin > 0.0)[..., None], edge, 0.0)
     V = 0.5 * V
     return np.where((np.sum(V * to_centre, axis=-1) < 0.0)[..., None], -V, V)

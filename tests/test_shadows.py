@@ -458,7 +458,8 @@ def test_layer_casters_keeps_every_caster_that_reaches_a_layer():
                                                                       (0.0, 0.0, 1.0))
     spheres = np.column_stack([rng.uniform(-10, 10, (200, 3)), rng.uniform(0.05, 2.0, 200)])
     directions = rng.normal(size=(3000, 3))
-    offsets = directions / np.linalg.norm(directions, axis=1, keepdims=True) * rng.uniform(0, 1, (3000, 1)) ** (1 / 3)
+    radii = rng.uniform(0, 1, (3000, 1)) ** (1 / 3)  # uniform in the unit ball
+    offsets = directions / np.linalg.norm(directions, axis=1, keepdims=True) * radii
     kept = shadows.layer_casters(np.stack([face, sun]), spheres)
     for layer, matrix in enumerate((face, sun)):
         reach = np.array([_inside_clip(matrix, c[:3] + c[3] * offsets).any() for c in spheres])
