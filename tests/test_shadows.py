@@ -388,9 +388,14 @@ def test_cascades_follow_the_camera_and_nothing_else():
 def test_a_lights_filter_and_resolution_limit_blur_its_shadow(tmp_path):
     """Blender's per-light shadow Filter (the hard shadow's filter radius in map texels, 1 by
     default) and Resolution Limit (the smallest texel, 1 mm by default): the point light's hard
-    shadow at the defaults is the bilinear filter's (unchanged); Filter 4 or a 2 cm limit (about 3
-    texels at the ground) widen its edge. Measured edge pixels (0.05 < visibility < 0.95) at
-    96 px: FILTER_EDGES (default, Filter 4, limit 2 cm)."""
+    shadow at the defaults is the bilinear filter's (unchanged); Filter 4 or a 2 cm limit widen
+    its edge. The edge's pixels (0.05 < visibility < 0.95) grow as the band over which the
+    filter crosses a straight edge from 5 % to 95 %: for a disc of radius R texels 2 x0 R, x0
+    where the disc's segment beyond a chord at x0 R from its centre holds 5 % of it (closed form,
+    below); for the bilinear filter about one texel (0.9 across an edge along the map's axes,
+    wider across a diagonal one). A 2 cm limit is a radius of 0.02 m over the texel at the
+    shadows (the cube face's texel per metre times the light's distance to the casters' shadows
+    on the ground, from the scene's geometry)."""
     scene, light = _scene("POINT")
 
     def edges(tag):
@@ -407,14 +412,23 @@ def test_a_lights_filter_and_resolution_limit_blur_its_shadow(tmp_path):
     light.data.shadow_filter_radius = 1.0
     light.data.shadow_maximum_resolution = 0.02
     limited, _ = edges("limit")
-    print(f"edge pixels: default {default}, filter 4 {wide}, limit 2 cm {limited}")
+    # x0: the disc's segment beyond x0 (radius 1) holds 5 %: (acos x - x sqrt(1 - x^2)) / pi = 0.05
+    x = np.linspace(0.0, 1.0, 100001)
+    x0 = x[np.argmin(np.abs((np.arccos(x) - x * np.sqrt(1.0 - x * x)) / np.pi - 0.05))]
+    light_at = np.array(LIGHTS["POINT"]["location"])
+    shadow_centres = [light_at + (np.array(c) - light_at) * light_at[2] / (light_at[2] - c[2])
+                      for c in ((-0.8, 0.0, 0.9), (0.9, 0.3, 0.7))]  # the sphere's and torus' centres
+    distance = float(np.mean([np.linalg.norm(c - light_at) for c in shadow_centres]))
+    texel = 2.0 * shadows.FACE_MARGIN / int(scene.shading_lab.shadow_map_size) * distance  # m
+    bilinear = 1.0  # texels: 0.9 along the map's axes, more across diagonals
+    expected = {"filter 4": 2.0 * x0 * 4.0 / bilinear, "limit": 2.0 * x0 * (0.02 / texel) / bilinear}
+    ratios = {"filter 4": wide / default, "limit": limited / default}
+    print(f"edge pixels: default {default}, filter 4 {wide}, limit 2 cm {limited}; ratios to the "
+          f"default {ratios}, expected {expected} (x0 {x0:.4f}, texel {texel * 1e3:.2f} mm)")
     assert np.array_equal(v_default, v_same)
-    for got, measured in zip((default, wide, limited), FILTER_EDGES):
-        assert abs(got - measured) <= 0.25 * measured + 3, (default, wide, limited, FILTER_EDGES)
-    assert wide > 3.0 * default and limited > 3.0 * default, (default, wide, limited)
-
-
-FILTER_EDGES = (15, 87, 68)
+    # measured: 15 / 87 / 68 pixels, ratios 5.80 and 4.53 against 6.44 and 4.48 expected (x0 0.805)
+    for name, ratio in ratios.items():
+        assert abs(ratio / expected[name] - 1.0) < 0.25, (ratios, expected)
 
 
 def test_jitter_filters_soft_shadows_with_more_taps(tmp_path):
