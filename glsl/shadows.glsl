@@ -100,6 +100,15 @@ vec2 shadow_first_direction()
   return vec2(cos(turn), sin(turn));
 }
 
+/* Vogel point k of `taps` over a disc of `radius` texels about `centre`, from `direction`, which
+ * it turns on to the next point's (the blocker search and the filter share the pattern). */
+vec2 vogel_tap(vec2 centre, float radius, int k, int taps, inout vec2 direction)
+{
+  vec2 at = centre + (radius * sqrt((float(k) + 0.5) / float(taps))) * direction;
+  direction = GOLDEN_TURN * direction;
+  return at;
+}
+
 /* Percentage-closer filter over a disc of `radius` texels (Vogel points from first_direction). */
 float shadow_pcf(int layer, vec2 uv_texels, float radius, vec2 first_direction, float d, vec2 gradient,
                  float bias, int tap_scale)
@@ -108,8 +117,7 @@ float shadow_pcf(int layer, vec2 uv_texels, float radius, vec2 first_direction, 
   vec2 direction = first_direction;
   int taps = (radius <= 3.0 ? SHADOW_FILTER_TAPS / 2 : SHADOW_FILTER_TAPS) * tap_scale;
   for (int k = 0; k < taps; k++) {
-    vec2 at = uv_texels + (radius * sqrt((float(k) + 0.5) / float(taps))) * direction;
-    direction = GOLDEN_TURN * direction;
+    vec2 at = vogel_tap(uv_texels, radius, k, taps, direction);
     lit += shadow_test(layer, ivec2(floor(at)), uv_texels, d, gradient, bias);
   }
   return lit / float(taps);
@@ -179,9 +187,7 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
     /* a search a few texels wide needs fewer taps (half of them within 2 texels) */
     int taps = (search <= 2.0 ? SHADOW_SEARCH_TAPS / 2 : SHADOW_SEARCH_TAPS) * tap_scale;
     for (int k = 0; k < taps; k++) {
-      vec2 at = uv_texels + (search * sqrt((float(k) + 0.5) / float(taps))) * direction;
-      direction = GOLDEN_TURN * direction;
-      ivec2 t = ivec2(floor(at));
+      ivec2 t = ivec2(floor(vogel_tap(uv_texels, search, k, taps, direction)));
       float stored = shadow_texel(layer, t);
       if (stored < shadow_receiver(t, uv_texels, d, gradient, bias)) {
         blockers += 1.0;
