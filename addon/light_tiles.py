@@ -181,7 +181,6 @@ def _within_tile_bound(centres, radii, light, tx, ty, edges, vp: np.ndarray) -> 
     cones with one apex meet iff so); for an orthographic view, the tile's rectangle in the view
     plane, met iff the sphere's centre lies within its radius of it."""
     xs, ys = edges
-    inverse = np.linalg.inv(vp)
     if _orthographic(vp):  # parallel rays: the rectangle is exact
         w = centres @ vp[3, :3] + vp[3, 3]
         cx, cy = ((centres @ vp[i, :3] + vp[i, 3]) / w for i in (0, 1))  # the centres' ndc
@@ -191,6 +190,8 @@ def _within_tile_bound(centres, radii, light, tx, ty, edges, vp: np.ndarray) -> 
         dx = np.maximum(np.maximum(xs[tx] - cx, cx - xs[tx + 1]), 0.0) * sx
         dy = np.maximum(np.maximum(ys[ty] - cy, cy - ys[ty + 1]), 0.0) * sy
         return dx * dx + dy * dy <= radii[light] ** 2 * (1.0 + 1e-9)  # rounding keeps a tangent sphere
+
+    inverse = np.linalg.inv(vp)
 
     def unproject(x, y):  # points on the rays through ndc (x, y), at ndc depth 0
         q = np.stack([x, y, np.zeros_like(x), np.ones_like(x)], axis=-1) @ inverse.T

@@ -15,7 +15,6 @@
  * the visible directions (the same integrals with the direction inside), which says from where
  * the unoccluded light comes (the normal itself where nothing occludes).
  *
- *
  * Interleaved (Keller & Heidrich 2001, "Interleaved Sampling"; as in GTAO's spatial denoiser):
  * each pixel of a 2 x 2 block traces SL_DIRECTIONS / 4 of the slices (its class c = x mod 2 +
  * 2 (y mod 2) takes slices c, c + 4, ...: perpendicular ones), and glsl/occlusion_resolve.frag.glsl
