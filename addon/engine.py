@@ -15,7 +15,7 @@ import gpu
 import numpy as np
 from bpy.app.handlers import persistent
 
-from . import exposure, extract
+from . import auto_terms, exposure, extract
 from .gpu_library import LIBRARY, ShaderCompileError
 from .passes import View
 from .renderer import Renderer, frame_views
@@ -42,6 +42,9 @@ last_timings: dict[str, float] = {}
 last_warnings: list[str] = []
 #: The last final render's automatic exposure: view name -> (stops used, stops metered).
 last_exposures: dict[str, tuple[float, float]] = {}
+#: The Auto term set's choices in the last final render or viewport update: material name ->
+#: auto_terms.Choice (the Material panel and the CLI show them).
+last_term_choices: dict = {}
 _TIMINGS_LOCK = threading.Lock()
 
 
@@ -49,6 +52,12 @@ def _set_timings(timings: dict[str, float]) -> None:
     with _TIMINGS_LOCK:
         last_timings.clear()
         last_timings.update(timings)
+
+
+def _set_term_choices(choices: dict) -> None:
+    with _TIMINGS_LOCK:
+        last_term_choices.clear()
+        last_term_choices.update(choices)
 
 
 def target_too_big(width: int, height: int, samples: int) -> str:
@@ -283,6 +292,8 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         region, rv3d = context.region, context.region_data
         texture = session.draw(region.width, region.height, rv3d.view_matrix, rv3d.window_matrix,
                                rv3d.is_perspective, background_color(session.snapshot, scene))
+        if session.snapshot.term_choices:
+            _set_term_choices(session.snapshot.term_choices)
         if session.error and not session.error_reported:
             self.report({"ERROR"}, session.error)
             session.error_reported = True
@@ -319,6 +330,9 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         extracted = time.perf_counter()
         self.update_progress(0.25)
         label = f"{snap.settings.model} | {snap.triangle_count:,} triangles | {len(snap.lights)} lights"
+        if snap.settings.auto_error_bound is not None and not self.is_preview:
+            _set_term_choices(snap.term_choices)
+            label = f"{label} | {auto_terms.summary(snap.term_choices)}"
         settings = snap.settings
         if settings.compare_mode != "OFF":
             label = (f"{label} | {settings.compare_mode.title()} "

@@ -13,7 +13,7 @@ from collections import Counter
 import bpy
 import numpy as np
 
-from . import light_tiles, shadows
+from . import auto_terms, light_tiles, shadows
 from . import snapshot as S
 
 LIGHT_KIND = {"POINT": "POINT", "SPOT": "SPOT", "SUN": "SUN", "AREA": "AREA"}
@@ -817,6 +817,8 @@ def scene_settings(scene) -> S.Settings:
                       shadows=bool(props.shadows), shadow_map_size=int(props.shadow_map_size),
                       soft_shadows=bool(props.soft_shadows),
                       light_threshold=float(props.light_threshold), light_culling=bool(props.light_culling),
+                      auto_error_bound=(float(props.auto_error_bound) if props.term_set == "AUTO" else None),
+                      auto_quantile=float(props.auto_quantile) / 100.0,
                       environment_samples=(int(props.world_samples) if props.world_specular == "SAMPLED"
                                            else 0))
 
@@ -872,14 +874,16 @@ def _is_dirty(obj, dirty: set[str] | None) -> bool:
 
 def snapshot(depsgraph, width: int | None = None, height: int | None = None,
              camera: S.Camera | None = None, settings: S.Settings | None = None,
-             previous: S.Snapshot | None = None, dirty: set[str] | None = None) -> S.Snapshot:
+             previous: S.Snapshot | None = None, dirty: set[str] | None = None,
+             auto_camera: S.Camera | None = None) -> S.Snapshot:
     """Everything the renderer draws, read from the evaluated scene.
 
     ``camera`` may be given (the viewport passes its own); otherwise the scene camera is used
     and its absence raises ``ExtractError``. With ``previous`` and ``dirty`` (from
     ``geometry_updates``), geometry of objects not named in ``dirty`` is reused from
     ``previous`` instead of read again; ``Snapshot.fresh`` lists the geometry keys read anew.
-    Lights, materials, matrices and the world are cheap and always read.
+    Lights, materials, matrices and the world are cheap and always read. With the Auto term set,
+    materials get their terms chosen as seen from ``auto_camera`` (else ``camera``).
     """
     scene = depsgraph.scene
     if width is None or height is None:
@@ -959,7 +963,16 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
                              f"left out")
         del snap.lights[S.MAX_LIGHTS:]
     snap.warnings[:] = dict.fromkeys(snap.warnings)  # each once, however many objects share it
+    if snap.settings.auto_error_bound is not None:
+        choose_terms(snap, previous.term_choices if previous is not None else None, auto_camera)
     return snap
+
+
+def choose_terms(snap: S.Snapshot, previous: dict | None = None, camera: S.Camera | None = None) -> None:
+    """The Auto term set's choice per material (``auto_terms.choose``), fixed into ``snap``."""
+    settings = snap.settings
+    auto_terms.apply(snap, auto_terms.choose(snap, settings.auto_error_bound, settings.auto_quantile,
+                                             previous, camera))
 
 
 def _material_with_images(snap: S.Snapshot, material) -> S.MaterialParams:

@@ -37,6 +37,9 @@ class ShaderCompileError(RuntimeError):
 #: Precomputed worlds kept (each ~13 MB of GPU memory): the viewport going back and forth
 #: between two worlds, or a world edit and its undo, recomputes nothing.
 ENVIRONMENTS_KEPT = 2
+#: Programs kept, least recently used dropped first: per-material term sets (Auto), light counts
+#: and shadow layouts multiply the variants an editing session meets; each holds driver memory.
+PROGRAMS_KEPT = 96
 
 
 class _Library:
@@ -53,8 +56,9 @@ class _Library:
                 declare: Callable[[gpu.types.GPUShaderCreateInfo], None]) -> gpu.types.GPUShader:
         """The program for ``key``: ``src``'s defines, then ``declare(info)`` adds the interface."""
         with self._lock:
-            shader = self._programs.get(key)
+            shader = self._programs.pop(key, None)
             if shader is not None:
+                self._programs[key] = shader  # most recently used last
                 return shader
             if key in self._failed:
                 self._compile_error = self._failed[key]
@@ -76,6 +80,8 @@ class _Library:
                 raise ShaderCompileError(message) from exc
             self.compiles += 1
             self._programs[key] = shader
+            while len(self._programs) > PROGRAMS_KEPT:
+                del self._programs[next(iter(self._programs))]
             return shader
 
     def table(self, key, build: Callable[[], gpu.types.GPUTexture]) -> gpu.types.GPUTexture:

@@ -143,8 +143,9 @@ class Features:
             shadow_layers = shadows.assign(snapshot)[1]
         if material is not None:
             model = material.model or model
-            terms = terms.override(fresnel=material.fresnel, ndf=material.ndf,
-                                   visibility=material.visibility, diffuse=material.diffuse)
+            terms = material.terms or terms.override(fresnel=material.fresnel, ndf=material.ndf,
+                                                     visibility=material.visibility,
+                                                     diffuse=material.diffuse)
         return cls(
             model=model or snapshot.settings.model,
             max_lights=light_slots(len(snapshot.lights)),

@@ -141,8 +141,19 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
             ("PRINCIPLED", "Principled BSDF", "Blender's Principled BSDF as Cycles evaluates it: exact "
                                               "Fresnel, GGX, Smith, per-lobe multiple scattering and a "
                                               "diffuse base under the specular layer's albedo"),
+            ("AUTO", "Auto", "Per material, the cheapest terms whose predicted error against the "
+                             "Principled BSDF set stays within the Error Bound"),
         ),
         description="Which physically based terms the engine evaluates")
+    auto_error_bound: FloatProperty(
+        name="Error Bound", default=1.0, min=0.01, soft_max=10.0, precision=2, update=_redraw,
+        description="The largest difference from the Principled BSDF set Auto allows a material, as "
+                    "Delta E_ITP (ITU-R BT.2124; 1 is about one just-noticeable difference) at the "
+                    "Quantile of its pixels")
+    auto_quantile: FloatProperty(
+        name="Quantile", default=99.0, min=50.0, max=100.0, subtype="PERCENTAGE", precision=1,
+        update=_redraw,
+        description="Which share of a material's pixels must lie within the Error Bound")
     fresnel: EnumProperty(name="Fresnel", items=TERM_ITEMS["fresnel"], default="SCHLICK", update=_redraw)
     ndf: EnumProperty(name="Distribution", items=TERM_ITEMS["ndf"], default="GGX", update=_redraw)
     visibility: EnumProperty(name="Masking-Shadowing", items=TERM_ITEMS["visibility"],

@@ -424,17 +424,30 @@ def specular_energy_compensation(s: Surface, terms: Terms):
     return 1.0 + s.f0 * _rgb_scalar(1.0 / E - 1.0)
 
 
-def principled_specular_tint(s: Surface, LoH):
-    """What multiplies D V in the Principled set's specular lobe (principled.glsl): its metal and
-    dielectric lobes' Fresnel and compensation, weighted by metalness."""
+def principled_layers(s: Surface):
+    """principled.glsl's principled_layers_at: (metal_M (rgb), dielectric_M, layer) at the view,
+    the two lobes' multiple-scattering compensation and the dielectric layer's albedo estimate
+    E M mix(F0, 1, S) that the Lambert base sits under."""
     rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
     E_mu = np.maximum(M.interpolate(M.albedo_table("GGX", "SMITH_CORRELATED"), s.NoV, rough), 1e-3)
     e_avg = M.interpolate_1d(M.average_albedo(), rough)
     F0m = np.minimum(s.base_color, 1.0)
-    metal = (M.principled_compensation(F0m + (1.0 - F0m) / 21.0, _rgb_scalar(E_mu), _rgb_scalar(e_avg))
-             * F_Schlick(F0m, np.ones(np.shape(LoH)), LoH))
-    Md = M.principled_compensation(M.principled_fss(s.eta), E_mu, e_avg)
-    dielectric = Md * F_Dielectric(s.eta, LoH)
+    metal_M = M.principled_compensation(F0m + (1.0 - F0m) / 21.0, _rgb_scalar(E_mu), _rgb_scalar(e_avg))
+    dielectric_M = M.principled_compensation(M.principled_fss(s.eta), E_mu, e_avg)
+    ratio = (s.eta - 1.0) / (s.eta + 1.0)
+    S = M.interpolate_s(M.principled_s_table(), rough, s.NoV,
+                        np.broadcast_to(np.sqrt(np.abs(ratio)), np.shape(s.NoV)))
+    layer = np.where(s.eta > 1.0, E_mu * dielectric_M * (ratio * ratio + S * (1.0 - ratio * ratio)), 0.0)
+    return metal_M, dielectric_M, layer
+
+
+def principled_specular_tint(s: Surface, LoH):
+    """What multiplies D V in the Principled set's specular lobe (principled.glsl): its metal and
+    dielectric lobes' Fresnel and compensation, weighted by metalness."""
+    metal_M, dielectric_M, _ = principled_layers(s)
+    F0m = np.minimum(s.base_color, 1.0)
+    metal = metal_M * F_Schlick(F0m, np.ones(np.shape(LoH)), LoH)
+    dielectric = dielectric_M * F_Dielectric(s.eta, LoH)
     return s.metal3 * metal + (1.0 - s.metal3) * _rgb_scalar(dielectric)
 
 
@@ -467,15 +480,8 @@ def principled_direct(s: Surface, NoL, NoH, NxH2, LoH):
     specular) f for the Principled set."""
     D = D_GGX(NoH, NxH2, s.alpha)
     V = V_SmithGGXCorrelated(s.NoV, NoL, s.alpha)
-    rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
-    E_mu = np.maximum(M.interpolate(M.albedo_table("GGX", "SMITH_CORRELATED"), s.NoV, rough), 1e-3)
-    e_avg = M.interpolate_1d(M.average_albedo(), rough)
-    Md = M.principled_compensation(M.principled_fss(s.eta), E_mu, e_avg)
     specular = principled_specular_tint(s, LoH) * _rgb_scalar(D * V)
-    ratio = (s.eta - 1.0) / (s.eta + 1.0)
-    S = M.interpolate_s(M.principled_s_table(), rough, s.NoV, np.broadcast_to(np.sqrt(np.abs(ratio)),
-                                                                                np.shape(s.NoV)))
-    layer = np.where(s.eta > 1.0, E_mu * Md * (ratio * ratio + S * (1.0 - ratio * ratio)), 0.0)
+    layer = principled_layers(s)[2]
     diffuse = s.base_color * (1.0 - s.metal3) * _rgb_scalar(np.clip(1.0 - layer, 0.0, 1.0)) * INV_PI
     return diffuse, specular
 
@@ -496,6 +502,47 @@ def pbr_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
         diffuse = pbr_diffuse(s, F, s.NoV, NoL_pos, NoH, LoH, LoV, terms)
         out = (diffuse * factors[0] + specular * factors[1]) * E * NoL_pos[..., None]
     return np.where((NoL > 0.0)[..., None], out, 0.0)
+
+
+def env_split_sum(s: Surface, terms: Terms):
+    """ibl.glsl's env_split_sum: (E, B) of the program's D and V at the view (the Principled set:
+    GGX with Smith); at the roughness floor a perfect mirror, E = 1, B = (1 - n.v)^5."""
+    ndf, visibility = ("GGX", "SMITH_CORRELATED") if terms.principled else (terms.ndf, terms.visibility)
+    rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
+    table = M.split_sum_table(ndf, visibility)
+    mirror = rough <= MIN_PERCEPTUAL_ROUGHNESS
+    return (np.where(mirror, 1.0, M.interpolate(table[..., 0], s.NoV, rough)),
+            np.where(mirror, (1.0 - s.NoV) ** 5, M.interpolate(table[..., 1], s.NoV, rough)))
+
+
+def shade_uniform_environment(s: Surface, radiance, terms: Terms = DEFAULT_TERMS, weights=(1.0, 1.0),
+                              ao=1.0, specular_ao=1.0):
+    """model_pbr.glsl's shade_environment (principled.glsl's principled_environment for the
+    Principled set) under a world of constant ``radiance`` (rgb): the prefiltered radiance is the
+    radiance itself times the specular occlusion ``specular_ao``, the irradiance pi times it
+    times the diffuse occlusion ``ao`` (split sum)."""
+    L = np.asarray(radiance, np.float64) * _rgb_scalar(specular_ao)
+    irradiance = np.pi * np.asarray(radiance, np.float64) * _rgb_scalar(ao)
+    E, B = env_split_sum(s, terms)
+    base = s.base_color * (1.0 - s.metal3)
+    if terms.principled:
+        metal_M, _, layer = principled_layers(s)
+        F0m = np.minimum(s.base_color, 1.0)
+        metal = metal_M * (F0m * _rgb_scalar(E - B) + _rgb_scalar(B))
+        specular = (s.metal3 * metal + (1.0 - s.metal3) * _rgb_scalar(layer)) * L
+        diffuse = base * _rgb_scalar(np.clip(1.0 - layer, 0.0, 1.0)) * irradiance * INV_PI
+        return diffuse * weights[0] + specular * weights[1]
+    albedo = s.f0 * _rgb_scalar(E - B) + _rgb_scalar(s.f90 * B)
+    specular = albedo * L
+    if terms.multiscatter:
+        # Fdez-Aguera 2019, eq. 16-18: light scattered more than once leaves as Fms Ems of the irradiance
+        Ems = _rgb_scalar(1.0 - E)
+        Favg = s.f0 + (1.0 - s.f0) / 21.0
+        Fms_Ems = albedo * Favg * Ems / (1.0 - Ems * Favg)
+        specular = specular + Fms_Ems * irradiance * INV_PI
+        albedo = albedo + Fms_Ems
+    diffuse = base * np.clip(1.0 - albedo, 0.0, 1.0) * irradiance * INV_PI
+    return diffuse * weights[0] + specular * weights[1]
 
 
 MODELS = {

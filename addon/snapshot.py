@@ -145,6 +145,7 @@ class MaterialParams:
     ndf: str = ""
     visibility: str = ""
     diffuse: str = ""
+    terms: Terms | None = None  # the whole term set, fixed for this material (the Auto term set's choice)
 
 
 #: Objects without a material render with this: Blender's default surface (grey 0.8,
@@ -394,6 +395,10 @@ class Settings:
     soft_shadows: bool = True  # penumbrae from the lights' sizes (else hard, filtered over a texel)
     light_threshold: float = 0.01  # W/m^2: a light reaches where its irradiance is above this
     light_culling: bool = True  # each screen tile shades only the lights that reach it
+    #: the Auto term set: per material the cheapest terms whose predicted Delta E_ITP against the
+    #: Principled set (at ``auto_quantile`` of its pixels) is within this bound; None: off
+    auto_error_bound: float | None = None
+    auto_quantile: float = 0.99
 
 
 @dataclass
@@ -411,6 +416,7 @@ class Snapshot:
     images: dict[str, ImageData] = field(default_factory=dict)  # by the key materials refer to
     warnings: list[str] = field(default_factory=list)
     fresh: set[str] = field(default_factory=set)  # geometry keys read anew (not reused)
+    term_choices: dict = field(default_factory=dict)  # material key -> auto_terms.Choice (Auto)
 
     @property
     def triangle_count(self) -> int:

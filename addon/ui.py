@@ -73,6 +73,10 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
         col = layout.column(heading="Physically Based")
         col.active = props.model == "PBR"
         col.prop(props, "term_set")
+        if props.term_set == "AUTO":
+            sub = col.column(align=True)
+            sub.prop(props, "auto_error_bound")
+            sub.prop(props, "auto_quantile")
         terms = col.column()
         terms.active = props.term_set == "CUSTOM"
         for name in ("fresnel", "ndf", "visibility", "diffuse", "multiscatter"):
@@ -234,6 +238,7 @@ class SHADINGLAB_PT_material(ShadingLabPanel, bpy.types.Panel):
         terms = layout.column(align=True)
         for name in ("fresnel", "ndf", "visibility", "diffuse"):
             terms.prop(props, name)
+        _auto_choice(layout, context)
         layout.label(text="Unticked values come from the surface shader (Principled BSDF)")
         col = layout.column()
         col.label(text="Physically based")
@@ -251,6 +256,26 @@ class SHADINGLAB_PT_material(ShadingLabPanel, bpy.types.Panel):
         _material_row(col, props, "use_shininess", "shininess", "from roughness")
         _material_row(col, props, "use_specular_color", "specular_color", "white")
         _material_row(col, props, "use_ambient_color", "ambient_color", "base colour")
+
+
+def _auto_choice(layout, context) -> None:
+    """What the Auto term set chose for the material in the last render or viewport frame."""
+    scene_props = context.scene.shading_lab
+    if scene_props.term_set != "AUTO":
+        return
+    from .engine import last_term_choices
+
+    choice = last_term_choices.get(context.material.name_full)
+    box = layout.box()
+    if choice is None:
+        box.label(text="Auto: not chosen yet (render, or draw the viewport)", icon="INFO")
+        return
+    box.label(text=f"Auto: {choice.label}", icon="SHADING_RENDERED")
+    bound = scene_props.auto_error_bound
+    box.label(text=f"Predicted ΔE_ITP {choice.predicted:.2f} (bound {bound:.2f}, "
+                   f"{scene_props.auto_quantile:.0f}th percentile, {choice.samples} points)")
+    if choice.limiting:
+        box.label(text=f"Needs {choice.limiting}: {choice.reason}")
 
 
 classes = (SHADINGLAB_PT_render, SHADINGLAB_PT_light, SHADINGLAB_PT_world, SHADINGLAB_PT_material)

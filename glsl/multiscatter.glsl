@@ -24,10 +24,16 @@ float ms_albedo(float NoV, float roughness)
 #endif
 
 #ifdef SL_MULTISCATTER
+vec3 ms_compensation_at(float NoV, float roughness, vec3 f0)
+{
+  float E = max(ms_albedo(NoV, roughness), 1e-3);
+  return 1.0 + f0 * (1.0 / E - 1.0);
+}
+
+/* Made once per shading point by make_surface (surface.glsl). */
 vec3 specular_energy_compensation(Surface s)
 {
-  float E = max(ms_albedo(s.NoV, s.roughness), 1e-3);
-  return 1.0 + s.f0 * (1.0 / E - 1.0);
+  return s.ms_compensation;
 }
 #else
 vec3 specular_energy_compensation(Surface s)

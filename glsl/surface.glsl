@@ -27,6 +27,12 @@ struct LtcFrame {
 LtcFrame ltc_frame_at(vec3 n, vec3 v, float NoV, float roughness);
 #endif
 
+#ifdef SL_MULTISCATTER
+/* The specular lobe's multiple-scattering compensation (multiscatter.glsl): it depends on the view
+ * only, so make_surface computes it once per shading point, not once per light. */
+vec3 ms_compensation_at(float NoV, float roughness, vec3 f0);
+#endif
+
 struct Surface {
   vec3 p;             /* world position */
   vec3 n;             /* unit shading normal, flipped towards the viewer on back faces */
@@ -50,6 +56,9 @@ struct Surface {
   vec3 ior_k;
 #ifdef SL_PRINCIPLED
   PrincipledLayers layers;
+#endif
+#ifdef SL_MULTISCATTER
+  vec3 ms_compensation;
 #endif
 #ifdef SL_LTC
   LtcFrame ltc;
@@ -93,6 +102,9 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
   s.ior_k = m.ior_k.rgb;
 #ifdef SL_PRINCIPLED
   s.layers = principled_layers_at(s.NoV, s.roughness, s.base_color, s.eta);
+#endif
+#ifdef SL_MULTISCATTER
+  s.ms_compensation = ms_compensation_at(s.NoV, s.roughness, s.f0);
 #endif
 #ifdef SL_LTC
   s.ltc = ltc_frame_at(n, v, s.NoV, s.roughness);

@@ -62,6 +62,12 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     terms.add_argument("--normalized-blinn-phong", action=argparse.BooleanOptionalAction, default=None)
     terms.add_argument("--principled", action=argparse.BooleanOptionalAction, default=None,
                        help="the Principled term set: Blender's Principled BSDF as Cycles evaluates it")
+    terms.add_argument("--term-set", choices=("custom", "principled", "auto"),
+                       help="custom (the terms above), principled, or auto: per material the cheapest "
+                            "terms within --error-bound of the Principled set")
+    terms.add_argument("--error-bound", type=float, metavar="DE",
+                       help="with --term-set auto: the largest predicted Delta E_ITP against the "
+                            "Principled set at the 99th percentile of a material's pixels (default 1)")
     display = parser.add_argument_group("display")
     display.add_argument("--tone-mapper", choices=TONE_MAPPERS)
     display.add_argument("--exposure", type=parse_exposure, metavar="EV|auto",
@@ -210,6 +216,18 @@ def configure(scene, args) -> None:
         props.exposure_method = metering.upper().replace("-", "_")
     if args.principled is not None:
         props.term_set = "PRINCIPLED" if args.principled else "CUSTOM"
+    term_set = getattr(args, "term_set", None)
+    if term_set is not None:
+        if args.principled is not None:
+            raise CliError("give --term-set or --principled, not both")
+        props.term_set = term_set.upper()
+    bound = getattr(args, "error_bound", None)
+    if bound is not None:
+        if props.term_set != "AUTO":
+            raise CliError("--error-bound needs --term-set auto")
+        if not bound > 0.0:  # also refuses NaN
+            raise CliError(f"--error-bound must be above 0 (Delta E_ITP), got {bound}")
+        props.auto_error_bound = bound
     for name in ("shadows", "soft_shadows", "light_culling"):
         if getattr(args, name, None) is not None:
             setattr(props, name, getattr(args, name))
@@ -328,6 +346,11 @@ def render_frame(args, scene, stem: str, models: list[str], frame: int | None, w
         said = engine.exposure_text(engine.last_exposures)
         if said:
             print(f"{stem}_{model}{suffix}: exposure {said}")
+        if scene.shading_lab.term_set == "AUTO" and MODELS[model] == "PBR":
+            for name, choice in sorted(engine.last_term_choices.items()):
+                why = f"; needs {choice.limiting} ({choice.reason})" if choice.limiting else ""
+                print(f"{stem}_{model}{suffix}: material {name or '(none)'}: {choice.label}, predicted "
+                      f"dE_ITP {choice.predicted:.2f}{why}")
         result = bpy.data.images.get("Render Result")
         if result is None:
             raise CliError(f"rendering {model}{suffix} produced no image")

@@ -1,0 +1,465 @@
+"""The Auto term set: per material, the cheapest physically based terms whose predicted error
+against the Principled set stays within the artist's bound.
+
+The prediction looks at what each material really shows: points on its surfaces, drawn where they
+cover pixels (area x n.v / d^2, inside the view), with their normals, the view and the scene's
+lights, and its textures' texel values. At those points the numpy twin (``shading.py``, itself
+checked against the GLSL, Mitsuba and Cycles) shades every candidate term set and the Principled
+set; the error is Delta E_ITP (ITU-R BT.2124) between the two, on the radiance as a display of
+100 cd/m^2 white shows it after the exposure, and its ``quantile`` over the points (the 99th
+percentile by default) is the material's predicted error. Candidates are tried cheap -> accurate
+(``term_costs.json``, measured by ``scripts/term_costs.py``); the first whose predicted error,
+times a calibrated margin, is within the bound wins, else the Principled set. Shadows and
+occlusion are left out of the prediction (they only darken, which shrinks differences).
+
+The choice is made when the scene is read (``extract.snapshot``), once per material, and fixed
+into the material's program by defines: on this machine's rasteriser both sides of every branch
+run, so only a separate program saves a term's cost. Pure numpy: no ``bpy``, no ``gpu``.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import zlib
+from dataclasses import dataclass, replace
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+from . import environment, shading
+from .snapshot import (
+    ImageData,
+    MaterialParams,
+    Snapshot,
+    Terms,
+    World,
+)
+
+#: The reference every candidate's error is measured against.
+REFERENCE = Terms(principled=True)
+#: Candidate term sets, by name: each a step from the default terms towards the Principled set
+#: (which terms Cycles' Principled BSDF adds: exact Fresnel, multiple scattering, the layered
+#: diffuse). Their order and costs come from ``term_costs.json``.
+CANDIDATE_TERMS = {
+    "DEFAULT": Terms(),
+    "MULTISCATTER": Terms(multiscatter=True),
+    "EXACT_FRESNEL": Terms(fresnel="EXACT"),
+    "EXACT_MULTISCATTER": Terms(fresnel="EXACT", multiscatter=True),
+    "PRINCIPLED": REFERENCE,
+}
+LABELS = {
+    "DEFAULT": "Schlick, GGX, Smith, Lambert",
+    "MULTISCATTER": "default + multiple scattering",
+    "EXACT_FRESNEL": "default with exact Fresnel",
+    "EXACT_MULTISCATTER": "exact Fresnel + multiple scattering",
+    "PRINCIPLED": "Principled set",
+}
+#: What each candidate leaves out of the Principled set (for "why" in the panel).
+MISSING = {
+    "DEFAULT": ("exact Fresnel", "multiple scattering", "layered diffuse"),
+    "MULTISCATTER": ("exact Fresnel", "layered diffuse"),
+    "EXACT_FRESNEL": ("multiple scattering", "layered diffuse"),
+    "EXACT_MULTISCATTER": ("layered diffuse",),
+    "PRINCIPLED": (),
+}
+COSTS_FILE = Path(__file__).with_name("term_costs.json")
+
+#: Default error bound: Delta E_ITP 1 is about one just-noticeable difference (BT.2124).
+DEFAULT_BOUND = 1.0
+DEFAULT_QUANTILE = 0.99
+#: Points per material the prediction shades (the quantile's sampling error at 0.99 and 512
+#: points: ~5 points beyond it).
+SAMPLES = 512
+#: The predicted error is multiplied by this before it is held to the bound. Calibrated on the
+#: random scenes of tests/auto_scenes.py with seeds 1000-1029 (apart from the tests' 0-49): 150
+#: materials, measured / predicted at most 1.01 where either was >= 0.1 (2026-12-02).
+MARGIN = 1.25
+#: A material keeps its set while that set's predicted error stays within this many times the
+#: bound, and moves to a cheaper one only when that one is within the bound / HYSTERESIS: small
+#: edits do not flip programs back and forth.
+HYSTERESIS = 1.25
+#: Lights the prediction shades per material (the brightest at its points; the rest add little).
+MAX_LIGHTS = 16
+#: The display the error is measured on: its white (cd/m^2 for radiance 1 after exposure) and its
+#: black (a 1000:1 display; without one, PQ's steep foot makes 0.05 cd/m^2 against 0 a difference
+#: of ~20 that no display shows).
+WHITE_NITS = 100.0
+BLACK_NITS = 0.1
+
+
+@dataclass(frozen=True)
+class Choice:
+    """What Auto chose for one material: the candidate's name, its terms, its predicted error
+    (Delta E_ITP at the quantile, before the margin), the term limiting it (the first one the
+    cheaper candidates lacked) and why, and every candidate's predicted error."""
+
+    name: str
+    terms: Terms
+    predicted: float
+    limiting: str = ""
+    reason: str = ""
+    errors: tuple[tuple[str, float], ...] = ()
+    samples: int = 0
+
+    @property
+    def label(self) -> str:
+        return LABELS[self.name]
+
+
+# --- the cost table ----------------------------------------------------------------------------
+
+@lru_cache(maxsize=1)
+def cost_table() -> dict:
+    """``term_costs.json`` as shipped (candidates' frame times relative to the default terms, per
+    light count); without it, every candidate costs as the order of ``CANDIDATE_TERMS`` says."""
+    try:
+        return json.loads(COSTS_FILE.read_text(encoding="utf-8"))
+    except (OSError, ValueError):
+        return {}
+
+
+def relative_costs(lights: int, table: dict | None = None) -> dict[str, float]:
+    """Each candidate's frame time over the default terms' at ``lights`` lights, interpolated in
+    log light count between the measured counts (held beyond them)."""
+    table = cost_table() if table is None else table
+    counts = table.get("lights", [])
+    out = {}
+    for i, name in enumerate(CANDIDATE_TERMS):
+        ratios = table.get("relative", {}).get(name)
+        if not counts or not ratios:
+            out[name] = 1.0 + 0.01 * i
+            continue
+        x = math.log(max(lights, 1))
+        out[name] = float(np.interp(x, np.log(counts), ratios))
+    return out
+
+
+def candidate_order(lights: int, table: dict | None = None) -> list[str]:
+    """Candidates cheap -> accurate at ``lights`` lights: those cheaper than the Principled set, by
+    cost, then the Principled set (always the last resort: its error is 0)."""
+    costs = relative_costs(lights, table)
+    cheaper = [n for n in CANDIDATE_TERMS if n != "PRINCIPLED" and costs[n] < costs["PRINCIPLED"]]
+    return sorted(cheaper, key=lambda n: (costs[n], list(CANDIDATE_TERMS).index(n))) + ["PRINCIPLED"]
+
+
+# --- Delta E_ITP (ITU-R BT.2124) ---------------------------------------------------------------
+
+#: BT.709 -> BT.2020 primaries (ITU-R BT.2087), then BT.2100's RGB -> LMS.
+_REC709_TO_2020 = np.array([[0.6274, 0.3293, 0.0433],
+                            [0.0691, 0.9195, 0.0114],
+                            [0.0164, 0.0880, 0.8956]])
+_RGB2020_TO_LMS = np.array([[1688.0, 2146.0, 262.0],
+                            [683.0, 2951.0, 462.0],
+                            [99.0, 309.0, 3688.0]]) / 4096.0
+_LMS_TO_ICTCP = np.array([[2048.0, 2048.0, 0.0],
+                          [6610.0, -13613.0, 7003.0],
+                          [17933.0, -17390.0, -543.0]]) / 4096.0
+
+
+def pq_encode(nits):
+    """SMPTE ST 2084's inverse EOTF: absolute luminance (cd/m^2, clipped to [0, 10000]) -> [0, 1]."""
+    m1, m2 = 2610.0 / 16384.0, 2523.0 / 4096.0 * 128.0
+    c1, c2, c3 = 3424.0 / 4096.0, 2413.0 / 4096.0 * 32.0, 2392.0 / 4096.0 * 32.0
+    y = np.clip(np.asarray(nits, np.float64) / 10000.0, 0.0, 1.0) ** m1
+    return ((c1 + c2 * y) / (1.0 + c3 * y)) ** m2
+
+
+def ictcp(rgb, white_nits: float = WHITE_NITS, black_nits: float = BLACK_NITS):
+    """ICtCp (BT.2100, PQ) of scene-linear BT.709 ``rgb`` shown with 1.0 at ``white_nits`` on a
+    display whose black is ``black_nits``."""
+    rgb = np.maximum(np.asarray(rgb, np.float64), 0.0) * white_nits + black_nits
+    lms = rgb @ (_RGB2020_TO_LMS @ _REC709_TO_2020).T
+    return pq_encode(lms) @ _LMS_TO_ICTCP.T
+
+
+def delta_e_itp(a, b, white_nits: float = WHITE_NITS, black_nits: float = BLACK_NITS):
+    """BT.2124's Delta E_ITP = 720 sqrt(dI^2 + (dCt / 2)^2 + dCp^2) per pixel (1: about one
+    just-noticeable difference)."""
+    d = ictcp(a, white_nits, black_nits) - ictcp(b, white_nits, black_nits)
+    return 720.0 * np.sqrt(d[..., 0] ** 2 + 0.25 * d[..., 1] ** 2 + d[..., 2] ** 2)
+
+
+# --- what a material shows ---------------------------------------------------------------------
+
+@dataclass
+class Samples:
+    """Points on one material's surfaces, distributed as its pixels are: world positions,
+    normals (facing the camera), view directions, and the material with per-point arrays where
+    textures vary it."""
+
+    p: np.ndarray
+    n: np.ndarray
+    v: np.ndarray
+    material: MaterialParams
+
+    def __len__(self) -> int:
+        return len(self.p)
+
+
+def _rng(name: str) -> np.random.Generator:
+    return np.random.default_rng(zlib.crc32(name.encode("utf-8")))
+
+
+def _triangles(snapshot: Snapshot, key: str, rng, per_item: int = 20000):
+    """(corners (T, 3, 3) world positions, corner normals (T, 3, 3), weight per triangle) of the
+    triangles drawn with material ``key``; a mesh with more than ``per_item`` of them contributes
+    a uniform random subset, weighted up."""
+    corners, normals, weights = [], [], []
+    for item in snapshot.items:
+        geometry = snapshot.geometries.get(item.geometry)
+        if geometry is None:
+            continue
+        for slot, first, count in geometry.ranges:
+            mkey = item.materials[slot] if slot < len(item.materials) else item.materials[-1]
+            if mkey != key or count < 3:
+                continue
+            tri = np.arange(first // 3, (first + count) // 3)
+            scale = 1.0
+            if len(tri) > per_item:
+                scale = len(tri) / per_item
+                tri = rng.choice(tri, per_item, replace=False)
+            rows = geometry.indices[(tri[:, None] * 3 + np.arange(3)).ravel()]
+            m = np.asarray(item.matrix, np.float64)
+            pos = geometry.positions[rows].astype(np.float64) @ m[:3, :3].T + m[:3, 3]
+            nm = np.asarray(item.normal_matrix, np.float64)[:3, :3]
+            nrm = geometry.normals[rows].astype(np.float64) @ nm.T
+            corners.append(pos.reshape(-1, 3, 3))
+            normals.append(nrm.reshape(-1, 3, 3))
+            weights.append(np.full(len(tri), scale))
+    if not corners:
+        return None
+    return np.concatenate(corners), np.concatenate(normals), np.concatenate(weights)
+
+
+def _texels(image: ImageData, count: int, rng) -> np.ndarray:
+    """``count`` random texels of ``image`` (linear, rgba) and its extremes by luminance."""
+    pixels = environment.linear_pixels(image).reshape(-1, 4)
+    picks = pixels[rng.integers(0, len(pixels), count)]
+    luminance = pixels[:, :3] @ np.array([0.2126, 0.7152, 0.0722])
+    picks[:2] = pixels[[int(np.argmin(luminance)), int(np.argmax(luminance))]]
+    return picks
+
+
+def material_samples(snapshot: Snapshot, key: str, count: int = SAMPLES, camera=None) -> Samples | None:
+    """Points where material ``key`` covers pixels (None: it covers none): area-sampled on its
+    triangles, then resampled by how many pixels each covers (n.v, and 1 / d^2 in perspective),
+    inside the view (``camera``'s, else the snapshot's); textured inputs take random texels of
+    their images."""
+    rng = _rng(key)
+    found = _triangles(snapshot, key, rng)
+    if found is None:
+        return None
+    corners, normals, tri_weight = found
+    e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
+    area = 0.5 * np.linalg.norm(np.cross(e1, e2), axis=-1) * tri_weight
+    if not np.any(area > 0.0):
+        return None
+    pool = 8 * count
+    tri = rng.choice(len(area), pool, p=area / area.sum())
+    r1, r2 = rng.random(pool), rng.random(pool)
+    flip = r1 + r2 > 1.0
+    r1, r2 = np.where(flip, 1.0 - r1, r1), np.where(flip, 1.0 - r2, r2)
+    bary = np.stack([1.0 - r1 - r2, r1, r2], -1)
+    p = np.einsum("ij,ijk->ik", bary, corners[tri])
+    n = np.einsum("ij,ijk->ik", bary, normals[tri])
+    face = np.cross(e1[tri], e2[tri])
+    length = np.linalg.norm(n, axis=-1, keepdims=True)
+    n = np.where(length > 1e-12, n / np.maximum(length, 1e-30),
+                 face / np.maximum(np.linalg.norm(face, axis=-1, keepdims=True), 1e-30))
+    camera = camera or snapshot.camera
+    if camera.is_perspective:
+        to_eye = np.asarray(camera.position, np.float64) - p
+        d2 = np.maximum(np.sum(to_eye * to_eye, axis=-1), 1e-12)
+        v = to_eye / np.sqrt(d2)[:, None]
+    else:
+        d2 = np.ones(pool)
+        v = np.broadcast_to(-np.asarray(camera.forward, np.float64), p.shape).copy()
+    NoV = np.sum(n * v, axis=-1)
+    n = np.where((NoV < 0.0)[:, None], -n, n)  # back faces shade with the normal flipped (as Cycles)
+    clip = np.c_[p, np.ones(pool)] @ camera.view_projection.astype(np.float64).T
+    w = clip[:, 3]
+    inside = (w > 0.0) if camera.is_perspective else np.ones(pool, bool)
+    inside &= np.all(np.abs(clip[:, :3]) <= np.abs(w)[:, None] * (1.0 + 1e-6), axis=-1)
+    weight = np.where(inside, np.abs(NoV) / d2, 0.0)
+    if not np.any(weight > 0.0):
+        return None
+    pick = rng.choice(pool, count, p=weight / weight.sum())
+    material = snapshot.materials[key]
+    changes = {}
+    for name, field, channel in (("base_color_map", "base_color", slice(0, 3)),
+                                 ("metallic_map", "metalness", 0), ("roughness_map", "roughness", 0)):
+        ref = getattr(material, name)
+        image = snapshot.images.get(ref[0]) if ref is not None else None
+        if image is not None:
+            values = _texels(image, count, rng)[:, channel]
+            changes[field] = np.clip(values, 0.0, None if field == "base_color" else 1.0)
+            changes[name] = None
+    if changes:
+        material = replace(material, **changes)
+    return Samples(p[pick], n[pick], v[pick], material)
+
+
+def world_radiance(world: World) -> np.ndarray:
+    """The mean radiance (rgb) of the world's lighting field over the sphere (its suns excluded:
+    they are lights): the uniform world the prediction lights materials with."""
+    if not world.lights:
+        return np.zeros(3)
+    directions = _sphere_directions(256)
+    threshold = world.threshold if world.suns else 0.0
+    return environment.world_radiance(world.lighting, directions, threshold).mean(0)
+
+
+@lru_cache(maxsize=4)
+def _sphere_directions(count: int) -> np.ndarray:
+    i = np.arange(count) + 0.5
+    z = 1.0 - 2.0 * i / count
+    phi = math.pi * (3.0 - math.sqrt(5.0)) * i
+    r = np.sqrt(1.0 - z * z)
+    return np.stack([r * np.cos(phi), r * np.sin(phi), z], -1)
+
+
+# --- prediction and choice ---------------------------------------------------------------------
+
+#: With the world occluded, this share of the samples is taken to lie in a crease (diffuse
+#: visibility CREASE_AO, the reflection direction blocked): candidates whose world term treats
+#: occlusion differently from the Principled set's (multiple scattering lit by the occluded
+#: irradiance, not by the occluded reflection) differ most there.
+CREASE_SHARE = 0.1
+CREASE_AO = 0.5
+
+
+def radiance(samples: Samples, lights, terms: Terms, world: np.ndarray | None = None,
+             occlusion: bool = False) -> np.ndarray:
+    """(N, 3) radiance at the samples with ``terms``: the lights (no shadows), the uniform world
+    (in creases for the first CREASE_SHARE of the samples when ``occlusion``), the emission."""
+    s = shading.Surface(samples.p, samples.n, samples.v, samples.material)
+    c = shading.shade("PBR", s, list(lights), terms=terms)
+    if world is not None and np.any(world > 0.0):
+        ao, specular_ao = np.ones(len(samples)), np.ones(len(samples))
+        if occlusion:
+            creased = np.arange(len(samples)) < CREASE_SHARE * len(samples)
+            ao, specular_ao = np.where(creased, CREASE_AO, 1.0), np.where(creased, 0.0, 1.0)
+        c = c + shading.shade_uniform_environment(s, world, terms, ao=ao, specular_ao=specular_ao)
+    return c
+
+
+def brightest_lights(samples: Samples, lights, count: int = MAX_LIGHTS):
+    """The ``count`` lights bringing the most irradiance to the samples."""
+    lights = list(lights)
+    if len(lights) <= count:
+        return lights
+    power = [float(shading.light_irradiance(light, samples.p)[0].max(axis=-1).sum()) for light in lights]
+    keep = sorted(np.argsort(power)[::-1][:count])
+    return [lights[i] for i in keep]
+
+
+def quantile_error(candidate: np.ndarray, reference: np.ndarray, exposure: float = 0.0,
+                   quantile: float = DEFAULT_QUANTILE) -> float:
+    """Delta E_ITP of ``candidate`` against ``reference`` radiance (after ``exposure`` EV) at
+    ``quantile`` over the samples."""
+    scale = 2.0 ** exposure
+    error = delta_e_itp(candidate * scale, reference * scale)
+    return float(np.quantile(error, quantile)) if error.size else 0.0
+
+
+def limiting_term(name: str, material: MaterialParams, errors: dict[str, float], bound: float,
+                  margin: float = MARGIN) -> tuple[str, str]:
+    """(terms, why) a material needed beyond the default terms, with its deciding values: ("", "")
+    when the default terms were within the bound (``name`` then won on cost alone); for the
+    Principled set, what the most accurate other candidate still lacked."""
+    if errors.get("DEFAULT", math.inf) * margin <= bound:
+        return "", ""
+    if name == "PRINCIPLED":
+        others = [n for n in errors if n != "PRINCIPLED"]
+        best = min(others, key=lambda n: errors[n]) if others else "DEFAULT"
+        needed = MISSING[best]
+    else:
+        needed = tuple(t for t in MISSING["DEFAULT"] if t not in MISSING[name])
+    kind = "metal" if np.mean(material.metalness) > 0.5 else "dielectric"
+    detail = f"{kind}, roughness {float(np.mean(material.roughness)):.2f}"
+    if needed != ("multiple scattering",):
+        detail += f", F0 {float(np.mean(material.f0)):.3f}"
+    return ", ".join(needed), detail
+
+
+def predict(samples: Samples, lights, world: np.ndarray | None, order, exposure: float = 0.0,
+            quantile: float = DEFAULT_QUANTILE, occlusion: bool = False) -> dict[str, float]:
+    """Each candidate's predicted error (before the margin), in ``order``."""
+    lights = brightest_lights(samples, lights)
+    reference = radiance(samples, lights, REFERENCE, world, occlusion)
+    out = {}
+    for name in order:
+        if name == "PRINCIPLED":
+            out[name] = 0.0
+            continue
+        out[name] = quantile_error(radiance(samples, lights, CANDIDATE_TERMS[name], world, occlusion),
+                                   reference, exposure, quantile)
+    return out
+
+
+def decide(errors: dict[str, float], order, bound: float, previous: str | None = None,
+           margin: float = MARGIN) -> str:
+    """The cheapest candidate in ``order`` within ``bound`` (with ``margin``); ``previous`` is
+    kept while within HYSTERESIS x bound unless a cheaper one is within bound / HYSTERESIS."""
+    fits = [n for n in order if errors[n] * margin <= bound]
+    best = fits[0] if fits else "PRINCIPLED"
+    if previous in errors and errors[previous] * margin <= bound * HYSTERESIS:
+        if order.index(best) >= order.index(previous):
+            return previous  # the new choice is no cheaper: stay
+        if errors[best] * margin > bound / HYSTERESIS:
+            return previous  # cheaper, but only just within: stay until clearly so
+    return best
+
+
+def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = DEFAULT_QUANTILE,
+           previous: dict[str, Choice] | None = None, camera=None) -> dict[str, Choice]:
+    """Auto's choice for every physically based material of ``snapshot`` that follows the scene's
+    terms (a material with its own term or model choices keeps them), seen from ``camera`` (the
+    snapshot's by default; the viewport passes the view it last drew)."""
+    if snapshot.settings.model != "PBR":
+        return {}
+    order = candidate_order(len(snapshot.lights))
+    world = world_radiance(snapshot.world)
+    exposure = float(snapshot.settings.exposure)
+    out = {}
+    for key, material in snapshot.materials.items():
+        if material.model not in ("", "PBR") or any(
+                (material.fresnel, material.ndf, material.visibility, material.diffuse)):
+            continue
+        if not any(key in item.materials for item in snapshot.items):
+            continue
+        samples = material_samples(snapshot, key, camera=camera)
+        if samples is None:  # covers no pixel: the cheapest set costs nothing to be wrong
+            out[key] = Choice(order[0], CANDIDATE_TERMS[order[0]], 0.0, samples=0)
+            continue
+        errors = predict(samples, snapshot.lights, world, order, exposure, quantile,
+                         snapshot.settings.world_occlusion)
+        before = previous.get(key).name if previous and key in previous else None
+        name = decide(errors, order, bound, before)
+        limiting, reason = limiting_term(name, samples.material, errors, bound)
+        out[key] = Choice(name, CANDIDATE_TERMS[name], errors[name], limiting, reason,
+                          tuple(errors.items()), len(samples))
+    return out
+
+
+def apply(snapshot: Snapshot, choices: dict[str, Choice]) -> None:
+    """Fix each chosen material's terms into ``snapshot.materials`` (its program follows) and
+    keep the choices in ``snapshot.term_choices``."""
+    for key, choice in choices.items():
+        snapshot.materials[key] = replace(snapshot.materials[key], terms=choice.terms)
+    snapshot.term_choices = choices
+
+
+def summary(choices: dict[str, Choice]) -> str:
+    """One line for the stats line: how many materials each set took, and the largest predicted
+    error."""
+    if not choices:
+        return ""
+    counts: dict[str, int] = {}
+    for choice in choices.values():
+        counts[choice.name] = counts.get(choice.name, 0) + 1
+    worst = max(choice.predicted for choice in choices.values())
+    parts = ", ".join(f"{counts[n]} {LABELS[n]}" for n in CANDIDATE_TERMS if n in counts)
+    return f"Auto: {parts} (predicted dE_ITP <= {worst:.2f})"

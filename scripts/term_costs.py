@@ -1,0 +1,134 @@
+"""The Auto term set's cost table: each candidate term set's frame time against the default
+terms', per light count, measured here (a benchmark, not a test).
+
+    .venv/bin/python scripts/term_costs.py [--resolution 1280x720] [--frames 5]
+        [--table docs/bench/term_costs.md] [--out addon/term_costs.json]
+
+A plane fills an orthographic view under N point lights that each reach all of it (N = 1, 4, 16;
+no shadows, a black world: the shading is all the frame does), with a rough metal material.
+Every (candidate, N) is rendered round-robin after a warm-up round, in one process; the medians
+of the engine's draw time (GPU work fenced by the read-back) go to ``--out`` with their ratios to
+the default terms (``relative``), which ``addon/auto_terms.py`` orders its candidates by. Times
+are CPU-rasteriser times (Mesa llvmpipe): only the ratios are used.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
+
+COUNTS = (1, 4, 16)
+VIEW = 8.0  # the view's width (m)
+
+
+def derive(draw_ms: dict[str, list[float]]) -> dict[str, list[float]]:
+    """Each candidate's draw time over the default terms' at the same light count (4 decimals)."""
+    base = draw_ms["DEFAULT"]
+    return {name: [round(t / b, 4) for t, b in zip(times, base)] for name, times in draw_ms.items()}
+
+
+def build(w: int, h: int):
+    import bpy
+    import render
+
+    render.ensure_addon()
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.engine = "SHADING_LAB"
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = w, h, 100
+    world = bpy.data.worlds.new("Black")
+    world.color = (0.0, 0.0, 0.0)
+    if world.node_tree is not None:
+        for node in world.node_tree.nodes:
+            if node.bl_idname == "ShaderNodeBackground":
+                node.inputs["Strength"].default_value = 0.0
+    scene.world = world
+    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    cam.data.type, cam.data.ortho_scale = "ORTHO", VIEW
+    cam.location = (0.0, 0.0, 5.0)
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    bpy.ops.mesh.primitive_plane_add(size=2 * VIEW)
+    mat = bpy.data.materials.new("Rough metal")
+    props = mat.shading_lab
+    props.use_base_color, props.base_color = True, (0.95, 0.64, 0.54)
+    props.use_metalness, props.metalness = True, 1.0
+    props.use_roughness, props.roughness = True, 0.5
+    bpy.context.active_object.data.materials.append(mat)
+    groups = {}
+    for n in COUNTS:
+        objs = []
+        for i in range(n):
+            data = bpy.data.lights.new(f"L{n}_{i}", "POINT")
+            data.energy, data.shadow_soft_size, data.use_shadow = 200.0 / n, 0.0, False
+            obj = bpy.data.objects.new(data.name, data)
+            obj.location = ((i % 4 - 1.5) * 1.5, (i // 4 - 1.5) * 1.0, 3.0)
+            scene.collection.objects.link(obj)
+            objs.append(obj)
+        groups[n] = objs
+    scene.shading_lab.model = "PBR"
+    scene.shading_lab.shadows = False
+    scene.shading_lab.light_culling = False  # every light reaches every tile: nothing to cull
+    return scene, groups
+
+
+def main() -> int:
+    import round_robin
+
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--resolution", default="1280x720")
+    parser.add_argument("--frames", type=int, default=5)
+    parser.add_argument("--table", type=Path, default=ROOT / "docs" / "bench" / "term_costs.md")
+    parser.add_argument("--out", type=Path, default=ROOT / "addon" / "term_costs.json")
+    args = parser.parse_args()
+    w, h = (int(x) for x in args.resolution.split("x"))
+
+    from addon import auto_terms
+
+    scene, groups = build(w, h)
+    props = scene.shading_lab
+    names = list(auto_terms.CANDIDATE_TERMS)
+    configs = [(name, n) for n in COUNTS for name in names]
+
+    def apply(config):
+        name, n = config
+        terms = auto_terms.CANDIDATE_TERMS[name]
+        props.term_set = "PRINCIPLED" if terms.principled else "CUSTOM"
+        props.fresnel, props.ndf, props.visibility, props.diffuse = (
+            terms.fresnel, terms.ndf, terms.visibility, terms.diffuse)
+        props.multiscatter = terms.multiscatter
+        round_robin.show_only(groups, n)
+
+    med = round_robin.median_draw_ms(configs, apply, args.frames)
+    draw_ms = {name: [round(med[(name, n)], 2) for n in COUNTS] for name in names}
+    data = {
+        "generated_by": "scripts/term_costs.py",
+        "scene": f"plane filling an orthographic view, rough metal, N point lights reaching all of it, "
+                 f"no shadows, black world, {w}x{h}, median of {args.frames} rounds",
+        "lights": list(COUNTS),
+        "draw_ms": draw_ms,
+        "relative": derive(draw_ms),
+    }
+    args.out.write_text(json.dumps(data, indent=1) + "\n")
+    rows = ["| candidate | " + " | ".join(f"{n} light(s) ms (x default)" for n in COUNTS) + " |",
+            "|---|" + "---:|" * len(COUNTS)]
+    for name in names:
+        cells = [f"{t:.1f} ({r:.3f}x)" for t, r in zip(draw_ms[name], data["relative"][name])]
+        rows.append(f"| {auto_terms.LABELS[name]} | " + " | ".join(cells) + " |")
+    order = {n: auto_terms.candidate_order(n, data) for n in COUNTS}
+    text = "\n".join([
+        "The Auto term set's candidates: draw time per light count (`scripts/term_costs.py`; "
+        f"{data['scene']}). Written to `addon/term_costs.json`, which orders the candidates.",
+        "", *rows, "",
+        *[f"Order at {n} light(s), cheap -> accurate: " + " -> ".join(order[n]) for n in COUNTS], ""])
+    round_robin.write_table(args.table, text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
