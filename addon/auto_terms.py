@@ -463,3 +463,58 @@ def summary(choices: dict[str, Choice]) -> str:
     worst = max(choice.predicted for choice in choices.values())
     parts = ", ".join(f"{counts[n]} {LABELS[n]}" for n in CANDIDATE_TERMS if n in counts)
     return f"Auto: {parts} (predicted dE_ITP <= {worst:.2f})"
+
+
+# --- verification against renders --------------------------------------------------------------
+
+@dataclass(frozen=True)
+class Verification:
+    """One material's measured error: Delta E_ITP of the Auto render against the Principled
+    render at the quantile of the material's pixels, and how many pixels it covers."""
+
+    measured: float
+    pixels: int
+    bound: float
+
+    @property
+    def over(self) -> bool:
+        return self.measured > self.bound
+
+
+def material_id_snapshot(snapshot: Snapshot) -> tuple[Snapshot, list[str]]:
+    """``snapshot`` drawn as material ids: every material emits (its index + 1, 0, 0) and reflects
+    nothing, no lights, a black world, no shadows or occlusion; with the keys in index order."""
+    keys = list(snapshot.materials)
+    black = (0.0, 0.0, 0.0)
+    materials = {key: replace(MaterialParams(name=key, base_color=black, diffuse_color=black,
+                                             specular_color=black, ambient_color=black,
+                                             emission=(float(i + 1), 0.0, 0.0)), model="PBR")
+                 for i, key in enumerate(keys)}
+    settings = replace(snapshot.settings, shadows=False, world_occlusion=False, auto_error_bound=None,
+                       ambient=0.0)
+    ids = replace(snapshot, materials=materials, lights=[], world=World(), world_color=black,
+                  settings=settings, term_choices={})
+    return ids, keys
+
+
+def principled_snapshot(snapshot: Snapshot) -> Snapshot:
+    """``snapshot`` with every material Auto chose for on the Principled set."""
+    materials = dict(snapshot.materials)
+    for key in snapshot.term_choices:
+        materials[key] = replace(materials[key], terms=REFERENCE)
+    return replace(snapshot, materials=materials)
+
+
+def measure(auto: np.ndarray, reference: np.ndarray, ids: np.ndarray, keys: list[str], bound: float,
+            exposure: float = 0.0, quantile: float = DEFAULT_QUANTILE) -> dict[str, Verification]:
+    """Per material of ``keys`` covering pixels: the Auto image's error against the reference's
+    on the pixels ``ids`` (the id image's red channel, index + 1) gives it."""
+    index = np.rint(ids[..., 0]).astype(int) - 1
+    scale = 2.0 ** exposure
+    error = delta_e_itp(auto[..., :3] * scale, reference[..., :3] * scale)
+    out = {}
+    for i, key in enumerate(keys):
+        mask = index == i
+        if mask.any():
+            out[key] = Verification(float(np.quantile(error[mask], quantile)), int(mask.sum()), bound)
+    return out

@@ -45,6 +45,16 @@ last_exposures: dict[str, tuple[float, float]] = {}
 #: The Auto term set's choices in the last final render or viewport update: material name ->
 #: auto_terms.Choice (the Material panel and the CLI show them).
 last_term_choices: dict = {}
+#: The last verification of the Auto term set (``request_verification``): material name ->
+#: auto_terms.Verification, the measured error of Auto against the Principled set.
+last_verification: dict = {}
+_VERIFY_NEXT = threading.Event()
+
+
+def request_verification() -> None:
+    """Have the next final render also measure the Auto term set against the Principled set, per
+    material (three more draws of the frame: Principled, material ids; ``last_verification``)."""
+    _VERIFY_NEXT.set()
 _TIMINGS_LOCK = threading.Lock()
 
 
@@ -356,6 +366,10 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         if drawn_frame is None or self.test_break():
             return
         images, exposures = drawn_frame
+        if _VERIFY_NEXT.is_set() and not self.is_preview:
+            _VERIFY_NEXT.clear()
+            self.update_stats("", f"Shading Lab | {label} | Verifying Auto against Principled")
+            self._verify(snap)
         drawn = time.perf_counter()
         self.update_progress(0.9)
         whole = (0, 0, snap.width, snap.height)
@@ -452,6 +466,40 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         finally:
             renderer.free()
         return None
+
+    def _verify(self, snap) -> None:
+        """Measure the Auto term set's real error per material (``request_verification``)."""
+        with _TIMINGS_LOCK:
+            last_verification.clear()
+        settings = snap.settings
+        if settings.auto_error_bound is None:
+            self.report({"WARNING"}, "Verify: the term set is not Auto; nothing to verify")
+            return
+        renderer = Renderer()
+        try:
+            auto = renderer.render(snap)
+            reference = renderer.render(auto_terms.principled_snapshot(snap))
+            ids, keys = auto_terms.material_id_snapshot(snap)
+            id_image = renderer.render(ids)
+        except Exception as exc:
+            self.report({"ERROR"}, f"Verify failed to draw: {type(exc).__name__}: {exc}")
+            return
+        finally:
+            renderer.free()
+        measured = auto_terms.measure(auto, reference, id_image, keys, settings.auto_error_bound,
+                                      settings.exposure, settings.auto_quantile)
+        measured = {key: v for key, v in measured.items() if key in snap.term_choices}
+        with _TIMINGS_LOCK:
+            last_verification.update(measured)
+        over = sorted(key for key, v in measured.items() if v.over)
+        if over:
+            self.report({"WARNING"}, f"Auto: {len(over)} material(s) over the error bound "
+                                     f"{settings.auto_error_bound:g}: " + ", ".join(
+                                         f"{key} ({measured[key].measured:.2f})" for key in over))
+        else:
+            worst = max((v.measured for v in measured.values()), default=0.0)
+            self.report({"INFO"}, f"Auto: {len(measured)} material(s) within the error bound "
+                                  f"{settings.auto_error_bound:g} (largest measured ΔE_ITP {worst:.2f})")
 
     def update_render_passes(self, scene=None, renderlayer=None):
         """Announce the passes to the compositor and multilayer EXR output."""

@@ -172,5 +172,44 @@ class SHADINGLAB_OT_bake_world(bpy.types.Operator):
         return {"FINISHED"}
 
 
+class SHADINGLAB_OT_verify_auto_terms(bpy.types.Operator):
+    """Render the scene with the Auto term set and with the Principled set, measure each material's
+    real error on its own pixels and mark those over the Error Bound"""
+
+    bl_idname = "shading_lab.verify_auto_terms"
+    bl_label = "Verify Auto Terms"
+
+    @classmethod
+    def poll(cls, context):
+        props = getattr(getattr(context, "scene", None), "shading_lab", None)
+        return props is not None and props.term_set == "AUTO" and context.scene.camera is not None
+
+    def execute(self, context):
+        from . import engine
+
+        engine.request_verification()
+        try:
+            bpy.ops.render.render()
+        except RuntimeError as exc:
+            self.report({"ERROR"}, f"Verify: the render failed: {str(exc).strip()}")
+            return {"CANCELLED"}
+        finally:
+            engine._VERIFY_NEXT.clear()  # a render that never ran must not verify a later one
+        measured = dict(engine.last_verification)
+        if not measured:
+            self.report({"WARNING"}, "Verify: no material chosen by Auto covers a pixel")
+            return {"CANCELLED"}
+        over = sorted(name for name, v in measured.items() if v.over)
+        bound = context.scene.shading_lab.auto_error_bound
+        if over:
+            self.report({"WARNING"}, f"{len(over)} of {len(measured)} material(s) over the error bound "
+                                     f"{bound:g}: " + ", ".join(over))
+        else:
+            worst = max(v.measured for v in measured.values())
+            self.report({"INFO"}, f"All {len(measured)} material(s) within the error bound {bound:g} "
+                                  f"(largest measured ΔE_ITP {worst:.2f})")
+        return {"FINISHED"}
+
+
 classes = (SHADINGLAB_OT_apply_material_preset, SHADINGLAB_OT_principled_to_explicit,
-           SHADINGLAB_OT_convert_roughness, SHADINGLAB_OT_bake_world)
+           SHADINGLAB_OT_convert_roughness, SHADINGLAB_OT_bake_world, SHADINGLAB_OT_verify_auto_terms)

@@ -260,22 +260,29 @@ class SHADINGLAB_PT_material(ShadingLabPanel, bpy.types.Panel):
 
 def _auto_choice(layout, context) -> None:
     """What the Auto term set chose for the material in the last render or viewport frame."""
-    scene_props = context.scene.shading_lab
-    if scene_props.term_set != "AUTO":
+    scene = getattr(context, "scene", None)
+    scene_props = getattr(scene, "shading_lab", None)
+    if scene_props is None or scene_props.term_set != "AUTO":
         return
-    from .engine import last_term_choices
+    from .engine import last_term_choices, last_verification
 
-    choice = last_term_choices.get(context.material.name_full)
+    name = context.material.name_full
+    choice = last_term_choices.get(name)
     box = layout.box()
     if choice is None:
         box.label(text="Auto: not chosen yet (render, or draw the viewport)", icon="INFO")
-        return
-    box.label(text=f"Auto: {choice.label}", icon="SHADING_RENDERED")
-    bound = scene_props.auto_error_bound
-    box.label(text=f"Predicted ΔE_ITP {choice.predicted:.2f} (bound {bound:.2f}, "
-                   f"{scene_props.auto_quantile:.0f}th percentile, {choice.samples} points)")
-    if choice.limiting:
-        box.label(text=f"Needs {choice.limiting}: {choice.reason}")
+    else:
+        box.label(text=f"Auto: {choice.label}", icon="SHADING_RENDERED")
+        box.label(text=f"Predicted ΔE_ITP {choice.predicted:.2f} (bound {scene_props.auto_error_bound:.2f}, "
+                       f"{scene_props.auto_quantile:.0f}th percentile, {choice.samples} points)")
+        if choice.limiting:
+            box.label(text=f"Needs {choice.limiting}: {choice.reason}")
+    checked = last_verification.get(name)
+    if checked is not None:
+        box.label(text=f"Measured ΔE_ITP {checked.measured:.2f} on {checked.pixels:,} pixels"
+                       + (f": over the bound {checked.bound:.2f}" if checked.over else ""),
+                  icon="ERROR" if checked.over else "CHECKMARK")
+    box.operator("shading_lab.verify_auto_terms", icon="VIEWZOOM")
 
 
 classes = (SHADINGLAB_PT_render, SHADINGLAB_PT_light, SHADINGLAB_PT_world, SHADINGLAB_PT_material)

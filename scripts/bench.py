@@ -47,6 +47,7 @@ DEFAULT_TERMS = {family: choices[0] for family, choices in TERM_CHOICES.items()}
 LIGHT_COUNTS = (1, 2, 4, 8, 16, 32, 64)
 TRIANGLE_COUNTS = (10_000, 100_000, 1_000_000)
 GENERIC_MAX_LIGHTS = 64
+AUTO_BOUNDS = (0.5, 1.0, 3.0)  # Delta E_ITP at the 99th percentile of a material's pixels
 QUICK_PRESET = "long_tail"
 SCALING_PRESET = "material_grid"
 
@@ -63,6 +64,7 @@ class Config:
     multiscatter: bool = False
     principled: bool = False
     normalized: bool = False  # energy-normalised Blinn-Phong
+    auto_bound: float | None = None  # the Auto term set at this error bound
 
     @property
     def group(self) -> str:
@@ -83,6 +85,8 @@ def all_configs(quick: bool) -> list[Config]:
             configs.append(Config(f"pbr-{family}-{name}", f"PBR {family} {name}", "PBR", ((family, choice),)))
     configs.append(Config("pbr-multiscatter", "PBR multiscatter", "PBR", multiscatter=True))
     configs.append(Config("pbr-principled", "PBR Principled set", "PBR", principled=True))
+    for bound in AUTO_BOUNDS:
+        configs.append(Config(f"pbr-auto-{bound:g}", f"PBR Auto, bound {bound:g}", "PBR", auto_bound=bound))
     return configs
 
 
@@ -90,7 +94,9 @@ def apply(scene, config: Config) -> None:
     scene.render.engine = "SHADING_LAB"
     props = scene.shading_lab
     props.model = config.model
-    props.term_set = "PRINCIPLED" if config.principled else "CUSTOM"
+    props.term_set = "PRINCIPLED" if config.principled else "AUTO" if config.auto_bound else "CUSTOM"
+    if config.auto_bound:
+        props.auto_error_bound = config.auto_bound
     terms = {**DEFAULT_TERMS, **dict(config.terms)}
     for family, choice in terms.items():
         if getattr(props, family) != choice:
@@ -257,6 +263,8 @@ def bench_preset(name: str, args, configs, peers, progress, tmp: Path) -> dict:
     import metrics
     import reference
 
+    from addon import auto_terms, engine
+
     scene, _stem = cli.load_scene(name, None)
     if scene.camera is None:
         raise cli.CliError(f"{name}: the scene has no active camera")
@@ -277,10 +285,13 @@ def bench_preset(name: str, args, configs, peers, progress, tmp: Path) -> dict:
     ref, cached = reference.render_reference(scene, samples=args.reference_samples)
     out["reference_cached"] = cached
     progress.step(f"{name} Cycles reference{' (cached)' if cached else ''}")
+    out["auto_sets"] = {}
     for config in configs:
         apply(scene, config)
         image = reference.render_to_array(scene, tmp / f"{name}_{config.key}.exr")
         out["errors"][config.key] = metrics.errors(ref, image)
+        if config.auto_bound:
+            out["auto_sets"][config.key] = auto_terms.summary(engine.last_term_choices).removeprefix("Auto: ")
         progress.step(f"{name} error {config.key}")
 
     images = {}
@@ -587,7 +598,26 @@ def report(args, results, lights, tris, configs, peers, machine, elapsed) -> str
               "saving of light specialisation alone — a lower bound for \"one program for "
               "everything\". Images agree (max |Δ| above).", ""]
 
-    # 6. detail per preset
+    # 6. the Auto term set
+    autos = [c for c in configs if c.auto_bound]
+    if autos:
+        lines += [f"## The Auto term set ({res(main)} times; errors and choices at {res(ref)})", ""]
+        rows = []
+        for r in results:
+            t, e = r["times"][main], r["errors"]
+            for c in autos:
+                rows.append([r["name"], f"{c.auto_bound:g}",
+                             f"{t[c.key]['total_ms'] / t['pbr-principled']['total_ms']:.3f}×",
+                             f"{t[c.key]['total_ms'] / t['pbr']['total_ms']:.3f}×",
+                             f"{e[c.key].flip:.4f} / {e['pbr-principled'].flip:.4f}",
+                             r["auto_sets"].get(c.key, "")])
+        lines += table(["preset", "bound", "time / Principled", "time / default", "FLIP Auto / Principled",
+                        "chosen sets"], rows)
+        lines += ["", "Bound: Delta E_ITP at the 99th percentile of a material's pixels against the "
+                  "Principled set (`addon/auto_terms.py`). Times include the prediction (in extraction).",
+                  ""]
+
+    # 7. detail per preset
     lines += ["## Detail per preset", ""]
     for r in results:
         lines += [f"### {r['name']} ({r['triangles']:,} triangles, {r['lights']} lights; Cycles reference "
@@ -678,6 +708,8 @@ def short_label(c: Config) -> str:
         return c.label.replace(", energy-normalised", " norm.")
     if c.principled:
         return "PBR Principled"
+    if c.auto_bound:
+        return f"Auto {c.auto_bound:g}"
     if c.multiscatter:
         return "PBR multiscatter"
     if c.terms:

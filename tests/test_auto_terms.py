@@ -230,3 +230,31 @@ def test_measured_error_is_within_a_factor_two_of_the_prediction(random_results)
     assert float(np.max(ratios)) <= 2.0, f"measured up to {np.max(ratios):.2f}x the prediction: {percentiles}"
     print(f"measured/predicted: {inside:.0%} of {len(pairs)} within a factor 2; "
           f"percentiles 5/25/50/75/95/100 {percentiles}")
+
+
+def test_verify_measures_what_the_analytic_masks_measure(tmp_path):
+    """The Verify operator's per-material errors (its own material-id render) agree with the same
+    error measured on the pixels found by intersecting rays with the analytic spheres and plane
+    (those keep only pixels whose 3x3 neighbourhood is one material, so they are fewer)."""
+    import bpy
+
+    scene, camera, names = auto_scenes.random_scene(7)
+    props = scene.shading_lab
+    props.term_set = "PRINCIPLED"
+    reference = scenes.render(scene, tmp_path / "principled.exr")
+    props.term_set, props.auto_error_bound = "AUTO", 4.0
+    auto = scenes.render(scene, tmp_path / "auto.exr")
+    assert bpy.ops.shading_lab.verify_auto_terms() == {"FINISHED"}
+    verified = dict(engine.last_verification)
+    masks = auto_scenes.material_masks(camera, names)
+    analytic = auto_scenes.measured_errors(auto, reference, masks, props.auto_quantile / 100.0)
+    cheaper = [n for n in names if engine.last_term_choices[n].name != "PRINCIPLED"]
+    assert cheaper, f"seed 7 chose the Principled set everywhere: {engine.last_term_choices}"
+    report = {n: (round(verified[n].measured, 3), round(analytic[n], 3), verified[n].pixels,
+                  int(masks[n].sum())) for n in cheaper}
+    for name in cheaper:
+        v = verified[name]
+        assert masks[name].sum() <= v.pixels <= 1.6 * masks[name].sum() + 40, report
+        assert abs(v.measured - analytic[name]) <= 0.25 * max(analytic[name], 0.2), report
+    assert set(verified) == {n for n in names if n in engine.last_term_choices}, (verified, report)
+    print(f"verify vs analytic (measured, analytic, pixels, eroded pixels): {report}")

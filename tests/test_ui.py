@@ -186,3 +186,25 @@ def test_render_panel_says_how_the_empirical_models_white_is_displayed():
     assert any("light grey" in t for t in _draw(ui.SHADINGLAB_PT_render, context).labels())
     scene.view_settings.view_transform = "Standard"
     assert not any("light grey" in t for t in _draw(ui.SHADINGLAB_PT_render, context).labels())
+
+
+def test_material_panel_shows_the_auto_choice_and_its_verification(monkeypatch):
+    from addon import auto_terms, engine
+
+    scene = scenes.reset(size=8)
+    mat = scenes.material("Rough gold", roughness=0.6, metalness=1.0)
+    context = SimpleNamespace(material=mat, scene=scene)
+    assert not any("Auto" in t for t in _draw(ui.SHADINGLAB_PT_material, context).labels())
+    scene.shading_lab.term_set = "AUTO"
+    assert any("not chosen yet" in t for t in _draw(ui.SHADINGLAB_PT_material, context).labels())
+    choice = auto_terms.Choice("MULTISCATTER", auto_terms.CANDIDATE_TERMS["MULTISCATTER"], 0.43,
+                               "multiple scattering", "metal, roughness 0.60", samples=512)
+    monkeypatch.setitem(engine.last_term_choices, mat.name_full, choice)
+    monkeypatch.setitem(engine.last_verification, mat.name_full, auto_terms.Verification(1.7, 120, 1.0))
+    layout = _draw(ui.SHADINGLAB_PT_material, context)
+    labels = layout.labels()
+    assert "Auto: default + multiple scattering" in labels, labels
+    assert any("Predicted ΔE_ITP 0.43 (bound 1.00" in t for t in labels), labels
+    assert "Needs multiple scattering: metal, roughness 0.60" in labels, labels
+    assert any("Measured ΔE_ITP 1.70 on 120 pixels: over the bound 1.00" in t for t in labels), labels
+    assert ("operator", "shading_lab.verify_auto_terms", True) in layout.log
