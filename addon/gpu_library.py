@@ -399,16 +399,20 @@ def r32f_texture(table: np.ndarray) -> gpu.types.GPUTexture:
 
 def albedo_table(terms) -> gpu.types.GPUTexture:
     """The directional-albedo table of ``terms``' D and V as an R32F texture (built once); for the
-    Principled set, GGX + Smith's table with Eavg(r) as an extra row."""
+    Principled set, GGX + Smith's table; with Eavg(r) (GGX + Smith's) as an extra row where the
+    layering estimate reads it (the Principled set, the LAYERED diffuse)."""
     from . import multiscatter
 
-    def build():
-        if terms.principled:
-            return r32f_texture(np.vstack([multiscatter.albedo_table("GGX", "SMITH_CORRELATED"),
-                                           multiscatter.average_albedo()[None, :]]))
-        return r32f_texture(multiscatter.albedo_table(terms.ndf, terms.visibility))
+    ndf, visibility = ("GGX", "SMITH_CORRELATED") if terms.principled else (terms.ndf, terms.visibility)
+    layered = terms.principled or terms.diffuse == "LAYERED"
 
-    return LIBRARY.table(("PRINCIPLED",) if terms.principled else (terms.ndf, terms.visibility), build)
+    def build():
+        table = multiscatter.albedo_table(ndf, visibility)
+        if layered:
+            table = np.vstack([table, multiscatter.average_albedo()[None, :]])
+        return r32f_texture(table)
+
+    return LIBRARY.table((ndf, visibility, "EAVG" if layered else ""), build)
 
 
 def ltc_table(terms) -> gpu.types.GPUTexture:

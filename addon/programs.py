@@ -180,7 +180,7 @@ class Features:
         """The program samples ``ms_table`` (multiple-scattering compensation, Principled set, the
         magnitude of area lights' specular lobe)."""
         return self.model == "PBR" and (self.terms.multiscatter or self.terms.principled
-                                        or self.uses_ltc)
+                                        or self.terms.diffuse == "LAYERED" or self.uses_ltc)
 
     @property
     def uses_env_chain(self) -> bool:
@@ -194,20 +194,26 @@ class Features:
 
     @property
     def uses_s_table(self) -> bool:
-        """The program samples ``s_table`` (the Principled set's layering estimate)."""
-        return self.model == "PBR" and self.terms.principled
+        """The program samples ``s_table`` (the layering estimate: the Principled set, the LAYERED
+        diffuse)."""
+        return self.model == "PBR" and (self.terms.principled or self.terms.diffuse == "LAYERED")
 
     def defines(self) -> tuple[tuple[str, str], ...]:
         out = [("SL_MAX_LIGHTS", str(self.max_lights)), ("SL_MODEL_" + self.model, "1")]
         out += [("SL_HAS_" + kind, "1") for kind in sorted(self.light_kinds)]
         t = self.terms
         if self.model == "PBR" and t.principled:
-            out += [("SL_PRINCIPLED", "1"), ("SL_MS_SIZE", str(MS_SIZE)), ("SL_S_SIZE", str(S_SIZE))]
+            out += [("SL_PRINCIPLED", "1"), ("SL_LAYERS", "1"), ("SL_MS_SIZE", str(MS_SIZE)),
+                    ("SL_S_SIZE", str(S_SIZE))]
         elif self.model == "PBR":
             out += [("SL_FRESNEL_" + t.fresnel, "1"), ("SL_NDF_" + t.ndf, "1"),
                     ("SL_VISIBILITY_" + t.visibility, "1"), ("SL_DIFFUSE_" + t.diffuse, "1")]
             if t.multiscatter:
                 out += [("SL_MULTISCATTER", "1"), ("SL_MS_SIZE", str(MS_SIZE))]
+            if t.diffuse == "LAYERED":  # the layering estimate of principled.glsl
+                out += [("SL_LAYERS", "1"), ("SL_S_SIZE", str(S_SIZE))]
+                if not t.multiscatter:
+                    out.append(("SL_MS_SIZE", str(MS_SIZE)))
         if self.sphere_lights:
             out.append(("SL_SPHERE_LIGHTS", "1"))
         if self.uses_ltc:

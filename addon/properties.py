@@ -44,6 +44,8 @@ TERM_ITEMS = {
         ("BURLEY_RENORMALIZED", "Burley Renormalised", "Lagarde & de Rousiers 2014 (Frostbite)"),
         ("OREN_NAYAR", "Oren-Nayar", "Oren & Nayar 1994, the full model, sigma = roughness"),
         ("GGX_HAMMON", "GGX Rough Diffuse", "Hammon 2017: Lambertian microfacets under GGX + Smith"),
+        ("LAYERED", "Layered (Principled)", "Lambert under the dielectric specular layer's albedo, as "
+                                            "Blender's Principled BSDF weighs its base"),
     ),
 }
 TERM_LABELS = {"fresnel": "Fresnel", "ndf": "Distribution", "visibility": "Masking-Shadowing",

@@ -46,6 +46,7 @@ from .brdf import (
 from .snapshot import Light, MaterialParams, Terms
 
 DEFAULT_TERMS = Terms()
+PRINCIPLED_TERMS = Terms(principled=True)
 MIN_DIST2 = 1e-4
 
 
@@ -412,6 +413,8 @@ def pbr_diffuse(s: Surface, F, NoV, NoL, NoH, LoH, LoV, terms: Terms):
         return Fd_OrenNayar(rho, NoV, NoL, cos_phi, s.roughness)
     if terms.diffuse == "GGX_HAMMON":
         return Fd_GGXHammon(rho, NoV, NoL, NoH, LoV, s.alpha)
+    if terms.diffuse == "LAYERED":
+        return rho * _rgb_scalar(np.clip(1.0 - principled_layers(s, terms)[2], 0.0, 1.0) * INV_PI)
     return (1.0 - F) * rho * Fd_Lambert()
 
 
@@ -424,12 +427,14 @@ def specular_energy_compensation(s: Surface, terms: Terms):
     return 1.0 + s.f0 * _rgb_scalar(1.0 / E - 1.0)
 
 
-def principled_layers(s: Surface):
+def principled_layers(s: Surface, terms: Terms = PRINCIPLED_TERMS):
     """principled.glsl's principled_layers_at: (metal_M (rgb), dielectric_M, layer) at the view,
     the two lobes' multiple-scattering compensation and the dielectric layer's albedo estimate
-    E M mix(F0, 1, S) that the Lambert base sits under."""
+    E M mix(F0, 1, S) that the Lambert base sits under; E of the program's D and V (``terms``';
+    the Principled set: GGX with Smith), Eavg GGX's."""
+    ndf, visibility = ("GGX", "SMITH_CORRELATED") if terms.principled else (terms.ndf, terms.visibility)
     rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
-    E_mu = np.maximum(M.interpolate(M.albedo_table("GGX", "SMITH_CORRELATED"), s.NoV, rough), 1e-3)
+    E_mu = np.maximum(M.interpolate(M.albedo_table(ndf, visibility), s.NoV, rough), 1e-3)
     e_avg = M.interpolate_1d(M.average_albedo(), rough)
     F0m = np.minimum(s.base_color, 1.0)
     metal_M = M.principled_compensation(F0m + (1.0 - F0m) / 21.0, _rgb_scalar(E_mu), _rgb_scalar(e_avg))
@@ -541,7 +546,11 @@ def shade_uniform_environment(s: Surface, radiance, terms: Terms = DEFAULT_TERMS
         Fms_Ems = albedo * Favg * Ems / (1.0 - Ems * Favg)
         specular = specular + Fms_Ems * irradiance * INV_PI
         albedo = albedo + Fms_Ems
-    diffuse = base * np.clip(1.0 - albedo, 0.0, 1.0) * irradiance * INV_PI
+    if terms.diffuse == "LAYERED":
+        weight = _rgb_scalar(np.clip(1.0 - principled_layers(s, terms)[2], 0.0, 1.0))
+    else:
+        weight = np.clip(1.0 - albedo, 0.0, 1.0)
+    diffuse = base * weight * irradiance * INV_PI
     return diffuse * weights[0] + specular * weights[1]
 
 

@@ -165,7 +165,11 @@ vec3 shade_environment(Surface s, vec2 weights)
   specular += Fms_Ems * irradiance * INV_PI;
   albedo += Fms_Ems;
 #    endif
+#    ifdef SL_DIFFUSE_LAYERED
+  vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - s.layers.layer) * irradiance * INV_PI;
+#    else
   vec3 diffuse = s.base_color * (1.0 - s.metalness) * clamp(1.0 - albedo, 0.0, 1.0) * irradiance * INV_PI;
+#    endif
   return diffuse * weights.x + specular * weights.y;
 #  endif
 }

@@ -6,7 +6,7 @@
  * (mu = n.v, perceptual roughness) on the grid i / (N - 1), ends included, and interpolated
  * bilinearly here (texelFetch, so that the numpy twin interpolates identically). */
 
-#if defined(SL_MULTISCATTER) || defined(SL_PRINCIPLED) || defined(SL_LTC)
+#if defined(SL_MULTISCATTER) || defined(SL_LAYERS) || defined(SL_LTC)
 float ms_albedo(float NoV, float roughness)
 {
   float n = float(SL_MS_SIZE);

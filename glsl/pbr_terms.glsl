@@ -3,7 +3,7 @@
  *   SL_FRESNEL_{SCHLICK, SCHLICK_SG, SCHLICK_GENERAL, EXACT}
  *   SL_NDF_{GGX, BECKMANN}
  *   SL_VISIBILITY_{SMITH_CORRELATED, SMITH_SEPARABLE, VCAVITY, APPROX}  (matched to the NDF)
- *   SL_DIFFUSE_{LAMBERT, BURLEY, BURLEY_RENORMALIZED, OREN_NAYAR, GGX_HAMMON} */
+ *   SL_DIFFUSE_{LAMBERT, BURLEY, BURLEY_RENORMALIZED, OREN_NAYAR, GGX_HAMMON, LAYERED} */
 
 vec3 pbr_fresnel(Surface s, float LoH)
 {
@@ -56,7 +56,8 @@ float pbr_visibility(float NoV, float NoL, float NoH, float LoH, float alpha)
 
 /* The diffuse lobe f_d (without the light's n.l). Only Lambert takes eq. 1.18's (1 - F) weight:
  * Burley's retro-reflection and Hammon's fit carry their own Fresnel-like falloff, Oren-Nayar
- * has none. */
+ * has none; LAYERED is Lambert under the dielectric layer's albedo at the view, as Blender's
+ * Principled BSDF weighs its base (principled.glsl's layers: Kulla & Conty 2017, Cycles' S). */
 vec3 pbr_diffuse(Surface s, vec3 F, float NoV, float NoL, float NoH, float LoH, float LoV)
 {
   vec3 rho = s.base_color * (1.0 - s.metalness);
@@ -71,6 +72,8 @@ vec3 pbr_diffuse(Surface s, vec3 F, float NoV, float NoL, float NoH, float LoH, 
   return Fd_OrenNayar(rho, NoV, NoL, cos_phi, s.roughness);
 #elif defined(SL_DIFFUSE_GGX_HAMMON)
   return Fd_GGXHammon(rho, NoV, NoL, NoH, LoV, s.alpha);
+#elif defined(SL_DIFFUSE_LAYERED)
+  return rho * (saturate(1.0 - s.layers.layer) * Fd_Lambert());
 #else
   return (vec3(1.0) - F) * rho * Fd_Lambert();
 #endif

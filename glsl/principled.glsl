@@ -4,7 +4,9 @@
  * ms_table rows 0..N-1 hold E(mu, r), row N holds Eavg(r); s_table is the 16^3 table S(r, mu, z)
  * laid out as 16 x 256 (y = mu index + 16 z index). */
 
-#ifdef SL_PRINCIPLED
+#ifdef SL_LAYERS
+/* The layering estimate (SL_LAYERS: the Principled set, and the LAYERED diffuse of
+ * pbr_terms.glsl): Eavg, S, Fss, M and the layer's albedo at the view. */
 float principled_Eavg(float roughness)
 {
   float n = float(SL_MS_SIZE);
@@ -73,6 +75,9 @@ PrincipledLayers principled_layers(Surface s)
 {
   return s.layers;
 }
+#endif
+
+#ifdef SL_PRINCIPLED
 
 /* f * E * NoL for the Principled set: a metal lobe (F82-tint Fresnel, which is Schlick for a
  * white tint) weighted by metalness, a dielectric lobe with exact Fresnel weighted by

@@ -1,7 +1,7 @@
 /* The shading point: geometry and material inputs every model reads. */
 
-#ifdef SL_PRINCIPLED
-/* What the Principled set needs at the view direction (principled.glsl): the metal lobe's and the
+#ifdef SL_LAYERS
+/* What the Principled set (and the LAYERED diffuse) needs at the view direction (principled.glsl): the metal lobe's and the
  * dielectric lobe's multiple-scattering compensation and the dielectric layer's albedo estimate
  * that the diffuse base sits under. They depend on the view only, so make_surface computes them
  * once per shading point, not once per light. */
@@ -54,7 +54,7 @@ struct Surface {
   bool has_complex_ior;
   vec3 ior_n;         /* conductor's complex IOR n + ik per channel (exact Fresnel) */
   vec3 ior_k;
-#ifdef SL_PRINCIPLED
+#ifdef SL_LAYERS
   PrincipledLayers layers;
 #endif
 #ifdef SL_MULTISCATTER
@@ -100,7 +100,7 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
   s.has_complex_ior = m.fresnel.z > 0.5;
   s.ior_n = m.ior_n.rgb;
   s.ior_k = m.ior_k.rgb;
-#ifdef SL_PRINCIPLED
+#ifdef SL_LAYERS
   s.layers = principled_layers_at(s.NoV, s.roughness, s.base_color, s.eta);
 #endif
 #ifdef SL_MULTISCATTER

@@ -4,7 +4,7 @@ terms', per light count, measured here (a benchmark, not a test).
     .venv/bin/python scripts/term_costs.py [--resolution 1280x720] [--frames 5]
         [--table docs/bench/term_costs.md] [--out addon/term_costs.json]
 
-A plane fills an orthographic view under N point lights that each reach all of it (N = 1, 4, 16;
+A plane fills an orthographic view under N point lights that each reach all of it (N = 2, 8, 32;
 no shadows, a black world: the shading is all the frame does), with a rough metal material.
 Every (candidate, N) is rendered round-robin after a warm-up round, in one process; the medians
 of the engine's draw time (GPU work fenced by the read-back) go to ``--out`` with their ratios to
@@ -22,7 +22,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
 
-COUNTS = (1, 4, 16)
+COUNTS = (2, 8, 32)
 VIEW = 8.0  # the view's width (m)
 
 
@@ -67,7 +67,7 @@ def build(w: int, h: int):
             data = bpy.data.lights.new(f"L{n}_{i}", "POINT")
             data.energy, data.shadow_soft_size, data.use_shadow = 200.0 / n, 0.0, False
             obj = bpy.data.objects.new(data.name, data)
-            obj.location = ((i % 4 - 1.5) * 1.5, (i // 4 - 1.5) * 1.0, 3.0)
+            obj.location = ((i % 8 - 3.5) * 0.8, (i // 8 - 1.5) * 1.0, 3.0)
             scene.collection.objects.link(obj)
             objs.append(obj)
         groups[n] = objs

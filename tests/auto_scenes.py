@@ -12,7 +12,7 @@ import bpy
 import numpy as np
 import scenes
 
-SIZE = 64
+SIZE = 96
 SCALE = 4.4  # the orthographic view's width (m)
 SPHERES = ((-1.5, 0.45), (-0.5, 0.45), (0.5, 0.45), (1.5, 0.45))  # (x, radius), on the plane z = 0
 

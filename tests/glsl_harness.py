@@ -49,11 +49,12 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
             info.define(name, value)
         info.typedef_source(programs.read_glsl("uniforms.glsl"))
         slot = 0
-        albedo_table = "SL_MULTISCATTER" in defs or "SL_PRINCIPLED" in defs or "SL_LTC" in defs
+        layers = "SL_LAYERS" in defs  # the layering estimate (principled.glsl)
+        albedo_table = "SL_MULTISCATTER" in defs or layers or "SL_LTC" in defs
         if albedo_table:
             info.sampler(slot, "FLOAT_2D", "ms_table")
             slot += 1
-        if "SL_PRINCIPLED" in defs:
+        if layers:
             info.sampler(slot, "FLOAT_2D", "s_table")
             slot += 1
         if "SL_LTC" in defs:
@@ -81,7 +82,7 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
                 shader.bind()
                 if albedo_table:
                     shader.uniform_sampler("ms_table", gpu_library.albedo_table(terms))
-                if "SL_PRINCIPLED" in defs:
+                if layers:
                     shader.uniform_sampler("s_table", gpu_library.s_table())
                 if "SL_LTC" in defs:
                     shader.uniform_sampler("ltc_table", gpu_library.ltc_table(terms))

@@ -61,7 +61,7 @@ def test_shipped_cost_table_is_what_the_script_derives():
     assert data["generated_by"] == "scripts/term_costs.py"
     assert set(data["draw_ms"]) == set(auto_terms.CANDIDATE_TERMS)
     assert data["relative"] == term_costs.derive(data["draw_ms"])
-    for lights in (1, 4, 16, 64):
+    for lights in (1, 2, 8, 32, 64):
         order = auto_terms.candidate_order(lights, data)
         costs = auto_terms.relative_costs(lights, data)
         assert order[-1] == "PRINCIPLED"
@@ -195,9 +195,10 @@ def random_results(tmp_path_factory):
 
 @pytest.mark.parametrize("bound", BOUNDS)
 def test_auto_keeps_random_materials_within_the_bound(random_results, bound):
-    """On 50 random scenes (4-5 materials each, 1-8 lights of every kind, frontal and grazing
-    views, shadows on, black or uniform worlds): the measured error of Auto against the Principled
-    set, per material, is within the bound for >= 95 % of the materials."""
+    """On 50 random scenes (5 materials each, 1-8 lights of every kind, frontal and grazing views,
+    shadows on, black or uniform worlds, 96 px): the measured error of Auto against the Principled
+    set, per material, is within the bound for >= 95 % of the materials (measured: 100 % at both
+    bounds), and Auto does not simply take the Principled set (bound 1: 196 of 250)."""
     rows = random_results[bound]
     measured = np.array([m for *_, m in rows])
     within = float(np.mean(measured <= bound))
@@ -216,9 +217,9 @@ def test_auto_keeps_random_materials_within_the_bound(random_results, bound):
 
 def test_measured_error_is_within_a_factor_two_of_the_prediction(random_results):
     """Where Auto chose a set other than the Principled one (whose error is 0 by construction)
-    and either error is noticeable (>= 0.1): measured / predicted within [1/2, 2] for most (68 %
-    of 100 measured; the rest over-predicted, mostly by the creases the prediction assumes), and
-    never above twice the prediction (measured at most 1.64x)."""
+    and either error is noticeable (>= 0.1): measured / predicted within [1/2, 2] for most (67 %
+    of 111 measured; the rest over-predicted, mostly by the creases and highlights the prediction
+    adds), and never above twice the prediction (measured at most 1.67x)."""
     rows = [row for bound in BOUNDS for row in random_results[bound]]
     pairs = [(c.predicted, m) for *_, c, m in rows if c.name != "PRINCIPLED" and max(c.predicted, m) >= 0.1]
     ratios = np.array([m / max(p, 1e-6) for p, m in pairs])
@@ -258,3 +259,51 @@ def test_verify_measures_what_the_analytic_masks_measure(tmp_path):
         assert abs(v.measured - analytic[name]) <= 0.25 * max(analytic[name], 0.2), report
     assert set(verified) == {n for n in names if n in engine.last_term_choices}, (verified, report)
     print(f"verify vs analytic (measured, analytic, pixels, eroded pixels): {report}")
+
+
+@pytest.mark.parametrize("name", ["DEFAULT", "MULTISCATTER", "LAYERED_MULTISCATTER", "PRINCIPLED"])
+def test_the_uniform_world_twin_is_the_programs_world_term(name, tmp_path):
+    """shading.shade_uniform_environment (the prediction's world term) against the GPU: a sphere
+    under a uniform world, nothing occluding it, no lights, for a rough metal and a dielectric, on
+    the pixels whose 3x3 neighbourhood is on the sphere (normals from the analytic sphere)."""
+    import bpy
+
+    from addon import shading
+
+    worst = {}
+    for metal, roughness in ((1.0, 0.6), (0.0, 0.35)):
+        scene = scenes.reset(size=48)
+        scene.shading_lab.model = "PBR"
+        scene.shading_lab.world_occlusion = False
+        terms = auto_terms.CANDIDATE_TERMS[name]
+        props = scene.shading_lab
+        props.term_set = "PRINCIPLED" if terms.principled else "CUSTOM"
+        props.diffuse, props.multiscatter = terms.diffuse, terms.multiscatter
+        camera = scenes.ortho_camera(scene, location=(0.0, 0.0, 5.0), scale=2.4)
+        base = (0.9, 0.55, 0.3)
+        mat = scenes.material("M", base_color=base, roughness=roughness, metalness=metal, f0=0.05)
+        bpy.ops.mesh.primitive_uv_sphere_add(radius=1.0, segments=128, ring_count=64)
+        sphere = bpy.context.object
+        for poly in sphere.data.polygons:
+            poly.use_smooth = True
+        sphere.data.materials.append(mat)
+        background = next(n for n in scenes.node_tree(scene.world).nodes
+                          if n.bl_idname == "ShaderNodeBackground")
+        background.inputs["Color"].default_value = (0.6, 0.8, 1.0, 1.0)
+        background.inputs["Strength"].default_value = 0.5
+        image = scenes.render(scene, tmp_path / f"{name}_{metal}.exr")[..., :3]
+        origins, direction = scenes.ortho_pixel_rays(48, 2.4, np.array(camera.matrix_world))
+        b = origins @ direction
+        disc = b * b - (np.sum(origins * origins, axis=-1) - 1.0)
+        hit = disc > 0.0
+        inner = np.pad(hit, 1)
+        inner = np.all([inner[dy:dy + 48, dx:dx + 48] for dy in range(3) for dx in range(3)], axis=0)
+        t = -b - np.sqrt(np.maximum(disc, 0.0))
+        p = origins + t[..., None] * direction
+        s = shading.Surface(p[inner], p[inner], np.broadcast_to(-direction, p[inner].shape),
+                            S.MaterialParams(base_color=base, roughness=roughness, metalness=metal, f0=0.05))
+        expected = shading.shade_uniform_environment(s, np.array([0.3, 0.4, 0.5]), terms)
+        worst[metal] = float(np.max(np.abs(image[inner] - expected) / np.maximum(expected, 1e-3)))
+    # float32 and the mesh's interpolated normals: measured up to 1.1e-3
+    assert max(worst.values()) < 3e-3, f"{name}: worst relative difference {worst}"
+    print(f"{name}: worst relative difference GPU vs twin {worst}")

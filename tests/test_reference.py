@@ -572,8 +572,9 @@ def _brdf(mat, terms, l, v):
 
 def test_helmholtz_reciprocity():
     """f(l, v) = f(v, l) for every term combination without multiscatter compensation (eq. 1.18's
-    1 - F(h.l) is symmetric since h.l = h.v; every diffuse variant is symmetric in l and v).
-    The compensation 1 + F0 (1 / E(n.v) - 1) depends on the view only: not reciprocal."""
+    1 - F(h.l) is symmetric since h.l = h.v; every diffuse variant but LAYERED is symmetric in l
+    and v). The compensation 1 + F0 (1 / E(n.v) - 1) and LAYERED's weight 1 - layer(n.v) depend
+    on the view only: not reciprocal (nor is Cycles' Principled BSDF, whose base LAYERED is)."""
     l, v = _random_pairs(400, 3, min_cos=0.02)
     worst = {}
     for metal in (0.0, 1.0):
@@ -589,7 +590,7 @@ def test_helmholtz_reciprocity():
     print("\nreciprocity, worst relative asymmetry:",
           {f"{k[0]}/{k[1]}": f"{v:.1e}" for k, v in worst.items()})
     for (kind, dif), err in worst.items():
-        if kind == "single":
+        if kind == "single" and dif != "LAYERED":
             assert err < 1e-9, dif
         else:
             assert err > 1e-3, dif
