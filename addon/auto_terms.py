@@ -22,6 +22,7 @@ from __future__ import annotations
 import json
 import math
 import zlib
+from collections import OrderedDict
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
@@ -459,6 +460,36 @@ def decide(errors: dict[str, float], order, bound: float, previous: str | None =
     return best
 
 
+#: Predictions kept (least recently used dropped first): a scene rendered again (a re-render, the
+#: benchmark's rounds, a viewport edit elsewhere) predicts nothing anew.
+PREDICTIONS_KEPT = 256
+_PREDICTIONS: OrderedDict = OrderedDict()
+
+
+def _geometry_fingerprint(geometry) -> tuple:
+    if geometry is None:
+        return ()
+    step = max(1, len(geometry.positions) // 97)
+    return (len(geometry.positions), len(geometry.indices), geometry.positions[::step].tobytes(),
+            geometry.normals[::step].tobytes())
+
+
+def _prediction_key(snapshot: Snapshot, key: str, camera, world, order, exposure: float,
+                    quantile: float, occlusion: bool) -> tuple:
+    """Everything a material's prediction depends on: its parameters and images, the geometry
+    drawn with it and where, the view, the lights, the world, the candidates."""
+    material = snapshot.materials[key]
+    images = tuple(id(snapshot.images.get(getattr(material, name)[0])) for name in MaterialParams.MAPS
+                   if getattr(material, name) is not None)
+    geometry = tuple(sorted((item.geometry.rsplit(":", 1)[0],
+                             _geometry_fingerprint(snapshot.geometries.get(item.geometry)),
+                             np.asarray(item.matrix, np.float32).tobytes())
+                            for item in snapshot.items if key in item.materials))
+    view = (np.asarray(camera.view).tobytes(), np.asarray(camera.projection).tobytes(), camera.is_perspective)
+    return (key, replace(material, terms=None), images, geometry, view, tuple(snapshot.lights),
+            np.asarray(world).tobytes(), tuple(order), exposure, quantile, occlusion)
+
+
 def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = DEFAULT_QUANTILE,
            previous: dict[str, Choice] | None = None, camera=None) -> dict[str, Choice]:
     """Auto's choice for every physically based material of ``snapshot`` that follows the scene's
@@ -476,17 +507,28 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
             continue
         if not any(key in item.materials for item in snapshot.items):
             continue
-        samples = material_samples(snapshot, key, camera=camera)
-        if samples is None:  # covers no pixel: the cheapest set costs nothing to be wrong
+        cache_key = _prediction_key(snapshot, key, camera or snapshot.camera, world, order, exposure,
+                                    quantile, snapshot.settings.world_occlusion)
+        cached = _PREDICTIONS.pop(cache_key, None)
+        if cached is None:
+            samples = material_samples(snapshot, key, camera=camera)
+            if samples is None:
+                cached = (None, 0, material)
+            else:
+                cached = (predict(samples, snapshot.lights, world, order, exposure, quantile,
+                                  snapshot.settings.world_occlusion), len(samples), samples.material)
+        _PREDICTIONS[cache_key] = cached  # most recently used last
+        while len(_PREDICTIONS) > PREDICTIONS_KEPT:
+            del _PREDICTIONS[next(iter(_PREDICTIONS))]
+        errors, count, seen = cached
+        if errors is None:  # covers no pixel: the cheapest set costs nothing to be wrong
             out[key] = Choice(order[0], CANDIDATE_TERMS[order[0]], 0.0, samples=0)
             continue
-        errors = predict(samples, snapshot.lights, world, order, exposure, quantile,
-                         snapshot.settings.world_occlusion)
         before = previous.get(key).name if previous and key in previous else None
         name = decide(errors, order, bound, before)
-        limiting, reason = limiting_term(name, samples.material, errors, bound)
+        limiting, reason = limiting_term(name, seen, errors, bound)
         out[key] = Choice(name, CANDIDATE_TERMS[name], errors[name], limiting, reason,
-                          tuple(errors.items()), len(samples))
+                          tuple(errors.items()), count)
     return out
 
 

@@ -47,6 +47,8 @@ def parse_args(argv):
         parser.add_argument(f"--{family}", choices=[cli._flag(c) for c in cli.TERM_CHOICES[family]])
     parser.add_argument("--multiscatter", action=argparse.BooleanOptionalAction, default=None)
     parser.add_argument("--principled", action=argparse.BooleanOptionalAction, default=None)
+    parser.add_argument("--term-set", choices=("custom", "principled", "auto"))
+    parser.add_argument("--error-bound", type=float, metavar="DE")
     parser.add_argument("--transparency-layers", type=int, metavar="N",
                         help="partly transparent surfaces blended per pixel in depth order (1-16)")
     cli.add_shadow_options(parser)
@@ -158,6 +160,7 @@ def compare(args) -> dict:
     write_multilayer(exr, layers)
     terms = scene.shading_lab
     term_text = ("Principled BSDF set" if terms.term_set == "PRINCIPLED" else
+                 f"Auto term set (error bound {terms.auto_error_bound:g})" if terms.term_set == "AUTO" else
                  f"{terms.fresnel.lower()} / {terms.ndf.lower()} / {terms.visibility.lower()} / "
                  f"{terms.diffuse.lower()}{' + multiscatter' if terms.multiscatter else ''}")
     title = (f"{stem} — physically based terms: {term_text}. Reference: Cycles, "

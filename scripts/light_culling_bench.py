@@ -27,18 +27,10 @@ VIEW = 8.0  # the view's width (m)
 
 def build(w: int, h: int):
     import bpy
-    import render
+    import round_robin
 
-    render.ensure_addon()
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    scene.render.engine = "SHADING_LAB"
-    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = w, h, 100
-    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    cam.data.type, cam.data.ortho_scale = "ORTHO", VIEW
-    cam.location = (0.0, 0.0, 5.0)
-    scene.collection.objects.link(cam)
-    scene.camera = cam
+    scene = round_robin.empty_scene(w, h)
+    round_robin.ortho_camera(scene, VIEW)
     bpy.ops.mesh.primitive_plane_add(size=2 * VIEW)
     view_h = VIEW * h / w
     disc = math.sqrt(VIEW * view_h / 16.0 / math.pi)  # a sixteenth of the view's area

@@ -31,13 +31,9 @@ LIGHTS = ((-2.0, -1.5, 2.5), (2.0, -1.5, 2.5), (-2.0, 2.0, 2.0), (2.0, 2.0, 3.0)
 
 def build(w: int, h: int):
     import bpy
-    import render
+    import round_robin
 
-    render.ensure_addon()
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    scene.render.engine = "SHADING_LAB"
-    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = w, h, 100
+    scene = round_robin.empty_scene(w, h)
     scene.shading_lab.shadows = False
     cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
     cam.location, cam.rotation_euler = (0.0, -7.5, 5.0), (math.radians(56.0), 0.0, 0.0)

@@ -132,6 +132,10 @@ def main(argv=None) -> int:
     furnace_ms = run("furnace", args, tag="_multiscatter", multiscatter=True)
     grid = run("material_grid", args)
     grid_principled = run("material_grid", args, tag="_principled", principled=True)
+    grid_auto = run("material_grid", args, tag="_auto", term_set="auto")
+    from addon import auto_terms, engine
+
+    grid_auto_sets = auto_terms.summary(engine.last_term_choices).removeprefix("Auto: ")
     lighting = {v: run("portability", args, variant=v) for v in VARIANTS}
     tuned = blinn_phong_tuned_for_studio(args)
     startup = run("startup", args)
@@ -165,7 +169,8 @@ BSDFs, so Cycles renders Blender's Principled BSDF (multiscatter GGX).
 {table([("fresnel", fresnel), ("long_tail (GGX)", tails), ("long_tail (Beckmann)", tails_beckmann),
         ("hdr", hdr), ("roughness_sweep", sweep), ("roughness_sweep (+ multiscatter)", sweep_ms),
         ("furnace", furnace), ("furnace (+ multiscatter)", furnace_ms),
-        ("material_grid", grid), ("material_grid (Principled set)", grid_principled)]
+        ("material_grid", grid), ("material_grid (Principled set)", grid_principled),
+        ("material_grid (Auto term set)", grid_auto)]
        + [(f"portability: {v}", r) for v, r in lighting.items()]
        + [("startup (Blender's default cube)", startup)]
        + [(f"world: {v}", r) for v, r in worlds.items()]
@@ -298,6 +303,15 @@ FLIP {_flip(grid, PBR):.3f}; the Principled term set, which reproduces Blender's
 {_flip(grid_principled, PBR):.3f}. Blinn-Phong: {_flip(grid, BP):.3f}.
 
 ![material grid, Principled set]({_rel(grid_principled['png'])})
+
+The Auto term set (error bound 1: Delta E_ITP at the 99th percentile of each material's pixels
+against the Principled set) chose per material: {grid_auto_sets}; FLIP
+{_flip(grid_auto, PBR):.3f}. Where it lands in time and error among every term set and the peers:
+the Pareto plot of `docs/bench/bench.md` (Auto at three bounds).
+
+![Pareto plot](bench/pareto.png)
+
+![material grid, Auto term set]({_rel(grid_auto['png'])})
 
 ## Material portability
 

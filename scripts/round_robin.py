@@ -24,6 +24,31 @@ def parse_args(doc: str, table: str) -> tuple[argparse.Namespace, int, int]:
     return args, w, h
 
 
+def empty_scene(w: int, h: int):
+    """Blender's empty factory scene rendering with Shading Lab at w x h (the add-on registered)."""
+    import bpy
+    import render
+
+    render.ensure_addon()
+    bpy.ops.wm.read_factory_settings(use_empty=True)
+    scene = bpy.context.scene
+    scene.render.engine = "SHADING_LAB"
+    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = w, h, 100
+    return scene
+
+
+def ortho_camera(scene, width: float, location=(0.0, 0.0, 5.0)):
+    """An orthographic camera ``width`` metres across, looking down -Z, made the scene's."""
+    import bpy
+
+    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
+    cam.data.type, cam.data.ortho_scale = "ORTHO", width
+    cam.location = location
+    scene.collection.objects.link(cam)
+    scene.camera = cam
+    return cam
+
+
 def median_draw_ms(configs: Sequence[Hashable], apply: Callable[[Hashable], None], frames: int) -> dict:
     """{config: median of the engine's draw time (ms, GPU work fenced by the read-back)} over
     ``frames`` rounds after the warm-up; ``apply(config)`` sets the scene up for one."""

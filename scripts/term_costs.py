@@ -34,13 +34,9 @@ def derive(draw_ms: dict[str, list[float]]) -> dict[str, list[float]]:
 
 def build(w: int, h: int):
     import bpy
-    import render
+    import round_robin
 
-    render.ensure_addon()
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    scene.render.engine = "SHADING_LAB"
-    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = w, h, 100
+    scene = round_robin.empty_scene(w, h)
     world = bpy.data.worlds.new("Black")
     world.color = (0.0, 0.0, 0.0)
     if world.node_tree is not None:
@@ -48,11 +44,7 @@ def build(w: int, h: int):
             if node.bl_idname == "ShaderNodeBackground":
                 node.inputs["Strength"].default_value = 0.0
     scene.world = world
-    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    cam.data.type, cam.data.ortho_scale = "ORTHO", VIEW
-    cam.location = (0.0, 0.0, 5.0)
-    scene.collection.objects.link(cam)
-    scene.camera = cam
+    round_robin.ortho_camera(scene, VIEW)
     bpy.ops.mesh.primitive_plane_add(size=2 * VIEW)
     mat = bpy.data.materials.new("Rough metal")
     props = mat.shading_lab

@@ -307,3 +307,17 @@ def test_the_uniform_world_twin_is_the_programs_world_term(name, tmp_path):
     # float32 and the mesh's interpolated normals: measured up to 1.1e-3
     assert max(worst.values()) < 3e-3, f"{name}: worst relative difference {worst}"
     print(f"{name}: worst relative difference GPU vs twin {worst}")
+
+
+def test_predictions_are_kept_for_an_unchanged_scene_and_redone_on_a_change(monkeypatch):
+    metal = S.MaterialParams(base_color=(0.95, 0.64, 0.54), metalness=1.0, roughness=0.45)
+    snap = _sphere_snapshot(metal, 30.0, "POINT")
+    calls = []
+    original = auto_terms.predict
+    monkeypatch.setattr(auto_terms, "predict", lambda *a, **k: calls.append(1) or original(*a, **k))
+    first = auto_terms.choose(snap)["m"]
+    again = auto_terms.choose(_sphere_snapshot(metal, 30.0, "POINT"))["m"]
+    assert len(calls) == 1 and again == first, (len(calls), first, again)
+    auto_terms.choose(_sphere_snapshot(metal, 31.0, "POINT"))  # the view moved
+    auto_terms.choose(_sphere_snapshot(S.MaterialParams(metalness=1.0, roughness=0.5), 30.0, "POINT"))
+    assert len(calls) == 3, len(calls)

@@ -384,3 +384,36 @@ def test_engine_view_draw_keeps_the_last_good_image_and_draws_the_error(engine_v
     recovered = _view_draw(stand_in, context, size)
     assert stand_in._viewport.error == ""
     assert np.allclose(recovered[..., :3], scenes.LAMBERT, rtol=1e-3)
+
+
+def test_viewport_chooses_auto_terms_for_the_view_it_draws(session_with_handler):
+    """With the Auto term set, the viewport's first update knows no view yet; its first draw
+    chooses for the view it draws, the image equals the final render's (the same choice), and a
+    later edit chooses again from that view, keeping the sets (hysteresis)."""
+    session, a, _b, _seen = session_with_handler
+    a.data.materials.append(scenes.material("Rough metal", roughness=0.7, metalness=1.0))
+    scene = bpy.context.scene
+    scene.shading_lab.term_set = "AUTO"
+    bpy.context.view_layer.update()  # what Blender's main loop does before the next redraw
+    assert session._chosen_blind
+    shown, _ = _draw(session)
+    choices = session.snapshot.term_choices
+    assert not session._chosen_blind and choices, choices
+    assert all(c.samples > 0 for c in choices.values()), choices
+    assert session.snapshot.materials["Rough metal"].terms == choices["Rough metal"].terms
+
+    def job(depsgraph):
+        snap = extract.snapshot(depsgraph, 16, 16)
+        r = renderer.Renderer()
+        try:
+            return snap.term_choices, r.render(snap)
+        finally:
+            r.free()
+
+    final_choices, reference = run_on_gpu(job)
+    assert {k: c.name for k, c in final_choices.items()} == {k: c.name for k, c in choices.items()}
+    np.testing.assert_allclose(shown[..., :3], reference[..., :3], rtol=2e-3, atol=1e-3)  # RGBA16F target
+    a.data.materials[0].shading_lab.roughness = 0.69  # a small edit: the set stays
+    bpy.context.view_layer.update()
+    assert session.snapshot.materials["Rough metal"].roughness == pytest.approx(0.69)
+    assert session.snapshot.term_choices["Rough metal"].name == choices["Rough metal"].name
