@@ -148,7 +148,7 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
         ),
         description="Which physically based terms the engine evaluates")
     auto_error_bound: FloatProperty(
-        name="Error Bound", default=1.0, min=0.01, soft_max=10.0, precision=2, update=_redraw,
+        name="Error Bound", default=0.5, min=0.01, soft_max=10.0, precision=2, update=_redraw,
         description="The largest difference from the Principled BSDF set Auto allows a material, as "
                     "Delta E_ITP (ITU-R BT.2124; 1 is about one just-noticeable difference) at the "
                     "Quantile of its pixels")

@@ -67,7 +67,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
                             "terms within --error-bound of the Principled set")
     terms.add_argument("--error-bound", type=float, metavar="DE",
                        help="with --term-set auto: the largest predicted Delta E_ITP against the "
-                            "Principled set at the 99th percentile of a material's pixels (default 1)")
+                            "Principled set at the 99th percentile of a material's pixels (default 0.5)")
     display = parser.add_argument_group("display")
     display.add_argument("--tone-mapper", choices=TONE_MAPPERS)
     display.add_argument("--exposure", type=parse_exposure, metavar="EV|auto",

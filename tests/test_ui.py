@@ -204,7 +204,7 @@ def test_material_panel_shows_the_auto_choice_and_its_verification(monkeypatch):
     layout = _draw(ui.SHADINGLAB_PT_material, context)
     labels = layout.labels()
     assert "Auto: default + multiple scattering" in labels, labels
-    assert any("Predicted ΔE_ITP 0.43 (bound 1.00" in t for t in labels), labels
+    assert any("Predicted ΔE_ITP 0.43 (bound 0.50" in t for t in labels), labels
     assert "Needs multiple scattering: metal, roughness 0.60" in labels, labels
     assert any("Measured ΔE_ITP 1.70 on 120 pixels: over the bound 1.00" in t for t in labels), labels
     assert ("operator", "shading_lab.verify_auto_terms", True) in layout.log
