@@ -1,0 +1,78 @@
+"""The Auto term set against the Principled set on every preset: frame time (a benchmark, not a
+test).
+
+    .venv/bin/python scripts/auto_bench.py [--resolution 1280x720] [--frames 7] [--bound 0.5]
+        [--table docs/bench/auto.md]
+
+Per preset, Auto (at ``--bound``) and the Principled set are rendered alternately, one warm-up
+round (program compiles, Auto's first prediction) then ``--frames`` rounds, in one process; the
+table gives the medians of the engine's total time (extraction, including Auto's cached
+prediction, + draw + read-back + result) and their ratio, with the sets Auto chose. Times are
+CPU-rasteriser times (Mesa llvmpipe): compare the ratios. ``bench.py`` times Auto among every
+configuration; this isolates the one comparison, with fewer configurations sharing the noise.
+"""
+
+from __future__ import annotations
+
+import math
+import statistics
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
+
+PRESETS = ("fresnel", "furnace", "hdr", "long_tail", "material_grid", "portability", "roughness_sweep",
+           "softbox", "world")
+
+
+def main() -> int:
+    import round_robin
+
+    parser = round_robin.argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("--resolution", default="1280x720")
+    parser.add_argument("--frames", type=int, default=7)
+    parser.add_argument("--bound", type=float, default=0.5)
+    parser.add_argument("--table", type=Path, default=ROOT / "docs" / "bench" / "auto.md")
+    args = parser.parse_args()
+    w, h = (int(x) for x in args.resolution.split("x"))
+
+    import bpy
+    import render as cli
+
+    cli.ensure_addon()
+    from addon import auto_terms, engine
+
+    rows, ratios = [], []
+    for name in PRESETS:
+        scene, _ = cli.load_scene(name, None)
+        scene.render.engine = "SHADING_LAB"
+        scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = w, h, 100
+        props = scene.shading_lab
+        times = {"PRINCIPLED": [], "AUTO": []}
+        chosen = ""
+        for r in range(args.frames + 1):
+            for term_set in (("PRINCIPLED", "AUTO") if r % 2 else ("AUTO", "PRINCIPLED")):
+                props.term_set, props.auto_error_bound = term_set, args.bound
+                bpy.ops.render.render()
+                if term_set == "AUTO":
+                    chosen = auto_terms.summary(engine.last_term_choices).removeprefix("Auto: ")
+                if r:
+                    times[term_set].append(engine.last_timings["total_ms"])
+            print(f"\r{name} round {r}/{args.frames}", end="", file=sys.stderr, flush=True)
+        print(file=sys.stderr)
+        auto, principled = statistics.median(times["AUTO"]), statistics.median(times["PRINCIPLED"])
+        ratios.append(auto / principled)
+        rows.append(f"| {name} | {auto:.1f} | {principled:.1f} | {auto / principled:.3f}× | {chosen} |")
+    mean = math.exp(statistics.mean(math.log(r) for r in ratios))
+    text = "\n".join([
+        f"The Auto term set (bound {args.bound:g}) against the Principled set, {w}x{h}, medians of "
+        f"{args.frames} alternating rounds after a warm-up (`scripts/auto_bench.py`).", "",
+        "| preset | Auto ms | Principled ms | Auto / Principled | Auto chose |", "|---|---:|---:|---:|---|",
+        *rows, "", f"Geometric mean {mean:.3f}× ({min(ratios):.3f}–{max(ratios):.3f}×).", ""])
+    round_robin.write_table(args.table, text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
