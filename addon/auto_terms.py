@@ -6,11 +6,12 @@ cover pixels (area x n.v / d^2, inside the view), with their normals, the view a
 lights, and its textures' texel values. At those points the numpy twin (``shading.py``, itself
 checked against the GLSL, Mitsuba and Cycles) shades every candidate term set and the Principled
 set; the error is Delta E_ITP (ITU-R BT.2124) between the two, on the radiance as a display of
-100 cd/m^2 white shows it after the exposure, and its ``quantile`` over the points (the 99th
-percentile by default) is the material's predicted error. Candidates are tried cheap -> accurate
-(``term_costs.json``, measured by ``scripts/term_costs.py``); the first whose predicted error,
-times a calibrated margin, is within the bound wins, else the Principled set. Shadows and
-occlusion are left out of the prediction (they only darken, which shrinks differences).
+100 cd/m^2 white and 0.1 cd/m^2 black shows it after the exposure, and its ``quantile`` over the
+points (the 99th percentile by default) is the material's predicted error. Candidates are tried
+cheap -> accurate (``term_costs.json``, measured by ``scripts/term_costs.py``); the first whose
+predicted error, times a calibrated margin, is within the bound wins, else the Principled set.
+Shadows are left out of the prediction (they only darken, which shrinks differences); the
+world's occlusion enters as creases (``CREASE_SHARE``), where the candidates' world terms differ.
 
 The choice is made when the scene is read (``extract.snapshot``), once per material, and fixed
 into the material's program by defines: on this machine's rasteriser both sides of every branch
@@ -30,6 +31,7 @@ from pathlib import Path
 import numpy as np
 
 from . import environment, shading
+from .brdf import half_vector
 from .snapshot import (
     ImageData,
     MaterialParams,
@@ -221,18 +223,26 @@ def _rng(name: str) -> np.random.Generator:
     return np.random.default_rng(zlib.crc32(name.encode("utf-8")))
 
 
-def _triangles(snapshot: Snapshot, key: str, rng, per_item: int = 20000):
-    """(corners (T, 3, 3) world positions, corner normals (T, 3, 3), weight per triangle) of the
-    triangles drawn with material ``key``; a mesh with more than ``per_item`` of them contributes
-    a uniform random subset, weighted up."""
-    corners, normals, weights = [], [], []
-    # in an order of the geometry itself, not of its listing (the depsgraph lists instances, and
-    # a mesh its triangles, in no fixed order; geometry keys hold addresses): the same scene, the
-    # same points
+def material_users(snapshot: Snapshot) -> dict[str, list]:
+    """Material key -> the items drawing it (in any slot), in an order of the geometry itself, not
+    of its listing (the depsgraph lists instances, and a mesh its triangles, in no fixed order;
+    geometry keys hold addresses): the same scene, the same points."""
     def order(item):
         return item.geometry.rsplit(":", 1)[0], np.asarray(item.matrix, np.float32).tobytes()
 
+    users: dict[str, list] = {}
     for item in sorted(snapshot.items, key=order):
+        for key in dict.fromkeys(item.materials):
+            users.setdefault(key, []).append(item)
+    return users
+
+
+def _triangles(snapshot: Snapshot, key: str, items, rng, per_item: int = 20000):
+    """(corners (T, 3, 3) world positions, corner normals (T, 3, 3), weight per triangle) of the
+    triangles drawn with material ``key`` by ``items`` (``material_users``'); a mesh with more
+    than ``per_item`` of them contributes a uniform random subset, weighted up."""
+    corners, normals, weights = [], [], []
+    for item in items:
         geometry = snapshot.geometries.get(item.geometry)
         if geometry is None:
             continue
@@ -272,13 +282,15 @@ def _texels(image: ImageData, count: int, rng) -> np.ndarray:
     return picks
 
 
-def material_samples(snapshot: Snapshot, key: str, count: int = SAMPLES, camera=None) -> Samples | None:
+def material_samples(snapshot: Snapshot, key: str, count: int = SAMPLES, camera=None,
+                     users: dict[str, list] | None = None) -> Samples | None:
     """Points where material ``key`` covers pixels (None: it covers none): area-sampled on its
     triangles, then resampled by how many pixels each covers (n.v, and 1 / d^2 in perspective),
     inside the view (``camera``'s, else the snapshot's); textured inputs take random texels of
-    their images."""
+    their images. ``users``: ``material_users(snapshot)``, when the caller has it."""
     rng = _rng(key)
-    found = _triangles(snapshot, key, rng)
+    users = material_users(snapshot) if users is None else users
+    found = _triangles(snapshot, key, users.get(key, ()), rng)
     if found is None:
         return None
     corners, normals, tri_weight = found
@@ -345,9 +357,8 @@ def _highlight_points(snapshot: Snapshot, p, n, v, weight, count: int) -> np.nda
             l = -np.broadcast_to(np.asarray(light.direction, np.float64), p.shape)
         else:
             l = np.asarray(light.position, np.float64) - p
-        h = l / np.maximum(np.linalg.norm(l, axis=-1, keepdims=True), 1e-30) + v
-        h /= np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-30)
-        best = np.maximum(best, np.sum(n * h, axis=-1))
+        l = l / np.maximum(np.linalg.norm(l, axis=-1, keepdims=True), 1e-30)
+        best = np.maximum(best, np.sum(n * half_vector(l, v, n), axis=-1))
     best = np.where(weight > 0.0, best, -np.inf)
     return np.argsort(best)[::-1][:count]
 
@@ -406,12 +417,17 @@ def brightest_lights(samples: Samples, lights, count: int = MAX_LIGHTS):
     return [lights[i] for i in keep]
 
 
+def display_error(image: np.ndarray, reference: np.ndarray, exposure: float = 0.0) -> np.ndarray:
+    """Delta E_ITP per point of ``image`` against ``reference`` radiance (rgb), after ``exposure``
+    EV: what the bound is held to."""
+    scale = 2.0 ** exposure
+    return delta_e_itp(image[..., :3] * scale, reference[..., :3] * scale)
+
+
 def quantile_error(candidate: np.ndarray, reference: np.ndarray, exposure: float = 0.0,
                    quantile: float = DEFAULT_QUANTILE) -> float:
-    """Delta E_ITP of ``candidate`` against ``reference`` radiance (after ``exposure`` EV) at
-    ``quantile`` over the samples."""
-    scale = 2.0 ** exposure
-    error = delta_e_itp(candidate * scale, reference * scale)
+    """``display_error`` at ``quantile`` over the samples."""
+    error = display_error(candidate, reference, exposure)
     return float(np.quantile(error, quantile)) if error.size else 0.0
 
 
@@ -478,7 +494,7 @@ def _geometry_fingerprint(geometry) -> tuple:
             geometry.normals[::step].tobytes())
 
 
-def _prediction_key(snapshot: Snapshot, key: str, camera, world, order, exposure: float,
+def _prediction_key(snapshot: Snapshot, key: str, items, camera, world, order, exposure: float,
                     quantile: float, occlusion: bool) -> tuple:
     """Everything a material's prediction depends on: its parameters and images, the geometry
     drawn with it and where, the view, the lights, the world, the candidates."""
@@ -488,7 +504,7 @@ def _prediction_key(snapshot: Snapshot, key: str, camera, world, order, exposure
     geometry = tuple(sorted((item.geometry.rsplit(":", 1)[0],
                              _geometry_fingerprint(snapshot.geometries.get(item.geometry)),
                              np.asarray(item.matrix, np.float32).tobytes())
-                            for item in snapshot.items if key in item.materials))
+                            for item in items))
     view = (np.asarray(camera.view).tobytes(), np.asarray(camera.projection).tobytes(), camera.is_perspective)
     return (key, replace(material, terms=None), images, geometry, view, tuple(snapshot.lights),
             np.asarray(world).tobytes(), tuple(order), exposure, quantile, occlusion)
@@ -504,18 +520,19 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
     order = candidate_order(len(snapshot.lights))
     world = world_radiance(snapshot.world)
     exposure = float(snapshot.settings.exposure)
+    users = material_users(snapshot)
     out = {}
     for key, material in snapshot.materials.items():
         if material.model not in ("", "PBR") or any(
                 (material.fresnel, material.ndf, material.visibility, material.diffuse)):
             continue
-        if not any(key in item.materials for item in snapshot.items):
+        if key not in users:
             continue
-        cache_key = _prediction_key(snapshot, key, camera or snapshot.camera, world, order, exposure,
-                                    quantile, snapshot.settings.world_occlusion)
+        cache_key = _prediction_key(snapshot, key, users[key], camera or snapshot.camera, world, order,
+                                    exposure, quantile, snapshot.settings.world_occlusion)
         cached = _PREDICTIONS.pop(cache_key, None)
         if cached is None:
-            samples = material_samples(snapshot, key, camera=camera)
+            samples = material_samples(snapshot, key, camera=camera, users=users)
             if samples is None:
                 cached = (None, 0, material)
             else:
@@ -578,9 +595,8 @@ def material_id_snapshot(snapshot: Snapshot) -> tuple[Snapshot, list[str]]:
     nothing, no lights, a black world, no shadows or occlusion; with the keys in index order."""
     keys = list(snapshot.materials)
     black = (0.0, 0.0, 0.0)
-    materials = {key: replace(MaterialParams(name=key, base_color=black, diffuse_color=black,
-                                             specular_color=black, ambient_color=black,
-                                             emission=(float(i + 1), 0.0, 0.0)), model="PBR")
+    materials = {key: MaterialParams(name=key, base_color=black, diffuse_color=black, specular_color=black,
+                                     ambient_color=black, emission=(float(i + 1), 0.0, 0.0), model="PBR")
                  for i, key in enumerate(keys)}
     settings = replace(snapshot.settings, shadows=False, world_occlusion=False, auto_error_bound=None,
                        ambient=0.0)
@@ -602,8 +618,7 @@ def measure(auto: np.ndarray, reference: np.ndarray, ids: np.ndarray, keys: list
     """Per material of ``keys`` covering pixels: the Auto image's error against the reference's
     on the pixels ``ids`` (the id image's red channel, index + 1) gives it."""
     index = np.rint(ids[..., 0]).astype(int) - 1
-    scale = 2.0 ** exposure
-    error = delta_e_itp(auto[..., :3] * scale, reference[..., :3] * scale)
+    error = display_error(auto, reference, exposure)
     out = {}
     for i, key in enumerate(keys):
         mask = index == i

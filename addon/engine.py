@@ -490,16 +490,7 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
                                       settings.exposure, settings.auto_quantile)
         measured = {key: v for key, v in measured.items() if key in snap.term_choices}
         with _TIMINGS_LOCK:
-            last_verification.update(measured)
-        over = sorted(key for key, v in measured.items() if v.over)
-        if over:
-            self.report({"WARNING"}, f"Auto: {len(over)} material(s) over the error bound "
-                                     f"{settings.auto_error_bound:g}: " + ", ".join(
-                                         f"{key} ({measured[key].measured:.2f})" for key in over))
-        else:
-            worst = max((v.measured for v in measured.values()), default=0.0)
-            self.report({"INFO"}, f"Auto: {len(measured)} material(s) within the error bound "
-                                  f"{settings.auto_error_bound:g} (largest measured ΔE_ITP {worst:.2f})")
+            last_verification.update(measured)  # the Verify operator reports it
 
     def update_render_passes(self, scene=None, renderlayer=None):
         """Announce the passes to the compositor and multilayer EXR output."""

@@ -875,7 +875,7 @@ def _is_dirty(obj, dirty: set[str] | None) -> bool:
 def snapshot(depsgraph, width: int | None = None, height: int | None = None,
              camera: S.Camera | None = None, settings: S.Settings | None = None,
              previous: S.Snapshot | None = None, dirty: set[str] | None = None,
-             auto_camera: S.Camera | None = None) -> S.Snapshot:
+             auto_camera: S.Camera | None = None, auto_choice: bool = True) -> S.Snapshot:
     """Everything the renderer draws, read from the evaluated scene.
 
     ``camera`` may be given (the viewport passes its own); otherwise the scene camera is used
@@ -883,7 +883,8 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
     ``geometry_updates``), geometry of objects not named in ``dirty`` is reused from
     ``previous`` instead of read again; ``Snapshot.fresh`` lists the geometry keys read anew.
     Lights, materials, matrices and the world are cheap and always read. With the Auto term set,
-    materials get their terms chosen as seen from ``auto_camera`` (else ``camera``).
+    materials get their terms chosen as seen from ``auto_camera`` (else ``camera``), unless
+    ``auto_choice`` is off (a viewport that has drawn no view yet chooses at its first draw).
     """
     scene = depsgraph.scene
     if width is None or height is None:
@@ -963,7 +964,7 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
                              f"left out")
         del snap.lights[S.MAX_LIGHTS:]
     snap.warnings[:] = dict.fromkeys(snap.warnings)  # each once, however many objects share it
-    if snap.settings.auto_error_bound is not None:
+    if snap.settings.auto_error_bound is not None and auto_choice:
         choose_terms(snap, previous.term_choices if previous is not None else None, auto_camera)
     return snap
 

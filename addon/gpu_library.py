@@ -367,7 +367,7 @@ def split_table(terms) -> gpu.types.GPUTexture:
     sum's second factor (the Principled set: GGX with Smith)."""
     from . import multiscatter
 
-    ndf, visibility = ("GGX", "SMITH_CORRELATED") if terms.principled else (terms.ndf, terms.visibility)
+    ndf, visibility = terms.lobe
 
     def build():
         table = multiscatter.split_sum_table(ndf, visibility)
@@ -403,16 +403,15 @@ def albedo_table(terms) -> gpu.types.GPUTexture:
     layering estimate reads it (the Principled set, the LAYERED diffuse)."""
     from . import multiscatter
 
-    ndf, visibility = ("GGX", "SMITH_CORRELATED") if terms.principled else (terms.ndf, terms.visibility)
-    layered = terms.principled or terms.diffuse == "LAYERED"
+    ndf, visibility = terms.lobe
 
     def build():
         table = multiscatter.albedo_table(ndf, visibility)
-        if layered:
+        if terms.layered:
             table = np.vstack([table, multiscatter.average_albedo()[None, :]])
         return r32f_texture(table)
 
-    return LIBRARY.table((ndf, visibility, "EAVG" if layered else ""), build)
+    return LIBRARY.table((ndf, visibility, "EAVG" if terms.layered else ""), build)
 
 
 def ltc_table(terms) -> gpu.types.GPUTexture:
@@ -421,7 +420,7 @@ def ltc_table(terms) -> gpu.types.GPUTexture:
     (glsl/ltc.glsl)."""
     from . import ltc
 
-    ndf = "GGX" if terms.principled else terms.ndf
+    ndf = terms.lobe[0]
 
     def build():
         table = ltc.ltc_table(ndf)

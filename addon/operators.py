@@ -203,7 +203,8 @@ class SHADINGLAB_OT_verify_auto_terms(bpy.types.Operator):
         bound = context.scene.shading_lab.auto_error_bound
         if over:
             self.report({"WARNING"}, f"{len(over)} of {len(measured)} material(s) over the error bound "
-                                     f"{bound:g}: " + ", ".join(over))
+                                     f"{bound:g}: " + ", ".join(f"{name} ({measured[name].measured:.2f})"
+                                                                for name in over))
         else:
             worst = max(v.measured for v in measured.values())
             self.report({"INFO"}, f"All {len(measured)} material(s) within the error bound {bound:g} "

@@ -179,8 +179,7 @@ class Features:
     def uses_albedo_table(self) -> bool:
         """The program samples ``ms_table`` (multiple-scattering compensation, Principled set, the
         magnitude of area lights' specular lobe)."""
-        return self.model == "PBR" and (self.terms.multiscatter or self.terms.principled
-                                        or self.terms.diffuse == "LAYERED" or self.uses_ltc)
+        return self.model == "PBR" and (self.terms.multiscatter or self.terms.layered or self.uses_ltc)
 
     @property
     def uses_env_chain(self) -> bool:
@@ -196,7 +195,7 @@ class Features:
     def uses_s_table(self) -> bool:
         """The program samples ``s_table`` (the layering estimate: the Principled set, the LAYERED
         diffuse)."""
-        return self.model == "PBR" and (self.terms.principled or self.terms.diffuse == "LAYERED")
+        return self.model == "PBR" and self.terms.layered
 
     def defines(self) -> tuple[tuple[str, str], ...]:
         out = [("SL_MAX_LIGHTS", str(self.max_lights)), ("SL_MODEL_" + self.model, "1")]

@@ -432,9 +432,8 @@ def principled_layers(s: Surface, terms: Terms = PRINCIPLED_TERMS):
     the two lobes' multiple-scattering compensation and the dielectric layer's albedo estimate
     E M mix(F0, 1, S) that the Lambert base sits under; E of the program's D and V (``terms``';
     the Principled set: GGX with Smith), Eavg GGX's."""
-    ndf, visibility = ("GGX", "SMITH_CORRELATED") if terms.principled else (terms.ndf, terms.visibility)
     rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
-    E_mu = np.maximum(M.interpolate(M.albedo_table(ndf, visibility), s.NoV, rough), 1e-3)
+    E_mu = np.maximum(M.interpolate(M.albedo_table(*terms.lobe), s.NoV, rough), 1e-3)
     e_avg = M.interpolate_1d(M.average_albedo(), rough)
     F0m = np.minimum(s.base_color, 1.0)
     metal_M = M.principled_compensation(F0m + (1.0 - F0m) / 21.0, _rgb_scalar(E_mu), _rgb_scalar(e_avg))
@@ -512,9 +511,8 @@ def pbr_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
 def env_split_sum(s: Surface, terms: Terms):
     """ibl.glsl's env_split_sum: (E, B) of the program's D and V at the view (the Principled set:
     GGX with Smith); at the roughness floor a perfect mirror, E = 1, B = (1 - n.v)^5."""
-    ndf, visibility = ("GGX", "SMITH_CORRELATED") if terms.principled else (terms.ndf, terms.visibility)
     rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
-    table = M.split_sum_table(ndf, visibility)
+    table = M.split_sum_table(*terms.lobe)
     mirror = rough <= MIN_PERCEPTUAL_ROUGHNESS
     return (np.where(mirror, 1.0, M.interpolate(table[..., 0], s.NoV, rough)),
             np.where(mirror, (1.0 - s.NoV) ** 5, M.interpolate(table[..., 1], s.NoV, rough)))
@@ -565,8 +563,7 @@ def ltc_frame(s: Surface, terms: Terms):
     """(x, y, z, entries): the shading frame (x the tangent towards v, z = n) and the LTC's M^-1
     entries at the view, for the program's distribution (surface.glsl's LtcFrame, ltc_frame_at)."""
     x, y, z, _ = ltc.shading_frame(s.n, s.v)
-    ndf = "GGX" if terms.principled else terms.ndf
-    entries = ltc.lookup(ltc.ltc_table(ndf), s.NoV, np.broadcast_to(s.roughness, np.shape(s.NoV)))
+    entries = ltc.lookup(ltc.ltc_table(terms.lobe[0]), s.NoV, np.broadcast_to(s.roughness, np.shape(s.NoV)))
     return x, y, z, entries
 
 
@@ -590,8 +587,7 @@ def shade_polygon_light(s: Surface, offsets, to_centre, L, form_factor, l, facto
     rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
     form_factor_lobe, length = ltc.ltc_integral(entries, local, jitter=ltc_jitter, with_length=True)
     LoH = saturate(_dot(l, half_vector(l, s.v, s.n)))
-    albedo_terms = ("GGX", "SMITH_CORRELATED") if terms.principled else (terms.ndf, terms.visibility)
-    albedo = M.interpolate(M.albedo_table(*albedo_terms), s.NoV, rough)
+    albedo = M.interpolate(M.albedo_table(*terms.lobe), s.NoV, rough)
     l_local = np.stack([_dot(l, x), _dot(l, y), _dot(l, z)], axis=-1)
     density = ltc.ltc_density(ltc.minv_from_entries(entries), l_local,
                               ltc.density_floor(form_factor_lobe, length))

@@ -71,6 +71,18 @@ class Terms:
                 raise ValueError(f"unknown {family} term {getattr(self, family)!r}; "
                                  f"expected one of {choices}")
 
+    @property
+    def lobe(self) -> tuple[str, str]:
+        """(distribution, masking-shadowing) of the specular lobe the program evaluates (the
+        Principled set: GGX with Smith height-correlated): its tables are looked up by these."""
+        return ("GGX", "SMITH_CORRELATED") if self.principled else (self.ndf, self.visibility)
+
+    @property
+    def layered(self) -> bool:
+        """The program computes the layering estimate of principled.glsl (``SL_LAYERS``): the
+        Principled set, and the LAYERED diffuse."""
+        return self.principled or self.diffuse == "LAYERED"
+
     def override(self, **families: str) -> Terms:
         """These terms with the non-empty entries of ``families`` replaced (per-material choices)."""
         changes = {k: v for k, v in families.items() if v}

@@ -46,15 +46,16 @@ class ViewportSession:
         # the Auto term set chooses per material as the last drawn view sees it (re-chosen on scene
         # edits, not on view changes); before the first draw there is none
         self._view: S.Camera | None = None
-        self._chosen_blind = False
+        self._unchosen = False
 
     def update(self, depsgraph) -> None:
         start = time.perf_counter()
         dirty = None if self.snapshot is None else extract.geometry_updates(depsgraph)
         extract.IMAGES.forget(extract.image_updates(depsgraph))
         self.snapshot = extract.snapshot(depsgraph, 1, 1, camera=_NO_CAMERA, previous=self.snapshot,
-                                         dirty=dirty, auto_camera=self._view)
-        self._chosen_blind = self._view is None and self.snapshot.settings.auto_error_bound is not None
+                                         dirty=dirty, auto_camera=self._view,
+                                         auto_choice=self._view is not None)
+        self._unchosen = self._view is None and self.snapshot.settings.auto_error_bound is not None
         self.pending |= self.snapshot.fresh
         self.last_update_ms = 1e3 * (time.perf_counter() - start)
 
@@ -66,9 +67,9 @@ class ViewportSession:
         snap.camera = S.Camera.from_matrices(np.array(view_matrix), np.array(window_matrix), is_perspective)
         snap.width, snap.height = width, height
         self._view = snap.camera
-        if self._chosen_blind:  # Auto chose before any view was drawn: choose again for this one
+        if self._unchosen:  # Auto waited for a view to choose for: this one
             extract.choose_terms(snap)
-            self._chosen_blind = False
+            self._unchosen = False
         pending = self.pending
         try:
             self.renderer.sync(snap, keep=lambda key: key not in pending)

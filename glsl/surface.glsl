@@ -1,10 +1,10 @@
 /* The shading point: geometry and material inputs every model reads. */
 
 #ifdef SL_LAYERS
-/* What the Principled set (and the LAYERED diffuse) needs at the view direction (principled.glsl): the metal lobe's and the
- * dielectric lobe's multiple-scattering compensation and the dielectric layer's albedo estimate
- * that the diffuse base sits under. They depend on the view only, so make_surface computes them
- * once per shading point, not once per light. */
+/* What the Principled set (and the LAYERED diffuse) needs at the view direction (principled.glsl):
+ * the metal lobe's and the dielectric lobe's multiple-scattering compensation and the dielectric
+ * layer's albedo estimate that the diffuse base sits under. They depend on the view only, so
+ * make_surface computes them once per shading point, not once per light. */
 struct PrincipledLayers {
   vec3 metal_M;
   float dielectric_M;

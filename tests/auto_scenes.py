@@ -86,27 +86,38 @@ def random_scene(seed: int):
     return scene, camera, names
 
 
+def sphere_hits(origins, direction, centre, radius: float) -> np.ndarray:
+    """Distance along each ray (unit ``direction``) to the sphere's near side; inf where it misses."""
+    oc = origins - np.asarray(centre, np.float64)
+    b = oc @ direction
+    disc = b * b - (np.sum(oc * oc, axis=-1) - radius * radius)
+    return np.where(disc > 0.0, -b - np.sqrt(np.maximum(disc, 0.0)), np.inf)
+
+
+def interior(ids: np.ndarray) -> np.ndarray:
+    """Pixels whose whole 3x3 neighbourhood has their own value (pixels beyond the edge: none)."""
+    h, w = ids.shape
+    padded = np.pad(ids, 1, constant_values=-1)
+    same = np.ones((h, w), bool)
+    for dy in (0, 1, 2):
+        for dx in (0, 1, 2):
+            same &= padded[dy:dy + h, dx:dx + w] == ids
+    return same
+
+
 def material_masks(camera, names) -> dict[str, np.ndarray]:
     """Per material, the pixels (top row first) whose whole 3x3 neighbourhood sees it."""
     origins, direction = scenes.ortho_pixel_rays(SIZE, SCALE, np.array(camera.matrix_world))
     depth = np.full((SIZE, SIZE), np.inf)
     ids = np.full((SIZE, SIZE), -1)
     for i, (x, radius) in enumerate(SPHERES):
-        oc = origins - np.array([x, 0.0, radius])
-        b = oc @ direction
-        c = np.sum(oc * oc, axis=-1) - radius * radius
-        disc = b * b - c
-        t = np.where(disc > 0.0, -b - np.sqrt(np.maximum(disc, 0.0)), np.inf)
+        t = sphere_hits(origins, direction, (x, 0.0, radius), radius)
         nearer = (t > 0.0) & (t < depth)
         depth, ids = np.where(nearer, t, depth), np.where(nearer, i, ids)
     t = -origins[..., 2] / direction[2] if direction[2] != 0.0 else np.full((SIZE, SIZE), np.inf)
     hit = (t > 0.0) & (t < depth) & (np.abs(origins[..., 0] + t * direction[0]) < 6.0)
     ids = np.where(hit, len(SPHERES), ids)
-    padded = np.pad(ids, 1, constant_values=-1)
-    same = np.ones((SIZE, SIZE), bool)
-    for dy in (0, 1, 2):
-        for dx in (0, 1, 2):
-            same &= padded[dy:dy + SIZE, dx:dx + SIZE] == ids
+    same = interior(ids)
     return {name: same & (ids == i) for i, name in enumerate(names)}
 
 

@@ -293,13 +293,10 @@ def test_the_uniform_world_twin_is_the_programs_world_term(name, tmp_path):
         background.inputs["Strength"].default_value = 0.5
         image = scenes.render(scene, tmp_path / f"{name}_{metal}.exr")[..., :3]
         origins, direction = scenes.ortho_pixel_rays(48, 2.4, np.array(camera.matrix_world))
-        b = origins @ direction
-        disc = b * b - (np.sum(origins * origins, axis=-1) - 1.0)
-        hit = disc > 0.0
-        inner = np.pad(hit, 1)
-        inner = np.all([inner[dy:dy + 48, dx:dx + 48] for dy in range(3) for dx in range(3)], axis=0)
-        t = -b - np.sqrt(np.maximum(disc, 0.0))
-        p = origins + t[..., None] * direction
+        t = auto_scenes.sphere_hits(origins, direction, (0.0, 0.0, 0.0), 1.0)
+        hit = np.isfinite(t)
+        inner = hit & auto_scenes.interior(hit.astype(int))
+        p = origins + np.where(hit, t, 0.0)[..., None] * direction
         s = shading.Surface(p[inner], p[inner], np.broadcast_to(-direction, p[inner].shape),
                             S.MaterialParams(base_color=base, roughness=roughness, metalness=metal, f0=0.05))
         expected = shading.shade_uniform_environment(s, np.array([0.3, 0.4, 0.5]), terms)

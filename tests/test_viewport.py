@@ -387,18 +387,18 @@ def test_engine_view_draw_keeps_the_last_good_image_and_draws_the_error(engine_v
 
 
 def test_viewport_chooses_auto_terms_for_the_view_it_draws(session_with_handler):
-    """With the Auto term set, the viewport's first update knows no view yet; its first draw
-    chooses for the view it draws, the image equals the final render's (the same choice), and a
+    """With the Auto term set, the viewport's first update knows no view yet and predicts nothing;
+    its first draw chooses for the view it draws, the image equals the final render's (the same choice), and a
     later edit chooses again from that view, keeping the sets (hysteresis)."""
     session, a, _b, _seen = session_with_handler
     a.data.materials.append(scenes.material("Rough metal", roughness=0.7, metalness=1.0))
     scene = bpy.context.scene
     scene.shading_lab.term_set = "AUTO"
     bpy.context.view_layer.update()  # what Blender's main loop does before the next redraw
-    assert session._chosen_blind
+    assert session._unchosen and not session.snapshot.term_choices  # no view yet: nothing predicted
     shown, _ = _draw(session)
     choices = session.snapshot.term_choices
-    assert not session._chosen_blind and choices, choices
+    assert not session._unchosen and choices, choices
     assert all(c.samples > 0 for c in choices.values()), choices
     assert session.snapshot.materials["Rough metal"].terms == choices["Rough metal"].terms
 
