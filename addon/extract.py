@@ -814,6 +814,7 @@ def scene_settings(scene) -> S.Settings:
                       ambient_world=props.ambient_source == "WORLD",
                       world_occlusion=bool(props.world_occlusion),
                       occlusion_distance=float(props.occlusion_distance),
+                      occlusion_resolution=str(props.occlusion_resolution),
                       shadows=bool(props.shadows), shadow_map_size=int(props.shadow_map_size),
                       soft_shadows=bool(props.soft_shadows),
                       light_threshold=float(props.light_threshold), light_culling=bool(props.light_culling),

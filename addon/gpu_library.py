@@ -252,23 +252,23 @@ def occlusion_depths_program() -> gpu.types.GPUShader:
                            _declare_full_screen("depth_map", "back_depth_map", "normal_map"))
 
 
-def gtao_program() -> gpu.types.GPUShader:
+def gtao_program(scale: int = 1) -> gpu.types.GPUShader:
     def declare(info):
         info.typedef_source(programs.read_glsl("chain_data.glsl"))
         _declare_full_screen("depths", "normal_map")(info)
         info.uniform_buf(0, "OcclusionData", "occlusion")
 
-    return LIBRARY.program(("gtao",), "ambient occlusion", programs.gtao_source(), declare)
+    return LIBRARY.program(("gtao", scale), "ambient occlusion", programs.gtao_source(scale), declare)
 
 
-def occlusion_resolve_program() -> gpu.types.GPUShader:
+def occlusion_resolve_program(scale: int = 1) -> gpu.types.GPUShader:
     def declare(info):
         info.typedef_source(programs.read_glsl("chain_data.glsl"))
         _declare_full_screen("raw", "depths", "normal_map")(info)
         info.uniform_buf(0, "OcclusionData", "occlusion")
 
-    return LIBRARY.program(("occlusion resolve",), "ambient occlusion",
-                           programs.occlusion_resolve_source(), declare)
+    return LIBRARY.program(("occlusion resolve", scale), "ambient occlusion",
+                           programs.occlusion_resolve_source(scale), declare)
 
 
 def shading_program(features: programs.Features) -> gpu.types.GPUShader:

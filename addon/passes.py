@@ -302,7 +302,8 @@ class OcclusionPass(Pass):
         self.prepass = _fitted(self.prepass, w, h, "RGBA16F", depth=True)
         self.back = _fitted(self.back, w, h, "R16F", depth=True)
         self.depths = _fitted(self.depths, w, h, "RG32F")
-        self.raw = _fitted(self.raw, w, h, "RGBA32F")
+        scale = programs.OCCLUSION_SCALES[frame.snapshot.settings.occlusion_resolution]
+        self.raw = _fitted(self.raw, -(-w // scale), -(-h // scale), "RGBA32F")
         self.target = _fitted(self.target, w, h, "RGBA16F")
         frame.scene.put_frame(view.view_projection, view.width, view.height, view.samples)
         for target, back_faces in ((self.prepass, False), (self.back, True)):
@@ -346,8 +347,8 @@ class OcclusionPass(Pass):
             gpu_library.bind_sampler(shader, "raw", raw.texture_color)
             bind(shader)
 
-        frame.draw_full_screen(gpu_library.gtao_program(), bind, self.raw)
-        frame.draw_full_screen(gpu_library.occlusion_resolve_program(), bind_resolve, self.target)
+        frame.draw_full_screen(gpu_library.gtao_program(scale), bind, self.raw)
+        frame.draw_full_screen(gpu_library.occlusion_resolve_program(scale), bind_resolve, self.target)
         frame.outputs[view.output("occlusion")] = self.target
         return True
 

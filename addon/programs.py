@@ -433,18 +433,24 @@ def exposure_source(stage: str) -> ProgramSource:
         ("SL_LOG_MIN", f"{exposure.LOG_MIN:.1f}"), ("SL_LOG_MAX", f"{exposure.LOG_MAX:.1f}")))
 
 
-@lru_cache(maxsize=1)
-def gtao_source() -> ProgramSource:
+#: The occlusion trace's resolution divisor per Settings.occlusion_resolution.
+OCCLUSION_SCALES = {"FULL": 1, "HALF": 2}
+
+
+@lru_cache(maxsize=2)
+def gtao_source(scale: int = 1) -> ProgramSource:
     return _full_screen_source("common.glsl", "occlusion.glsl", "gtao.frag.glsl",
                                typedefs=read_glsl("chain_data.glsl"),
                                defines=(("SL_DIRECTIONS", str(OCCLUSION_DIRECTIONS)),
-                                        ("SL_STEPS", str(OCCLUSION_STEPS))))
+                                        ("SL_STEPS", str(OCCLUSION_STEPS)),
+                                        ("SL_OCCLUSION_SCALE", str(scale))))
 
 
-@lru_cache(maxsize=1)
-def occlusion_resolve_source() -> ProgramSource:
+@lru_cache(maxsize=2)
+def occlusion_resolve_source(scale: int = 1) -> ProgramSource:
     return _full_screen_source("occlusion.glsl", "occlusion_resolve.frag.glsl",
-                               typedefs=read_glsl("chain_data.glsl"))
+                               typedefs=read_glsl("chain_data.glsl"),
+                               defines=(("SL_OCCLUSION_SCALE", str(scale)),))
 
 
 @lru_cache(maxsize=1)

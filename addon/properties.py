@@ -214,6 +214,13 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
         name="Occlusion Distance", default=2.0, min=0.001, soft_max=100.0, subtype="DISTANCE", update=_redraw,
         description="How far geometry occludes the world's light (on screen only: what the camera does not "
                     "see occludes nothing)")
+    occlusion_resolution: EnumProperty(
+        name="Occlusion Resolution", default="HALF", update=_redraw, items=(
+            ("FULL", "Full", "Trace the occlusion at every pixel (slowest; sharpest at thin objects' edges)"),
+            ("HALF", "Half", "Trace one pixel of every 2 x 2 block and merge the neighbours on the same "
+                             "surface (a quarter of the work; thin objects' occlusion softens)"),
+        ),
+        description="How many pixels the world's occlusion is traced at")
     shadows: BoolProperty(
         name="Shadows", default=True, update=_redraw,
         description="Lights whose Cast Shadow is on cast shadows (shadow maps); objects whose shadow ray "

@@ -402,6 +402,7 @@ class Settings:
     ambient_world: bool = False  # Blinn-Phong/Phong ambient: the world's irradiance, not the constant
     world_occlusion: bool = True  # screen-space ambient occlusion of the world's light
     occlusion_distance: float = 2.0  # how far (m) geometry occludes the world's light
+    occlusion_resolution: str = "HALF"  # the occlusion trace's pixels: "FULL" or "HALF" (a quarter)
     shadows: bool = True  # lights whose Cast Shadow is on cast shadows (shadow maps)
     shadow_map_size: int = 1024  # texels per side of each shadow map (a point light has six)
     soft_shadows: bool = True  # penumbrae from the lights' sizes (else hard, filtered over a texel)

@@ -113,9 +113,10 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
         col = layout.column(heading="World")
         col.active = props.model == "PBR"
         col.prop(props, "world_occlusion", text="Occlusion")
-        sub = col.row()
+        sub = col.column()
         sub.active = props.world_occlusion
         sub.prop(props, "occlusion_distance", text="Distance")
+        sub.prop(props, "occlusion_resolution", text="Resolution")
         col.prop(props, "world_diffuse", text="Diffuse")
         col.prop(props, "world_specular", text="Specular")
         if props.world_specular == "SAMPLED":

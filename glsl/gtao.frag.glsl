@@ -19,7 +19,10 @@
  * each pixel of a 2 x 2 block traces SL_DIRECTIONS / 4 of the slices (its class c = x mod 2 +
  * 2 (y mod 2) takes slices c, c + 4, ...: perpendicular ones), and glsl/occlusion_resolve.frag.glsl
  * merges each pixel's 3 x 3 neighbourhood with tent weights, which give the four classes equal
- * weight: every pixel ends with all SL_DIRECTIONS slices, a quarter of the tracing.
+ * weight: every pixel ends with all SL_DIRECTIONS slices, a quarter of the tracing. At half
+ * resolution (SL_OCCLUSION_SCALE 2, glsl/occlusion.glsl's traced_texel) the pattern runs over the
+ * cells of the trace, each tracing one of its 2 x 2 pixels, and the resolve merges the 3 x 3 cells
+ * around a pixel's own: a sixteenth of the full-resolution trace.
  * The visibility is a ratio: the slices' cosine-weighted visible arcs over what the same slices
  * give with nothing occluded (cos n + n sin n each, weighted alike), so a few slices estimate it
  * without bias where nothing occludes (2 slices alone are off by up to 2 % of the hemisphere's
@@ -82,8 +85,9 @@ uint sector_mask(float a, float b, float n)
 void main()
 {
   vec2 size = occlusion.params.zw;
-  ivec2 texel = ivec2(gl_FragCoord.xy);
-  vec2 uv = gl_FragCoord.xy / size;
+  ivec2 cell = ivec2(gl_FragCoord.xy);
+  ivec2 texel = traced_texel(cell);
+  vec2 uv = (vec2(texel) + 0.5) / size;
   float depth = texelFetch(depths, texel, 0).r;
   if (depth >= 1.0) {
     frag_color = vec4(0.0); /* the sky: nothing to occlude (the resolve leaves it out) */
@@ -98,7 +102,7 @@ void main()
   float radius_uv = abs(edge.x / edge.w - centre.x / centre.w) * 0.5;
   float visibility = 0.0, unoccluded = 0.0;
   vec3 bent = vec3(0.0);
-  int pattern = (texel.x & 1) + 2 * (texel.y & 1);
+  int pattern = (cell.x & 1) + 2 * (cell.y & 1);
   for (int i = pattern; i < SL_DIRECTIONS; i += 4) {
     float phi = PI * (float(i) + 0.5) / float(SL_DIRECTIONS);
     vec2 dir = vec2(cos(phi), sin(phi));

@@ -15,3 +15,16 @@ float view_z(float d)
   float z = d * 2.0 - 1.0;
   return (ip[2][2] * z + ip[3][2]) / (ip[2][3] * z + ip[3][3]);
 }
+
+/* The trace runs at 1 / SL_OCCLUSION_SCALE of the pixels in each direction (1 or 2): a texel of
+ * the trace (a cell) stands for a SL_OCCLUSION_SCALE^2 block of pixels and traces one of them,
+ * its corner moving with the cell ((x, y) mod 2) so that thin surfaces are traced somewhere. */
+ivec2 traced_texel(ivec2 cell)
+{
+#if SL_OCCLUSION_SCALE > 1
+  ivec2 size = ivec2(occlusion.params.zw);
+  return min(cell * SL_OCCLUSION_SCALE + (cell & 1), size - 1);
+#else
+  return cell;
+#endif
+}

@@ -5,6 +5,8 @@
  * plane by more than PLANE_TOLERANCE of its depth, or its normal turned by more than acos
  * NORMAL_TOLERANCE) or the sky is left out, and the rest renormalised: at silhouettes a pixel
  * keeps fewer slices rather than another surface's occlusion.
+ * At half resolution (SL_OCCLUSION_SCALE 2) the neighbourhood is the 3 x 3 cells of the trace
+ * around the pixel's own, each tested at the pixel it traced (glsl/occlusion.glsl).
  * The visibility is the ratio of the merged sums (visible over unoccluded arcs, glsl/gtao.frag.glsl).
  * raw: the trace (xyz bent-normal sum, w the two sums packed); depths, normal_map as the trace's.
  * Output: xyz the world-space bent normal (the normal where nothing is visible), w visibility. */
@@ -27,14 +29,17 @@ void main()
   float tolerance = PLANE_TOLERANCE * abs(P.z);
   vec3 bent = vec3(0.0);
   vec2 sums = vec2(0.0); /* visible, unoccluded */
+  ivec2 cells = ivec2(textureSize(raw, 0));
+  ivec2 own = texel / SL_OCCLUSION_SCALE;
   for (int dy = -1; dy <= 1; dy++) {
     for (int dx = -1; dx <= 1; dx++) {
-      ivec2 t = texel + ivec2(dx, dy);
-      if (any(lessThan(t, ivec2(0))) || any(greaterThanEqual(t, size))) {
+      ivec2 c = own + ivec2(dx, dy);
+      if (any(lessThan(c, ivec2(0))) || any(greaterThanEqual(c, cells))) {
         continue;
       }
+      ivec2 t = traced_texel(c);
       float w = (dx == 0 ? 1.0 : 0.5) * (dy == 0 ? 1.0 : 0.5);
-      if (dx != 0 || dy != 0) {
+      if (t != texel) {
         float d = texelFetch(depths, t, 0).r;
         if (d >= 1.0 || dot(texelFetch(normal_map, t, 0).xyz, N) < NORMAL_TOLERANCE) {
           continue;
@@ -44,7 +49,7 @@ void main()
           continue;
         }
       }
-      vec4 s = texelFetch(raw, t, 0);
+      vec4 s = texelFetch(raw, c, 0);
       bent += w * s.xyz;
       sums += w * unpackHalf2x16(floatBitsToUint(s.w));
     }
