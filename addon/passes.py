@@ -38,11 +38,16 @@ class Target:
     """A float colour texture and (unless ``depth`` is False) a depth texture drawn into
     together, both readable by shaders (depth peeling samples the opaque depth)."""
 
-    def __init__(self, width: int, height: int, format: str = "RGBA32F", depth: bool = True):
+    def __init__(self, width: int, height: int, format: str = "RGBA32F", depth: bool = True,
+                 depth_texture: gpu.types.GPUTexture | None = None):
+        """``depth_texture``: another target's depth (of this size) to draw against instead of a
+        depth texture of its own."""
         self.width, self.height, self.format, self.depth = width, height, format, depth
         self.texture_color = gpu.types.GPUTexture((width, height), format=format)
-        self.texture_depth = (gpu.types.GPUTexture((width, height), format="DEPTH_COMPONENT32F")
-                              if depth else None)
+        self.shares_depth = depth and depth_texture is not None
+        if depth and depth_texture is None:
+            depth_texture = gpu.types.GPUTexture((width, height), format="DEPTH_COMPONENT32F")
+        self.texture_depth = depth_texture if depth else None
         if depth:
             self.framebuffer = gpu.types.GPUFrameBuffer(color_slots=self.texture_color,
                                                         depth_slot=self.texture_depth)
@@ -280,7 +285,8 @@ class ShadowPass(Pass):
 class OcclusionPass(Pass):
     """Screen-space ambient occlusion of the world's light (glsl/gtao.frag.glsl), for the views
     whose programs use it: the opaque surfaces' depth and normals drawn first (a prepass), then
-    the visible fraction of the hemisphere per sub-pixel. Writes ``<view>.occlusion``. Nothing
+    the visible fraction of the hemisphere per sub-pixel. Writes ``<view>.occlusion`` and
+    ``<view>.prepass`` (its depth, the opaque pass's). Nothing
     when the world sends no light or occlusion is off."""
 
     draws_geometry = True
@@ -350,6 +356,7 @@ class OcclusionPass(Pass):
         frame.draw_full_screen(gpu_library.gtao_program(scale), bind, self.raw)
         frame.draw_full_screen(gpu_library.occlusion_resolve_program(scale), bind_resolve, self.target)
         frame.outputs[view.output("occlusion")] = self.target
+        frame.outputs[view.output("prepass")] = self.prepass
         return True
 
     def free(self) -> None:
@@ -359,15 +366,36 @@ class OcclusionPass(Pass):
         self.prepass = self.back = self.depths = self.raw = self.target = None
 
 
+#: Draw the opaque surfaces against the occlusion prepass's depth where there is one, so that
+#: each pixel is shaded once (tests turn it off to compare).
+SHADE_ONCE = True
+
+
 class OpaquePass(TargetPass):
     """The view's scene target (colour and depth, supersampled size), cleared to the background
-    colour, and every opaque surface drawn into it. Writes ``<view>.scene``."""
+    colour, and every opaque surface drawn into it. Where the occlusion pass drew its prepass
+    (``<view>.prepass``), the target takes that depth and draws against it without writing it:
+    hidden surfaces cost no shading. Writes ``<view>.scene``."""
 
     draws_geometry = True
 
     def run(self, frame: Frame, view: View) -> bool:
         s = view.samples
-        target = self.fit(view.width * s, view.height * s, view.format, depth=True)
+        w, h = view.width * s, view.height * s
+        prepass = frame.outputs.get(view.output("prepass")) if SHADE_ONCE else None
+        if prepass is not None and prepass.fits(w, h, prepass.format, True):
+            # the occlusion pass's prepass already holds the nearest opaque surface's depth, by
+            # the same vertex program: drawn against it, each pixel is shaded once
+            if self.target is None or not self.target.fits(w, h, view.format, True) or \
+                    self.target.texture_depth is not prepass.texture_depth:
+                self.free()
+                self.target = Target(w, h, view.format, depth_texture=prepass.texture_depth)
+            target = self.target
+        else:
+            prepass = None
+            if self.target is not None and self.target.shares_depth:
+                self.free()
+            target = self.fit(w, h, view.format, depth=True)
         frame.outputs[view.output("scene")] = target
         frame.scene.put_frame(view.view_projection, view.width, view.height, view.samples)
         lists = frame.scene.draw_lists(view.model, view.half_target)
@@ -377,9 +405,12 @@ class OpaquePass(TargetPass):
             gpu_library.bind_sampler(shader, "env_occlusion_map", occlusion.texture_color)
 
         with target.bind():
-            target.framebuffer.clear(color=view.background, depth=1.0)
+            if prepass is None:
+                target.framebuffer.clear(color=view.background, depth=1.0)
+            else:
+                target.framebuffer.clear(color=view.background)
             gpu.state.depth_test_set("LESS_EQUAL")
-            gpu.state.depth_mask_set(True)
+            gpu.state.depth_mask_set(prepass is None)
             gpu.state.face_culling_set("NONE")
             gpu.state.blend_set("NONE")
             try:

@@ -58,3 +58,42 @@ def test_pass_names_are_eevees(tmp_path):
     bpy.ops.render.render()
     eevee = set(scenes.read_exr_layers(scenes.save_result(scene, tmp_path / "eevee.exr", "MULTILAYER")))
     assert set(LIGHT_PASSES) <= eevee, f"EEVEE wrote {sorted(eevee)}"
+
+
+@pytest.mark.parametrize("preset", ["material_grid", "world", "portability"])
+def test_opaque_surfaces_drawn_against_the_occlusion_prepass_change_no_pixel(preset):
+    """Where the world's occlusion draws its prepass, the opaque pass takes that depth and shades
+    each pixel once: exactly the image drawn with a depth test of its own (and a partly
+    transparent plane in front, which peels against that depth, blends as before)."""
+    from gpu_harness import run_on_gpu
+    from mathutils import Matrix
+
+    from addon import extract, passes, presets, renderer, scene_builder
+
+    scene = scenes.reset()
+    scene_builder.build_scene(presets.load_scene_preset(preset), scene)
+    scene.render.resolution_x, scene.render.resolution_y = 96, 54
+    glass = scenes.material("Veil", base_color=(0.2, 0.5, 0.9), roughness=0.3)
+    glass.node_tree.nodes["Principled BSDF"].inputs["Alpha"].default_value = 0.5
+    veil = scenes.plane(scene, size=30.0, material=glass)
+    veil.matrix_world = scene.camera.matrix_world @ Matrix.Translation((0.0, 0.0, -3.0))
+    r = renderer.Renderer()
+
+    def job(depsgraph):
+        out = {}
+        for once in (True, False):
+            passes.SHADE_ONCE = once
+            out[once] = r.render(extract.snapshot(depsgraph, 96, 54))
+            out[once, "shared"] = r._passes[passes.OpaquePass, "main"].target.shares_depth
+        return out
+
+    try:
+        out = run_on_gpu(job)
+    finally:
+        passes.SHADE_ONCE = True
+        run_on_gpu(lambda _d: r.free())
+    assert out[True, "shared"] and not out[False, "shared"], "the world lights the preset: a prepass"
+    lit = out[False][..., :3].max(axis=2) > 0.0
+    assert lit.mean() > 0.5, lit.mean()
+    differ = np.abs(out[True] - out[False]).max()
+    assert differ == 0.0, f"{differ} largest difference"
