@@ -105,20 +105,33 @@ def interior(ids: np.ndarray) -> np.ndarray:
     return same
 
 
+#: Pixels whose centre lies within this many pixels of a sphere's silhouette belong to no
+#: material: there the drawn mesh (64 x 32 segments, its outline up to 0.005 radii = 0.04 px
+#: inside the sphere's) and the analytic sphere may disagree.
+SILHOUETTE_MARGIN = 0.05
+
+
 def material_masks(camera, names) -> dict[str, np.ndarray]:
-    """Per material, the pixels (top row first) whose whole 3x3 neighbourhood sees it."""
+    """Per material, the pixels (top row first) whose centre's ray meets it first, but for those
+    within SILHOUETTE_MARGIN of a sphere's outline: every pixel the material shows, its grazing rim
+    and the creases at its contacts included (a 3x3 erosion dropped the outer pixel ring, where
+    n.v < 0.47 on these spheres, 22 % of their pixels and the ones where the terms differ most)."""
     origins, direction = scenes.ortho_pixel_rays(SIZE, SCALE, np.array(camera.matrix_world))
     depth = np.full((SIZE, SIZE), np.inf)
     ids = np.full((SIZE, SIZE), -1)
+    margin = SILHOUETTE_MARGIN * SCALE / SIZE
+    near_outline = np.zeros((SIZE, SIZE), bool)
     for i, (x, radius) in enumerate(SPHERES):
         t = sphere_hits(origins, direction, (x, 0.0, radius), radius)
         nearer = (t > 0.0) & (t < depth)
         depth, ids = np.where(nearer, t, depth), np.where(nearer, i, ids)
+        inner = np.isfinite(sphere_hits(origins, direction, (x, 0.0, radius), radius - margin))
+        outer = np.isfinite(sphere_hits(origins, direction, (x, 0.0, radius), radius + margin))
+        near_outline |= outer & ~inner
     t = -origins[..., 2] / direction[2] if direction[2] != 0.0 else np.full((SIZE, SIZE), np.inf)
     hit = (t > 0.0) & (t < depth) & (np.abs(origins[..., 0] + t * direction[0]) < 6.0)
     ids = np.where(hit, len(SPHERES), ids)
-    same = interior(ids)
-    return {name: same & (ids == i) for i, name in enumerate(names)}
+    return {name: ~near_outline & (ids == i) for i, name in enumerate(names)}
 
 
 def measured_errors(image, reference, masks, quantile: float, min_pixels: int = 20) -> dict[str, float]:
