@@ -30,10 +30,11 @@ from collections import OrderedDict
 from dataclasses import dataclass, replace
 from functools import lru_cache
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
-from . import environment, shading
+from . import environment, programs, shading
 from .brdf import half_vector
 from .snapshot import (
     ImageData,
@@ -126,6 +127,8 @@ class Choice:
     reason: str = ""
     errors: tuple[tuple[str, float], ...] = ()
     samples: int = 0
+    alone: str = ""  # the candidate it would have taken on its own, where merged into another's program
+    costs_ms: float = 0.0  # what that merge costs a frame (ms on the cost table's machine)
 
     @property
     def label(self) -> str:
@@ -166,6 +169,68 @@ def candidate_order(lights: int, table: dict | None = None) -> list[str]:
     costs = relative_costs(lights, table)
     cheaper = [n for n in CANDIDATE_TERMS if n != "PRINCIPLED" and costs[n] < costs["PRINCIPLED"]]
     return sorted(cheaper, key=lambda n: (costs[n], list(CANDIDATE_TERMS).index(n))) + ["PRINCIPLED"]
+
+
+#: A term set gets a shading program of its own only where the materials on it save that
+#: program's first use (its compile and first draw: ``first_use_ms`` in term_costs.json) within
+#: this many frames: about a second of viewport navigation here, or a short animation; a still
+#: render pays the compile for one frame. On this machine a program's first use took 27 ms with
+#: the driver's shader cache warm (~600 ms cold: the hdr preset's first render with Auto 2.0-2.2 s
+#: against the Principled set's 1.3 s, one program more) while that preset's one metal on
+#: multiple scattering saved ~0.3 ms a frame; no per-frame cost of a second program could be
+#: measured (+-5 % noise), so only the compile counts (2026-12-02).
+PAYBACK_FRAMES = 10
+
+
+def shading_ms(lights: int, pixels: int, table: dict | None = None) -> dict[str, float]:
+    """Each candidate's time to shade ``pixels`` pixels under ``lights`` lights (ms, as
+    term_costs.py measured the default terms over its whole view, scaled by the pixel count);
+    empty without a measured table."""
+    table = cost_table() if table is None else table
+    counts, base = table.get("lights"), table.get("draw_ms", {}).get("DEFAULT")
+    if not counts or not base or not table.get("pixels"):
+        return {}
+    default = float(np.interp(math.log(max(lights, 1)), np.log(counts), base)) * pixels / table["pixels"]
+    return {name: default * ratio for name, ratio in relative_costs(lights, table).items()}
+
+
+def merge_small_savings(chosen: dict[str, str], allowed: dict[str, list[str]], shares: dict[str, float],
+                        program: Callable[[str, str], object], fixed: set, frame_ms: dict[str, float],
+                        first_use_ms: float, payback_frames: float = PAYBACK_FRAMES) -> dict[str, str]:
+    """Auto's choices with the programs that do not pay for themselves merged away.
+
+    ``chosen``: material -> candidate; ``allowed``: material -> the candidates within its bound;
+    ``shares``: of the view each covers; ``program(material, candidate)``: the program it would
+    draw with; ``fixed``: the programs other materials draw with anyway; ``frame_ms``: each
+    candidate's full-view shading time. Greedily, the program whose materials save the least
+    against their cheapest allowed candidate among the other programs in use is dropped while
+    that saving, over ``payback_frames`` frames, is less than a program's ``first_use_ms``."""
+    chosen = dict(chosen)
+    if not frame_ms or first_use_ms <= 0.0:
+        return chosen
+    while True:
+        in_use: dict = {}
+        for key, name in chosen.items():
+            in_use.setdefault(program(key, name), []).append(key)
+        best = None
+        for prog, members in in_use.items():
+            if prog in fixed:
+                continue
+            moves, loss = {}, 0.0
+            for key in members:
+                targets = [n for n in allowed[key] if n != chosen[key] and
+                           (program(key, n) in fixed or program(key, n) in in_use)]
+                if not targets:
+                    break
+                target = min(targets, key=lambda n: frame_ms[n])
+                moves[key] = target
+                loss += shares[key] * (frame_ms[target] - frame_ms[chosen[key]])
+            else:
+                if loss * payback_frames < first_use_ms and (best is None or loss < best[0]):
+                    best = (loss, moves)
+        if best is None:
+            return chosen
+        chosen.update(best[1])
 
 
 # --- Delta E_ITP (ITU-R BT.2124) ---------------------------------------------------------------
@@ -217,6 +282,7 @@ class Samples:
     n: np.ndarray
     v: np.ndarray
     material: MaterialParams
+    share: float = 0.0  # of the view's pixels it covers (hidden parts counted: an upper bound)
 
     def __len__(self) -> int:
         return len(self.p)
@@ -330,6 +396,7 @@ def material_samples(snapshot: Snapshot, key: str, count: int = SAMPLES, camera=
     weight = np.where(inside, np.abs(NoV) / d2, 0.0)
     if not np.any(weight > 0.0):
         return None
+    share = _view_share(camera, p, weight, NoV > 0.0, area.sum() / pool)
     pick = rng.choice(pool, count, p=weight / weight.sum())
     highlights = _highlight_points(snapshot, p, n, v, weight, int(HIGHLIGHT_SHARE * count))
     pick = np.concatenate([pick, highlights])
@@ -345,7 +412,25 @@ def material_samples(snapshot: Snapshot, key: str, count: int = SAMPLES, camera=
             changes[name] = None
     if changes:
         material = replace(material, **changes)
-    return Samples(p[pick], n[pick], v[pick], material)
+    return Samples(p[pick], n[pick], v[pick], material, share)
+
+
+def _view_share(camera, p, weight, front, area_per_point: float) -> float:
+    """The share of the view's pixels the pool points ``p`` cover, each standing for
+    ``area_per_point`` m^2 and weighted by |n.v| / d^2 (0 outside the view): its projected area
+    on the image plane at distance 1 (a solid angle over cos^3 of the angle off the axis, in
+    perspective) over the plane's 4 / (P00 P11), of its front faces (``front``) or of its back
+    faces, whichever cover more (a closed surface's back faces are hidden behind its front; an
+    open one seen from behind shows its back). Other objects in front are not known here."""
+    projection = np.asarray(camera.projection, np.float64)
+    plane = 4.0 / max(abs(projection[0, 0] * projection[1, 1]), 1e-12)
+    if camera.is_perspective:
+        to_point = p - np.asarray(camera.position, np.float64)
+        d = np.maximum(np.linalg.norm(to_point, axis=-1), 1e-12)
+        cos_axis = np.clip(to_point @ np.asarray(camera.forward, np.float64) / d, 1e-3, 1.0)
+        weight = weight / cos_axis ** 3
+    covered = max(np.sum(weight[front]), np.sum(weight[~front]))
+    return float(min(covered * area_per_point / plane, 1.0))
 
 
 def _highlight_points(snapshot: Snapshot, p, n, v, weight, count: int) -> np.ndarray:
@@ -519,17 +604,20 @@ def _prediction_key(snapshot: Snapshot, key: str, items, camera, world, order, e
 
 
 def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = DEFAULT_QUANTILE,
-           previous: dict[str, Choice] | None = None, camera=None) -> dict[str, Choice]:
+           previous: dict[str, Choice] | None = None, camera=None,
+           payback_frames: float | None = None) -> dict[str, Choice]:
     """Auto's choice for every physically based material of ``snapshot`` that follows the scene's
     terms (a material with its own term or model choices keeps them), seen from ``camera`` (the
-    snapshot's by default; the viewport passes the view it last drew)."""
+    snapshot's by default; the viewport passes the view it last drew); then the programs that
+    would not pay for their first use within ``payback_frames`` frames merged into others
+    (``merge_small_savings``; PAYBACK_FRAMES by default)."""
     if snapshot.settings.model != "PBR":
         return {}
     order = candidate_order(len(snapshot.lights))
     world = world_radiance(snapshot.world)
     exposure = float(snapshot.settings.exposure)
     users = material_users(snapshot)
-    out = {}
+    found = {}
     for key, material in snapshot.materials.items():
         if material.model not in ("", "PBR") or any(
                 (material.fresnel, material.ndf, material.visibility, material.diffuse)):
@@ -542,23 +630,58 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
         if cached is None:
             samples = material_samples(snapshot, key, camera=camera, users=users)
             if samples is None:
-                cached = (None, 0, material)
+                cached = (None, 0, material, 0.0)
             else:
                 cached = (predict(samples, snapshot.lights, world, order, exposure, quantile,
-                                  snapshot.settings.world_occlusion), len(samples), samples.material)
+                                  snapshot.settings.world_occlusion), len(samples), samples.material,
+                          samples.share)
         _PREDICTIONS[cache_key] = cached  # most recently used last
         while len(_PREDICTIONS) > PREDICTIONS_KEPT:
             del _PREDICTIONS[next(iter(_PREDICTIONS))]
-        errors, count, seen = cached
-        if errors is None:  # covers no pixel: the cheapest set costs nothing to be wrong
-            out[key] = Choice(order[0], CANDIDATE_TERMS[order[0]], 0.0, samples=0)
+        found[key] = cached
+    alone, allowed = {}, {}
+    for key, (errors, _count, _seen, _share) in found.items():
+        if errors is None:  # covers no pixel: every set is as good, the cheapest first
+            alone[key], allowed[key] = order[0], list(order)
             continue
         before = previous.get(key).name if previous and key in previous else None
-        name = decide(errors, order, bound, before)
+        alone[key] = decide(errors, order, bound, before)
+        allowed[key] = [n for n in order if errors[n] * MARGIN <= bound or n in ("PRINCIPLED", alone[key])]
+    pixels = snapshot.width * snapshot.height * snapshot.settings.samples ** 2
+    frame_ms = shading_ms(len(snapshot.lights), pixels)
+    programs_of = _program_keys(snapshot)
+    fixed = {programs_of(key, None) for key in users if key not in found}  # drawn with their own terms
+    chosen = merge_small_savings(alone, allowed, {k: f[3] for k, f in found.items()}, programs_of, fixed,
+                                 frame_ms, float(cost_table().get("first_use_ms", 0.0)),
+                                 PAYBACK_FRAMES if payback_frames is None else payback_frames)
+    out = {}
+    for key, (errors, count, seen, share) in found.items():
+        name = chosen[key]
+        if errors is None:
+            out[key] = Choice(name, CANDIDATE_TERMS[name], 0.0, samples=0)
+            continue
         limiting, reason = limiting_term(name, seen, errors, bound)
+        saving = share * (frame_ms[name] - frame_ms[alone[key]]) if frame_ms and name != alone[key] else 0.0
         out[key] = Choice(name, CANDIDATE_TERMS[name], errors[name], limiting, reason,
-                          tuple(errors.items()), count)
+                          tuple(errors.items()), count, alone[key] if name != alone[key] else "", saving)
     return out
+
+
+def _program_keys(snapshot: Snapshot) -> Callable[[str, str | None], tuple]:
+    """(material, candidate) -> what tells its shading program from the others in this scene (its
+    model, terms, maps); candidate None: the terms it has."""
+    keys: dict = {}
+
+    def key_of(key: str, name: str | None) -> tuple:
+        if (key, name) not in keys:
+            material = snapshot.materials[key]
+            if name is not None:
+                material = replace(material, terms=CANDIDATE_TERMS[name])
+            f = programs.Features.from_snapshot(snapshot, material=material, shadow_layers=0)
+            keys[key, name] = (f.model, f.terms, f.maps, f.alpha_from_base_map)
+        return keys[key, name]
+
+    return key_of
 
 
 def apply(snapshot: Snapshot, choices: dict[str, Choice]) -> None:

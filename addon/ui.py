@@ -265,6 +265,7 @@ def _auto_choice(layout, context) -> None:
     scene_props = getattr(scene, "shading_lab", None)
     if scene_props is None or scene_props.term_set != "AUTO":
         return
+    from .auto_terms import LABELS
     from .engine import last_term_choices, last_verification
 
     name = context.material.name_full
@@ -278,6 +279,9 @@ def _auto_choice(layout, context) -> None:
                        f"{scene_props.auto_quantile:.0f}th percentile, {choice.samples} points)")
         if choice.limiting:
             box.label(text=f"Needs {choice.limiting}: {choice.reason}")
+        if choice.alone:
+            box.label(text=f"Alone it would take {LABELS[choice.alone]}: a program of its own would "
+                           f"save {choice.costs_ms:.2f} ms a frame, too little to repay its compile")
     checked = last_verification.get(name)
     if checked is not None:
         box.label(text=f"Measured ΔE_ITP {checked.measured:.2f} on {checked.pixels:,} pixels"

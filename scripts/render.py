@@ -328,7 +328,7 @@ def render_frame(args, scene, stem: str, models: list[str], frame: int | None, w
     """Render ``frame`` (None: the current one) with each model; the files written."""
     import bpy
 
-    from addon import engine
+    from addon import auto_terms, engine
 
     written = []
     if frame is not None:
@@ -349,6 +349,9 @@ def render_frame(args, scene, stem: str, models: list[str], frame: int | None, w
         if scene.shading_lab.term_set == "AUTO" and MODELS[model] == "PBR":
             for name, choice in sorted(engine.last_term_choices.items()):
                 why = f"; needs {choice.limiting} ({choice.reason})" if choice.limiting else ""
+                if choice.alone:
+                    why += (f"; shares a program (alone: {auto_terms.LABELS[choice.alone]}, saving "
+                            f"{choice.costs_ms:.2f} ms a frame)")
                 print(f"{stem}_{model}{suffix}: material {name or '(none)'}: {choice.label}, predicted "
                       f"dE_ITP {choice.predicted:.2f}{why}")
         result = bpy.data.images.get("Render Result")

@@ -8,14 +8,17 @@ A plane fills an orthographic view under N point lights that each reach all of i
 no shadows, a black world: the shading is all the frame does), with a rough metal material.
 Every (candidate, N) is rendered round-robin after a warm-up round, in one process; the medians
 of the engine's draw time (GPU work fenced by the read-back) go to ``--out`` with their ratios to
-the default terms (``relative``), which ``addon/auto_terms.py`` orders its candidates by. Times
-are CPU-rasteriser times (Mesa llvmpipe): only the ratios are used.
+the default terms (``relative``), which ``addon/auto_terms.py`` orders its candidates by, with
+the view's pixel count and a candidate program's first use (``first_use_ms``: its compile and
+first draw, the driver's shader cache warm), which it weighs a program of its own against. Times
+are CPU-rasteriser times (Mesa llvmpipe): the add-on uses them only against each other.
 """
 
 from __future__ import annotations
 
 import argparse
 import json
+import statistics
 import sys
 from pathlib import Path
 
@@ -30,6 +33,28 @@ def derive(draw_ms: dict[str, list[float]]) -> dict[str, list[float]]:
     """Each candidate's draw time over the default terms' at the same light count (4 decimals)."""
     base = draw_ms["DEFAULT"]
     return {name: [round(t / b, 4) for t, b in zip(times, base)] for name, times in draw_ms.items()}
+
+
+def first_use_ms(names, apply) -> dict[str, float]:
+    """Per candidate but the first, what its shading program's first use adds to a frame (its
+    compile and first draw, with the driver's shader cache warm: every program was compiled
+    before), at the first light count: the program library is emptied, the first candidate drawn
+    (the frame's other programs and the tables come back), then each other one twice."""
+    import bpy
+
+    from addon import engine, gpu_library
+
+    gpu_library.LIBRARY.clear()
+    out = {}
+    for i, name in enumerate(names):
+        times = []
+        for _ in range(2):
+            apply((name, COUNTS[0]))
+            bpy.ops.render.render()
+            times.append(engine.last_timings["draw_ms"])
+        if i:
+            out[name] = times[0] - times[1]
+    return out
 
 
 def build(w: int, h: int):
@@ -98,13 +123,16 @@ def main() -> int:
 
     med = round_robin.median_draw_ms(configs, apply, args.frames)
     draw_ms = {name: [round(med[(name, n)], 2) for n in COUNTS] for name in names}
+    first_use = first_use_ms(names, apply)
     data = {
         "generated_by": "scripts/term_costs.py",
         "scene": f"plane filling an orthographic view, rough metal, N point lights reaching all of it, "
                  f"no shadows, black world, {w}x{h}, median of {args.frames} rounds",
         "lights": list(COUNTS),
+        "pixels": w * h,
         "draw_ms": draw_ms,
         "relative": derive(draw_ms),
+        "first_use_ms": round(statistics.median(first_use.values()), 1),
     }
     args.out.write_text(json.dumps(data, indent=1) + "\n")
     rows = ["| candidate | " + " | ".join(f"{n} light(s) ms (x default)" for n in COUNTS) + " |",
@@ -117,6 +145,9 @@ def main() -> int:
         "The Auto term set's candidates: draw time per light count (`scripts/term_costs.py`; "
         f"{data['scene']}). Written to `addon/term_costs.json`, which orders the candidates.",
         "", *rows, "",
+        f"A candidate's program's first use (compile and first draw, the driver's shader cache warm), "
+        f"median of {len(first_use)}: {data['first_use_ms']:.1f} ms "
+        f"({', '.join(f'{auto_terms.LABELS[n]} {t:.0f}' for n, t in first_use.items())}).", "",
         *[f"Order at {n} light(s), cheap -> accurate: " + " -> ".join(order[n]) for n in COUNTS], ""])
     round_robin.write_table(args.table, text)
     return 0

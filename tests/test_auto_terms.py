@@ -144,6 +144,97 @@ def test_materials_with_their_own_terms_or_unseen_keep_theirs():
     assert choice.samples == 0 and choice.name == auto_terms.candidate_order(1)[0], choice
 
 
+def test_a_materials_share_of_the_view_is_its_projected_area():
+    """The unit sphere (a 32 x 64 UV mesh) in an orthographic view 2.4 m square covers its
+    projected outline's area over the view's 5.76 m^2 (the back half hidden behind the front,
+    not counted twice); the estimate is a sum over 8,192 random points (measured: 1.1 % over)."""
+    metal = S.MaterialParams(base_color=(0.9, 0.9, 0.9), metalness=1.0, roughness=0.5)
+    snap = _sphere_snapshot(metal, 45.0)
+    samples = auto_terms.material_samples(snap, "m")
+    # the mesh's outline seen along the view: the convex hull of its vertices projected
+    from scipy.spatial import ConvexHull
+
+    view = np.asarray(snap.camera.view, np.float64)
+    xy = (snap.geometries["sphere"].positions.astype(np.float64) @ view[:3, :3].T)[:, :2]
+    expected = ConvexHull(xy).volume / 5.76
+    assert abs(samples.share / expected - 1.0) < 0.03, f"share {samples.share:.4f}, outline {expected:.4f}"
+
+
+def test_programs_that_save_too_little_are_merged():
+    """A program of its own must repay its first use within PAYBACK_FRAMES frames: a material
+    covering 1 % of the view saves 0.01 x (140 - 110) = 0.3 ms a frame on multiple scattering
+    against the Principled set (30 ms over 100 frames, less than a 70 ms first use: merged into
+    the Principled program another material uses); covering 5 % it saves 1.5 ms (150 ms: kept).
+    A material moves only to a set within its bound whose program is drawn anyway."""
+    frame_ms = {"DEFAULT": 100.0, "MULTISCATTER": 110.0, "PRINCIPLED": 140.0}
+
+    def merged(chosen, allowed, shares, fixed=()):
+        return auto_terms.merge_small_savings(chosen, allowed, shares, lambda key, name: name, set(fixed),
+                                              frame_ms, 70.0, 100)
+
+    allowed = {"a": ["MULTISCATTER", "PRINCIPLED"], "b": ["PRINCIPLED"]}
+    on_ms = {"a": "MULTISCATTER", "b": "PRINCIPLED"}
+    assert merged(on_ms, allowed, {"a": 0.01, "b": 0.9}) == {"a": "PRINCIPLED", "b": "PRINCIPLED"}
+    assert merged(on_ms, allowed, {"a": 0.05, "b": 0.9}) == on_ms
+    # no program within a's bound is drawn but its own (multiple scattering is not): kept
+    on_default = {"a": "DEFAULT", "b": "PRINCIPLED"}
+    assert merged(on_default, {"a": ["DEFAULT", "MULTISCATTER"], "b": ["PRINCIPLED"]},
+                  {"a": 0.001, "b": 0.9}) == on_default
+    # a cheap program merges into a dearer one in use (0.01 x 10 ms x 100 < 70 ms) ...
+    assert merged({"a": "DEFAULT", "b": "MULTISCATTER"},
+                  {"a": ["DEFAULT", "MULTISCATTER", "PRINCIPLED"], "b": ["MULTISCATTER", "PRINCIPLED"]},
+                  {"a": 0.01, "b": 0.9}) == {"a": "MULTISCATTER", "b": "MULTISCATTER"}
+    # ... or into one that a material with its own terms draws with (``fixed``), which is never
+    # merged away itself
+    assert merged({"a": "MULTISCATTER"}, {"a": ["MULTISCATTER", "PRINCIPLED"]}, {"a": 0.01},
+                  fixed={"PRINCIPLED"}) == {"a": "PRINCIPLED"}
+    assert merged({"a": "DEFAULT"}, {"a": ["DEFAULT", "PRINCIPLED"]}, {"a": 0.001}, fixed={"DEFAULT"}) \
+        == {"a": "DEFAULT"}
+
+
+def test_the_hdr_presets_small_metal_joins_the_principled_program(tmp_path):
+    """The hdr preset: alone, its silver sphere (about 1.5 % of the view) would take a cheaper set
+    than the Principled set the other three materials need, saving share x (Principled - alone)
+    of the measured full-view shading time a frame -- at 1280 x 720 well under a program's first
+    use over PAYBACK_FRAMES frames, so it joins the Principled program: Auto draws exactly what
+    the Principled set draws (the same image), with no program more to compile. Only when a
+    program need repay its first use over far more frames does the silver keep its own."""
+    import bpy
+
+    from addon import extract, presets, scene_builder
+
+    scene = scenes.reset()
+    scene_builder.build_scene(presets.load_scene_preset("hdr"), scene)
+    scene.render.resolution_x, scene.render.resolution_y = 1280, 720
+    scene.shading_lab.term_set = "AUTO"
+    bpy.context.view_layer.update()
+    snap = extract.snapshot(bpy.context.evaluated_depsgraph_get(), auto_choice=False)
+    choices = auto_terms.choose(snap, auto_terms.DEFAULT_BOUND)
+    silver = next(c for key, c in choices.items() if "ilver" in key)
+    frame_ms = auto_terms.shading_ms(len(snap.lights), snap.width * snap.height * snap.settings.samples ** 2)
+    first_use = auto_terms.cost_table()["first_use_ms"]
+    assert {c.name for c in choices.values()} == {"PRINCIPLED"}, {k: (c.name, c.alone)
+                                                                  for k, c in choices.items()}
+    assert silver.alone and silver.alone != "PRINCIPLED", silver
+    samples = auto_terms.material_samples(snap, next(k for k in choices if "ilver" in k))
+    expected = samples.share * (frame_ms["PRINCIPLED"] - frame_ms[silver.alone])
+    assert silver.costs_ms == pytest.approx(expected, rel=1e-6), (silver.costs_ms, expected)
+    assert 0.0 < silver.costs_ms * auto_terms.PAYBACK_FRAMES < first_use, (silver.costs_ms, first_use)
+    kept = auto_terms.choose(snap, auto_terms.DEFAULT_BOUND, payback_frames=2.0 * first_use / silver.costs_ms)
+    assert next(c.name for k, c in kept.items() if "ilver" in k) == silver.alone
+    print(f"hdr silver: alone {silver.alone}, share {samples.share:.4f}, saving {silver.costs_ms:.3f} ms a "
+          f"frame against a {first_use:.1f} ms first use")
+    # the same programs draw the same image
+    scene.render.resolution_x, scene.render.resolution_y = 96, 54
+    scene.shading_lab.term_set = "PRINCIPLED"
+    principled = scenes.render(scene, tmp_path / "principled.exr")
+    scene.shading_lab.term_set = "AUTO"
+    auto = scenes.render(scene, tmp_path / "auto.exr")
+    assert {c.name for c in engine.last_term_choices.values()} == {"PRINCIPLED"}, engine.last_term_choices
+    worst = float(np.max(np.abs(auto - principled)))
+    assert worst <= 1e-5 * float(np.max(principled)), f"Auto differs from the Principled set by {worst:.3g}"
+
+
 def test_hysteresis_keeps_a_set_through_small_changes():
     order = ["DEFAULT", "MULTISCATTER", "PRINCIPLED"]
     errors = {"DEFAULT": 0.79, "MULTISCATTER": 0.5, "PRINCIPLED": 0.0}
@@ -183,13 +274,21 @@ def _render_pairs(seed: int, tmp_path: Path) -> dict[float, list]:
     return out
 
 
+#: Programs never merged (``auto_terms.PAYBACK_FRAMES``): at these 96 px no cheaper set saves a
+#: program's first use, so every material would join the Principled set's program and the
+#: prediction would go untested. The merge has tests of its own.
+NEVER_MERGE = 1e12
+
+
 @pytest.fixture(scope="module")
 def random_results(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("auto")
     rows = {bound: [] for bound in BOUNDS}
-    for seed in SEEDS:
-        for bound, found in _render_pairs(seed, tmp).items():
-            rows[bound] += found
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setattr(auto_terms, "PAYBACK_FRAMES", NEVER_MERGE)
+        for seed in SEEDS:
+            for bound, found in _render_pairs(seed, tmp).items():
+                rows[bound] += found
     return rows
 
 
@@ -199,7 +298,7 @@ def test_auto_keeps_random_materials_within_the_bound(random_results, bound):
     shadows on, black or uniform worlds, 96 px): the measured error of Auto against the Principled
     set, per material on all its pixels, is within the bound for >= 95 % of the materials
     (measured: 100 % at 0.5, 99.6 % at 4: a rough dielectric at 4.59), and Auto does not simply
-    take the Principled set (bound 0.5: 205 of 250)."""
+    take the Principled set (bound 0.5: 191 of 250; 4: 102)."""
     rows = random_results[bound]
     measured = np.array([m for *_, m in rows])
     within = float(np.mean(measured <= bound))
@@ -218,11 +317,12 @@ def test_auto_keeps_random_materials_within_the_bound(random_results, bound):
 
 def test_measured_error_is_within_a_factor_two_of_the_prediction(random_results):
     """Where Auto chose a set other than the Principled one (whose error is 0 by construction)
-    and either error is noticeable: measured / predicted within [1/2, 2] for most (82 % of 95
+    and either error is noticeable: measured / predicted within [1/2, 2] for most (81 % of 150
     with either >= 0.1; the rest mostly over-predicted: smooth metals, whose 99th percentile lies
     at n.v < 0.1, a rim 0.04 px wide on these 8.5-px spheres that two or three pixel centres
     sample), and never above twice the prediction where either is at least half a just-noticeable
-    difference (measured at most 1.72x of 67; below that 2.3x: 0.19 predicted, 0.44 measured)."""
+    difference (measured at most 1.72x of 100, 79 % within a factor 2; below that 2.3x: 0.19
+    predicted, 0.44 measured)."""
     rows = [row for bound in BOUNDS for row in random_results[bound]]
 
     def compared(floor):
@@ -248,12 +348,13 @@ def test_measured_error_is_within_a_factor_two_of_the_prediction(random_results)
           f"{len(noticeable)}, {noticeable_percentiles}")
 
 
-def test_verify_measures_what_the_analytic_masks_measure(tmp_path):
+def test_verify_measures_what_the_analytic_masks_measure(tmp_path, monkeypatch):
     """The Verify operator's per-material errors (its own material-id render) agree with the same
     error measured on the pixels found by intersecting rays with the analytic spheres and plane
     (less those whose centres lie within a twentieth of a pixel of a sphere's outline)."""
     import bpy
 
+    monkeypatch.setattr(auto_terms, "PAYBACK_FRAMES", NEVER_MERGE)
     scene, camera, names = auto_scenes.random_scene(7)
     props = scene.shading_lab
     props.term_set = "PRINCIPLED"

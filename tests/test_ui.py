@@ -208,3 +208,10 @@ def test_material_panel_shows_the_auto_choice_and_its_verification(monkeypatch):
     assert "Needs multiple scattering: metal, roughness 0.60" in labels, labels
     assert any("Measured ΔE_ITP 1.70 on 120 pixels: over the bound 1.00" in t for t in labels), labels
     assert ("operator", "shading_lab.verify_auto_terms", True) in layout.log
+    merged = auto_terms.Choice("PRINCIPLED", auto_terms.REFERENCE, 0.0, samples=512, alone="MULTISCATTER",
+                               costs_ms=0.0213)
+    monkeypatch.setitem(engine.last_term_choices, mat.name_full, merged)
+    labels = _draw(ui.SHADINGLAB_PT_material, context).labels()
+    assert "Auto: Principled set" in labels, labels
+    assert ("Alone it would take default + multiple scattering: a program of its own would save 0.02 ms "
+            "a frame, too little to repay its compile") in labels, labels
