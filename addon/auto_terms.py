@@ -128,7 +128,9 @@ class Choice:
     errors: tuple[tuple[str, float], ...] = ()
     samples: int = 0
     alone: str = ""  # the candidate it would have taken on its own, where merged into another's program
-    costs_ms: float = 0.0  # what that merge costs a frame (ms on the cost table's machine)
+    #: what that merge costs a frame (ms on the cost table's machine); unpredicted (no ``errors``):
+    #: the most any cheaper set could save it
+    costs_ms: float = 0.0
 
     @property
     def label(self) -> str:
@@ -603,6 +605,17 @@ def _prediction_key(snapshot: Snapshot, key: str, items, camera, world, order, e
             np.asarray(world).tobytes(), tuple(order), exposure, quantile, occlusion)
 
 
+@dataclass
+class _Prediction:
+    """One material's points and, once made, its prediction (kept in ``_PREDICTIONS``)."""
+
+    count: int  # points (0: it covers no pixel)
+    seen: MaterialParams  # the material as the points saw it (textures' values)
+    share: float  # of the view
+    samples: Samples | None  # the points, until predicted
+    errors: dict[str, float] | None = None
+
+
 def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = DEFAULT_QUANTILE,
            previous: dict[str, Choice] | None = None, camera=None,
            payback_frames: float | None = None) -> dict[str, Choice]:
@@ -610,14 +623,17 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
     terms (a material with its own term or model choices keeps them), seen from ``camera`` (the
     snapshot's by default; the viewport passes the view it last drew); then the programs that
     would not pay for their first use within ``payback_frames`` frames merged into others
-    (``merge_small_savings``; PAYBACK_FRAMES by default)."""
+    (``merge_small_savings``; PAYBACK_FRAMES by default). A material covering too little of the
+    view for any cheaper set to repay a program of its own is predicted only where a cheaper
+    program it could join is drawn anyway; else it takes the Principled set unpredicted."""
     if snapshot.settings.model != "PBR":
         return {}
     order = candidate_order(len(snapshot.lights))
     world = world_radiance(snapshot.world)
     exposure = float(snapshot.settings.exposure)
+    occlusion = snapshot.settings.world_occlusion
     users = material_users(snapshot)
-    found = {}
+    found: dict[str, _Prediction] = {}
     for key, material in snapshot.materials.items():
         if material.model not in ("", "PBR") or any(
                 (material.fresnel, material.ndf, material.visibility, material.diffuse)):
@@ -625,45 +641,72 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
         if key not in users:
             continue
         cache_key = _prediction_key(snapshot, key, users[key], camera or snapshot.camera, world, order,
-                                    exposure, quantile, snapshot.settings.world_occlusion)
-        cached = _PREDICTIONS.pop(cache_key, None)
-        if cached is None:
+                                    exposure, quantile, occlusion)
+        entry = _PREDICTIONS.pop(cache_key, None)
+        if entry is None:
             samples = material_samples(snapshot, key, camera=camera, users=users)
-            if samples is None:
-                cached = (None, 0, material, 0.0)
-            else:
-                cached = (predict(samples, snapshot.lights, world, order, exposure, quantile,
-                                  snapshot.settings.world_occlusion), len(samples), samples.material,
-                          samples.share)
-        _PREDICTIONS[cache_key] = cached  # most recently used last
+            entry = (_Prediction(0, material, 0.0, None) if samples is None else
+                     _Prediction(len(samples), samples.material, samples.share, samples))
+        _PREDICTIONS[cache_key] = entry  # most recently used last
         while len(_PREDICTIONS) > PREDICTIONS_KEPT:
             del _PREDICTIONS[next(iter(_PREDICTIONS))]
-        found[key] = cached
-    alone, allowed = {}, {}
-    for key, (errors, _count, _seen, _share) in found.items():
-        if errors is None:  # covers no pixel: every set is as good, the cheapest first
-            alone[key], allowed[key] = order[0], list(order)
-            continue
-        before = previous.get(key).name if previous and key in previous else None
-        alone[key] = decide(errors, order, bound, before)
-        allowed[key] = [n for n in order if errors[n] * MARGIN <= bound or n in ("PRINCIPLED", alone[key])]
+        found[key] = entry
+
+    def predicted(entry: _Prediction) -> dict[str, float]:
+        if entry.errors is None:
+            entry.errors = predict(entry.samples, snapshot.lights, world, order, exposure, quantile,
+                                   occlusion)
+            entry.samples = None
+        return entry.errors
+
     pixels = snapshot.width * snapshot.height * snapshot.settings.samples ** 2
     frame_ms = shading_ms(len(snapshot.lights), pixels)
+    first_use = float(cost_table().get("first_use_ms", 0.0))
+    payback = PAYBACK_FRAMES if payback_frames is None else payback_frames
     programs_of = _program_keys(snapshot)
     fixed = {programs_of(key, None) for key in users if key not in found}  # drawn with their own terms
-    chosen = merge_small_savings(alone, allowed, {k: f[3] for k, f in found.items()}, programs_of, fixed,
-                                 frame_ms, float(cost_table().get("first_use_ms", 0.0)),
-                                 PAYBACK_FRAMES if payback_frames is None else payback_frames)
+    cheapest = min(order, key=lambda n: frame_ms.get(n, 0.0))
+    reach = {key: e.share * (frame_ms["PRINCIPLED"] - frame_ms[cheapest]) if frame_ms else math.inf
+             for key, e in found.items()}
+
+    def choices(keys) -> tuple[dict, dict, dict]:
+        """(alone, allowed, merged) for ``keys``, the rest on the Principled set."""
+        alone, allowed = {}, {}
+        for key in found:
+            entry = found[key]
+            if entry.count == 0:  # covers no pixel: every set is as good, the cheapest first
+                alone[key], allowed[key] = order[0], list(order)
+            elif key not in keys:
+                alone[key], allowed[key] = "PRINCIPLED", ["PRINCIPLED"]
+            else:
+                errors = predicted(entry)
+                before = previous.get(key).name if previous and key in previous else None
+                alone[key] = decide(errors, order, bound, before)
+                allowed[key] = [n for n in order
+                                if errors[n] * MARGIN <= bound or n in ("PRINCIPLED", alone[key])]
+        return alone, allowed, merge_small_savings(alone, allowed, {k: e.share for k, e in found.items()},
+                                                   programs_of, fixed, frame_ms, first_use, payback)
+
+    big = {key for key, e in found.items() if e.count and reach[key] * payback >= first_use}
+    _, _, merged = choices(big)
+    in_use = fixed | {programs_of(key, name) for key, name in merged.items() if found[key].count}
+    joinable = {key for key, e in found.items() if e.count and key not in big and any(
+        programs_of(key, n) in in_use for n in order if n != "PRINCIPLED")}
+    alone, _allowed, chosen = choices(big | joinable) if joinable else choices(big)
     out = {}
-    for key, (errors, count, seen, share) in found.items():
+    for key, entry in found.items():
         name = chosen[key]
-        if errors is None:
+        if entry.count == 0:
             out[key] = Choice(name, CANDIDATE_TERMS[name], 0.0, samples=0)
-            continue
-        limiting, reason = limiting_term(name, seen, errors, bound)
-        saving = share * (frame_ms[name] - frame_ms[alone[key]]) if frame_ms and name != alone[key] else 0.0
-        out[key] = Choice(name, CANDIDATE_TERMS[name], errors[name], limiting, reason,
-                          tuple(errors.items()), count, alone[key] if name != alone[key] else "", saving)
+        elif entry.errors is None:  # too small to be worth a program, none cheaper to join
+            out[key] = Choice(name, CANDIDATE_TERMS[name], 0.0, samples=entry.count, costs_ms=reach[key])
+        else:
+            errors = entry.errors
+            limiting, reason = limiting_term(name, entry.seen, errors, bound)
+            merged = name != alone[key]
+            saving = entry.share * (frame_ms[name] - frame_ms[alone[key]]) if merged else 0.0
+            out[key] = Choice(name, CANDIDATE_TERMS[name], errors[name], limiting, reason,
+                              tuple(errors.items()), entry.count, alone[key] if merged else "", saving)
     return out
 
 

@@ -279,6 +279,9 @@ def _auto_choice(layout, context) -> None:
                        f"{scene_props.auto_quantile:.0f}th percentile, {choice.samples} points)")
         if choice.limiting:
             box.label(text=f"Needs {choice.limiting}: {choice.reason}")
+        if choice.samples and not choice.errors:
+            box.label(text=f"Too small for a program of its own: a cheaper set would save at most "
+                           f"{choice.costs_ms:.2f} ms a frame")
         if choice.alone:
             box.label(text=f"Alone it would take {LABELS[choice.alone]}: a program of its own would "
                            f"save {choice.costs_ms:.2f} ms a frame, too little to repay its compile")

@@ -349,6 +349,8 @@ def render_frame(args, scene, stem: str, models: list[str], frame: int | None, w
         if scene.shading_lab.term_set == "AUTO" and MODELS[model] == "PBR":
             for name, choice in sorted(engine.last_term_choices.items()):
                 why = f"; needs {choice.limiting} ({choice.reason})" if choice.limiting else ""
+                if choice.samples and not choice.errors:
+                    why += f"; too small for a program of its own (at most {choice.costs_ms:.2f} ms a frame)"
                 if choice.alone:
                     why += (f"; shares a program (alone: {auto_terms.LABELS[choice.alone]}, saving "
                             f"{choice.costs_ms:.2f} ms a frame)")
