@@ -187,9 +187,11 @@ def test_shipped_ltc_cells_are_what_the_build_fits(ndf):
         entries = ltc.fit_cells(ndf, mu[i:i + 1], rough[j], ltc.seed_for(shipped, j, i)[None])[0][0]
         scale = np.abs(shipped[j, i]).max()
         worst = max(worst, float(np.abs(entries - shipped[j, i]).max() / scale))
-    # deterministic numpy, and a cell fitted alone takes the path it took among its row: equal up
-    # to the last bits another machine's math library may round differently (measured: 0)
-    assert worst <= 1e-6, f"refitted cells differ from the shipped table by {worst:.3g} (relative)"
+    # deterministic numpy, and a cell fitted alone takes the path it took among its row; but
+    # Nelder-Mead's path follows the error's last bits, which another machine's math library rounds
+    # differently: measured 0 on the machine that fitted the table, 7.1e-6 (GGX) on another (AMD
+    # EPYC, 2026-12-02)
+    assert worst <= 3e-5, f"refitted cells differ from the shipped table by {worst:.3g} (relative)"
 
 
 def test_shipped_sphere_table_is_what_the_build_computes():
