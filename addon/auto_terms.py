@@ -623,9 +623,10 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
     terms (a material with its own term or model choices keeps them), seen from ``camera`` (the
     snapshot's by default; the viewport passes the view it last drew); then the programs that
     would not pay for their first use within ``payback_frames`` frames merged into others
-    (``merge_small_savings``; PAYBACK_FRAMES by default). A material covering too little of the
-    view for any cheaper set to repay a program of its own is predicted only where a cheaper
-    program it could join is drawn anyway; else it takes the Principled set unpredicted."""
+    (``merge_small_savings``; PAYBACK_FRAMES by default). Materials covering too little of the
+    view for any cheaper set to repay a program, alone or all of them together, are predicted only
+    where a cheaper program they could join is drawn anyway; else they take the Principled set
+    unpredicted."""
     if snapshot.settings.model != "PBR":
         return {}
     order = candidate_order(len(snapshot.lights))
@@ -688,6 +689,9 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
                                                    programs_of, fixed, frame_ms, first_use, payback)
 
     big = {key for key, e in found.items() if e.count and reach[key] * payback >= first_use}
+    small = {key for key, e in found.items() if e.count and key not in big}
+    if sum(reach[key] for key in small) * payback >= first_use:
+        big |= small  # together they might repay a program
     _, _, merged = choices(big)
     in_use = fixed | {programs_of(key, name) for key, name in merged.items() if found[key].count}
     joinable = {key for key, e in found.items() if e.count and key not in big and any(
