@@ -681,7 +681,9 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
                 alone[key], allowed[key] = "PRINCIPLED", ["PRINCIPLED"]
             else:
                 errors = predicted(entry)
-                before = previous.get(key).name if previous and key in previous else None
+                before = None  # what it took on its own last time (a merge moves it, not its need)
+                if previous and key in previous:
+                    before = previous[key].alone or previous[key].name
                 alone[key] = decide(errors, order, bound, before)
                 allowed[key] = [n for n in order
                                 if errors[n] * MARGIN <= bound or n in ("PRINCIPLED", alone[key])]
@@ -692,11 +694,12 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
     small = {key for key, e in found.items() if e.count and key not in big}
     if sum(reach[key] for key in small) * payback >= first_use:
         big |= small  # together they might repay a program
-    _, _, merged = choices(big)
-    in_use = fixed | {programs_of(key, name) for key, name in merged.items() if found[key].count}
+    alone, _allowed, chosen = choices(big)
+    in_use = fixed | {programs_of(key, name) for key, name in chosen.items() if found[key].count}
     joinable = {key for key, e in found.items() if e.count and key not in big and any(
         programs_of(key, n) in in_use for n in order if n != "PRINCIPLED")}
-    alone, _allowed, chosen = choices(big | joinable) if joinable else choices(big)
+    if joinable:
+        alone, _allowed, chosen = choices(big | joinable)
     out = {}
     for key, entry in found.items():
         name = chosen[key]
@@ -707,10 +710,10 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
         else:
             errors = entry.errors
             limiting, reason = limiting_term(name, entry.seen, errors, bound)
-            merged = name != alone[key]
-            saving = entry.share * (frame_ms[name] - frame_ms[alone[key]]) if merged else 0.0
+            was_merged = name != alone[key]
+            saving = entry.share * (frame_ms[name] - frame_ms[alone[key]]) if was_merged else 0.0
             out[key] = Choice(name, CANDIDATE_TERMS[name], errors[name], limiting, reason,
-                              tuple(errors.items()), entry.count, alone[key] if merged else "", saving)
+                              tuple(errors.items()), entry.count, alone[key] if was_merged else "", saving)
     return out
 
 
