@@ -284,7 +284,7 @@ class Samples:
     n: np.ndarray
     v: np.ndarray
     material: MaterialParams
-    share: float = 0.0  # of the view's pixels it covers (hidden parts counted: an upper bound)
+    share: float = 0.0  # of the view's pixels it covers (what other objects hide counted too)
 
     def __len__(self) -> int:
         return len(self.p)
@@ -690,22 +690,24 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
         return alone, allowed, merge_small_savings(alone, allowed, {k: e.share for k, e in found.items()},
                                                    programs_of, fixed, frame_ms, first_use, payback)
 
-    big = {key for key, e in found.items() if e.count and reach[key] * payback >= first_use}
-    small = {key for key, e in found.items() if e.count and key not in big}
+    predicted_keys = {key for key, e in found.items() if e.count and reach[key] * payback >= first_use}
+    small = {key for key, e in found.items() if e.count and key not in predicted_keys}
     if sum(reach[key] for key in small) * payback >= first_use:
-        big |= small  # together they might repay a program
-    alone, _allowed, chosen = choices(big)
+        predicted_keys |= small  # together they might repay a program
+    alone, _allowed, chosen = choices(predicted_keys)
     in_use = fixed | {programs_of(key, name) for key, name in chosen.items() if found[key].count}
-    joinable = {key for key, e in found.items() if e.count and key not in big and any(
+    joinable = {key for key, e in found.items() if e.count and key not in predicted_keys and any(
         programs_of(key, n) in in_use for n in order if n != "PRINCIPLED")}
     if joinable:
-        alone, _allowed, chosen = choices(big | joinable)
+        predicted_keys |= joinable
+        alone, _allowed, chosen = choices(predicted_keys)
     out = {}
     for key, entry in found.items():
         name = chosen[key]
         if entry.count == 0:
             out[key] = Choice(name, CANDIDATE_TERMS[name], 0.0, samples=0)
-        elif entry.errors is None:  # too small to be worth a program, none cheaper to join
+        elif key not in predicted_keys:  # too small to be worth a program, none cheaper to join
+            # (a prediction kept from an earlier choice, with another payback, decided nothing here)
             out[key] = Choice(name, CANDIDATE_TERMS[name], 0.0, samples=entry.count, costs_ms=reach[key])
         else:
             errors = entry.errors
