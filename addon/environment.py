@@ -170,6 +170,58 @@ def level_roughness(k: int) -> float:
     return PREFILTER_ROUGHNESS[k]
 
 
+def radical_inverse(i) -> np.ndarray:
+    """The Van der Corput radical inverse in base 2 of 32-bit integers (Hammersley's second
+    coordinate; glsl/environment.glsl's radical_inverse)."""
+    bits = np.asarray(i, np.uint64) & 0xFFFFFFFF
+    reversed_bits = np.zeros_like(bits)
+    for b in range(32):
+        reversed_bits |= ((bits >> np.uint64(b)) & np.uint64(1)) << np.uint64(31 - b)
+    return reversed_bits.astype(np.float64) * 2.0 ** -32
+
+
+def prefilter_samples(alpha: float, samples: int, height: int, chain_width: int) -> np.ndarray:
+    """(height, n, 4) float32: the lobe samples of one prefiltered level, per row of the level
+    (``height`` rows, equirectangular), as ``env_prefilter`` reads them.
+
+    The level is the environment seen through a GGX lobe of ``alpha`` about each texel's
+    direction with n = v (the split sum, Karis 2013): ``samples`` Hammersley half vectors
+    (Walter et al. 2007, eq. 35-36), reflected to l and weighted by n.l; those with n.l <= 0 weigh
+    nothing and are left out (half of them at alpha 1). Each texel of a row sees the same lobe
+    turned about the pole by its longitude, and an equirectangular u is the longitude, so each
+    sample is stored once per row: (u offset from the texel's u, v, the chain level to read,
+    n.l / sum n.l). The level is filtered importance sampling's (Krivanek & Colbert 2008): the
+    level whose texels cover the sample's solid angle 1 / (N pdf), plus one (``chain_lod`` in
+    glsl/environment.glsl; the chain's widest level is ``chain_width`` texels wide). What was
+    computed per texel and sample on the GPU (the frame, the half vector, atan and acos, the
+    level) is computed here once per row."""
+    a2 = alpha * alpha
+    i = np.arange(samples)
+    phi = 2.0 * np.pi * i / samples
+    xi2 = radical_inverse(i)
+    cos_t = np.sqrt((1.0 - xi2) / (1.0 + (a2 - 1.0) * xi2))
+    sin_t = np.sqrt(np.maximum(1.0 - cos_t * cos_t, 0.0))
+    n_dot_l = 2.0 * cos_t * cos_t - 1.0  # l = 2 (n.h) h - n
+    keep = n_dot_l > 0.0
+    t = cos_t * cos_t * (a2 - 1.0) + 1.0
+    pdf = (a2 / (np.pi * t * t) * 0.25)[keep]  # of l, with n = v: D(h) / 4
+    local = np.stack([2.0 * cos_t * sin_t * np.cos(phi), 2.0 * cos_t * sin_t * np.sin(phi), n_dot_l], -1)[keep]
+    # each row's texel at u = 1/2 (longitude 0): n = (sin theta, 0, cos theta), frame (ty, tx, n)
+    # as the shader's: tx = normalize(cross(z, n)) = +y, ty = cross(n, tx)
+    theta = np.pi * (1.0 - (np.arange(height) + 0.5) / height)
+    n = np.stack([np.sin(theta), np.zeros(height), np.cos(theta)], -1)
+    ty = np.stack([-np.cos(theta), np.zeros(height), np.sin(theta)], -1)
+    l = (local[None, :, 0, None] * np.array([0.0, 1.0, 0.0]) + local[None, :, 1, None] * ty[:, None, :]
+         + local[None, :, 2, None] * n[:, None, :])
+    uv = equirect_uv(l)
+    du = (uv[..., 0] - 0.5 + 0.5) % 1.0 - 0.5
+    omega_s = 1.0 / (samples * pdf)
+    omega_p = 2.0 * np.pi * np.pi * np.sqrt(np.maximum(1.0 - l[..., 2] ** 2, 1e-4)) / (chain_width * chain_width // 2)
+    lod = 0.5 * np.log2(omega_s[None, :] / omega_p) + 1.0
+    weight = np.broadcast_to(n_dot_l[keep] / n_dot_l[keep].sum(), du.shape)
+    return np.stack([du, uv[..., 1], lod, weight], -1).astype(np.float32)
+
+
 def atlas_layout(mirror_width: int) -> tuple[tuple[int, int, int, int], ...]:
     """(x, y, width, height) of each prefiltered level in one texture, then of the irradiance
     map: the mirror level on top of a row of the others, each half as wide as the one before

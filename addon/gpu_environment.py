@@ -147,13 +147,18 @@ def _build_maps(frame: Frame, terms, suns: bool) -> EnvironmentMaps:
     for k, rect in enumerate(rects):
         last = k == len(rects) - 1  # the irradiance map
         alpha = 0.0 if last else env.level_roughness(k) ** 2
-        samples = 0.0 if last else float(max(env.PREFILTER_SAMPLES[k], 1))
-        params = (alpha, float(irradiance_source) if last else 0.0, samples, 0.0)
+        samples = None
+        if not last and alpha > 0.0:
+            samples = gpu_library.prefilter_samples(alpha, env.PREFILTER_SAMPLES[k], rect[3], chain_rects[0][2])
+        count = float(samples.width) if samples is not None else 0.0
+        params = (alpha, float(irradiance_source) if last else 0.0, count, 0.0)
 
         source = clamped if last or k >= env.FIRST_CLAMPED_LEVEL else chain
 
-        def bind(shader, rect=rect, params=params, source=source):
+        def bind(shader, rect=rect, params=params, source=source, samples=samples):
             gpu_library.bind_sampler(shader, "source", source.texture_color)
+            # (the mirror level and the irradiance map read no samples: any texture will do)
+            gpu_library.bind_sampler(shader, "samples", source.texture_color if samples is None else samples)
             shader.uniform_block("chain", chain_block)
             shader.uniform_float("rect", tuple(float(x) for x in rect))
             shader.uniform_float("params", params)

@@ -27,6 +27,7 @@ from collections.abc import Callable
 import gpu
 import numpy as np
 
+from . import environment as env
 from . import programs
 
 
@@ -342,13 +343,25 @@ def env_downsample_program(copy: bool = False) -> gpu.types.GPUShader:
 def env_prefilter_program() -> gpu.types.GPUShader:
     def declare(info):
         info.typedef_source(programs.read_glsl("chain_data.glsl"))
-        _declare_full_screen("source")(info)
+        _declare_full_screen("source", "samples")(info)
         info.uniform_buf(0, "ChainData", "chain")
         info.push_constant("VEC4", "rect")
         info.push_constant("VEC4", "params")
 
     return LIBRARY.program(("env_prefilter",), "environment prefilter", programs.env_prefilter_source(),
                            declare)
+
+
+def prefilter_samples(alpha: float, samples: int, height: int, chain_width: int) -> gpu.types.GPUTexture:
+    """One prefiltered level's lobe samples per row (``environment.prefilter_samples``) as an
+    RGBA32F texture, a sample a texel (built once per level size: every world shares it)."""
+    def build():
+        table = env.prefilter_samples(alpha, samples, height, chain_width)
+        h, w = table.shape[:2]
+        data = gpu.types.Buffer("FLOAT", w * h * 4, np.ascontiguousarray(table).ravel())
+        return gpu.types.GPUTexture((w, h), format="RGBA32F", data=data)
+
+    return LIBRARY.table(("PREFILTER", alpha, samples, height, chain_width), build)
 
 
 def env_irradiance_program() -> gpu.types.GPUShader:

@@ -108,13 +108,18 @@ vec3 chain_level(sampler2D map, int k, vec2 uv)
              mix(chain_texel(map, rect, x, y + 1), chain_texel(map, rect, x + 1, y + 1), f.x), f.y);
 }
 
-vec3 chain_lookup(sampler2D map, vec3 d, float lod)
+/* The chain at equirectangular uv, between levels floor(lod) and the next. */
+vec3 chain_lookup_uv(sampler2D map, vec2 uv, float lod)
 {
-  vec2 uv = equirect_uv(d);
   lod = clamp(lod, 0.0, chain.info.x - 1.0);
   int k = int(floor(lod));
   int k1 = min(k + 1, int(chain.info.x) - 1);
   return mix(chain_level(map, k, uv), chain_level(map, k1, uv), lod - float(k));
+}
+
+vec3 chain_lookup(sampler2D map, vec3 d, float lod)
+{
+  return chain_lookup_uv(map, equirect_uv(d), lod);
 }
 
 /* The level of detail for a sample of probability density pdf (per steradian) out of n, plus
