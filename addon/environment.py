@@ -205,20 +205,20 @@ def prefilter_samples(alpha: float, samples: int, height: int, chain_width: int)
     keep = n_dot_l > 0.0
     t = cos_t * cos_t * (a2 - 1.0) + 1.0
     pdf = (a2 / (np.pi * t * t) * 0.25)[keep]  # of l, with n = v: D(h) / 4
-    local = np.stack([2.0 * cos_t * sin_t * np.cos(phi), 2.0 * cos_t * sin_t * np.sin(phi), n_dot_l], -1)[keep]
-    # each row's texel at u = 1/2 (longitude 0): n = (sin theta, 0, cos theta), frame (ty, tx, n)
-    # as the shader's: tx = normalize(cross(z, n)) = +y, ty = cross(n, tx)
-    theta = np.pi * (1.0 - (np.arange(height) + 0.5) / height)
-    n = np.stack([np.sin(theta), np.zeros(height), np.cos(theta)], -1)
-    ty = np.stack([-np.cos(theta), np.zeros(height), np.sin(theta)], -1)
-    l = (local[None, :, 0, None] * np.array([0.0, 1.0, 0.0]) + local[None, :, 1, None] * ty[:, None, :]
-         + local[None, :, 2, None] * n[:, None, :])
+    lx, ly = 2.0 * cos_t * sin_t * np.cos(phi), 2.0 * cos_t * sin_t * np.sin(phi)
+    lx, ly, lz = lx[keep], ly[keep], n_dot_l[keep]
+    # each row's texel at u = 1/2 (longitude 0): n = (sin theta, 0, cos theta), and the shader's
+    # frame about it: tx = normalize(cross(z, n)) = +y, ty = cross(n, tx) = (-cos theta, 0, sin theta)
+    theta = np.pi * (1.0 - (np.arange(height) + 0.5) / height)[:, None]
+    l = np.stack([-np.cos(theta) * ly + np.sin(theta) * lz, np.broadcast_to(lx, (height, lx.size)),
+                  np.sin(theta) * ly + np.cos(theta) * lz], -1)
     uv = equirect_uv(l)
-    du = (uv[..., 0] - 0.5 + 0.5) % 1.0 - 0.5
+    du = uv[..., 0] - 0.5
     omega_s = 1.0 / (samples * pdf)
-    omega_p = 2.0 * np.pi * np.pi * np.sqrt(np.maximum(1.0 - l[..., 2] ** 2, 1e-4)) / (chain_width * chain_width // 2)
+    omega_p = (2.0 * np.pi * np.pi * np.sqrt(np.maximum(1.0 - l[..., 2] ** 2, 1e-4))
+               / (chain_width * (chain_width // 2)))
     lod = 0.5 * np.log2(omega_s[None, :] / omega_p) + 1.0
-    weight = np.broadcast_to(n_dot_l[keep] / n_dot_l[keep].sum(), du.shape)
+    weight = np.broadcast_to(lz / lz.sum(), du.shape)
     return np.stack([du, uv[..., 1], lod, weight], -1).astype(np.float32)
 
 

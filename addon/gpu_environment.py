@@ -149,7 +149,8 @@ def _build_maps(frame: Frame, terms, suns: bool) -> EnvironmentMaps:
         alpha = 0.0 if last else env.level_roughness(k) ** 2
         samples = None
         if not last and alpha > 0.0:
-            samples = gpu_library.prefilter_samples(alpha, env.PREFILTER_SAMPLES[k], rect[3], chain_rects[0][2])
+            samples = gpu_library.prefilter_samples(alpha, env.PREFILTER_SAMPLES[k], rect[3],
+                                                    chain_rects[0][2])
         count = float(samples.width) if samples is not None else 0.0
         params = (alpha, float(irradiance_source) if last else 0.0, count, 0.0)
 
