@@ -486,12 +486,12 @@ CREASE_AO = 0.5
 
 
 def radiance(samples: Samples, lights, terms: Terms, world: np.ndarray | None = None,
-             occlusion: bool = False) -> np.ndarray:
+             occlusion: bool = False, irradiance: list | None = None) -> np.ndarray:
     """(N, 3) radiance at the samples with ``terms``: the lights (no shadows), the uniform world;
     when ``occlusion``, the first CREASE_SHARE of the samples lie in creases (the world occluded,
-    the lights blocked)."""
+    the lights blocked). ``irradiance``: the lights' (E, l) at the samples, if already known."""
     s = shading.Surface(samples.p, samples.n, samples.v, samples.material)
-    c = shading.shade("PBR", s, list(lights), terms=terms)
+    c = shading.shade("PBR", s, list(lights), terms=terms, irradiance=irradiance)
     if world is not None and np.any(world > 0.0):
         ao, specular_ao = np.ones(len(samples)), np.ones(len(samples))
         if occlusion:
@@ -550,14 +550,15 @@ def predict(samples: Samples, lights, world: np.ndarray | None, order, exposure:
             quantile: float = DEFAULT_QUANTILE, occlusion: bool = False) -> dict[str, float]:
     """Each candidate's predicted error (before the margin), in ``order``."""
     lights = brightest_lights(samples, lights)
-    reference = radiance(samples, lights, REFERENCE, world, occlusion)
+    irradiance = [shading.light_irradiance(light, samples.p) for light in lights]  # the same for all
+    reference = radiance(samples, lights, REFERENCE, world, occlusion, irradiance)
     out = {}
     for name in order:
         if name == "PRINCIPLED":
             out[name] = 0.0
             continue
-        out[name] = quantile_error(radiance(samples, lights, CANDIDATE_TERMS[name], world, occlusion),
-                                   reference, exposure, quantile)
+        out[name] = quantile_error(radiance(samples, lights, CANDIDATE_TERMS[name], world, occlusion,
+                                            irradiance), reference, exposure, quantile)
     return out
 
 

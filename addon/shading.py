@@ -675,14 +675,16 @@ def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAU
 
 
 def shade(model: str, s: Surface, lights: list[Light], ambient: float = 0.0,
-          terms: Terms = DEFAULT_TERMS):
-    """Outgoing radiance (rgb) at every point of ``s``: the twin of mesh.frag.glsl's main()."""
+          terms: Terms = DEFAULT_TERMS, irradiance: list | None = None):
+    """Outgoing radiance (rgb) at every point of ``s``: the twin of mesh.frag.glsl's main().
+    ``irradiance``: each light's ``light_irradiance`` at ``s.p``, where the caller shades the
+    same points with several term sets (it depends on the light and the points alone)."""
     ldr = MODELS[model][1]
     c = np.zeros(np.shape(s.p), np.float64)
     c = c + s.emission
     if ldr:
         c = c + s.ambient_color * ambient  # eq. 1.4
-    for light in lights:
-        E, l = light_irradiance(light, s.p)
+    for k, light in enumerate(lights):
+        E, l = light_irradiance(light, s.p) if irradiance is None else irradiance[k]
         c = c + shade_light(model, s, light, E, l, terms)
     return np.clip(c, 0.0, 1.0) if ldr else c
