@@ -624,7 +624,8 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
     terms (a material with its own term or model choices keeps them), seen from ``camera`` (the
     snapshot's by default; the viewport passes the view it last drew); then the programs that
     would not pay for their first use within ``payback_frames`` frames merged into others
-    (``merge_small_savings``; PAYBACK_FRAMES by default). Materials covering too little of the
+    (``merge_small_savings``; PAYBACK_FRAMES by default; the programs ``previous`` drew are
+    compiled already and so repay nothing more). Materials covering too little of the
     view for any cheaper set to repay a program, alone or all of them together, are predicted only
     where a cheaper program they could join is drawn anyway; else they take the Principled set
     unpredicted."""
@@ -667,6 +668,11 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
     payback = PAYBACK_FRAMES if payback_frames is None else payback_frames
     programs_of = _program_keys(snapshot)
     fixed = {programs_of(key, None) for key in users if key not in found}  # drawn with their own terms
+    # the programs the previous choice drew are compiled: their first use is paid, so none is
+    # merged away and joining one costs nothing (a material near the payback threshold does not
+    # flip between a program of its own and a shared one on small edits)
+    fixed |= {programs_of(key, choice.name) for key, choice in (previous or {}).items()
+              if key in snapshot.materials and choice.name in CANDIDATE_TERMS}
     cheapest = min(order, key=lambda n: frame_ms.get(n, 0.0))
     reach = {key: e.share * (frame_ms["PRINCIPLED"] - frame_ms[cheapest]) if frame_ms else math.inf
              for key, e in found.items()}

@@ -200,7 +200,8 @@ def test_the_hdr_presets_small_metal_stays_on_the_principled_program(tmp_path):
     cheaper program is drawn for the big floor: it takes the Principled set without a
     prediction. Auto then draws exactly what the Principled set draws (the same image), with no
     program more to compile. Where a program need repay its first use only over many more
-    frames, the silver is predicted and takes a cheaper set of its own."""
+    frames, the silver is predicted and takes a cheaper set of its own, which it keeps in the
+    next choice under the usual payback: its program is compiled by then."""
     import bpy
 
     from addon import extract, presets, scene_builder
@@ -223,8 +224,12 @@ def test_the_hdr_presets_small_metal_stays_on_the_principled_program(tmp_path):
     assert not silver.errors and silver.samples > 0, silver  # not predicted
     assert silver.costs_ms == pytest.approx(reach, rel=1e-6), (silver.costs_ms, reach)
     assert 0.0 < reach * auto_terms.PAYBACK_FRAMES < first_use, (reach, first_use)
-    kept = auto_terms.choose(snap, auto_terms.DEFAULT_BOUND, payback_frames=4.0 * first_use / reach)[key]
+    alone = auto_terms.choose(snap, auto_terms.DEFAULT_BOUND, payback_frames=4.0 * first_use / reach)
+    kept = alone[key]
     assert kept.errors and kept.name not in ("PRINCIPLED", "") and not kept.alone, kept
+    # once drawn, that program is compiled: the next choice keeps it (nothing left to repay)
+    again = auto_terms.choose(snap, auto_terms.DEFAULT_BOUND, previous=alone)[key]
+    assert again.name == kept.name and again.errors, (again, kept)
     print(f"hdr silver: share {share:.4f}, at most {reach:.3f} ms a frame against a {first_use:.1f} ms "
           f"first use; predicted alone: {kept.name}")
     # the same programs draw the same image
