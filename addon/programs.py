@@ -94,6 +94,9 @@ class Features:
     soft_shadows: bool = False  # penumbrae from the lights' sizes
     light_tiles: bool = False  # loop over the fragment's screen tile's lights (light_tiles.py)
     sphere_lights: bool = False  # a point or spot light has a radius (the physically based model)
+    #: a point or spot light may have a radius (its falloff 1 / (d^2 + r^2) in every model); off,
+    #: the program reads no light's shape (True unless the scene says otherwise)
+    light_radii: bool = True
 
     def has_map(self, name: str) -> bool:
         return name in self.maps or name + "_CLOSEST" in self.maps
@@ -110,6 +113,8 @@ class Features:
             object.__setattr__(self, "ambient_world", False)
         elif not self.ambient_world:  # the empirical models see the world only through their ambient term
             object.__setattr__(self, "environment", "")
+        if not {"POINT", "SPOT"} & set(self.light_kinds):
+            object.__setattr__(self, "light_radii", False)  # no light that could have one
         if self.model != "PBR" or not {"POINT", "SPOT"} & set(self.light_kinds):
             object.__setattr__(self, "sphere_lights", False)  # shaded by their irradiance alone
         if self.peel or not self.environment:  # a transparent surface lies in front of what the
@@ -152,6 +157,8 @@ class Features:
             light_kinds=frozenset(light.kind for light in snapshot.lights),
             sphere_lights=any(light.kind in ("POINT", "SPOT") and light.sphere_radius > 0.0
                               for light in snapshot.lights),
+            light_radii=any(light.kind in ("POINT", "SPOT") and light.sphere_radius > 0.0
+                            for light in snapshot.lights),
             terms=terms,
             half_target=half_target,
             maps=maps,
@@ -215,6 +222,8 @@ class Features:
                     out.append(("SL_MS_SIZE", str(MS_SIZE)))
         if self.sphere_lights:
             out.append(("SL_SPHERE_LIGHTS", "1"))
+        if self.light_radii:
+            out.append(("SL_LIGHT_RADII", "1"))
         if self.uses_ltc:
             out += [("SL_LTC", "1"), ("SL_LTC_SIZE", str(LTC_SIZE)),
                     ("SL_LTC_SPHERE_SIZE", str(LTC_SPHERE_SIZE))]

@@ -24,8 +24,8 @@ vec3 shading_normal(vec3 p)
 
 /* Light i's data: row i of the light texture, one texel per vec4 of LightData. The position and
  * reach first (light culling tests them alone), then the texels the light's kind reads: a point
- * light has no direction, only an area light has axes (fetches are most of a light's cost on a
- * software rasteriser). */
+ * light has no direction, only an area light has axes, only lights with a size have a shape
+ * (fetches are most of a light's cost on a software rasteriser). */
 LightData load_light_reach(int i)
 {
   LightData light;
@@ -38,16 +38,25 @@ LightData load_light_rest(LightData light, int i)
 {
   light.intensity_blend = texelFetch(light_data, ivec2(2, i), 0);
   light.factors = texelFetch(light_data, ivec2(3, i), 0);
+  /* and only the texels some light of the scene needs: a runtime test would not save the fetch
+   * here (both sides of an `if` run), so the kinds and radii present decide at compile time */
+  light.shape = vec4(0.0);
+#if defined(SL_LIGHT_RADII) || defined(SL_HAS_AREA)
   light.shape = texelFetch(light_data, ivec2(4, i), 0);
+#endif
   int kind = int(light.position_kind.w);
   light.direction_cone = vec4(0.0, 0.0, -1.0, 1.0);
+#if defined(SL_HAS_SPOT) || defined(SL_HAS_SUN) || defined(SL_HAS_AREA)
   if (kind != LIGHT_POINT) {
     light.direction_cone = texelFetch(light_data, ivec2(1, i), 0);
   }
+#endif
   light.area = vec4(1.0, 0.0, 0.0, 0.0);
+#ifdef SL_HAS_AREA
   if (kind == LIGHT_AREA) {
     light.area = texelFetch(light_data, ivec2(5, i), 0);
   }
+#endif
   return light;
 }
 

@@ -74,8 +74,13 @@ def test_models_compile_only_their_own_lobes():
 def test_feature_keys():
     a = programs.Features("PBR", 4, frozenset({"POINT"}))
     assert a.defines() == (("SL_DIFFUSE_LAMBERT", "1"), ("SL_FRESNEL_SCHLICK", "1"), ("SL_HAS_POINT", "1"),
-                           ("SL_MAX_LIGHTS", "4"), ("SL_MODEL_PBR", "1"), ("SL_NDF_GGX", "1"),
-                           ("SL_VISIBILITY_SMITH_CORRELATED", "1"))
+                           ("SL_LIGHT_RADII", "1"), ("SL_MAX_LIGHTS", "4"), ("SL_MODEL_PBR", "1"),
+                           ("SL_NDF_GGX", "1"), ("SL_VISIBILITY_SMITH_CORRELATED", "1"))
+    # a scene whose point lights have no radius reads no light's shape; without point or spot
+    # lights no radius can matter
+    assert ("SL_LIGHT_RADII", "1") not in programs.Features("PBR", 4, frozenset({"POINT"}),
+                                                            light_radii=False).defines()
+    assert ("SL_LIGHT_RADII", "1") not in programs.Features("PBR", 4, frozenset({"SUN"})).defines()
     # terms a model does not use do not split its programs
     bp = programs.Features("BLINN_PHONG", 4, frozenset({"POINT"}), S.Terms(ndf="BECKMANN", multiscatter=True))
     assert bp.defines() == programs.Features("BLINN_PHONG", 4, frozenset({"POINT"})).defines()
