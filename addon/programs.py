@@ -97,6 +97,8 @@ class Features:
     #: a point or spot light may have a radius (its falloff 1 / (d^2 + r^2) in every model); off,
     #: the program reads no light's shape (True unless the scene says otherwise)
     light_radii: bool = True
+    #: an area light may have a Spread under 180 degrees; off, the program holds no spread code
+    area_spread: bool = True
 
     def has_map(self, name: str) -> bool:
         return name in self.maps or name + "_CLOSEST" in self.maps
@@ -115,6 +117,8 @@ class Features:
             object.__setattr__(self, "environment", "")
         if not {"POINT", "SPOT"} & set(self.light_kinds):
             object.__setattr__(self, "light_radii", False)  # no light that could have one
+        if "AREA" not in self.light_kinds:
+            object.__setattr__(self, "area_spread", False)
         if self.model != "PBR" or not {"POINT", "SPOT"} & set(self.light_kinds):
             object.__setattr__(self, "sphere_lights", False)  # shaded by their irradiance alone
         if self.peel or not self.environment:  # a transparent surface lies in front of what the
@@ -158,6 +162,8 @@ class Features:
             sphere_lights=any(light.kind in ("POINT", "SPOT") and light.sphere_radius > 0.0
                               for light in snapshot.lights),
             light_radii=any(light.kind in ("POINT", "SPOT") and light.sphere_radius > 0.0
+                            for light in snapshot.lights),
+            area_spread=any(light.kind == "AREA" and light.spread_terms[1] > 0.0
                             for light in snapshot.lights),
             terms=terms,
             half_target=half_target,
@@ -224,6 +230,8 @@ class Features:
             out.append(("SL_SPHERE_LIGHTS", "1"))
         if self.light_radii:
             out.append(("SL_LIGHT_RADII", "1"))
+        if self.area_spread:
+            out.append(("SL_AREA_SPREAD", "1"))
         if self.uses_ltc:
             out += [("SL_LTC", "1"), ("SL_LTC_SIZE", str(LTC_SIZE)),
                     ("SL_LTC_SPHERE_SIZE", str(LTC_SPHERE_SIZE))]

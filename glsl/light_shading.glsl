@@ -44,10 +44,12 @@ vec3 shade_area_light(Surface s, LightData light, vec3 l, vec3 E, float visibili
    * the light its spread lets through (E_Area's) */
   float spread = 1.0;
   float lobe_spread = 1.0;
+#    ifdef SL_AREA_SPREAD
   if (light.influence.z > 0.0) {
     mat3 to_shading = transpose(mat3(s.ltc.x_axis, s.ltc.y_axis, s.n));
     spread = area_spread(light, s.p, poly, true, s.ltc.m, to_shading, lobe_spread);
   }
+#    endif
   vec3 L = light.intensity_blend.rgb * (spread * visibility * light_window(light, s.p) /
                                         max(area_light_area(light), 1e-12));
   float L_max = max(L.r, max(L.g, L.b));

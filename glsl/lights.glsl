@@ -369,16 +369,22 @@ vec3 E_Area(LightData light, vec3 p, out vec3 l)
   }
   float cos_a = dot(-l, light.direction_cone.xyz);
   if (area_far_field(light, d2)) {
-    float spread = light.influence.z > 0.0 ? spread_weight(light, sqrt(max(1.0 - cos_a * cos_a, 0.0)) / cos_a)
-                                           : 1.0;
+    float spread = 1.0;
+#  ifdef SL_AREA_SPREAD
+    spread = light.influence.z > 0.0 ? spread_weight(light, sqrt(max(1.0 - cos_a * cos_a, 0.0)) / cos_a)
+                                     : 1.0;
+#  endif
     return light.intensity_blend.rgb * (cos_a * spread / max(d2, MIN_DIST2));
   }
   LightPolygon poly = area_polygon(light, p);
   float spread = 1.0;
+#  ifdef SL_AREA_SPREAD /* compiled only where an area light has a Spread under 180 degrees: the
+                        * test at run time would not save its cost on llvmpipe (10 % of softbox) */
   if (light.influence.z > 0.0) {
     float lobe_spread;
     spread = area_spread(light, p, poly, false, vec4(0.0), mat3(1.0), lobe_spread);
   }
+#  endif
   vec3 V = polygon_form_factor(poly, mat3(1.0));
   float len = length(V);
   if (len <= 0.0 || spread <= 0.0) {

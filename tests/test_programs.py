@@ -81,6 +81,11 @@ def test_feature_keys():
     assert ("SL_LIGHT_RADII", "1") not in programs.Features("PBR", 4, frozenset({"POINT"}),
                                                             light_radii=False).defines()
     assert ("SL_LIGHT_RADII", "1") not in programs.Features("PBR", 4, frozenset({"SUN"})).defines()
+    # likewise an area light's spread code: only where an area light may have one
+    assert ("SL_AREA_SPREAD", "1") in programs.Features("PBR", 4, frozenset({"AREA"})).defines()
+    assert ("SL_AREA_SPREAD", "1") not in programs.Features("PBR", 4, frozenset({"AREA"}),
+                                                            area_spread=False).defines()
+    assert ("SL_AREA_SPREAD", "1") not in a.defines()
     # terms a model does not use do not split its programs
     bp = programs.Features("BLINN_PHONG", 4, frozenset({"POINT"}), S.Terms(ndf="BECKMANN", multiscatter=True))
     assert bp.defines() == programs.Features("BLINN_PHONG", 4, frozenset({"POINT"})).defines()
