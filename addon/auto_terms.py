@@ -486,12 +486,13 @@ CREASE_AO = 0.5
 
 
 def radiance(samples: Samples, lights, terms: Terms, world: np.ndarray | None = None,
-             occlusion: bool = False, irradiance: list | None = None) -> np.ndarray:
+             occlusion: bool = False, irradiance: list | None = None, memo: dict | None = None) -> np.ndarray:
     """(N, 3) radiance at the samples with ``terms``: the lights (no shadows), the uniform world;
     when ``occlusion``, the first CREASE_SHARE of the samples lie in creases (the world occluded,
-    the lights blocked). ``irradiance``: the lights' (E, l) at the samples, if already known."""
+    the lights blocked). ``irradiance``, ``memo``: what ``shading.shade`` can share between the
+    candidates shading the same samples."""
     s = shading.Surface(samples.p, samples.n, samples.v, samples.material)
-    c = shading.shade("PBR", s, list(lights), terms=terms, irradiance=irradiance)
+    c = shading.shade("PBR", s, list(lights), terms=terms, irradiance=irradiance, memo=memo)
     if world is not None and np.any(world > 0.0):
         ao, specular_ao = np.ones(len(samples)), np.ones(len(samples))
         if occlusion:
@@ -551,14 +552,15 @@ def predict(samples: Samples, lights, world: np.ndarray | None, order, exposure:
     """Each candidate's predicted error (before the margin), in ``order``."""
     lights = brightest_lights(samples, lights)
     irradiance = [shading.light_irradiance(light, samples.p) for light in lights]  # the same for all
-    reference = radiance(samples, lights, REFERENCE, world, occlusion, irradiance)
+    memo: dict = {}  # the area and sphere lights' lobe geometry, the same for all
+    reference = radiance(samples, lights, REFERENCE, world, occlusion, irradiance, memo)
     out = {}
     for name in order:
         if name == "PRINCIPLED":
             out[name] = 0.0
             continue
         out[name] = quantile_error(radiance(samples, lights, CANDIDATE_TERMS[name], world, occlusion,
-                                            irradiance), reference, exposure, quantile)
+                                            irradiance, memo), reference, exposure, quantile)
     return out
 
 

@@ -568,36 +568,46 @@ def ltc_frame(s: Surface, terms: Terms):
 
 
 def shade_polygon_light(s: Surface, offsets, to_centre, L, form_factor, l, factors, terms: Terms,
-                        ltc_jitter=None, specular_scale=1.0):
+                        ltc_jitter=None, specular_scale=1.0, memo: dict | None = None, memo_key=None):
     """light_shading.glsl's shade_polygon_light: a light of radiance ``L`` (rgb, as it arrives)
     over the polygon of corners ``offsets`` about its centre at ``to_centre`` from the points, of
     unclipped form factor ``form_factor``, on the physically based model: the diffuse lobe from
     the horizon-clipped irradiance, the specular from the linearly transformed cosine's integral
-    over the polygon (addon/ltc.py). ``ltc_jitter``: ltc.ltc_integral's, for tests."""
+    over the polygon (addon/ltc.py). ``ltc_jitter``: ltc.ltc_integral's, for tests. ``memo``
+    (with ``memo_key`` naming the polygon): where the same points are shaded with several term
+    sets, what depends on the points, the polygon and the distribution alone is computed once."""
     L = np.asarray(L, np.float64)
     lit = (L.max(axis=-1) > 0.0) & (form_factor > 0.0)
-    with np.errstate(divide="ignore", invalid="ignore"):
-        NoL = _dot(s.n, l)
-        clipped = ltc.sphere_lookup(ltc.sphere_table(), np.minimum(form_factor, 1.0), NoL)
-        E_clipped = L * np.where(NoL > 0.0, np.pi * clipped / np.where(NoL > 0.0, NoL, 1.0), 0.0)[..., None]
-    diffuse = pbr_direct(s, l, E_clipped, (factors[0], 0.0), terms)
-    x, y, z, entries = ltc_frame(s, terms)
-    corners = np.asarray(to_centre)[..., None, :] + offsets
-    local = np.stack([np.sum(corners * a[..., None, :], axis=-1) for a in (x, y, z)], axis=-1)
+    key = None if memo is None or memo_key is None or ltc_jitter is not None else (memo_key, terms.lobe[0])
+    geometry = memo.get(key) if key is not None else None
+    if geometry is None:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            NoL = _dot(s.n, l)
+            clipped = ltc.sphere_lookup(ltc.sphere_table(), np.minimum(form_factor, 1.0), NoL)
+            clipped = np.where(NoL > 0.0, np.pi * clipped / np.where(NoL > 0.0, NoL, 1.0), 0.0)
+        x, y, z, entries = ltc_frame(s, terms)
+        corners = np.asarray(to_centre)[..., None, :] + offsets
+        local = np.stack([np.sum(corners * a[..., None, :], axis=-1) for a in (x, y, z)], axis=-1)
+        form_factor_lobe, length = ltc.ltc_integral(entries, local, jitter=ltc_jitter, with_length=True)
+        LoH = saturate(_dot(l, half_vector(l, s.v, s.n)))
+        l_local = np.stack([_dot(l, x), _dot(l, y), _dot(l, z)], axis=-1)
+        density = ltc.ltc_density(ltc.minv_from_entries(entries), l_local,
+                                  ltc.density_floor(form_factor_lobe, length))
+        geometry = (clipped, form_factor_lobe, LoH, density)
+        if key is not None:
+            memo[key] = geometry
+    clipped, form_factor_lobe, LoH, density = geometry
+    diffuse = pbr_direct(s, l, L * clipped[..., None], (factors[0], 0.0), terms)
     rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
-    form_factor_lobe, length = ltc.ltc_integral(entries, local, jitter=ltc_jitter, with_length=True)
-    LoH = saturate(_dot(l, half_vector(l, s.v, s.n)))
     albedo = M.interpolate(M.albedo_table(*terms.lobe), s.NoV, rough)
-    l_local = np.stack([_dot(l, x), _dot(l, y), _dot(l, z)], axis=-1)
-    density = ltc.ltc_density(ltc.minv_from_entries(entries), l_local,
-                              ltc.density_floor(form_factor_lobe, length))
     lobe = ltc.lobe_integral(form_factor_lobe, albedo, pbr_lobe(s, l, terms), density)
     specular = pbr_specular_tint(s, LoH, terms) * L * (lobe * factors[1] * specular_scale)[..., None]
     specular = np.where((form_factor_lobe > 0.0)[..., None], specular, 0.0)
     return np.where(lit[..., None], diffuse + specular, 0.0)
 
 
-def shade_area_light(s: Surface, light: Light, E, l, visibility, terms: Terms, ltc_jitter=None):
+def shade_area_light(s: Surface, light: Light, E, l, visibility, terms: Terms, ltc_jitter=None,
+                     memo: dict | None = None):
     """light_shading.glsl's shade_area_light: an area light's polygon of radiance I / A
     (shade_polygon_light); the point emitter in its far field."""
     factors = (light.diffuse_factor, light.specular_factor)
@@ -615,13 +625,15 @@ def shade_area_light(s: Surface, light: Light, E, l, visibility, terms: Terms, l
     L_max, E_max = L.max(axis=-1), np.asarray(E).max(axis=-1)
     lit = (L_max > 0.0) & (E_max > 0.0)
     form_factor = np.where(lit, E_max / (np.pi * np.where(lit, L_max, 1.0)), 0.0)
+    polygon = None if light.spread_terms[1] > 0.0 else ("area", id(light))  # spread: its own frame
     out = shade_polygon_light(s, offsets, clipped, L, form_factor, l, factors, terms, ltc_jitter,
-                              specular_scale)
+                              specular_scale, memo, polygon)
     far = area_far_field(light, _dot(to_centre, to_centre))
     return np.where(far[..., None], pbr_direct(s, l, E, factors, terms), out)
 
 
-def shade_sphere_light(s: Surface, light: Light, E, l, terms: Terms, ltc_jitter=None, k=None):
+def shade_sphere_light(s: Surface, light: Light, E, l, terms: Terms, ltc_jitter=None, k=None,
+                       memo: dict | None = None):
     """light_shading.glsl's shade_sphere_light: radiance I / (pi r^2) over the sphere light's disc
     (sphere_offsets), L = E (d^2 [+ r^2]) / (pi r^2), form factor r^2 / (d^2 [+ r^2])."""
     to_centre = np.asarray(light.position, np.float64) - s.p
@@ -634,21 +646,22 @@ def shade_sphere_light(s: Surface, light: Light, E, l, terms: Terms, ltc_jitter=
     for sides, use in ((AREA_ELLIPSE_SIDES, fine), (SPHERE_COARSE_SIDES, ~fine)):
         if np.any(use):
             c = shade_polygon_light(s, sphere_offsets(light, s.p, sides), to_centre, L,
-                                    r2 / np.maximum(falloff, 1e-30), l, factors, terms, ltc_jitter)
+                                    r2 / np.maximum(falloff, 1e-30), l, factors, terms, ltc_jitter,
+                                    memo=memo, memo_key=("sphere", id(light), sides))
             out = out + np.where(use[..., None], c, 0.0)
     # at the centre: no direction to the light (E_Point's l = 0), no light
     return np.where((_dot(to_centre, to_centre) > 0.0)[..., None], out, 0.0)
 
 
 def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAULT_TERMS,
-                visibility=1.0, ltc_jitter=None):
+                visibility=1.0, ltc_jitter=None, memo: dict | None = None):
     """One light's reflected radiance (rgb, before the model's final clamp) from its irradiance
     ``E`` and direction ``l`` (``light_irradiance``, times ``visibility``, the light's shadow
     factor): the body of mesh.frag.glsl's light loop. ``ltc_jitter``: for tests (ltc.ltc_integral)."""
     direct, _ = MODELS[model]
     area = light.kind == "AREA" and light.half_size[0] > 0.0
     if model == "PBR" and area:
-        return shade_area_light(s, light, E, l, visibility, terms, ltc_jitter)
+        return shade_area_light(s, light, E, l, visibility, terms, ltc_jitter, memo)
     if model == "PBR" and light.sphere_radius > 0.0:
         # by the LTC over its disc where it is large against the lobe, by its nearest point and the
         # lobe widened by it where small, blended between (light_shading.glsl's shade_light)
@@ -658,7 +671,7 @@ def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAU
         share = np.where(near, np.clip((k - SPHERE_LTC_FROM) / (SPHERE_LTC_FULL - SPHERE_LTC_FROM), 0.0, 1.0),
                          0.0)
         if np.any(share > 0.0):
-            polygon = shade_sphere_light(s, light, E, l, terms, ltc_jitter, k)
+            polygon = shade_sphere_light(s, light, E, l, terms, ltc_jitter, k, memo)
         r_dir = 2.0 * _dot(s.n, s.v)[..., None] * s.n - s.v
         l_specular, alpha_wide, wide_weight, point_weight = sphere_light_specular(light, s.p, r_dir, s.alpha)
         wide = copy.copy(s)
@@ -675,10 +688,11 @@ def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAU
 
 
 def shade(model: str, s: Surface, lights: list[Light], ambient: float = 0.0,
-          terms: Terms = DEFAULT_TERMS, irradiance: list | None = None):
+          terms: Terms = DEFAULT_TERMS, irradiance: list | None = None, memo: dict | None = None):
     """Outgoing radiance (rgb) at every point of ``s``: the twin of mesh.frag.glsl's main().
-    ``irradiance``: each light's ``light_irradiance`` at ``s.p``, where the caller shades the
-    same points with several term sets (it depends on the light and the points alone)."""
+    Where the caller shades the same points with several term sets: ``irradiance``, each light's
+    ``light_irradiance`` at ``s.p`` (it depends on the light and the points alone), and ``memo``,
+    a dict that keeps the area and sphere lights' lobe geometry between the calls."""
     ldr = MODELS[model][1]
     c = np.zeros(np.shape(s.p), np.float64)
     c = c + s.emission
@@ -686,5 +700,5 @@ def shade(model: str, s: Surface, lights: list[Light], ambient: float = 0.0,
         c = c + s.ambient_color * ambient  # eq. 1.4
     for k, light in enumerate(lights):
         E, l = light_irradiance(light, s.p) if irradiance is None else irradiance[k]
-        c = c + shade_light(model, s, light, E, l, terms)
+        c = c + shade_light(model, s, light, E, l, terms, memo=memo)
     return np.clip(c, 0.0, 1.0) if ldr else c

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import scenes
 
-from addon import auto_terms, engine
+from addon import auto_terms, engine, shading
 from addon import snapshot as S
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -159,6 +159,29 @@ def test_a_materials_share_of_the_view_is_its_projected_area():
     xy = (snap.geometries["sphere"].positions.astype(np.float64) @ view[:3, :3].T)[:, :2]
     expected = ConvexHull(xy).volume / 5.76
     assert abs(samples.share / expected - 1.0) < 0.03, f"share {samples.share:.4f}, outline {expected:.4f}"
+
+
+def test_candidates_sharing_the_lights_geometry_shade_as_alone():
+    """predict shades one material's points with every candidate, sharing the lights' irradiance
+    and the area and sphere lights' lobe geometry between them (``shading.shade``'s
+    ``irradiance`` and ``memo``): each candidate's radiance must equal what it gives alone."""
+    rng = np.random.default_rng(7)
+    n = rng.normal(size=(400, 3))
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    v = n + rng.normal(scale=0.5, size=(400, 3))
+    v /= np.linalg.norm(v, axis=-1, keepdims=True)
+    p = rng.uniform(-1.0, 1.0, size=(400, 3))
+    lights = [S.Light("AREA", (0.0, 0.0, 3.0), (0.0, 0.0, -1.0), (50.0, 50.0, 50.0), half_size=(0.8, 0.5)),
+              S.Light("POINT", (2.0, 1.0, 2.0), (0.0, 0.0, -1.0), (80.0, 60.0, 40.0), radius=0.3)]
+    material = S.MaterialParams(base_color=(0.8, 0.5, 0.3), metalness=0.3, roughness=0.25)
+    irradiance = [shading.light_irradiance(light, p) for light in lights]
+    memo: dict = {}
+    for terms in (auto_terms.REFERENCE, *auto_terms.CANDIDATE_TERMS.values()):
+        s = shading.Surface(p, n, v, material)
+        shared = shading.shade("PBR", s, lights, terms=terms, irradiance=irradiance, memo=memo)
+        alone = shading.shade("PBR", shading.Surface(p, n, v, material), lights, terms=terms)
+        assert np.array_equal(shared, alone), terms
+    assert memo  # the geometry was shared
 
 
 def test_programs_that_save_too_little_are_merged():
