@@ -41,9 +41,10 @@ def mirror_ball_uv(d) -> np.ndarray:
     return 0.5 * (np.stack([x / safe, z / safe], -1) + 1.0)
 
 
-def linear_pixels(image: ImageData) -> np.ndarray:
-    """(h, w, 4) float64 as the sampler returns them: sRGB bytes decoded, other bytes / 255."""
-    pixels = np.asarray(image.pixels, np.float64)
+def linear_pixels(image: ImageData, where=None) -> np.ndarray:
+    """(h, w, 4) float64 as the sampler returns them: sRGB bytes decoded, other bytes / 255; or
+    (n, 4), only the texels at ``where`` (rows, columns)."""
+    pixels = np.asarray(image.pixels if where is None else image.pixels[where], np.float64)
     if image.pixels.dtype == np.uint8:
         pixels = pixels / 255.0
     if image.storage == "SRGB8":
@@ -315,16 +316,26 @@ def split_suns(term: EnvironmentTerm, threshold: float, max_suns: int = MAX_SUNS
     mirror ball, whose texels this does not map)."""
     if term.image is None or term.projection != "EQUIRECTANGULAR" or threshold <= 0.0:
         return []
-    radiance = linear_pixels(term.image)[..., :3] * np.asarray(term.weight, np.float64)
+    weight = np.asarray(term.weight, np.float64)
+    pixels = term.image.pixels
+    h, w = pixels.shape[:2]
+    # the texels that might be above the threshold, found in float32 over the whole image (with a
+    # margin for its rounding; non-finite ones too), then converted and tested in float64: a 4K
+    # world has 8 M texels and a few hundred bright ones. Bytes and negative weights: every texel.
+    if pixels.dtype == np.uint8 or np.any(weight < 0.0):
+        where = np.nonzero(np.ones((h, w), bool))
+    else:
+        luminance = pixels[..., :3].astype(np.float32, copy=False) @ (LUMINANCE * weight).astype(np.float32)
+        where = np.nonzero((luminance > np.float32(threshold * (1.0 - 1e-4))) | ~np.isfinite(luminance))
+    radiance = linear_pixels(term.image, where)[:, :3] * weight
     radiance = np.where(np.isfinite(radiance), radiance, 0.0)
-    h, w = radiance.shape[:2]
-    luminance = radiance @ LUMINANCE
-    mask = luminance > threshold
-    if not mask.any():
+    bright_ones = radiance @ LUMINANCE > threshold
+    if not bright_ones.any():
         return []
-    ys, xs = np.nonzero(mask)
+    ys, xs, bright = where[0][bright_ones], where[1][bright_ones], radiance[bright_ones]
+    mask = np.zeros((h, w), bool)
+    mask[ys, xs] = True
     omega = texel_solid_angles(h, w)[ys]
-    bright = radiance[ys, xs]
     excess = (bright - clamp_luminance(bright, threshold)) * omega[:, None]
     # texture-space directions back to the world through the Mapping's rotation and scale
     inverse = np.linalg.inv(np.asarray(term.lookup, np.float64)[:3, :3])
