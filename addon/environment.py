@@ -242,12 +242,21 @@ CHAIN_NARROWEST = 8
 
 def chain_layout(width: int) -> tuple[tuple[int, int, int, int], ...]:
     """(x, y, width, height) of each downsampled level, ``width`` wide down to
-    ``CHAIN_NARROWEST``, in one texture: the widest on top of a row of the others."""
-    rects, x, w = [(0, 0, width, width // 2)], 0, width // 2
+    ``CHAIN_NARROWEST``, in one texture (``chain_size``): the widest on top of a row of the
+    others. Each level has a border of one texel around it (its opposite column at the sides,
+    its edge row above and below), so that the GPU's bilinear filter reads a level as the
+    equirectangular image it is: repeating in longitude, clamped at the poles
+    (glsl/environment.glsl chain_level)."""
+    rects, x, w = [(1, 1, width, width // 2)], 1, width // 2
     while w >= CHAIN_NARROWEST:
-        rects.append((x, width // 2, w, w // 2))
-        x, w = x + w, w // 2
+        rects.append((x, width // 2 + 3, w, w // 2))
+        x, w = x + w + 2, w // 2
     return tuple(rects)
+
+
+def chain_size(layout) -> tuple[int, int]:
+    """The chain texture's size: its levels' rectangles and their borders."""
+    return max(x + w + 1 for x, _, w, _ in layout), max(y + h + 1 for _, y, _, h in layout)
 
 
 def atlas_size(layout) -> tuple[int, int]:

@@ -113,7 +113,7 @@ def _chain(frame: Frame, terms, clamp: bool) -> tuple[list[Target], Target, tupl
         _draw(frame, downsample, lambda s, t=source.texture_color: gpu_library.bind_sampler(s, "source", t),
               levels[-1])
     rects = env.chain_layout(min(width, env.MIRROR_WIDTH))
-    chain = Target(*env.atlas_size(rects), depth=False)
+    chain = Target(*env.chain_size(rects), depth=False)
     copy = gpu_library.env_downsample_program(copy=True)
     by_width = {t.width: t for t in levels}
     for rect in rects:
@@ -121,7 +121,7 @@ def _chain(frame: Frame, terms, clamp: bool) -> tuple[list[Target], Target, tupl
             gpu_library.bind_sampler(shader, "source", level.texture_color)
             shader.uniform_float("offset", (float(rect[0]), float(rect[1]), 0.0, 0.0))
 
-        _draw(frame, copy, bind, chain, rect)
+        _draw(frame, copy, bind, chain, (rect[0] - 1, rect[1] - 1, rect[2] + 2, rect[3] + 2))  # and its border
     return levels, chain, rects
 
 
@@ -138,7 +138,7 @@ def _build_maps(frame: Frame, terms, suns: bool) -> EnvironmentMaps:
     sh = env.sh9_project(by_width.get(SH_WIDTH, clamped_levels[0]).read())
     rows = np.zeros((13, 4), np.float32)
     rows[:len(chain_rects)] = chain_rects
-    rows[12, 0] = len(chain_rects)
+    rows[12, :3] = (len(chain_rects), *env.chain_size(chain_rects))
     chain_block = gpu.types.GPUUniformBuf(rows.tobytes())
     rects = env.atlas_layout(chain_rects[0][2])
     atlas = Target(*env.atlas_size(rects), depth=False)

@@ -1,5 +1,6 @@
 /* The downsampled environment in one texture for filtered importance sampling: each level's
- * rectangle (x, y, width, height in texels), x: the number of levels. */
+ * rectangle (x, y, width, height in texels; a border of one texel around it), info: x the number
+ * of levels, yz the texture's size. */
 struct ChainData {
   vec4 rect[12];
   vec4 info;

@@ -5,8 +5,13 @@
 void main()
 {
 #ifdef SL_COPY
-  /* a level copied into its rectangle of the chain texture (drawn with the viewport set to it) */
-  frag_color = texelFetch(source, ivec2(gl_FragCoord.xy - offset.xy), 0);
+  /* a level copied into its rectangle of the chain texture (offset: the rectangle's origin),
+   * drawn with the viewport one texel wider on every side: the border repeats the opposite
+   * column at the sides and the edge row above and below (addon/environment.py chain_layout) */
+  ivec2 size = textureSize(source, 0);
+  ivec2 q = ivec2(floor(gl_FragCoord.xy - offset.xy));
+  q.x = q.x < 0 ? size.x - 1 : (q.x >= size.x ? 0 : q.x);
+  frag_color = texelFetch(source, ivec2(q.x, clamp(q.y, 0, size.y - 1)), 0);
   return;
 #endif
   ivec2 p = ivec2(gl_FragCoord.xy) * 2;

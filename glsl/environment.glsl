@@ -91,21 +91,14 @@ float radical_inverse(uint bits)
   return float(bits) * 2.3283064365386963e-10;
 }
 
-vec3 chain_texel(sampler2D map, ivec4 rect, int x, int y)
-{
-  x = x - rect.z * int(floor(float(x) / float(rect.z)));
-  return texelFetch(map, rect.xy + ivec2(x, clamp(y, 0, rect.w - 1)), 0).rgb;
-}
-
+/* Level k of the chain at equirectangular uv, bilinearly between texel centres by the GPU's
+ * filter: the level's border (addon/environment.py chain_layout) makes it repeat in u and clamp
+ * in v, and keeps the filter from reading a neighbouring level. */
 vec3 chain_level(sampler2D map, int k, vec2 uv)
 {
-  ivec4 rect = ivec4(chain.rect[k]);
-  vec2 p = uv * vec2(rect.zw) - 0.5;
-  vec2 i = floor(p);
-  vec2 f = p - i;
-  int x = int(i.x), y = int(i.y);
-  return mix(mix(chain_texel(map, rect, x, y), chain_texel(map, rect, x + 1, y), f.x),
-             mix(chain_texel(map, rect, x, y + 1), chain_texel(map, rect, x + 1, y + 1), f.x), f.y);
+  vec4 rect = chain.rect[k];
+  vec2 p = rect.xy + vec2(fract(uv.x), clamp(uv.y, 0.0, 1.0)) * rect.zw;
+  return textureLod(map, p / chain.info.yz, 0.0).rgb;
 }
 
 /* The chain at equirectangular uv, between levels floor(lod) and the next. */
