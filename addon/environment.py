@@ -224,15 +224,16 @@ def prefilter_samples(alpha: float, samples: int, height: int, chain_width: int)
 
 
 def atlas_layout(mirror_width: int) -> tuple[tuple[int, int, int, int], ...]:
-    """(x, y, width, height) of each prefiltered level in one texture, then of the irradiance
-    map: the mirror level on top of a row of the others, each half as wide as the one before
-    (never narrower than ``NARROWEST``), the irradiance map below; all equirectangular."""
+    """(x, y, width, height) of each prefiltered level in one texture (``atlas_size``), then of
+    the irradiance map: the mirror level on top of a row of the others, each half as wide as the
+    one before (never narrower than ``NARROWEST``), the irradiance map below; all
+    equirectangular, each with a border of one texel (``chain_layout``)."""
     widths = [mirror_width] + [max(mirror_width >> k, NARROWEST) for k in range(1, PREFILTER_LEVELS)]
-    rects, x = [(0, 0, widths[0], widths[0] // 2)], 0
+    rects, x, y = [(1, 1, widths[0], widths[0] // 2)], 1, widths[0] // 2 + 3
     for w in widths[1:]:
-        rects.append((x, widths[0] // 2, w, w // 2))
-        x += w
-    rects.append((0, widths[0] // 2 + widths[1] // 2, IRRADIANCE_WIDTH, IRRADIANCE_WIDTH // 2))
+        rects.append((x, y, w, w // 2))
+        x += w + 2
+    rects.append((1, y + widths[1] // 2 + 2, IRRADIANCE_WIDTH, IRRADIANCE_WIDTH // 2))
     return tuple(rects)
 
 
@@ -242,7 +243,7 @@ CHAIN_NARROWEST = 8
 
 def chain_layout(width: int) -> tuple[tuple[int, int, int, int], ...]:
     """(x, y, width, height) of each downsampled level, ``width`` wide down to
-    ``CHAIN_NARROWEST``, in one texture (``chain_size``): the widest on top of a row of the
+    ``CHAIN_NARROWEST``, in one texture (``atlas_size``): the widest on top of a row of the
     others. Each level has a border of one texel around it (its opposite column at the sides,
     its edge row above and below), so that the GPU's bilinear filter reads a level as the
     equirectangular image it is: repeating in longitude, clamped at the poles
@@ -254,13 +255,9 @@ def chain_layout(width: int) -> tuple[tuple[int, int, int, int], ...]:
     return tuple(rects)
 
 
-def chain_size(layout) -> tuple[int, int]:
-    """The chain texture's size: its levels' rectangles and their borders."""
-    return max(x + w + 1 for x, _, w, _ in layout), max(y + h + 1 for _, y, _, h in layout)
-
-
 def atlas_size(layout) -> tuple[int, int]:
-    return max(x + w for x, _, w, _ in layout), max(y + h for _, y, _, h in layout)
+    """The size of a texture holding ``layout``'s rectangles and their borders."""
+    return max(x + w + 1 for x, _, w, _ in layout), max(y + h + 1 for _, y, _, h in layout)
 
 
 # --- very bright texels: split off as suns ------------------------------------------------------

@@ -62,8 +62,9 @@ def environment_key(terms, threshold: float = 0.0) -> tuple:
 def _packed(sh: np.ndarray, rects, uniform, first_clamped: int = 0) -> gpu.types.GPUUniformBuf:
     premultiplied = sh * np.array(env.SH_COSINE)[:, None]
     roughness = env.PREFILTER_ROUGHNESS if rects else ()
+    size = env.atlas_size(rects) if rects else (0, 0)
     return gpu.types.GPUUniformBuf(programs.pack_environment(premultiplied, rects, uniform, roughness,
-                                                             first_clamped))
+                                                             first_clamped, size))
 
 
 def _uniform(terms) -> EnvironmentMaps:
@@ -95,6 +96,12 @@ def _draw(frame: Frame, shader, bind, target: Target, rect=None) -> None:
             gpu.state.viewport_set(0, 0, target.width, target.height)
 
 
+def _bordered(rect) -> tuple[int, int, int, int]:
+    """A level's rectangle with its border (``environment.chain_layout``): the viewport it is
+    drawn with."""
+    return rect[0] - 1, rect[1] - 1, rect[2] + 2, rect[3] + 2
+
+
 def _chain(frame: Frame, terms, clamp: bool) -> tuple[list[Target], Target, tuple]:
     """Bake the field (with its brightest texels clamped, if ``clamp``) and halve it down to
     ``environment.CHAIN_NARROWEST``; the levels from the mirror level's width down also go into
@@ -113,7 +120,7 @@ def _chain(frame: Frame, terms, clamp: bool) -> tuple[list[Target], Target, tupl
         _draw(frame, downsample, lambda s, t=source.texture_color: gpu_library.bind_sampler(s, "source", t),
               levels[-1])
     rects = env.chain_layout(min(width, env.MIRROR_WIDTH))
-    chain = Target(*env.chain_size(rects), depth=False)
+    chain = Target(*env.atlas_size(rects), depth=False)
     copy = gpu_library.env_downsample_program(copy=True)
     by_width = {t.width: t for t in levels}
     for rect in rects:
@@ -121,7 +128,7 @@ def _chain(frame: Frame, terms, clamp: bool) -> tuple[list[Target], Target, tupl
             gpu_library.bind_sampler(shader, "source", level.texture_color)
             shader.uniform_float("offset", (float(rect[0]), float(rect[1]), 0.0, 0.0))
 
-        _draw(frame, copy, bind, chain, (rect[0] - 1, rect[1] - 1, rect[2] + 2, rect[3] + 2))  # and its border
+        _draw(frame, copy, bind, chain, _bordered(rect))
     return levels, chain, rects
 
 
@@ -138,7 +145,7 @@ def _build_maps(frame: Frame, terms, suns: bool) -> EnvironmentMaps:
     sh = env.sh9_project(by_width.get(SH_WIDTH, clamped_levels[0]).read())
     rows = np.zeros((13, 4), np.float32)
     rows[:len(chain_rects)] = chain_rects
-    rows[12, :3] = (len(chain_rects), *env.chain_size(chain_rects))
+    rows[12, :3] = (len(chain_rects), *env.atlas_size(chain_rects))
     chain_block = gpu.types.GPUUniformBuf(rows.tobytes())
     rects = env.atlas_layout(chain_rects[0][2])
     atlas = Target(*env.atlas_size(rects), depth=False)
@@ -165,7 +172,7 @@ def _build_maps(frame: Frame, terms, suns: bool) -> EnvironmentMaps:
             shader.uniform_float("params", params)
 
         program = irradiance if last else gpu_library.env_prefilter_program()
-        _draw(frame, program, bind, atlas, rect)
+        _draw(frame, program, bind, atlas, _bordered(rect))
     atlas.fence()  # the time below is the GPU's too
     for target in {*levels, *clamped_levels}:
         target.free()

@@ -6,6 +6,7 @@
 void main()
 {
   vec2 uv = (gl_FragCoord.xy - rect.xy) / rect.zw;
+  uv = vec2(fract(uv.x), clamp(uv.y, 0.5 / rect.w, 1.0 - 0.5 / rect.w));  /* the border, as the levels' */
   vec3 n = equirect_direction(uv);
   ivec4 src = ivec4(chain.rect[int(params.y)]);
   float dphi = 2.0 * PI / float(src.z);

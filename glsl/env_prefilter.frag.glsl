@@ -12,12 +12,15 @@
 
 void main()
 {
+  /* drawn with the level's border (addon/environment.py atlas_layout): its texels are those of
+   * the opposite column at the sides and of the edge row above and below */
   vec2 uv = (gl_FragCoord.xy - rect.xy) / rect.zw;
+  uv = vec2(fract(uv.x), clamp(uv.y, 0.5 / rect.w, 1.0 - 0.5 / rect.w));
   if (params.x <= 0.0) {
     frag_color = vec4(chain_level(source, int(params.y), uv), 1.0);
     return;
   }
-  int row = int(gl_FragCoord.y - rect.y);
+  int row = clamp(int(gl_FragCoord.y - rect.y), 0, int(rect.w) - 1);
   int count = int(params.z);
   vec3 sum = vec3(0.0);
   for (int i = 0; i < count; i++) {

@@ -43,22 +43,13 @@ vec2 env_split_sum(float NoV, float roughness)
 #  endif
 
 #  ifdef SL_ENV_MAP
-/* One level of the atlas, bilinear, repeating in u and clamped in v inside its rectangle. */
-vec3 env_atlas_texel(ivec4 rect, int x, int y)
-{
-  x = x - rect.z * int(floor(float(x) / float(rect.z)));
-  return texelFetch(env_atlas, rect.xy + ivec2(x, clamp(y, 0, rect.w - 1)), 0).rgb;
-}
-
+/* One level of the atlas at equirectangular uv, bilinear (the GPU's filter; the level's border
+ * makes it repeat in u and clamp in v, as environment.glsl's chain_level). */
 vec3 env_level_uv(int k, vec2 uv)
 {
-  ivec4 rect = ivec4(env.rect[k]);
-  vec2 p = uv * vec2(rect.zw) - 0.5;
-  vec2 i = floor(p);
-  vec2 f = p - i;
-  int x = int(i.x), y = int(i.y);
-  return mix(mix(env_atlas_texel(rect, x, y), env_atlas_texel(rect, x + 1, y), f.x),
-             mix(env_atlas_texel(rect, x, y + 1), env_atlas_texel(rect, x + 1, y + 1), f.x), f.y);
+  vec4 rect = env.rect[k];
+  vec2 p = rect.xy + vec2(fract(uv.x), clamp(uv.y, 0.0, 1.0)) * rect.zw;
+  return textureLod(env_atlas, p / env.info.zw, 0.0).rgb;
 }
 
 vec3 env_level(int k, vec3 d)

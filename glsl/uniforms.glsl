@@ -53,8 +53,9 @@ struct MaterialData {
  * premultiplied by the cosine kernel's band factors, the rectangles in the atlas (x, y, width,
  * height in texels) of the prefiltered levels and, last, of the irradiance map; info.x: the
  * number of prefiltered levels, info.y: the first level made from the world with its suns split
- * off (the smoother ones keep them: info.x when there are none); each level's roughness (4 per
- * vec4); the radiance of a world without images. */
+ * off (the smoother ones keep them: info.x when there are none), info.zw: the atlas' size (each
+ * rectangle has a border of one texel around it); each level's roughness (4 per vec4); the
+ * radiance of a world without images. */
 struct EnvironmentData {
   vec4 sh[9];
   vec4 rect[8];

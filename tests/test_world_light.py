@@ -281,6 +281,15 @@ def test_prefiltered_levels_are_the_lobe_means_of_the_world(monkeypatch, tmp_pat
           + ", ".join(f"r {environment.level_roughness(k)}: {e:.3%}" for k, e in enumerate(errors, 1)))
     for k, (error, bound) in enumerate(zip(errors, PREFILTER_BOUNDS), 1):
         assert error < bound, f"roughness {environment.level_roughness(k)}: {error:.3%} (bound {bound:.1%})"
+    # every level's border (the irradiance map's too) repeats the opposite column and the edge
+    # rows, as the shading's bilinear reads expect: computed there, not copied, so equal up to a
+    # float's rounding (measured: exactly equal)
+    for x, y, lw, lh in kept["rects"]:
+        level = kept["atlas"][y:y + lh, x:x + lw, :3]
+        bordered = np.pad(level, ((1, 1), (0, 0), (0, 0)), mode="edge")
+        bordered = np.concatenate([bordered[:, -1:], bordered, bordered[:, :1]], axis=1)
+        off = np.abs(kept["atlas"][y - 1:y + lh + 1, x - 1:x + lw + 1, :3] - bordered).max() / level.max()
+        assert off < 1e-6, f"level {lw} wide: its border is {off:.1e} off"
 
 
 
