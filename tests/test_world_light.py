@@ -217,6 +217,14 @@ def _lobe_mean(radiance, n: np.ndarray, alpha: float, steps: int = 256) -> np.nd
     return np.einsum("ij,ijc->c", w, radiance(l)) / w.sum()
 
 
+def _bordered(level: np.ndarray) -> np.ndarray:
+    """An equirectangular level with the border the GPU's bilinear reads expect
+    (environment.chain_layout): the edge rows repeated at the poles, the opposite columns at
+    the sides."""
+    rows = np.pad(level, ((1, 1), (0, 0), (0, 0)), mode="edge")
+    return np.concatenate([rows[:, -1:], rows, rows[:, :1]], axis=1)
+
+
 #: per prefiltered level (roughness 0.125 ... 1), about 2x the largest relative error measured
 #: (0.99 / 0.66 / 0.42 / 0.22 / 0.18 / 0.32 %)
 PREFILTER_BOUNDS = (0.02, 0.013, 0.008, 0.0045, 0.004, 0.006)
@@ -286,9 +294,8 @@ def test_prefiltered_levels_are_the_lobe_means_of_the_world(monkeypatch, tmp_pat
     # float's rounding (measured: exactly equal)
     for x, y, lw, lh in kept["rects"]:
         level = kept["atlas"][y:y + lh, x:x + lw, :3]
-        bordered = np.pad(level, ((1, 1), (0, 0), (0, 0)), mode="edge")
-        bordered = np.concatenate([bordered[:, -1:], bordered, bordered[:, :1]], axis=1)
-        off = np.abs(kept["atlas"][y - 1:y + lh + 1, x - 1:x + lw + 1, :3] - bordered).max() / level.max()
+        drawn = kept["atlas"][y - 1:y + lh + 1, x - 1:x + lw + 1, :3]
+        off = np.abs(drawn - _bordered(level)).max() / level.max()
         assert off < 1e-6, f"level {lw} wide: its border is {off:.1e} off"
 
 
@@ -336,9 +343,8 @@ def test_the_chain_holds_the_halved_world_with_repeating_borders(monkeypatch, tm
             want = summed / (2.0 * weight.reshape(lh, 2, 1, 1).sum(axis=1))
         level = texels[y:y + lh, x:x + lw]
         errors.append(float(np.abs(level - want).max() / want.max()))
-        bordered = np.pad(level, ((1, 1), (0, 0), (0, 0)), mode="edge")  # poles: the edge rows
-        bordered = np.concatenate([bordered[:, -1:], bordered, bordered[:, :1]], axis=1)  # u repeats
-        assert np.array_equal(texels[y - 1:y + lh + 1, x - 1:x + lw + 1], bordered), f"{lw} wide: border"
+        drawn = texels[y - 1:y + lh + 1, x - 1:x + lw + 1]
+        assert np.array_equal(drawn, _bordered(level)), f"{lw} wide: its border"
         want = level  # the next level halves this one as drawn
     print("chain levels against the image (level 0) and against the level above halved, largest "
           "relative error: " + ", ".join(f"{r[2]} wide {e:.1e}" for r, e in zip(rects, errors)))
