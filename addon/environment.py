@@ -223,17 +223,24 @@ def prefilter_samples(alpha: float, samples: int, height: int, chain_width: int)
     return np.stack([du, uv[..., 1], lod, weight], -1).astype(np.float32)
 
 
+def _bordered_layout(widths) -> list[tuple[int, int, int, int]]:
+    """(x, y, width, height) of equirectangular levels ``widths`` wide in one texture: the first
+    on top of a row of the others, each with a border of one texel around it (``chain_layout``)."""
+    rects, x, y = [(1, 1, widths[0], widths[0] // 2)], 1, widths[0] // 2 + 3
+    for w in widths[1:]:
+        rects.append((x, y, w, w // 2))
+        x += w + 2
+    return rects
+
+
 def atlas_layout(mirror_width: int) -> tuple[tuple[int, int, int, int], ...]:
     """(x, y, width, height) of each prefiltered level in one texture (``atlas_size``), then of
     the irradiance map: the mirror level on top of a row of the others, each half as wide as the
     one before (never narrower than ``NARROWEST``), the irradiance map below; all
     equirectangular, each with a border of one texel (``chain_layout``)."""
     widths = [mirror_width] + [max(mirror_width >> k, NARROWEST) for k in range(1, PREFILTER_LEVELS)]
-    rects, x, y = [(1, 1, widths[0], widths[0] // 2)], 1, widths[0] // 2 + 3
-    for w in widths[1:]:
-        rects.append((x, y, w, w // 2))
-        x += w + 2
-    rects.append((1, y + widths[1] // 2 + 2, IRRADIANCE_WIDTH, IRRADIANCE_WIDTH // 2))
+    rects = _bordered_layout(widths)
+    rects.append((1, rects[1][1] + widths[1] // 2 + 2, IRRADIANCE_WIDTH, IRRADIANCE_WIDTH // 2))
     return tuple(rects)
 
 
@@ -248,11 +255,10 @@ def chain_layout(width: int) -> tuple[tuple[int, int, int, int], ...]:
     its edge row above and below), so that the GPU's bilinear filter reads a level as the
     equirectangular image it is: repeating in longitude, clamped at the poles
     (glsl/environment.glsl chain_level)."""
-    rects, x, w = [(1, 1, width, width // 2)], 1, width // 2
-    while w >= CHAIN_NARROWEST:
-        rects.append((x, width // 2 + 3, w, w // 2))
-        x, w = x + w + 2, w // 2
-    return tuple(rects)
+    widths = [width]
+    while widths[-1] // 2 >= CHAIN_NARROWEST:
+        widths.append(widths[-1] // 2)
+    return tuple(_bordered_layout(widths))
 
 
 def atlas_size(layout) -> tuple[int, int]:

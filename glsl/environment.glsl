@@ -73,6 +73,16 @@ vec3 env_term(sampler2D map, mat4 lookup, vec4 kind, vec4 weight, vec3 d, bool c
   return (clamp_bright && kind.z > 0.0 && y > kind.z) ? c * (kind.z / y) : c;
 }
 
+/* One equirectangular level, in rectangle rect (x, y, width, height in texels) of a texture of
+ * size texels holding several (the chain, the prefiltered atlas), at uv: bilinearly between
+ * texel centres by the GPU's filter. The level's border of one texel (addon/environment.py
+ * chain_layout) makes it repeat in u and clamp in v, and keeps the filter off its neighbours. */
+vec3 bordered_level(sampler2D map, vec4 rect, vec2 size, vec2 uv)
+{
+  vec2 p = rect.xy + vec2(fract(uv.x), clamp(uv.y, 0.0, 1.0)) * rect.zw;
+  return textureLod(map, p / size, 0.0).rgb;
+}
+
 #ifdef SL_CHAIN
 /* Filtered importance sampling (Krivanek & Colbert 2008, "Real-time Shading with Filtered
  * Importance Sampling") over the downsampled environment (all levels in one texture,
@@ -91,14 +101,10 @@ float radical_inverse(uint bits)
   return float(bits) * 2.3283064365386963e-10;
 }
 
-/* Level k of the chain at equirectangular uv, bilinearly between texel centres by the GPU's
- * filter: the level's border (addon/environment.py chain_layout) makes it repeat in u and clamp
- * in v, and keeps the filter from reading a neighbouring level. */
+/* Level k of the chain at equirectangular uv (bordered_level). */
 vec3 chain_level(sampler2D map, int k, vec2 uv)
 {
-  vec4 rect = chain.rect[k];
-  vec2 p = rect.xy + vec2(fract(uv.x), clamp(uv.y, 0.0, 1.0)) * rect.zw;
-  return textureLod(map, p / chain.info.yz, 0.0).rgb;
+  return bordered_level(map, chain.rect[k], chain.info.yz, uv);
 }
 
 /* The chain at equirectangular uv, between levels floor(lod) and the next. */

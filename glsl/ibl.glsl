@@ -43,13 +43,10 @@ vec2 env_split_sum(float NoV, float roughness)
 #  endif
 
 #  ifdef SL_ENV_MAP
-/* One level of the atlas at equirectangular uv, bilinear (the GPU's filter; the level's border
- * makes it repeat in u and clamp in v, as environment.glsl's chain_level). */
+/* Level k of the atlas at equirectangular uv (environment.glsl's bordered_level). */
 vec3 env_level_uv(int k, vec2 uv)
 {
-  vec4 rect = env.rect[k];
-  vec2 p = rect.xy + vec2(fract(uv.x), clamp(uv.y, 0.0, 1.0)) * rect.zw;
-  return textureLod(env_atlas, p / env.info.zw, 0.0).rgb;
+  return bordered_level(env_atlas, env.rect[k], env.info.zw, uv);
 }
 
 vec3 env_level(int k, vec3 d)
