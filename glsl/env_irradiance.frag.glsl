@@ -5,9 +5,7 @@
 
 void main()
 {
-  vec2 uv = (gl_FragCoord.xy - rect.xy) / rect.zw;
-  uv = vec2(fract(uv.x), clamp(uv.y, 0.5 / rect.w, 1.0 - 0.5 / rect.w));  /* the border, as the levels' */
-  vec3 n = equirect_direction(uv);
+  vec3 n = equirect_direction(bordered_level_uv(rect));  /* drawn with its border, as the levels */
   ivec4 src = ivec4(chain.rect[int(params.y)]);
   float dphi = 2.0 * PI / float(src.z);
   /* a row's texel directions (equirect_direction at the texel centres) turn by -dphi from one

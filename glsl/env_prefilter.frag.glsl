@@ -12,10 +12,7 @@
 
 void main()
 {
-  /* drawn with the level's border (addon/environment.py atlas_layout): its texels are those of
-   * the opposite column at the sides and of the edge row above and below */
-  vec2 uv = (gl_FragCoord.xy - rect.xy) / rect.zw;
-  uv = vec2(fract(uv.x), clamp(uv.y, 0.5 / rect.w, 1.0 - 0.5 / rect.w));
+  vec2 uv = bordered_level_uv(rect);  /* drawn with the level's border */
   if (params.x <= 0.0) {
     frag_color = vec4(chain_level(source, int(params.y), uv), 1.0);
     return;

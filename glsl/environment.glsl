@@ -83,6 +83,15 @@ vec3 bordered_level(sampler2D map, vec4 rect, vec2 size, vec2 uv)
   return textureLod(map, p / size, 0.0).rgb;
 }
 
+/* The equirectangular uv of the texel a pass draws into a level's rectangle rect (drawn with
+ * its border): a border texel gets the uv of the opposite column at the sides and of the edge
+ * row above and below, so that the border holds what bordered_level expects. */
+vec2 bordered_level_uv(vec4 rect)
+{
+  vec2 uv = (gl_FragCoord.xy - rect.xy) / rect.zw;
+  return vec2(fract(uv.x), clamp(uv.y, 0.5 / rect.w, 1.0 - 0.5 / rect.w));
+}
+
 #ifdef SL_CHAIN
 /* Filtered importance sampling (Krivanek & Colbert 2008, "Real-time Shading with Filtered
  * Importance Sampling") over the downsampled environment (all levels in one texture,
