@@ -64,11 +64,25 @@ def _register():
         _undo(done)
         raise
     _registered = True
+    _use_extension_folder()
     if not bpy.app.binary_path:
         # Blender as a Python module never disables add-ons at exit, and 4.x then leaks the
         # registered classes and can hang in its exit destructors: unregister first (once).
         atexit.unregister(unregister)
         atexit.register(unregister)
+
+
+def _use_extension_folder() -> None:
+    """Installed as an extension, the world cache lives in the extension's own user folder."""
+    import bpy
+
+    from . import world_cache
+
+    if __package__.startswith("bl_ext."):
+        try:
+            world_cache.set_user_folder(bpy.utils.extension_path_user(__package__, path="world_cache"))
+        except Exception as exc:  # no user folder: the XDG cache folder then
+            print(f"Shading Lab: no extension user folder for the world cache ({exc})")
 
 
 #: How long unregister() waits for renders running on other threads to end.

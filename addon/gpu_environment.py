@@ -26,14 +26,16 @@ import gpu
 import numpy as np
 
 from . import environment as env
-from . import gpu_library, programs
+from . import gpu_library, programs, world_cache
 from .passes import Frame, Pass, Target
 from .snapshot import MAX_ENVIRONMENT_IMAGES, World
 
 #: The level the spherical harmonics are projected from (texels wide).
 SH_WIDTH = 256
-#: Environments precomputed since start (tests count them: an object edit must add none).
+#: Environments precomputed since start (tests count them: an object edit must add none), and
+#: those read from the disk cache instead (``world_cache``).
 BUILDS = 0
+LOADS = 0
 
 
 @dataclass
@@ -47,7 +49,8 @@ class EnvironmentMaps:
     chain_block: gpu.types.GPUUniformBuf | None
     sh: np.ndarray  # (9, 3) radiance coefficients L_lm (not premultiplied)
     rects: tuple
-    build_ms: float
+    build_ms: float  # the precomputation's, or (``loaded``) reading it from the disk cache
+    loaded: bool = False
 
 
 def environment_key(terms, threshold: float = 0.0) -> tuple:
@@ -132,10 +135,20 @@ def _chain(frame: Frame, terms, clamp: bool) -> tuple[list[Target], Target, tupl
     return levels, chain, rects
 
 
-def _build_maps(frame: Frame, terms, suns: bool) -> EnvironmentMaps:
+def _chain_block(chain_rects) -> gpu.types.GPUUniformBuf:
+    """The ChainData block (glsl/chain_data.glsl): the levels' rectangles, their count and the
+    texture's size."""
+    rows = np.zeros((13, 4), np.float32)
+    rows[:len(chain_rects)] = chain_rects
+    rows[12, :3] = (len(chain_rects), *env.atlas_size(chain_rects))
+    return gpu.types.GPUUniformBuf(rows.tobytes())
+
+
+def _build_maps(frame: Frame, terms, suns: bool, keep=None) -> EnvironmentMaps:
     """The maps of an image-lit world. With suns split off, two chains: the whole world for the
     smoother prefiltered levels (which show the brightest texels where they are), the clamped one
-    for the rougher levels, the irradiance and the SH (the suns light those as lights)."""
+    for the rougher levels, the irradiance and the SH (the suns light those as lights).
+    ``keep(arrays)``: handed what ``_maps`` makes the same maps from again (read back)."""
     global BUILDS
     BUILDS += 1
     start = time.perf_counter()
@@ -143,10 +156,7 @@ def _build_maps(frame: Frame, terms, suns: bool) -> EnvironmentMaps:
     clamped_levels, clamped, _ = _chain(frame, terms, clamp=True) if suns else (levels, chain, None)
     by_width = {t.width: t for t in clamped_levels}
     sh = env.sh9_project(by_width.get(SH_WIDTH, clamped_levels[0]).read())
-    rows = np.zeros((13, 4), np.float32)
-    rows[:len(chain_rects)] = chain_rects
-    rows[12, :3] = (len(chain_rects), *env.atlas_size(chain_rects))
-    chain_block = gpu.types.GPUUniformBuf(rows.tobytes())
+    chain_block = _chain_block(chain_rects)
     rects = env.atlas_layout(chain_rects[0][2])
     atlas = Target(*env.atlas_size(rects), depth=False)
     irradiance = gpu_library.env_irradiance_program()
@@ -176,10 +186,66 @@ def _build_maps(frame: Frame, terms, suns: bool) -> EnvironmentMaps:
     atlas.fence()  # the time below is the GPU's too
     for target in {*levels, *clamped_levels}:
         target.free()
+    if keep is not None:
+        keep({"atlas": atlas.read(), "chain": chain.read(), "sh": sh,
+              **({"clamped": clamped.read()} if suns else {})})
     first_clamped = env.FIRST_CLAMPED_LEVEL if suns else env.PREFILTER_LEVELS
     return EnvironmentMaps(_packed(sh, rects, (0.0, 0.0, 0.0), first_clamped), atlas.texture_color,
                            chain.texture_color, clamped.texture_color, chain_block, sh, rects,
                            1e3 * (time.perf_counter() - start))
+
+
+def _layouts(terms) -> tuple[tuple, tuple]:
+    """The rectangles of the chain's levels and of the atlas's (as ``_chain`` and ``_build_maps``
+    lay them out)."""
+    chain_rects = env.chain_layout(min(_bake_width(terms), env.MIRROR_WIDTH))
+    return chain_rects, env.atlas_layout(chain_rects[0][2])
+
+
+def _shapes(terms, suns: bool) -> dict[str, tuple]:
+    """The arrays ``_build_maps`` keeps, by shape (rows first)."""
+    chain_rects, rects = _layouts(terms)
+    chain, atlas = env.atlas_size(chain_rects), env.atlas_size(rects)
+    shapes = {"atlas": (atlas[1], atlas[0], 4), "chain": (chain[1], chain[0], 4), "sh": (9, 3)}
+    return {**shapes, "clamped": shapes["chain"]} if suns else shapes
+
+
+def _texture(pixels: np.ndarray) -> gpu.types.GPUTexture:
+    h, w = pixels.shape[:2]
+    data = gpu.types.Buffer("FLOAT", w * h * 4, np.ascontiguousarray(pixels, np.float32).ravel())
+    return gpu.types.GPUTexture((w, h), format="RGBA32F", data=data)
+
+
+def _maps(terms, suns: bool, arrays) -> EnvironmentMaps:
+    """The maps ``_build_maps`` made, from the arrays it kept."""
+    global LOADS
+    start = time.perf_counter()
+    chain_rects, rects = _layouts(terms)
+    chain = _texture(arrays["chain"])
+    clamped = _texture(arrays["clamped"]) if suns else chain
+    sh = np.asarray(arrays["sh"], np.float64)
+    first_clamped = env.FIRST_CLAMPED_LEVEL if suns else env.PREFILTER_LEVELS
+    LOADS += 1
+    return EnvironmentMaps(_packed(sh, rects, (0.0, 0.0, 0.0), first_clamped), _texture(arrays["atlas"]),
+                           chain, clamped, _chain_block(chain_rects), sh, rects,
+                           1e3 * (time.perf_counter() - start), loaded=True)
+
+
+def _device() -> str:
+    return "|".join((gpu.platform.vendor_get(), gpu.platform.renderer_get(), gpu.platform.version_get()))
+
+
+def _cached_or_built(frame: Frame, terms, threshold: float, suns: bool) -> EnvironmentMaps:
+    """The maps from the disk cache (``world_cache``) if an earlier session kept them, else built
+    (and kept for the next)."""
+    key = world_cache.content_key(terms, threshold, suns, _device()) if world_cache.folder() else None
+    if key is not None:
+        arrays = world_cache.load(key, _shapes(terms, suns))
+        if arrays is not None:
+            return _maps(terms, suns, arrays)
+    if key is None:
+        return _build_maps(frame, terms, suns)
+    return _build_maps(frame, terms, suns, keep=lambda arrays: world_cache.save_later(key, arrays))
 
 
 class EnvironmentPass(Pass):
@@ -198,5 +264,5 @@ class EnvironmentPass(Pass):
         else:
             frame.scene.environment = gpu_library.LIBRARY.environment(
                 environment_key(world.lighting, world.threshold),
-                lambda: _build_maps(frame, world.lighting, bool(world.suns)))
+                lambda: _cached_or_built(frame, world.lighting, world.threshold, bool(world.suns)))
         return True

@@ -8,10 +8,13 @@ Each (preset, term set) runs in a fresh Python process, so that nothing is cache
 compiled programs, lookup tables (shipped in addon/tables.npz, loaded and uploaded at first use),
 world precomputation. The process loads the preset, renders it twice with the term set (wall time
 of ``bpy.ops.render.render``) and prints both; the difference is what the first render costs
-extra. Measured twice: with Mesa's on-disk shader cache disabled (MESA_SHADER_CACHE_DISABLE), so
-that every process compiles its programs, as on a first start; and with the cache on, in a
-folder of its own that an earlier process filled, as an artist's later sessions find it. Times
-are CPU-rasteriser times (Mesa llvmpipe): compare them within one run.
+extra. Measured three times: cold, with Mesa's on-disk shader cache disabled
+(MESA_SHADER_CACHE_DISABLE) and the add-on's world cache off (SHADING_LAB_CACHE=off), so that every
+process compiles its programs and computes its world, as on a first start; warm, with Mesa's cache
+on, in a folder of its own that an earlier process filled, as an artist's later sessions find it;
+and warm with the world's maps cached too (``addon/world_cache.py``, in a folder the same earlier
+process filled), as a later session that renders a world seen before finds it. Times are
+CPU-rasteriser times (Mesa llvmpipe): compare them within one run.
 """
 
 from __future__ import annotations
@@ -53,15 +56,17 @@ def child(preset: str, term_set: str, width: int, height: int) -> None:
     print("RESULT " + json.dumps({"first_ms": times[0], "second_ms": times[1]}), flush=True)
 
 
-def measure(preset: str, term_set: str, size: tuple[int, int], cache: Path | None = None) -> dict:
+def measure(preset: str, term_set: str, size: tuple[int, int], cache: Path | None = None,
+            world_cache: Path | None = None) -> dict:
     """Both renders in a fresh process: with Mesa's shader cache off, or (``cache``) with it in
-    that folder."""
+    that folder; with the world cache off, or (``world_cache``) in that folder."""
     env = dict(os.environ)
     if cache is None:
         env["MESA_SHADER_CACHE_DISABLE"] = "true"
     else:
         env.pop("MESA_SHADER_CACHE_DISABLE", None)
         env["MESA_SHADER_CACHE_DIR"] = str(cache)
+    env["SHADING_LAB_CACHE"] = "off" if world_cache is None else str(world_cache)
     out = subprocess.run([sys.executable, __file__, "--child", preset, term_set, str(size[0]), str(size[1])],
                          capture_output=True, text=True, env=env, timeout=900, check=False)
     for line in out.stdout.splitlines():
@@ -85,33 +90,36 @@ def main(argv: list[str] | None = None) -> int:
     size = tuple(int(x) for x in args.resolution.lower().split("x"))
     names = args.presets.split(",") if args.presets else presets.scene_preset_names()
     rows = []
-    with tempfile.TemporaryDirectory(prefix="sl_shader_cache_") as folder:
+    with tempfile.TemporaryDirectory(prefix="sl_shader_cache_") as folder, \
+            tempfile.TemporaryDirectory(prefix="sl_world_cache_") as worlds:
         for name in names:
             for label, term_set in TERM_SETS.items():
                 cold = measure(name, term_set, size)
-                measure(name, term_set, size, Path(folder))  # fills the cache
+                measure(name, term_set, size, Path(folder), Path(worlds))  # fills both caches
                 warm = measure(name, term_set, size, Path(folder))
-                extra = cold["first_ms"] - cold["second_ms"]
-                warm_extra = warm["first_ms"] - warm["second_ms"]
-                rows.append((name, label, cold["first_ms"], cold["second_ms"], extra, warm["first_ms"],
-                             warm_extra))
+                seen = measure(name, term_set, size, Path(folder), Path(worlds))
+                extras = [r["first_ms"] - r["second_ms"] for r in (cold, warm, seen)]
+                rows.append((name, label, cold["first_ms"], cold["second_ms"], *extras))
                 print(f"{name:16s} {label:12s} first {cold['first_ms']:8.1f} ms  second "
-                      f"{cold['second_ms']:8.1f} ms  first costs +{extra:.1f} ms; shader cache warm: "
-                      f"+{warm_extra:.1f} ms", flush=True)
+                      f"{cold['second_ms']:8.1f} ms  first costs +{extras[0]:.1f} ms; shader cache warm: "
+                      f"+{extras[1]:.1f} ms; and the world cached: +{extras[2]:.1f} ms", flush=True)
     lines = [f"The first render of each term set in a fresh process against the second, "
              f"{size[0]}x{size[1]}, physically based model (`scripts/first_render_bench.py`; wall "
-             f"time of the render operator). *Cold*: Mesa's shader cache off, so programs compile as "
-             f"on a first start; *warm*: the cache filled by an earlier process, as from an artist's "
-             f"second session on (Mesa keeps it on disk by default): what is left is the add-on's own "
-             f"set-up (tables, the world's precomputation, scene upload).", "",
-             "| preset | term set | first ms | second ms | first costs (cold) | first ms (warm) "
-             "| first costs (warm) |", "|---|---|---:|---:|---:|---:|---:|"]
-    lines += [f"| {n} | {t} | {a:.0f} | {b:.0f} | +{c:.0f} ms | {d:.0f} | +{e:.0f} ms |"
+             f"time of the render operator). *Cold*: Mesa's shader cache and the world cache off, so "
+             f"programs compile and the world's maps are computed as on a first start; *warm*: the "
+             f"shader cache filled by an earlier process, as from an artist's second session on (Mesa "
+             f"keeps it on disk by default), the world's maps computed: what is left is the add-on's "
+             f"own set-up (tables, the world's precomputation, scene upload); *world seen*: the "
+             f"world's maps also kept by that earlier process (`addon/world_cache.py`, on by "
+             f"default), as a later session that renders a world seen before finds them.", "",
+             "| preset | term set | first ms | second ms | first costs (cold) | first costs (warm) "
+             "| first costs (warm, world seen) |", "|---|---|---:|---:|---:|---:|---:|"]
+    lines += [f"| {n} | {t} | {a:.0f} | {b:.0f} | +{c:.0f} ms | +{d:.0f} ms | +{e:.0f} ms |"
               for n, t, a, b, c, d, e in rows]
-    worst = max(rows, key=lambda r: r[4])
-    worst_warm = max(rows, key=lambda r: r[6])
-    lines += ["", f"Largest extra cost of a first render: **+{worst[4]:.0f} ms** cold ({worst[0]}, "
-              f"{worst[1]}), **+{worst_warm[6]:.0f} ms** warm ({worst_warm[0]}, {worst_warm[1]})."]
+    worst = [max(rows, key=lambda r, k=k: r[k]) for k in (4, 5, 6)]
+    lines += ["", "Largest extra cost of a first render: " + ", ".join(
+        f"**+{w[k]:.0f} ms** {what} ({w[0]}, {w[1]})"
+        for w, k, what in zip(worst, (4, 5, 6), ("cold", "warm", "warm with the world seen")))]
     args.table.parent.mkdir(parents=True, exist_ok=True)
     args.table.write_text("\n".join(lines) + "\n")
     print(f"wrote {args.table}")

@@ -17,6 +17,9 @@ image resampled to 4K (4096 x 2048), medians of ``--frames`` rebuilds (the world
 nudged each time so that the cache does not answer). Frame cost: the demo scene at 1280 x 720
 (its point light and sun) with a black world and with the forest world, medians of ``--frames``.
 
+The world cache (``addon/world_cache.py``) is off here: every build is computed, as a session's
+first render of a world it has not seen computes it.
+
 Writes ``OUT/world.md`` (also printed). Frame times are CPU-rasteriser times (Mesa llvmpipe):
 compare ratios within one run.
 """
@@ -24,6 +27,7 @@ compare ratios within one run.
 from __future__ import annotations
 
 import argparse
+import os
 import statistics
 import sys
 import tempfile
@@ -31,6 +35,7 @@ import time
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent.parent
+os.environ["SHADING_LAB_CACHE"] = "off"  # the precomputation is measured, not the cache
 sys.path[:0] = [str(ROOT), str(ROOT / "scripts"), str(ROOT / "tests")]
 
 import render as cli  # noqa: E402

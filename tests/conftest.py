@@ -3,12 +3,16 @@ suite that skipped its renders would pass while proving nothing."""
 
 from __future__ import annotations
 
+import os
 import sys
 from pathlib import Path
 
 import pytest
 
 ROOT = Path(__file__).resolve().parent.parent
+# the world's maps are computed in every test (tests/test_world_cache.py turns the disk cache on
+# in folders of its own): a cache filled by earlier runs would hide the computation under test
+os.environ["SHADING_LAB_CACHE"] = "off"
 sys.path.insert(0, str(ROOT))
 sys.path.insert(0, str(ROOT / "tests"))
 

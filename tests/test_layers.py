@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 ADDON = Path(__file__).resolve().parent.parent / "addon"
-PURE = ("snapshot", "programs", "brdf", "multiscatter", "ltc", "shading", "tonemap", "presets")
+PURE = ("snapshot", "programs", "brdf", "multiscatter", "ltc", "shading", "tonemap", "presets", "world_cache")
 GPU_SIDE = ("gpu_library", "gpu_scene", "passes", "renderer")
 
 
