@@ -172,6 +172,27 @@ class SHADINGLAB_OT_bake_world(bpy.types.Operator):
         return {"FINISHED"}
 
 
+class SHADINGLAB_OT_clear_world_cache(bpy.types.Operator):
+    """Delete the world lighting Shading Lab keeps on disk between sessions (each world's maps are
+    computed again the next time it is rendered)"""
+
+    bl_idname = "shading_lab.clear_world_cache"
+    bl_label = "Clear World Cache"
+    bl_options = {"REGISTER"}
+
+    def execute(self, context):
+        from . import world_cache
+
+        where = world_cache.folder()
+        if where is None:
+            self.report({"INFO"}, "The world cache is off (SHADING_LAB_CACHE=off): nothing to clear")
+            return {"CANCELLED"}
+        count, size = world_cache.clear()
+        self.report({"INFO"}, f"Deleted {count} cached world{'s' * (count != 1)} "
+                              f"({size / 2 ** 20:.0f} MB) from {where}")
+        return {"FINISHED"}
+
+
 class SHADINGLAB_OT_verify_auto_terms(bpy.types.Operator):
     """Render the scene with the Auto term set and with the Principled set, measure each material's
     real error on its own pixels and mark those over the Error Bound"""
@@ -213,4 +234,5 @@ class SHADINGLAB_OT_verify_auto_terms(bpy.types.Operator):
 
 
 classes = (SHADINGLAB_OT_apply_material_preset, SHADINGLAB_OT_principled_to_explicit,
-           SHADINGLAB_OT_convert_roughness, SHADINGLAB_OT_bake_world, SHADINGLAB_OT_verify_auto_terms)
+           SHADINGLAB_OT_convert_roughness, SHADINGLAB_OT_bake_world, SHADINGLAB_OT_clear_world_cache,
+           SHADINGLAB_OT_verify_auto_terms)

@@ -206,6 +206,23 @@ class SHADINGLAB_PT_world(ShadingLabPanel, bpy.types.Panel):
             col.label(text=f"Baked: {props.baked_image.name}" + ("" if current else " (out of date)"),
                       icon="CHECKMARK" if current else "ERROR")
             col.prop(props, "baked_image", text="Image")
+        _world_cache_row(layout)
+
+
+def _world_cache_row(layout) -> None:
+    """What the world cache keeps on disk, and a button to clear it."""
+    from . import world_cache
+
+    col = layout.column(heading="Cache")
+    if world_cache.folder() is None:
+        col.label(text="Off (SHADING_LAB_CACHE=off)")
+        return
+    count, size = world_cache.usage()
+    row = col.row(align=True)
+    row.label(text=f"{count} world{'s' * (count != 1)}, {size / 2 ** 20:.0f} MB on disk")
+    sub = row.row()
+    sub.enabled = count > 0
+    sub.operator("shading_lab.clear_world_cache", text="", icon="TRASH")
 
 
 def _material_row(layout, props, flag, value, fallback_label):

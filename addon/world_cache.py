@@ -186,6 +186,37 @@ def _write(where: Path, key: str, arrays: dict[str, np.ndarray]) -> None:
                                      f"it is computed again in the next session")
 
 
+def usage() -> tuple[int, int]:
+    """(worlds, bytes) kept in the folder now (0, 0 when it is off or empty)."""
+    where = folder()
+    if where is None or not where.is_dir():
+        return 0, 0
+    sizes = []
+    for path in where.glob("*.maps"):
+        try:
+            sizes.append(path.stat().st_size)
+        except OSError:
+            continue
+    return len(sizes), sum(sizes)
+
+
+def clear() -> tuple[int, int]:
+    """Delete every kept world (after pending writes): (worlds, bytes) deleted."""
+    wait()
+    where = folder()
+    if where is None or not where.is_dir():
+        return 0, 0
+    count = size = 0
+    for path in where.glob("*.maps"):
+        try:
+            bytes_ = path.stat().st_size
+            path.unlink()
+        except OSError:
+            continue
+        count, size = count + 1, size + bytes_
+    return count, size
+
+
 def _keep_within_budget(where: Path, budget: int) -> None:
     """Delete the least recently used files until the folder's maps fit in ``budget`` bytes;
     temporary files a stopped writer left behind go too once an hour old."""

@@ -184,3 +184,26 @@ def test_the_key_is_the_content(tmp_path):
                key(suns=False), key(constant=(0.1, 0.0, 0.0)), key(device="another gpu"),
                key(pixels=pixels.astype(np.float16))]
     assert base not in changed and len(set(changed)) == len(changed)
+
+
+def test_the_world_panel_shows_what_is_kept_and_the_operator_clears_it(cache, tmp_path, monkeypatch):
+    from types import SimpleNamespace
+
+    from test_ui import _draw
+
+    from addon import ui
+
+    scene = _scene(tmp_path)
+    scenes.render(scene, tmp_path / "r.exr")
+    world_cache.wait()
+    (path,) = _files(cache)
+    megabytes = path.stat().st_size / 2 ** 20
+    labels = _draw(ui.SHADINGLAB_PT_world, SimpleNamespace(world=scene.world, scene=scene)).log
+    assert ("label", f"1 world, {megabytes:.0f} MB on disk", True) in labels, labels
+    assert ("operator", "shading_lab.clear_world_cache", True) in labels
+    assert bpy.ops.shading_lab.clear_world_cache() == {"FINISHED"}
+    assert not _files(cache) and world_cache.usage() == (0, 0)
+    monkeypatch.setenv("SHADING_LAB_CACHE", "off")
+    labels = _draw(ui.SHADINGLAB_PT_world, SimpleNamespace(world=scene.world, scene=scene)).labels()
+    assert "Off (SHADING_LAB_CACHE=off)" in labels
+    assert bpy.ops.shading_lab.clear_world_cache() == {"CANCELLED"}
