@@ -283,8 +283,11 @@ _LINEAR_BYTE_SPACES = {"Non-Color", "Linear Rec.709", "Linear", "Raw", "Linear C
 
 
 def _fingerprint(image: bpy.types.Image) -> tuple:
+    # is_dirty: pixels read while an image was edited are read again once it is saved (they are
+    # then a file's: ImageData.saved)
     return (tuple(image.size), image.is_float, image.colorspace_settings.name, image.alpha_mode,
-            image.filepath_raw, image.source, image.packed_file is not None, image.use_half_precision)
+            image.filepath_raw, image.source, image.packed_file is not None, image.use_half_precision,
+            image.is_dirty)
 
 
 class _ImageCache:
@@ -364,7 +367,9 @@ def _read_image(key: str, image: bpy.types.Image, warnings: list[str]) -> S.Imag
         pixels = np.rint(pixels * 255.0).astype(np.uint8)  # the image's own bytes
     if image.alpha_mode == "NONE":  # "ignore the alpha channel of the file"
         pixels[..., 3] = 255 if pixels.dtype == np.uint8 else 1.0
-    return S.ImageData(key, pixels, storage, next(_REVISIONS))
+    saved = not image.is_dirty and (image.source in {"FILE", "SEQUENCE", "MOVIE", "TILED"}
+                                    or image.packed_file is not None)
+    return S.ImageData(key, pixels, storage, next(_REVISIONS), saved)
 
 
 def image_updates(depsgraph) -> set[str]:

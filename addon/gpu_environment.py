@@ -237,8 +237,11 @@ def _device() -> str:
 
 def _cached_or_built(frame: Frame, terms, threshold: float, suns: bool) -> EnvironmentMaps:
     """The maps from the disk cache (``world_cache``) if an earlier session kept them, else built
-    (and kept for the next)."""
-    key = world_cache.content_key(terms, threshold, suns, _device()) if world_cache.folder() else None
+    (and kept for the next). Not for images being edited (each edit would write a file)."""
+    saved = all(term.image.saved for term in World.images(terms)[:MAX_ENVIRONMENT_IMAGES])
+    key = None
+    if saved and world_cache.folder() is not None:
+        key = world_cache.content_key(terms, threshold, suns, _device())
     if key is not None:
         arrays = world_cache.load(key, _shapes(terms, suns))
         if arrays is not None:

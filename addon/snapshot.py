@@ -212,6 +212,9 @@ class ImageData:
     pixels: np.ndarray
     storage: str = "FLOAT"
     revision: int = 0  # a new number each time the pixels are read (precomputation keys use it)
+    # the pixels are a file's (or a packed file's), unedited: what is computed from them may be
+    # kept on disk between sessions (addon/world_cache.py); an image being painted is not
+    saved: bool = False
 
     def __post_init__(self):
         if self.storage not in IMAGE_STORAGE:

@@ -207,3 +207,24 @@ def test_the_world_panel_shows_what_is_kept_and_the_operator_clears_it(cache, tm
     labels = _draw(ui.SHADINGLAB_PT_world, SimpleNamespace(world=scene.world, scene=scene)).labels()
     assert "Off (SHADING_LAB_CACHE=off)" in labels
     assert bpy.ops.shading_lab.clear_world_cache() == {"CANCELLED"}
+
+
+def test_an_image_being_edited_is_not_kept(cache, tmp_path):
+    """An unsaved image (painted, generated) is read again for every render: each edit would
+    write a file. Its world is computed as without the cache."""
+    scene = _scene(tmp_path)
+    image = scene.world.node_tree.nodes["Environment Texture"].image
+    pixels = np.empty(len(image.pixels), np.float32)
+    image.pixels.foreach_get(pixels)
+    image.pixels.foreach_set(pixels * 1.5)  # an edit, not saved
+    assert image.is_dirty
+    builds, loads, saves = gpu_environment.BUILDS, gpu_environment.LOADS, world_cache.SAVES
+    scenes.render(scene, tmp_path / "a.exr")
+    scenes.render(scene, tmp_path / "b.exr")
+    world_cache.wait()
+    assert (gpu_environment.BUILDS, gpu_environment.LOADS, world_cache.SAVES) == (builds + 2, loads, saves)
+    assert not _files(cache)
+    image.save()  # saved: kept from the next render on
+    scenes.render(scene, tmp_path / "c.exr")
+    world_cache.wait()
+    assert world_cache.SAVES == saves + 1 and len(_files(cache)) == 1
