@@ -7,8 +7,11 @@ Pure numpy: no ``bpy``, no ``gpu``.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 
+from .brdf import MIN_PERCEPTUAL_ROUGHNESS
 from .snapshot import MAX_ENVIRONMENT_IMAGES, EnvironmentTerm, ImageData, World
 from .tonemap import srgb_to_linear
 
@@ -171,6 +174,7 @@ def level_roughness(k: int) -> float:
     return PREFILTER_ROUGHNESS[k]
 
 
+
 def radical_inverse(i) -> np.ndarray:
     """The Van der Corput radical inverse in base 2 of 32-bit integers (Hammersley's second
     coordinate; glsl/environment.glsl's radical_inverse)."""
@@ -179,6 +183,33 @@ def radical_inverse(i) -> np.ndarray:
     for b in range(32):
         reversed_bits |= ((bits >> np.uint64(b)) & np.uint64(1)) << np.uint64(31 - b)
     return reversed_bits.astype(np.float64) * 2.0 ** -32
+
+
+def _prefilter_lobe(alpha: float, samples: int):
+    """The prefilter's lobe samples about n = v = +z: (l_x, l_y, l_z, pdf of l), those with
+    n.l > 0 only (``prefilter_samples``)."""
+    a2 = alpha * alpha
+    i = np.arange(samples)
+    phi = 2.0 * np.pi * i / samples
+    xi2 = radical_inverse(i)
+    cos_t = np.sqrt((1.0 - xi2) / (1.0 + (a2 - 1.0) * xi2))
+    sin_t = np.sqrt(np.maximum(1.0 - cos_t * cos_t, 0.0))
+    n_dot_l = 2.0 * cos_t * cos_t - 1.0  # l = 2 (n.h) h - n
+    keep = n_dot_l > 0.0
+    t = cos_t * cos_t * (a2 - 1.0) + 1.0
+    pdf = (a2 / (np.pi * t * t) * 0.25)[keep]  # of l, with n = v: D(h) / 4
+    lx, ly = 2.0 * cos_t * sin_t * np.cos(phi), 2.0 * cos_t * sin_t * np.sin(phi)
+    return lx[keep], ly[keep], n_dot_l[keep], pdf
+
+
+def chain_lod(l_z, pdf, samples: int, chain_width: int, bias: float):
+    """environment.glsl's chain_lod: the chain level whose texels cover the solid angle
+    1 / (samples pdf) of a sample towards a direction of z ``l_z`` (the widest level
+    ``chain_width`` texels wide), plus ``bias`` levels."""
+    omega_s = 1.0 / (samples * np.asarray(pdf, np.float64))
+    omega_p = (2.0 * np.pi * np.pi * np.sqrt(np.maximum(1.0 - np.asarray(l_z, np.float64) ** 2, 1e-4))
+               / (chain_width * (chain_width // 2)))
+    return 0.5 * np.log2(omega_s / omega_p) + bias
 
 
 def prefilter_samples(alpha: float, samples: int, height: int, chain_width: int) -> np.ndarray:
@@ -196,18 +227,7 @@ def prefilter_samples(alpha: float, samples: int, height: int, chain_width: int)
     glsl/environment.glsl; the chain's widest level is ``chain_width`` texels wide). What was
     computed per texel and sample on the GPU (the frame, the half vector, atan and acos, the
     level) is computed here once per row."""
-    a2 = alpha * alpha
-    i = np.arange(samples)
-    phi = 2.0 * np.pi * i / samples
-    xi2 = radical_inverse(i)
-    cos_t = np.sqrt((1.0 - xi2) / (1.0 + (a2 - 1.0) * xi2))
-    sin_t = np.sqrt(np.maximum(1.0 - cos_t * cos_t, 0.0))
-    n_dot_l = 2.0 * cos_t * cos_t - 1.0  # l = 2 (n.h) h - n
-    keep = n_dot_l > 0.0
-    t = cos_t * cos_t * (a2 - 1.0) + 1.0
-    pdf = (a2 / (np.pi * t * t) * 0.25)[keep]  # of l, with n = v: D(h) / 4
-    lx, ly = 2.0 * cos_t * sin_t * np.cos(phi), 2.0 * cos_t * sin_t * np.sin(phi)
-    lx, ly, lz = lx[keep], ly[keep], n_dot_l[keep]
+    lx, ly, lz, pdf = _prefilter_lobe(alpha, samples)
     # each row's texel at u = 1/2 (longitude 0): n = (sin theta, 0, cos theta), and the shader's
     # frame about it: tx = normalize(cross(z, n)) = +y, ty = cross(n, tx) = (-cos theta, 0, sin theta)
     theta = np.pi * (1.0 - (np.arange(height) + 0.5) / height)[:, None]
@@ -215,10 +235,7 @@ def prefilter_samples(alpha: float, samples: int, height: int, chain_width: int)
                   np.sin(theta) * ly + np.cos(theta) * lz], -1)
     uv = equirect_uv(l)
     du = uv[..., 0] - 0.5
-    omega_s = 1.0 / (samples * pdf)
-    omega_p = (2.0 * np.pi * np.pi * np.sqrt(np.maximum(1.0 - l[..., 2] ** 2, 1e-4))
-               / (chain_width * (chain_width // 2)))
-    lod = 0.5 * np.log2(omega_s[None, :] / omega_p) + 1.0
+    lod = chain_lod(l[..., 2], pdf[None, :], samples, chain_width, 1.0)
     weight = np.broadcast_to(lz / lz.sum(), du.shape)
     return np.stack([du, uv[..., 1], lod, weight], -1).astype(np.float32)
 
@@ -264,6 +281,154 @@ def chain_layout(width: int) -> tuple[tuple[int, int, int, int], ...]:
 def atlas_size(layout) -> tuple[int, int]:
     """The size of a texture holding ``layout``'s rectangles and their borders."""
     return max(x + w + 1 for x, _, w, _ in layout), max(y + h + 1 for _, y, _, h in layout)
+
+
+# --- the GPU's world maps, in numpy (gpu_environment, env_*.frag.glsl) ---------------------------
+
+def bake_width(terms) -> int:
+    """The width the field is baked at: the widest image (a mirror ball counts twice its width)
+    rounded up to a power of two, 64 to 4096."""
+    widest = max((term.image.size[0] * (2 if term.projection == "MIRROR_BALL" else 1)
+                  for term in World.images(terms)[:MAX_ENVIRONMENT_IMAGES]), default=64)
+    width = 64
+    while width < min(widest, 4096):
+        width *= 2
+    return width
+
+
+def halve(level: np.ndarray) -> np.ndarray:
+    """env_downsample.frag.glsl: half the size of an equirectangular level (h, w, 3), each texel
+    the solid-angle weighted mean of the 2 x 2 it covers (rows weighted by sin theta at their
+    centres)."""
+    h, w = level.shape[0] // 2, level.shape[1] // 2
+    weight = np.sin(np.pi * (1.0 - (np.arange(2 * h) + 0.5) / (2 * h)))[:, None, None]
+    summed = (level[..., :3] * weight).reshape(h, 2, w, 2, 3).sum(axis=(1, 3))
+    return summed / (2.0 * weight.reshape(h, 2, 1, 1).sum(axis=1))
+
+
+def chain_levels(terms, threshold: float = 0.0) -> list[np.ndarray]:
+    """The downsampled chain (gpu_environment._chain) of the field ``terms``, its brightest texels
+    clamped at ``threshold`` if > 0: the bake halved down to ``CHAIN_NARROWEST``, the levels
+    from ``MIRROR_WIDTH`` (or the bake's width) down, widest first."""
+    width = bake_width(terms)
+    levels = [world_radiance(terms, texel_directions(width // 2, width), threshold)]
+    while levels[-1].shape[1] > CHAIN_NARROWEST:
+        levels.append(halve(levels[-1]))
+    return [level for level in levels if level.shape[1] <= MIRROR_WIDTH]
+
+
+def level_lookup(level: np.ndarray, uv) -> np.ndarray:
+    """environment.glsl's bordered_level: bilinear between texel centres, repeating in u and
+    clamped in v (what a level's border gives the GPU's filter)."""
+    h, w = level.shape[:2]
+    uv = np.asarray(uv, np.float64)
+    x = np.mod(uv[..., 0], 1.0) * w - 0.5
+    y = np.clip(uv[..., 1], 0.0, 1.0) * h - 0.5
+    x0, y0 = np.floor(x), np.floor(y)
+    fx, fy = (x - x0)[..., None], (y - y0)[..., None]
+    xa, xb = np.mod(x0, w).astype(int), np.mod(x0 + 1, w).astype(int)
+    ya, yb = np.clip(y0, 0, h - 1).astype(int), np.clip(y0 + 1, 0, h - 1).astype(int)
+    bottom = level[ya, xa] * (1.0 - fx) + level[ya, xb] * fx
+    top = level[yb, xa] * (1.0 - fx) + level[yb, xb] * fx
+    return bottom * (1.0 - fy) + top * fy
+
+
+def chain_lookup(levels: list[np.ndarray], d, lod) -> np.ndarray:
+    """environment.glsl's chain_lookup: the chain in directions ``d`` (..., 3), between levels
+    floor(lod) and the next."""
+    uv = equirect_uv(d)
+    lod = np.clip(np.broadcast_to(np.asarray(lod, np.float64), uv.shape[:-1]), 0.0, len(levels) - 1.0)
+    k = np.floor(lod).astype(int)
+    t = (lod - k)[..., None]
+    out = np.zeros(uv.shape[:-1] + (3,))
+    for level in np.unique(k):
+        at = k == level
+        a = level_lookup(levels[level], uv[at])
+        b = level_lookup(levels[min(level + 1, len(levels) - 1)], uv[at])
+        out[at] = a + (b - a) * t[at]
+    return out
+
+
+def tangent_frame(n) -> tuple[np.ndarray, np.ndarray]:
+    """(tx, ty) about unit normals ``n`` as the world's shaders build them: tx = normalize(up x n),
+    up +z unless n is within 0.999 of it (then +x), ty = n x tx."""
+    n = np.asarray(n, np.float64)
+    up = np.where((np.abs(n[..., 2]) < 0.999)[..., None], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0])
+    tx = np.cross(up, n)
+    tx /= np.linalg.norm(tx, axis=-1, keepdims=True)
+    return tx, np.cross(n, tx)
+
+
+def prefiltered_level(levels: list[np.ndarray], d, k: int, samples: int | None = None) -> np.ndarray:
+    """(N, 3): prefiltered level ``k`` (env_prefilter.frag.glsl) in unit directions ``d`` (N, 3),
+    evaluated there rather than read between its texels: the lobe's ``samples``
+    (``PREFILTER_SAMPLES[k]``) about each direction, each read from the chain at its filtered
+    importance sampling level plus one, weighted by n.l. Level 0 is the chain's widest level."""
+    d = np.asarray(d, np.float64)
+    alpha = level_roughness(k) ** 2
+    if alpha <= 0.0:
+        return level_lookup(levels[0], equirect_uv(d))
+    count = PREFILTER_SAMPLES[k] if samples is None else samples
+    lx, ly, lz, pdf = _prefilter_lobe(alpha, count)
+    tx, ty = tangent_frame(d)
+    l = tx[:, None] * lx[:, None] + ty[:, None] * ly[:, None] + d[:, None] * lz[:, None]
+    lod = chain_lod(l[..., 2], pdf[None, :], count, levels[0].shape[1], 1.0)
+    return np.einsum("nsc,s->nc", chain_lookup(levels, l, lod), lz / lz.sum())
+
+
+def prefiltered_radiance(whole: list[np.ndarray], clamped: list[np.ndarray], d, roughness,
+                         first_clamped: int = PREFILTER_LEVELS, samples: int | None = None) -> np.ndarray:
+    """(N, 3): ibl.glsl's env_prefiltered: the two levels around each point's perceptual
+    ``roughness`` (level 0 standing for the roughness floor 0.045), mixed linearly in roughness;
+    levels from ``first_clamped`` on made from the ``clamped`` chain."""
+    d = np.asarray(d, np.float64)
+    rough = np.broadcast_to(np.asarray(roughness, np.float64), d.shape[:-1])
+    r = np.array([MIN_PERCEPTUAL_ROUGHNESS] + list(PREFILTER_ROUGHNESS[1:]))
+    k = np.clip(np.searchsorted(r, rough, side="left") - 1, 0, PREFILTER_LEVELS - 2)
+    t = np.clip((rough - r[k]) / (r[k + 1] - r[k]), 0.0, 1.0)[..., None]
+    out = np.zeros(d.shape[:-1] + (3,))
+    for level in np.unique(k):
+        at = k == level
+        a, b = (prefiltered_level(clamped if j >= first_clamped else whole, d[at], j, samples)
+                for j in (level, level + 1))
+        out[at] = a + (b - a) * t[at]
+    return out
+
+
+def irradiance(level: np.ndarray, n) -> np.ndarray:
+    """(N, 3): the irradiance E(n) = sum over texels L max(n.d, 0) dOmega of an equirectangular
+    level (env_irradiance.frag.glsl's exact convolution, at ``n`` rather than between the
+    irradiance map's texels)."""
+    h, w = level.shape[:2]
+    d = texel_directions(h, w).reshape(-1, 3)
+    radiance = (level[..., :3] * texel_solid_angles(h, w)[:, None, None]).reshape(-1, 3)
+    return np.maximum(np.asarray(n, np.float64) @ d.T, 0.0) @ radiance
+
+
+@dataclass
+class WorldMaps:
+    """The numpy twin of ``gpu_environment.EnvironmentMaps``: the chains the world's light is read
+    from (the whole field's and the clamped one's, the same list without suns), the first level
+    made from the clamped chain, and the spherical harmonics."""
+
+    whole: list
+    clamped: list
+    first_clamped: int
+    sh: np.ndarray
+
+    def level(self, width: int) -> np.ndarray:
+        """The clamped chain's level ``width`` texels wide (or its widest, if narrower)."""
+        return next((level for level in self.clamped if level.shape[1] == width), self.clamped[0])
+
+
+def world_maps(world: World) -> WorldMaps:
+    """What ``gpu_environment`` computes for ``world``'s lighting field (images or not)."""
+    whole = chain_levels(world.lighting)
+    suns = bool(world.suns)
+    clamped = chain_levels(world.lighting, world.threshold) if suns else whole
+    first_clamped = FIRST_CLAMPED_LEVEL if suns else PREFILTER_LEVELS
+    return WorldMaps(whole, clamped, first_clamped, sh9_project(next(
+        (level for level in clamped if level.shape[1] == 256), clamped[0])))
 
 
 # --- very bright texels: split off as suns ------------------------------------------------------

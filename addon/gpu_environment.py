@@ -77,15 +77,6 @@ def _uniform(terms) -> EnvironmentMaps:
     return EnvironmentMaps(_packed(sh, (), radiance), None, None, None, None, sh, (), 0.0)
 
 
-def _bake_width(terms) -> int:
-    widest = max((term.image.size[0] * (2 if term.projection == "MIRROR_BALL" else 1)
-                  for term in World.images(terms)[:MAX_ENVIRONMENT_IMAGES]), default=64)
-    width = 64
-    while width < min(widest, 4096):
-        width *= 2
-    return width
-
-
 def _draw(frame: Frame, shader, bind, target: Target, rect=None) -> None:
     with target.bind():
         gpu.state.depth_test_set("NONE")
@@ -109,7 +100,7 @@ def _chain(frame: Frame, terms, clamp: bool) -> tuple[list[Target], Target, tupl
     """Bake the field (with its brightest texels clamped, if ``clamp``) and halve it down to
     ``environment.CHAIN_NARROWEST``; the levels from the mirror level's width down also go into
     one texture for the prefilter. Returns the separate levels, that texture and its rectangles."""
-    width = _bake_width(terms)
+    width = env.bake_width(terms)
     images = min(len(World.images(terms)), MAX_ENVIRONMENT_IMAGES)
     levels = [Target(width, width // 2, depth=False)]
     size = (float(width), float(width // 2), 1.0 if clamp else 0.0, 0.0)
@@ -198,7 +189,7 @@ def _build_maps(frame: Frame, terms, suns: bool, keep=None) -> EnvironmentMaps:
 def _layouts(terms) -> tuple[tuple, tuple]:
     """The rectangles of the chain's levels and of the atlas's (as ``_chain`` and ``_build_maps``
     lay them out)."""
-    chain_rects = env.chain_layout(min(_bake_width(terms), env.MIRROR_WIDTH))
+    chain_rects = env.chain_layout(min(env.bake_width(terms), env.MIRROR_WIDTH))
     return chain_rects, env.atlas_layout(chain_rects[0][2])
 
 

@@ -15,7 +15,7 @@ import math
 
 import numpy as np
 
-from . import ltc
+from . import environment, ltc
 from . import multiscatter as M
 from .brdf import (
     D_GGX,
@@ -526,17 +526,29 @@ def shade_uniform_environment(s: Surface, radiance, terms: Terms = DEFAULT_TERMS
     times the diffuse occlusion ``ao`` (split sum)."""
     L = np.asarray(radiance, np.float64) * _rgb_scalar(specular_ao)
     irradiance = np.pi * np.asarray(radiance, np.float64) * _rgb_scalar(ao)
+    return shade_environment(s, L, irradiance, terms, weights)
+
+
+def shade_environment(s: Surface, prefiltered, irradiance, terms: Terms = DEFAULT_TERMS, weights=(1.0, 1.0),
+                      sampled=None):
+    """model_pbr.glsl's shade_environment (principled.glsl's principled_environment for the
+    Principled set), occlusion applied by the caller: the split sum's specular, its lobe's albedo
+    F0 (E - B) + F90 B (Karis 2013) times the ``prefiltered`` radiance; or (``sampled``, World
+    Specular: Sampled) that lobe sampled against the world (``env_sampled_specular``); the
+    diffuse lobe lit by the ``irradiance`` and weighted by what the split-sum lobe left."""
     E, B = env_split_sum(s, terms)
     base = s.base_color * (1.0 - s.metal3)
     if terms.principled:
         metal_M, _, layer = principled_layers(s)
         F0m = np.minimum(s.base_color, 1.0)
         metal = metal_M * (F0m * _rgb_scalar(E - B) + _rgb_scalar(B))
-        specular = (s.metal3 * metal + (1.0 - s.metal3) * _rgb_scalar(layer)) * L
+        specular = (s.metal3 * metal + (1.0 - s.metal3) * _rgb_scalar(layer)) * prefiltered
+        if sampled is not None:
+            specular = np.broadcast_to(sampled, np.shape(specular))
         diffuse = base * _rgb_scalar(np.clip(1.0 - layer, 0.0, 1.0)) * irradiance * INV_PI
         return diffuse * weights[0] + specular * weights[1]
     albedo = s.f0 * _rgb_scalar(E - B) + _rgb_scalar(s.f90 * B)
-    specular = albedo * L
+    specular = albedo * prefiltered if sampled is None else np.asarray(sampled, np.float64)
     if terms.multiscatter:
         # Fdez-Aguera 2019, eq. 16-18: light scattered more than once leaves as Fms Ems of the irradiance
         Ems = _rgb_scalar(1.0 - E)
@@ -550,6 +562,113 @@ def shade_uniform_environment(s: Surface, radiance, terms: Terms = DEFAULT_TERMS
         weight = np.clip(1.0 - albedo, 0.0, 1.0)
     diffuse = base * weight * irradiance * INV_PI
     return diffuse * weights[0] + specular * weights[1]
+
+
+def env_dominant_direction(n, r, alpha):
+    """ibl.glsl's env_dominant_direction: where a GGX lobe's reflected energy peaks, off the
+    mirror direction ``r`` towards the normal as the surface roughens (Lagarde & de Rousiers
+    2014, listing 22)."""
+    smoothness = (1.0 - np.asarray(alpha, np.float64))[..., None]
+    d = n + (r - n) * (smoothness * (np.sqrt(smoothness) + (1.0 - smoothness)))
+    return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+
+def shade_image_environment(s: Surface, maps: environment.WorldMaps, terms: Terms = DEFAULT_TERMS,
+                            samples: int = 0, diffuse: str = "MAP", weights=(1.0, 1.0)):
+    """model_pbr.glsl's shade_environment under an image world (``environment.world_maps``),
+    nothing occluded: the prefiltered radiance read in the lobe's dominant direction (the mirror
+    direction at the roughness floor) or, with ``samples``, the lobe sampled (World Specular:
+    Sampled); the irradiance from the map (``diffuse`` "MAP": the exact convolution of the 64
+    texels wide level, evaluated at n) or the nine spherical harmonics ("SH9")."""
+    r = 2.0 * s.NoV[..., None] * s.n - s.v
+    if diffuse == "SH9":
+        irradiance = environment.sh9_irradiance(maps.sh, s.n)
+    else:
+        irradiance = environment.irradiance(maps.level(environment.IRRADIANCE_WIDTH), s.n)
+    if samples:
+        sampled = env_sampled_specular(s, maps.whole, maps.clamped, samples, maps.first_clamped, terms)
+        return shade_environment(s, 0.0, irradiance, terms, weights, sampled)
+    rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
+    d = np.where((rough > MIN_PERCEPTUAL_ROUGHNESS)[..., None],
+                 env_dominant_direction(s.n, r, np.broadcast_to(s.alpha, np.shape(s.NoV))), r)
+    prefiltered = environment.prefiltered_radiance(maps.whole, maps.clamped, d, rough, maps.first_clamped)
+    return shade_environment(s, prefiltered, irradiance, terms, weights)
+
+
+def env_sample_lobe(s: Surface, levels, samples: int, terms: Terms = DEFAULT_TERMS):
+    """model_pbr.glsl's env_sample_lobe: the specular lobe's ``samples`` Hammersley half vectors
+    about each point's normal (phi = 2 pi (i + 1/2) / N), each sample's light read from the
+    chain ``levels`` at its filtered importance sampling level (``environment.chain_lod``, no
+    bias), weighted by f cos / pdf = F V 4 (v.h)(n.l) / (n.h); at the roughness floor the mirror
+    direction read from the chain's widest level, times F at n.v."""
+    rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
+    alpha = np.broadcast_to(s.alpha, np.shape(s.NoV))
+    lobe_terms = DEFAULT_TERMS if terms.principled else terms
+    r = 2.0 * s.NoV[..., None] * s.n - s.v
+    if terms.principled:
+        mirror = principled_specular_tint(s, s.NoV)
+    else:
+        mirror = pbr_fresnel(s, s.NoV, terms)
+    mirror = mirror * environment.level_lookup(levels[0], environment.equirect_uv(r))
+    tx, ty = environment.tangent_frame(s.n)
+    a2 = (alpha * alpha)[..., None]
+    total = np.zeros(np.shape(s.NoV) + (3,))
+    xi = environment.radical_inverse(np.arange(samples))
+    for i in range(samples):
+        phi = 2.0 * np.pi * (i + 0.5) / samples
+        if lobe_terms.ndf == "BECKMANN":
+            cos_t = 1.0 / np.sqrt(1.0 - a2[..., 0] * math.log(max(1.0 - xi[i], 1e-12)))
+        else:
+            cos_t = np.sqrt((1.0 - xi[i]) / (1.0 + (a2[..., 0] - 1.0) * xi[i]))
+        sin_t = np.sqrt(np.maximum(1.0 - cos_t * cos_t, 0.0))
+        h = (tx * (sin_t * math.cos(phi))[..., None] + ty * (sin_t * math.sin(phi))[..., None]
+             + s.n * cos_t[..., None])
+        VoH = _dot(s.v, h)
+        l = 2.0 * VoH[..., None] * h - s.v
+        NoL = _dot(s.n, l)
+        on = (VoH > 0.0) & (NoL > 0.0)
+        NoH = np.maximum(cos_t, MIN_COS)
+        with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+            D = pbr_distribution(NoH, sin_t * sin_t, alpha, lobe_terms)
+            pdf = D * NoH / (4.0 * VoH)
+            lod = environment.chain_lod(l[..., 2], np.where(on, pdf, 1.0), samples, levels[0].shape[1], 0.0)
+            L = environment.chain_lookup(levels, l, np.where(on, lod, 0.0))
+            if terms.principled:
+                F = principled_specular_tint(s, VoH)
+                V = V_SmithGGXCorrelated(s.NoV, NoL, alpha)
+            else:
+                F = pbr_fresnel(s, VoH, terms)
+                V = pbr_visibility(s.NoV, NoL, NoH, VoH, alpha, terms)
+            weight = V * 4.0 * VoH * NoL / NoH
+        total += np.where(on[..., None], L * F * np.where(on, weight, 0.0)[..., None], 0.0)
+    total /= samples
+    if not terms.principled:
+        total = total * specular_energy_compensation(s, terms)
+    return np.where((rough <= MIN_PERCEPTUAL_ROUGHNESS)[..., None], mirror, total)
+
+
+def world_sun_specular(roughness, first_clamped: int):
+    """ibl.glsl's world_sun_specular: the suns' specular weight, 0 up to the last level made from
+    the whole world, 1 from the first made from the clamped one, linear in roughness between."""
+    if first_clamped >= environment.PREFILTER_LEVELS:
+        return np.ones(np.shape(roughness))
+    r0 = MIN_PERCEPTUAL_ROUGHNESS if first_clamped == 1 else environment.level_roughness(first_clamped - 1)
+    r1 = environment.level_roughness(first_clamped)
+    return np.clip((np.asarray(roughness, np.float64) - r0) / (r1 - r0), 0.0, 1.0)
+
+
+def env_sampled_specular(s: Surface, whole, clamped, samples: int, first_clamped: int,
+                         terms: Terms = DEFAULT_TERMS):
+    """model_pbr.glsl's env_sampled_specular: the lobe sampled against the whole world's chain
+    for smooth surfaces, against the clamped one (the suns lit as lights) for rough ones,
+    mixed as the split-sum levels are (``world_sun_specular``)."""
+    t = np.broadcast_to(world_sun_specular(s.roughness, first_clamped), np.shape(s.NoV))[..., None]
+    out = np.zeros(np.shape(s.NoV) + (3,))
+    if np.any(t < 1.0):
+        out = out + (1.0 - t) * env_sample_lobe(s, whole, samples, terms)
+    if np.any(t > 0.0):
+        out = out + t * env_sample_lobe(s, clamped, samples, terms)
+    return out
 
 
 MODELS = {
