@@ -739,7 +739,7 @@ def _program_keys(snapshot: Snapshot) -> Callable[[str, str | None], tuple]:
             if name is not None:
                 material = replace(material, terms=CANDIDATE_TERMS[name])
             f = programs.Features.from_snapshot(snapshot, material=material, shadow_layers=0)
-            keys[key, name] = (f.model, f.terms, f.maps, f.alpha_from_base_map)
+            keys[key, name] = (f.model, f.terms, f.maps, f.alpha_from_base_map, f.env_samples)
         return keys[key, name]
 
     return key_of

@@ -262,7 +262,9 @@ def _material_extras(props) -> dict:
 
     extras = dict(model=chosen(props.model), fresnel=chosen(props.fresnel), ndf=chosen(props.ndf),
                   visibility=chosen(props.visibility), diffuse=chosen(props.diffuse),
-                  fresnel_p=float(props.fresnel_p))
+                  fresnel_p=float(props.fresnel_p),
+                  environment_samples={"SCENE": -1, "SPLIT_SUM": 0}.get(props.world_specular,
+                                                                        int(props.world_samples)))
     if props.use_f90:
         extras["f90"] = float(props.f90)
     if props.use_complex_ior:

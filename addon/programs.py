@@ -150,8 +150,11 @@ class Features:
                              for name in MaterialParams.MAPS if getattr(material, name))
         if shadow_layers is None:
             shadow_layers = shadows.assign(snapshot)[1]
+        env_samples = snapshot.settings.environment_samples
         if material is not None:
             model = material.model or model
+            if material.environment_samples >= 0:  # the material's own World Specular
+                env_samples = material.environment_samples
             terms = material.terms or terms.override(fresnel=material.fresnel, ndf=material.ndf,
                                                      visibility=material.visibility,
                                                      diffuse=material.diffuse)
@@ -172,7 +175,7 @@ class Features:
                                      and material.base_color_map is not None and with_maps),
             environment=environment_kind(snapshot.world),
             env_diffuse=snapshot.settings.environment_diffuse,
-            env_samples=snapshot.settings.environment_samples,
+            env_samples=env_samples,
             ambient_world=snapshot.settings.ambient_world,
             occlusion=snapshot.settings.world_occlusion,
             shadow_layers=light_slots(shadow_layers) if shadow_layers else 0,

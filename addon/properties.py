@@ -260,6 +260,19 @@ class ShadingLabMaterialSettings(bpy.types.PropertyGroup):
                              items=(("SCENE", "Scene's", ""), *TERM_ITEMS["visibility"]))
     diffuse: EnumProperty(name="Diffuse", items=(("SCENE", "Scene's", ""), *TERM_ITEMS["diffuse"]),
                           default="SCENE", update=_redraw)
+    world_specular: EnumProperty(
+        name="World Specular", default="SCENE", update=_redraw, items=(
+            ("SCENE", "Scene's", "The Render properties' World Specular"),
+            ("SPLIT_SUM", "Split Sum", "Prefiltered world x directional albedo (Karis 2013): one lookup"),
+            ("SAMPLED", "Sampled", "The BRDF importance-sampled against the world at every pixel of "
+                                   "this material: slow, converges to the reference"),
+        ),
+        description="How the world lights this material's specular lobe (physically based model, "
+                    "worlds with images): a hero metal sampled while the rest of the scene uses the "
+                    "split sum, or the other way round")
+    world_samples: IntProperty(
+        name="World Samples", default=64, min=1, max=1024, update=_redraw,
+        description="Samples of the world per pixel for this material's sampled world specular")
     use_base_color: _override("Base Color", "base colour")
     base_color: FloatVectorProperty(name="Base Color", subtype="COLOR", size=3, min=0.0, max=1.0,
                                     default=(0.8, 0.8, 0.8), update=_redraw)

@@ -158,6 +158,9 @@ class MaterialParams:
     visibility: str = ""
     diffuse: str = ""
     terms: Terms | None = None  # the whole term set, fixed for this material (the Auto term set's choice)
+    # the world's specular for this material: -1 follows the scene, 0 the split sum, n > 0 the lobe
+    # sampled n times per pixel (physically based model, image worlds)
+    environment_samples: int = -1
 
 
 #: Objects without a material render with this: Blender's default surface (grey 0.8,

@@ -256,6 +256,10 @@ class SHADINGLAB_PT_material(ShadingLabPanel, bpy.types.Panel):
         terms = layout.column(align=True)
         for name in ("fresnel", "ndf", "visibility", "diffuse"):
             terms.prop(props, name)
+        row = layout.row(align=True)
+        row.prop(props, "world_specular")
+        if props.world_specular == "SAMPLED":
+            row.prop(props, "world_samples", text="Samples")
         _auto_choice(layout, context)
         layout.label(text="Unticked values come from the surface shader (Principled BSDF)")
         col = layout.column()

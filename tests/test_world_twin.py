@@ -15,7 +15,7 @@ from gpu_harness import run_on_gpu
 from test_cycles import _cycles
 from test_world_light import _sphere, _world
 
-from addon import environment, extract, shading
+from addon import environment, extract, gpu_library, shading
 from addon.scene_builder import principled_material
 
 W, H, SCALE = 96, 48, 4.0  # orthographic, looking down -z; 24 px per metre
@@ -173,3 +173,35 @@ def test_the_sampled_twin_converges_to_cycles_and_measures_the_split_sums_error(
         assert error < SAMPLED_VS_CYCLES[kind], f"r {roughness}: sampled twin {error:.2%} from Cycles"
     worst_split, worst_sampled = max(b for _, _, b in rows), max(a for _, a, _ in rows)
     assert worst_split > 1.5 * worst_sampled, f"split sum {worst_split:.2%}, sampled {worst_sampled:.2%}"
+
+
+@pytest.mark.parametrize("scene_samples", [0, 16])
+def test_a_material_takes_its_own_world_specular(scene_samples, tmp_path):
+    """Material > World Specular overrides the scene's: the middle sphere sampled (16) under a
+    split-sum scene, or on the split sum in a sampled scene; every sphere as the twin shades it
+    with its own setting, and the program compiled for it says so."""
+    scene = _scene(tmp_path, "metal", 0.0, "PRINCIPLED")
+    middle = bpy.data.materials[f"metal {ROUGHNESS[1]}"].shading_lab
+    middle.world_specular = "SPLIT_SUM" if scene_samples else "SAMPLED"
+    middle.world_samples = 16
+    props = scene.shading_lab
+    props.world_specular = "SAMPLED" if scene_samples else "SPLIT_SUM"
+    props.world_samples = max(scene_samples, 1)
+    gpu = scenes.render(scene, tmp_path / "gpu.exr")[..., :3].astype(np.float64)
+    own = 0 if scene_samples else 16
+    errors = []
+    for i, samples in enumerate((scene_samples, own, scene_samples)):
+        twin, pixels = _twin(scene, samples)
+        rows, cols, _, _ = pixels[i]
+        a, b = gpu[rows, cols], twin[rows, cols]
+        errors.append(float(np.abs(a - b).mean() / b.mean()))
+    other, _ = _twin(scene, scene_samples)  # the middle sphere as the scene's setting would shade it
+    rows, cols, _, _ = _pixels()[1]
+    apart = float(np.abs(other[rows, cols] - gpu[rows, cols]).mean() / gpu[rows, cols].mean())
+    print(f"scene {scene_samples} samples, the middle sphere {own}: errors against the twin "
+          + ", ".join(f"{e:.3%}" for e in errors) + f"; the middle one as the scene's: {apart:.2%}")
+    assert max(errors) < 0.015, errors
+    assert apart > 3.0 * errors[1], (apart, errors[1])
+    defines = [dict(k) for k in gpu_library.LIBRARY._programs if isinstance(k[0], tuple)]
+    assert any(d.get("SL_ENV_SAMPLES") == "16" for d in defines)
+    assert any("SL_ENV_MAP" in d and "SL_ENV_SAMPLES" not in d for d in defines)
