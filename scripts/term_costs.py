@@ -10,8 +10,12 @@ Every (candidate, N) is rendered round-robin after a warm-up round, in one proce
 of the engine's draw time (GPU work fenced by the read-back) go to ``--out`` with their ratios to
 the default terms (``relative``), which ``addon/auto_terms.py`` orders its candidates by, with
 the view's pixel count and a candidate program's first use (``first_use_ms``: its compile and
-first draw, the driver's shader cache warm), which it weighs a program of its own against. Times
-are CPU-rasteriser times (Mesa llvmpipe): the add-on uses them only against each other.
+first draw, the driver's shader cache warm), which it weighs a program of its own against. Then
+the world's specular (``world_ms``): the same plane under Blender's bundled forest world instead
+of the black one (2 lights, world occlusion off), the Principled set with the split sum and with
+the lobe sampled 16 and 64 times per pixel, which Auto weighs the split sum against where a scene
+samples its world. Times are CPU-rasteriser times (Mesa llvmpipe): the add-on uses them only
+against each other.
 """
 
 from __future__ import annotations
@@ -26,6 +30,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
 
 COUNTS = (2, 8, 32)
+#: Per-pixel world samples the sampled world specular is measured at.
+WORLD_SAMPLES = (16, 64)
 VIEW = 8.0  # the view's width (m)
 
 
@@ -55,6 +61,35 @@ def first_use_ms(names, apply) -> dict[str, float]:
         if i:
             out[name] = times[0] - times[1]
     return out
+
+
+def world_costs(scene, groups, frames: int) -> dict:
+    """The Principled set's draw time under the bundled forest world: with the split sum, and
+    with the lobe sampled WORLD_SAMPLES times per pixel (round-robin, medians)."""
+    import os
+
+    import bpy
+    import round_robin
+
+    folder = bpy.utils.system_resource("DATAFILES", path="studiolights/world")
+    world = bpy.data.worlds.new("Forest")
+    world.use_nodes = True
+    tree = world.node_tree
+    environment = tree.nodes.new("ShaderNodeTexEnvironment")
+    environment.image = bpy.data.images.load(os.path.join(folder, "forest.exr"), check_existing=True)
+    tree.links.new(environment.outputs["Color"], tree.nodes["Background"].inputs["Color"])
+    scene.world = world
+    props = scene.shading_lab
+    props.term_set, props.world_occlusion = "PRINCIPLED", False
+    round_robin.show_only(groups, COUNTS[0])
+
+    def apply(samples):
+        props.world_specular = "SAMPLED" if samples else "SPLIT_SUM"
+        props.world_samples = max(samples, 1)
+
+    med = round_robin.median_draw_ms([0, *WORLD_SAMPLES], apply, frames)
+    return {"lights": COUNTS[0], "split_sum": round(med[0], 2),
+            "sampled": {str(n): round(med[n], 2) for n in WORLD_SAMPLES}}
 
 
 def build(w: int, h: int):
@@ -124,6 +159,7 @@ def main() -> int:
     med = round_robin.median_draw_ms(configs, apply, args.frames)
     draw_ms = {name: [round(med[(name, n)], 2) for n in COUNTS] for name in names}
     first_use = first_use_ms(names, apply)
+    world = world_costs(scene, groups, args.frames)
     data = {
         "generated_by": "scripts/term_costs.py",
         "scene": f"plane filling an orthographic view, rough metal, N point lights reaching all of it, "
@@ -133,6 +169,7 @@ def main() -> int:
         "draw_ms": draw_ms,
         "relative": derive(draw_ms),
         "first_use_ms": round(statistics.median(first_use.values()), 1),
+        "world_ms": world,
     }
     args.out.write_text(json.dumps(data, indent=1) + "\n")
     rows = ["| candidate | " + " | ".join(f"{n} light(s) ms (x default)" for n in COUNTS) + " |",
@@ -148,7 +185,10 @@ def main() -> int:
         f"A candidate's program's first use (compile and first draw, the driver's shader cache warm), "
         f"median of {len(first_use)}: {data['first_use_ms']:.1f} ms "
         f"({', '.join(f'{auto_terms.LABELS[n]} {t:.0f}' for n, t in first_use.items())}).", "",
-        *[f"Order at {n} light(s), cheap -> accurate: " + " -> ".join(order[n]) for n in COUNTS], ""])
+        *[f"Order at {n} light(s), cheap -> accurate: " + " -> ".join(order[n]) for n in COUNTS], "",
+        f"The world's specular, Principled set, {world['lights']} lights, the forest world: split sum "
+        f"{world['split_sum']:.1f} ms, sampled " + ", ".join(
+            f"{n} per pixel {t:.1f} ms" for n, t in world["sampled"].items()) + ".", ""])
     round_robin.write_table(args.table, text)
     return 0
 
