@@ -2,7 +2,7 @@
 terms', per light count, measured here (a benchmark, not a test).
 
     .venv/bin/python scripts/term_costs.py [--resolution 1280x720] [--frames 5]
-        [--table docs/bench/term_costs.md] [--out addon/term_costs.json]
+        [--table docs/bench/term_costs.md] [--out addon/term_costs.json] [--world-only]
 
 A plane fills an orthographic view under N point lights that each reach all of it (N = 2, 8, 32;
 no shadows, a black world: the shading is all the frame does), with a rough metal material.
@@ -14,8 +14,9 @@ first draw, the driver's shader cache warm), which it weighs a program of its ow
 the world's specular (``world_ms``): the same plane under Blender's bundled forest world instead
 of the black one (2 lights, world occlusion off), the Principled set with the split sum and with
 the lobe sampled 16 and 64 times per pixel, which Auto weighs the split sum against where a scene
-samples its world. Times are CPU-rasteriser times (Mesa llvmpipe): the add-on uses them only
-against each other.
+samples its world (``--world-only`` measures that alone and replaces it in ``--out`` and the
+table, the candidates' times kept). Times are CPU-rasteriser times (Mesa llvmpipe): the add-on
+uses them only against each other.
 """
 
 from __future__ import annotations
@@ -92,6 +93,15 @@ def world_costs(scene, groups, frames: int) -> dict:
             "sampled": {str(n): round(med[n], 2) for n in WORLD_SAMPLES}}
 
 
+WORLD_LINE = "The world's specular"
+
+
+def world_line(world: dict) -> str:
+    return (f"{WORLD_LINE}, Principled set, {world['lights']} lights, the forest world: split sum "
+            f"{world['split_sum']:.1f} ms, sampled " + ", ".join(
+                f"{n} per pixel {t:.1f} ms" for n, t in world["sampled"].items()) + ".")
+
+
 def build(w: int, h: int):
     import bpy
     import round_robin
@@ -137,12 +147,26 @@ def main() -> int:
     parser.add_argument("--frames", type=int, default=5)
     parser.add_argument("--table", type=Path, default=ROOT / "docs" / "bench" / "term_costs.md")
     parser.add_argument("--out", type=Path, default=ROOT / "addon" / "term_costs.json")
+    parser.add_argument("--world-only", action="store_true",
+                        help="measure the world's specular only; keep the candidates' times")
     args = parser.parse_args()
     w, h = (int(x) for x in args.resolution.split("x"))
 
     from addon import auto_terms
 
     scene, groups = build(w, h)
+    if args.world_only:
+        data = json.loads(args.out.read_text())
+        if data.get("pixels") != w * h:
+            raise SystemExit(f"{args.out} was measured at {data.get('pixels')} pixels, not {w}x{h}")
+        data["world_ms"] = world_costs(scene, groups, args.frames)
+        args.out.write_text(json.dumps(data, indent=1) + "\n")
+        old = args.table.read_text().split("\n") if args.table.exists() else []
+        kept = [line for line in old if not line.startswith(WORLD_LINE)]
+        while kept and not kept[-1]:
+            kept.pop()
+        round_robin.write_table(args.table, "\n".join([*kept, "", world_line(data["world_ms"]), ""]))
+        return 0
     props = scene.shading_lab
     names = list(auto_terms.CANDIDATE_TERMS)
     configs = [(name, n) for n in COUNTS for name in names]
@@ -186,9 +210,7 @@ def main() -> int:
         f"median of {len(first_use)}: {data['first_use_ms']:.1f} ms "
         f"({', '.join(f'{auto_terms.LABELS[n]} {t:.0f}' for n, t in first_use.items())}).", "",
         *[f"Order at {n} light(s), cheap -> accurate: " + " -> ".join(order[n]) for n in COUNTS], "",
-        f"The world's specular, Principled set, {world['lights']} lights, the forest world: split sum "
-        f"{world['split_sum']:.1f} ms, sampled " + ", ".join(
-            f"{n} per pixel {t:.1f} ms" for n, t in world["sampled"].items()) + ".", ""])
+        world_line(world), ""])
     round_robin.write_table(args.table, text)
     return 0
 
