@@ -65,8 +65,9 @@ def first_use_ms(names, apply) -> dict[str, float]:
 
 
 def world_costs(scene, groups, frames: int) -> dict:
-    """The Principled set's draw time under the bundled forest world: with the split sum, and
-    with the lobe sampled WORLD_SAMPLES times per pixel (round-robin, medians)."""
+    """The Principled set's draw time under the black world and under the bundled forest world:
+    with the split sum, and with the lobe sampled WORLD_SAMPLES times per pixel (round-robin in
+    one process, medians: the world's cost is the difference to the black world's)."""
     import os
 
     import bpy
@@ -79,17 +80,18 @@ def world_costs(scene, groups, frames: int) -> dict:
     environment = tree.nodes.new("ShaderNodeTexEnvironment")
     environment.image = bpy.data.images.load(os.path.join(folder, "forest.exr"), check_existing=True)
     tree.links.new(environment.outputs["Color"], tree.nodes["Background"].inputs["Color"])
-    scene.world = world
+    black = scene.world
     props = scene.shading_lab
     props.term_set, props.world_occlusion = "PRINCIPLED", False
     round_robin.show_only(groups, COUNTS[0])
 
     def apply(samples):
-        props.world_specular = "SAMPLED" if samples else "SPLIT_SUM"
+        scene.world = black if samples < 0 else world
+        props.world_specular = "SAMPLED" if samples > 0 else "SPLIT_SUM"
         props.world_samples = max(samples, 1)
 
-    med = round_robin.median_draw_ms([0, *WORLD_SAMPLES], apply, frames)
-    return {"lights": COUNTS[0], "split_sum": round(med[0], 2),
+    med = round_robin.median_draw_ms([-1, 0, *WORLD_SAMPLES], apply, frames)
+    return {"lights": COUNTS[0], "black": round(med[-1], 2), "split_sum": round(med[0], 2),
             "sampled": {str(n): round(med[n], 2) for n in WORLD_SAMPLES}}
 
 
@@ -97,8 +99,8 @@ WORLD_LINE = "The world's specular"
 
 
 def world_line(world: dict) -> str:
-    return (f"{WORLD_LINE}, Principled set, {world['lights']} lights, the forest world: split sum "
-            f"{world['split_sum']:.1f} ms, sampled " + ", ".join(
+    return (f"{WORLD_LINE}, Principled set, {world['lights']} lights: the black world {world['black']:.1f} "
+            f"ms; the forest world with the split sum {world['split_sum']:.1f} ms, sampled " + ", ".join(
                 f"{n} per pixel {t:.1f} ms" for n, t in world["sampled"].items()) + ".")
 
 
