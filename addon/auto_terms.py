@@ -16,6 +16,10 @@ reference alike); with the world occluded, a share of the points lies in creases
 the candidates' world terms alone, which differ most there and are seen near black, where Delta
 E_ITP is steepest.
 
+Where the scene samples an image world's specular, the world joins the candidates: each term set
+also with the split sum (``SPLIT_SUM``), lit by the image world's twin (``environment.world_maps``)
+against the reference sampled as the GPU samples it.
+
 The choice is made when the scene is read (``extract.snapshot``), once per material, and fixed
 into the material's program by defines: on this machine's rasteriser both sides of every branch
 run, so only a separate program saves a term's cost. Pure numpy: no ``bpy``, no ``gpu``.
@@ -82,6 +86,34 @@ MISSING = {
     "PRINCIPLED": (),
 }
 COSTS_FILE = Path(__file__).with_name("term_costs.json")
+#: Where a scene samples an image world's specular (World Specular: Sampled), the world joins the
+#: candidates: each term set with the split sum instead, named with this suffix, cheaper than
+#: any sampled one; the reference (and the last resort) stays the Principled set sampled. The
+#: other sets sampled are left out: the sampling, not the terms, is most of their cost.
+SPLIT_SUM = "+SPLIT_SUM"
+#: The prediction's twin of the world (``environment.world_maps``): baked no wider than this, each
+#: prefiltered level from this many lobe samples a point (the GPU: 1024 wide, 64-2048 samples);
+#: the split sum's error against the sampled lobe is what it predicts, at 1024 points a material.
+PREDICTION_WORLD_WIDTH = 512
+PREDICTION_PREFILTER_SAMPLES = 128
+
+
+def base_name(name: str) -> str:
+    """The term set of candidate ``name`` (without the world's split-sum suffix)."""
+    return name[:-len(SPLIT_SUM)] if name.endswith(SPLIT_SUM) else name
+
+
+def candidate_terms(name: str) -> Terms:
+    return CANDIDATE_TERMS[base_name(name)]
+
+
+def label(name: str) -> str:
+    return LABELS[base_name(name)] + (", split-sum world" if name.endswith(SPLIT_SUM) else "")
+
+
+def missing(name: str) -> tuple[str, ...]:
+    """What candidate ``name`` leaves out of the reference."""
+    return MISSING[base_name(name)] + (("sampled world specular",) if name.endswith(SPLIT_SUM) else ())
 
 #: Default error bound. Delta E_ITP 1 is about one just-noticeable difference (BT.2124), but at 1
 #: the benchmark's material_grid moved its mean FLIP against Cycles from 0.032 (Principled set)
@@ -134,7 +166,13 @@ class Choice:
 
     @property
     def label(self) -> str:
-        return LABELS[self.name]
+        return label(self.name)
+
+    @property
+    def environment_samples(self) -> int | None:
+        """The material's World Specular with this choice: 0 (the split sum) for a split-sum
+        candidate, else None (as it was)."""
+        return 0 if self.name.endswith(SPLIT_SUM) else None
 
 
 # --- the cost table ----------------------------------------------------------------------------
@@ -194,6 +232,23 @@ def shading_ms(lights: int, pixels: int, table: dict | None = None) -> dict[str,
         return {}
     default = float(np.interp(math.log(max(lights, 1)), np.log(counts), base)) * pixels / table["pixels"]
     return {name: default * ratio for name, ratio in relative_costs(lights, table).items()}
+
+
+def world_ms(samples: int, pixels: int, table: dict | None = None) -> tuple[float, float] | None:
+    """(split sum, sampled ``samples`` per pixel): what an image world's light adds to the
+    frame time at ``pixels`` pixels (term_costs.py's ``world_ms``: the Principled set under the
+    forest world less under the black one, in one run; linear in the samples between and beyond
+    the measured counts, never below the split sum); None without a measured table."""
+    table = cost_table() if table is None else table
+    world = table.get("world_ms")
+    if not world or "black" not in world or not table.get("pixels"):
+        return None
+    counts = sorted(int(n) for n in world["sampled"])
+    times = [world["sampled"][str(n)] for n in counts]
+    slope = (times[-1] - times[0]) / (counts[-1] - counts[0]) if len(counts) > 1 else 0.0
+    sampled = max(times[0] + slope * (samples - counts[0]), world["split_sum"])
+    scale = pixels / table["pixels"]
+    return (world["split_sum"] - world["black"]) * scale, (sampled - world["black"]) * scale
 
 
 def merge_small_savings(chosen: dict[str, str], allowed: dict[str, list[str]], shares: dict[str, float],
@@ -483,23 +538,45 @@ def _sphere_directions(count: int) -> np.ndarray:
 #: predicted at 2.2 (random scene 42, 2026-12-02).
 CREASE_SHARE = 0.1
 CREASE_AO = 0.5
+#: Under an image world (``SPLIT_SUM`` candidates), a further share of the samples is taken to lie
+#: in the lights' shadows, the world unoccluded: the split sum's error against the sampled lobe is
+#: seen there against the world's light alone, darker than in the light. Without it, a ground in
+#: the shadow of spheres under the sunset world's sun was predicted at 0.44 and measured at 5.1
+#: (random scene 2011, bound 4, 2026-12-03).
+SHADOW_SHARE = 0.1
 
 
 def radiance(samples: Samples, lights, terms: Terms, world: np.ndarray | None = None,
-             occlusion: bool = False, irradiance: list | None = None, memo: dict | None = None) -> np.ndarray:
-    """(N, 3) radiance at the samples with ``terms``: the lights (no shadows), the uniform world;
-    when ``occlusion``, the first CREASE_SHARE of the samples lie in creases (the world occluded,
-    the lights blocked). ``irradiance``, ``memo``: what ``shading.shade`` can share between the
-    candidates shading the same samples."""
+             occlusion: bool = False, irradiance: list | None = None, memo: dict | None = None,
+             image: tuple | None = None) -> np.ndarray:
+    """(N, 3) radiance at the samples with ``terms``: the lights (no shadows), the uniform world
+    ``world`` or (``image``: the twin's maps, the world samples per pixel, 0 for the split sum,
+    and the diffuse mode) the image world itself; when ``occlusion``, the first CREASE_SHARE of
+    the samples lie in creases (the world occluded, the lights blocked); under an image world, the
+    next SHADOW_SHARE in the lights' shadows. ``irradiance``,
+    ``memo``: what ``shading.shade`` and the world's twin can share between the candidates
+    shading the same samples."""
     s = shading.Surface(samples.p, samples.n, samples.v, samples.material)
     c = shading.shade("PBR", s, list(lights), terms=terms, irradiance=irradiance, memo=memo)
-    if world is not None and np.any(world > 0.0):
+    lit = image is not None or (world is not None and np.any(world > 0.0))
+    if lit:
         ao, specular_ao = np.ones(len(samples)), np.ones(len(samples))
+        index = np.arange(len(samples))
+        creases = CREASE_SHARE * len(samples) if occlusion else 0.0
         if occlusion:
-            creased = np.arange(len(samples)) < CREASE_SHARE * len(samples)
+            creased = index < creases
             ao, specular_ao = np.where(creased, CREASE_AO, 1.0), np.where(creased, 0.0, 1.0)
             c = np.where(creased[:, None], 0.0, c)  # the lights shadowed in creases
-        c = c + shading.shade_uniform_environment(s, world, terms, ao=ao, specular_ao=specular_ao)
+        if image is not None:
+            shadowed = (index >= creases) & (index < creases + SHADOW_SHARE * len(samples))
+            c = np.where(shadowed[:, None], 0.0, c)
+            maps, count, diffuse = image
+            world_memo = {} if memo is None else memo.setdefault(("world",), {})
+            c = c + shading.shade_image_environment(s, maps, terms, count, diffuse, ao=ao,
+                                                    specular_ao=specular_ao, memo=world_memo,
+                                                    prefilter_samples=PREDICTION_PREFILTER_SAMPLES)
+        else:
+            c = c + shading.shade_uniform_environment(s, world, terms, ao=ao, specular_ao=specular_ao)
     return c
 
 
@@ -532,35 +609,47 @@ def limiting_term(name: str, material: MaterialParams, errors: dict[str, float],
     """(terms, why) a material needed beyond the default terms, with its deciding values: ("", "")
     when the default terms were within the bound (``name`` then won on cost alone); for the
     Principled set, what the most accurate other candidate still lacked."""
-    if errors.get("DEFAULT", math.inf) * margin <= bound:
+    cheapest = "DEFAULT" + SPLIT_SUM if "DEFAULT" + SPLIT_SUM in errors else "DEFAULT"
+    if errors.get(cheapest, math.inf) * margin <= bound:
         return "", ""
     if name == "PRINCIPLED":
         others = [n for n in errors if n != "PRINCIPLED"]
-        best = min(others, key=lambda n: errors[n]) if others else "DEFAULT"
-        needed = MISSING[best]
+        best = min(others, key=lambda n: errors[n]) if others else cheapest
+        needed = missing(best)
     else:
-        needed = tuple(t for t in MISSING["DEFAULT"] if t not in MISSING[name])
+        needed = tuple(t for t in missing(cheapest) if t not in missing(name))
     kind = "metal" if np.mean(material.metalness) > 0.5 else "dielectric"
     detail = f"{kind}, roughness {float(np.mean(material.roughness)):.2f}"
-    if set(needed) - {"multiple scattering"}:
+    if set(needed) - {"multiple scattering", "sampled world specular"}:
         detail += f", F0 {float(np.mean(material.f0)):.3f}"
     return ", ".join(needed), detail
 
 
 def predict(samples: Samples, lights, world: np.ndarray | None, order, exposure: float = 0.0,
-            quantile: float = DEFAULT_QUANTILE, occlusion: bool = False) -> dict[str, float]:
-    """Each candidate's predicted error (before the margin), in ``order``."""
+            quantile: float = DEFAULT_QUANTILE, occlusion: bool = False,
+            image: tuple | None = None) -> dict[str, float]:
+    """Each candidate's predicted error (before the margin), in ``order``. ``image``: (the twin's
+    maps, world samples per pixel, diffuse mode) of a scene that samples an image world's
+    specular: the world lights the reference sampled and the split-sum candidates with the
+    split sum (``SPLIT_SUM``)."""
     lights = brightest_lights(samples, lights)
     irradiance = [shading.light_irradiance(light, samples.p) for light in lights]  # the same for all
-    memo: dict = {}  # the area and sphere lights' lobe geometry, the same for all
-    reference = radiance(samples, lights, REFERENCE, world, occlusion, irradiance, memo)
+    memo: dict = {}  # the area and sphere lights' lobe geometry, the world's light: the same for all
+
+    def world_of(name: str):
+        if image is None:
+            return None
+        return (image[0], 0 if name.endswith(SPLIT_SUM) else image[1], image[2])
+
+    reference = radiance(samples, lights, REFERENCE, world, occlusion, irradiance, memo,
+                         world_of("PRINCIPLED"))
     out = {}
     for name in order:
         if name == "PRINCIPLED":
             out[name] = 0.0
             continue
-        out[name] = quantile_error(radiance(samples, lights, CANDIDATE_TERMS[name], world, occlusion,
-                                            irradiance, memo), reference, exposure, quantile)
+        out[name] = quantile_error(radiance(samples, lights, candidate_terms(name), world, occlusion,
+                                            irradiance, memo, world_of(name)), reference, exposure, quantile)
     return out
 
 
@@ -592,7 +681,7 @@ def _geometry_fingerprint(geometry) -> tuple:
             geometry.normals[::step].tobytes())
 
 
-def _prediction_key(snapshot: Snapshot, key: str, items, camera, world, order, exposure: float,
+def _prediction_key(snapshot: Snapshot, key: str, items, camera, world: bytes | tuple, order, exposure: float,
                     quantile: float, occlusion: bool) -> tuple:
     """Everything a material's prediction depends on: its parameters and images, the geometry
     drawn with it and where, the view, the lights, the world, the candidates."""
@@ -605,7 +694,35 @@ def _prediction_key(snapshot: Snapshot, key: str, items, camera, world, order, e
                             for item in items))
     view = (np.asarray(camera.view).tobytes(), np.asarray(camera.projection).tobytes(), camera.is_perspective)
     return (key, replace(material, terms=None), images, geometry, view, tuple(snapshot.lights),
-            np.asarray(world).tobytes(), tuple(order), exposure, quantile, occlusion)
+            world, tuple(order), exposure, quantile, occlusion)
+
+
+#: The twin's maps of the last worlds a prediction sampled (by content, as the GPU keeps its own).
+_WORLD_MAPS: OrderedDict = OrderedDict()
+WORLD_MAPS_KEPT = 2
+
+
+def _world_key(world: World) -> tuple:
+    terms = world.lighting
+    return (World.constant(terms), world.threshold, bool(world.suns),
+            tuple((t.image.key, t.image.revision, tuple(t.weight), t.projection, t.closest,
+                   np.asarray(t.lookup, np.float32).tobytes()) for t in World.images(terms)))
+
+
+def sampled_world(snapshot: Snapshot) -> tuple | None:
+    """(the twin's maps, world samples per pixel, diffuse mode) where the scene samples an image
+    world's specular (the world then joins the candidates: ``SPLIT_SUM``); else None."""
+    samples = snapshot.settings.environment_samples
+    if samples <= 0 or programs.environment_kind(snapshot.world) != "MAP":
+        return None
+    key = _world_key(snapshot.world)
+    maps = _WORLD_MAPS.pop(key, None)
+    if maps is None:
+        maps = environment.world_maps(snapshot.world, PREDICTION_WORLD_WIDTH)
+    _WORLD_MAPS[key] = maps
+    while len(_WORLD_MAPS) > WORLD_MAPS_KEPT:
+        del _WORLD_MAPS[next(iter(_WORLD_MAPS))]
+    return maps, samples, snapshot.settings.environment_diffuse
 
 
 @dataclass
@@ -634,18 +751,24 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
     if snapshot.settings.model != "PBR":
         return {}
     order = candidate_order(len(snapshot.lights))
-    world = world_radiance(snapshot.world)
+    image = sampled_world(snapshot)
+    if image is not None:  # the split sum joins: every set with it, then the reference sampled
+        order = [name + SPLIT_SUM for name in order] + ["PRINCIPLED"]
+    world = world_radiance(snapshot.world) if image is None else None
+    world_id = (np.asarray(world).tobytes() if image is None
+                else (_world_key(snapshot.world), image[1], image[2]))
     exposure = float(snapshot.settings.exposure)
     occlusion = snapshot.settings.world_occlusion
     users = material_users(snapshot)
     found: dict[str, _Prediction] = {}
     for key, material in snapshot.materials.items():
         if material.model not in ("", "PBR") or any(
-                (material.fresnel, material.ndf, material.visibility, material.diffuse)):
+                (material.fresnel, material.ndf, material.visibility, material.diffuse)) \
+                or material.environment_samples >= 0:  # its own terms or World Specular: kept
             continue
         if key not in users:
             continue
-        cache_key = _prediction_key(snapshot, key, users[key], camera or snapshot.camera, world, order,
+        cache_key = _prediction_key(snapshot, key, users[key], camera or snapshot.camera, world_id, order,
                                     exposure, quantile, occlusion)
         entry = _PREDICTIONS.pop(cache_key, None)
         if entry is None:
@@ -660,12 +783,17 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
     def predicted(entry: _Prediction) -> dict[str, float]:
         if entry.errors is None:
             entry.errors = predict(entry.samples, snapshot.lights, world, order, exposure, quantile,
-                                   occlusion)
+                                   occlusion, image)
             entry.samples = None
         return entry.errors
 
     pixels = snapshot.width * snapshot.height * snapshot.settings.samples ** 2
     frame_ms = shading_ms(len(snapshot.lights), pixels)
+    if image is not None and frame_ms:  # every set sampled (as the scene is) or on the split sum
+        costs = world_ms(image[1], pixels)
+        frame_ms = {} if costs is None else {
+            **{name + SPLIT_SUM: ms + costs[0] for name, ms in frame_ms.items()},
+            **{name: ms + costs[1] for name, ms in frame_ms.items()}}
     first_use = float(cost_table().get("first_use_ms", 0.0))
     payback = PAYBACK_FRAMES if payback_frames is None else payback_frames
     programs_of = _program_keys(snapshot)
@@ -674,7 +802,7 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
     # merged away and joining one costs nothing (a material near the payback threshold does not
     # flip between a program of its own and a shared one on small edits)
     fixed |= {programs_of(key, choice.name) for key, choice in (previous or {}).items()
-              if key in snapshot.materials and choice.name in CANDIDATE_TERMS}
+              if key in snapshot.materials and choice.name in order}
     cheapest = min(order, key=lambda n: frame_ms.get(n, 0.0))
     reach = {key: e.share * (frame_ms["PRINCIPLED"] - frame_ms[cheapest]) if frame_ms else math.inf
              for key, e in found.items()}
@@ -714,16 +842,16 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
     for key, entry in found.items():
         name = chosen[key]
         if entry.count == 0:
-            out[key] = Choice(name, CANDIDATE_TERMS[name], 0.0, samples=0)
+            out[key] = Choice(name, candidate_terms(name), 0.0, samples=0)
         elif key not in predicted_keys:  # too small to be worth a program, none cheaper to join
             # (a prediction kept from an earlier choice, with another payback, decided nothing here)
-            out[key] = Choice(name, CANDIDATE_TERMS[name], 0.0, samples=entry.count, costs_ms=reach[key])
+            out[key] = Choice(name, candidate_terms(name), 0.0, samples=entry.count, costs_ms=reach[key])
         else:
             errors = entry.errors
             limiting, reason = limiting_term(name, entry.seen, errors, bound)
             was_merged = name != alone[key]
             saving = entry.share * (frame_ms[name] - frame_ms[alone[key]]) if was_merged else 0.0
-            out[key] = Choice(name, CANDIDATE_TERMS[name], errors[name], limiting, reason,
+            out[key] = Choice(name, candidate_terms(name), errors[name], limiting, reason,
                               tuple(errors.items()), entry.count, alone[key] if was_merged else "", saving)
     return out
 
@@ -737,7 +865,9 @@ def _program_keys(snapshot: Snapshot) -> Callable[[str, str | None], tuple]:
         if (key, name) not in keys:
             material = snapshot.materials[key]
             if name is not None:
-                material = replace(material, terms=CANDIDATE_TERMS[name])
+                material = replace(material, terms=candidate_terms(name))
+                if name.endswith(SPLIT_SUM):
+                    material = replace(material, environment_samples=0)
             f = programs.Features.from_snapshot(snapshot, material=material, shadow_layers=0)
             keys[key, name] = (f.model, f.terms, f.maps, f.alpha_from_base_map, f.env_samples)
         return keys[key, name]
@@ -749,7 +879,10 @@ def apply(snapshot: Snapshot, choices: dict[str, Choice]) -> None:
     """Fix each chosen material's terms into ``snapshot.materials`` (its program follows) and
     keep the choices in ``snapshot.term_choices``."""
     for key, choice in choices.items():
-        snapshot.materials[key] = replace(snapshot.materials[key], terms=choice.terms)
+        material = replace(snapshot.materials[key], terms=choice.terms)
+        if choice.environment_samples is not None:
+            material = replace(material, environment_samples=choice.environment_samples)
+        snapshot.materials[key] = material
     snapshot.term_choices = choices
 
 
@@ -762,7 +895,8 @@ def summary(choices: dict[str, Choice]) -> str:
     for choice in choices.values():
         counts[choice.name] = counts.get(choice.name, 0) + 1
     worst = max(choice.predicted for choice in choices.values())
-    parts = ", ".join(f"{counts[n]} {LABELS[n]}" for n in CANDIDATE_TERMS if n in counts)
+    names = sorted(counts, key=lambda n: (n.endswith(SPLIT_SUM), list(CANDIDATE_TERMS).index(base_name(n))))
+    parts = ", ".join(f"{counts[n]} {label(n)}" for n in names)
     return f"Auto: {parts} (predicted dE_ITP <= {worst:.2f})"
 
 
@@ -798,10 +932,11 @@ def material_id_snapshot(snapshot: Snapshot) -> tuple[Snapshot, list[str]]:
 
 
 def principled_snapshot(snapshot: Snapshot) -> Snapshot:
-    """``snapshot`` with every material Auto chose for on the Principled set."""
+    """``snapshot`` with every material Auto chose for on the Principled set, with the scene's
+    World Specular (Auto chooses only for materials that follow it)."""
     materials = dict(snapshot.materials)
     for key in snapshot.term_choices:
-        materials[key] = replace(materials[key], terms=REFERENCE)
+        materials[key] = replace(materials[key], terms=REFERENCE, environment_samples=-1)
     return replace(snapshot, materials=materials)
 
 

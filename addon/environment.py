@@ -306,11 +306,12 @@ def halve(level: np.ndarray) -> np.ndarray:
     return summed / (2.0 * weight.reshape(h, 2, 1, 1).sum(axis=1))
 
 
-def chain_levels(terms, threshold: float = 0.0) -> list[np.ndarray]:
+def chain_levels(terms, threshold: float = 0.0, max_width: int | None = None) -> list[np.ndarray]:
     """The downsampled chain (gpu_environment._chain) of the field ``terms``, its brightest texels
     clamped at ``threshold`` if > 0: the bake halved down to ``CHAIN_NARROWEST``, the levels
-    from ``MIRROR_WIDTH`` (or the bake's width) down, widest first."""
-    width = bake_width(terms)
+    from ``MIRROR_WIDTH`` (or the bake's width) down, widest first. ``max_width``: baked no wider
+    (point-sampled there, not halved down to it: a cheaper, slightly sharper chain)."""
+    width = bake_width(terms) if max_width is None else min(bake_width(terms), max_width)
     levels = [world_radiance(terms, texel_directions(width // 2, width), threshold)]
     while levels[-1].shape[1] > CHAIN_NARROWEST:
         levels.append(halve(levels[-1]))
@@ -421,11 +422,12 @@ class WorldMaps:
         return next((level for level in self.clamped if level.shape[1] == width), self.clamped[0])
 
 
-def world_maps(world: World) -> WorldMaps:
-    """What ``gpu_environment`` computes for ``world``'s lighting field (images or not)."""
-    whole = chain_levels(world.lighting)
+def world_maps(world: World, max_width: int | None = None) -> WorldMaps:
+    """What ``gpu_environment`` computes for ``world``'s lighting field (images or not); baked no
+    wider than ``max_width`` if given (``chain_levels``)."""
+    whole = chain_levels(world.lighting, max_width=max_width)
     suns = bool(world.suns)
-    clamped = chain_levels(world.lighting, world.threshold) if suns else whole
+    clamped = chain_levels(world.lighting, world.threshold, max_width) if suns else whole
     first_clamped = FIRST_CLAMPED_LEVEL if suns else PREFILTER_LEVELS
     return WorldMaps(whole, clamped, first_clamped, sh9_project(next(
         (level for level in clamped if level.shape[1] == 256), clamped[0])))

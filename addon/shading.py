@@ -574,25 +574,36 @@ def env_dominant_direction(n, r, alpha):
 
 
 def shade_image_environment(s: Surface, maps: environment.WorldMaps, terms: Terms = DEFAULT_TERMS,
-                            samples: int = 0, diffuse: str = "MAP", weights=(1.0, 1.0)):
-    """model_pbr.glsl's shade_environment under an image world (``environment.world_maps``),
-    nothing occluded: the prefiltered radiance read in the lobe's dominant direction (the mirror
-    direction at the roughness floor) or, with ``samples``, the lobe sampled (World Specular:
-    Sampled); the irradiance from the map (``diffuse`` "MAP": the exact convolution of the 64
-    texels wide level, evaluated at n) or the nine spherical harmonics ("SH9")."""
-    r = 2.0 * s.NoV[..., None] * s.n - s.v
-    if diffuse == "SH9":
-        irradiance = environment.sh9_irradiance(maps.sh, s.n)
-    else:
-        irradiance = environment.irradiance(maps.level(environment.IRRADIANCE_WIDTH), s.n)
+                            samples: int = 0, diffuse: str = "MAP", weights=(1.0, 1.0), ao=1.0,
+                            specular_ao=1.0, memo: dict | None = None, prefilter_samples: int | None = None):
+    """model_pbr.glsl's shade_environment under an image world (``environment.world_maps``): the
+    prefiltered radiance read in the lobe's dominant direction (the mirror direction at the
+    roughness floor) or, with ``samples``, the lobe sampled (World Specular: Sampled); the
+    irradiance from the map (``diffuse`` "MAP": the exact convolution of the 64 texels wide level,
+    evaluated at n) or the nine spherical harmonics ("SH9"); the diffuse occlusion ``ao`` and the
+    specular's ``specular_ao`` as the occlusion pass gives them. ``memo``: where the same points
+    are shaded with several term sets, the irradiance and the prefiltered radiance (which depend
+    on the points and the roughness alone) computed once; ``prefilter_samples``: the lobe samples
+    of each prefiltered level (``environment.PREFILTER_SAMPLES`` if None)."""
+    memo = {} if memo is None else memo
+    if ("irradiance", diffuse) not in memo:
+        if diffuse == "SH9":
+            memo["irradiance", diffuse] = environment.sh9_irradiance(maps.sh, s.n)
+        else:
+            level = maps.level(environment.IRRADIANCE_WIDTH)
+            memo["irradiance", diffuse] = environment.irradiance(level, s.n)
+    irradiance = memo["irradiance", diffuse] * _rgb_scalar(ao)
     if samples:
         sampled = env_sampled_specular(s, maps.whole, maps.clamped, samples, maps.first_clamped, terms)
-        return shade_environment(s, 0.0, irradiance, terms, weights, sampled)
-    rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
-    d = np.where((rough > MIN_PERCEPTUAL_ROUGHNESS)[..., None],
-                 env_dominant_direction(s.n, r, np.broadcast_to(s.alpha, np.shape(s.NoV))), r)
-    prefiltered = environment.prefiltered_radiance(maps.whole, maps.clamped, d, rough, maps.first_clamped)
-    return shade_environment(s, prefiltered, irradiance, terms, weights)
+        return shade_environment(s, 0.0, irradiance, terms, weights, sampled * _rgb_scalar(specular_ao))
+    if "prefiltered" not in memo:
+        r = 2.0 * s.NoV[..., None] * s.n - s.v
+        rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
+        d = np.where((rough > MIN_PERCEPTUAL_ROUGHNESS)[..., None],
+                     env_dominant_direction(s.n, r, np.broadcast_to(s.alpha, np.shape(s.NoV))), r)
+        memo["prefiltered"] = environment.prefiltered_radiance(maps.whole, maps.clamped, d, rough,
+                                                               maps.first_clamped, prefilter_samples)
+    return shade_environment(s, memo["prefiltered"] * _rgb_scalar(specular_ao), irradiance, terms, weights)
 
 
 def env_sample_lobe(s: Surface, levels, samples: int, terms: Terms = DEFAULT_TERMS):

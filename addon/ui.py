@@ -286,7 +286,7 @@ def _auto_choice(layout, context) -> None:
     scene_props = getattr(scene, "shading_lab", None)
     if scene_props is None or scene_props.term_set != "AUTO":
         return
-    from .auto_terms import LABELS
+    from .auto_terms import label
     from .engine import last_term_choices, last_verification
 
     name = context.material.name_full
@@ -304,7 +304,7 @@ def _auto_choice(layout, context) -> None:
             box.label(text=f"Too small for a program of its own: a cheaper set would save at most "
                            f"{choice.costs_ms:.2f} ms a frame")
         if choice.alone:
-            box.label(text=f"Alone it would take {LABELS[choice.alone]}: a program of its own would "
+            box.label(text=f"Alone it would take {label(choice.alone)}: a program of its own would "
                            f"save {choice.costs_ms:.2f} ms a frame, too little to repay its compile")
     checked = last_verification.get(name)
     if checked is not None:
