@@ -202,19 +202,19 @@ def _prefilter_lobe(alpha: float, samples: int):
     return lx[keep], ly[keep], n_dot_l[keep], pdf
 
 
-def chain_lod(l_z, pdf, samples: int, chain_width: int, bias: float):
-    """environment.glsl's chain_lod: the chain level whose texels cover the solid angle
-    1 / (samples pdf) of a sample towards a direction of z ``l_z`` (the widest level
-    ``chain_width`` texels wide), plus ``bias`` levels."""
+def chain_lod(pdf, samples: int, chain_width: int, bias: float):
+    """environment.glsl's chain_lod: the chain level whose texels at the equator cover the solid
+    angle 1 / (samples pdf) of a sample (the widest level ``chain_width`` texels wide), plus
+    ``bias`` levels, at every latitude."""
     omega_s = 1.0 / (samples * np.asarray(pdf, np.float64))
-    omega_p = (2.0 * np.pi * np.pi * np.sqrt(np.maximum(1.0 - np.asarray(l_z, np.float64) ** 2, 1e-4))
-               / (chain_width * (chain_width // 2)))
+    omega_p = 2.0 * np.pi * np.pi / (chain_width * (chain_width // 2))
     return 0.5 * np.log2(omega_s / omega_p) + bias
 
 
 def prefilter_samples(alpha: float, samples: int, height: int, chain_width: int) -> np.ndarray:
-    """(height, n, 4) float32: the lobe samples of one prefiltered level, per row of the level
-    (``height`` rows, equirectangular), as ``env_prefilter`` reads them.
+    """(height + 2, n, 4) float32: the lobe samples of one prefiltered level, per row of the level
+    (``height`` rows, equirectangular), then about the north and the south pole (for the level's
+    border rows: ``chain_layout``), as ``env_prefilter`` reads them.
 
     The level is the environment seen through a GGX lobe of ``alpha`` about each texel's
     direction with n = v (the split sum, Karis 2013): ``samples`` Hammersley half vectors
@@ -223,19 +223,19 @@ def prefilter_samples(alpha: float, samples: int, height: int, chain_width: int)
     turned about the pole by its longitude, and an equirectangular u is the longitude, so each
     sample is stored once per row: (u offset from the texel's u, v, the chain level to read,
     n.l / sum n.l). The level is filtered importance sampling's (Krivanek & Colbert 2008): the
-    level whose texels cover the sample's solid angle 1 / (N pdf), plus one (``chain_lod`` in
+    level whose texels at the equator cover the sample's solid angle 1 / (N pdf), plus one (``chain_lod`` in
     glsl/environment.glsl; the chain's widest level is ``chain_width`` texels wide). What was
     computed per texel and sample on the GPU (the frame, the half vector, atan and acos, the
     level) is computed here once per row."""
     lx, ly, lz, pdf = _prefilter_lobe(alpha, samples)
     # each row's texel at u = 1/2 (longitude 0): n = (sin theta, 0, cos theta), and the shader's
     # frame about it: tx = normalize(cross(z, n)) = +y, ty = cross(n, tx) = (-cos theta, 0, sin theta)
-    theta = np.pi * (1.0 - (np.arange(height) + 0.5) / height)[:, None]
-    l = np.stack([-np.cos(theta) * ly + np.sin(theta) * lz, np.broadcast_to(lx, (height, lx.size)),
+    theta = np.concatenate([np.pi * (1.0 - (np.arange(height) + 0.5) / height), [0.0, np.pi]])[:, None]
+    l = np.stack([-np.cos(theta) * ly + np.sin(theta) * lz, np.broadcast_to(lx, (height + 2, lx.size)),
                   np.sin(theta) * ly + np.cos(theta) * lz], -1)
     uv = equirect_uv(l)
     du = uv[..., 0] - 0.5
-    lod = chain_lod(l[..., 2], pdf[None, :], samples, chain_width, 1.0)
+    lod = np.broadcast_to(chain_lod(pdf, samples, chain_width, 1.0), du.shape)
     weight = np.broadcast_to(lz / lz.sum(), du.shape)
     return np.stack([du, uv[..., 1], lod, weight], -1).astype(np.float32)
 
@@ -318,9 +318,17 @@ def chain_levels(terms, threshold: float = 0.0, max_width: int | None = None) ->
     return [level for level in levels if level.shape[1] <= MIRROR_WIDTH]
 
 
+def pole_borders(level: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(below, above): a level's border rows beyond its poles (``chain_layout``): 2 P - the edge
+    row, P the edge row's mean (the pole's value), so that bilinear filtering runs from each edge
+    texel to P at the pole itself."""
+    bottom, top = level[0, :, :3], level[-1, :, :3]
+    return 2.0 * bottom.mean(0) - bottom, 2.0 * top.mean(0) - top
+
+
 def level_lookup(level: np.ndarray, uv) -> np.ndarray:
-    """environment.glsl's bordered_level: bilinear between texel centres, repeating in u and
-    clamped in v (what a level's border gives the GPU's filter)."""
+    """environment.glsl's bordered_level: bilinear between texel centres, repeating in u; between
+    the edge rows and the poles, towards the pole's value (``pole_borders``)."""
     h, w = level.shape[:2]
     uv = np.asarray(uv, np.float64)
     x = np.mod(uv[..., 0], 1.0) * w - 0.5
@@ -328,9 +336,15 @@ def level_lookup(level: np.ndarray, uv) -> np.ndarray:
     x0, y0 = np.floor(x), np.floor(y)
     fx, fy = (x - x0)[..., None], (y - y0)[..., None]
     xa, xb = np.mod(x0, w).astype(int), np.mod(x0 + 1, w).astype(int)
-    ya, yb = np.clip(y0, 0, h - 1).astype(int), np.clip(y0 + 1, 0, h - 1).astype(int)
-    bottom = level[ya, xa] * (1.0 - fx) + level[ya, xb] * fx
-    top = level[yb, xa] * (1.0 - fx) + level[yb, xb] * fx
+    below, above = pole_borders(level)
+
+    def texels(yi, xi):  # rows -1 and h: the borders
+        inside = level[np.clip(yi, 0, h - 1), xi, :3]
+        return np.where((yi >= h)[..., None], above[xi], np.where((yi < 0)[..., None], below[xi], inside))
+
+    ya, yb = y0.astype(int), (y0 + 1).astype(int)
+    bottom = texels(ya, xa) * (1.0 - fx) + texels(ya, xb) * fx
+    top = texels(yb, xa) * (1.0 - fx) + texels(yb, xb) * fx
     return bottom * (1.0 - fy) + top * fy
 
 
@@ -373,7 +387,7 @@ def prefiltered_level(levels: list[np.ndarray], d, k: int, samples: int | None =
     lx, ly, lz, pdf = _prefilter_lobe(alpha, count)
     tx, ty = tangent_frame(d)
     l = tx[:, None] * lx[:, None] + ty[:, None] * ly[:, None] + d[:, None] * lz[:, None]
-    lod = chain_lod(l[..., 2], pdf[None, :], count, levels[0].shape[1], 1.0)
+    lod = np.broadcast_to(chain_lod(pdf, count, levels[0].shape[1], 1.0), l.shape[:-1])
     return np.einsum("nsc,s->nc", chain_lookup(levels, l, lod), lz / lz.sum())
 
 

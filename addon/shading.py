@@ -642,7 +642,7 @@ def env_sample_lobe(s: Surface, levels, samples: int, terms: Terms = DEFAULT_TER
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
             D = pbr_distribution(NoH, sin_t * sin_t, alpha, lobe_terms)
             pdf = D * NoH / (4.0 * VoH)
-            lod = environment.chain_lod(l[..., 2], np.where(on, pdf, 1.0), samples, levels[0].shape[1], 0.0)
+            lod = environment.chain_lod(np.where(on, pdf, 1.0), samples, levels[0].shape[1], 0.0)
             L = environment.chain_lookup(levels, l, np.where(on, lod, 0.0))
             if terms.principled:
                 F = principled_specular_tint(s, VoH)

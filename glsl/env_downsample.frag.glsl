@@ -7,11 +7,20 @@ void main()
 #ifdef SL_COPY
   /* a level copied into its rectangle of the chain texture (offset: the rectangle's origin),
    * drawn with the viewport one texel wider on every side: the border repeats the opposite
-   * column at the sides and the edge row above and below (addon/environment.py chain_layout) */
+   * column at the sides, and above and below holds 2 P - the edge row, P the edge row's mean,
+   * the pole's value (environment.glsl bordered_level_pole; addon/environment.py chain_layout) */
   ivec2 size = textureSize(source, 0);
   ivec2 q = ivec2(floor(gl_FragCoord.xy - offset.xy));
   q.x = q.x < 0 ? size.x - 1 : (q.x >= size.x ? 0 : q.x);
-  frag_color = texelFetch(source, ivec2(q.x, clamp(q.y, 0, size.y - 1)), 0);
+  int y = clamp(q.y, 0, size.y - 1);
+  frag_color = texelFetch(source, ivec2(q.x, y), 0);
+  if (y != q.y) {
+    vec3 pole = vec3(0.0);
+    for (int x = 0; x < size.x; x++) {
+      pole += texelFetch(source, ivec2(x, y), 0).rgb;
+    }
+    frag_color.rgb = 2.0 * pole / float(size.x) - frag_color.rgb;
+  }
   return;
 #endif
   ivec2 p = ivec2(gl_FragCoord.xy) * 2;

@@ -3,9 +3,8 @@
  * L max(n.l, 0) dOmega -- the cosine convolution computed exactly for that image (no spherical
  * harmonic truncation), the downsampling averaging each texel's light over its solid angle. */
 
-void main()
+vec3 irradiance(vec3 n)
 {
-  vec3 n = equirect_direction(bordered_level_uv(rect));  /* drawn with its border, as the levels */
   ivec4 src = ivec4(chain.rect[int(params.y)]);
   float dphi = 2.0 * PI / float(src.z);
   /* a row's texel directions (equirect_direction at the texel centres) turn by -dphi from one
@@ -30,5 +29,15 @@ void main()
       c = turned;
     }
   }
-  frag_color = vec4(sum, 1.0);
+  return sum;
+}
+
+void main()
+{
+  vec3 e = irradiance(equirect_direction(bordered_level_uv(rect)));  /* drawn with its border */
+  float pole = bordered_level_pole(rect);
+  if (pole != 0.0) {  /* the border beyond a pole: 2 P - T (environment.glsl bordered_level_pole) */
+    e = 2.0 * irradiance(vec3(0.0, 0.0, pole)) - e;
+  }
+  frag_color = vec4(e, 1.0);
 }

@@ -8,21 +8,39 @@
  * small source is spread over the lobe instead of sparkling.
  * The texels of a row see one lobe turned about the pole by their longitude, which is u: the
  * samples come per row from `samples` (addon/environment.py prefilter_samples: u offset, v,
- * chain level, weight), params.z of them. alpha 0 (params.x) copies chain level params.y. */
+ * chain level, weight), params.z of them; two more rows about the poles give the border rows
+ * above and below the level their 2 P - T (environment.glsl bordered_level_pole). alpha 0
+ * (params.x) copies chain level params.y. */
 
-void main()
+/* The lobe mean of row `row` of the sample table (the level's rows, then the north and the south
+ * pole) turned to longitude u. */
+vec3 lobe_mean(int row, float u)
 {
-  vec2 uv = bordered_level_uv(rect);  /* drawn with the level's border */
-  if (params.x <= 0.0) {
-    frag_color = vec4(chain_level(source, int(params.y), uv), 1.0);
-    return;
-  }
-  int row = clamp(int(gl_FragCoord.y - rect.y), 0, int(rect.w) - 1);
   int count = int(params.z);
   vec3 sum = vec3(0.0);
   for (int i = 0; i < count; i++) {
     vec4 s = texelFetch(samples, ivec2(i, row), 0);
-    sum += chain_lookup_uv(source, vec2(uv.x + s.x, s.y), s.z) * s.w;
+    sum += chain_lookup_uv(source, vec2(u + s.x, s.y), s.z) * s.w;
   }
-  frag_color = vec4(sum, 1.0);
+  return sum;
+}
+
+void main()
+{
+  vec2 uv = bordered_level_uv(rect);  /* drawn with the level's border */
+  float pole = bordered_level_pole(rect);
+  if (params.x <= 0.0) {
+    vec3 c = chain_level(source, int(params.y), uv);
+    if (pole != 0.0) {  /* the chain's level reaches its pole's value at v = 0 or 1 */
+      c = 2.0 * chain_level(source, int(params.y), vec2(uv.x, 0.5 + 0.5 * pole)) - c;
+    }
+    frag_color = vec4(c, 1.0);
+    return;
+  }
+  int row = clamp(int(gl_FragCoord.y - rect.y), 0, int(rect.w) - 1);
+  vec3 c = lobe_mean(row, uv.x);
+  if (pole != 0.0) {
+    c = 2.0 * lobe_mean(int(rect.w) + (pole > 0.0 ? 0 : 1), uv.x) - c;
+  }
+  frag_color = vec4(c, 1.0);
 }

@@ -76,7 +76,8 @@ vec3 env_term(sampler2D map, mat4 lookup, vec4 kind, vec4 weight, vec3 d, bool c
 /* One equirectangular level, in rectangle rect (x, y, width, height in texels) of a texture of
  * size texels holding several (the chain, the prefiltered atlas), at uv: bilinearly between
  * texel centres by the GPU's filter. The level's border of one texel (addon/environment.py
- * chain_layout) makes it repeat in u and clamp in v, and keeps the filter off its neighbours. */
+ * chain_layout) makes it repeat in u and reach the poles' values at v = 0 and 1
+ * (bordered_level_pole), and keeps the filter off its neighbours. */
 vec3 bordered_level(sampler2D map, vec4 rect, vec2 size, vec2 uv)
 {
   vec2 p = rect.xy + vec2(fract(uv.x), clamp(uv.y, 0.0, 1.0)) * rect.zw;
@@ -85,11 +86,23 @@ vec3 bordered_level(sampler2D map, vec4 rect, vec2 size, vec2 uv)
 
 /* The equirectangular uv of the texel a pass draws into a level's rectangle rect (drawn with
  * its border): a border texel gets the uv of the opposite column at the sides and of the edge
- * row above and below, so that the border holds what bordered_level expects. */
+ * row above and below (where the pass writes 2 P - that row's value: bordered_level_pole). */
 vec2 bordered_level_uv(vec4 rect)
 {
   vec2 uv = (gl_FragCoord.xy - rect.xy) / rect.zw;
   return vec2(fract(uv.x), clamp(uv.y, 0.5 / rect.w, 1.0 - 0.5 / rect.w));
+}
+
+/* Which pole the texel a pass draws into a level's rectangle lies beyond: 1 in the border row
+ * above the level (north, +z), -1 below it, 0 within. Those rows hold 2 P - T, T the edge row's
+ * texel in that column and P the level's value at the pole, so that the filter runs from each
+ * edge texel to P at the pole itself: a level 32 texels wide has its edge rows 5.6 degrees from
+ * the poles, and a floor (n = +z) read the edge texel of its longitude instead of the pole's
+ * value (measured: 2.5-4 % on a rough metal floor under the sunset world). */
+float bordered_level_pole(vec4 rect)
+{
+  float y = gl_FragCoord.y - rect.y;
+  return y < 0.0 ? -1.0 : (y > rect.w ? 1.0 : 0.0);
 }
 
 #ifdef SL_CHAIN
@@ -131,12 +144,17 @@ vec3 chain_lookup(sampler2D map, vec3 d, float lod)
 }
 
 /* The level of detail for a sample of probability density pdf (per steradian) out of n, plus
- * bias levels (Krivanek & Colbert use 1: each sample also averages its neighbourhood). */
-float chain_lod(vec3 l, float pdf, int n, float bias)
+ * bias levels (Krivanek & Colbert use 1: each sample also averages its neighbourhood): the level
+ * whose texels at the equator cover the sample's solid angle, at every latitude. Towards the
+ * poles a texel's solid angle shrinks with sin(theta) but its extent in latitude does not: a
+ * level chosen by the texel's solid angle there read texels many times taller than the sample's
+ * footprint (measured: prefiltered levels against their lobe means, roughness 0.25: 0.77 ->
+ * 0.23 %; sampled world specular against Cycles, city world, metal: up to 2.9 -> 2.0 %). */
+float chain_lod(float pdf, int n, float bias)
 {
   vec2 base = chain.rect[0].zw;  /* level 0: an equator texel spans (2 pi / w)(pi / h) */
   float omega_s = 1.0 / (float(n) * pdf);
-  float omega_p = 2.0 * PI * PI * sqrt(max(1.0 - l.z * l.z, 1e-4)) / (base.x * base.y);
+  float omega_p = 2.0 * PI * PI / (base.x * base.y);
   return 0.5 * log2(omega_s / omega_p) + bias;
 }
 #endif

@@ -104,7 +104,7 @@ vec3 env_sample_lobe(Surface s, sampler2D chain_map)
     float pdf = D * NoH / (4.0 * VoH);
     /* no extra bias level: measured against Cycles on the bundled forest world, bias 0 and 0.5
      * differ by under 1 % at 256 samples; 1 blurs what near-mirror lobes see */
-    vec3 L = chain_lookup(chain_map, l, chain_lod(l, pdf, SL_ENV_SAMPLES, 0.0));
+    vec3 L = chain_lookup(chain_map, l, chain_lod(pdf, SL_ENV_SAMPLES, 0.0));
 #  ifdef SL_PRINCIPLED
     vec3 F = s.metalness * p.metal_M * F_Schlick(F0m, 1.0, VoH) +
              (1.0 - s.metalness) * p.dielectric_M * F_Dielectric(s.eta, VoH);

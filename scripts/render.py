@@ -352,7 +352,7 @@ def render_frame(args, scene, stem: str, models: list[str], frame: int | None, w
                 if choice.samples and not choice.errors:
                     why += f"; too small for a program of its own (at most {choice.costs_ms:.2f} ms a frame)"
                 if choice.alone:
-                    why += (f"; shares a program (alone: {auto_terms.LABELS[choice.alone]}, saving "
+                    why += (f"; shares a program (alone: {auto_terms.label(choice.alone)}, saving "
                             f"{choice.costs_ms:.2f} ms a frame)")
                 print(f"{stem}_{model}{suffix}: material {name or '(none)'}: {choice.label}, predicted "
                       f"dE_ITP {choice.predicted:.2f}{why}")

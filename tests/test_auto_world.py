@@ -64,7 +64,8 @@ def world_results(tmp_path_factory):
     return rows
 
 
-#: Of the materials, at least this share takes the split sum (measured ...).
+#: Of the materials, at least this share takes the split sum (measured 2026-12-03: 8 of 60 at
+#: 0.5, 18 of 60 at 4).
 SPLIT_SHARE = {auto_terms.DEFAULT_BOUND: 0.08, 4.0: 0.2}
 
 
@@ -92,7 +93,8 @@ def test_auto_takes_the_split_sum_where_it_is_within_the_bound(world_results, bo
 
 def test_the_split_sums_predicted_error_against_the_measured(world_results):
     """Where a material took the split sum and either error is noticeable (>= 0.1): measured /
-    predicted within a factor 2 for most."""
+    predicted within a factor 2 for most (measured 2026-12-03: 72 % of 18, the largest ratio 3.4;
+    11.6 before the levels' borders led to the poles' values: a rough metal floor)."""
     pairs = [(c.predicted, m) for bound in BOUNDS for *_, c, m in world_results[bound]
              if c.name.endswith(auto_terms.SPLIT_SUM) and max(c.predicted, m) >= 0.1]
     ratios = np.array([m / max(p, 1e-6) for p, m in pairs])
