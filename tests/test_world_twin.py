@@ -2,8 +2,10 @@
 shading.shade_image_environment): the split sum and the sampled lobe, each term set, with and
 without suns split off. The twin evaluates what the GPU reads between texels at the exact
 directions (prefiltered levels, irradiance), from analytic sphere normals where the GPU
-interpolates a mesh's; the bounds hold those differences. The twin is held to independent
-references in test_world_light.py (lobe means by quadrature) and below (Cycles)."""
+interpolates a mesh's; the bounds hold those differences. Shadows and the world's occlusion are
+off here: the twin shades the world's light alone (with the suns as lights), and occlusion has
+its own tests against Cycles (test_world_light.py). The twin is held to independent references
+in test_world_light.py (lobe means by quadrature) and below (Cycles)."""
 
 from __future__ import annotations
 
