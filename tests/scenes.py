@@ -104,6 +104,19 @@ def unread_material(name="Mixed") -> bpy.types.Material:
     return mat
 
 
+def saved_float_image(name: str, pixels: np.ndarray, folder: Path) -> bpy.types.Image:
+    """A 32-bit float image of ``pixels`` (h, w, 4; bottom row first), saved as OpenEXR in
+    ``folder`` as an artist's file is (an unsaved image is read again for every render)."""
+    h, w = pixels.shape[:2]
+    image = bpy.data.images.new(name, w, h, float_buffer=True, alpha=False)
+    image.use_half_precision = False
+    image.pixels.foreach_set(np.asarray(pixels, np.float32).ravel())
+    image.filepath_raw = str(Path(folder) / f"{name}.exr")
+    image.file_format = "OPEN_EXR"
+    image.save()
+    return image
+
+
 def render(scene, path: Path) -> np.ndarray:
     """Render to a 32-bit OpenEXR and read it back: (height, width, 4) float32, top row first."""
     settings = scene.render.image_settings

@@ -24,13 +24,7 @@ def _image(folder, seed: int = 0, bright: float = 500.0) -> bpy.types.Image:
     pixels = np.ones((h, w, 4), np.float32)
     pixels[..., :3] = np.random.default_rng(seed).uniform(0.05, 2.0, (h, w, 3))
     pixels[24, 40, :3] = bright
-    image = bpy.data.images.new(f"World {seed}", w, h, float_buffer=True, alpha=False)
-    image.use_half_precision = False
-    image.pixels.foreach_set(pixels.ravel())
-    image.filepath_raw = str(folder / f"world{seed}.exr")
-    image.file_format = "OPEN_EXR"
-    image.save()
-    return image
+    return scenes.saved_float_image(f"World {seed}", pixels, folder)
 
 
 def _scene(folder):

@@ -40,13 +40,7 @@ def _image(folder, sun: float) -> bpy.types.Image:
     pixels[..., :3] = rgb
     if sun:
         pixels[52, 30, :3] = sun
-    image = bpy.data.images.new(f"World {sun}", w, h, float_buffer=True, alpha=False)
-    image.use_half_precision = False
-    image.pixels.foreach_set(pixels.ravel())
-    image.filepath_raw = str(folder / f"world{sun}.exr")
-    image.file_format = "OPEN_EXR"
-    image.save()
-    return image
+    return scenes.saved_float_image(f"World {sun}", pixels, folder)
 
 
 def _scene(folder, kind: str, sun: float, term_set: str = "CUSTOM"):
