@@ -201,25 +201,20 @@ def _shapes(terms, suns: bool) -> dict[str, tuple]:
     return {**shapes, "clamped": shapes["chain"]} if suns else shapes
 
 
-def _texture(pixels: np.ndarray) -> gpu.types.GPUTexture:
-    h, w = pixels.shape[:2]
-    data = gpu.types.Buffer("FLOAT", w * h * 4, np.ascontiguousarray(pixels, np.float32).ravel())
-    return gpu.types.GPUTexture((w, h), format="RGBA32F", data=data)
-
-
 def _maps(terms, suns: bool, arrays) -> EnvironmentMaps:
     """The maps ``_build_maps`` made, from the arrays it kept."""
     global LOADS
     start = time.perf_counter()
     chain_rects, rects = _layouts(terms)
-    chain = _texture(arrays["chain"])
-    clamped = _texture(arrays["clamped"]) if suns else chain
+    chain = gpu_library.rgba32f_texture(arrays["chain"])
+    clamped = gpu_library.rgba32f_texture(arrays["clamped"]) if suns else chain
     sh = np.asarray(arrays["sh"], np.float64)
     first_clamped = env.FIRST_CLAMPED_LEVEL if suns else env.PREFILTER_LEVELS
     LOADS += 1
-    return EnvironmentMaps(_packed(sh, rects, (0.0, 0.0, 0.0), first_clamped), _texture(arrays["atlas"]),
-                           chain, clamped, _chain_block(chain_rects), sh, rects,
-                           1e3 * (time.perf_counter() - start), loaded=True)
+    atlas = gpu_library.rgba32f_texture(arrays["atlas"])
+    return EnvironmentMaps(_packed(sh, rects, (0.0, 0.0, 0.0), first_clamped), atlas, chain, clamped,
+                           _chain_block(chain_rects), sh, rects, 1e3 * (time.perf_counter() - start),
+                           loaded=True)
 
 
 def _device() -> str:

@@ -356,10 +356,7 @@ def prefilter_samples(alpha: float, samples: int, height: int, chain_width: int)
     """One prefiltered level's lobe samples per row (``environment.prefilter_samples``) as an
     RGBA32F texture, a sample a texel (built once per level size: every world shares it)."""
     def build():
-        table = env.prefilter_samples(alpha, samples, height, chain_width)
-        h, w = table.shape[:2]
-        data = gpu.types.Buffer("FLOAT", w * h * 4, np.ascontiguousarray(table).ravel())
-        return gpu.types.GPUTexture((w, h), format="RGBA32F", data=data)
+        return rgba32f_texture(env.prefilter_samples(alpha, samples, height, chain_width))
 
     return LIBRARY.table(("PREFILTER", alpha, samples, height, chain_width), build)
 
@@ -383,10 +380,7 @@ def split_table(terms) -> gpu.types.GPUTexture:
     ndf, visibility = terms.lobe
 
     def build():
-        table = multiscatter.split_sum_table(ndf, visibility)
-        h, w = table.shape[:2]
-        data = gpu.types.Buffer("FLOAT", w * h * 4, np.ascontiguousarray(table, np.float32).ravel())
-        return gpu.types.GPUTexture((w, h), format="RGBA32F", data=data)
+        return rgba32f_texture(multiscatter.split_sum_table(ndf, visibility))
 
     return LIBRARY.table(("SPLIT", ndf, visibility), build)
 
@@ -403,6 +397,13 @@ def under_program() -> gpu.types.GPUShader:
 
 
 # --- the tables -------------------------------------------------------------------------------
+
+def rgba32f_texture(table: np.ndarray) -> gpu.types.GPUTexture:
+    """An RGBA32F texture of ``table`` (h, w, 4), bottom row first."""
+    h, w = table.shape[:2]
+    data = gpu.types.Buffer("FLOAT", w * h * 4, np.ascontiguousarray(table, np.float32).ravel())
+    return gpu.types.GPUTexture((w, h), format="RGBA32F", data=data)
+
 
 def r32f_texture(table: np.ndarray) -> gpu.types.GPUTexture:
     h, w = table.shape
@@ -440,10 +441,7 @@ def ltc_table(terms) -> gpu.types.GPUTexture:
         sphere = ltc.sphere_table()
         rows = np.zeros((sphere.shape[0], table.shape[1], 4), np.float32)
         rows[:, :sphere.shape[1], 0] = sphere
-        atlas = np.ascontiguousarray(np.concatenate([table, rows]), np.float32)
-        h, w = atlas.shape[:2]
-        data = gpu.types.Buffer("FLOAT", w * h * 4, atlas.ravel())
-        return gpu.types.GPUTexture((w, h), format="RGBA32F", data=data)
+        return rgba32f_texture(np.concatenate([table, rows]))
 
     return LIBRARY.table(("LTC", ndf), build)
 
