@@ -702,20 +702,13 @@ _WORLD_MAPS: OrderedDict = OrderedDict()
 WORLD_MAPS_KEPT = 2
 
 
-def _world_key(world: World) -> tuple:
-    terms = world.lighting
-    return (World.constant(terms), world.threshold, bool(world.suns),
-            tuple((t.image.key, t.image.revision, tuple(t.weight), t.projection, t.closest,
-                   np.asarray(t.lookup, np.float32).tobytes()) for t in World.images(terms)))
-
-
 def sampled_world(snapshot: Snapshot) -> tuple | None:
     """(the twin's maps, world samples per pixel, diffuse mode) where the scene samples an image
     world's specular (the world then joins the candidates: ``SPLIT_SUM``); else None."""
     samples = snapshot.settings.environment_samples
     if samples <= 0 or programs.environment_kind(snapshot.world) != "MAP":
         return None
-    key = _world_key(snapshot.world)
+    key = environment.field_key(snapshot.world.lighting, snapshot.world.threshold)
     maps = _WORLD_MAPS.pop(key, None)
     if maps is None:
         maps = environment.world_maps(snapshot.world, PREDICTION_WORLD_WIDTH)
@@ -755,8 +748,8 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
     if image is not None:  # the split sum joins: every set with it, then the reference sampled
         order = [name + SPLIT_SUM for name in order] + ["PRINCIPLED"]
     world = world_radiance(snapshot.world) if image is None else None
-    world_id = (np.asarray(world).tobytes() if image is None
-                else (_world_key(snapshot.world), image[1], image[2]))
+    world_id = np.asarray(world).tobytes() if image is None else (
+        environment.field_key(snapshot.world.lighting, snapshot.world.threshold), *image[1:])
     exposure = float(snapshot.settings.exposure)
     occlusion = snapshot.settings.world_occlusion
     users = material_users(snapshot)

@@ -285,6 +285,16 @@ def atlas_size(layout) -> tuple[int, int]:
 
 # --- the GPU's world maps, in numpy (gpu_environment, env_*.frag.glsl) ---------------------------
 
+def field_key(terms, threshold: float = 0.0) -> tuple:
+    """A lighting field's content within this session (its images by key and revision): what the
+    world's precomputation and its twin depend on, with the sun threshold it is clamped at."""
+    key = [tuple(round(c, 7) for c in World.constant(terms)), threshold]
+    for term in World.images(terms)[:MAX_ENVIRONMENT_IMAGES]:
+        key.append((term.image.key, term.image.revision, tuple(term.weight), term.projection, term.closest,
+                    np.asarray(term.lookup, np.float32).tobytes()))
+    return tuple(key)
+
+
 def bake_width(terms) -> int:
     """The width the field is baked at: the widest image (a mirror ball counts twice its width)
     rounded up to a power of two, 64 to 4096."""

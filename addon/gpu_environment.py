@@ -53,15 +53,6 @@ class EnvironmentMaps:
     loaded: bool = False
 
 
-def environment_key(terms, threshold: float = 0.0) -> tuple:
-    """The lighting field's content: what a precomputation depends on."""
-    key = [tuple(round(c, 7) for c in World.constant(terms)), threshold]
-    for term in World.images(terms)[:MAX_ENVIRONMENT_IMAGES]:
-        key.append((term.image.key, term.image.revision, tuple(term.weight), term.projection, term.closest,
-                    np.asarray(term.lookup, np.float32).tobytes()))
-    return tuple(key)
-
-
 def _packed(sh: np.ndarray, rects, uniform, first_clamped: int = 0) -> gpu.types.GPUUniformBuf:
     premultiplied = sh * np.array(env.SH_COSINE)[:, None]
     roughness = env.PREFILTER_ROUGHNESS if rects else ()
@@ -249,9 +240,9 @@ class EnvironmentPass(Pass):
             frame.scene.environment = None
         elif kind == "UNIFORM":
             frame.scene.environment = gpu_library.LIBRARY.environment(
-                environment_key(world.lighting), lambda: _uniform(world.lighting))
+                env.field_key(world.lighting), lambda: _uniform(world.lighting))
         else:
             frame.scene.environment = gpu_library.LIBRARY.environment(
-                environment_key(world.lighting, world.threshold),
+                env.field_key(world.lighting, world.threshold),
                 lambda: _cached_or_built(frame, world.lighting, world.threshold, bool(world.suns)))
         return True
