@@ -2,7 +2,7 @@
 test).
 
     .venv/bin/python scripts/auto_bench.py [--resolution 1280x720] [--frames 7] [--bound 0.5]
-        [--table docs/bench/auto.md]
+        [--table docs/bench/auto.md] [--presets world] [--world-samples 64]
 
 Per preset, Auto (at ``--bound``) and the Principled set are rendered alternately, one warm-up
 round (program compiles, Auto's first prediction) then ``--frames`` rounds, in one process; each
@@ -14,6 +14,8 @@ draws the very same programs as the Principled set, the ratio shows this machine
 material_grid). Times are
 CPU-rasteriser times (Mesa llvmpipe): compare the ratios. ``bench.py`` times Auto among every
 configuration; this isolates the one comparison, with fewer configurations sharing the noise.
+``--world-samples N`` renders every preset with World Specular: Sampled at N samples a pixel
+(where the world has images, Auto may then take the split sum: its largest saving).
 """
 
 from __future__ import annotations
@@ -38,6 +40,9 @@ def main() -> int:
     parser.add_argument("--frames", type=int, default=7)
     parser.add_argument("--bound", type=float, default=0.5)
     parser.add_argument("--table", type=Path, default=ROOT / "docs" / "bench" / "auto.md")
+    parser.add_argument("--presets", default=",".join(PRESETS), help="comma-separated preset names")
+    parser.add_argument("--world-samples", type=int, default=0,
+                        help="World Specular: Sampled at this many samples a pixel (0: the presets' own)")
     args = parser.parse_args()
     w, h = (int(x) for x in args.resolution.split("x"))
 
@@ -48,11 +53,13 @@ def main() -> int:
     from addon import auto_terms, engine
 
     rows, ratios = [], []
-    for name in PRESETS:
+    for name in args.presets.split(","):
         scene, _ = cli.load_scene(name, None)
         scene.render.engine = "SHADING_LAB"
         scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = w, h, 100
         props = scene.shading_lab
+        if args.world_samples:
+            props.world_specular, props.world_samples = "SAMPLED", args.world_samples
         times = {"PRINCIPLED": [], "AUTO": []}
         chosen = ""
         for r in range(args.frames + 1):
@@ -72,7 +79,9 @@ def main() -> int:
     mean = math.exp(statistics.mean(math.log(r) for r in ratios))
     text = "\n".join([
         f"The Auto term set (bound {args.bound:g}) against the Principled set, {w}x{h}, medians of "
-        f"{args.frames} alternating rounds after a warm-up (`scripts/auto_bench.py`).", "",
+        f"{args.frames} alternating rounds after a warm-up (`scripts/auto_bench.py`"
+        + (f" --world-samples {args.world_samples}`: World Specular: Sampled, {args.world_samples} "
+           f"samples a pixel" if args.world_samples else "`") + ").", "",
         "| preset | Auto ms | Principled ms | Auto / Principled | Auto chose |", "|---|---:|---:|---:|---|",
         *rows, "", f"Geometric mean {mean:.3f}× ({min(ratios):.3f}–{max(ratios):.3f}×).", ""])
     round_robin.write_table(args.table, text)
