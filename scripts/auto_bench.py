@@ -79,8 +79,8 @@ def main() -> int:
         rows.append(f"| {name} | {bound:g} | {auto:.1f} | {principled:.1f} | {auto / principled:.3f}× | "
                     f"{chosen} |")
     mean = math.exp(statistics.mean(math.log(r) for r in ratios))
-    sampled = (f" --world-samples {args.world_samples}`: World Specular: Sampled, {args.world_samples} samples "
-               f"a pixel" if args.world_samples else "`")
+    n = args.world_samples
+    sampled = f" --world-samples {n}`: World Specular: Sampled, {n} samples a pixel" if n else "`"
     text = "\n".join([
         f"The Auto term set against the Principled set, {w}x{h}, medians of {args.frames} alternating "
         f"rounds after a warm-up (`scripts/auto_bench.py{sampled}).", "",
