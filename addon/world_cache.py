@@ -1,7 +1,7 @@
 """The world's precomputed maps kept on disk between sessions, by their content.
 
 An image-lit world's maps (``gpu_environment``: the prefiltered atlas, the downsampled chains,
-the spherical harmonics) take 0.3 s (a 1K world) to 0.9 s (4K) on the GPU each time a session
+the spherical harmonics) take 0.32 s (a 1K world) to 0.97 s (4K) on the GPU each time a session
 first renders that world. They depend only on the lighting field's content and on the code that
 computes them, so they are written here once, one file per world (``<key>.maps``: numpy ``.npy``
 records, the arrays' names then each array, uncompressed, 39 MB for any world 1K or wider), and
