@@ -396,7 +396,7 @@ HDRI_BOUNDS = {
     ("forest", "metal", "SAMPLED"): (0.004, 0.16, 0.065, 0.07, 0.07),
     ("forest", "dielectric", "SPLIT_SUM"): (0.012, 0.022, 0.019, 0.019, 0.015),
     ("city", "metal", "SPLIT_SUM"): (0.002, 0.04, 0.12, 0.14, 0.075),
-    ("city", "metal", "SAMPLED"): (0.002, 0.11, 0.035, 0.05, 0.06),
+    ("city", "metal", "SAMPLED"): (0.002, 0.025, 0.025, 0.037, 0.04),
     ("city", "dielectric", "SPLIT_SUM"): (0.006, 0.008, 0.011, 0.011, 0.009),
 }
 
