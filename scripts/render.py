@@ -190,6 +190,15 @@ def add_shadow_options(parser) -> None:
                         help="irradiance below which a light stops (0: every light reaches everywhere)")
     lights.add_argument("--light-culling", action=argparse.BooleanOptionalAction, default=None,
                         help="shade each screen tile with only the lights that reach it")
+    world = parser.add_argument_group("the world's light (default: the scene's settings)")
+    world.add_argument("--world-specular", choices=("split-sum", "sampled"),
+                       help="the specular lobe lit by the prefiltered world (split sum) or sampled per pixel")
+    world.add_argument("--world-samples", type=int, metavar="N",
+                       help="samples of the world per pixel for --world-specular sampled (1-1024)")
+    world.add_argument("--world-diffuse", choices=("map", "sh9"),
+                       help="the diffuse lobe lit by the irradiance map or nine spherical harmonics")
+    world.add_argument("--world-occlusion", action=argparse.BooleanOptionalAction, default=None,
+                       help="geometry occludes the world's light (screen-space)")
 
 
 def configure(scene, args) -> None:
@@ -228,9 +237,19 @@ def configure(scene, args) -> None:
         if not bound > 0.0:  # also refuses NaN
             raise CliError(f"--error-bound must be above 0 (Delta E_ITP), got {bound}")
         props.auto_error_bound = bound
-    for name in ("shadows", "soft_shadows", "light_culling"):
+    for name in ("shadows", "soft_shadows", "light_culling", "world_occlusion"):
         if getattr(args, name, None) is not None:
             setattr(props, name, getattr(args, name))
+    for name in ("world_specular", "world_diffuse"):
+        if getattr(args, name, None) is not None:
+            setattr(props, name, getattr(args, name).upper().replace("-", "_"))
+    world_samples = getattr(args, "world_samples", None)
+    if world_samples is not None:
+        if not 1 <= world_samples <= 1024:
+            raise CliError(f"--world-samples must be between 1 and 1024, got {world_samples}")
+        if props.world_specular != "SAMPLED":
+            raise CliError("--world-samples needs --world-specular sampled (or a scene sampling its world)")
+        props.world_samples = world_samples
     if getattr(args, "shadow_map_size", None) is not None:
         props.shadow_map_size = str(args.shadow_map_size)
     threshold = getattr(args, "light_threshold", None)

@@ -118,6 +118,25 @@ def test_shadow_options_reach_the_scene():
         cli.parse_args(["x", "--shadow-map-size", "300"])
 
 
+def test_world_options_reach_the_scene():
+    sys.path.insert(0, str(ROOT / "scripts"))
+    import render as cli
+
+    scene = scenes.reset(size=8)
+    props = scene.shading_lab
+    cli.configure(scene, cli.parse_args(["x"]))
+    assert (props.world_specular, props.world_diffuse, props.world_occlusion) == ("SPLIT_SUM", "MAP", True)
+    cli.configure(scene, cli.parse_args(["x", "--world-specular", "sampled", "--world-samples", "16",
+                                         "--world-diffuse", "sh9", "--no-world-occlusion"]))
+    assert (props.world_specular, props.world_samples, props.world_diffuse, props.world_occlusion) == (
+        "SAMPLED", 16, "SH9", False)
+    for bad, message in ((["--world-samples", "0"], "between 1 and 1024, got 0"),
+                         (["--world-specular", "split-sum", "--world-samples", "8"],
+                          "needs --world-specular")):
+        with pytest.raises(cli.CliError, match=message):
+            cli.configure(scene, cli.parse_args(["x", *bad]))
+
+
 def test_warnings_are_listed_once_per_run(tmp_path):
     """What the engine could not read is listed by the CLI once, whatever the number of models."""
     scene = scenes.reset(size=8)
