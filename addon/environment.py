@@ -162,6 +162,8 @@ PREFILTER_LEVELS = len(PREFILTER_ROUGHNESS)
 FIRST_CLAMPED_LEVEL = 2
 #: The diffuse irradiance map (exact convolution of a downsampled environment), texels wide.
 IRRADIANCE_WIDTH = 64
+#: The level the spherical harmonics are projected from (texels wide; the bake, if narrower).
+SH_WIDTH = 256
 #: Importance samples per texel of each prefiltered level: few for the sharp, large levels, many
 #: for the rough, small ones (a wide lobe over an environment with small bright sources needs
 #: them), about the same work per level.
@@ -452,9 +454,9 @@ def world_maps(world: World, max_width: int | None = None) -> WorldMaps:
     whole = chain_levels(world.lighting, max_width=max_width)
     suns = bool(world.suns)
     clamped = chain_levels(world.lighting, world.threshold, max_width) if suns else whole
-    first_clamped = FIRST_CLAMPED_LEVEL if suns else PREFILTER_LEVELS
-    return WorldMaps(whole, clamped, first_clamped, sh9_project(next(
-        (level for level in clamped if level.shape[1] == 256), clamped[0])))
+    maps = WorldMaps(whole, clamped, FIRST_CLAMPED_LEVEL if suns else PREFILTER_LEVELS, np.zeros((9, 3)))
+    maps.sh = sh9_project(maps.level(SH_WIDTH))
+    return maps
 
 
 # --- very bright texels: split off as suns ------------------------------------------------------

@@ -30,8 +30,6 @@ from . import gpu_library, programs, world_cache
 from .passes import Frame, Pass, Target
 from .snapshot import MAX_ENVIRONMENT_IMAGES, World
 
-#: The level the spherical harmonics are projected from (texels wide).
-SH_WIDTH = 256
 #: Environments precomputed since start (tests count them: an object edit must add none), and
 #: those read from the disk cache instead (``world_cache``).
 BUILDS = 0
@@ -137,7 +135,7 @@ def _build_maps(frame: Frame, terms, suns: bool, keep=None) -> EnvironmentMaps:
     levels, chain, chain_rects = _chain(frame, terms, clamp=False)
     clamped_levels, clamped, _ = _chain(frame, terms, clamp=True) if suns else (levels, chain, None)
     by_width = {t.width: t for t in clamped_levels}
-    sh = env.sh9_project(by_width.get(SH_WIDTH, clamped_levels[0]).read())
+    sh = env.sh9_project(by_width.get(env.SH_WIDTH, clamped_levels[0]).read())
     chain_block = _chain_block(chain_rects)
     rects = env.atlas_layout(chain_rects[0][2])
     atlas = Target(*env.atlas_size(rects), depth=False)

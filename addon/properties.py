@@ -48,6 +48,14 @@ TERM_ITEMS = {
                                             "Blender's Principled BSDF weighs its base"),
     ),
 }
+#: World Specular: how the world lights the physically based specular lobe (the scene's setting,
+#: and a material's own).
+WORLD_SPECULAR_ITEMS = (
+    ("SPLIT_SUM", "Split Sum", "Prefiltered world x directional albedo (Karis 2013): one lookup; "
+                               "assumes the view along the normal, so errs at grazing angles"),
+    ("SAMPLED", "Sampled", "The BRDF importance-sampled against the world at every pixel: slow, "
+                           "converges to the reference as the samples grow"),
+)
 TERM_LABELS = {"fresnel": "Fresnel", "ndf": "Distribution", "visibility": "Masking-Shadowing",
                "diffuse": "Diffuse"}
 
@@ -199,12 +207,7 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
         ),
         description="How the world lights the diffuse lobe of the physically based model")
     world_specular: EnumProperty(
-        name="World Specular", default="SPLIT_SUM", update=_redraw, items=(
-            ("SPLIT_SUM", "Split Sum", "Prefiltered world x directional albedo (Karis 2013): one lookup; "
-                                       "assumes the view along the normal, so errs at grazing angles"),
-            ("SAMPLED", "Sampled", "The BRDF importance-sampled against the world at every pixel: slow, "
-                                   "converges to the reference as the samples grow"),
-        ),
+        name="World Specular", default="SPLIT_SUM", update=_redraw, items=WORLD_SPECULAR_ITEMS,
         description="How the world lights the specular lobe of the physically based model")
     world_occlusion: BoolProperty(
         name="World Occlusion", default=True, update=_redraw,
@@ -261,12 +264,8 @@ class ShadingLabMaterialSettings(bpy.types.PropertyGroup):
     diffuse: EnumProperty(name="Diffuse", items=(("SCENE", "Scene's", ""), *TERM_ITEMS["diffuse"]),
                           default="SCENE", update=_redraw)
     world_specular: EnumProperty(
-        name="World Specular", default="SCENE", update=_redraw, items=(
-            ("SCENE", "Scene's", "The Render properties' World Specular"),
-            ("SPLIT_SUM", "Split Sum", "Prefiltered world x directional albedo (Karis 2013): one lookup"),
-            ("SAMPLED", "Sampled", "The BRDF importance-sampled against the world at every pixel of "
-                                   "this material: slow, converges to the reference"),
-        ),
+        name="World Specular", default="SCENE", update=_redraw,
+        items=(("SCENE", "Scene's", "The Render properties' World Specular"), *WORLD_SPECULAR_ITEMS),
         description="How the world lights this material's specular lobe (physically based model, "
                     "worlds with images): a hero metal sampled while the rest of the scene uses the "
                     "split sum, or the other way round")
