@@ -13,6 +13,10 @@ main thread) all draw with the same programs, so they live here, once, behind on
 - The message of the last failed compile is kept for the Render panel until a render compiles
   cleanly.
 
+- ``take_spare(key)`` / ``keep_spare(key, ...)``: textures a finished renderer handed back (its
+  shadow maps) for the next one of the same shape, within ``SPARE_BYTES``; their content is
+  never reused, only their memory.
+
 Blender shares programs and textures between its GPU contexts, so a program compiled on the
 render thread serves the viewport too; framebuffers and vertex arrays are per context and are
 never kept here (each ``Renderer`` owns its own).
@@ -41,6 +45,13 @@ ENVIRONMENTS_KEPT = 2
 #: Programs kept, least recently used dropped first: per-material term sets (Auto), light counts
 #: and shadow layouts multiply the variants an editing session meets; each holds driver memory.
 PROGRAMS_KEPT = 96
+#: Shadow-map textures kept between renders, in bytes of GPU memory (a bounded pool: the oldest
+#: goes first). A final render makes a new renderer each time, and a fresh array of depth maps
+#: costs more to allocate than to draw on the CPU rasteriser (a softbox scene's 12 layers of
+#: 1024^2: ~40 ms of its ~90 ms shadow pass): the next render of the same shape takes the texture
+#: back and draws every layer again (its content is never reused). Textures larger than this are
+#: freed as before.
+SPARE_BYTES = 256 << 20
 
 
 class _Library:
@@ -49,6 +60,7 @@ class _Library:
         self._programs: dict = {}
         self._tables: dict = {}
         self._environments: dict = {}
+        self._spares: list = []  # (key, texture, bytes), oldest first
         self._compile_error = ""
         self._failed: dict = {}  # key -> why it did not compile (not tried again on every redraw)
         self.compiles = 0  # programs compiled since start (for tests and benchmarks)
@@ -105,6 +117,34 @@ class _Library:
                 del self._environments[next(iter(self._environments))]
             return held
 
+    def take_spare(self, key):
+        """A texture a finished renderer left for ``key`` (its kind and shape), or None. Taken, not
+        shared: two renderers never draw into one texture."""
+        with self._lock:
+            for i, (held_key, texture, _size) in enumerate(self._spares):
+                if held_key == key:
+                    del self._spares[i]
+                    return texture
+            return None
+
+    def keep_spare(self, key, texture, size: int) -> None:
+        """Keep a renderer's ``texture`` (``size`` bytes) for the next one asking for ``key``,
+        within ``SPARE_BYTES`` (the oldest dropped first)."""
+        if size > SPARE_BYTES:
+            return
+        with self._lock:
+            self._spares.append((key, texture, size))
+            while sum(entry[2] for entry in self._spares) > SPARE_BYTES:
+                del self._spares[0]
+
+    def spare_bytes(self) -> int:
+        with self._lock:
+            return sum(entry[2] for entry in self._spares)
+
+    def drop_spares(self) -> None:
+        with self._lock:
+            self._spares = []
+
     def program_count(self) -> int:
         return len(self._programs)
 
@@ -114,7 +154,8 @@ class _Library:
     def held(self) -> list:
         """Every program and table the library holds (tests check that nothing else holds them)."""
         with self._lock:
-            return [*self._programs.values(), *self._tables.values(), *self._environments.values()]
+            return [*self._programs.values(), *self._tables.values(), *self._environments.values(),
+                    *(entry[1] for entry in self._spares)]
 
     @property
     def compile_error(self) -> str:
@@ -134,6 +175,7 @@ class _Library:
             self._failed = {}
             self._tables = {}
             self._environments = {}
+            self._spares = []
         programs.clear_source_caches()
 
 

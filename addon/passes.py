@@ -234,8 +234,8 @@ class ShadowPass(Pass):
         shape = (plan.size, plan.layers)
         if self.texture is None or self._shape != shape:
             self.free()
-            self.texture = gpu.types.GPUTexture((plan.size, plan.size), layers=plan.layers,
-                                                format="DEPTH_COMPONENT32F")
+            self.texture = gpu_library.LIBRARY.take_spare(("shadow maps", shape)) or gpu.types.GPUTexture(
+                (plan.size, plan.size), layers=plan.layers, format="DEPTH_COMPONENT32F")
             self.framebuffers = [gpu.types.GPUFrameBuffer(depth_slot={"texture": self.texture, "layer": i})
                                  for i in range(plan.layers)]
             self._shape = shape
@@ -276,6 +276,11 @@ class ShadowPass(Pass):
         return True
 
     def free(self) -> None:
+        """Hand the maps' texture to the library for the next renderer of its shape (a final
+        render's successor draws every layer again); the framebuffers belong to this context."""
+        if self.texture is not None:
+            size, layers = self._shape
+            gpu_library.LIBRARY.keep_spare(("shadow maps", self._shape), self.texture, 4 * size * size * layers)
         self.texture = None
         self.framebuffers = []
         self.key = None

@@ -518,3 +518,48 @@ def test_culled_casters_draw_the_same_shadows(tmp_path, monkeypatch):
     print(f"layers x casters {layers} x {casters} = {all_pairs}; drawn with culling {pairs}")
     assert all_pairs == layers * casters and pairs < 0.5 * all_pairs, (pairs, all_pairs)  # measured 31 of 91
     assert np.array_equal(culled, every)
+
+
+# --- the maps' texture between renders ------------------------------------------------------------
+
+
+def test_a_render_takes_back_the_last_ones_shadow_texture_and_draws_every_layer_again(tmp_path, monkeypatch):
+    """A final render hands its maps' texture to the library; the next render of the same shape
+    takes it (no new allocation) and draws its layers again: after a caster moved, the image is
+    bit for bit a render's with a fresh texture, not one with the old shadows."""
+    from addon import gpu_library
+
+    library = gpu_library.LIBRARY
+    scene, _light = _scene("POINT", 0.2, resolution=48)
+    library.drop_spares()
+    first = scenes.render(scene, tmp_path / "a.exr")
+    size = int(scene.shading_lab.shadow_map_size)
+    assert library.spare_bytes() == 4 * size * size * 6, library.spare_bytes()  # a point light: 6 faces
+    taken = []
+    take = library.take_spare
+    monkeypatch.setattr(library, "take_spare", lambda key: taken.append(take(key)) or taken[-1])
+    bpy.data.objects["Sphere"].location.x += 0.4
+    reused = scenes.render(scene, tmp_path / "b.exr")
+    assert len(taken) == 1 and taken[0] is not None, "the second render made a new texture"
+    library.drop_spares()
+    fresh = scenes.render(scene, tmp_path / "c.exr")
+    assert len(taken) == 2 and taken[1] is None
+    moved = float(np.abs(reused - first).max())
+    assert moved > 0.05, f"moving the sphere changed the image by only {moved}"
+    assert np.array_equal(reused, fresh), float(np.abs(reused - fresh).max())
+
+
+def test_spare_textures_stay_within_their_budget(monkeypatch):
+    from addon import gpu_library
+
+    monkeypatch.setattr(gpu_library, "SPARE_BYTES", 100)
+    library = gpu_library._Library()
+    a, b, c, d = (object() for _ in range(4))
+    library.keep_spare("k", a, 40)
+    library.keep_spare("k", b, 40)  # two of one shape: both kept
+    assert library.spare_bytes() == 80
+    library.keep_spare("j", c, 40)  # over the budget: the oldest (a) goes
+    assert library.spare_bytes() == 80 and library.take_spare("k") is b and library.take_spare("k") is None
+    library.keep_spare("big", d, 101)  # larger than the budget: not kept
+    assert library.take_spare("big") is None and library.take_spare("j") is c
+    assert library.spare_bytes() == 0 and library.held() == []
