@@ -280,7 +280,8 @@ class ShadowPass(Pass):
         render's successor draws every layer again); the framebuffers belong to this context."""
         if self.texture is not None:
             size, layers = self._shape
-            gpu_library.LIBRARY.keep_spare(("shadow maps", self._shape), self.texture, 4 * size * size * layers)
+            gpu_library.LIBRARY.keep_spare(("shadow maps", self._shape), self.texture,
+                                           4 * size * size * layers)
         self.texture = None
         self.framebuffers = []
         self.key = None
