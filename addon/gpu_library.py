@@ -12,7 +12,6 @@ main thread) all draw with the same programs, so they live here, once, behind on
   has; the next request compiles anew.
 - The message of the last failed compile is kept for the Render panel until a render compiles
   cleanly.
-
 - ``take_spare(key)`` / ``keep_spare(key, ...)``: textures a finished renderer handed back (its
   shadow maps) for the next one of the same shape, within ``SPARE_BYTES``; their content is
   never reused, only their memory.
