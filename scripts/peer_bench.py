@@ -32,7 +32,10 @@ import bench  # noqa: E402
 import render as cli  # noqa: E402
 
 TARGET = 20.0  # EEVEE at 1 sample over our Principled set's time
-CONFIGS = (("principled", "SHADING_LAB"), ("pbr", "SHADING_LAB"), ("eevee-1", "EEVEE"))
+#: Ours as bench.py configures them (``bench.apply``), then EEVEE at 1 sample as bench.py sets up
+#: its peers (``bench.set_peer``).
+CONFIGS = (bench.Config("principled", "Principled set", "PBR", principled=True),
+           bench.Config("pbr", "PBR default", "PBR"), "eevee-1")
 
 
 def parse_args(argv):
@@ -48,21 +51,8 @@ def parse_args(argv):
     return args
 
 
-def configure(scene, key: str) -> None:
-    import reference
-
-    if key == "eevee-1":
-        bench.set_peer(scene, (key, reference.EEVEE, 1))
-        return
-    scene.render.engine = "SHADING_LAB"
-    props = scene.shading_lab
-    props.model = "PBR"
-    props.term_set = "PRINCIPLED" if key == "principled" else "CUSTOM"
-    for family, choice in bench.DEFAULT_TERMS.items():
-        if key == "pbr" and getattr(props, family) != choice:
-            setattr(props, family, choice)
-    if key == "pbr":
-        props.multiscatter = False
+def key_of(config) -> str:
+    return config.key if isinstance(config, bench.Config) else config
 
 
 def measure(name: str, args, progress, tmp: Path) -> dict:
@@ -74,8 +64,11 @@ def measure(name: str, args, progress, tmp: Path) -> dict:
     images = {}
 
     def run(config):
-        key = config[0]
-        configure(scene, key)
+        key = key_of(config)
+        if isinstance(config, bench.Config):
+            bench.apply(scene, config)
+        else:
+            bench.set_peer(scene, (key, reference.EEVEE, 1))
         if key not in images:  # the warm-up round's render gives the image
             images[key] = reference.render_to_array(scene, tmp / f"{name}_{key}.exr")
             return {"wall_ms": 0.0}
@@ -85,7 +78,7 @@ def measure(name: str, args, progress, tmp: Path) -> dict:
     ref, cached = reference.render_reference(scene, samples=args.reference_samples)
     progress.step(f"{name} Cycles reference{' (cached)' if cached else ''}")
     return {"name": name, "lights": sum(1 for o in scene.objects if o.type == "LIGHT"),
-            "times": {c[0]: t["wall_ms"] for c, t in zip(CONFIGS, times)},
+            "times": {key_of(c): t["wall_ms"] for c, t in zip(CONFIGS, times)},
             "errors": {key: metrics.errors(ref, image) for key, image in images.items()}}
 
 
