@@ -44,11 +44,22 @@ def run_on_gpu(job):
     previous = scene.render.engine
     scene.render.engine = _HarnessEngine.bl_idname
     _HarnessEngine.job, _HarnessEngine.outcome = job, None
+    # Blender renders nothing without a camera; a job that draws on its own needs none of the
+    # scene, so whatever scene an earlier test left gets a stand-in for the call
+    stand_in = None
+    if scene.camera is None:
+        stand_in = bpy.data.objects.new("Harness camera", bpy.data.cameras.new("Harness camera"))
+        scene.collection.objects.link(stand_in)
+        scene.camera = stand_in
     try:
         bpy.ops.render.render()
     finally:
         scene.render.engine = previous
         _HarnessEngine.job = None
+        if stand_in is not None:
+            camera = stand_in.data
+            bpy.data.objects.remove(stand_in)
+            bpy.data.cameras.remove(camera)
     status, value = _HarnessEngine.outcome or ("error", RuntimeError("the harness engine did not run"))
     _HarnessEngine.outcome = None
     if status == "error":
