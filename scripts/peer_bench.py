@@ -7,7 +7,9 @@ and error against Cycles -- the speed target's comparison alone (a benchmark, no
 Per preset, at ``--resolution``: Shading Lab's Principled set and its default terms, and EEVEE at
 1 sample (lights as the file has them, shadows included, light threshold 1e-6: ``bench.set_peer``),
 rendered round-robin in one process (a warm-up round, then ``--frames`` timed rounds, the order
-rotated each round); wall time of ``bpy.ops.render.render()``, medians. Errors against Cycles
+rotated each round; a timed render that follows the other engine's is preceded by an untimed one
+of its own, ``bench.round_robin``: each engine in its steady state); wall time of
+``bpy.ops.render.render()``, medians. Errors against Cycles
 (``reference.render_reference``, cached; direct light, world on, lights as the file has them):
 mean HDR-FLIP and mean relative luminance error on lit pixels. *Met*: EEVEE takes at least
 ``TARGET``x our Principled set's time and its FLIP is higher. ``bench.py`` measures the same
@@ -74,7 +76,8 @@ def measure(name: str, args, progress, tmp: Path) -> dict:
             return {"wall_ms": 0.0}
         return bench.render_timed(scene)
 
-    times = bench.round_robin(list(CONFIGS), args.frames, run, progress, name)
+    times = bench.round_robin(list(CONFIGS), args.frames, run, progress, name,
+                              engine_of=lambda config: isinstance(config, bench.Config))
     ref, cached = reference.render_reference(scene, samples=args.reference_samples)
     progress.step(f"{name} Cycles reference{' (cached)' if cached else ''}")
     return {"name": name, "lights": sum(1 for o in scene.objects if o.type == "LIGHT"),
@@ -92,7 +95,8 @@ def report(args, rows, started: float, machine: dict) -> str:
         f"at start {machine['load'][0]}, at end {machine['load'][1]}. CPU-rasteriser times: ratios within "
         "this run only.", "",
         f"{bench.res(args.size)}, wall ms of a whole render (medians of {args.frames} rounds after a "
-        "warm-up, round-robin, order rotated), errors against Cycles at "
+        "warm-up, round-robin, order rotated; a render after the other engine's follows an untimed one of "
+        "its own), errors against Cycles at "
         f"{args.reference_samples} spp. *Met*: EEVEE 1 spp takes >= {TARGET:.0f}x our Principled set's time "
         "and has the higher FLIP.", "",
         "| preset | lights | Principled ms | default PBR ms | EEVEE 1 spp ms | EEVEE / Principled | "
