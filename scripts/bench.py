@@ -143,9 +143,10 @@ def round_robin(items: list, frames: int, run, progress, label: str,
 
     ``engine_of(item)``: the render engine an item draws with. A timed render that follows
     another engine's render is preceded by an untimed one of its own: each engine is timed in its
-    steady state, not paying for what the other left behind (on the CPU rasteriser EEVEE's
-    hundreds of programs push ours out of the JIT's cache of compiled programs: our next render
-    took 50-100 ms longer, 1.5x on a 100 ms frame)."""
+    steady state, not paying for what the other left behind (on the CPU rasteriser our first
+    render after an EEVEE render took 50-100 ms longer, 1.5-2.5x on hdr's ~95 ms frame, its shadow
+    pass 23-33 -> 91-113 ms; consistent with EEVEE's hundreds of programs displacing ours from the
+    rasteriser's cache of compiled code, not established)."""
     samples: list[list[dict[str, float]]] = [[] for _ in items]
     order = list(range(len(items)))
     last = None

@@ -31,8 +31,10 @@ lights), and one at full geometry with every light evaluates 2.07 M rows, so:
 - all 320 combinations over REDUCED_AXES, each axis's outermost values, with the lights the light
   loop shades with one lobe (point, spots, sun: 12,288 rows each), 20 combinations to a program
   (grouped_gpu_values);
-48-53 s for the file here (2 cores; ~70 s with the other core busy), of which ~15 s build the
-multiple-scattering and Principled tables that the rest of the suite shares.
+~5 min for the file here (2 cores, 2026-12-03): most of it twin_spread on the rows near the
+tolerance, 22 of the 25 s of a pairwise sweep with area lights (27,606 such rows, each moved ~20
+ways through the twin's polygon form factors). ./run test runs the suite's files in parallel, each
+file whole in one worker, so this file's module state (MEASURED) sees every sweep.
 
 Agreement, on every row: |gpu - twin| <= REL_TOL max(twin, 1e-4) + SPREAD_FACTOR x the row's
 spread: the twin's own largest change, relative to the same max, when the shading point, the view
