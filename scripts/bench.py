@@ -145,8 +145,9 @@ def round_robin(items: list, frames: int, run, progress, label: str,
     another engine's render is preceded by an untimed one of its own: each engine is timed in its
     steady state, not paying for what the other left behind (on the CPU rasteriser our first
     render after an EEVEE render took 50-100 ms longer, 1.5-2.5x on hdr's ~95 ms frame, its shadow
-    pass 23-33 -> 91-113 ms; consistent with EEVEE's hundreds of programs displacing ours from the
-    rasteriser's cache of compiled code, not established)."""
+    pass 23-33 -> 91-113 ms; a Workbench render in between cost nothing: consistent with EEVEE's
+    hundreds of programs displacing ours from the rasteriser's cache of compiled code, not
+    established)."""
     samples: list[list[dict[str, float]]] = [[] for _ in items]
     order = list(range(len(items)))
     last = None
