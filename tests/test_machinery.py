@@ -144,7 +144,7 @@ def test_round_robin_settles_an_engine_after_another_engines_render():
 
     def run(item):
         calls.append(item[0])
-        # the first render after an engine switch is slow, as a JIT cache refilling
+        # the first render after an engine switch is slow, as ours is after an EEVEE render
         switched = len(calls) > 1 and dict(items)[calls[-2]] != item[1]
         return {"ms": 100.0 if switched else 1.0}
 
