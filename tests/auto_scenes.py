@@ -7,6 +7,7 @@ the analytic spheres and plane, not from the engine)."""
 from __future__ import annotations
 
 import math
+from pathlib import Path
 
 import bpy
 import numpy as np
@@ -86,6 +87,31 @@ def random_scene(seed: int):
     return scene, camera, names
 
 
+#: Blender's bundled worlds the image-world scenes take turns with (by seed).
+WORLDS = ("forest", "city", "studio", "sunset")
+
+
+def world_scene(seed: int, specular: str = "SAMPLED", samples: int = 16):
+    """``random_scene(seed)`` under one of Blender's bundled worlds (WORLDS, by seed), turned about
+    the vertical and scaled (strength 0.3-1.5) at random, with World Specular ``specular``
+    (SAMPLED at ``samples`` a pixel, or SPLIT_SUM)."""
+    from test_world_light import _hdri, _world
+
+    scene, camera, names = random_scene(seed)
+    rng = np.random.default_rng(seed + 7)
+    _world(scene, image=_hdri(WORLDS[seed % len(WORLDS)]), strength=float(rng.uniform(0.3, 1.5)))
+    tree = scene.world.node_tree
+    mapping = tree.nodes.new("ShaderNodeMapping")
+    mapping.inputs["Rotation"].default_value[2] = float(rng.uniform(0.0, 2.0 * math.pi))
+    coords = tree.nodes.new("ShaderNodeTexCoord")
+    tree.links.new(coords.outputs["Generated"], mapping.inputs["Vector"])
+    tree.links.new(mapping.outputs["Vector"], tree.nodes["Environment Texture"].inputs["Vector"])
+    props = scene.shading_lab
+    props.world_specular, props.world_samples = specular, samples
+    bpy.context.view_layer.update()
+    return scene, camera, names
+
+
 def sphere_hits(origins, direction, centre, radius: float) -> np.ndarray:
     """Distance along each ray (unit ``direction``) to the sphere's near side; inf where it misses."""
     oc = origins - np.asarray(centre, np.float64)
@@ -141,3 +167,23 @@ def measured_errors(image, reference, masks, quantile: float, min_pixels: int = 
     error = auto_terms.delta_e_itp(image[..., :3], reference[..., :3])
     return {name: float(np.quantile(error[mask], quantile)) for name, mask in masks.items()
             if mask.sum() >= min_pixels}
+
+
+def render_pairs(scene, camera, names, seed: int, bounds, folder: Path) -> dict[float, list]:
+    """{bound: [(seed, material, Choice, measured error)]}: ``scene`` rendered with the Principled
+    set once and with Auto at each of ``bounds``, the error measured per material on its pixels
+    (``material_masks``) at the scene's Auto quantile."""
+    from addon import engine
+
+    props = scene.shading_lab
+    props.term_set = "PRINCIPLED"
+    reference = scenes.render(scene, folder / f"{seed}_principled.exr")
+    masks = material_masks(camera, names)
+    out = {}
+    for bound in bounds:
+        props.term_set, props.auto_error_bound = "AUTO", bound
+        auto = scenes.render(scene, folder / f"{seed}_auto_{bound}.exr")
+        choices = dict(engine.last_term_choices)
+        measured = measured_errors(auto, reference, masks, props.auto_quantile / 100.0)
+        out[bound] = [(seed, name, choices[name], measured[name]) for name in names if name in measured]
+    return out

@@ -287,24 +287,6 @@ def test_hysteresis_keeps_a_set_through_small_changes():
 BOUNDS = (auto_terms.DEFAULT_BOUND, 4.0)
 
 
-def _render_pairs(seed: int, tmp_path: Path) -> dict[float, list]:
-    """{bound: [(seed, material, Choice, measured error)]}: the scene rendered with the Principled
-    set once and with Auto at each of BOUNDS."""
-    scene, camera, names = auto_scenes.random_scene(seed)
-    props = scene.shading_lab
-    props.term_set = "PRINCIPLED"
-    reference = scenes.render(scene, tmp_path / f"{seed}_principled.exr")
-    masks = auto_scenes.material_masks(camera, names)
-    out = {}
-    for bound in BOUNDS:
-        props.term_set, props.auto_error_bound = "AUTO", bound
-        auto = scenes.render(scene, tmp_path / f"{seed}_auto_{bound}.exr")
-        choices = dict(engine.last_term_choices)
-        measured = auto_scenes.measured_errors(auto, reference, masks, props.auto_quantile / 100.0)
-        out[bound] = [(seed, name, choices[name], measured[name]) for name in names if name in measured]
-    return out
-
-
 #: Programs never merged (``auto_terms.PAYBACK_FRAMES``): at these 96 px no cheaper set saves a
 #: program's first use, so every material would join the Principled set's program and the
 #: prediction would go untested. The merge has tests of its own.
@@ -318,7 +300,8 @@ def random_results(tmp_path_factory):
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(auto_terms, "PAYBACK_FRAMES", NEVER_MERGE)
         for seed in SEEDS:
-            for bound, found in _render_pairs(seed, tmp).items():
+            scene, camera, names = auto_scenes.random_scene(seed)
+            for bound, found in auto_scenes.render_pairs(scene, camera, names, seed, BOUNDS, tmp).items():
                 rows[bound] += found
     return rows
 
