@@ -84,12 +84,16 @@ def main() -> int:
         print(f"auto_calibrate: unknown world(s) {', '.join(unknown)}; choose from {', '.join(WORLDS)}",
               file=sys.stderr)
         return 2
-    try:
-        args.table.parent.mkdir(parents=True, exist_ok=True)
-        args.table.touch()
-    except OSError as error:
-        print(f"auto_calibrate: cannot write {args.table}: {error}", file=sys.stderr)
-        return 2
+    for path in (args.table, args.rows):  # before minutes of rendering, not after
+        if path is None:
+            continue
+        try:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            with path.open("a"):  # an existing file is kept as it is until the end
+                pass
+        except OSError as error:
+            print(f"auto_calibrate: cannot write {path}: {error}", file=sys.stderr)
+            return 2
 
     import auto_scenes
     import render as cli

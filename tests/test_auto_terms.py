@@ -449,3 +449,33 @@ def test_predictions_are_kept_for_an_unchanged_scene_and_redone_on_a_change(monk
     auto_terms.choose(_sphere_snapshot(metal, 31.0, "POINT"))  # the view moved
     auto_terms.choose(_sphere_snapshot(S.MaterialParams(metalness=1.0, roughness=0.5), 30.0, "POINT"))
     assert len(calls) == 3, len(calls)
+
+
+def test_the_calibration_script_end_to_end(tmp_path):
+    """scripts/auto_calibrate.py on one scene under its own world and one under an image world on
+    the split sum: a row per world and bound, each material's row in the CSV with the set Auto
+    chose and the measured error; a world it does not know and an unwritable table are one clear
+    error each (exit 2), nothing written."""
+    import csv
+    import subprocess
+
+    script = ROOT / "scripts" / "auto_calibrate.py"
+
+    def run(*options):
+        return subprocess.run([sys.executable, str(script), "--seeds", "1000", "--bounds", "4", *options],
+                              capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
+
+    table, rows = tmp_path / "calibration.md", tmp_path / "rows.csv"
+    proc = run("--worlds", "uniform,split-sum", "--table", str(table), "--rows", str(rows))
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    text = table.read_text()
+    assert "| uniform | 4 | 5 |" in text and "| split-sum | 4 | 5 |" in text, text
+    found = list(csv.DictReader(rows.open()))
+    assert len(found) == 10 and {r["world"] for r in found} == {"uniform", "split-sum"}, found
+    assert all(r["set"] in auto_terms.CANDIDATE_TERMS and float(r["measured"]) >= 0.0 for r in found), found
+    bad = run("--worlds", "uniform,cloudy", "--table", str(tmp_path / "bad.md"))
+    assert bad.returncode == 2 and "unknown world(s) cloudy" in bad.stderr, bad.stderr[-500:]
+    assert not (tmp_path / "bad.md").exists()
+    (tmp_path / "folder").mkdir()
+    unwritable = run("--worlds", "uniform", "--table", str(tmp_path / "folder"))
+    assert unwritable.returncode == 2 and "cannot write" in unwritable.stderr, unwritable.stderr[-500:]
