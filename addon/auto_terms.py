@@ -473,7 +473,7 @@ def material_samples(snapshot: Snapshot, key: str, count: int = SAMPLES, camera=
         ref = getattr(material, name)
         image = snapshot.images.get(ref[0]) if ref is not None else None
         if image is not None:
-            values = _texels(image, count, rng)[:, channel]
+            values = _texels(image, len(pick), rng)[:, channel]  # a texel for every point
             changes[field] = np.clip(values, 0.0, None if field == "base_color" else 1.0)
             changes[name] = None
     if changes:
