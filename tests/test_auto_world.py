@@ -86,7 +86,11 @@ def test_auto_takes_the_split_sum_where_it_is_within_the_bound(world_results, bo
 def test_the_split_sums_predicted_error_against_the_measured(world_results):
     """Where a material took the split sum and either error is noticeable (>= 0.1): measured /
     predicted within a factor 2 for most (measured 2026-12-03: 72 % of 18, the largest ratio 3.4;
-    11.6 before the levels' borders led to the poles' values: a rough metal floor)."""
+    11.6 before the levels' borders led to the poles' values: a rough metal floor). The rest are
+    over-predicted: the world's occlusion, which the prediction does not see but in its creases,
+    hides much of the reflected world where the spheres stand in a row (calibration scene 1011, a
+    near-mirror sphere reflecting a low sun past its neighbour: 2.24 predicted, 0.33 measured;
+    with World Occlusion off 2.29 and 1.52)."""
     rows = [(seed, name, c, m) for bound in BOUNDS for seed, name, c, m in world_results[bound]
             if c.name.endswith(auto_terms.SPLIT_SUM)]
     ratios, inside, percentiles = _ratios(rows, 0.1)
