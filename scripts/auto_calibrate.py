@@ -134,13 +134,9 @@ def main() -> int:
         "|---|---|---|---|---|",
     ]
     for (world, bound), found in rows.items():
-        measured = np.array([m for *_, m in found])
-        chosen: dict[str, int] = {}
-        for *_, c, _m in found:
-            chosen[c.name] = chosen.get(c.name, 0) + 1
+        within, chosen, _over = auto_scenes.tally(found, bound)
         sets = ", ".join(f"{n} {auto_terms.label(name)}"
                          for name, n in sorted(chosen.items(), key=lambda x: -x[1]))
-        within = float(np.mean(measured <= bound)) if len(measured) else float("nan")
         lines.append(f"| {world} | {bound:g} | {len(found)} | {within:.1%} | {sets} |")
     lines += ["", f"Measured / predicted where either is >= {args.floor:g} (both bounds together; the "
               "Principled set, predicted 0 by construction, left out):", "",

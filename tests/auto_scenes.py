@@ -187,3 +187,16 @@ def render_pairs(scene, camera, names, seed: int, bounds, folder: Path) -> dict[
         measured = measured_errors(auto, reference, masks, props.auto_quantile / 100.0)
         out[bound] = [(seed, name, choices[name], measured[name]) for name in names if name in measured]
     return out
+
+
+def tally(rows, bound: float) -> tuple[float, dict[str, int], list]:
+    """Of ``render_pairs`` rows at ``bound``: the share of materials measured within it, how many
+    took each set, and those over it (seed, material, set, predicted, measured)."""
+    measured = np.array([m for *_, m in rows])
+    within = float(np.mean(measured <= bound)) if len(measured) else float("nan")
+    chosen: dict[str, int] = {}
+    for *_, choice, _m in rows:
+        chosen[choice.name] = chosen.get(choice.name, 0) + 1
+    over = [(seed, name, c.name, round(c.predicted, 2), round(m, 2))
+            for seed, name, c, m in rows if m > bound]
+    return within, chosen, over

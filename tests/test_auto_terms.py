@@ -314,19 +314,13 @@ def test_auto_keeps_random_materials_within_the_bound(random_results, bound):
     (measured: 100 % at 0.5, 99.6 % at 4: a rough dielectric at 4.59), and Auto does not simply
     take the Principled set (bound 0.5: 191 of 250; 4: 102)."""
     rows = random_results[bound]
-    measured = np.array([m for *_, m in rows])
-    within = float(np.mean(measured <= bound))
-    over = [(seed, name, c.name, round(c.predicted, 2), round(m, 2)) for seed, name, c, m in rows
-            if m > bound]
-    chosen = {}
-    for *_, c, _m in rows:
-        chosen[c.name] = chosen.get(c.name, 0) + 1
+    within, chosen, over = auto_scenes.tally(rows, bound)
     assert len(rows) >= 200, len(rows)
-    assert within >= 0.95, (f"{within:.1%} of {len(measured)} materials within {bound}; over: {over}; "
+    assert within >= 0.95, (f"{within:.1%} of {len(rows)} materials within {bound}; over: {over}; "
                             f"chosen {chosen}")
     principled = chosen.get("PRINCIPLED", 0)
     assert principled < 0.9 * len(rows), f"Auto chose the Principled set nearly always: {chosen}"
-    print(f"bound {bound}: within {within:.1%} of {len(measured)}; chosen {chosen}; over: {over}")
+    print(f"bound {bound}: within {within:.1%} of {len(rows)}; chosen {chosen}; over: {over}")
 
 
 def test_measured_error_is_within_a_factor_two_of_the_prediction(random_results):

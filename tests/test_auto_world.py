@@ -69,15 +69,9 @@ def test_auto_takes_the_split_sum_where_it_is_within_the_bound(world_results, bo
     E_ITP 5-30 at the 99th percentile, measured and predicted alike); rough dielectrics and dark
     materials take it."""
     rows = world_results[bound]
-    measured = np.array([m for *_, m in rows])
-    within = float(np.mean(measured <= bound))
-    chosen: dict[str, int] = {}
-    for *_, c, _m in rows:
-        chosen[c.name] = chosen.get(c.name, 0) + 1
+    within, chosen, over = auto_scenes.tally(rows, bound)
     split = sum(n for name, n in chosen.items() if name.endswith(auto_terms.SPLIT_SUM))
-    over = [(seed, name, c.name, round(c.predicted, 2), round(m, 2))
-            for seed, name, c, m in rows if m > bound]
-    print(f"bound {bound}: within {within:.1%} of {len(measured)}; chosen {chosen}; over: {over}")
+    print(f"bound {bound}: within {within:.1%} of {len(rows)}; chosen {chosen}; over: {over}")
     assert len(rows) >= 50, len(rows)
     assert within >= 0.95, f"{within:.1%} within {bound}; over: {over}"
     assert split >= SPLIT_SHARE[bound] * len(rows), f"the split sum by {split} of {len(rows)}: {chosen}"
@@ -106,13 +100,7 @@ def test_auto_on_the_split_sum_keeps_materials_within_the_bound(split_sum_result
     lit by the image itself, stay within the bound (>= 95 %; measured 2026-12-03: all 60 at either
     bound) and do not all take the Principled set (measured: 10 of 60 at 0.5, 30 at 4)."""
     rows = split_sum_results[bound]
-    measured = np.array([m for *_, m in rows])
-    within = float(np.mean(measured <= bound))
-    chosen: dict[str, int] = {}
-    for *_, c, _m in rows:
-        chosen[c.name] = chosen.get(c.name, 0) + 1
-    over = [(seed, name, c.name, round(c.predicted, 2), round(m, 2))
-            for seed, name, c, m in rows if m > bound]
+    within, chosen, over = auto_scenes.tally(rows, bound)
     print(f"bound {bound}: within {within:.1%} of {len(rows)}; chosen {chosen}; over: {over}")
     assert len(rows) >= 50, len(rows)
     assert within >= 0.95, f"{within:.1%} within {bound}; over: {over}"
