@@ -462,7 +462,8 @@ def mesh_geometry(key: str, mesh: bpy.types.Mesh, tangents: bool = False) -> S.M
     if co is None:
         co = np.empty(len(mesh.vertices) * 3, np.float32)
         mesh.vertices.foreach_get("co", co)
-    positions = np.take(co.reshape(-1, 3), _corner_verts(mesh), axis=0)
+    corner_verts = _corner_verts(mesh)
+    positions = np.take(co.reshape(-1, 3), corner_verts, axis=0)
     tri_corners, tri_face = triangle_corners(mesh, positions)
     face_mat = _attribute(mesh, "material_index", "value", np.int32, len(mesh.polygons))
     if face_mat is None or face_mat.min() == face_mat.max():
@@ -492,7 +493,46 @@ def mesh_geometry(key: str, mesh: bpy.types.Mesh, tangents: bool = False) -> S.M
                 sign = np.empty(n_corner, np.float32)
                 mesh.loops.foreach_get("bitangent_sign", sign)
                 tangent_data = np.ascontiguousarray(np.column_stack([t.reshape(-1, 3), sign]), np.float32)
-    return S.MeshGeometry(key, positions, normals, ranges, uvs, tangent_data, indices=indices)
+    return S.MeshGeometry(key, positions, normals, ranges, uvs, tangent_data, indices=indices,
+                          winding=closed_winding(mesh, corner_verts, positions, tri_corners))
+
+
+def closed_winding(mesh, corner_verts: np.ndarray, corner_positions: np.ndarray,
+                   tri_corners: np.ndarray) -> int:
+    """``MeshGeometry.winding`` of ``mesh``: +1 (-1) where every edge that borders a face borders
+    exactly two, run along it in opposite directions (a closed, consistently oriented surface),
+    and the volume it encloses, from its triangles (``tri_corners`` into ``corner_positions``;
+    ``corner_verts``: each corner's vertex), is positive (negative); else 0. Whole arrays of
+    Blender's corner and edge attributes: ~20 ms for a closed mesh of 330,000 triangles, ~6 ms
+    for an open one of a million."""
+    n_corners, n_edges = len(mesh.loops), len(mesh.edges)
+    if n_edges == 0:
+        return 0
+    corner_edge = _attribute(mesh, ".corner_edge", "value", np.int32, n_corners)
+    if corner_edge is None:  # older Blender: no corner attribute
+        corner_edge = np.empty(n_corners, np.int32)
+        mesh.loops.foreach_get("edge_index", corner_edge)
+    edge_verts = _attribute(mesh, ".edge_verts", "value", np.int32, n_edges, 2)
+    if edge_verts is None:
+        edge_verts = np.empty(n_edges * 2, np.int32)
+        mesh.edges.foreach_get("vertices", edge_verts)
+    faces = np.bincount(corner_edge, minlength=n_edges)
+    if np.any((faces != 0) & (faces != 2)):
+        return 0  # a border or a non-manifold edge
+    # a corner runs along its edge from its own vertex: of an edge's two corners, one from each end
+    from_first = corner_verts == edge_verts.reshape(-1, 2)[corner_edge, 0]
+    if np.any(np.bincount(corner_edge, weights=from_first, minlength=n_edges)[faces == 2] != 1.0):
+        return 0
+    # the divergence theorem: 6 V = sum over triangles of a . (b x c), about a corner of the mesh
+    # (float32 products, float64 sums: only the sign is wanted; ~10 ms for 300,000 triangles)
+    centred = corner_positions - corner_positions[0]
+    a, b, c = (np.take(centred, tri_corners[:, i], axis=0).T for i in range(3))
+    terms = a[0] * (b[1] * c[2] - b[2] * c[1]) + a[1] * (b[2] * c[0] - b[0] * c[2]) + \
+        a[2] * (b[0] * c[1] - b[1] * c[0])
+    volume = float(np.sum(terms, dtype=np.float64))
+    if abs(volume) <= 1e-6 * float(np.sum(np.abs(terms), dtype=np.float64)):
+        return 0  # flat: no inside to face
+    return 1 if volume > 0.0 else -1
 
 
 def _geometry_key(obj: bpy.types.Object) -> str:

@@ -206,6 +206,11 @@ class TargetPass(Pass):
             self.target = None
 
 
+#: Draw only the light-facing faces of closed casters into the shadow maps (the same depths as
+#: every face; tests turn it off to compare).
+CULL_CLOSED_CASTERS = True
+
+
 class ShadowPass(Pass):
     """The frame's shadow maps (``gpu_scene.SceneResources.shadow_plan``): one layer of a 2D-array
     depth texture per map, each holding the casters' distances from its light
@@ -247,6 +252,7 @@ class ShadowPass(Pass):
         # each layer draws only the casters that reach its volume (a cube face sees a sixth)
         reach = shadows.layer_casters(plan.matrices, scene.caster_spheres(casters))
         self.drawn_casters = int(reach.sum())
+        facing = scene.caster_facing(casters) if CULL_CLOSED_CASTERS else np.zeros(len(casters), np.int8)
         for layer, framebuffer in enumerate(self.framebuffers):
             if frame.should_stop is not None and frame.should_stop():
                 return False
@@ -266,11 +272,19 @@ class ShadowPass(Pass):
                     shader.uniform_float("shadow_view_projection", plan.matrices[layer].T.ravel().tolist())
                     if not orthographic:  # (an orthographic layer's program has no use for it)
                         shader.uniform_float("light_origin", light_origin)
-                    scene.draw_positions([c for c, r in zip(casters, reach[layer]) if r], shader,
-                                         frame_block=False)
+                    # a closed caster's nearest face to the light faces it: its other faces are
+                    # culled (counter-clockwise faces the light; mirrored or inward-facing ones turn)
+                    for face, cull, turned in ((0, "NONE", False), (1, "BACK", False), (-1, "BACK", True)):
+                        draws = [c for c, r, f in zip(casters, reach[layer], facing) if r and f == face]
+                        if draws:
+                            gpu.state.face_culling_set(cull)
+                            gpu.state.front_facing_set(turned)
+                            scene.draw_positions(draws, shader, frame_block=False)
                 finally:
                     gpu.state.depth_test_set("NONE")
                     gpu.state.depth_mask_set(False)
+                    gpu.state.face_culling_set("NONE")
+                    gpu.state.front_facing_set(False)
             self.renders += 1
         self.key = key
         return True

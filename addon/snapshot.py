@@ -183,6 +183,10 @@ class MeshGeometry:
     uvs: np.ndarray | None = None  # (N, 2) float32, the active UV map (None: the mesh has none)
     tangents: np.ndarray | None = None  # (N, 4) float32: tangent xyz, bitangent sign (normal maps)
     indices: np.ndarray | None = None  # (3T,) int32 rows of the triangles' corners; None: 0, 1, 2, ...
+    #: +1: a closed surface facing out (every edge between two faces that run along it in opposite
+    #: directions, positive volume), -1: closed facing in, 0: open or not known. Seen from outside,
+    #: a closed surface's nearest face faces the viewer: shadow maps need draw only such faces.
+    winding: int = 0
 
     def __post_init__(self):
         if self.indices is None:

@@ -569,3 +569,57 @@ def test_mesh_geometry_keeps_material_ranges_of_the_fast_path():
     order = np.argsort(mats[faces], kind="stable")
     expected = co.reshape(-1, 3)[corner_vert[loops[order].reshape(-1)]]
     assert np.array_equal(geometry.per_corner(geometry.positions), expected)
+
+
+def _winding_of(obj) -> int:
+    evaluated = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
+    mesh = evaluated.to_mesh()
+    try:
+        return extract.mesh_geometry("k", mesh).winding
+    finally:
+        evaluated.to_mesh_clear()
+
+
+def test_closed_surfaces_and_their_facing():
+    """``MeshGeometry.winding``: +1 for closed surfaces facing out (a UV sphere with its pole fans,
+    a cube of quads, a torus), -1 for the same turned inside out, 0 for an open surface (a plane,
+    a cube missing a face), a face turned against its neighbours, and three faces on one edge."""
+    import bmesh
+
+    scenes.reset()
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=24, ring_count=12)
+    sphere = bpy.context.object
+    bpy.ops.mesh.primitive_cube_add()
+    cube = bpy.context.object
+    bpy.ops.mesh.primitive_torus_add()
+    torus = bpy.context.object
+    assert [_winding_of(o) for o in (sphere, cube, torus)] == [1, 1, 1]
+    for obj in (sphere, cube):
+        obj.data.flip_normals()
+    assert [_winding_of(o) for o in (sphere, cube)] == [-1, -1]
+    bpy.ops.mesh.primitive_plane_add()
+    assert _winding_of(bpy.context.object) == 0
+
+    def edited(obj, change):
+        mesh = bmesh.new()
+        mesh.from_mesh(obj.data)
+        change(mesh)
+        mesh.to_mesh(obj.data)
+        mesh.free()
+        obj.data.update()
+        return _winding_of(obj)
+
+    bpy.ops.mesh.primitive_cube_add()
+    assert edited(bpy.context.object,
+                  lambda m: bmesh.ops.delete(m, geom=[m.faces[:][0]], context="FACES_ONLY")) == 0
+    bpy.ops.mesh.primitive_cube_add()
+    assert edited(bpy.context.object, lambda m: m.faces[:][0].normal_flip()) == 0
+
+    def fin(m):  # a third face on one of the cube's edges
+        m.verts.ensure_lookup_table()
+        edge = m.edges[:][0]
+        far = m.verts.new((5.0, 5.0, 5.0))
+        m.faces.new((edge.verts[0], edge.verts[1], far))
+
+    bpy.ops.mesh.primitive_cube_add()
+    assert edited(bpy.context.object, fin) == 0

@@ -520,6 +520,66 @@ def test_culled_casters_draw_the_same_shadows(tmp_path, monkeypatch):
     assert np.array_equal(culled, every)
 
 
+def test_closed_casters_drawn_by_their_lit_faces_cast_the_same_shadows(tmp_path, monkeypatch):
+    """Closed casters drawn into the maps by their faces towards the light alone (the rest culled)
+    give, bit for bit, the image drawn with every face: spheres and a torus facing out, a mirrored
+    torus and an inside-out sphere (their faces turn), under a point light (cube maps), a spot and
+    a sun, each with a size; the ground (open) and a cube with a partly transparent face (the rest
+    of it open) drawn whole."""
+    from addon import gpu_scene, passes
+
+    scene = scenes.reset(size=64)
+    scene.shading_lab.model = "PBR"
+    scenes.ortho_camera(scene, location=(0.0, -7.0, 6.0), rotation=(math.radians(48.0), 0.0, 0.0), scale=8.0)
+    mat = _white()
+    scenes.plane(scene, size=12.0, material=mat)
+    _sphere(scene, 0.5, (-2.0, 0.0, 0.6), mat)
+    bpy.ops.mesh.primitive_torus_add(location=(0.0, 1.0, 0.5), rotation=(0.6, 0.0, 0.0))
+    _smooth(bpy.context.object, mat)
+    bpy.ops.mesh.primitive_torus_add(location=(2.0, -0.5, 0.5), rotation=(0.3, 0.8, 0.0))
+    mirrored = _smooth(bpy.context.object, mat)
+    mirrored.scale = (-1.0, 1.0, 1.0)
+    inside_out = _sphere(scene, 0.4, (0.5, -1.5, 0.5), mat)
+    inside_out.data.flip_normals()
+    bpy.ops.mesh.primitive_cube_add(size=0.8, location=(-1.0, -1.5, 0.5))
+    cube = _smooth(bpy.context.object, mat)
+    glass = _white("Glass")
+    scenes.node_tree(glass).nodes.get("Principled BSDF").inputs["Alpha"].default_value = 0.5
+    cube.data.materials.append(glass)
+    cube.data.polygons[0].material_index = 1
+    for kind, location, rotation in (
+            ("POINT", (-1.0, -1.0, 3.0), (0.0, 0.0, 0.0)),
+            ("SPOT", (2.0, -2.0, 4.0), (math.radians(35.0), 0.0, math.radians(30.0))),
+            ("SUN", (0.0, 0.0, 5.0), (math.radians(-35.0), math.radians(25.0), 0.0))):
+        light = scenes.light(scene, kind, energy=2.0 if kind == "SUN" else 300.0, location=location,
+                             rotation=rotation)
+        light.data.use_shadow = True
+        if kind == "SUN":
+            light.data.angle = math.radians(3.0)
+        else:
+            light.data.shadow_soft_size = 0.2
+            if kind == "SPOT":
+                light.data.spot_size = math.radians(100.0)
+    facings = []
+    original = gpu_scene.SceneResources.caster_facing
+
+    def caster_facing(self, casters):
+        out = original(self, casters)
+        facings.append(sorted(int(f) for f in out))
+        return out
+
+    monkeypatch.setattr(gpu_scene.SceneResources, "caster_facing", caster_facing)
+    culled = scenes.render(scene, tmp_path / "culled.exr")
+    monkeypatch.setattr(passes, "CULL_CLOSED_CASTERS", False)
+    whole = scenes.render(scene, tmp_path / "whole.exr")
+    # the ground and the cube (its other face is not drawn): open; the inside-out sphere and the
+    # mirrored torus: turned
+    assert facings == [[-1, -1, 0, 0, 1, 1]], facings
+    shadowed = float(np.mean(whole[..., :3].sum(-1) < 0.5 * np.median(whole[..., :3].sum(-1))))
+    assert shadowed > 0.03, f"only {shadowed:.1%} of the pixels in shadow"
+    assert np.array_equal(culled, whole), float(np.abs(culled - whole).max())
+
+
 # --- the maps' texture between renders ------------------------------------------------------------
 
 
