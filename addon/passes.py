@@ -250,7 +250,8 @@ class ShadowPass(Pass):
         self.key = None  # until every layer is drawn
         casters = scene.shadow_casters()
         # each layer draws only the casters that reach its volume (a cube face sees a sixth)
-        reach = shadows.layer_casters(plan.matrices, scene.caster_spheres(casters))
+        spheres = scene.caster_spheres(casters)
+        reach = shadows.layer_casters(plan.matrices, spheres)
         self.drawn_casters = int(reach.sum())
         facing = scene.caster_facing(casters) if CULL_CLOSED_CASTERS else np.zeros(len(casters), np.int8)
         for layer, framebuffer in enumerate(self.framebuffers):
@@ -259,6 +260,12 @@ class ShadowPass(Pass):
             origin = plan.origins[layer]
             orthographic = origin[3] == shadows.KIND_ORTHOGRAPHIC
             inverse_far = 0.0 if orthographic else 1.0 / float(plan.info[layer][0])
+            layer_facing = facing
+            if not orthographic and facing.any():  # a light inside a closed caster (a bulb) sees
+                # its inside: every face drawn (the near plane, <= 1e-4 far + 1 mm, counted in)
+                margin = 1e-4 * float(plan.info[layer][0]) + 1e-3
+                around = np.linalg.norm(spheres[:, :3] - origin[:3], axis=1) <= spheres[:, 3] + margin
+                layer_facing = np.where(around, 0, facing)
             shader = gpu_library.shadow_program(orthographic)
             light_origin = (*(float(x) for x in origin[:3]), inverse_far)
             with framebuffer.bind():
@@ -275,7 +282,7 @@ class ShadowPass(Pass):
                     # a closed caster's nearest face to the light faces it: its other faces are
                     # culled (counter-clockwise faces the light; mirrored or inward-facing ones turn)
                     for face, cull, turned in ((0, "NONE", False), (1, "BACK", False), (-1, "BACK", True)):
-                        draws = [c for c, r, f in zip(casters, reach[layer], facing) if r and f == face]
+                        draws = [c for c, r, f in zip(casters, reach[layer], layer_facing) if r and f == face]
                         if draws:
                             gpu.state.face_culling_set(cull)
                             gpu.state.front_facing_set(turned)

@@ -525,7 +525,8 @@ def test_closed_casters_drawn_by_their_lit_faces_cast_the_same_shadows(tmp_path,
     give, bit for bit, the image drawn with every face: spheres and a torus facing out, a mirrored
     torus and an inside-out sphere (their faces turn), under a point light (cube maps), a spot and
     a sun, each with a size; the ground (open) and a cube with a partly transparent face (the rest
-    of it open) drawn whole."""
+    of it open) drawn whole; a second point light inside a closed sphere (a bulb), which sees its
+    inside: drawn whole for it, the bulb keeps its light in."""
     from addon import gpu_scene, passes
 
     scene = scenes.reset(size=64)
@@ -560,6 +561,9 @@ def test_closed_casters_drawn_by_their_lit_faces_cast_the_same_shadows(tmp_path,
             light.data.shadow_soft_size = 0.2
             if kind == "SPOT":
                 light.data.spot_size = math.radians(100.0)
+    _sphere(scene, 0.3, (-3.0, 2.0, 1.0), mat)  # the bulb, around a light
+    bulb = scenes.light(scene, "POINT", energy=300.0, location=(-3.0, 2.0, 1.0))
+    bulb.data.use_shadow, bulb.data.shadow_soft_size = True, 0.05
     facings = []
     original = gpu_scene.SceneResources.caster_facing
 
@@ -574,7 +578,7 @@ def test_closed_casters_drawn_by_their_lit_faces_cast_the_same_shadows(tmp_path,
     whole = scenes.render(scene, tmp_path / "whole.exr")
     # the ground and the cube (its other face is not drawn): open; the inside-out sphere and the
     # mirrored torus: turned
-    assert facings == [[-1, -1, 0, 0, 1, 1]], facings
+    assert facings == [[-1, -1, 0, 0, 1, 1, 1]], facings
     shadowed = float(np.mean(whole[..., :3].sum(-1) < 0.5 * np.median(whole[..., :3].sum(-1))))
     assert shadowed > 0.03, f"only {shadowed:.1%} of the pixels in shadow"
     assert np.array_equal(culled, whole), float(np.abs(culled - whole).max())
