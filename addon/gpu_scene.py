@@ -227,6 +227,13 @@ class SceneResources:
                    for item in snapshot.items if item.casts_shadow]
         self.caster_key = repr(casters).encode()
 
+    def handedness(self, draws: list[Draw]) -> np.ndarray:
+        """Per draw, the sign of its item's matrix's determinant: -1 where it mirrors (turning its
+        triangles' winding), 0 where it flattens."""
+        items = self.snapshot.items
+        return np.array([np.sign(np.linalg.det(np.asarray(items[d.order].matrix, np.float64)[:3, :3]))
+                         for d in draws], np.int8)
+
     def caster_facing(self, casters: list[Draw]) -> np.ndarray:
         """Per caster draw: +1 where its item is a closed surface facing out as drawn (the mesh's
         ``winding`` times the sign of its matrix's determinant: a mirror turns its faces), -1
@@ -234,15 +241,12 @@ class SceneResources:
         slot casts nothing: the rest is open) or its mesh is open."""
         items, geometries = self.snapshot.items, self.snapshot.geometries
         drawn = Counter(draw.order for draw in casters)
-        out = np.zeros(len(casters), np.int8)
+        out = self.handedness(casters)
         for i, draw in enumerate(casters):
             item = items[draw.order]
             geometry = geometries.get(item.geometry)
-            if geometry is None or not geometry.winding or \
-                    drawn[draw.order] != len(self._batches[item.geometry]):
-                continue
-            det = float(np.linalg.det(np.asarray(item.matrix, np.float64)[:3, :3]))
-            out[i] = geometry.winding * (1 if det > 0.0 else -1 if det < 0.0 else 0)
+            whole = geometry is not None and drawn[draw.order] == len(self._batches[item.geometry])
+            out[i] *= geometry.winding if whole else 0
         return out
 
     def shadow_casters(self) -> list[Draw]:

@@ -280,18 +280,17 @@ class ShadowPass(Pass):
                     if not orthographic:  # (an orthographic layer's program has no use for it)
                         shader.uniform_float("light_origin", light_origin)
                     # a closed caster's nearest face to the light faces it: its other faces are
-                    # culled (counter-clockwise faces the light; mirrored or inward-facing ones turn)
-                    for face, cull, turned in ((0, "NONE", False), (1, "BACK", False), (-1, "BACK", True)):
+                    # culled (counter-clockwise faces the light; mirrored or inward-facing ones
+                    # wind the other way)
+                    for face, cull in ((0, "NONE"), (1, "BACK"), (-1, "FRONT")):
                         draws = [c for c, r, f in zip(casters, reach[layer], layer_facing) if r and f == face]
                         if draws:
                             gpu.state.face_culling_set(cull)
-                            gpu.state.front_facing_set(turned)
                             scene.draw_positions(draws, shader, frame_block=False)
                 finally:
                     gpu.state.depth_test_set("NONE")
                     gpu.state.depth_mask_set(False)
                     gpu.state.face_culling_set("NONE")
-                    gpu.state.front_facing_set(False)
             self.renders += 1
         self.key = key
         return True
@@ -307,6 +306,11 @@ class ShadowPass(Pass):
         self.framebuffers = []
         self.key = None
         self._shape = None
+
+
+#: Draw the occlusion's back-face prepass with the faces towards the viewer culled (the same
+#: depths as discarding them in the program; tests turn it off to compare).
+CULL_BACK_PREPASS = True
 
 
 class OcclusionPass(Pass):
@@ -348,10 +352,23 @@ class OcclusionPass(Pass):
                 shader = gpu_library.prepass_program(back_faces)
                 try:
                     for _features, draws in lists.opaque:
-                        frame.scene.draw_positions(draws, shader)
+                        if not (back_faces and CULL_BACK_PREPASS):
+                            frame.scene.draw_positions(draws, shader)
+                            continue
+                        # the faces turned away alone: the others culled before they rasterise (the
+                        # program discards them too); a mirrored object's outward faces wind the
+                        # other way (turning the winding with front_facing_set would turn the
+                        # program's gl_FrontFacing too)
+                        mirrored = frame.scene.handedness(draws) < 0
+                        for turned, cull in ((False, "FRONT"), (True, "BACK")):
+                            group = [d for d, m in zip(draws, mirrored) if m == turned]
+                            if group:
+                                gpu.state.face_culling_set(cull)
+                                frame.scene.draw_positions(group, shader)
                 finally:
                     gpu.state.depth_test_set("NONE")
                     gpu.state.depth_mask_set(False)
+                    gpu.state.face_culling_set("NONE")
         camera = frame.snapshot.camera
         vp = camera.view_projection if view.view_projection is None else view.view_projection
         projection = np.asarray(vp, np.float64) @ np.linalg.inv(np.asarray(camera.view, np.float64))

@@ -687,3 +687,37 @@ def test_the_viewport_is_lit_by_the_world_as_the_final_render(tmp_path):
     surface = final[..., 3] > 0.0  # (the viewport shows the world behind; the film here is transparent)
     assert surface.mean() > 0.5 and final[surface, :3].mean() > 0.3
     np.testing.assert_allclose(shown[surface, :3], final[surface, :3], rtol=3e-3, atol=2e-3)  # RGBA16F
+
+
+def test_the_back_face_prepass_culled_is_the_prepass_discarded(tmp_path, monkeypatch):
+    """The occlusion's back-face prepass drawn with the faces towards the viewer culled gives, bit
+    for bit, the image of the prepass that rasterises them and discards them: spheres on a ground,
+    a mirrored torus (its winding turned) and a plane tilted to show its back; and the occlusion
+    does darken it (against World Occlusion off)."""
+    from addon import passes
+
+    scene = scenes.reset(size=48)
+    scene.shading_lab.model = "PBR"
+    scene.shading_lab.world_occlusion = True
+    scenes.ortho_camera(scene, location=(0.0, -6.0, 5.0), rotation=(math.radians(50.0), 0.0, 0.0),
+                        scale=6.0)
+    _world(scene, color=(0.6, 0.6, 0.6))
+    mat = _diffuse("diffuse")
+    scenes.plane(scene, size=10.0, material=mat)
+    for x in (-1.0, 0.0):
+        _sphere((x, 0.0, 0.5), mat, radius=0.5)
+    bpy.ops.mesh.primitive_torus_add(location=(1.5, 0.0, 0.3), rotation=(0.4, 0.0, 0.0))
+    torus = bpy.context.object
+    torus.data.materials.append(mat)
+    torus.scale = (-1.0, 1.0, 1.0)
+    bpy.ops.mesh.primitive_plane_add(size=1.5, location=(-1.5, 1.5, 1.0),
+                                     rotation=(math.radians(120.0), 0.0, 0.0))
+    bpy.context.object.data.materials.append(mat)
+    culled = scenes.render(scene, tmp_path / "culled.exr")
+    monkeypatch.setattr(passes, "CULL_BACK_PREPASS", False)
+    discarded = scenes.render(scene, tmp_path / "discarded.exr")
+    scene.shading_lab.world_occlusion = False
+    open_sky = scenes.render(scene, tmp_path / "open.exr")
+    darker = float(np.mean(open_sky[..., :3] - discarded[..., :3] > 0.02))
+    assert darker > 0.05, f"the occlusion darkened only {darker:.1%} of the pixels"
+    assert np.array_equal(culled, discarded), float(np.abs(culled - discarded).max())
