@@ -490,8 +490,7 @@ def test_textured_materials_are_predicted_from_their_texels(tmp_path, monkeypatc
     scene, camera, names = auto_scenes.random_scene(seed)
     sphere = next(o for o in scene.objects if o.type == "MESH" and o.data.materials[0].name == names[0])
     mat = bpy.data.materials.new("Textured")
-    mat.use_nodes = True
-    tree = mat.node_tree
+    tree = scenes.node_tree(mat)
     bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
     rng = np.random.default_rng(seed)
     for socket, non_color in (("Base Color", False), ("Roughness", True)):
