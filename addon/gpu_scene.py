@@ -378,9 +378,19 @@ class SceneResources:
             draw.batch.draw(shader)
         return True
 
-    def draw_positions(self, draws: list[Draw], shader, frame_block: bool = True) -> None:
+    def draw_positions(self, draws: list[Draw], shader, frame_block: bool = True,
+                       culling: list[str] | None = None) -> None:
         """Draw ``draws`` with a program that needs only positions and normals (the prepass), or
-        (``frame_block`` False) positions under its own projection (a shadow map)."""
+        (``frame_block`` False) positions under its own projection (a shadow map). ``culling``:
+        per draw, the faces the rasteriser drops ("NONE", "BACK", "FRONT"), drawn a mode at a time
+        (the state is left at the last mode: callers restore it)."""
+        if culling is not None:
+            for mode in ("NONE", "BACK", "FRONT"):
+                group = [d for d, m in zip(draws, culling) if m == mode]
+                if group:
+                    gpu.state.face_culling_set(mode)
+                    self.draw_positions(group, shader, frame_block)
+            return
         shader.bind()
         if frame_block:
             shader.uniform_block("frame", self._frame.ubo)

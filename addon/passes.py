@@ -209,6 +209,8 @@ class TargetPass(Pass):
 #: Draw only the light-facing faces of closed casters into the shadow maps (the same depths as
 #: every face; tests turn it off to compare).
 CULL_CLOSED_CASTERS = True
+#: The faces culled for a caster's facing (``SceneResources.caster_facing``): open, out, in.
+CULLING = {0: "NONE", 1: "BACK", -1: "FRONT"}
 
 
 class ShadowPass(Pass):
@@ -282,11 +284,9 @@ class ShadowPass(Pass):
                     # a closed caster's nearest face to the light faces it: its other faces are
                     # culled (counter-clockwise faces the light; mirrored or inward-facing ones
                     # wind the other way)
-                    for face, cull in ((0, "NONE"), (1, "BACK"), (-1, "FRONT")):
-                        draws = [c for c, r, f in zip(casters, reach[layer], layer_facing) if r and f == face]
-                        if draws:
-                            gpu.state.face_culling_set(cull)
-                            scene.draw_positions(draws, shader, frame_block=False)
+                    drawn = [(c, CULLING[f]) for c, r, f in zip(casters, reach[layer], layer_facing) if r]
+                    scene.draw_positions([c for c, _ in drawn], shader, frame_block=False,
+                                         culling=[m for _, m in drawn])
                 finally:
                     gpu.state.depth_test_set("NONE")
                     gpu.state.depth_mask_set(False)
@@ -352,19 +352,14 @@ class OcclusionPass(Pass):
                 shader = gpu_library.prepass_program(back_faces)
                 try:
                     for _features, draws in lists.opaque:
-                        if not (back_faces and CULL_BACK_PREPASS):
-                            frame.scene.draw_positions(draws, shader)
-                            continue
-                        # the faces turned away alone: the others culled before they rasterise (the
-                        # program discards them too); a mirrored object's outward faces wind the
-                        # other way (turning the winding with front_facing_set would turn the
-                        # program's gl_FrontFacing too)
-                        mirrored = frame.scene.handedness(draws) < 0
-                        for turned, cull in ((False, "FRONT"), (True, "BACK")):
-                            group = [d for d, m in zip(draws, mirrored) if m == turned]
-                            if group:
-                                gpu.state.face_culling_set(cull)
-                                frame.scene.draw_positions(group, shader)
+                        culling = None
+                        if back_faces and CULL_BACK_PREPASS:
+                            # the faces turned away alone: the others culled before they rasterise
+                            # (the program discards them too); a mirrored object's outward faces
+                            # wind the other way (turning the winding with front_facing_set would
+                            # turn the program's gl_FrontFacing too)
+                            culling = ["BACK" if h < 0 else "FRONT" for h in frame.scene.handedness(draws)]
+                        frame.scene.draw_positions(draws, shader, culling=culling)
                 finally:
                     gpu.state.depth_test_set("NONE")
                     gpu.state.depth_mask_set(False)
