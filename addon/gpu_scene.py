@@ -162,6 +162,10 @@ class SceneResources:
         self.shadow_plan: shadows.ShadowPlan | None = None
         self.caster_key: bytes = b""  # what the shadow maps saw: casters' geometry and matrices
         self.shadow_maps = None  # the 2D-array depth texture (passes.ShadowPass)
+        # the lights in the order the programs loop over them, and how many may cast a shadow
+        # (programs.light_order: those with a shadow map first)
+        self.lights: list = []
+        self.shadowed_lights = 0
 
     # --- keeping the GPU copy up to date ------------------------------------------------------
 
@@ -190,7 +194,10 @@ class SceneResources:
             self.uploads["materials"] += block.put(programs.pack_material(material))
         self._sync_shadows(snapshot)  # before the lights: they name their first shadow layer
         slots = programs.light_slots(len(snapshot.lights))
-        lights = programs.pack_lights(snapshot, slots, self.shadow_plan.first_layer)
+        first = self.shadow_plan.first_layer
+        order, self.shadowed_lights = programs.light_order(first)
+        self.lights = [snapshot.lights[i] for i in order]
+        lights = programs.pack_lights(self.lights, slots, [first[i] for i in order])
         self.uploads["lights"] += self._lights.put(lights)
         blocks = programs.pack_objects(snapshot.items)
         del self._objects[len(blocks):]
@@ -270,14 +277,15 @@ class SceneResources:
         culling is on (``light_tiles``)."""
         tiles = None
         if programs.uses_light_tiles(self.snapshot):
-            lights = self.snapshot.lights
+            lights = self.lights
             vp = self.snapshot.camera.view_projection if view_projection is None else view_projection
             tiles = light_tiles.tile_lists([light.position for light in lights],
                                            [light.influence for light in lights], vp,
                                            width * samples, height * samples, light_tiles.TILE * samples)
             texels = tiles.texels()
             self.uploads["light tiles"] += self._light_tiles.put(texels.reshape(len(texels), -1))
-        self.uploads["frame"] += self._frame.put(programs.pack_frame(self.snapshot, view_projection, tiles))
+        self.uploads["frame"] += self._frame.put(programs.pack_frame(self.snapshot, view_projection, tiles,
+                                                                     self.shadowed_lights))
 
     @property
     def geometry_count(self) -> int:
@@ -300,9 +308,10 @@ class SceneResources:
         if lists is not None:
             return lists
         snapshot = self.snapshot
-        layers = self.shadow_plan.layers  # planned once per sync, not counted again per material
+        plan = self.shadow_plan  # planned once per sync, not counted again per material
         features = {key: programs.Features.from_snapshot(snapshot, model=model, material=m,
-                                                         half_target=half_target, shadow_layers=layers)
+                                                         half_target=half_target, shadow_layers=plan.layers,
+                                                         first_layer=plan.first_layer)
                     for key, m in snapshot.materials.items()}
         opaque: dict[programs.Features, list[Draw]] = {}
         blended: dict[programs.Features, list[Draw]] = {}

@@ -35,6 +35,9 @@ LTC_SPHERE_SIZE = 32
 #: Objects per uniform block of object data (128 bytes each: 32 KiB, within every GPU's limit);
 #: a scene with more objects uses several blocks, a draw names its object by block and index.
 OBJECT_BLOCK = 256
+#: Shade the lights without a shadow map in a loop without shadow lookups (``Features.
+#: unshadowed_lights``; the same image as one loop; tests turn it off to compare).
+SPLIT_UNSHADOWED = True
 
 MODEL_FILES = {
     "BLINN_PHONG": "model_blinn_phong.glsl",
@@ -99,6 +102,11 @@ class Features:
     light_radii: bool = True
     #: an area light may have a Spread under 180 degrees; off, the program holds no spread code
     area_spread: bool = True
+    #: with shadows, some light has no shadow map: the program shades those lights in a loop of
+    #: their own that holds no shadow lookup (``light_order`` lists the others first); both sides
+    #: of an ``if`` run on this machine's rasteriser (glsl/README.md), so a light skipped by a test
+    #: would pay the lookup anyway
+    unshadowed_lights: bool = False
 
     def has_map(self, name: str) -> bool:
         return name in self.maps or name + "_CLOSEST" in self.maps
@@ -126,6 +134,7 @@ class Features:
         if not self.shadow_layers:
             object.__setattr__(self, "shadow_size", 0)
             object.__setattr__(self, "soft_shadows", False)
+            object.__setattr__(self, "unshadowed_lights", False)
         if self.model == "PBR" and self.terms.principled:
             canonical = Terms(principled=True)  # one fixed set: exact Fresnel, GGX, Smith, layered
         elif self.model == "PBR":
@@ -139,17 +148,18 @@ class Features:
     @classmethod
     def from_snapshot(cls, snapshot: Snapshot, model: str | None = None,
                       material: MaterialParams | None = None, half_target: bool = False,
-                      with_maps: bool = True, shadow_layers: int | None = None) -> Features:
+                      with_maps: bool = True, shadow_layers: int | None = None,
+                      first_layer: tuple[int, ...] | None = None) -> Features:
         """The scene's features, for ``model`` or for ``material`` (its model and term overrides).
-        ``shadow_layers``: the frame's shadow-map layers when the caller planned them (else counted
-        by ``shadows.assign``)."""
+        ``shadow_layers`` and ``first_layer``: the frame's shadow-map layers and each light's
+        first when the caller planned them (else given by ``shadows.assign``)."""
         terms = snapshot.settings.terms
         maps = frozenset()
         if material is not None and with_maps:
             maps = frozenset(name[:-4].upper() + ("_CLOSEST" if getattr(material, name)[1] else "")
                              for name in MaterialParams.MAPS if getattr(material, name))
-        if shadow_layers is None:
-            shadow_layers = shadows.assign(snapshot)[1]
+        if shadow_layers is None or first_layer is None:
+            first_layer, shadow_layers = shadows.assign(snapshot)[:2]
         env_samples = snapshot.settings.environment_samples
         if material is not None:
             model = material.model or model
@@ -182,6 +192,7 @@ class Features:
             shadow_size=int(snapshot.settings.shadow_map_size),
             soft_shadows=snapshot.settings.soft_shadows,
             light_tiles=uses_light_tiles(snapshot),
+            unshadowed_lights=SPLIT_UNSHADOWED and any(f < 0 for f in first_layer[:len(snapshot.lights)]),
         )
 
     @property
@@ -259,6 +270,8 @@ class Features:
                     ("SL_SHADOW_SIZE", str(self.shadow_size))]
             if self.soft_shadows:
                 out.append(("SL_SOFT_SHADOWS", "1"))
+            if self.unshadowed_lights:
+                out.append(("SL_UNSHADOWED_LIGHTS", "1"))
         if self.environment:
             out.append(("SL_ENV_" + self.environment, "1"))
             if self.environment == "MAP" and self.env_diffuse == "SH9":
@@ -510,8 +523,9 @@ ALL_LOBES = (1.0, 1.0, 1.0, 1.0)
 
 
 def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None,
-               tiles: light_tiles.TileLists | None = None) -> bytes:
-    """The FrameData block; ``tiles``: the view's light tiles (light culling)."""
+               tiles: light_tiles.TileLists | None = None, shadowed: int | None = None) -> bytes:
+    """The FrameData block; ``tiles``: the view's light tiles (light culling); ``shadowed``: the
+    lights the programs look shadows up for, first in ``light_order`` (default: all)."""
     cam = snapshot.camera
     vp = cam.view_projection if view_projection is None else view_projection
     ambient = snapshot.settings.ambient
@@ -522,6 +536,7 @@ def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None,
         [ambient, ambient, ambient, 0.0],
         [float(len(snapshot.lights)), *((float(tiles.tile), float(tiles.columns), float(tiles.header_texels))
                                          if tiles is not None else (0.0, 0.0, 0.0))],
+        [float(len(snapshot.lights) if shadowed is None else shadowed), 0.0, 0.0, 0.0],
     ]
     return np.concatenate([np.asarray(r, np.float32) for r in rows]).tobytes()
 
@@ -536,11 +551,19 @@ def uses_light_tiles(snapshot: Snapshot) -> bool:
     return snapshot.settings.light_culling and any(math.isfinite(light.influence) for light in lights)
 
 
-def pack_lights(snapshot: Snapshot, max_lights: int, first_layer: tuple[int, ...]) -> np.ndarray:
+def light_order(first_layer: tuple[int, ...]) -> tuple[list[int], int]:
+    """The order the programs loop over the lights in, and how many come first: those with a
+    shadow map (``first_layer[i] >= 0``), then the others, each in the scene's order. A program
+    shades the others in a loop of their own without shadow lookups (``Features.unshadowed_lights``)."""
+    shadowed = [i for i, first in enumerate(first_layer) if first >= 0]
+    return shadowed + [i for i, first in enumerate(first_layer) if first < 0], len(shadowed)
+
+
+def pack_lights(lights, max_lights: int, first_layer) -> np.ndarray:
     """(max_lights, LIGHT_FLOATS) float32: each light's LightData, a row of the light texture;
     ``first_layer[i]``: light i's first shadow-map layer (``shadows.ShadowPlan``), -1 for none."""
     data = np.zeros((max_lights, LIGHT_FLOATS), np.float32)
-    for i, light in enumerate(snapshot.lights[:max_lights]):
+    for i, light in enumerate(lights[:max_lights]):
         data[i] = [
             *light.position, LIGHT_KIND_IDS[light.kind],
             *light.direction, light.spot_cos_half,

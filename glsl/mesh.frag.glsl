@@ -81,6 +81,45 @@ int tile_light(int first, int k)
 }
 #endif
 
+/* The index of the k-th light of `listed` (first, count): the screen tile's list with light
+ * culling, else every light in order. */
+int listed_light(ivec2 listed, int k)
+{
+#ifdef SL_LIGHT_TILES
+  return tile_light(listed.x, k);
+#else
+  return k;
+#endif
+}
+
+/* A light's share of the radiance leaving s. shadowed: look its shadow up (where the light
+ * has a shadow map; ng is the flat face's normal for it), a constant at each call, so a loop
+ * over lights without shadows holds no lookup. */
+vec3 light_share(Surface s, vec3 ng, LightData light, bool shadowed)
+{
+  vec4 factors = light.factors * vec4(lobes.xy, 1.0, 1.0);
+  if (light.factors.z > 0.5) {
+    /* a sun split off the world */
+#ifdef SL_MODEL_PBR
+    factors.y *= world_sun_specular(s.roughness);
+#else
+#  ifndef SL_AMBIENT_WORLD
+    return vec3(0.0); /* the empirical models are lit by their ambient constant, not the world */
+#  endif
+#endif
+  }
+  vec3 l;
+  vec3 E = light_irradiance(light, s.p, l);
+  float visibility = 1.0;
+#ifdef SL_SHADOWS
+  if (shadowed && dot(s.n, l) > 0.0 && max(E.r, max(E.g, E.b)) > 0.0) {
+    visibility = light_visibility(light, s.p, ng);
+    E *= visibility;
+  }
+#endif
+  return shade_light(s, light, l, E, visibility, factors);
+}
+
 void main()
 {
   /* textures and screen derivatives first: they need every fragment of the quad alive */
@@ -112,50 +151,51 @@ void main()
   c += shade_environment(s, lobes.xy);
 #ifdef SL_LIGHT_TILES
   ivec2 listed = tile_lights();
-  int count = listed.y;
 #else
-  int count = int(frame.counts.x);
+  ivec2 listed = ivec2(0, int(frame.counts.x));
 #endif
-  for (int k = 0; k < SL_MAX_LIGHTS; k++) {
+  int count = listed.y;
+  /* With shadows the lights that may cast one come first (programs.light_order); where some
+   * have no shadow map the program shades them in a loop of its own, which holds no lookup
+   * (an `if` would cost the lookup anyway: glsl/README.md) */
+  int k = 0;
+#ifdef SL_SHADOWS
+  for (; k < SL_MAX_LIGHTS; k++) {
     if (k >= count) {
       break;
     }
-#ifdef SL_LIGHT_TILES
-    int index = tile_light(listed.x, k);
-#else
-    int index = k;
-#endif
+    int index = listed_light(listed, k);
+#  ifdef SL_UNSHADOWED_LIGHTS
+    if (index >= int(frame.shadowed.x)) {
+      break;
+    }
+#  endif
     LightData light = load_light_reach(index);
-#ifdef SL_LIGHT_TILES
+#  ifdef SL_LIGHT_TILES
     /* a tile lists every light whose reach meets some of its pixels: at the others the light's
      * window is exactly 0 (light_window), known before the rest of its texels are read */
     if (light_window(light, s.p) <= 0.0) {
       continue;
     }
-#endif
-    light = load_light_rest(light, index);
-    vec4 factors = light.factors * vec4(lobes.xy, 1.0, 1.0);
-    if (light.factors.z > 0.5) {
-      /* a sun split off the world */
-#ifdef SL_MODEL_PBR
-      factors.y *= world_sun_specular(s.roughness);
-#else
-#  ifndef SL_AMBIENT_WORLD
-      continue; /* the empirical models are lit by their ambient constant, not the world */
 #  endif
-#endif
-    }
-    vec3 l;
-    vec3 E = light_irradiance(light, s.p, l);
-    float visibility = 1.0;
-#ifdef SL_SHADOWS
-    if (dot(s.n, l) > 0.0 && max(E.r, max(E.g, E.b)) > 0.0) {
-      visibility = light_visibility(light, s.p, ng);
-      E *= visibility;
-    }
-#endif
-    c += shade_light(s, light, l, E, visibility, factors);
+    c += light_share(s, ng, load_light_rest(light, index), true);
   }
+#endif
+#if !defined(SL_SHADOWS) || defined(SL_UNSHADOWED_LIGHTS)
+  for (; k < SL_MAX_LIGHTS; k++) {
+    if (k >= count) {
+      break;
+    }
+    int index = listed_light(listed, k);
+    LightData light = load_light_reach(index);
+#  ifdef SL_LIGHT_TILES
+    if (light_window(light, s.p) <= 0.0) {
+      continue;
+    }
+#  endif
+    c += light_share(s, vec3(0.0), load_light_rest(light, index), false);
+  }
+#endif
   /* alpha: coverage, blended over what is behind (L = a L_surface + (1 - a) L_behind, as Cycles'
    * transparency); the renderer peels partly transparent surfaces and composites them in depth order */
   frag_color = vec4(write_target(lobes.w > 0.5 ? shade_finish(c) : c), m.emission.w);

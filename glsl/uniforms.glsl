@@ -9,6 +9,8 @@ struct FrameData {
   vec4 ambient;          /* rgb: Blinn-Phong/Phong ambient constant x (eq. 1.4) */
   vec4 counts;           /* x: number of lights in use; light culling: y the tiles' side in pixels,
                           * z tiles per row, w where the light indices start in light_tiles */
+  vec4 shadowed;         /* x: the lights [0, x) may cast a shadow (addon/programs.py's light_order
+                          * lists those with a shadow map first); the others have none */
 };
 
 struct LightData {

@@ -627,3 +627,57 @@ def test_spare_textures_stay_within_their_budget(monkeypatch):
     library.keep_spare("big", d, 101)  # larger than the budget: not kept
     assert library.take_spare("big") is None and library.take_spare("j") is c
     assert library.spare_bytes() == 0 and library.held() == []
+
+
+# --- lights without a shadow map: a loop of their own ---------------------------------------------
+
+
+def test_light_order_lists_the_lights_with_a_shadow_map_first():
+    assert programs.light_order((-1, 0, -1, 6, -1, 12)) == ([1, 3, 5, 0, 2, 4], 3)
+    assert programs.light_order((-1, -1)) == ([0, 1], 0)
+    assert programs.light_order((0, 1)) == ([0, 1], 2)
+
+
+@pytest.mark.parametrize("culling", [False, True], ids=["every light", "light tiles"])
+def test_lights_without_shadows_shaded_apart_give_the_same_image(culling, tmp_path, monkeypatch):
+    """Where some lights cast no shadow the program shades them in a loop of their own, without
+    shadow lookups, after those that may cast one: the image equals, bit for bit, the one loop's
+    with a lookup test for every light. The scene lists them mixed (a point, a sun and an area
+    light without shadows before and between a casting spot, point and sun), and with light
+    culling each tile's list keeps the same order."""
+    from addon import gpu_library
+
+    scene = scenes.reset(size=64)
+    scene.shading_lab.model = "PBR"
+    scene.shading_lab.light_culling = culling
+    scenes.ortho_camera(scene, location=(0.0, -7.0, 6.0), rotation=(math.radians(48.0), 0.0, 0.0), scale=8.0)
+    mat = _white()
+    scenes.plane(scene, size=12.0, material=mat)
+    for i in range(5):
+        _sphere(scene, 0.45, (-2.5 + 1.25 * i, 0.3 * (i % 2), 0.5), mat)
+    lit = [("POINT", False, (-2.0, -1.0, 2.0), (0.0, 0.0, 0.0)),
+           ("SPOT", True, (2.0, -2.0, 4.0), (math.radians(35.0), 0.0, math.radians(30.0))),
+           ("SUN", False, (0.0, 0.0, 5.0), (math.radians(-50.0), 0.0, math.radians(60.0))),
+           ("POINT", True, (1.0, 1.5, 2.5), (0.0, 0.0, 0.0)),
+           ("AREA", False, (0.0, -3.0, 3.0), (math.radians(45.0), 0.0, 0.0)),
+           ("SUN", True, (0.0, 0.0, 5.0), (math.radians(-35.0), math.radians(25.0), 0.0))]
+    for kind, casts, location, rotation in lit:
+        light = scenes.light(scene, kind, energy=1.5 if kind == "SUN" else 150.0, location=location,
+                             rotation=rotation)
+        light.data.use_shadow = casts
+        if kind in ("POINT", "SPOT", "AREA") and culling:
+            light.data.use_custom_distance, light.data.cutoff_distance = True, 4.0
+        if kind == "SPOT":
+            light.data.spot_size = math.radians(100.0)
+    made = []
+    shading_program = gpu_library.shading_program
+    monkeypatch.setattr(gpu_library, "shading_program",
+                        lambda features: made.append(features) or shading_program(features))
+    apart = scenes.render(scene, tmp_path / "apart.exr")
+    monkeypatch.setattr(programs, "SPLIT_UNSHADOWED", False)
+    together = scenes.render(scene, tmp_path / "together.exr")
+    assert [f.unshadowed_lights for f in made] == [True, False], made
+    assert all(f.light_tiles == culling for f in made)
+    dark = float(np.mean(together[..., :3].sum(-1) < 0.5 * np.median(together[..., :3].sum(-1))))
+    assert dark > 0.02, f"only {dark:.1%} of the pixels in shadow"
+    assert np.array_equal(apart, together), float(np.abs(apart - together).max())

@@ -67,7 +67,6 @@ import dataclasses
 import functools
 import itertools
 import math
-import types
 
 import bpy
 import numpy as np
@@ -224,7 +223,7 @@ class Sweep:
 
     def gpu_inputs(self) -> dict[str, np.ndarray]:
         m = self.materials[self.index["material"]]
-        light_rows = np.stack([programs.pack_lights(types.SimpleNamespace(lights=[LIGHTS[name]]), 1, (-1,))[0]
+        light_rows = np.stack([programs.pack_lights([LIGHTS[name]], 1, (-1,))[0]
                                for name in self.lights])[self.index["light"]]
         light_rows[:, 8:11] *= self.intensity[:, None]
         sun = self.kind == "SUN"
