@@ -102,11 +102,11 @@ class Features:
     light_radii: bool = True
     #: an area light may have a Spread under 180 degrees; off, the program holds no spread code
     area_spread: bool = True
-    #: with shadows, some light has no shadow map: the program shades those lights in a loop of
-    #: their own that holds no shadow lookup (``light_order`` lists the others first); both sides
-    #: of an ``if`` run on this machine's rasteriser (glsl/README.md), so a light skipped by a test
-    #: would pay the lookup anyway
-    unshadowed_lights: bool = False
+    #: some light has no shadow map (every light, without shadows): the program shades those in a
+    #: loop of their own that holds no shadow lookup (``light_order`` lists the others first); both
+    #: sides of an ``if`` run on this machine's rasteriser (glsl/README.md), so a light skipped by
+    #: a test would pay the lookup anyway
+    unshadowed_lights: bool = True
 
     def has_map(self, name: str) -> bool:
         return name in self.maps or name + "_CLOSEST" in self.maps
@@ -134,7 +134,7 @@ class Features:
         if not self.shadow_layers:
             object.__setattr__(self, "shadow_size", 0)
             object.__setattr__(self, "soft_shadows", False)
-            object.__setattr__(self, "unshadowed_lights", False)
+            object.__setattr__(self, "unshadowed_lights", True)
         if self.model == "PBR" and self.terms.principled:
             canonical = Terms(principled=True)  # one fixed set: exact Fresnel, GGX, Smith, layered
         elif self.model == "PBR":
@@ -190,7 +190,10 @@ class Features:
             occlusion=snapshot.settings.world_occlusion,
             shadow_layers=light_slots(shadow_layers) if shadow_layers else 0,
             shadow_size=int(snapshot.settings.shadow_map_size),
-            soft_shadows=snapshot.settings.soft_shadows,
+            # the penumbrae's code only where a light with a map has a size (a test costs its body)
+            soft_shadows=snapshot.settings.soft_shadows and any(
+                shadows.penumbra_size(light) > 0.0 for light, first in zip(snapshot.lights, first_layer)
+                if first >= 0),
             light_tiles=uses_light_tiles(snapshot),
             unshadowed_lights=SPLIT_UNSHADOWED and any(f < 0 for f in first_layer[:len(snapshot.lights)]),
         )
@@ -270,8 +273,8 @@ class Features:
                     ("SL_SHADOW_SIZE", str(self.shadow_size))]
             if self.soft_shadows:
                 out.append(("SL_SOFT_SHADOWS", "1"))
-            if self.unshadowed_lights:
-                out.append(("SL_UNSHADOWED_LIGHTS", "1"))
+        if self.unshadowed_lights:
+            out.append(("SL_UNSHADOWED_LIGHTS", "1"))
         if self.environment:
             out.append(("SL_ENV_" + self.environment, "1"))
             if self.environment == "MAP" and self.env_diffuse == "SH9":

@@ -149,6 +149,12 @@ def _filter_code(light: Light) -> float:
     return -(light.shadow_filter + 1.0) if light.shadow_jitter else light.shadow_filter
 
 
+def penumbra_size(light: Light) -> float:
+    """What sizes the light's penumbrae (a layer's info z): a sun's tan of half its angle, else
+    its radius (m); 0: hard shadows whatever the Soft Shadows setting."""
+    return math.tan(0.5 * light.angle) if light.kind == "SUN" else float(light.radius)
+
+
 def _sun_view(light: Light, lo, hi) -> np.ndarray:
     return look_at(0.5 * (lo + hi), np.asarray(light.direction, np.float64), (0.0, 0.0, 1.0))
 
@@ -180,7 +186,7 @@ def _sun_layer(light: Light, lo, hi, size: int, region=None, cascades: int = 1):
     view = look_at(near_centre, direction, (0.0, 0.0, 1.0))
     matrix = orthographic(half_x, half_y, depth) @ view
     texel = 2.0 * max(half_x, half_y) / size
-    return [(matrix, (depth, texel, math.tan(0.5 * light.angle), light.shadow_resolution_limit),
+    return [(matrix, (depth, texel, penumbra_size(light), light.shadow_resolution_limit),
              (*near_centre, KIND_ORTHOGRAPHIC), view, (half_x, half_y, float(cascades), _filter_code(light)))]
 
 
@@ -252,7 +258,7 @@ def _perspective_layers(light: Light, lo, hi, size: int, cube: bool):
     layers = []
     for forward, up in faces:
         view = look_at(position, forward, up)
-        layers.append((projection @ view, (far, texel, light.radius, light.shadow_resolution_limit),
+        layers.append((projection @ view, (far, texel, penumbra_size(light), light.shadow_resolution_limit),
                        (*position, kind), view, (tan_half, tan_half, 0.0, _filter_code(light))))
     return layers
 

@@ -181,7 +181,7 @@ void main()
     c += light_share(s, ng, load_light_rest(light, index), true);
   }
 #endif
-#if !defined(SL_SHADOWS) || defined(SL_UNSHADOWED_LIGHTS)
+#ifdef SL_UNSHADOWED_LIGHTS
   for (; k < SL_MAX_LIGHTS; k++) {
     if (k >= count) {
       break;

@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import re
+from dataclasses import replace
 
 import bpy
 import pytest
@@ -75,7 +76,14 @@ def test_feature_keys():
     a = programs.Features("PBR", 4, frozenset({"POINT"}))
     assert a.defines() == (("SL_DIFFUSE_LAMBERT", "1"), ("SL_FRESNEL_SCHLICK", "1"), ("SL_HAS_POINT", "1"),
                            ("SL_LIGHT_RADII", "1"), ("SL_MAX_LIGHTS", "4"), ("SL_MODEL_PBR", "1"),
-                           ("SL_NDF_GGX", "1"), ("SL_VISIBILITY_SMITH_CORRELATED", "1"))
+                           ("SL_NDF_GGX", "1"), ("SL_UNSHADOWED_LIGHTS", "1"),
+                           ("SL_VISIBILITY_SMITH_CORRELATED", "1"))
+    # with shadows, the loop over lights without a shadow map only where some light has none
+    shadowed = programs.Features("PBR", 4, frozenset({"POINT"}), shadow_layers=6, shadow_size=1024,
+                                 unshadowed_lights=False)
+    assert ("SL_SHADOWS", "1") in shadowed.defines()
+    assert ("SL_UNSHADOWED_LIGHTS", "1") not in shadowed.defines()
+    assert ("SL_UNSHADOWED_LIGHTS", "1") in replace(shadowed, unshadowed_lights=True).defines()
     # a scene whose point lights have no radius reads no light's shape; without point or spot
     # lights no radius can matter
     assert ("SL_LIGHT_RADII", "1") not in programs.Features("PBR", 4, frozenset({"POINT"}),

@@ -681,3 +681,31 @@ def test_lights_without_shadows_shaded_apart_give_the_same_image(culling, tmp_pa
     dark = float(np.mean(together[..., :3].sum(-1) < 0.5 * np.median(together[..., :3].sum(-1))))
     assert dark > 0.02, f"only {dark:.1%} of the pixels in shadow"
     assert np.array_equal(apart, together), float(np.abs(apart - together).max())
+
+
+def test_penumbra_code_only_where_a_light_with_a_map_has_a_size():
+    """Soft Shadows on, the program holds the penumbrae's search and filter only where a light
+    with a shadow map has a size: casting lights of size 0 and a sun with an angle that casts no
+    shadow leave it out (the same image: a light of size 0 never takes that code; on this machine's
+    rasteriser the code would cost its body anyway: the furnace preset 10 %)."""
+    scene = scenes.reset(size=32)
+    scenes.ortho_camera(scene, scale=4.0)
+    mat = _white()
+    scenes.plane(scene, size=4.0, material=mat)
+    _sphere(scene, 0.5, (0.0, 0.0, 0.6), mat)
+    point = scenes.light(scene, "POINT", location=(1.0, 0.0, 3.0))
+    sun = scenes.light(scene, "SUN", energy=2.0, rotation=(0.3, 0.2, 0.0))
+    point.data.use_shadow, sun.data.angle = True, math.radians(3.0)
+
+    def soft() -> bool:
+        snap = extract.snapshot(bpy.context.evaluated_depsgraph_get(), 32, 32)
+        return programs.Features.from_snapshot(snap).soft_shadows
+
+    assert scene.shading_lab.soft_shadows
+    assert not soft()
+    sun.data.use_shadow = True
+    assert soft()
+    sun.data.use_shadow, point.data.shadow_soft_size = False, 0.1
+    assert soft()
+    scene.shading_lab.soft_shadows = False
+    assert not soft()
