@@ -158,8 +158,10 @@ class Features:
         if material is not None and with_maps:
             maps = frozenset(name[:-4].upper() + ("_CLOSEST" if getattr(material, name)[1] else "")
                              for name in MaterialParams.MAPS if getattr(material, name))
-        if shadow_layers is None or first_layer is None:
+        if shadow_layers is None:
             first_layer, shadow_layers = shadows.assign(snapshot)[:2]
+        elif first_layer is None:
+            first_layer = shadows.assign(snapshot)[0] if shadow_layers else (-1,) * len(snapshot.lights)
         env_samples = snapshot.settings.environment_samples
         if material is not None:
             model = material.model or model
@@ -195,7 +197,7 @@ class Features:
                 shadows.penumbra_size(light) > 0.0 for light, first in zip(snapshot.lights, first_layer)
                 if first >= 0),
             light_tiles=uses_light_tiles(snapshot),
-            unshadowed_lights=SPLIT_UNSHADOWED and any(f < 0 for f in first_layer[:len(snapshot.lights)]),
+            unshadowed_lights=SPLIT_UNSHADOWED and any(first < 0 for first in first_layer),
         )
 
     @property
