@@ -162,10 +162,10 @@ class SceneResources:
         self.shadow_plan: shadows.ShadowPlan | None = None
         self.caster_key: bytes = b""  # what the shadow maps saw: casters' geometry and matrices
         self.shadow_maps = None  # the 2D-array depth texture (passes.ShadowPass)
-        # the lights in the order the programs loop over them, and how many may cast a shadow
-        # (programs.light_order: those with a shadow map first)
+        # the lights in the order the programs loop over them, by group, and where each group
+        # ends (programs.light_order)
         self.lights: list = []
-        self.shadowed_lights = 0
+        self.light_group_ends: tuple[int, ...] = ()
 
     # --- keeping the GPU copy up to date ------------------------------------------------------
 
@@ -195,7 +195,7 @@ class SceneResources:
         self._sync_shadows(snapshot)  # before the lights: they name their first shadow layer
         slots = programs.light_slots(len(snapshot.lights))
         first = self.shadow_plan.first_layer
-        order, self.shadowed_lights = programs.light_order(first)
+        order, self.light_group_ends = programs.light_order(snapshot.lights, first)
         self.lights = [snapshot.lights[i] for i in order]
         lights = programs.pack_lights(self.lights, slots, [first[i] for i in order])
         self.uploads["lights"] += self._lights.put(lights)
@@ -285,7 +285,7 @@ class SceneResources:
             texels = tiles.texels()
             self.uploads["light tiles"] += self._light_tiles.put(texels.reshape(len(texels), -1))
         self.uploads["frame"] += self._frame.put(programs.pack_frame(self.snapshot, view_projection, tiles,
-                                                                     self.shadowed_lights))
+                                                                     self.light_group_ends))
 
     @property
     def geometry_count(self) -> int:

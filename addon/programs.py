@@ -35,9 +35,9 @@ LTC_SPHERE_SIZE = 32
 #: Objects per uniform block of object data (128 bytes each: 32 KiB, within every GPU's limit);
 #: a scene with more objects uses several blocks, a draw names its object by block and index.
 OBJECT_BLOCK = 256
-#: Shade the lights without a shadow map in a loop without shadow lookups (``Features.
-#: unshadowed_lights``; the same image as one loop; tests turn it off to compare).
-SPLIT_UNSHADOWED = True
+#: Shade the lights in groups, one loop per kind with and without a shadow map (``Features.
+#: light_groups``; the same image as one loop over them all; tests turn it off to compare).
+LIGHT_GROUPS = True
 
 MODEL_FILES = {
     "BLINN_PHONG": "model_blinn_phong.glsl",
@@ -102,11 +102,14 @@ class Features:
     light_radii: bool = True
     #: an area light may have a Spread under 180 degrees; off, the program holds no spread code
     area_spread: bool = True
-    #: some light has no shadow map (every light, without shadows): the program shades those in a
-    #: loop of their own that holds no shadow lookup (``light_order`` lists the others first); both
-    #: sides of an ``if`` run on this machine's rasteriser (glsl/README.md), so a light skipped by
-    #: a test would pay the lookup anyway
-    unshadowed_lights: bool = True
+    #: the groups of lights the program loops over, one loop each (``light_order`` lists the
+    #: lights by group): a kind, "_SHADOWED" where those lights have a shadow map. A loop holds
+    #: its kind's code alone, and the shadow lookup only with "_SHADOWED": both sides of an ``if``
+    #: run on this machine's rasteriser (glsl/README.md), so a point light among area lights would
+    #: pay the area light's code, and a light without a map the lookup. None: every kind of
+    #: ``light_kinds``, with and (with shadows) without maps. Empty: one loop over every light
+    #: (``LIGHT_GROUPS`` off)
+    light_groups: frozenset[str] | None = None
 
     def has_map(self, name: str) -> bool:
         return name in self.maps or name + "_CLOSEST" in self.maps
@@ -134,7 +137,14 @@ class Features:
         if not self.shadow_layers:
             object.__setattr__(self, "shadow_size", 0)
             object.__setattr__(self, "soft_shadows", False)
-            object.__setattr__(self, "unshadowed_lights", True)
+        if self.light_groups is None:
+            groups = set(self.light_kinds)
+            if self.shadow_layers:
+                groups |= {kind + "_SHADOWED" for kind in self.light_kinds}
+            object.__setattr__(self, "light_groups", frozenset(groups))
+        elif not self.shadow_layers:  # no light has a map
+            object.__setattr__(self, "light_groups", frozenset(
+                group.removesuffix("_SHADOWED") for group in self.light_groups))
         if self.model == "PBR" and self.terms.principled:
             canonical = Terms(principled=True)  # one fixed set: exact Fresnel, GGX, Smith, layered
         elif self.model == "PBR":
@@ -197,7 +207,9 @@ class Features:
                 shadows.penumbra_size(light) > 0.0 for light, first in zip(snapshot.lights, first_layer)
                 if first >= 0),
             light_tiles=uses_light_tiles(snapshot),
-            unshadowed_lights=SPLIT_UNSHADOWED and any(first < 0 for first in first_layer),
+            light_groups=frozenset(light.kind + ("_SHADOWED" if first >= 0 else "")
+                                   for light, first in zip(snapshot.lights, first_layer))
+            if LIGHT_GROUPS else frozenset(),
         )
 
     @property
@@ -275,8 +287,9 @@ class Features:
                     ("SL_SHADOW_SIZE", str(self.shadow_size))]
             if self.soft_shadows:
                 out.append(("SL_SOFT_SHADOWS", "1"))
-        if self.unshadowed_lights:
-            out.append(("SL_UNSHADOWED_LIGHTS", "1"))
+        out += [("SL_LIGHTS_" + group, "1") for group in sorted(self.light_groups)]
+        if not self.light_groups:
+            out.append(("SL_ONE_LIGHT_LOOP", "1"))
         if self.environment:
             out.append(("SL_ENV_" + self.environment, "1"))
             if self.environment == "MAP" and self.env_diffuse == "SH9":
@@ -528,9 +541,10 @@ ALL_LOBES = (1.0, 1.0, 1.0, 1.0)
 
 
 def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None,
-               tiles: light_tiles.TileLists | None = None, shadowed: int | None = None) -> bytes:
-    """The FrameData block; ``tiles``: the view's light tiles (light culling); ``shadowed``: the
-    lights the programs look shadows up for, first in ``light_order`` (default: all)."""
+               tiles: light_tiles.TileLists | None = None,
+               group_ends: tuple[int, ...] | None = None) -> bytes:
+    """The FrameData block; ``tiles``: the view's light tiles (light culling); ``group_ends``:
+    where each group of ``light_order`` ends (default: each after the last light)."""
     cam = snapshot.camera
     vp = cam.view_projection if view_projection is None else view_projection
     ambient = snapshot.settings.ambient
@@ -541,7 +555,8 @@ def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None,
         [ambient, ambient, ambient, 0.0],
         [float(len(snapshot.lights)), *((float(tiles.tile), float(tiles.columns), float(tiles.header_texels))
                                          if tiles is not None else (0.0, 0.0, 0.0))],
-        [float(len(snapshot.lights) if shadowed is None else shadowed), 0.0, 0.0, 0.0],
+        *np.reshape(group_ends if group_ends is not None else [len(snapshot.lights)] * len(LIGHT_GROUP_ORDER),
+                    (2, 4)),
     ]
     return np.concatenate([np.asarray(r, np.float32) for r in rows]).tobytes()
 
@@ -556,12 +571,20 @@ def uses_light_tiles(snapshot: Snapshot) -> bool:
     return snapshot.settings.light_culling and any(math.isfinite(light.influence) for light in lights)
 
 
-def light_order(first_layer: tuple[int, ...]) -> tuple[list[int], int]:
-    """The order the programs loop over the lights in, and how many come first: those with a
-    shadow map (``first_layer[i] >= 0``), then the others, each in the scene's order. A program
-    shades the others in a loop of their own without shadow lookups (``Features.unshadowed_lights``)."""
-    shadowed = [i for i, first in enumerate(first_layer) if first >= 0]
-    return shadowed + [i for i, first in enumerate(first_layer) if first < 0], len(shadowed)
+#: The groups of lights in the order the programs loop over them (``Features.light_groups``):
+#: each kind with a shadow map, then each without (FrameData.group_ends, glsl/uniforms.glsl).
+LIGHT_GROUP_ORDER = tuple(kind + "_SHADOWED" for kind in LIGHT_KINDS) + LIGHT_KINDS
+
+
+def light_order(lights, first_layer) -> tuple[list[int], tuple[int, ...]]:
+    """The order the programs loop over ``lights`` in (``first_layer[i]``: light i's first
+    shadow-map layer, -1 for none): by group of ``LIGHT_GROUP_ORDER``, each in the scene's order;
+    and where each group ends in it."""
+    group = [LIGHT_GROUP_ORDER.index(light.kind + ("_SHADOWED" if first >= 0 else ""))
+             for light, first in zip(lights, first_layer)]
+    order = sorted(range(len(group)), key=group.__getitem__)
+    ends = tuple(sum(1 for g in group if g <= i) for i in range(len(LIGHT_GROUP_ORDER)))
+    return order, ends
 
 
 def pack_lights(lights, max_lights: int, first_layer) -> np.ndarray:

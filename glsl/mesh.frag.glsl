@@ -120,6 +120,37 @@ vec3 light_share(Surface s, vec3 ng, LightData light, bool shadowed)
   return shade_light(s, light, l, E, visibility, factors);
 }
 
+/* Shade the fragment's lights from its k-th listed one up to light index `end` into c (k moves
+ * on). programs.light_order lists the lights by group, a kind with or without a shadow map, and a
+ * program loops over each group its scene has: with `kind` and `shadowed` constants at each call
+ * the loop holds that kind's code alone, and the shadow lookup only where shadowed (both sides of
+ * an `if` would run: glsl/README.md). kind -1: each light's own (one loop over every light). */
+void shade_group(inout vec3 c, Surface s, vec3 ng, ivec2 listed, inout int k, int end, int kind,
+                 bool shadowed)
+{
+  for (; k < SL_MAX_LIGHTS; k++) {
+    if (k >= listed.y) {
+      break;
+    }
+    int index = listed_light(listed, k);
+    if (index >= end) {
+      break;
+    }
+    LightData light = load_light_reach(index);
+    if (kind >= 0) {
+      light.position_kind.w = float(kind);
+    }
+#ifdef SL_LIGHT_TILES
+    /* a tile lists every light whose reach meets some of its pixels: at the others the light's
+     * window is exactly 0 (light_window), known before the rest of its texels are read */
+    if (light_window(light, s.p) <= 0.0) {
+      continue;
+    }
+#endif
+    c += light_share(s, ng, load_light_rest(light, index), shadowed);
+  }
+}
+
 void main()
 {
   /* textures and screen derivatives first: they need every fragment of the quad alive */
@@ -130,6 +161,8 @@ void main()
   /* the flat face's normal, for shadow lookups (the receiver's plane) */
   vec3 face = cross(dFdx(world_position), dFdy(world_position));
   vec3 ng = dot(face, face) > 1e-30 ? normalize(face) : n;
+#else
+  vec3 ng = n; /* no shadow lookups */
 #endif
   MaterialData m = apply_material_maps(material, uv);
 #ifdef SL_PEEL
@@ -154,47 +187,37 @@ void main()
 #else
   ivec2 listed = ivec2(0, int(frame.counts.x));
 #endif
-  int count = listed.y;
-  /* With shadows the lights that may cast one come first (programs.light_order); where some
-   * have no shadow map the program shades them in a loop of its own, which holds no lookup
-   * (an `if` would cost the lookup anyway: glsl/README.md) */
   int k = 0;
-#ifdef SL_SHADOWS
-  for (; k < SL_MAX_LIGHTS; k++) {
-    if (k >= count) {
-      break;
-    }
-    int index = listed_light(listed, k);
-#  ifdef SL_UNSHADOWED_LIGHTS
-    if (index >= int(frame.shadowed.x)) {
-      break;
-    }
+#ifdef SL_ONE_LIGHT_LOOP
+#  ifdef SL_SHADOWS
+  shade_group(c, s, ng, listed, k, SL_MAX_LIGHTS, -1, true);
+#  else
+  shade_group(c, s, ng, listed, k, SL_MAX_LIGHTS, -1, false);
 #  endif
-    LightData light = load_light_reach(index);
-#  ifdef SL_LIGHT_TILES
-    /* a tile lists every light whose reach meets some of its pixels: at the others the light's
-     * window is exactly 0 (light_window), known before the rest of its texels are read */
-    if (light_window(light, s.p) <= 0.0) {
-      continue;
-    }
-#  endif
-    c += light_share(s, ng, load_light_rest(light, index), true);
-  }
 #endif
-#ifdef SL_UNSHADOWED_LIGHTS
-  for (; k < SL_MAX_LIGHTS; k++) {
-    if (k >= count) {
-      break;
-    }
-    int index = listed_light(listed, k);
-    LightData light = load_light_reach(index);
-#  ifdef SL_LIGHT_TILES
-    if (light_window(light, s.p) <= 0.0) {
-      continue;
-    }
-#  endif
-    c += light_share(s, vec3(0.0), load_light_rest(light, index), false);
-  }
+#ifdef SL_LIGHTS_POINT_SHADOWED
+  shade_group(c, s, ng, listed, k, int(frame.group_ends[0].x), LIGHT_POINT, true);
+#endif
+#ifdef SL_LIGHTS_SPOT_SHADOWED
+  shade_group(c, s, ng, listed, k, int(frame.group_ends[0].y), LIGHT_SPOT, true);
+#endif
+#ifdef SL_LIGHTS_SUN_SHADOWED
+  shade_group(c, s, ng, listed, k, int(frame.group_ends[0].z), LIGHT_SUN, true);
+#endif
+#ifdef SL_LIGHTS_AREA_SHADOWED
+  shade_group(c, s, ng, listed, k, int(frame.group_ends[0].w), LIGHT_AREA, true);
+#endif
+#ifdef SL_LIGHTS_POINT
+  shade_group(c, s, ng, listed, k, int(frame.group_ends[1].x), LIGHT_POINT, false);
+#endif
+#ifdef SL_LIGHTS_SPOT
+  shade_group(c, s, ng, listed, k, int(frame.group_ends[1].y), LIGHT_SPOT, false);
+#endif
+#ifdef SL_LIGHTS_SUN
+  shade_group(c, s, ng, listed, k, int(frame.group_ends[1].z), LIGHT_SUN, false);
+#endif
+#ifdef SL_LIGHTS_AREA
+  shade_group(c, s, ng, listed, k, int(frame.group_ends[1].w), LIGHT_AREA, false);
 #endif
   /* alpha: coverage, blended over what is behind (L = a L_surface + (1 - a) L_behind, as Cycles'
    * transparency); the renderer peels partly transparent surfaces and composites them in depth order */

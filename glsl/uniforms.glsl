@@ -9,8 +9,9 @@ struct FrameData {
   vec4 ambient;          /* rgb: Blinn-Phong/Phong ambient constant x (eq. 1.4) */
   vec4 counts;           /* x: number of lights in use; light culling: y the tiles' side in pixels,
                           * z tiles per row, w where the light indices start in light_tiles */
-  vec4 shadowed;         /* x: the lights [0, x) may cast a shadow (addon/programs.py's light_order
-                          * lists those with a shadow map first); the others have none */
+  vec4 group_ends[2];    /* where each group of lights ends (addon/programs.py's light_order lists
+                          * them by group): [0] those with a shadow map, [1] those without, each
+                          * x point, y spot, z sun, w area lights */
 };
 
 struct LightData {

@@ -75,15 +75,18 @@ def test_models_compile_only_their_own_lobes():
 def test_feature_keys():
     a = programs.Features("PBR", 4, frozenset({"POINT"}))
     assert a.defines() == (("SL_DIFFUSE_LAMBERT", "1"), ("SL_FRESNEL_SCHLICK", "1"), ("SL_HAS_POINT", "1"),
-                           ("SL_LIGHT_RADII", "1"), ("SL_MAX_LIGHTS", "4"), ("SL_MODEL_PBR", "1"),
-                           ("SL_NDF_GGX", "1"), ("SL_UNSHADOWED_LIGHTS", "1"),
+                           ("SL_LIGHTS_POINT", "1"), ("SL_LIGHT_RADII", "1"), ("SL_MAX_LIGHTS", "4"),
+                           ("SL_MODEL_PBR", "1"), ("SL_NDF_GGX", "1"),
                            ("SL_VISIBILITY_SMITH_CORRELATED", "1"))
-    # with shadows, the loop over lights without a shadow map only where some light has none
-    shadowed = programs.Features("PBR", 4, frozenset({"POINT"}), shadow_layers=6, shadow_size=1024,
-                                 unshadowed_lights=False)
-    assert ("SL_SHADOWS", "1") in shadowed.defines()
-    assert ("SL_UNSHADOWED_LIGHTS", "1") not in shadowed.defines()
-    assert ("SL_UNSHADOWED_LIGHTS", "1") in replace(shadowed, unshadowed_lights=True).defines()
+    # a loop per group of lights the scene has (a kind, with or without shadow maps); with
+    # shadows and no groups named, both for every kind; without shadows, none with maps
+    shadowed = programs.Features("PBR", 4, frozenset({"POINT", "AREA"}), shadow_layers=6, shadow_size=1024)
+    assert shadowed.light_groups == {"POINT", "AREA", "POINT_SHADOWED", "AREA_SHADOWED"}
+    only = replace(shadowed, light_groups=frozenset({"POINT_SHADOWED", "AREA"}))
+    assert [d for d in only.defines() if d[0].startswith("SL_LIGHTS_")] == [
+        ("SL_LIGHTS_AREA", "1"), ("SL_LIGHTS_POINT_SHADOWED", "1")]
+    assert replace(only, shadow_layers=0).light_groups == {"POINT", "AREA"}
+    assert ("SL_ONE_LIGHT_LOOP", "1") in replace(only, light_groups=frozenset()).defines()
     # a scene whose point lights have no radius reads no light's shape; without point or spot
     # lights no radius can matter
     assert ("SL_LIGHT_RADII", "1") not in programs.Features("PBR", 4, frozenset({"POINT"}),

@@ -632,19 +632,25 @@ def test_spare_textures_stay_within_their_budget(monkeypatch):
 # --- lights without a shadow map: a loop of their own ---------------------------------------------
 
 
-def test_light_order_lists_the_lights_with_a_shadow_map_first():
-    assert programs.light_order((-1, 0, -1, 6, -1, 12)) == ([1, 3, 5, 0, 2, 4], 3)
-    assert programs.light_order((-1, -1)) == ([0, 1], 0)
-    assert programs.light_order((0, 1)) == ([0, 1], 2)
+def test_light_order_lists_the_lights_by_kind_with_a_shadow_map_first():
+    import types
+
+    lights = [types.SimpleNamespace(kind=kind) for kind in ("AREA", "POINT", "SUN", "POINT", "SPOT", "SUN")]
+    # groups: POINT, SPOT, SUN, AREA with a map, then without
+    order = programs.light_order(lights, (-1, 0, -1, 6, -1, 12))
+    assert order == ([1, 3, 5, 4, 2, 0], (2, 2, 3, 3, 3, 4, 5, 6)), order
+    assert programs.light_order(lights[:2], (-1, -1)) == ([1, 0], (0, 0, 0, 0, 1, 1, 1, 2))
+    assert programs.light_order(lights[1:4:2], (0, 6)) == ([0, 1], (2, 2, 2, 2, 2, 2, 2, 2))
 
 
 @pytest.mark.parametrize("culling", [False, True], ids=["every light", "light tiles"])
-def test_lights_without_shadows_shaded_apart_give_the_same_image(culling, tmp_path, monkeypatch):
-    """Where some lights cast no shadow the program shades them in a loop of their own, without
-    shadow lookups, after those that may cast one: the image equals, bit for bit, the one loop's
-    with a lookup test for every light. The scene lists them mixed (a point, a sun and an area
-    light without shadows before and between a casting spot, point and sun), and with light
-    culling each tile's list keeps the same order."""
+def test_lights_shaded_by_group_give_the_one_loops_image(culling, tmp_path, monkeypatch):
+    """The program shades the lights in a loop per group, a kind with or without a shadow map,
+    holding that kind's code alone and the shadow lookup only with a map: the image equals, bit
+    for bit, the one loop's over every light in the same order (each light's kind and shadow map
+    tested). The scene lists them mixed (a point, a sun and an area light without shadows before
+    and between a casting spot, point and sun), and with light culling each tile's list keeps the
+    same order."""
     from addon import gpu_library
 
     scene = scenes.reset(size=64)
@@ -674,9 +680,10 @@ def test_lights_without_shadows_shaded_apart_give_the_same_image(culling, tmp_pa
     monkeypatch.setattr(gpu_library, "shading_program",
                         lambda features: made.append(features) or shading_program(features))
     apart = scenes.render(scene, tmp_path / "apart.exr")
-    monkeypatch.setattr(programs, "SPLIT_UNSHADOWED", False)
+    monkeypatch.setattr(programs, "LIGHT_GROUPS", False)
     together = scenes.render(scene, tmp_path / "together.exr")
-    assert [f.unshadowed_lights for f in made] == [True, False], made
+    assert [sorted(f.light_groups) for f in made] == [
+        ["AREA", "POINT", "POINT_SHADOWED", "SPOT_SHADOWED", "SUN", "SUN_SHADOWED"], []], made
     assert all(f.light_tiles == culling for f in made)
     dark = float(np.mean(together[..., :3].sum(-1) < 0.5 * np.median(together[..., :3].sum(-1))))
     assert dark > 0.02, f"only {dark:.1%} of the pixels in shadow"
