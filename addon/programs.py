@@ -207,9 +207,7 @@ class Features:
                 shadows.penumbra_size(light) > 0.0 for light, first in zip(snapshot.lights, first_layer)
                 if first >= 0),
             light_tiles=uses_light_tiles(snapshot),
-            light_groups=frozenset(light.kind + ("_SHADOWED" if first >= 0 else "")
-                                   for light, first in zip(snapshot.lights, first_layer))
-            if LIGHT_GROUPS else frozenset(),
+            light_groups=frozenset(map(light_group, snapshot.lights, first_layer) if LIGHT_GROUPS else ()),
         )
 
     @property
@@ -576,12 +574,17 @@ def uses_light_tiles(snapshot: Snapshot) -> bool:
 LIGHT_GROUP_ORDER = tuple(kind + "_SHADOWED" for kind in LIGHT_KINDS) + LIGHT_KINDS
 
 
+def light_group(light, first_layer: int) -> str:
+    """The group of ``LIGHT_GROUP_ORDER`` a light belongs to (``first_layer``: its first
+    shadow-map layer, -1 for none)."""
+    return light.kind + ("_SHADOWED" if first_layer >= 0 else "")
+
+
 def light_order(lights, first_layer) -> tuple[list[int], tuple[int, ...]]:
     """The order the programs loop over ``lights`` in (``first_layer[i]``: light i's first
     shadow-map layer, -1 for none): by group of ``LIGHT_GROUP_ORDER``, each in the scene's order;
     and where each group ends in it."""
-    group = [LIGHT_GROUP_ORDER.index(light.kind + ("_SHADOWED" if first >= 0 else ""))
-             for light, first in zip(lights, first_layer)]
+    group = [LIGHT_GROUP_ORDER.index(light_group(light, first)) for light, first in zip(lights, first_layer)]
     order = sorted(range(len(group)), key=group.__getitem__)
     ends = tuple(sum(1 for g in group if g <= i) for i in range(len(LIGHT_GROUP_ORDER)))
     return order, ends
