@@ -613,10 +613,14 @@ def pack_shadows(plan: shadows.ShadowPlan, slots: int) -> bytes:
     matrices = np.tile(np.eye(4, dtype=np.float32), (2, slots, 1, 1))
     matrices[0, :plan.layers] = plan.matrices
     matrices[1, :plan.layers] = np.linalg.inv(plan.views.astype(np.float64))  # view -> world
-    rows = np.zeros((3, slots, 4), np.float32)
+    rows = np.zeros((4, slots, 4), np.float32)
     rows[0, :plan.layers] = plan.info
     rows[1, :plan.layers] = plan.origins
     rows[2, :plan.layers] = plan.extents
+    # the near plane's centre along the view's right, up and forward (the view's rows 0, 1, -2)
+    views = np.asarray(plan.views, np.float64)
+    centres = np.asarray(plan.origins, np.float64)[:, :3]
+    rows[3, :plan.layers, :3] = np.einsum("lij,lj->li", views[:, :3, :3] * [[1.0], [1.0], [-1.0]], centres)
     return np.concatenate([matrices.transpose(0, 1, 3, 2).ravel(), rows.ravel()]).tobytes()
 
 

@@ -28,7 +28,7 @@ import numpy as np
 from .snapshot import Light, Snapshot
 
 #: Layers one frame may use (a point light takes six): lights beyond them cast no shadow (a warning
-#: says so). The uniform block holds 144 bytes per layer.
+#: says so). The uniform block holds 160 bytes per layer.
 MAX_SHADOW_LAYERS = 48
 #: tan(half the field of view) of a cube face: 1 would be exactly 90 degrees.
 FACE_MARGIN = 1.08

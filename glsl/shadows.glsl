@@ -36,56 +36,69 @@ int shadow_face(vec3 d)
 }
 
 /* Where the map ray through texel position uv_texels (in texels) meets the plane (p, ng), as a
- * stored distance in metres. The ray from the layer's view and half extents (not the inverse
- * projection: with the near plane close to the light, its depth rows lose float precision). */
-float shadow_plane_distance(int layer, vec2 uv_texels, vec3 p, vec3 ng)
+ * stored distance in metres, for a layer seen from a point (`to_world`: the layer's view ->
+ * world, `tan_half` its projection's half extent): the ray from the view and half extent, not the
+ * inverse projection (with the near plane close to the light, its depth rows lose float
+ * precision). A cube's faces give to_world without reading it (cube_face_view). */
+float shadow_plane_distance(mat3 to_world, vec3 o, float tan_half, vec2 uv_texels, vec3 p, vec3 ng)
 {
   vec2 ndc = uv_texels * (2.0 / float(SL_SHADOW_SIZE)) - 1.0;
-  mat4 to_world = shadow.layer_view_inverse[layer];
-  vec2 extent = shadow.layer_extent[layer].xy;
-  vec3 o, dir;
-  if (int(shadow.layer_origin[layer].w + 0.5) != SHADOW_ORTHOGRAPHIC) { /* rays leave the light's centre */
-    o = to_world[3].xyz;
-    dir = normalize(mat3(to_world) * vec3(ndc * extent, -1.0));
-  }
-  else { /* orthographic: parallel rays from the near plane */
-    o = (to_world * vec4(ndc * extent, 0.0, 1.0)).xyz;
-    dir = -to_world[2].xyz;
-  }
+  vec3 dir = normalize(to_world * vec3(ndc * tan_half, -1.0));
   float cosine = dot(dir, ng);
   return dot(p - o, ng) / (abs(cosine) > 1e-4 ? cosine : (cosine < 0.0 ? -1e-4 : 1e-4));
 }
 
+/* The receiver's plane at the texels right of and above uv_texels, less at uv_texels (stored
+ * metres per texel), for a layer seen from a point (shadow_plane_distance). */
+vec2 perspective_gradient(mat3 to_world, vec3 o, float tan_half, vec2 uv_texels, vec3 p, vec3 ng)
+{
+  return vec2(shadow_plane_distance(to_world, o, tan_half, uv_texels + vec2(1.0, 0.0), p, ng),
+              shadow_plane_distance(to_world, o, tan_half, uv_texels + vec2(0.0, 1.0), p, ng)) -
+         shadow_plane_distance(to_world, o, tan_half, uv_texels, p, ng);
+}
+
+/* Where a receiver falls in a light's shadow map: the layer and texel position, its stored
+ * distance, the receiver's plane (stored metres per texel), the bias, and the layer's far
+ * distance and info (glsl/uniforms.glsl). */
+struct ShadowPoint {
+  int layer;
+  vec2 uv_texels;
+  float d;
+  vec2 gradient;
+  float bias;
+  vec4 info;
+};
+
 /* Stored distance (metres) of a texel, clamped to the map. */
-float shadow_texel(int layer, ivec2 texel)
+float shadow_texel(ShadowPoint q, ivec2 texel)
 {
   texel = clamp(texel, ivec2(0), ivec2(SL_SHADOW_SIZE - 1));
-  return texelFetch(shadow_maps, ivec3(texel, layer), 0).r * shadow.layer_info[layer].x;
+  return texelFetch(shadow_maps, ivec3(texel, q.layer), 0).r * q.info.x;
 }
 
 /* The receiver's plane at a texel's centre, as a stored distance less the bias: a caster stored
  * nearer than this hides the light there. */
-float shadow_receiver(ivec2 texel, vec2 uv_texels, float d, vec2 gradient, float bias)
+float shadow_receiver(ShadowPoint q, ivec2 texel)
 {
-  return d + dot(vec2(texel) + 0.5 - uv_texels, gradient) - bias;
+  return q.d + dot(vec2(texel) + 0.5 - q.uv_texels, q.gradient) - q.bias;
 }
 
 /* 1 where the texel's caster is not in front of the receiver's plane there, else 0. */
-float shadow_test(int layer, ivec2 texel, vec2 uv_texels, float d, vec2 gradient, float bias)
+float shadow_test(ShadowPoint q, ivec2 texel)
 {
-  return shadow_texel(layer, texel) >= shadow_receiver(texel, uv_texels, d, gradient, bias) ? 1.0 : 0.0;
+  return shadow_texel(q, texel) >= shadow_receiver(q, texel) ? 1.0 : 0.0;
 }
 
-/* Bilinear percentage-closer filter of the four texels around uv_texels. */
-float shadow_bilinear(int layer, vec2 uv_texels, float d, vec2 gradient, float bias)
+/* Bilinear percentage-closer filter of the four texels around the receiver. */
+float shadow_bilinear(ShadowPoint q)
 {
-  vec2 base = uv_texels - 0.5;
+  vec2 base = q.uv_texels - 0.5;
   ivec2 t = ivec2(floor(base));
   vec2 f = base - floor(base);
-  float v00 = shadow_test(layer, t, uv_texels, d, gradient, bias);
-  float v10 = shadow_test(layer, t + ivec2(1, 0), uv_texels, d, gradient, bias);
-  float v01 = shadow_test(layer, t + ivec2(0, 1), uv_texels, d, gradient, bias);
-  float v11 = shadow_test(layer, t + ivec2(1, 1), uv_texels, d, gradient, bias);
+  float v00 = shadow_test(q, t);
+  float v10 = shadow_test(q, t + ivec2(1, 0));
+  float v01 = shadow_test(q, t + ivec2(0, 1));
+  float v11 = shadow_test(q, t + ivec2(1, 1));
   return mix(mix(v00, v10, f.x), mix(v01, v11, f.x), f.y);
 }
 
@@ -110,17 +123,111 @@ vec2 vogel_tap(vec2 centre, float radius, int k, int taps, inout vec2 direction)
 }
 
 /* Percentage-closer filter over a disc of `radius` texels (Vogel points from first_direction). */
-float shadow_pcf(int layer, vec2 uv_texels, float radius, vec2 first_direction, float d, vec2 gradient,
-                 float bias, int tap_scale)
+float shadow_pcf(ShadowPoint q, float radius, vec2 first_direction, int tap_scale)
 {
   float lit = 0.0;
   vec2 direction = first_direction;
   int taps = (radius <= 3.0 ? SHADOW_FILTER_TAPS / 2 : SHADOW_FILTER_TAPS) * tap_scale;
   for (int k = 0; k < taps; k++) {
-    vec2 at = vogel_tap(uv_texels, radius, k, taps, direction);
-    lit += shadow_test(layer, ivec2(floor(at)), uv_texels, d, gradient, bias);
+    vec2 at = vogel_tap(q.uv_texels, radius, k, taps, direction);
+    lit += shadow_test(q, ivec2(floor(at)));
   }
   return lit / float(taps);
+}
+
+/* The kind of a light's maps: a sun's are orthographic, a point or area light's a cube's
+ * (addon/shadows.py); a spot's follow its cone. A constant where the light's kind is one (the
+ * light loop's groups), so each path below is compiled only where a light can take it: reading a
+ * layer's data is a per-pixel gather on the software rasteriser (glsl/README.md), and the paths
+ * of suns and cube faces read a few values instead of the layer's matrices. */
+int shadow_kind(LightData light, int first)
+{
+  int kind = int(light.position_kind.w);
+  if (kind == LIGHT_SUN) {
+    return SHADOW_ORTHOGRAPHIC;
+  }
+  if (kind == LIGHT_SPOT) {
+    return int(shadow.layer_origin[first].w + 0.5);
+  }
+  return SHADOW_CUBE;
+}
+
+/* A cube face's view -> world rotation: its columns the face's right, up and backward axes, as
+ * addon/shadows.py's look_at makes them from CUBE_FACES (the face looking along +-axis, up -y,
+ * but +z for +y and -z for -y). */
+mat3 cube_face_view(int face)
+{
+  int axis = face / 2;
+  float sign = (face & 1) == 0 ? 1.0 : -1.0;
+  vec3 forward = vec3(0.0);
+  forward[axis] = sign;
+  vec3 up = axis == 1 ? vec3(0.0, 0.0, sign) : vec3(0.0, -1.0, 0.0);
+  vec3 right = cross(forward, up);
+  return mat3(right, cross(right, forward), -forward);
+}
+
+/* The point p on its cube face (light at `position`): false where it is outside the map. */
+bool cube_shadow_point(int first, vec3 position, vec3 p, vec3 ng, out ShadowPoint q)
+{
+  vec3 from_light = p - position;
+  int face = shadow_face(from_light);
+  mat3 to_world = cube_face_view(face);
+  vec3 local = from_light * to_world; /* the face's view coordinates */
+  float tan_half = shadow.layer_extent[first].x; /* every face's projection is the first's */
+  q.layer = first + face;
+  q.info = shadow.layer_info[first];
+  q.uv_texels = (local.xy / (-local.z * tan_half) * 0.5 + 0.5) * float(SL_SHADOW_SIZE);
+  q.d = length(from_light);
+  q.gradient = perspective_gradient(to_world, position, tan_half, q.uv_texels, p, ng);
+  return -local.z > 0.0;
+}
+
+/* The point p in a sun's maps (`direction` the light's): its cascades (addon/shadows.py) share
+ * one rotation, so p's coordinates across the light are taken once and each cascade's fit
+ * (glsl/uniforms.glsl's layer_fit) and half extents place them; the finest cascade whose map
+ * holds p with room for the filter, else the last. The receiver's plane in closed form: the rays
+ * are parallel, a texel's step moves the ray's origin by the map's half extent / (size / 2). */
+bool sun_shadow_point(int first, vec3 direction, vec3 p, vec3 ng, out ShadowPoint q)
+{
+  mat4 axes = shadow.layer_view_inverse[first]; /* columns: right, up (every cascade's) */
+  vec3 right = axes[0].xyz;
+  vec3 up = axes[1].xyz;
+  vec2 across = vec2(dot(right, p), dot(up, p));
+  q.layer = first;
+  vec4 fit = shadow.layer_fit[first];
+  vec2 half_extent = shadow.layer_extent[first].xy;
+  vec2 at = (across - fit.xy) / half_extent;
+  int cascades = int(shadow.layer_extent[first].z + 0.5);
+  for (int c = 1; c < cascades; c++) {
+    if (all(lessThan(abs(at), vec2(1.0 - SHADOW_CASCADE_ROOM / float(SL_SHADOW_SIZE))))) {
+      break;
+    }
+    q.layer++;
+    fit = shadow.layer_fit[q.layer];
+    half_extent = shadow.layer_extent[q.layer].xy;
+    at = (across - fit.xy) / half_extent;
+  }
+  q.info = shadow.layer_info[q.layer];
+  q.uv_texels = (at * 0.5 + 0.5) * float(SL_SHADOW_SIZE);
+  q.d = dot(p, direction) - fit.z;
+  float cosine = dot(direction, ng);
+  cosine = abs(cosine) > 1e-4 ? cosine : (cosine < 0.0 ? -1e-4 : 1e-4);
+  q.gradient = -(2.0 / float(SL_SHADOW_SIZE)) * half_extent * vec2(dot(right, ng), dot(up, ng)) / cosine;
+  return true;
+}
+
+/* The point p in a spot's one perspective map (its layer's matrices). */
+bool spot_shadow_point(int first, vec3 position, vec3 p, vec3 ng, out ShadowPoint q)
+{
+  vec4 clip = shadow.layer_matrix[first] * vec4(p, 1.0);
+  float tan_half = shadow.layer_extent[first].x;
+  q.layer = first;
+  q.info = shadow.layer_info[first];
+  q.uv_texels = (clip.xy / clip.w * 0.5 + 0.5) * float(SL_SHADOW_SIZE);
+  q.d = length(p - position);
+  q.gradient = perspective_gradient(mat3(shadow.layer_view_inverse[first]), position, tan_half,
+                                    q.uv_texels, p, ng);
+  return clip.w > 0.0;
 }
 
 /* The fraction of `light` that reaches p (geometric normal ng): 1 unshadowed. */
@@ -130,56 +237,42 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
   if (first < 0) {
     return 1.0;
   }
-  vec3 from_light = p - light.position_kind.xyz;
-  int layer = first;
-  int kind = int(shadow.layer_origin[first].w + 0.5);
-  if (kind == SHADOW_CUBE) {
-    layer += shadow_face(from_light);
+  int kind = shadow_kind(light, first);
+  ShadowPoint q;
+  bool ahead;
+  if (kind == SHADOW_ORTHOGRAPHIC) {
+    ahead = sun_shadow_point(first, light.direction_cone.xyz, p, ng, q);
   }
-  else if (kind == SHADOW_ORTHOGRAPHIC) {
-    /* a sun's cascades (addon/shadows.py), finest first: the first whose map holds p with room
-     * for the filter, else the last */
-    int cascades = int(shadow.layer_extent[first].z + 0.5);
-    for (int c = 1; c < cascades; c++) {
-      vec2 at = (shadow.layer_matrix[layer] * vec4(p, 1.0)).xy;
-      if (all(lessThan(abs(at), vec2(1.0 - SHADOW_CASCADE_ROOM / float(SL_SHADOW_SIZE))))) {
-        break;
-      }
-      layer++;
-    }
+  else if (kind == SHADOW_CUBE) {
+    ahead = cube_shadow_point(first, light.position_kind.xyz, p, ng, q);
   }
-  vec4 clip = shadow.layer_matrix[layer] * vec4(p, 1.0);
-  if (clip.w <= 0.0) {
-    return 1.0;
+  else {
+    ahead = spot_shadow_point(first, light.position_kind.xyz, p, ng, q);
   }
-  vec2 uv_texels = (clip.xy / clip.w * 0.5 + 0.5) * float(SL_SHADOW_SIZE);
-  if (any(lessThan(uv_texels, vec2(0.0))) || any(greaterThan(uv_texels, vec2(SL_SHADOW_SIZE)))) {
+  if (!ahead || any(lessThan(q.uv_texels, vec2(0.0))) ||
+      any(greaterThan(q.uv_texels, vec2(SL_SHADOW_SIZE))))
+  {
     return 1.0; /* outside the map: nothing was drawn there to cast */
   }
-  vec4 info = shadow.layer_info[layer];
   bool ortho = kind == SHADOW_ORTHOGRAPHIC;
-  float d = ortho ? dot(p - shadow.layer_origin[layer].xyz, light.direction_cone.xyz) : length(from_light);
-  float texel = ortho ? info.y : info.y * d; /* a texel's width at the receiver (m) */
-  /* the receiver's plane: its distance's change per texel, limited to 64 texels (89 degrees from
-   * the light: a limit much lower predicts a steep plane too close to the light on one side of the
-   * point and shadows a lit convex surface there) */
-  vec2 gradient = vec2(shadow_plane_distance(layer, uv_texels + vec2(1.0, 0.0), p, ng),
-                       shadow_plane_distance(layer, uv_texels + vec2(0.0, 1.0), p, ng)) -
-                  shadow_plane_distance(layer, uv_texels, p, ng);
-  gradient = clamp(gradient, vec2(-64.0 * texel), vec2(64.0 * texel));
-  float bias = 0.5 * texel + 1e-5 * d;
+  float texel = ortho ? q.info.y : q.info.y * q.d; /* a texel's width at the receiver (m) */
+  /* the receiver's plane limited to 64 texels (89 degrees from the light: a limit much lower
+   * predicts a steep plane too close to the light on one side of the point and shadows a lit
+   * convex surface there) */
+  q.gradient = clamp(q.gradient, vec2(-64.0 * texel), vec2(64.0 * texel));
+  q.bias = 0.5 * texel + 1e-5 * q.d;
   /* the light's Filter (texels) and Resolution Limit (the smallest texel, m): the narrowest filter */
-  float filter_code = shadow.layer_extent[layer].w; /* -(Filter + 1) with Jitter: twice the taps */
+  float filter_code = shadow.layer_extent[first].w; /* -(Filter + 1) with Jitter: twice the taps */
   int tap_scale = filter_code < 0.0 ? 2 : 1;
-  float filter_radius = min(max(filter_code < 0.0 ? -filter_code - 1.0 : filter_code, info.w / texel),
+  float filter_radius = min(max(filter_code < 0.0 ? -filter_code - 1.0 : filter_code, q.info.w / texel),
                             SHADOW_MAX_RADIUS);
 #ifdef SL_SOFT_SHADOWS
-  float size = info.z;
+  float size = q.info.z;
   if (size > 0.0) {
     vec2 first_direction = shadow_first_direction();
     /* blocker search: casters between the receiver and a quarter of its distance (the sun: the
      * map's top) that hide some of the light */
-    float search = ortho ? d * size / texel : 3.0 * size / info.y / d;
+    float search = ortho ? q.d * size / texel : 3.0 * size / q.info.y / q.d;
     search = clamp(search, 1.0, SHADOW_MAX_RADIUS);
     float blockers = 0.0;
     float blocker_sum = 0.0;
@@ -187,9 +280,9 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
     /* a search a few texels wide needs fewer taps (half of them within 2 texels) */
     int taps = (search <= 2.0 ? SHADOW_SEARCH_TAPS / 2 : SHADOW_SEARCH_TAPS) * tap_scale;
     for (int k = 0; k < taps; k++) {
-      ivec2 t = ivec2(floor(vogel_tap(uv_texels, search, k, taps, direction)));
-      float stored = shadow_texel(layer, t);
-      if (stored < shadow_receiver(t, uv_texels, d, gradient, bias)) {
+      ivec2 t = ivec2(floor(vogel_tap(q.uv_texels, search, k, taps, direction)));
+      float stored = shadow_texel(q, t);
+      if (stored < shadow_receiver(q, t)) {
         blockers += 1.0;
         blocker_sum += stored;
       }
@@ -198,18 +291,17 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
       return 1.0;
     }
     float d_blocker = max(blocker_sum / blockers, 1e-4);
-    float penumbra = ortho ? (d - d_blocker) * size : size * (d - d_blocker) / d_blocker;
+    float penumbra = ortho ? (q.d - d_blocker) * size : size * (q.d - d_blocker) / d_blocker;
     float radius = min(max(max(penumbra, 0.0) / texel, filter_radius), SHADOW_MAX_RADIUS);
     if (radius > 1.0) {
-      return shadow_pcf(layer, uv_texels, radius, first_direction, d, gradient, bias, tap_scale);
+      return shadow_pcf(q, radius, first_direction, tap_scale);
     }
   }
 #endif
   if (filter_radius > 1.0) {
-    return shadow_pcf(layer, uv_texels, filter_radius, shadow_first_direction(), d, gradient, bias,
-                      tap_scale);
+    return shadow_pcf(q, filter_radius, shadow_first_direction(), tap_scale);
   }
-  return shadow_bilinear(layer, uv_texels, d, gradient, bias);
+  return shadow_bilinear(q);
 }
 
 #endif

@@ -88,13 +88,16 @@ struct ObjectBlock {
  * far distance (m per unit of stored depth), y: a texel's width per metre of distance
  * (perspective) or in metres (orthographic), z: the light's size for penumbrae (radius in m; a
  * sun's tan(angle / 2)); origin.xyz: the light's position (perspective) or the near plane's
- * centre (orthographic), w: the layer's kind (0 cube face, 1 perspective, 2 orthographic). A
- * light's first layer is its LightData.factors.w (-1: no shadow). */
+ * centre (orthographic), w: the layer's kind (0 cube face, 1 perspective, 2 orthographic);
+ * fit (orthographic): the near plane's centre e along the view's right, up and forward axes
+ * (r.e, u.e, f.e), which place a point's coordinates across a sun's cascades (each cascade has
+ * the sun's rotation). A light's first layer is its LightData.factors.w (-1: no shadow). */
 struct ShadowBlock {
   mat4 layer_matrix[SL_SHADOW_LAYERS];
   mat4 layer_view_inverse[SL_SHADOW_LAYERS];
   vec4 layer_info[SL_SHADOW_LAYERS];
   vec4 layer_origin[SL_SHADOW_LAYERS];
   vec4 layer_extent[SL_SHADOW_LAYERS];
+  vec4 layer_fit[SL_SHADOW_LAYERS];
 };
 #endif

@@ -124,6 +124,42 @@ def test_hard_shadows_match_cycles_outside_the_edges(kind, tmp_path):
     assert differ <= 0.001, f"{kind}: {differ:.5f} of the pixels differ in lit/shadowed state from Cycles"
 
 
+def _cube_scene(below: bool):
+    """A point light 1 m over the ground with spheres whose shadows fall in each face of its cube
+    map: beyond the four side spheres (further across the ground than the light is high: the
+    +-x and +-y faces) and under the light (-z); ``below``: everything mirrored through the ground
+    and seen from under it (+z)."""
+    s = -1.0 if below else 1.0
+    scene = scenes.reset(size=SIZE)
+    scene.shading_lab.model = "PBR"
+    scenes.ortho_camera(scene, location=(0.0, -6.0, 5.0 * s),
+                        rotation=(math.radians(90.0 - 40.0 * s), 0.0, 0.0), scale=6.0)
+    mat = _white()
+    scenes.plane(scene, size=8.0, rotation=(math.pi if below else 0.0, 0.0, 0.0), material=mat)
+    for x, y, radius in ((1.1, 0.2, 0.25), (-1.1, -0.3, 0.25), (0.3, 1.1, 0.25), (-0.2, -1.1, 0.25),
+                         (0.35, 0.25, 0.25)):
+        _sphere(scene, radius, (x, y, s * (radius + 0.15)), mat)
+    light = scenes.light(scene, "POINT", energy=300.0, location=(0.1, -0.1, s))
+    light.data.use_shadow = True
+    return scene
+
+
+#: Measured at 96 px: no pixel's lit/shadowed state differs from Cycles' outside its edges' band,
+#: above the ground and below it.
+@pytest.mark.parametrize("below", [False, True])
+def test_every_face_of_a_point_lights_cube_map_shadows_as_in_cycles(below, tmp_path):
+    scene = _cube_scene(below)
+    ours, _ = _visibility(scene, tmp_path, "ours")
+    ref, unshadowed = _visibility(scene, tmp_path, "cycles", cycles=True)
+    state_ours, state_ref = ours > 0.5, ref > 0.5
+    considered = ~_edge_band(state_ref) & (unshadowed > 0.02 * unshadowed.max())
+    differ = float((state_ours != state_ref)[considered].mean())
+    shadowed = float((~state_ref)[considered].mean())
+    print(f"below={below}: {differ:.5f} of the pixels differ, {shadowed:.4f} in shadow")
+    assert shadowed > 0.03, f"the scene must show shadows: {shadowed:.3f} of the pixels are in shadow"
+    assert differ <= 0.001, f"{differ:.5f} of the pixels differ in lit/shadowed state from Cycles"
+
+
 #: Measured at 96 px against Cycles (256 spp): mean |visibility difference| over Cycles' penumbra
 #: pixels (0.05 < visibility < 0.95) 0.055 / 0.058 / 0.061 (point 0.1 / 0.3 / 0.5 m), 0.049 (spot
 #: 0.3 m), 0.058 / 0.040 (sun 2 / 5 degrees); penumbra pixel counts ours / Cycles 0.87 - 1.12.
