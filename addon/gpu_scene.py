@@ -270,6 +270,23 @@ class SceneResources:
         boxes = np.stack([self._bounds[items[d.order].geometry] for d in draws])
         return shadows.bounding_spheres(boxes, np.stack([items[d.order].matrix for d in draws]))
 
+    def shadowless_casters(self, draws: list[Draw]) -> np.ndarray:
+        """(layers, n): which of ``draws`` (casters) can shadow nothing in each layer of the shadow
+        plan (``shadows.shadowless_casters``: a flat caster with the light on one side and every
+        object on that side), against every item's box."""
+        items = self.snapshot.items
+        plan = self.shadow_plan
+        if not draws or plan is None:
+            return np.zeros((0 if plan is None else plan.layers, len(draws)), bool)
+        boxes = np.stack([self._bounds[items[d.order].geometry] for d in draws])
+        planes = shadows.flat_planes(boxes, np.stack([items[d.order].matrix for d in draws]))
+        if np.isnan(planes[:, 0]).all():
+            return np.zeros((plan.layers, len(draws)), bool)
+        held = [item for item in items if item.geometry in self._bounds]
+        world = shadows.world_corners(np.stack([self._bounds[item.geometry] for item in held]),
+                                      np.stack([item.matrix for item in held]))
+        return shadows.shadowless_casters(plan, self.snapshot.lights, planes, world)
+
     def put_frame(self, view_projection: np.ndarray | None, width: int, height: int,
                   samples: int = 1) -> None:
         """The frame block for a view (the camera's, unless the viewport passes its own) of

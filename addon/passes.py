@@ -209,6 +209,9 @@ class TargetPass(Pass):
 #: Draw only the light-facing faces of closed casters into the shadow maps (the same depths as
 #: every face; tests turn it off to compare).
 CULL_CLOSED_CASTERS = True
+#: Leave out of a layer the flat casters that can shadow nothing in it (a ground under the scene
+#: and its light: ``shadows.shadowless_casters``; tests turn it off to compare).
+SKIP_SHADOWLESS = True
 #: The faces culled for a caster's facing (``SceneResources.caster_facing``): open, out, in.
 CULLING = {0: "NONE", 1: "BACK", -1: "FRONT"}
 
@@ -254,6 +257,8 @@ class ShadowPass(Pass):
         # each layer draws only the casters that reach its volume (a cube face sees a sixth)
         spheres = scene.caster_spheres(casters)
         reach = shadows.layer_casters(plan.matrices, spheres)
+        if SKIP_SHADOWLESS:
+            reach &= ~scene.shadowless_casters(casters)
         self.drawn_casters = int(reach.sum())
         facing = scene.caster_facing(casters) if CULL_CLOSED_CASTERS else np.zeros(len(casters), np.int8)
         for layer, framebuffer in enumerate(self.framebuffers):

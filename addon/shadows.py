@@ -358,3 +358,83 @@ def layer_casters(matrices: np.ndarray, spheres: np.ndarray) -> np.ndarray:
     norms = np.linalg.norm(planes[..., :3], axis=-1)  # (layers, 6)
     signed = np.einsum("lpk,nk->lpn", planes[..., :3], spheres[:, :3]) + planes[..., 3:4]
     return np.all(signed >= -(spheres[:, 3][None, None] * norms[..., None]), axis=1)
+
+
+#: A box this thin along one of its axes, relative to its largest extent, holds a flat object (a
+#: plane): ``shadowless_casters`` may leave it out of the maps.
+FLAT = 1e-6
+
+
+def light_extent(light: Light) -> float:
+    """The radius of a sphere about the light's position holding all of its emitting surface: an
+    area light's rectangle or ellipse, a point or spot light's sphere (0 for a sun)."""
+    if light.kind == "AREA":
+        return math.hypot(*light.half_size)
+    return 0.0 if light.kind == "SUN" else float(light.radius)
+
+
+def world_corners(boxes: np.ndarray, matrices: np.ndarray) -> np.ndarray:
+    """(n, 8, 3) world corners of object-space boxes ``boxes`` (n, 2, 3) under ``matrices``."""
+    boxes = np.asarray(boxes, np.float64).reshape(-1, 2, 3)
+    matrices = np.asarray(matrices, np.float64).reshape(-1, 4, 4)
+    pick = np.array([[i, j, k] for i in (0, 1) for j in (0, 1) for k in (0, 1)])  # (8, 3): min or max
+    corners = boxes[:, pick, np.arange(3)]  # (n, 8, 3)
+    return np.einsum("nij,nkj->nki", matrices[:, :3, :3], corners) + matrices[:, None, :3, 3]
+
+
+def flat_planes(boxes: np.ndarray, matrices: np.ndarray) -> np.ndarray:
+    """(n, 4) world planes (unit normal, offset: n.x + offset = 0) of the objects whose
+    object-space boxes ``boxes`` (n, 2, 3) are flat along an axis (``FLAT``), under ``matrices``
+    (n, 4, 4); NaN rows for the others (and for a matrix that flattens the object)."""
+    boxes = np.asarray(boxes, np.float64).reshape(-1, 2, 3)
+    matrices = np.asarray(matrices, np.float64).reshape(-1, 4, 4)
+    out = np.full((len(boxes), 4), np.nan)
+    extent = boxes[:, 1] - boxes[:, 0]
+    axis = np.argmin(extent, axis=1)
+    flat = extent[np.arange(len(boxes)), axis] <= FLAT * np.maximum(extent.max(axis=1), 1e-30)
+    m3 = matrices[:, :3, :3]
+    flat &= np.abs(np.linalg.det(m3)) > 1e-30
+    for i in np.flatnonzero(flat):
+        normal = np.linalg.inv(m3[i]).T[:, axis[i]]  # the axis's normal carried to the world
+        normal /= np.linalg.norm(normal)
+        point = m3[i] @ (0.5 * (boxes[i, 0] + boxes[i, 1])) + matrices[i, :3, 3]
+        out[i] = (*normal, -float(normal @ point))
+    return out
+
+
+def shadowless_casters(plan: ShadowPlan, lights, planes: np.ndarray, receivers: np.ndarray) -> np.ndarray:
+    """(layers, n) bool: the flat casters (``planes``, ``flat_planes``; NaN rows are not flat)
+    that can hide no part of a layer's light from anything: the whole light (``light_extent``; a
+    sun's cone of directions) lies on one side of the caster's plane and every object's box
+    (``receivers``: (m, 8, 3) world corners) on that side or in the plane. A segment from such a
+    point to the light stays on that side, so the caster can shadow nothing (a ground under a
+    scene lit from above: on the CPU rasteriser the largest caster of most maps). Left out of a
+    layer, its texels hold the far distance instead of the ground's: the ground, tested against
+    its own plane, was never behind itself; the one change is near silhouettes at grazing light,
+    where a receiver's plane extrapolated over the filter's texels passed behind the ground and
+    the ground darkened it (measured on the presets: <= 0.5 % of the pixels, error against Cycles
+    unchanged or lower)."""
+    out = np.zeros((plan.layers, len(planes)), bool)
+    flat = ~np.isnan(planes[:, 0])
+    if not flat.any() or not plan.layers:
+        return out
+    corners = np.asarray(receivers, np.float64).reshape(-1, 3)
+    scale = max(float(np.ptp(corners, axis=0).max()) if len(corners) else 1.0, 1.0)
+    eps = 1e-5 * scale
+    p = planes[flat]
+    signed = corners @ p[:, :3].T + p[:, 3]  # (corners, flat casters)
+    starts = sorted(s for s in plan.first_layer if s >= 0) + [plan.layers]
+    for light, start in zip(lights, plan.first_layer):
+        if start < 0:
+            continue
+        end = starts[starts.index(start) + 1]
+        if light.kind == "SUN":  # the light arrives from -direction, within half its angle
+            towards = -(p[:, :3] @ np.asarray(light.direction, np.float64))
+            clear = np.abs(towards) > math.sin(0.5 * light.angle) + 1e-6
+        else:
+            towards = p[:, :3] @ np.asarray(light.position, np.float64) + p[:, 3]
+            clear = np.abs(towards) > light_extent(light) + eps
+        side = np.sign(towards)
+        clear &= np.all(signed * side >= -eps, axis=0)
+        out[start:end, np.flatnonzero(flat)[clear]] = True
+    return out

@@ -160,6 +160,73 @@ def test_every_face_of_a_point_lights_cube_map_shadows_as_in_cycles(below, tmp_p
     assert differ <= 0.001, f"{differ:.5f} of the pixels differ in lit/shadowed state from Cycles"
 
 
+def test_flat_casters_that_can_shadow_nothing_are_left_out():
+    """A ground (flat box) under a sphere's box: lit from above (a point, a sun within its angle)
+    it can hide the light from nothing, so it leaves the light's layers; lit from below, with a
+    box under the ground, with a sized light reaching through its plane or a sun whose cone
+    straddles it, it stays. The sphere (not flat) always stays."""
+    from types import SimpleNamespace
+
+    from addon.snapshot import Light
+
+    boxes = np.array([[[-4.0, -4.0, 0.0], [4.0, 4.0, 0.0]], [[-0.5, -0.5, 0.0], [0.5, 0.5, 1.0]]])
+    planes = shadows.flat_planes(boxes, np.stack([np.eye(4)] * 2))
+    assert np.allclose(planes[0], (0.0, 0.0, 1.0, 0.0)) and np.isnan(planes[1]).all(), planes
+
+    def point(z, radius=0.0, kind="POINT", half=(0.0, 0.0)):
+        return Light(kind, (0.3, 0.2, z), (0.0, 0.0, -1.0), (1.0, 1.0, 1.0), radius=radius, half_size=half)
+
+    def sun(direction, angle):
+        return Light("SUN", (0.0, 0.0, 0.0), direction, (1.0, 1.0, 1.0), angle=angle)
+
+    lights = [point(3.0), point(-1.0), point(0.2, radius=0.3), point(0.5, kind="AREA", half=(0.2, 0.1)),
+              sun((0.0, 0.0, -1.0), 0.1), sun((1.0, 0.0, -0.02), 0.1)]
+    expect = [True, False, False, True, True, False]
+    first = tuple(range(0, 6 * len(lights), 6))
+    plan = SimpleNamespace(layers=6 * len(lights), first_layer=first)
+    corners = shadows.world_corners(boxes, np.stack([np.eye(4)] * 2))
+    out = shadows.shadowless_casters(plan, lights, planes, corners)
+    assert out.shape == (6 * len(lights), 2) and not out[:, 1].any()
+    assert [bool(out[f:f + 6, 0].all()) for f in first] == expect
+    assert all(out[f:f + 6, 0].all() or not out[f:f + 6, 0].any() for f in first)
+    under = np.concatenate([boxes, [[[-1.0, -1.0, -2.0], [1.0, 1.0, -1.0]]]])  # a box under the ground
+    corners = shadows.world_corners(under, np.stack([np.eye(4)] * 3))
+    out = shadows.shadowless_casters(plan, lights, planes, corners)
+    assert not out.any()
+
+
+def test_a_ground_that_can_shadow_nothing_leaves_the_maps_and_the_shadows(tmp_path, monkeypatch):
+    """The cube-face scene (lit from above, hard shadows) and a sun's: the ground leaves every
+    layer, and each pixel's lit/shadowed state against Cycles is as good as with it drawn."""
+    from addon import passes
+
+    scene = _cube_scene(False)
+    sun = scenes.light(scene, "SUN", energy=2.0, rotation=(math.radians(-30.0), math.radians(20.0), 0.0))
+    sun.data.use_shadow = True
+    drawn = []
+    original = passes.ShadowPass.run
+
+    def run(self, frame, spec=None):
+        done = original(self, frame, spec)
+        drawn.append(self.drawn_casters)
+        return done
+
+    monkeypatch.setattr(passes.ShadowPass, "run", run)
+    ref, unshadowed = _visibility(scene, tmp_path, "cycles", cycles=True)
+    state_ref = ref > 0.5
+    considered = ~_edge_band(state_ref) & (unshadowed > 0.02 * unshadowed.max())
+    differ = {}
+    for skip in (True, False):
+        monkeypatch.setattr(passes, "SKIP_SHADOWLESS", skip)
+        drawn.clear()
+        ours, _ = _visibility(scene, tmp_path, f"skip{skip}")
+        differ[skip] = (float(((ours > 0.5) != state_ref)[considered].mean()), drawn[0])
+    print(f"(lit/shadowed state differing from Cycles', layer x caster pairs drawn): {differ}")
+    (skipped, pairs), (kept, all_pairs) = differ[True], differ[False]
+    assert all_pairs - pairs == 7, (pairs, all_pairs)  # the ground in the 6 faces and the sun's map
+    assert skipped <= kept + 1e-4 and skipped <= 0.001, differ
+
+
 #: Measured at 96 px against Cycles (256 spp): mean |visibility difference| over Cycles' penumbra
 #: pixels (0.05 < visibility < 0.95) 0.055 / 0.058 / 0.061 (point 0.1 / 0.3 / 0.5 m), 0.049 (spot
 #: 0.3 m), 0.058 / 0.040 (sun 2 / 5 degrees); penumbra pixel counts ours / Cycles 0.87 - 1.12.
@@ -523,8 +590,11 @@ def test_layer_casters_keeps_every_caster_that_reaches_a_layer():
 def test_culled_casters_draw_the_same_shadows(tmp_path, monkeypatch):
     """Spheres all around a point light (each cube face sees a few) and a sun over them: the
     image with each layer drawing only the casters that reach it equals, bit for bit, the image
-    with every caster drawn into every layer, and the layers drew far fewer casters."""
+    with every caster drawn into every layer, and the layers drew far fewer casters (the ground
+    drawn everywhere: test_a_ground_that_can_shadow_nothing_leaves_the_maps_and_the_shadows)."""
     from addon import passes
+
+    monkeypatch.setattr(passes, "SKIP_SHADOWLESS", False)
 
     scene = scenes.reset(size=48)
     scene.shading_lab.model = "PBR"
