@@ -109,17 +109,22 @@ def _edge_band(state: np.ndarray, width: int = 1) -> np.ndarray:
     return band
 
 
+def _state_against_cycles(scene, tmp_path) -> tuple[float, float]:
+    """(the fraction of pixels whose lit/shadowed state differs from Cycles', the fraction in
+    shadow in Cycles), over the lit pixels outside a 1-pixel band around Cycles' shadow edges."""
+    ours, _ = _visibility(scene, tmp_path, "ours")
+    ref, unshadowed = _visibility(scene, tmp_path, "cycles", cycles=True)
+    state_ours, state_ref = ours > 0.5, ref > 0.5
+    considered = ~_edge_band(state_ref) & (unshadowed > 0.02 * unshadowed.max())
+    return float((state_ours != state_ref)[considered].mean()), float((~state_ref)[considered].mean())
+
+
 #: Measured fractions of pixels (outside a 1-pixel band around Cycles' shadow edges) whose lit /
 #: shadowed state differs from Cycles' at 96 px: point 0, spot 0.00031, sun 0.00012.
 @pytest.mark.parametrize("kind", ["POINT", "SPOT", "SUN"])
 def test_hard_shadows_match_cycles_outside_the_edges(kind, tmp_path):
     scene, _ = _scene(kind)
-    ours, _ = _visibility(scene, tmp_path, "ours")
-    ref, unshadowed = _visibility(scene, tmp_path, "cycles", cycles=True)
-    state_ours, state_ref = ours > 0.5, ref > 0.5
-    considered = ~_edge_band(state_ref) & (unshadowed > 0.02 * unshadowed.max())
-    differ = float((state_ours != state_ref)[considered].mean())
-    shadowed = float((~state_ref)[considered].mean())
+    differ, shadowed = _state_against_cycles(scene, tmp_path)
     assert shadowed > 0.03, f"the scene must show shadows: {shadowed:.3f} of the pixels are in shadow"
     assert differ <= 0.001, f"{kind}: {differ:.5f} of the pixels differ in lit/shadowed state from Cycles"
 
@@ -148,13 +153,7 @@ def _cube_scene(below: bool):
 #: above the ground and below it.
 @pytest.mark.parametrize("below", [False, True])
 def test_every_face_of_a_point_lights_cube_map_shadows_as_in_cycles(below, tmp_path):
-    scene = _cube_scene(below)
-    ours, _ = _visibility(scene, tmp_path, "ours")
-    ref, unshadowed = _visibility(scene, tmp_path, "cycles", cycles=True)
-    state_ours, state_ref = ours > 0.5, ref > 0.5
-    considered = ~_edge_band(state_ref) & (unshadowed > 0.02 * unshadowed.max())
-    differ = float((state_ours != state_ref)[considered].mean())
-    shadowed = float((~state_ref)[considered].mean())
+    differ, shadowed = _state_against_cycles(_cube_scene(below), tmp_path)
     print(f"below={below}: {differ:.5f} of the pixels differ, {shadowed:.4f} in shadow")
     assert shadowed > 0.03, f"the scene must show shadows: {shadowed:.3f} of the pixels are in shadow"
     assert differ <= 0.001, f"{differ:.5f} of the pixels differ in lit/shadowed state from Cycles"
