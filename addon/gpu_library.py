@@ -25,6 +25,7 @@ from __future__ import annotations
 
 import atexit
 import threading
+import weakref
 from collections.abc import Callable
 
 import gpu
@@ -51,6 +52,15 @@ PROGRAMS_KEPT = 96
 #: back and draws every layer again (its content is never reused). Textures larger than this are
 #: freed as before.
 SPARE_BYTES = 256 << 20
+#: Image textures kept between renderers, in bytes of GPU memory (least recently used dropped
+#: first). A final render makes a new renderer each time, and uploading an image costs it again:
+#: 12 ms of the world preset's ~110 ms frame for its 1024 x 512 half-float world (the conversion
+#: and the driver's copy). The pixels' identity keys them (``snapshot.ImageData``: the scene reader
+#: keeps one object per image until the image changes), so an edited image is uploaded again and
+#: its old texture dropped at once; an image larger than this is not kept.
+IMAGE_BYTES = 512 << 20
+#: GPU bytes per texel of each ``ImageData.storage`` (gpu_scene.TEXTURE_FORMATS).
+_TEXEL_BYTES = {"SRGB8": 4, "UNORM8": 4, "HALF": 8, "FLOAT": 16}
 
 
 class _Library:
@@ -60,6 +70,8 @@ class _Library:
         self._tables: dict = {}
         self._environments: dict = {}
         self._spares: list = []  # (key, texture, bytes), oldest first
+        self._images: dict = {}  # image key -> (weakref to its ImageData, texture, bytes), by use
+        self.image_uploads = 0  # image textures made since start (tests count them)
         self._compile_error = ""
         self._failed: dict = {}  # key -> why it did not compile (not tried again on every redraw)
         self.compiles = 0  # programs compiled since start (for tests and benchmarks)
@@ -116,6 +128,29 @@ class _Library:
                 del self._environments[next(iter(self._environments))]
             return held
 
+    def image_texture(self, image, build: Callable[[object], gpu.types.GPUTexture]) -> tuple:
+        """(the texture of ``image``, whether it was uploaded now): ``build(image)`` makes it
+        unless this very ``snapshot.ImageData`` was uploaded before and kept (``IMAGE_BYTES``).
+        Shared and read-only: every renderer samples it, none draws into it."""
+        with self._lock:
+            held = self._images.pop(image.key, None)
+            if held is not None and held[0]() is image:
+                self._images[image.key] = held  # most recently used last
+                return held[1], False
+            texture = build(image)
+            self.image_uploads += 1
+            height, width = image.pixels.shape[:2]
+            size = width * height * _TEXEL_BYTES[image.storage]
+            if size <= IMAGE_BYTES:
+                self._images[image.key] = (weakref.ref(image), texture, size)
+                while sum(entry[2] for entry in self._images.values()) > IMAGE_BYTES:
+                    del self._images[next(iter(self._images))]
+            return texture, True
+
+    def image_bytes(self) -> int:
+        with self._lock:
+            return sum(entry[2] for entry in self._images.values())
+
     def take_spare(self, key):
         """A texture a finished renderer left for ``key`` (its kind and shape), or None. Taken, not
         shared: two renderers never draw into one texture."""
@@ -154,7 +189,7 @@ class _Library:
         """Every program and table the library holds (tests check that nothing else holds them)."""
         with self._lock:
             return [*self._programs.values(), *self._tables.values(), *self._environments.values(),
-                    *(entry[1] for entry in self._spares)]
+                    *(entry[1] for entry in self._spares), *(entry[1] for entry in self._images.values())]
 
     @property
     def compile_error(self) -> str:
@@ -175,6 +210,7 @@ class _Library:
             self._tables = {}
             self._environments = {}
             self._spares = []
+            self._images = {}
         programs.clear_source_caches()
 
 

@@ -219,8 +219,10 @@ class SceneResources:
         for key, image in snapshot.images.items():
             held = self._textures.get(key)
             if held is None or held[0] is not image:
-                self._textures[key] = (image, image_texture(image))
-                self.uploads["textures"] += 1
+                texture, uploaded = gpu_library.LIBRARY.image_texture(image, image_texture)
+                self._textures[key] = (image, texture)
+                if uploaded:
+                    self.uploads["textures"] += 1
 
     def _sync_shadows(self, snapshot: Snapshot) -> None:
         plan = self.shadow_plan = shadows.plan(snapshot, self._bounds)

@@ -215,10 +215,12 @@ def _albedo_scene(texels):
     return _textured_scene({"Base Color": ("albedo", texels, False)}, sun=math.pi)
 
 
-def test_image_pixels_are_read_once_and_again_after_an_edit(tmp_path):
-    """A saved image's pixels are read from Blender once, not per render; an unsaved edit (new
-    pixels, as painting makes) is read again by the next render, and seen."""
-    from addon import extract
+def test_image_pixels_are_read_and_uploaded_once_and_again_after_an_edit(tmp_path):
+    """A saved image's pixels are read from Blender and uploaded to the GPU once, not per render
+    (each final render is a new renderer: the program library keeps the texture); an unsaved edit
+    (new pixels, as painting makes) is read and uploaded again by the next render, and seen, and
+    the old texture is not kept beside the new one."""
+    from addon import extract, gpu_library
 
     rng = np.random.default_rng(11)
     first, second = rng.uniform(0.0, 1.0, (2, TEXELS, TEXELS, 3))
@@ -228,10 +230,13 @@ def test_image_pixels_are_read_once_and_again_after_an_edit(tmp_path):
     image.file_format = "PNG"
     image.save()
     assert not image.is_dirty
-    reads = extract.IMAGES.reads
+    reads, uploads = extract.IMAGES.reads, gpu_library.LIBRARY.image_uploads
     a = scenes.render(scene, tmp_path / "a.exr")[..., :3]
     b = scenes.render(scene, tmp_path / "b.exr")[..., :3]
     assert extract.IMAGES.reads - reads == 1, "the second render read the image again"
+    assert gpu_library.LIBRARY.image_uploads - uploads == 1, "the second render uploaded the image again"
+    kept = gpu_library.LIBRARY.image_bytes()
+    assert kept >= TEXELS * TEXELS * 4, kept
     np.testing.assert_array_equal(a, b)
     np.testing.assert_allclose(a, _per_texel(srgb_decode(_stored(first))), atol=2e-3)
     rgba = np.concatenate([second, np.ones((TEXELS, TEXELS, 1))], -1).astype(np.float32)
@@ -240,6 +245,43 @@ def test_image_pixels_are_read_once_and_again_after_an_edit(tmp_path):
     assert image.is_dirty
     c = scenes.render(scene, tmp_path / "c.exr")[..., :3]
     np.testing.assert_allclose(c, _per_texel(srgb_decode(_stored(second))), atol=2e-3)
+    assert gpu_library.LIBRARY.image_uploads - uploads == 2, "the edited image was not uploaded again"
+    assert gpu_library.LIBRARY.image_bytes() == kept, "the edited image's old texture was kept beside the new"
+
+
+def test_kept_image_textures_stay_within_their_budget(monkeypatch):
+    """The library's image textures: one per image, the least recently used dropped first beyond
+    IMAGE_BYTES, an image larger than that not kept, and an image read again (a new ImageData,
+    even with the same pixels) uploaded again."""
+    from addon import gpu_library
+    from addon.snapshot import ImageData
+
+    monkeypatch.setattr(gpu_library, "IMAGE_BYTES", 100)
+    library = gpu_library._Library()
+    made = []
+
+    def build(image):
+        made.append(image.key)
+        return object()
+
+    def image(key, texels):  # 8-bit storage: 4 bytes a texel
+        return ImageData(key, np.zeros((1, texels, 4), np.uint8), "UNORM8")
+
+    a, b, c = image("a", 10), image("b", 10), image("c", 10)
+    ta, uploaded = library.image_texture(a, build)
+    assert uploaded and library.image_texture(a, build) == (ta, False) and library.image_bytes() == 40
+    library.image_texture(b, build)
+    library.image_texture(a, build)  # a used last: b is the oldest now
+    library.image_texture(c, build)  # 120 bytes: b goes
+    assert library.image_bytes() == 80 and made == ["a", "b", "c"]
+    assert library.image_texture(a, build)[1] is False and library.image_texture(b, build)[1] is True
+    again = image("a", 10)  # a's pixels read again (an edit): a new texture, the old one dropped
+    assert library.image_texture(again, build)[1] is True and library.image_texture(a, build)[1] is True
+    big = image("big", 26)  # 104 bytes: larger than the budget, made but not kept
+    assert library.image_texture(big, build)[1] is True and library.image_texture(big, build)[1] is True
+    assert made == ["a", "b", "c", "b", "a", "a", "big", "big"]
+    library.clear()
+    assert library.image_bytes() == 0 and library.held() == []
 
 
 def test_image_from_a_linked_library_beside_a_local_one_of_the_same_name(tmp_path):
