@@ -13,8 +13,10 @@ main thread) all draw with the same programs, so they live here, once, behind on
 - The message of the last failed compile is kept for the Render panel until a render compiles
   cleanly.
 - ``take_spare(key)`` / ``keep_spare(key, ...)``: textures a finished renderer handed back (its
-  shadow maps) for the next one of the same shape, within ``SPARE_BYTES``; their content is
-  never reused, only their memory.
+  shadow maps) for the next one of the same shape, within ``SPARE_BYTES``, with what the
+  renderer says of their content (the shadow maps' layers that hold nothing).
+- ``image_texture(image, build)``: each image's texture, uploaded once per read of its pixels,
+  within ``IMAGE_BYTES``.
 
 Blender shares programs and textures between its GPU contexts, so a program compiled on the
 render thread serves the viewport too; framebuffers and vertex arrays are per context and are
@@ -49,8 +51,9 @@ PROGRAMS_KEPT = 96
 #: goes first). A final render makes a new renderer each time, and a fresh array of depth maps
 #: costs more to allocate than to draw on the CPU rasteriser (a softbox scene's 12 layers of
 #: 1024^2: ~40 ms of its ~90 ms shadow pass): the next render of the same shape takes the texture
-#: back and draws every layer again (its content is never reused). Textures larger than this are
-#: freed as before.
+#: back and draws every layer a caster reaches again; of the others it clears only those that do
+#: not hold "nothing" already (the renderer that kept it says which, passes.ShadowPass.far).
+#: Textures larger than this are freed as before.
 SPARE_BYTES = 256 << 20
 #: Image textures kept between renderers, in bytes of GPU memory (least recently used dropped
 #: first). A final render makes a new renderer each time, and uploading an image costs it again:
@@ -69,7 +72,7 @@ class _Library:
         self._programs: dict = {}
         self._tables: dict = {}
         self._environments: dict = {}
-        self._spares: list = []  # (key, texture, bytes), oldest first
+        self._spares: list = []  # (key, texture, bytes, state), oldest first
         self._images: dict = {}  # image key -> (weakref to its ImageData, texture, bytes), by use
         self.image_uploads = 0  # image textures made since start (tests count them)
         self._compile_error = ""
@@ -151,23 +154,25 @@ class _Library:
         with self._lock:
             return sum(entry[2] for entry in self._images.values())
 
-    def take_spare(self, key):
-        """A texture a finished renderer left for ``key`` (its kind and shape), or None. Taken, not
-        shared: two renderers never draw into one texture."""
+    def take_spare(self, key) -> tuple | None:
+        """(a texture a finished renderer left for ``key`` (its kind and shape), what that renderer
+        said of its content), or None. Taken, not shared: two renderers never draw into one
+        texture."""
         with self._lock:
-            for i, (held_key, texture, _size) in enumerate(self._spares):
+            for i, (held_key, texture, _size, state) in enumerate(self._spares):
                 if held_key == key:
                     del self._spares[i]
-                    return texture
+                    return texture, state
             return None
 
-    def keep_spare(self, key, texture, size: int) -> None:
-        """Keep a renderer's ``texture`` (``size`` bytes) for the next one asking for ``key``,
-        within ``SPARE_BYTES`` (the oldest dropped first)."""
+    def keep_spare(self, key, texture, size: int, state=None) -> None:
+        """Keep a renderer's ``texture`` (``size`` bytes) and ``state`` (what its content is, for
+        the next user) for the next renderer asking for ``key``, within ``SPARE_BYTES`` (the
+        oldest dropped first)."""
         if size > SPARE_BYTES:
             return
         with self._lock:
-            self._spares.append((key, texture, size))
+            self._spares.append((key, texture, size, state))
             while sum(entry[2] for entry in self._spares) > SPARE_BYTES:
                 del self._spares[0]
 

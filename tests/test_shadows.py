@@ -718,6 +718,55 @@ def test_a_render_takes_back_the_last_ones_shadow_texture_and_draws_every_layer_
     assert np.array_equal(reused, fresh), float(np.abs(reused - fresh).max())
 
 
+def test_layers_no_caster_reaches_are_cleared_once_and_the_others_drawn_again(tmp_path, monkeypatch):
+    """A point light a metre over the ground and a small sphere beside it (the ground leaves the
+    maps: it can shadow nothing): the cube faces no caster reaches hold nothing, and a render
+    that takes back the last one's texture clears and draws only the faces a caster reaches.
+    Moving the sphere from the light's +x side to its +y side clears the face it left (the image
+    is bit for bit a fresh texture's), and moving it back clears the other (the first image
+    again): a face left as it was would keep the sphere's shadow on the ground in view."""
+    from addon import gpu_library, passes
+
+    library = gpu_library.LIBRARY
+    scene, light = _scene("POINT", 0.0, resolution=48)
+    bpy.data.objects.remove(bpy.data.objects["Torus"])
+    sphere = bpy.data.objects["Sphere"]
+    sphere.scale = (0.5, 0.5, 0.5)
+    light.location = (0.0, 0.0, 1.0)
+    seen = []
+    original = passes.ShadowPass.run
+
+    def run(self, frame, spec=None):
+        done = original(self, frame, spec)
+        seen.append((self.cleared, frozenset(self.far)))
+        return done
+
+    monkeypatch.setattr(passes.ShadowPass, "run", run)
+
+    def render(name, location):
+        sphere.location = location
+        return scenes.render(scene, tmp_path / f"{name}.exr")
+
+    library.drop_spares()
+    first = render("a", (1.0, 0.0, 0.5))  # shadow centred on (2, 0, 0)
+    again = render("b", (1.0, 0.0, 0.5))
+    (cleared_fresh, far), (cleared_again, far_again) = seen
+    assert cleared_fresh == 6 and 1 <= len(far) < 6 and far_again == far, seen
+    assert cleared_again == 6 - len(far), seen  # the faces a caster reaches alone
+    assert np.array_equal(first, again), float(np.abs(first - again).max())
+    moved = render("c", (0.0, 1.0, 0.5))  # shadow centred on (0, 2, 0)
+    far_moved = seen[-1][1]
+    assert far_moved - far and far - far_moved, (far, far_moved)  # faces left and faces entered
+    back = render("d", (1.0, 0.0, 0.5))
+    assert seen[-1][1] == far, seen
+    assert np.array_equal(back, first), float(np.abs(back - first).max())
+    library.drop_spares()
+    fresh = render("e", (0.0, 1.0, 0.5))
+    assert seen[-1] == (6, far_moved), seen
+    assert float(np.abs(moved - first).max()) > 0.05, "moving the sphere changed nothing"
+    assert np.array_equal(moved, fresh), float(np.abs(moved - fresh).max())
+
+
 def test_spare_textures_stay_within_their_budget(monkeypatch):
     from addon import gpu_library
 
@@ -725,12 +774,13 @@ def test_spare_textures_stay_within_their_budget(monkeypatch):
     library = gpu_library._Library()
     a, b, c, d = (object() for _ in range(4))
     library.keep_spare("k", a, 40)
-    library.keep_spare("k", b, 40)  # two of one shape: both kept
+    library.keep_spare("k", b, 40, "b's state")  # two of one shape: both kept, with their states
     assert library.spare_bytes() == 80
     library.keep_spare("j", c, 40)  # over the budget: the oldest (a) goes
-    assert library.spare_bytes() == 80 and library.take_spare("k") is b and library.take_spare("k") is None
+    assert library.spare_bytes() == 80 and library.take_spare("k") == (b, "b's state")
+    assert library.take_spare("k") is None
     library.keep_spare("big", d, 101)  # larger than the budget: not kept
-    assert library.take_spare("big") is None and library.take_spare("j") is c
+    assert library.take_spare("big") is None and library.take_spare("j") == (c, None)
     assert library.spare_bytes() == 0 and library.held() == []
 
 
