@@ -147,6 +147,7 @@ class SceneResources:
         self._materials: dict[str, _Block] = {}
         self._lights = _RowTexture()
         self._light_tiles = _RowTexture(channels=2)  # light culling's tiles and lists (per view)
+        self._tiles = None  # (what they were made from, the lists) of the last lists uploaded
         self._objects: list[_Block] = []
         self._frame = _Block()
         self._world_camera = _Block()
@@ -298,11 +299,21 @@ class SceneResources:
         if programs.uses_light_tiles(self.snapshot):
             lights = self.lights
             vp = self.snapshot.camera.view_projection if view_projection is None else view_projection
-            tiles = light_tiles.tile_lists([light.position for light in lights],
-                                           [light.influence for light in lights], vp,
-                                           width * samples, height * samples, light_tiles.TILE * samples)
-            texels = tiles.texels()
-            self.uploads["light tiles"] += self._light_tiles.put(texels.reshape(len(texels), -1))
+            centres = np.array([light.position for light in lights], np.float64).reshape(-1, 3)
+            radii = np.array([light.influence for light in lights], np.float64)
+            # the passes of one view ask again (the occlusion's and the opaque pass's): the lists
+            # are the last ones' while lights, view and size are (~7 ms of numpy for 3 lights at
+            # 640 x 360 on this machine)
+            key = (centres.tobytes(), radii.tobytes(), np.asarray(vp, np.float64).tobytes(), width, height,
+                   samples)
+            if self._tiles is not None and self._tiles[0] == key:
+                tiles = self._tiles[1]
+            else:
+                tiles = light_tiles.tile_lists(centres, radii, vp, width * samples, height * samples,
+                                               light_tiles.TILE * samples)
+                self._tiles = (key, tiles)
+                texels = tiles.texels()
+                self.uploads["light tiles"] += self._light_tiles.put(texels.reshape(len(texels), -1))
         self.uploads["frame"] += self._frame.put(programs.pack_frame(self.snapshot, view_projection, tiles,
                                                                      self.light_group_ends))
 
@@ -440,6 +451,7 @@ class SceneResources:
         self._programs.clear()
         self._lights = _RowTexture()
         self._light_tiles = _RowTexture(channels=2)
+        self._tiles = None
         self._frame = _Block()
         self._world_camera = _Block()
         self._world_lighting = _Block()

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -111,10 +112,15 @@ def tile_lists(centres, radii, view_projection, width: int, height: int, tile: i
     y0 = np.zeros(n, np.int64)
     x1 = np.full(n, columns, np.int64)
     y1 = np.full(n, rows, np.int64)
+    vp = np.asarray(view_projection, np.float64)
     bounded = np.isfinite(radii)
+    if not _orthographic(vp) and bounded.any():
+        # a sphere that holds the camera's centre meets every tile's frustum (they share its
+        # apex): listed everywhere without the tests (often the scene's few large lights)
+        eye = np.linalg.inv(vp) @ np.array([0.0, 0.0, 1.0, 0.0])
+        bounded &= np.linalg.norm(centres - eye[:3] / eye[3], axis=1) > radii
     if bounded.any():
-        boxes = _screen_boxes(centres[bounded], radii[bounded], np.asarray(view_projection, np.float64),
-                              width, height)
+        boxes = _screen_boxes(centres[bounded], radii[bounded], vp, width, height)
         x0[bounded] = np.clip(np.floor(boxes[:, 0] / tile), 0, columns)
         y0[bounded] = np.clip(np.floor(boxes[:, 1] / tile), 0, rows)
         x1[bounded] = np.clip(np.floor(boxes[:, 2] / tile) + 1, 0, columns)
@@ -128,14 +134,16 @@ def tile_lists(centres, radii, view_projection, width: int, height: int, tile: i
     k = np.arange(total) - np.repeat(np.cumsum(counts) - counts, counts)  # index within the box
     span = np.repeat(np.maximum(spans_x, 1), counts)
     tx, ty = np.repeat(x0, counts) + k % span, np.repeat(y0, counts) + k // span
-    if total <= SPHERE_TESTED:
-        vp = np.asarray(view_projection, np.float64)
+    tested = bounded[light]
+    if total <= SPHERE_TESTED and tested.any():
         edges = _tile_edges(tile, width, height, columns, rows)
-        finite = np.where(np.isfinite(radii), radii, 0.0)
-        keep = _within_tile_bound(centres, finite, light, tx, ty, edges, vp)
+        finite = np.where(bounded, radii, 0.0)
+        pairs = light[tested], tx[tested], ty[tested]
+        met = _within_tile_bound(centres, finite, *pairs, edges, vp)
         if not _orthographic(vp):  # (orthographic: the rectangle is exact, the planes add nothing)
-            keep &= _meets_tile(centres, finite, light, tx, ty, edges, vp)
-        keep |= ~np.isfinite(radii[light])
+            met &= _meets_tile(centres, finite, *pairs, edges, vp)
+        keep = ~tested
+        keep[tested] = met
         light, tx, ty = light[keep], tx[keep], ty[keep]
     tiles = ty * columns + tx
     order = np.argsort(tiles, kind="stable")  # by tile; lights in their own order within one
@@ -191,6 +199,23 @@ def _within_tile_bound(centres, radii, light, tx, ty, edges, vp: np.ndarray) -> 
         dy = np.maximum(np.maximum(ys[ty] - cy, cy - ys[ty + 1]), 0.0) * sy
         return dx * dx + dy * dy <= radii[light] ** 2 * (1.0 + 1e-9)  # rounding keeps a tangent sphere
 
+    eye, axis, half_angle = _tile_cones(vp.tobytes(), xs.tobytes(), ys.tobytes())
+    v = centres - eye  # per light
+    dist = np.linalg.norm(v, axis=1)
+    reach = np.arcsin(np.clip(radii / np.maximum(dist, 1e-300), 0.0, 1.0))
+    unit = v / np.maximum(dist, 1e-300)[:, None]
+    angle = np.arccos(np.clip(np.sum(unit[light] * axis[ty, tx], axis=1), -1.0, 1.0))
+    inside = dist[light] <= radii[light]
+    return inside | (angle <= half_angle[ty, tx] + reach[light] + 1e-9)  # rounding, as above
+
+
+@lru_cache(maxsize=4)
+def _tile_cones(vp_bytes: bytes, xs_bytes: bytes, ys_bytes: bytes):
+    """(the camera's centre, each tile's cone axis (rows, columns, 3) and half-angle (rows,
+    columns)) for a perspective view-projection and the tiles' ndc edges (as bytes, to be kept
+    by them: a view's renders and passes ask again, and the cones are most of the lists' work)."""
+    vp = np.frombuffer(vp_bytes).reshape(4, 4)
+    xs, ys = np.frombuffer(xs_bytes), np.frombuffer(ys_bytes)
     inverse = np.linalg.inv(vp)
 
     def unproject(x, y):  # points on the rays through ndc (x, y), at ndc depth 0
@@ -210,13 +235,9 @@ def _within_tile_bound(centres, radii, light, tx, ty, edges, vp: np.ndarray) -> 
         corner /= np.linalg.norm(corner, axis=-1, keepdims=True)
         cos_half = np.minimum(cos_half, np.sum(corner * axis, axis=-1))
     half_angle = np.arccos(np.clip(cos_half, -1.0, 1.0))
-    v = centres - eye  # per light
-    dist = np.linalg.norm(v, axis=1)
-    reach = np.arcsin(np.clip(radii / np.maximum(dist, 1e-300), 0.0, 1.0))
-    unit = v / np.maximum(dist, 1e-300)[:, None]
-    angle = np.arccos(np.clip(np.sum(unit[light] * axis[ty, tx], axis=1), -1.0, 1.0))
-    inside = dist[light] <= radii[light]
-    return inside | (angle <= half_angle[ty, tx] + reach[light] + 1e-9)  # rounding, as above
+    for array in (eye, axis, half_angle):
+        array.flags.writeable = False  # shared by every caller
+    return eye, axis, half_angle
 
 
 def _one_list(n: int) -> TileLists:

@@ -76,6 +76,36 @@ def test_every_pixel_lists_every_light_that_reaches_it_in_order(eye):
     assert total < every, "culling must leave some lights out of some tiles"
 
 
+def test_a_light_around_the_camera_is_in_every_tile_as_the_tile_tests_find():
+    """A light whose reach holds the camera's centre is listed in every tile without testing its
+    pairs: the tests themselves (the tile's cone and its four side planes) pass it everywhere, as
+    a sphere that holds a frustum's apex meets it; a light just short of the camera is tested."""
+    width, height, tile = 160, 96, 16
+    eye = np.array([1.0, -6.0, 2.5])
+    vp = _perspective(50.0, width / height) @ _look_at(tuple(eye), (0.0, 0.0, 0.0))
+    rng = np.random.default_rng(5)
+    offsets = rng.normal(size=(12, 3))
+    centres = eye + offsets * rng.uniform(0.2, 5.0, (12, 1)) / np.linalg.norm(offsets, axis=1, keepdims=True)
+    distance = np.linalg.norm(centres - eye, axis=1)
+    radii = distance * np.where(np.arange(12) < 8, 1.01, 0.99)  # 8 around the camera, 4 short of it
+    lists = light_tiles.tile_lists(centres, radii, vp, width, height, tile)
+    columns, rows = lists.columns, lists.header.shape[0]
+    ty, tx = (a.ravel() for a in np.mgrid[0:rows, 0:columns])
+    edges = light_tiles._tile_edges(tile, width, height, columns, rows)
+    entries = lists.entries.reshape(-1)
+    listed = [set(entries[int(f):int(f) + int(c)].astype(int)) for f, c in lists.header.reshape(-1, 2)]
+    for i in range(12):
+        light = np.full(len(tx), i)
+        tested = (light_tiles._within_tile_bound(centres, radii, light, tx, ty, edges, vp)
+                  & light_tiles._meets_tile(centres, radii, light, tx, ty, edges, vp))
+        in_lists = np.array([i in tile_set for tile_set in listed])
+        if i < 8:
+            assert tested.all() and in_lists.all(), (i, int(tested.sum()), int(in_lists.sum()))
+        else:
+            assert np.array_equal(in_lists, tested), (i, int(tested.sum()), int(in_lists.sum()))
+    assert sum(len(t) for t in listed) < 12 * len(listed), "the lights short of the camera go somewhere"
+
+
 def _ortho(width_m: float, aspect: float) -> np.ndarray:
     return np.diag([2.0 / width_m, 2.0 * aspect / width_m, -0.01, 1.0])
 
