@@ -142,6 +142,9 @@ class _Library:
                 return held[1], False
             texture = build(image)
             self.image_uploads += 1
+            # an image the scene reader let go of (its cache's budget, a file load) goes too
+            for key in [key for key, entry in self._images.items() if entry[0]() is None]:
+                del self._images[key]
             height, width = image.pixels.shape[:2]
             size = width * height * _TEXEL_BYTES[image.storage]
             if size <= IMAGE_BYTES:

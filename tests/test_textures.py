@@ -251,8 +251,9 @@ def test_image_pixels_are_read_and_uploaded_once_and_again_after_an_edit(tmp_pat
 
 def test_kept_image_textures_stay_within_their_budget(monkeypatch):
     """The library's image textures: one per image, the least recently used dropped first beyond
-    IMAGE_BYTES, an image larger than that not kept, and an image read again (a new ImageData,
-    even with the same pixels) uploaded again."""
+    IMAGE_BYTES, an image larger than that not kept, an image read again (a new ImageData, even
+    with the same pixels) uploaded again, and the textures of images nothing holds any more
+    dropped at the next upload."""
     from addon import gpu_library
     from addon.snapshot import ImageData
 
@@ -280,6 +281,10 @@ def test_kept_image_textures_stay_within_their_budget(monkeypatch):
     big = image("big", 26)  # 104 bytes: larger than the budget, made but not kept
     assert library.image_texture(big, build)[1] is True and library.image_texture(big, build)[1] is True
     assert made == ["a", "b", "c", "b", "a", "a", "big", "big"]
+    kept = library.image_bytes()
+    del a, b, c, again  # the scene reader let them go (a file load, its own budget)
+    library.image_texture(image("d", 1), build)  # the next upload drops their textures
+    assert library.image_bytes() == 4 < kept, (kept, library.image_bytes())
     library.clear()
     assert library.image_bytes() == 0 and library.held() == []
 
