@@ -227,8 +227,9 @@ def test_a_ground_that_can_shadow_nothing_leaves_the_maps_and_the_shadows(tmp_pa
 
 
 #: Measured at 96 px against Cycles (256 spp): mean |visibility difference| over Cycles' penumbra
-#: pixels (0.05 < visibility < 0.95) 0.055 / 0.058 / 0.061 (point 0.1 / 0.3 / 0.5 m), 0.049 (spot
-#: 0.3 m), 0.058 / 0.040 (sun 2 / 5 degrees); penumbra pixel counts ours / Cycles 0.87 - 1.12.
+#: pixels (0.05 < visibility < 0.95) 0.054 / 0.061 (point 0.1 / 0.5 m), 0.047 (spot 0.3 m), 0.042 /
+#: 0.035 (sun 2 / 5 degrees); penumbra pixel counts ours / Cycles 0.89 - 1.14. (Before each filter
+#: tap was a bilinear filter of four texels: 0.055 / 0.061, 0.049, 0.058 / 0.040; 0.88 - 1.12.)
 @pytest.mark.parametrize("kind, size", [("POINT", 0.1), ("POINT", 0.5), ("SPOT", 0.3), ("SUN", 2.0),
                                         ("SUN", 5.0)])
 def test_soft_shadows_match_cycles_in_the_penumbra(kind, size, tmp_path):
@@ -254,6 +255,7 @@ def test_penumbrae_widen_with_the_lights_size_as_in_cycles(tmp_path):
             seen = unshadowed > 0.02 * unshadowed.max()
             counts[name, size] = int((seen & (v > 0.05) & (v < 0.95)).sum())
     ours, ref = counts["ours", 0.5] / counts["ours", 0.1], counts["cycles", 0.5] / counts["cycles", 0.1]
+    print(f"penumbra growth 0.1 -> 0.5 m: ours {ours:.2f}x, Cycles {ref:.2f}x")
     assert ref > 3.0, counts
     assert abs(ours / ref - 1.0) < 0.2, f"penumbra growth 0.1 -> 0.5 m: ours {ours:.2f}x, Cycles {ref:.2f}x"
 
@@ -551,7 +553,7 @@ def test_jitter_filters_soft_shadows_with_more_taps(tmp_path):
     assert errors[1] < errors[0], errors
 
 
-JITTER_ERRORS = (0.0614, 0.0570)
+JITTER_ERRORS = (0.0605, 0.0561)
 
 
 # --- which casters each layer draws -----------------------------------------------------------
