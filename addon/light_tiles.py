@@ -117,8 +117,7 @@ def tile_lists(centres, radii, view_projection, width: int, height: int, tile: i
     if not _orthographic(vp) and bounded.any():
         # a sphere that holds the camera's centre meets every tile's frustum (they share its
         # apex): listed everywhere without the tests (often the scene's few large lights)
-        eye = np.linalg.inv(vp) @ np.array([0.0, 0.0, 1.0, 0.0])
-        bounded &= np.linalg.norm(centres - eye[:3] / eye[3], axis=1) > radii
+        bounded &= np.linalg.norm(centres - _camera_centre(np.linalg.inv(vp)), axis=1) > radii
     if bounded.any():
         boxes = _screen_boxes(centres[bounded], radii[bounded], vp, width, height)
         x0[bounded] = np.clip(np.floor(boxes[:, 0] / tile), 0, columns)
@@ -151,6 +150,13 @@ def tile_lists(centres, radii, view_projection, width: int, height: int, tile: i
     first = np.concatenate([[0], np.cumsum(per_tile)[:-1]])
     header = np.stack([first, per_tile], axis=-1).reshape(rows, columns, 2).astype(np.float32)
     return TileLists(tile, header, _padded(light[order]))
+
+
+def _camera_centre(inverse: np.ndarray) -> np.ndarray:
+    """A perspective view's centre of projection, from its view-projection's inverse: the point
+    where clip x = y = w = 0."""
+    eye = inverse @ np.array([0.0, 0.0, 1.0, 0.0])
+    return eye[:3] / eye[3]
 
 
 def _orthographic(vp: np.ndarray) -> bool:
@@ -222,8 +228,7 @@ def _tile_cones(vp_bytes: bytes, xs_bytes: bytes, ys_bytes: bytes):
         q = np.stack([x, y, np.zeros_like(x), np.ones_like(x)], axis=-1) @ inverse.T
         return q[..., :3] / q[..., 3:]
 
-    eye = inverse @ np.array([0.0, 0.0, 1.0, 0.0])  # x = y = w = 0: the camera's centre
-    eye = eye[:3] / eye[3]
+    eye = _camera_centre(inverse)
     columns, rows = len(xs) - 1, len(ys) - 1
     cx, cy = np.meshgrid(0.5 * (xs[:-1] + xs[1:]), 0.5 * (ys[:-1] + ys[1:]))  # (rows, columns)
     axis = unproject(cx, cy) - eye
