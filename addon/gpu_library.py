@@ -62,8 +62,6 @@ SPARE_BYTES = 256 << 20
 #: keeps one object per image until the image changes), so an edited image is uploaded again and
 #: its old texture dropped at once; an image larger than this is not kept.
 IMAGE_BYTES = 512 << 20
-#: GPU bytes per texel of each ``ImageData.storage`` (gpu_scene.TEXTURE_FORMATS).
-_TEXEL_BYTES = {"SRGB8": 4, "UNORM8": 4, "HALF": 8, "FLOAT": 16}
 
 
 class _Library:
@@ -145,8 +143,7 @@ class _Library:
             # an image the scene reader let go of (its cache's budget, a file load) goes too
             for key in [key for key, entry in self._images.items() if entry[0]() is None]:
                 del self._images[key]
-            height, width = image.pixels.shape[:2]
-            size = width * height * _TEXEL_BYTES[image.storage]
+            size = image.pixels.nbytes  # the texture's too: each storage keeps its texels' format
             if size <= IMAGE_BYTES:
                 self._images[image.key] = (weakref.ref(image), texture, size)
                 while sum(entry[2] for entry in self._images.values()) > IMAGE_BYTES:
