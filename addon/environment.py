@@ -236,10 +236,42 @@ def prefilter_samples(alpha: float, samples: int, height: int, chain_width: int)
     l = np.stack([-np.cos(theta) * ly + np.sin(theta) * lz, np.broadcast_to(lx, (height + 2, lx.size)),
                   np.sin(theta) * ly + np.cos(theta) * lz], -1)
     uv = equirect_uv(l)
-    du = uv[..., 0] - 0.5
-    lod = np.broadcast_to(chain_lod(pdf, samples, chain_width, 1.0), du.shape)
-    weight = np.broadcast_to(lz / lz.sum(), du.shape)
-    return np.stack([du, uv[..., 1], lod, weight], -1).astype(np.float32)
+    out = np.empty(uv.shape[:-1] + (4,), np.float32)
+    out[..., 0] = uv[..., 0] - 0.5
+    out[..., 1] = uv[..., 1]
+    out[..., 2] = chain_lod(pdf, samples, chain_width, 1.0)
+    out[..., 3] = lz / lz.sum()
+    return out
+
+
+def prefilter_reads(rows: np.ndarray, chain_width: int) -> np.ndarray:
+    """(rows, 2 n, 4) float32: ``prefilter_samples``' samples (``rows``: (rows, n, 4)) as the reads
+    env_prefilter makes of the chain texture (``chain_layout(chain_width)``), two texels a sample:
+    (u offset, x origin and width of level k, y of level k) and (weight on level k, x origin of
+    level k + 1, weight on level k + 1, y of level k + 1), in the texture's 0-1 coordinates, k the
+    floor of the sample's chain level (clamped to the chain) and the weights its n.l weight split
+    between k and k + 1 (level k + 1 is half as wide). A texel at longitude u then reads level k at
+    (x origin + fract(u + u offset) width, y): what chain_lookup_uv computes per texel and sample
+    from the same numbers, computed once per row here."""
+    rects = np.array(chain_layout(chain_width), np.float64)
+    size = np.array(atlas_size(rects), np.float64)
+    rows = np.asarray(rows, np.float64)
+    du, v, lod, weight = np.moveaxis(rows, -1, 0)
+    lod = np.clip(lod, 0.0, len(rects) - 1.0)
+    k = np.floor(lod).astype(int)
+    k1 = np.minimum(k + 1, len(rects) - 1)
+    t = lod - k
+    v = np.clip(v, 0.0, 1.0)
+    out = np.empty(rows.shape[:2] + (2, 4), np.float32)
+    out[..., 0, 0] = du
+    out[..., 0, 1] = rects[k, 0] / size[0]
+    out[..., 0, 2] = rects[k, 2] / size[0]
+    out[..., 0, 3] = (rects[k, 1] + v * rects[k, 3]) / size[1]
+    out[..., 1, 0] = weight * (1.0 - t)
+    out[..., 1, 1] = rects[k1, 0] / size[0]
+    out[..., 1, 2] = weight * t
+    out[..., 1, 3] = (rects[k1, 1] + v * rects[k1, 3]) / size[1]
+    return out.reshape(rows.shape[0], -1, 4)
 
 
 def _bordered_layout(widths) -> list[tuple[int, int, int, int]]:

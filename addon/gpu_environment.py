@@ -148,7 +148,7 @@ def _build_maps(frame: Frame, terms, suns: bool, keep=None) -> EnvironmentMaps:
         if not last and alpha > 0.0:
             samples = gpu_library.prefilter_samples(alpha, env.PREFILTER_SAMPLES[k], rect[3],
                                                     chain_rects[0][2])
-        count = float(samples.width) if samples is not None else 0.0
+        count = float(samples.width // 2) if samples is not None else 0.0  # two texels a sample
         params = (alpha, float(irradiance_source) if last else 0.0, count, 0.0)
 
         source = clamped if last or k >= env.FIRST_CLAMPED_LEVEL else chain

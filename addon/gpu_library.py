@@ -435,10 +435,12 @@ def env_prefilter_program() -> gpu.types.GPUShader:
 
 
 def prefilter_samples(alpha: float, samples: int, height: int, chain_width: int) -> gpu.types.GPUTexture:
-    """One prefiltered level's lobe samples per row (``environment.prefilter_samples``) as an
-    RGBA32F texture, a sample a texel (built once per level size: every world shares it)."""
+    """One prefiltered level's lobe samples per row as the reads of the chain they make
+    (``environment.prefilter_reads``), an RGBA32F texture, two texels a sample (built once per
+    level size: every world shares it)."""
     def build():
-        return rgba32f_texture(env.prefilter_samples(alpha, samples, height, chain_width))
+        rows = env.prefilter_samples(alpha, samples, height, chain_width)
+        return rgba32f_texture(env.prefilter_reads(rows, chain_width))
 
     return LIBRARY.table(("PREFILTER", alpha, samples, height, chain_width), build)
 

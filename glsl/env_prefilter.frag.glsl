@@ -7,20 +7,25 @@
  * trilinearly from the chain (all levels in one texture, rectangles in chain.rect) -- a bright
  * small source is spread over the lobe instead of sparkling.
  * The texels of a row see one lobe turned about the pole by their longitude, which is u: the
- * samples come per row from `samples` (addon/environment.py prefilter_samples: u offset, v,
- * chain level, weight), params.z of them; two more rows about the poles give the border rows
- * above and below the level their 2 P - T (environment.glsl bordered_level_pole). alpha 0
- * (params.x) copies chain level params.y. */
+ * samples come per row from `samples`, params.z of them, each as the two reads of the chain
+ * that chain_lookup_uv would make for it (addon/environment.py prefilter_reads: level k's x
+ * origin, width and y in the texture, the weight on it, and the same for level k + 1, half as
+ * wide), so that a texel computes only where in the row it reads; two more rows about the poles
+ * give the border rows above and below the level their 2 P - T (environment.glsl
+ * bordered_level_pole). alpha 0 (params.x) copies chain level params.y. */
 
 /* The lobe mean of row `row` of the sample table (the level's rows, then the north and the south
- * pole) turned to longitude u. */
+ * pole) turned to longitude u: per sample, levels k and k + 1 at fract(u + u offset). */
 vec3 lobe_mean(int row, float u)
 {
   int count = int(params.z);
   vec3 sum = vec3(0.0);
   for (int i = 0; i < count; i++) {
-    vec4 s = texelFetch(samples, ivec2(i, row), 0);
-    sum += chain_lookup_uv(source, vec2(u + s.x, s.y), s.z) * s.w;
+    vec4 a = texelFetch(samples, ivec2(2 * i, row), 0);
+    vec4 b = texelFetch(samples, ivec2(2 * i + 1, row), 0);
+    float f = fract(u + a.x);
+    sum += textureLod(source, vec2(a.y + f * a.z, a.w), 0.0).rgb * b.x
+         + textureLod(source, vec2(b.y + f * (0.5 * a.z), b.w), 0.0).rgb * b.z;
   }
   return sum;
 }
