@@ -352,13 +352,18 @@ def _read_image(key: str, image: bpy.types.Image, warnings: list[str]) -> S.Imag
     pixels = flat.reshape(height, width, 4)
     space = image.colorspace_settings.name
     if image.is_float:
-        bad = ~np.isfinite(pixels)
-        if bad.any():  # NaN or Inf would poison every sum the image enters
+        # the smallest and largest value say it all in two passes without a temporary: a NaN
+        # makes both NaN, an infinity one of them infinite (a 1024 x 512 image: ~2 ms, where
+        # testing every texel and taking the largest magnitude took ~18)
+        low, high = float(flat.min(initial=0.0)), float(flat.max(initial=0.0))
+        if not (np.isfinite(low) and np.isfinite(high)):  # NaN or Inf would poison every sum
+            bad = ~np.isfinite(pixels)
             warnings.append(f"Image '{image.name_full}' has {int(bad.any(axis=-1).sum())} texels that are "
                             f"not finite numbers: they are read as 0")
             pixels = np.where(bad, 0.0, pixels).astype(np.float32)
+            low, high = float(pixels.min(initial=0.0)), float(pixels.max(initial=0.0))
         # half floats top out at 65504: a sun baked into a sky goes beyond, keep those in float
-        half = image.use_half_precision and float(np.abs(pixels).max(initial=0.0)) <= 65504.0
+        half = image.use_half_precision and max(high, -low) <= 65504.0
         storage = "HALF" if half else "FLOAT"
         pixels = pixels.astype(np.float16) if half else pixels
     else:

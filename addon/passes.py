@@ -61,12 +61,14 @@ class Target:
         return (self.width, self.height, self.format, self.depth) == (width, height, format, depth)
 
     def read(self) -> np.ndarray:
-        """(height, width, 4) float32, bottom row first (a copy: a view would pin the GPU buffer)."""
+        """(height, width, 4) float32, bottom row first: a view of the buffer the texels were read
+        into (main memory, kept alive by the array), not a copy of it (a 1280 x 720 copy took
+        3-30 ms, most of it the fresh memory's first touch)."""
         w, h = self.width, self.height
         with self.bind():
             buffer = self.framebuffer.read_color(0, 0, w, h, 4, 0, "FLOAT")
         buffer.dimensions = w * h * 4
-        return np.array(buffer, np.float32).reshape(h, w, 4)
+        return np.frombuffer(buffer, np.float32).reshape(h, w, 4)
 
     def fence(self) -> None:
         """Wait until everything drawn into the target is done (one texel read back)."""

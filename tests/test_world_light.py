@@ -371,8 +371,9 @@ def test_the_prefilter_reads_are_the_lobe_samples_reads():
         u = (tx + 0.5) / lw
         a, b = reads[ty, 0::2], reads[ty, 1::2]  # (texels, samples, 4)
         f = np.mod(u[:, None] + a[..., 0], 1.0)
-        got = np.einsum("nsc,ns->nc", _bilinear(texture, a[..., 1] + f * a[..., 2], a[..., 3]), b[..., 0])
-        got += np.einsum("nsc,ns->nc", _bilinear(texture, b[..., 1] + f * 0.5 * a[..., 2], b[..., 3]), b[..., 2])
+        level_k = _bilinear(texture, a[..., 1] + f * a[..., 2], a[..., 3])
+        level_k1 = _bilinear(texture, b[..., 1] + f * 0.5 * a[..., 2], b[..., 3])  # half as wide
+        got = np.einsum("nsc,ns->nc", level_k, b[..., 0]) + np.einsum("nsc,ns->nc", level_k1, b[..., 2])
         want = environment.prefiltered_level(levels, environment.equirect_direction(u, (ty + 0.5) / lh), k)
         worst.append(float(np.abs(got - want).max() / want.max()))
     print("prefilter table against the twin's lobe reads, largest relative difference per level: "
