@@ -2,9 +2,10 @@
 
 From the lighting field of ``snapshot.World`` (constant terms and up to four environment images):
 1. bake: one equirectangular image of the field (``env_bake``), as wide as the widest image
-   (a power of two, 64 to 4096; a mirror ball counts twice its width);
-2. downsample: halve it down to ``environment.NARROWEST`` texels wide, each level
-   solid-angle weighted (``env_downsample``);
+   (a power of two, 64 to 4096; a mirror ball counts twice its width), straight into the chain
+   texture's widest rectangle when it fits (``environment.MIRROR_WIDTH``);
+2. downsample: halve it down to ``environment.CHAIN_NARROWEST`` texels wide, each level
+   solid-angle weighted (``env_downsample``), and copy the halved levels into the chain texture;
 3. spherical harmonics: the level 256 texels wide (or the bake, if narrower) read back and
    projected in numpy (``environment.sh9_project``): nine coefficients for the irradiance;
 4. prefiltered levels: an atlas (``environment.atlas_layout``) of the environment seen through
@@ -85,34 +86,79 @@ def _bordered(rect) -> tuple[int, int, int, int]:
     return rect[0] - 1, rect[1] - 1, rect[2] + 2, rect[3] + 2
 
 
-def _chain(frame: Frame, terms, clamp: bool) -> tuple[list[Target], Target, tuple]:
+def _chain(frame: Frame, terms, clamp: bool, reuse: list[Target] | None = None
+           ) -> tuple[list[Target], Target, tuple]:
     """Bake the field (with its brightest texels clamped, if ``clamp``) and halve it down to
-    ``environment.CHAIN_NARROWEST``; the levels from the mirror level's width down also go into
-    one texture for the prefilter. Returns the separate levels, that texture and its rectangles."""
+    ``environment.CHAIN_NARROWEST``, the levels from the mirror level's width down in one texture
+    for the prefilter (``environment.chain_layout``). The bake goes straight into that texture's
+    widest rectangle, with its border (env_bake; the means of its edge rows from a pass of their
+    own); each halved level is drawn on its own and copied into its rectangle. A field wider than
+    the mirror level is baked on its own and halved down to it first. Returns the levels drawn on
+    their own, that texture and its rectangles. ``reuse``: the levels drawn on their own of a
+    chain of the same field, already copied into its texture, drawn again instead of new ones (on a
+    software rasteriser a new texture's first writes cost about as much as the drawing: ~1.7 ms
+    per MB here)."""
     width = env.bake_width(terms)
     images = min(len(World.images(terms)), MAX_ENVIRONMENT_IMAGES)
-    levels = [Target(width, width // 2, depth=False)]
-    size = (float(width), float(width // 2), 1.0 if clamp else 0.0, 0.0)
-    _draw(frame, gpu_library.env_bake_program(images),
-          lambda s: (frame.scene.bind_world(s, terms, lighting=True), s.uniform_float("target", size)),
-          levels[0])
-    downsample = gpu_library.env_downsample_program()
-    while levels[-1].width > env.CHAIN_NARROWEST:
-        source = levels[-1]
-        levels.append(Target(source.width // 2, source.height // 2, depth=False))
-        _draw(frame, downsample, lambda s, t=source.texture_color: gpu_library.bind_sampler(s, "source", t),
-              levels[-1])
+    spare = iter(reuse or ())
     rects = env.chain_layout(min(width, env.MIRROR_WIDTH))
     chain = Target(*env.atlas_size(rects), depth=False)
+    params = (1.0 if clamp else 0.0, 0.0, 0.0, 0.0)
+
+    def bake(rect, poles=None):
+        def bind(shader):
+            frame.scene.bind_world(shader, terms, lighting=True)
+            shader.uniform_float("rect", tuple(float(x) for x in rect))
+            shader.uniform_float("params", params)
+            if poles is not None:
+                gpu_library.bind_sampler(shader, "poles", poles)
+        return bind
+
+    levels = []
+    if width > env.MIRROR_WIDTH:  # baked on its own (no border rows: the chain texture stands in)
+        levels.append(next(spare, None) or Target(width, width // 2, depth=False))
+        source, source_rect = levels[0].texture_color, (0, 0, width, width // 2)
+        _draw(frame, gpu_library.env_bake_program(images), bake(source_rect, chain.texture_color), levels[0])
+    else:
+        poles = Target(2, 1, depth=False)
+        _draw(frame, gpu_library.env_bake_program(images, poles=True), bake(rects[0]), poles)
+        _draw(frame, gpu_library.env_bake_program(images), bake(rects[0], poles.texture_color), chain,
+              _bordered(rects[0]))
+        source, source_rect = chain.texture_color, rects[0]
+    downsample = gpu_library.env_downsample_program()
+    while source_rect[2] > env.CHAIN_NARROWEST:
+        w, h = source_rect[2] // 2, source_rect[3] // 2
+        levels.append(next(spare, None) or Target(w, h, depth=False))
+
+        def bind(shader, texture=source, rect=source_rect):
+            gpu_library.bind_sampler(shader, "source", texture)
+            shader.uniform_float("offset", tuple(float(x) for x in rect))
+
+        _draw(frame, downsample, bind, levels[-1])
+        source, source_rect = levels[-1].texture_color, (0, 0, w, h)
     copy = gpu_library.env_downsample_program(copy=True)
     by_width = {t.width: t for t in levels}
     for rect in rects:
+        if rect[2] not in by_width:
+            continue  # baked in place
+
         def bind(shader, level=by_width[rect[2]], rect=rect):
             gpu_library.bind_sampler(shader, "source", level.texture_color)
             shader.uniform_float("offset", (float(rect[0]), float(rect[1]), 0.0, 0.0))
 
         _draw(frame, copy, bind, chain, _bordered(rect))
     return levels, chain, rects
+
+
+def _sh_level(levels: list[Target], chain: Target, rects) -> np.ndarray:
+    """The level the spherical harmonics are projected from (``environment.SH_WIDTH`` wide, or the
+    widest if narrower), read back."""
+    level = next((t for t in levels if t.width == env.SH_WIDTH), None)
+    if level is not None:
+        return level.read()
+    if rects[0][2] <= env.SH_WIDTH:  # baked in the chain's texture
+        return chain.read(rects[0])
+    return levels[0].read()
 
 
 def _chain_block(chain_rects) -> gpu.types.GPUUniformBuf:
@@ -133,9 +179,8 @@ def _build_maps(frame: Frame, terms, suns: bool, keep=None) -> EnvironmentMaps:
     BUILDS += 1
     start = time.perf_counter()
     levels, chain, chain_rects = _chain(frame, terms, clamp=False)
-    clamped_levels, clamped, _ = _chain(frame, terms, clamp=True) if suns else (levels, chain, None)
-    by_width = {t.width: t for t in clamped_levels}
-    sh = env.sh9_project(by_width.get(env.SH_WIDTH, clamped_levels[0]).read())
+    clamped_levels, clamped, _ = _chain(frame, terms, True, levels) if suns else (levels, chain, None)
+    sh = env.sh9_project(_sh_level(clamped_levels, clamped, chain_rects))
     chain_block = _chain_block(chain_rects)
     rects = env.atlas_layout(chain_rects[0][2])
     atlas = Target(*env.atlas_size(rects), depth=False)

@@ -400,23 +400,26 @@ def background_program(features: programs.BackgroundFeatures) -> gpu.types.GPUSh
                            programs.background_source(features), declare)
 
 
-def env_bake_program(images: int) -> gpu.types.GPUShader:
+def env_bake_program(images: int, poles: bool = False) -> gpu.types.GPUShader:
+    """Bake the world's lighting field into a level of the chain; or (``poles``) the means of its
+    edge rows, which the bake's border rows read."""
     def declare(info):
         info.typedef_source(programs.read_glsl("world_data.glsl"))
-        _declare_full_screen(*(f"env_image_{i}" for i in range(images)))(info)
+        _declare_full_screen(*(f"env_image_{i}" for i in range(images)), *(() if poles else ("poles",)))(info)
         info.uniform_buf(0, "WorldData", "world")
-        info.push_constant("VEC4", "target")
+        info.push_constant("VEC4", "rect")
+        info.push_constant("VEC4", "params")
 
-    return LIBRARY.program(("env_bake", images), "environment bake", programs.env_bake_source(images),
-                           declare)
+    return LIBRARY.program(("env_bake", images, poles), "environment bake",
+                           programs.env_bake_source(images, poles), declare)
 
 
 def env_downsample_program(copy: bool = False) -> gpu.types.GPUShader:
-    """Halve an equirectangular image; or (``copy``) copy one into a rectangle (``offset``)."""
+    """Halve an equirectangular level (in rectangle ``offset`` of its texture); or (``copy``) copy
+    one into a rectangle (``offset``)."""
     def declare(info):
         _declare_full_screen("source")(info)
-        if copy:
-            info.push_constant("VEC4", "offset")
+        info.push_constant("VEC4", "offset")
 
     return LIBRARY.program(("env_downsample", copy), "environment downsample",
                            programs.env_downsample_source(copy), declare)

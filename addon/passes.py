@@ -60,13 +60,14 @@ class Target:
     def fits(self, width: int, height: int, format: str, depth: bool) -> bool:
         return (self.width, self.height, self.format, self.depth) == (width, height, format, depth)
 
-    def read(self) -> np.ndarray:
-        """(height, width, 4) float32, bottom row first: a view of the buffer the texels were read
-        into (main memory, kept alive by the array), not a copy of it (a 1280 x 720 copy took
-        3-30 ms, most of it the fresh memory's first touch)."""
-        w, h = self.width, self.height
+    def read(self, region: tuple[int, int, int, int] | None = None) -> np.ndarray:
+        """(height, width, 4) float32, bottom row first, of the whole texture or of ``region``
+        (x, y, width, height): a view of the buffer the texels were read into (main memory, kept
+        alive by the array), not a copy of it (a 1280 x 720 copy took 3-30 ms, most of it the
+        fresh memory's first touch)."""
+        x, y, w, h = (0, 0, self.width, self.height) if region is None else region
         with self.bind():
-            buffer = self.framebuffer.read_color(0, 0, w, h, 4, 0, "FLOAT")
+            buffer = self.framebuffer.read_color(x, y, w, h, 4, 0, "FLOAT")
         buffer.dimensions = w * h * 4
         return np.frombuffer(buffer, np.float32).reshape(h, w, 4)
 

@@ -423,11 +423,12 @@ def _full_screen_source(*files: str, defines=(), typedefs: str = "") -> ProgramS
                          defines=tuple(sorted(defines)))
 
 
-@lru_cache(maxsize=8)
-def env_bake_source(images: int) -> ProgramSource:
-    """The world's lighting field baked into an equirectangular image."""
-    return _full_screen_source("common.glsl", "environment.glsl", "env_bake.frag.glsl",
-                               defines=(("SL_ENV_IMAGES", str(images)),),
+@lru_cache(maxsize=16)
+def env_bake_source(images: int, poles: bool = False) -> ProgramSource:
+    """The world's lighting field baked into an equirectangular level; or (``poles``) the means of
+    its edge rows."""
+    defines = (("SL_ENV_IMAGES", str(images)),) + ((("SL_POLES", "1"),) if poles else ())
+    return _full_screen_source("common.glsl", "environment.glsl", "env_bake.frag.glsl", defines=defines,
                                typedefs=read_glsl("world_data.glsl"))
 
 

@@ -1,6 +1,7 @@
-/* Half the size of an equirectangular image: each texel the solid-angle-weighted mean of the
- * 2 x 2 texels it covers (a row's texels span sin(theta) times the equator's solid angle), so
- * that every level integrates to the same light. */
+/* Half the size of an equirectangular level (in rectangle `offset` of its texture: x, y, width,
+ * height): each texel the solid-angle-weighted mean of the 2 x 2 texels it covers (a row's
+ * texels span sin(theta) times the equator's solid angle), so that every level integrates to
+ * the same light. */
 
 void main()
 {
@@ -23,13 +24,15 @@ void main()
   }
   return;
 #endif
+  /* the source level: rectangle offset (x, y, width, height) of its texture */
   ivec2 p = ivec2(gl_FragCoord.xy) * 2;
-  float height = float(textureSize(source, 0).y);
+  ivec2 at = ivec2(offset.xy) + p;
+  float height = offset.w;
   vec3 sum = vec3(0.0);
   float weight = 0.0;
   for (int y = 0; y < 2; y++) {
     float w = sin(PI * (1.0 - (float(p.y + y) + 0.5) / height));
-    sum += w * (texelFetch(source, p + ivec2(0, y), 0).rgb + texelFetch(source, p + ivec2(1, y), 0).rgb);
+    sum += w * (texelFetch(source, at + ivec2(0, y), 0).rgb + texelFetch(source, at + ivec2(1, y), 0).rgb);
     weight += 2.0 * w;
   }
   frag_color = vec4(sum / weight, 1.0);
