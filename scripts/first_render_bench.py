@@ -2,7 +2,7 @@
 not a test): what an artist waits for the first time a term set is used in a session.
 
     .venv/bin/python scripts/first_render_bench.py [--presets a,b] [--resolution 1280x720]
-        [--table docs/bench/first_render.md]
+        [--table docs/bench/first_render.md] [--repeat 3]
 
 Each (preset, term set) runs in a fresh Python process, so that nothing is cached in memory:
 compiled programs, lookup tables (shipped in addon/tables.npz, loaded and uploaded at first use),
@@ -13,8 +13,10 @@ extra. Measured three times: cold, with Mesa's on-disk shader cache disabled
 process compiles its programs and computes its world, as on a first start; warm, with Mesa's cache
 on, in a folder of its own that an earlier process filled, as an artist's later sessions find it;
 and warm with the world's maps cached too (``addon/world_cache.py``, in a folder the same earlier
-process filled), as a later session that renders a world seen before finds it. Times are
-CPU-rasteriser times (Mesa llvmpipe): compare them within one run.
+process filled), as a later session that renders a world seen before finds it. Each is measured
+in ``--repeat`` fresh processes (the three kinds interleaved, as this machine's load drifts) and
+the table holds the medians. Times are CPU-rasteriser times (Mesa llvmpipe): compare them within
+one run.
 """
 
 from __future__ import annotations
@@ -22,6 +24,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import statistics
 import subprocess
 import sys
 import tempfile
@@ -86,6 +89,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--presets", default=None, help="comma-separated preset names (default: all shipped)")
     parser.add_argument("--resolution", default="1280x720", metavar="WxH")
     parser.add_argument("--table", type=Path, default=ROOT / "docs" / "bench" / "first_render.md")
+    parser.add_argument("--repeat", type=int, default=3,
+                        help="fresh processes per measurement; the table holds their medians (default 3)")
     args = parser.parse_args(argv)
     size = tuple(int(x) for x in args.resolution.lower().split("x"))
     names = args.presets.split(",") if args.presets else presets.scene_preset_names()
@@ -94,18 +99,25 @@ def main(argv: list[str] | None = None) -> int:
             tempfile.TemporaryDirectory(prefix="sl_world_cache_") as worlds:
         for name in names:
             for label, term_set in TERM_SETS.items():
-                cold = measure(name, term_set, size)
                 measure(name, term_set, size, Path(folder), Path(worlds))  # fills both caches
-                warm = measure(name, term_set, size, Path(folder))
-                seen = measure(name, term_set, size, Path(folder), Path(worlds))
-                extras = [r["first_ms"] - r["second_ms"] for r in (cold, warm, seen)]
-                rows.append((name, label, cold["first_ms"], cold["second_ms"], *extras))
-                print(f"{name:16s} {label:12s} first {cold['first_ms']:8.1f} ms  second "
-                      f"{cold['second_ms']:8.1f} ms  first costs +{extras[0]:.1f} ms; shader cache warm: "
-                      f"+{extras[1]:.1f} ms; and the world cached: +{extras[2]:.1f} ms", flush=True)
+                runs = {"cold": [], "warm": [], "seen": []}
+                for _ in range(max(args.repeat, 1)):  # interleaved: the machine's load drifts
+                    runs["cold"].append(measure(name, term_set, size))
+                    runs["warm"].append(measure(name, term_set, size, Path(folder)))
+                    runs["seen"].append(measure(name, term_set, size, Path(folder), Path(worlds)))
+                extras = [statistics.median(r["first_ms"] - r["second_ms"] for r in runs[k])
+                          for k in ("cold", "warm", "seen")]
+                first, second = (statistics.median(r[k] for r in runs["cold"])
+                                 for k in ("first_ms", "second_ms"))
+                rows.append((name, label, first, second, *extras))
+                spread = ", ".join(f"{r['first_ms'] - r['second_ms']:+.0f}" for r in runs["warm"])
+                print(f"{name:16s} {label:12s} first {first:8.1f} ms  second {second:8.1f} ms  first "
+                      f"costs +{extras[0]:.1f} ms; shader cache warm: +{extras[1]:.1f} ms ({spread}); and "
+                      f"the world cached: +{extras[2]:.1f} ms", flush=True)
     lines = [f"The first render of each term set in a fresh process against the second, "
              f"{size[0]}x{size[1]}, physically based model (`scripts/first_render_bench.py`; wall "
-             f"time of the render operator). *Cold*: Mesa's shader cache and the world cache off, so "
+             f"time of the render operator; medians of {max(args.repeat, 1)} fresh processes each, "
+             f"the three kinds interleaved). *Cold*: Mesa's shader cache and the world cache off, so "
              f"programs compile and the world's maps are computed as on a first start; *warm*: the "
              f"shader cache filled by an earlier process, as from an artist's second session on (Mesa "
              f"keeps it on disk by default), the world's maps computed: what is left is the add-on's "
