@@ -15,7 +15,10 @@ From the lighting field of ``snapshot.World`` (constant terms and up to four env
 A world without images needs none of this: its SH are those of a constant and its prefiltered
 radiance the constant itself. The result (``EnvironmentMaps``) is kept in the program library by
 a key of the field's content, so renders and the viewport share it and an object edit recomputes
-nothing.
+nothing. The chains (the whole world's and, with suns split off, the clamped one's) are kept with
+it only once a surface samples the world per pixel (``samples_per_pixel``): the split sum reads
+the atlas alone, and without them the clamped chain is drawn over the whole one in one texture
+(25 MB less for a 1K world with suns, on the GPU and in ``world_cache``'s file).
 """
 
 from __future__ import annotations
@@ -29,7 +32,7 @@ import numpy as np
 from . import environment as env
 from . import gpu_library, programs, world_cache
 from .passes import Frame, Pass, Target
-from .snapshot import MAX_ENVIRONMENT_IMAGES, World
+from .snapshot import MAX_ENVIRONMENT_IMAGES, Snapshot, World
 
 #: Environments precomputed since start (tests count them: an object edit must add none), and
 #: those read from the disk cache instead (``world_cache``).
@@ -86,7 +89,7 @@ def _bordered(rect) -> tuple[int, int, int, int]:
     return rect[0] - 1, rect[1] - 1, rect[2] + 2, rect[3] + 2
 
 
-def _chain(frame: Frame, terms, clamp: bool, reuse: list[Target] | None = None
+def _chain(frame: Frame, terms, clamp: bool, reuse: list[Target] | None = None, into: Target | None = None
            ) -> tuple[list[Target], Target, tuple]:
     """Bake the field (with its brightest texels clamped, if ``clamp``) and halve it down to
     ``environment.CHAIN_NARROWEST``, the levels from the mirror level's width down in one texture
@@ -97,12 +100,12 @@ def _chain(frame: Frame, terms, clamp: bool, reuse: list[Target] | None = None
     their own, that texture and its rectangles. ``reuse``: the levels drawn on their own of a
     chain of the same field, already copied into its texture, drawn again instead of new ones (on a
     software rasteriser a new texture's first writes cost about as much as the drawing: ~1.7 ms
-    per MB here)."""
+    per MB here); ``into``: a chain texture of the same field to draw over, likewise."""
     width = env.bake_width(terms)
     images = min(len(World.images(terms)), MAX_ENVIRONMENT_IMAGES)
     spare = iter(reuse or ())
     rects = env.chain_layout(min(width, env.MIRROR_WIDTH))
-    chain = Target(*env.atlas_size(rects), depth=False)
+    chain = into or Target(*env.atlas_size(rects), depth=False)
     params = (1.0 if clamp else 0.0, 0.0, 0.0, 0.0)
 
     def bake(rect, poles=None):
@@ -170,23 +173,45 @@ def _chain_block(chain_rects) -> gpu.types.GPUUniformBuf:
     return gpu.types.GPUUniformBuf(rows.tobytes())
 
 
-def _build_maps(frame: Frame, terms, suns: bool, keep=None) -> EnvironmentMaps:
+def _build_maps(frame: Frame, terms, suns: bool, keep=None, chains: bool = True) -> EnvironmentMaps:
     """The maps of an image-lit world. With suns split off, two chains: the whole world for the
     smoother prefiltered levels (which show the brightest texels where they are), the clamped one
     for the rougher levels, the irradiance and the SH (the suns light those as lights).
-    ``keep(arrays)``: handed what ``_maps`` makes the same maps from again (read back)."""
+    ``keep(arrays)``: handed what ``_maps`` makes the same maps from again (read back).
+    ``chains``: keep the chains for surfaces that sample the world per pixel; without them the
+    clamped chain is drawn over the whole one once the levels that read it are drawn (one texture
+    instead of two)."""
     global BUILDS
     BUILDS += 1
     start = time.perf_counter()
     levels, chain, chain_rects = _chain(frame, terms, clamp=False)
-    clamped_levels, clamped, _ = _chain(frame, terms, True, levels) if suns else (levels, chain, None)
-    sh = env.sh9_project(_sh_level(clamped_levels, clamped, chain_rects))
     chain_block = _chain_block(chain_rects)
     rects = env.atlas_layout(chain_rects[0][2])
     atlas = Target(*env.atlas_size(rects), depth=False)
-    irradiance = gpu_library.env_irradiance_program()
+    first_clamped = env.FIRST_CLAMPED_LEVEL if suns else env.PREFILTER_LEVELS
+    _prefiltered(frame, chain, chain_rects, chain_block, atlas, rects, range(first_clamped))
+    clamped, clamped_levels = chain, levels
+    if suns:
+        clamped_levels, clamped, _ = _chain(frame, terms, True, levels, into=None if chains else chain)
+    sh = env.sh9_project(_sh_level(clamped_levels, clamped, chain_rects))
+    _prefiltered(frame, clamped, chain_rects, chain_block, atlas, rects, range(first_clamped, len(rects)))
+    atlas.fence()  # the time below is the GPU's too
+    for target in {*levels, *clamped_levels}:
+        target.free()
+    if keep is not None:
+        keep({"atlas": atlas.read(), "sh": sh})
+    return EnvironmentMaps(_packed(sh, rects, (0.0, 0.0, 0.0), first_clamped), atlas.texture_color,
+                           chain.texture_color if chains else None,
+                           clamped.texture_color if chains else None, chain_block, sh, rects,
+                           1e3 * (time.perf_counter() - start))
+
+
+def _prefiltered(frame: Frame, chain: Target, chain_rects, chain_block, atlas: Target, rects, which) -> None:
+    """Draw the atlas's levels ``which`` (indices into ``rects``; the last is the irradiance map)
+    from ``chain``."""
     irradiance_source = next(k for k, r in enumerate(chain_rects) if r[2] == env.IRRADIANCE_WIDTH)
-    for k, rect in enumerate(rects):
+    for k in which:
+        rect = rects[k]
         last = k == len(rects) - 1  # the irradiance map
         alpha = 0.0 if last else env.level_roughness(k) ** 2
         samples = None
@@ -196,28 +221,28 @@ def _build_maps(frame: Frame, terms, suns: bool, keep=None) -> EnvironmentMaps:
         count = float(samples.width // 2) if samples is not None else 0.0  # two texels a sample
         params = (alpha, float(irradiance_source) if last else 0.0, count, 0.0)
 
-        source = clamped if last or k >= env.FIRST_CLAMPED_LEVEL else chain
-
-        def bind(shader, rect=rect, params=params, source=source, samples=samples):
-            gpu_library.bind_sampler(shader, "source", source.texture_color)
+        def bind(shader, rect=rect, params=params, samples=samples):
+            gpu_library.bind_sampler(shader, "source", chain.texture_color)
             # (the mirror level and the irradiance map read no samples: any texture will do)
-            gpu_library.bind_sampler(shader, "samples", source.texture_color if samples is None else samples)
+            gpu_library.bind_sampler(shader, "samples", chain.texture_color if samples is None else samples)
             shader.uniform_block("chain", chain_block)
             shader.uniform_float("rect", tuple(float(x) for x in rect))
             shader.uniform_float("params", params)
 
-        program = irradiance if last else gpu_library.env_prefilter_program()
+        program = gpu_library.env_irradiance_program() if last else gpu_library.env_prefilter_program()
         _draw(frame, program, bind, atlas, _bordered(rect))
-    atlas.fence()  # the time below is the GPU's too
+
+
+def _add_chains(frame: Frame, terms, suns: bool, maps: EnvironmentMaps) -> None:
+    """The chains of maps built or read without them, drawn for surfaces that sample the world per
+    pixel (the same textures ``_build_maps`` keeps when asked to)."""
+    levels, chain, _ = _chain(frame, terms, clamp=False)
+    clamped_levels, clamped = levels, chain
+    if suns:
+        clamped_levels, clamped, _ = _chain(frame, terms, True, levels)
     for target in {*levels, *clamped_levels}:
         target.free()
-    if keep is not None:
-        keep({"atlas": atlas.read(), "chain": chain.read(), "sh": sh,
-              **({"clamped": clamped.read()} if suns else {})})
-    first_clamped = env.FIRST_CLAMPED_LEVEL if suns else env.PREFILTER_LEVELS
-    return EnvironmentMaps(_packed(sh, rects, (0.0, 0.0, 0.0), first_clamped), atlas.texture_color,
-                           chain.texture_color, clamped.texture_color, chain_block, sh, rects,
-                           1e3 * (time.perf_counter() - start))
+    maps.chain, maps.clamped_chain = chain.texture_color, clamped.texture_color
 
 
 def _layouts(terms) -> tuple[tuple, tuple]:
@@ -227,26 +252,23 @@ def _layouts(terms) -> tuple[tuple, tuple]:
     return chain_rects, env.atlas_layout(chain_rects[0][2])
 
 
-def _shapes(terms, suns: bool) -> dict[str, tuple]:
+def _shapes(terms) -> dict[str, tuple]:
     """The arrays ``_build_maps`` keeps, by shape (rows first)."""
-    chain_rects, rects = _layouts(terms)
-    chain, atlas = env.atlas_size(chain_rects), env.atlas_size(rects)
-    shapes = {"atlas": (atlas[1], atlas[0], 4), "chain": (chain[1], chain[0], 4), "sh": (9, 3)}
-    return {**shapes, "clamped": shapes["chain"]} if suns else shapes
+    _, rects = _layouts(terms)
+    atlas = env.atlas_size(rects)
+    return {"atlas": (atlas[1], atlas[0], 4), "sh": (9, 3)}
 
 
 def _maps(terms, suns: bool, arrays) -> EnvironmentMaps:
-    """The maps ``_build_maps`` made, from the arrays it kept."""
+    """The maps ``_build_maps`` made, from the arrays it kept (without the chains)."""
     global LOADS
     start = time.perf_counter()
     chain_rects, rects = _layouts(terms)
-    chain = gpu_library.rgba32f_texture(arrays["chain"])
-    clamped = gpu_library.rgba32f_texture(arrays["clamped"]) if suns else chain
     sh = np.asarray(arrays["sh"], np.float64)
     first_clamped = env.FIRST_CLAMPED_LEVEL if suns else env.PREFILTER_LEVELS
     LOADS += 1
     atlas = gpu_library.rgba32f_texture(arrays["atlas"])
-    return EnvironmentMaps(_packed(sh, rects, (0.0, 0.0, 0.0), first_clamped), atlas, chain, clamped,
+    return EnvironmentMaps(_packed(sh, rects, (0.0, 0.0, 0.0), first_clamped), atlas, None, None,
                            _chain_block(chain_rects), sh, rects, 1e3 * (time.perf_counter() - start),
                            loaded=True)
 
@@ -255,20 +277,31 @@ def _device() -> str:
     return "|".join((gpu.platform.vendor_get(), gpu.platform.renderer_get(), gpu.platform.version_get()))
 
 
-def _cached_or_built(frame: Frame, terms, threshold: float, suns: bool) -> EnvironmentMaps:
+def _cached_or_built(frame: Frame, terms, threshold: float, suns: bool, chains: bool) -> EnvironmentMaps:
     """The maps from the disk cache (``world_cache``) if an earlier session kept them, else built
-    (and kept for the next). Not for images being edited (each edit would write a file)."""
+    (and kept for the next), with the chains if ``chains``. Not for images being edited (each edit
+    would write a file)."""
     saved = all(term.image.saved for term in World.images(terms)[:MAX_ENVIRONMENT_IMAGES])
     key = None
     if saved and world_cache.folder() is not None:
         key = world_cache.content_key(terms, threshold, suns, _device())
     if key is not None:
-        arrays = world_cache.load(key, _shapes(terms, suns))
+        arrays = world_cache.load(key, _shapes(terms))
         if arrays is not None:
             return _maps(terms, suns, arrays)
     if key is None:
-        return _build_maps(frame, terms, suns)
-    return _build_maps(frame, terms, suns, keep=lambda arrays: world_cache.save_later(key, arrays))
+        return _build_maps(frame, terms, suns, chains=chains)
+    return _build_maps(frame, terms, suns, keep=lambda arrays: world_cache.save_later(key, arrays),
+                       chains=chains)
+
+
+def samples_per_pixel(snapshot: Snapshot) -> bool:
+    """Whether a surface may sample the world's specular per pixel (World Specular: Sampled, the
+    scene's or a material's own): those read the chains. (Any model: a model that does not
+    sample only makes the chains a little early.)"""
+    scene = snapshot.settings.environment_samples
+    return scene > 0 or any(m.environment_samples > 0 or (m.environment_samples < 0 and scene > 0)
+                            for m in snapshot.materials.values())
 
 
 class EnvironmentPass(Pass):
@@ -285,7 +318,12 @@ class EnvironmentPass(Pass):
             frame.scene.environment = gpu_library.LIBRARY.environment(
                 env.field_key(world.lighting), lambda: _uniform(world.lighting))
         else:
-            frame.scene.environment = gpu_library.LIBRARY.environment(
+            chains = samples_per_pixel(frame.snapshot)
+            suns = bool(world.suns)
+            maps = gpu_library.LIBRARY.environment(
                 env.field_key(world.lighting, world.threshold),
-                lambda: _cached_or_built(frame, world.lighting, world.threshold, bool(world.suns)))
+                lambda: _cached_or_built(frame, world.lighting, world.threshold, suns, chains))
+            if chains and maps.chain is None:  # built or read without them
+                _add_chains(frame, world.lighting, suns, maps)
+            frame.scene.environment = maps
         return True

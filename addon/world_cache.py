@@ -1,11 +1,13 @@
 """The world's precomputed maps kept on disk between sessions, by their content.
 
-An image-lit world's maps (``gpu_environment``: the prefiltered atlas, the downsampled chains,
-the spherical harmonics) take 0.32 s (a 1K world) to 0.97 s (4K) on the GPU each time a session
-first renders that world. They depend only on the lighting field's content and on the code that
-computes them, so they are written here once, one file per world (``<key>.maps``: numpy ``.npy``
-records, the arrays' names then each array, uncompressed, 39 MB for any world 1K or wider), and
-read back by the first render of a later session in ~20 ms (float32: the same maps to the bit).
+An image-lit world's maps (``gpu_environment``: the prefiltered atlas and the spherical
+harmonics) take 0.2 s (a 1K world) to ~0.9 s (4K) on the GPU each time a session first renders
+that world. They depend only on the lighting field's content and on the code that computes them,
+so they are written here once, one file per world (``<key>.maps``: numpy ``.npy`` records, the
+arrays' names then each array, uncompressed, 13.4 MB for any world 1K or wider), and read back by
+the first render of a later session in ~20 ms (float32: the same maps to the bit). The
+downsampled chains that surfaces sampling the world per pixel read are not kept: drawn again
+when such a surface first asks (~40-80 ms), they would triple the file.
 
 - The key (``content_key``) hashes the code (every GLSL file and the Python modules that build
   the maps), the GPU that drew them, and the field: its constant, the sun threshold, each image
@@ -18,7 +20,7 @@ read back by the first render of a later session in ~20 ms (float32: the same ma
   user folder (``bpy.utils.extension_path_user``, which registration hands to
   ``set_user_folder``) when installed as an extension, else
   ``$XDG_CACHE_HOME/shading_lab`` (``~/.cache/shading_lab``). ``SHADING_LAB_CACHE_MB`` sets the
-  budget (1024 MB by default: 25 worlds at 40 MB).
+  budget (1024 MB by default: 76 worlds at 13.4 MB).
 
 Pure Python (no ``bpy``, no ``gpu``): the GPU side (reading textures back, making them again) is
 ``gpu_environment``'s.

@@ -81,6 +81,33 @@ def test_a_later_session_reads_the_maps_and_renders_exactly_the_same(cache, tmp_
         assert diff == 0.0, f"{mode}: the render from the kept maps differs by up to {diff:g}"
 
 
+def test_the_chains_are_made_only_for_surfaces_that_sample_the_world(cache, tmp_path):
+    """The downsampled chains (two textures the size of the mirror level and its halvings) are what
+    per-pixel sampling reads; split-sum renders keep only the atlas, and the file only the atlas
+    and the SH. A surface that samples later gets them drawn then, and renders exactly as if the
+    maps had been built with them."""
+    scene = _scene(tmp_path)
+    scene.shading_lab.world_specular = "SPLIT_SUM"
+    scenes.render(scene, tmp_path / "split.exr")
+    world_cache.wait()
+    (held,) = gpu_library.LIBRARY._environments.values()
+    assert held.chain is None and held.clamped_chain is None
+    (path,) = _files(cache)
+    arrays = world_cache.load(path.stem, {})
+    assert sorted(arrays) == ["atlas", "sh"], sorted(arrays)
+    scene.shading_lab.world_specular = "SAMPLED"
+    added = scenes.render(scene, tmp_path / "added.exr")
+    assert held.chain is not None and held.clamped_chain is not None
+    gpu_library.LIBRARY.clear()
+    world_cache.clear()
+    builds = gpu_environment.BUILDS
+    built = scenes.render(scene, tmp_path / "built.exr")  # built with the chains from the start
+    assert gpu_environment.BUILDS == builds + 1
+    assert added[..., :3].max() > 0.1
+    diff = float(np.abs(added - built).max())
+    assert diff == 0.0, f"chains drawn later render {diff:g} off"
+
+
 def test_a_changed_world_is_computed_again(cache, tmp_path):
     scene = _scene(tmp_path)
     scenes.render(scene, tmp_path / "a.exr")

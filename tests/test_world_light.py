@@ -260,8 +260,8 @@ def test_prefiltered_levels_are_the_lobe_means_of_the_world(monkeypatch, tmp_pat
     kept = {}
     build = gpu_environment._build_maps
 
-    def keep_atlas(frame, terms, suns):
-        maps = build(frame, terms, suns)
+    def keep_atlas(frame, terms, suns, **kwargs):
+        maps = build(frame, terms, suns, **kwargs)
         width, height = environment.atlas_size(maps.rects)
         framebuffer = gpu.types.GPUFrameBuffer(color_slots=maps.atlas)
         with framebuffer.bind():
@@ -404,8 +404,8 @@ def test_the_chain_holds_the_halved_world_with_repeating_borders(monkeypatch, tm
     kept = []
     chain = gpu_environment._chain
 
-    def keep_chain(frame, terms, clamp):
-        levels, target, rects = chain(frame, terms, clamp)
+    def keep_chain(frame, terms, clamp, *args, **kwargs):
+        levels, target, rects = chain(frame, terms, clamp, *args, **kwargs)
         kept.append((target.read()[..., :3].astype(np.float64), rects))
         return levels, target, rects
 
