@@ -513,14 +513,13 @@ def clamp_luminance(radiance, threshold: float) -> np.ndarray:
 CLUSTER_CELL = 4
 
 
-def _clusters(mask: np.ndarray) -> np.ndarray:
-    """Connected components (8 neighbours, repeating in u) of a boolean image: labels, -1 outside,
-    found on cells of ``CLUSTER_CELL`` texels."""
+def _clusters(mask: np.ndarray, ys: np.ndarray, xs: np.ndarray) -> np.ndarray:
+    """Connected components (8 neighbours, repeating in u) of a boolean image, found on cells of
+    ``CLUSTER_CELL`` texels: the labels of its texels (ys, xs), those it holds."""
     h, w = mask.shape
     c = CLUSTER_CELL if h % CLUSTER_CELL == 0 and w % CLUSTER_CELL == 0 else 1
     coarse = mask.reshape(h // c, c, w // c, c).any(axis=(1, 3))
-    labels = _cell_clusters(coarse)
-    return np.where(mask, np.repeat(np.repeat(labels, c, axis=0), c, axis=1), -1)
+    return _cell_clusters(coarse)[ys // c, xs // c]
 
 
 def _cell_clusters(mask: np.ndarray) -> np.ndarray:
@@ -578,7 +577,7 @@ def split_suns(term: EnvironmentTerm, threshold: float, max_suns: int = MAX_SUNS
     inverse = np.linalg.inv(np.asarray(term.lookup, np.float64)[:3, :3])
     directions = equirect_direction((xs + 0.5) / w, (ys + 0.5) / h) @ inverse.T
     directions /= np.linalg.norm(directions, axis=-1, keepdims=True)
-    labels = _clusters(mask)[ys, xs]
+    labels = _clusters(mask, ys, xs)
     suns = []
     for label in range(labels.max() + 1):
         where = labels == label
