@@ -217,7 +217,7 @@ def _prefiltered(frame: Frame, chain: Target, chain_rects, chain_block, atlas: T
         samples = None
         if not last and alpha > 0.0:
             samples = gpu_library.prefilter_samples(alpha, env.PREFILTER_SAMPLES[k], rect[3],
-                                                    chain_rects[0][2])
+                                                    chain_rects[0][2], env.PREFILTER_BIAS[k])
         count = float(samples.width // 2) if samples is not None else 0.0  # two texels a sample
         params = (alpha, float(irradiance_source) if last else 0.0, count, 0.0)
 

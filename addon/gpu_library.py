@@ -437,15 +437,16 @@ def env_prefilter_program() -> gpu.types.GPUShader:
                            declare)
 
 
-def prefilter_samples(alpha: float, samples: int, height: int, chain_width: int) -> gpu.types.GPUTexture:
+def prefilter_samples(alpha: float, samples: int, height: int, chain_width: int,
+                      bias: float) -> gpu.types.GPUTexture:
     """One prefiltered level's lobe samples per row as the reads of the chain they make
     (``environment.prefilter_reads``), an RGBA32F texture, two texels a sample (built once per
     level size: every world shares it)."""
     def build():
-        rows = env.prefilter_samples(alpha, samples, height, chain_width)
+        rows = env.prefilter_samples(alpha, samples, height, chain_width, bias)
         return rgba32f_texture(env.prefilter_reads(rows, chain_width))
 
-    return LIBRARY.table(("PREFILTER", alpha, samples, height, chain_width), build)
+    return LIBRARY.table(("PREFILTER", alpha, samples, height, chain_width, bias), build)
 
 
 def env_irradiance_program() -> gpu.types.GPUShader:
