@@ -157,11 +157,7 @@ def _sh_level(levels: list[Target], chain: Target, rects) -> np.ndarray:
     """The level the spherical harmonics are projected from (``environment.SH_WIDTH`` wide, or the
     widest if narrower), read back."""
     level = next((t for t in levels if t.width == env.SH_WIDTH), None)
-    if level is not None:
-        return level.read()
-    if rects[0][2] <= env.SH_WIDTH:  # baked in the chain's texture
-        return chain.read(rects[0])
-    return levels[0].read()
+    return level.read() if level is not None else chain.read(rects[0])  # narrower: baked in place
 
 
 def _chain_block(chain_rects) -> gpu.types.GPUUniformBuf:
@@ -190,9 +186,8 @@ def _build_maps(frame: Frame, terms, suns: bool, keep=None, chains: bool = True)
     atlas = Target(*env.atlas_size(rects), depth=False)
     first_clamped = env.FIRST_CLAMPED_LEVEL if suns else env.PREFILTER_LEVELS
     _prefiltered(frame, chain, chain_rects, chain_block, atlas, rects, range(first_clamped))
-    clamped, clamped_levels = chain, levels
-    if suns:
-        clamped_levels, clamped, _ = _chain(frame, terms, True, levels, into=None if chains else chain)
+    clamped_levels, clamped = _clamped_chain(frame, terms, suns, levels, chain,
+                                             into=None if chains else chain)
     sh = env.sh9_project(_sh_level(clamped_levels, clamped, chain_rects))
     _prefiltered(frame, clamped, chain_rects, chain_block, atlas, rects, range(first_clamped, len(rects)))
     atlas.fence()  # the time below is the GPU's too
@@ -237,12 +232,20 @@ def _add_chains(frame: Frame, terms, suns: bool, maps: EnvironmentMaps) -> None:
     """The chains of maps built or read without them, drawn for surfaces that sample the world per
     pixel (the same textures ``_build_maps`` keeps when asked to)."""
     levels, chain, _ = _chain(frame, terms, clamp=False)
-    clamped_levels, clamped = levels, chain
-    if suns:
-        clamped_levels, clamped, _ = _chain(frame, terms, True, levels)
+    clamped_levels, clamped = _clamped_chain(frame, terms, suns, levels, chain)
     for target in {*levels, *clamped_levels}:
         target.free()
     maps.chain, maps.clamped_chain = chain.texture_color, clamped.texture_color
+
+
+def _clamped_chain(frame: Frame, terms, suns: bool, levels: list[Target], chain: Target,
+                   into: Target | None = None) -> tuple[list[Target], Target]:
+    """The chain with the suns split off (drawn in the whole chain's halved levels again, and
+    ``into`` that texture if given), or the whole chain itself when there are none."""
+    if not suns:
+        return levels, chain
+    clamped_levels, clamped, _ = _chain(frame, terms, True, levels, into=into)
+    return clamped_levels, clamped
 
 
 def _layouts(terms) -> tuple[tuple, tuple]:
@@ -299,9 +302,8 @@ def samples_per_pixel(snapshot: Snapshot) -> bool:
     """Whether a surface may sample the world's specular per pixel (World Specular: Sampled, the
     scene's or a material's own): those read the chains. (Any model: a model that does not
     sample only makes the chains a little early.)"""
-    scene = snapshot.settings.environment_samples
-    return scene > 0 or any(m.environment_samples > 0 or (m.environment_samples < 0 and scene > 0)
-                            for m in snapshot.materials.values())
+    return snapshot.settings.environment_samples > 0 or any(
+        m.environment_samples > 0 for m in snapshot.materials.values())
 
 
 class EnvironmentPass(Pass):
