@@ -174,8 +174,9 @@ PREFILTER_SAMPLES = (0, 64, 256, 512, 1024, 2048, 2048)
 #: means (numpy twin, 40 directions, the bundled worlds whole), bias 1 -> the one here: roughness
 #: 0.125 (bias 0) forest 7.8 -> 1.8 %, sunset 1.6 -> 0.5, city 2.7 -> 0.7, studio 112 -> 23,
 #: night 7.2 -> 5.2; 0.25 (bias 0.5) forest 3.1 -> 1.8, sunset 1.4 -> 0.9, city 1.9 -> 1.2, studio
-#: 34 -> 21, night 7.4 -> 5.7. From 0.375 up less blur is not better everywhere (city 0.5-1 and
-#: texel-sized sources, tests/test_world_light.py, lose), so those keep Krivanek & Colbert's one.
+#: 34 -> 21, night 7.4 -> 5.7. From 0.375 up less blur is not better everywhere (city at 0.5-1,
+#: and a synthetic world of texel-sized sources at 0.375, lose), so those keep Krivanek & Colbert's
+#: one (tests/test_world_light.py holds the 0.125 and 0.25 levels to the forest world's lobe means).
 PREFILTER_BIAS = (0.0, 0.0, 0.5, 1.0, 1.0, 1.0, 1.0)
 #: Widest mirror level (texels); narrower levels halve down to the narrowest.
 MIRROR_WIDTH, NARROWEST = 1024, 32
