@@ -109,8 +109,9 @@ float bordered_level_pole(vec4 rect)
 /* Filtered importance sampling (Krivanek & Colbert 2008, "Real-time Shading with Filtered
  * Importance Sampling") over the downsampled environment (all levels in one texture,
  * rectangles in chain.rect): a sample standing for the solid angle 1 / (N pdf) reads the level
- * whose texels cover that much (plus a bias: addon/environment.py PREFILTER_BIAS), trilinearly -- a
- * bright small source spreads over the lobe instead of sparkling. */
+ * whose texels cover that much (plus a bias: per prefiltered level addon/environment.py
+ * PREFILTER_BIAS, none per pixel), trilinearly -- a bright small source spreads over the lobe
+ * instead of sparkling. */
 
 /* The Van der Corput radical inverse in base 2 (the second Hammersley coordinate). */
 float radical_inverse(uint bits)

@@ -327,7 +327,7 @@ def test_prefiltered_levels_are_the_lobe_means_of_the_world(monkeypatch, tmp_pat
 
 
 #: largest mean error of the twin's roughness 0.125 and 0.25 levels against the lobe means on the
-#: bundled forest world, about 1.5x the measured (2026-12-04: 1.81 / 1.84 %; with Krivanek &
+#: bundled forest world, about 1.5x the measured (2026-12-04: 1.81 / 1.83 %; with Krivanek &
 #: Colbert's bias of one level 7.81 / 3.07 %)
 NARROW_LOBE_BOUNDS = (0.027, 0.027)
 
