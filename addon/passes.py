@@ -365,11 +365,23 @@ class OcclusionPass(Pass):
 
     def run(self, frame: Frame, view: View) -> bool:
         lists = frame.scene.draw_lists(view.model, view.half_target)
-        if not any(features.occlusion for features, _ in lists.opaque):
-            self.free()
-            return True
         s = view.samples
         w, h = view.width * s, view.height * s
+        if not any(features.occlusion for features, _ in lists.opaque):
+            if not (SHADE_ONCE and depth_prepass_pays(lists.opaque, frame.snapshot.triangle_count, w * h)):
+                self.free()
+                return True
+            # no occlusion, but shading costly enough that the opaque surfaces' depth is worth
+            # drawing first: the prepass alone
+            for target in (self.back, self.depths, self.raw, self.target):
+                if target is not None:
+                    target.free()
+            self.back = self.depths = self.raw = self.target = None
+            self.prepass = _fitted(self.prepass, w, h, "RGBA16F", depth=True)
+            frame.scene.put_frame(view.view_projection, view.width, view.height, view.samples)
+            self._draw_prepass(frame, lists, self.prepass, back_faces=False)
+            frame.outputs[view.output("prepass")] = self.prepass
+            return True
         self.prepass = _fitted(self.prepass, w, h, "RGBA16F", depth=True)
         self.back = _fitted(self.back, w, h, "R16F", depth=True)
         self.depths = _fitted(self.depths, w, h, "RG32F")
@@ -378,26 +390,7 @@ class OcclusionPass(Pass):
         self.target = _fitted(self.target, w, h, "RGBA16F")
         frame.scene.put_frame(view.view_projection, view.width, view.height, view.samples)
         for target, back_faces in ((self.prepass, False), (self.back, True)):
-            with target.bind():
-                target.framebuffer.clear(color=(0.0, 0.0, 1.0, 0.0), depth=1.0)
-                gpu.state.depth_test_set("LESS_EQUAL")
-                gpu.state.depth_mask_set(True)
-                gpu.state.blend_set("NONE")
-                shader = gpu_library.prepass_program(back_faces)
-                try:
-                    for _features, draws in lists.opaque:
-                        culling = None
-                        if back_faces and CULL_BACK_PREPASS:
-                            # the faces turned away alone: the others culled before they rasterise
-                            # (the program discards them too); a mirrored object's outward faces
-                            # wind the other way (turning the winding with front_facing_set would
-                            # turn the program's gl_FrontFacing too)
-                            culling = ["BACK" if h < 0 else "FRONT" for h in frame.scene.handedness(draws)]
-                        frame.scene.draw_positions(draws, shader, culling=culling)
-                finally:
-                    gpu.state.depth_test_set("NONE")
-                    gpu.state.depth_mask_set(False)
-                    gpu.state.face_culling_set("NONE")
+            self._draw_prepass(frame, lists, target, back_faces)
         camera = frame.snapshot.camera
         vp = camera.view_projection if view.view_projection is None else view.view_projection
         projection = np.asarray(vp, np.float64) @ np.linalg.inv(np.asarray(camera.view, np.float64))
@@ -432,6 +425,31 @@ class OcclusionPass(Pass):
         frame.outputs[view.output("prepass")] = self.prepass
         return True
 
+    @staticmethod
+    def _draw_prepass(frame: Frame, lists, target: Target, back_faces: bool) -> None:
+        """The opaque surfaces' nearest depth and normals into ``target`` (``back_faces``: the
+        nearest faces turned away, depth alone)."""
+        with target.bind():
+            target.framebuffer.clear(color=(0.0, 0.0, 1.0, 0.0), depth=1.0)
+            gpu.state.depth_test_set("LESS_EQUAL")
+            gpu.state.depth_mask_set(True)
+            gpu.state.blend_set("NONE")
+            shader = gpu_library.prepass_program(back_faces)
+            try:
+                for _features, draws in lists.opaque:
+                    culling = None
+                    if back_faces and CULL_BACK_PREPASS:
+                        # the faces turned away alone: the others culled before they rasterise
+                        # (the program discards them too); a mirrored object's outward faces
+                        # wind the other way (turning the winding with front_facing_set would
+                        # turn the program's gl_FrontFacing too)
+                        culling = ["BACK" if h < 0 else "FRONT" for h in frame.scene.handedness(draws)]
+                    frame.scene.draw_positions(draws, shader, culling=culling)
+            finally:
+                gpu.state.depth_test_set("NONE")
+                gpu.state.depth_mask_set(False)
+                gpu.state.face_culling_set("NONE")
+
     def free(self) -> None:
         for target in (self.prepass, self.back, self.depths, self.raw, self.target):
             if target is not None:
@@ -442,6 +460,20 @@ class OcclusionPass(Pass):
 #: Draw the opaque surfaces against the occlusion prepass's depth where there is one, so that
 #: each pixel is shaded once (tests turn it off to compare).
 SHADE_ONCE = True
+
+
+def depth_prepass_pays(opaque, triangles: int, pixels: int) -> bool:
+    """Whether drawing the opaque surfaces' depth ahead of their shading (the prepass alone, where
+    no occlusion asks for it) saves more than it costs: where some surface's program is costly per
+    pixel (penumbrae searched in shadow maps, area lights, the world sampled per pixel, many
+    lights), each pixel hidden behind another surface then costs no shading; the geometry drawn
+    twice costs its vertices and rasterising again, which a scene of many more triangles than
+    pixels does not win back. Measured (docs/bench/peers.md's presets, 640 x 360): softbox
+    and furnace gain, scenes of a light or two without penumbrae lose a few ms."""
+    if triangles > pixels:
+        return False
+    return any(f.soft_shadows or "AREA" in f.light_kinds or f.env_samples > 0 or f.max_lights >= 8
+               for f, _ in opaque)
 
 
 class OpaquePass(TargetPass):

@@ -60,9 +60,10 @@ def test_pass_names_are_eevees(tmp_path):
     assert set(LIGHT_PASSES) <= eevee, f"EEVEE wrote {sorted(eevee)}"
 
 
-@pytest.mark.parametrize("preset", ["material_grid", "world", "portability"])
+@pytest.mark.parametrize("preset", ["material_grid", "world", "portability", "softbox"])
 def test_opaque_surfaces_drawn_against_the_occlusion_prepass_change_no_pixel(preset):
-    """Where the world's occlusion draws its prepass, the opaque pass takes that depth and shades
+    """Where the world's occlusion draws its prepass (or, in a black world, costly shading asks for
+    the prepass alone: softbox's area lights), the opaque pass takes that depth and shades
     each pixel once: exactly the image drawn with a depth test of its own (and a partly
     transparent plane in front, which peels against that depth, blends as before)."""
     from gpu_harness import run_on_gpu
@@ -72,7 +73,9 @@ def test_opaque_surfaces_drawn_against_the_occlusion_prepass_change_no_pixel(pre
 
     scene = scenes.reset()
     scene_builder.build_scene(presets.load_scene_preset(preset), scene)
-    scene.render.resolution_x, scene.render.resolution_y = 96, 54
+    # softbox's prepass pays only with more pixels than its spheres' ~28k triangles
+    w, h = (256, 144) if preset == "softbox" else (96, 54)
+    scene.render.resolution_x, scene.render.resolution_y = w, h
     glass = scenes.material("Veil", base_color=(0.2, 0.5, 0.9), roughness=0.3)
     glass.node_tree.nodes["Principled BSDF"].inputs["Alpha"].default_value = 0.5
     veil = scenes.plane(scene, size=30.0, material=glass)
@@ -83,8 +86,9 @@ def test_opaque_surfaces_drawn_against_the_occlusion_prepass_change_no_pixel(pre
         out = {}
         for once in (True, False):
             passes.SHADE_ONCE = once
-            out[once] = r.render(extract.snapshot(depsgraph, 96, 54))
+            out[once] = r.render(extract.snapshot(depsgraph, w, h))
             out[once, "shared"] = r._passes[passes.OpaquePass, "main"].target.shares_depth
+            out[once, "occlusion"] = r._passes[passes.OcclusionPass, "main"].target is not None
         return out
 
     try:
@@ -92,8 +96,28 @@ def test_opaque_surfaces_drawn_against_the_occlusion_prepass_change_no_pixel(pre
     finally:
         passes.SHADE_ONCE = True
         run_on_gpu(lambda _d: r.free())
-    assert out[True, "shared"] and not out[False, "shared"], "the world lights the preset: a prepass"
+    assert out[True, "shared"] and not out[False, "shared"], "the preset's shading asks for a prepass"
+    assert out[True, "occlusion"] == (preset != "softbox"), "occlusion only where the world lights"
     lit = out[False][..., :3].max(axis=2) > 0.0
     assert lit.mean() > 0.5, lit.mean()
     differ = np.abs(out[True] - out[False]).max()
     assert differ == 0.0, f"{differ} largest difference"
+
+
+def test_the_depth_prepass_is_drawn_where_shading_is_costly_and_the_geometry_is_not():
+    """Without occlusion the prepass is drawn alone for programs costly per pixel (penumbrae, area
+    lights, the world sampled per pixel, many lights), not for a light or two without penumbrae,
+    and not where the triangles outnumber the pixels (their second draw would cost more)."""
+    from dataclasses import replace
+
+    from addon import passes, programs
+
+    cheap = programs.Features(light_kinds=frozenset({"POINT"}), max_lights=2, shadow_layers=6,
+                              shadow_size=1024)
+    costly = [replace(cheap, soft_shadows=True), replace(cheap, light_kinds=frozenset({"AREA"})),
+              replace(cheap, environment="MAP", env_samples=16), replace(cheap, max_lights=8)]
+    pixels = 640 * 360
+    assert not passes.depth_prepass_pays([(cheap, [])], 1000, pixels)
+    for features in costly:
+        assert passes.depth_prepass_pays([(cheap, []), (features, [])], 1000, pixels), features
+        assert not passes.depth_prepass_pays([(features, [])], pixels + 1, pixels), features
