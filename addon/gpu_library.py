@@ -272,12 +272,21 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     if features.uses_ltc:
         info.sampler(16, "FLOAT_2D", "ltc_table")
     for binding, block in enumerate(_BLOCKS):
-        if block is not None:
+        if block is not None and not (features.deferred and block[1] in ("material", "objects")):
             info.uniform_buf(binding, *block)
     if features.environment:
         info.uniform_buf(len(_BLOCKS), "EnvironmentData", "env")
     if features.uses_env_chain:
         info.uniform_buf(len(_BLOCKS) + 1, "ChainData", "chain")
+    if features.deferred:  # a full-screen pass over the G-buffer (glsl/gbuffer.frag.glsl)
+        for slot, name in enumerate(("material_table", "gbuffer_position", "gbuffer_normal"), start=17):
+            info.sampler(slot, "FLOAT_2D", name)
+        if features.shadow_layers:
+            info.sampler(20, "FLOAT_2D", "gbuffer_face")
+        info.push_constant("VEC4", "lobes")
+        info.push_constant("INT", "deferred_group")
+        info.vertex_in(0, "VEC2", "pos")
+        return
     for kind, name in _PUSH_CONSTANTS:
         info.push_constant(kind, name)
     _declare_mesh_stage(info, "shading_lab_iface")
@@ -306,6 +315,24 @@ def prepass_program(back_faces: bool = False) -> gpu.types.GPUShader:
         _declare_mesh_stage(info, "shading_lab_prepass_iface")
 
     return LIBRARY.program(("prepass", back_faces), "depth and normal", src, declare)
+
+
+def gbuffer_program() -> gpu.types.GPUShader:
+    """The G-buffer of the opaque surfaces shaded deferred: position and material row, the normal
+    facing the viewer and the program's group, the flat face's normal."""
+    src = programs.gbuffer_source()
+
+    def declare(info):
+        info.typedef_source(src.typedefs)
+        info.uniform_buf(0, "FrameData", "frame")
+        info.uniform_buf(3, "ObjectBlock", "objects")
+        info.push_constant("INT", "object_index")
+        info.push_constant("IVEC2", "gbuffer")  # the material's row, the group
+        info.fragment_out(1, "VEC4", "gbuffer_normal")
+        info.fragment_out(2, "VEC4", "gbuffer_face")
+        _declare_mesh_stage(info, "shading_lab_gbuffer_iface")
+
+    return LIBRARY.program(("gbuffer",), "G-buffer", src, declare)
 
 
 def shadow_program(orthographic: bool = False) -> gpu.types.GPUShader:

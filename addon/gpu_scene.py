@@ -145,6 +145,10 @@ class SceneResources:
         self.uploads: Counter = Counter()
         self._batches: dict[str, list[tuple[int, gpu.types.GPUBatch]]] = {}
         self._materials: dict[str, _Block] = {}
+        # the materials again as rows of one texture, for programs shading deferred (a pixel's
+        # material is the G-buffer's row), and each material's row
+        self._material_table = _RowTexture()
+        self.material_rows: dict[str, int] = {}
         self._lights = _RowTexture()
         self._light_tiles = _RowTexture(channels=2)  # light culling's tiles and lists (per view)
         self._tiles = None  # (what they were made from, the lists) of the last lists uploaded
@@ -193,6 +197,10 @@ class SceneResources:
         for key, material in snapshot.materials.items():
             block = self._materials.setdefault(key, _Block())
             self.uploads["materials"] += block.put(programs.pack_material(material))
+        self.material_rows = {key: row for row, key in enumerate(snapshot.materials)}
+        if snapshot.materials:
+            self._material_table.put(np.stack([np.frombuffer(self._materials[key].data, np.float32)
+                                               for key in snapshot.materials]))
         self._sync_shadows(snapshot)  # before the lights: they name their first shadow layer
         slots = programs.light_slots(len(snapshot.lights))
         first = self.shadow_plan.first_layer
@@ -368,10 +376,9 @@ class SceneResources:
             shader = self._programs[features] = gpu_library.shading_program(features)
         return shader
 
-    def draw_group(self, features: programs.Features, draws: list[Draw], lobes,
-                   should_stop: Callable[[], bool] | None = None,
-                   bind: Callable[[gpu.types.GPUShader], None] | None = None) -> bool:
-        """Draw ``draws`` (one feature set's) into the bound framebuffer; False if cancelled."""
+    def _bind_program(self, features: programs.Features, lobes,
+                      bind: Callable[[gpu.types.GPUShader], None] | None) -> gpu.types.GPUShader:
+        """Bind ``features``' program and what every draw of it reads."""
         shader = self.program(features)
         shader.bind()
         shader.uniform_block("frame", self._frame.ubo)
@@ -400,6 +407,13 @@ class SceneResources:
             gpu_library.bind_sampler(shader, "shadow_maps", self.shadow_maps)
         if bind is not None:
             bind(shader)
+        return shader
+
+    def draw_group(self, features: programs.Features, draws: list[Draw], lobes,
+                   should_stop: Callable[[], bool] | None = None,
+                   bind: Callable[[gpu.types.GPUShader], None] | None = None) -> bool:
+        """Draw ``draws`` (one feature set's) into the bound framebuffer; False if cancelled."""
+        shader = self._bind_program(features, lobes, bind)
         materials = self.snapshot.materials
         samplers = [(name.removesuffix("_CLOSEST").lower() + "_map") for name in features.maps]
         block = -1
@@ -416,6 +430,40 @@ class SceneResources:
                 gpu_library.bind_sampler(shader, sampler, self._textures[image_key][1])
             draw.batch.draw(shader)
         return True
+
+    def draw_gbuffer(self, groups: list[tuple[int, list[Draw]]],
+                     should_stop: Callable[[], bool] | None = None) -> bool:
+        """Draw each (group, draws) into the bound G-buffer (glsl/gbuffer.frag.glsl): group -1 for
+        surfaces shaded forward; False if cancelled."""
+        shader = gpu_library.gbuffer_program()
+        shader.bind()
+        shader.uniform_block("frame", self._frame.ubo)
+        block = -1
+        for group, draws in groups:
+            for draw in draws:
+                if should_stop is not None and draw.order % 64 == 0 and should_stop():
+                    return False
+                if draw.block != block:
+                    block = draw.block
+                    shader.uniform_block("objects", self._objects[block].ubo)
+                shader.uniform_int("object_index", draw.index)
+                shader.uniform_int("gbuffer", (self.material_rows[draw.material], group))
+                draw.batch.draw(shader)
+        return True
+
+    def shade_deferred(self, features: programs.Features, group: int, lobes, gbuffer,
+                       full_screen: gpu.types.GPUBatch,
+                       bind: Callable[[gpu.types.GPUShader], None] | None = None) -> None:
+        """Shade the G-buffer's pixels of ``group`` with ``features``' deferred program into the
+        bound framebuffer. ``gbuffer``: the position and normal textures, and the face's with shadows."""
+        shader = self._bind_program(features, lobes, bind)
+        gpu_library.bind_sampler(shader, "material_table", self._material_table.texture)
+        gpu_library.bind_sampler(shader, "gbuffer_position", gbuffer[0])
+        gpu_library.bind_sampler(shader, "gbuffer_normal", gbuffer[1])
+        if features.shadow_layers:
+            gpu_library.bind_sampler(shader, "gbuffer_face", gbuffer[2])
+        shader.uniform_int("deferred_group", group)
+        full_screen.draw(shader)
 
     def draw_positions(self, draws: list[Draw], shader, frame_block: bool = True,
                        culling: list[str] | None = None) -> None:

@@ -110,6 +110,9 @@ class Features:
     #: ``light_kinds``, with and (with shadows) without maps. Empty: one loop over every light
     #: (``LIGHT_GROUPS`` off)
     light_groups: frozenset[str] | None = None
+    #: shaded deferred: a full-screen pass over the G-buffer's pixels of this group (passes.OpaquePass),
+    #: not the surfaces' own fragments; opaque surfaces without image maps only
+    deferred: bool = False
 
     def has_map(self, name: str) -> bool:
         return name in self.maps or name + "_CLOSEST" in self.maps
@@ -134,6 +137,8 @@ class Features:
             object.__setattr__(self, "sphere_lights", False)  # shaded by their irradiance alone
         if self.peel or not self.environment:  # a transparent surface lies in front of what the
             object.__setattr__(self, "occlusion", False)  # occlusion pass saw
+        if self.peel or self.maps:
+            object.__setattr__(self, "deferred", False)
         if not self.shadow_layers:
             object.__setattr__(self, "shadow_size", 0)
             object.__setattr__(self, "soft_shadows", False)
@@ -274,6 +279,8 @@ class Features:
             out.append(("SL_ALPHA_FROM_BASE_MAP", "1"))
         if self.peel:
             out.append(("SL_PEEL", "1"))
+        if self.deferred:
+            out.append(("SL_DEFERRED", "1"))
         if self.ambient_world and self.environment:
             out.append(("SL_AMBIENT_WORLD", "1"))
         if self.occlusion:
@@ -326,12 +333,13 @@ def program_source(features: Features) -> ProgramSource:
         fragment += [read_glsl(name) for name in PBR_LIBRARY]
     fragment.append(read_glsl(MODEL_FILES[features.model]))
     fragment.append(read_glsl("light_shading.glsl"))  # after the model: it calls shade_direct
-    fragment.append(read_glsl("facing.glsl"))  # reads the object block: mesh programs only
+    if not features.deferred:  # reads the object block and the mesh's varyings
+        fragment.append(read_glsl("facing.glsl"))
     fragment.append(read_glsl("shadows.glsl"))  # reads the shadow block (SL_SHADOWS)
     fragment.append(read_glsl("mesh.frag.glsl"))
     return ProgramSource(
         typedefs=read_glsl("uniforms.glsl") + "\n" + read_glsl("chain_data.glsl"),
-        vertex=read_glsl("mesh.vert.glsl"),
+        vertex=read_glsl("post.vert.glsl" if features.deferred else "mesh.vert.glsl"),
         fragment="\n".join(fragment),
         defines=tuple(sorted(features.defines() + (("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)),))),
     )
@@ -387,7 +395,7 @@ def clear_source_caches() -> None:
     for cached in (read_glsl, program_source, post_source, compare_source, occupancy_source, under_source,
                    background_source, env_bake_source, env_downsample_source, env_prefilter_source,
                    env_irradiance_source, prepass_source, gtao_source, occlusion_resolve_source,
-                   occlusion_depths_source, shadow_source, exposure_source):
+                   occlusion_depths_source, shadow_source, exposure_source, gbuffer_source):
         cached.cache_clear()
 
 
@@ -462,6 +470,17 @@ def prepass_source(back_faces: bool = False) -> ProgramSource:
         fragment=read_glsl("facing.glsl") + "\n" + read_glsl("prepass.frag.glsl"),
         defines=(("SL_MAX_LIGHTS", "1"), ("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)))
         + ((("SL_BACK_FACES", "1"),) if back_faces else ()),
+    )
+
+
+@lru_cache(maxsize=1)
+def gbuffer_source() -> ProgramSource:
+    """The G-buffer of the opaque surfaces shaded deferred (glsl/gbuffer.frag.glsl)."""
+    return ProgramSource(
+        typedefs=read_glsl("uniforms.glsl") + "\n" + read_glsl("chain_data.glsl"),
+        vertex=read_glsl("mesh.vert.glsl"),
+        fragment=read_glsl("facing.glsl") + "\n" + read_glsl("gbuffer.frag.glsl"),
+        defines=(("SL_MAX_LIGHTS", "1"), ("SL_OBJECT_BLOCK", str(OBJECT_BLOCK))),
     )
 
 

@@ -9,19 +9,6 @@ vec3 view_direction(vec3 p)
   return -frame.camera_forward.xyz; /* orthographic: parallel view rays */
 }
 
-/* Interpolated corner normals can be zero (a zero-length custom normal, or opposite normals
- * averaged across a triangle); fall back to the flat face normal from screen derivatives. */
-vec3 shading_normal(vec3 p)
-{
-  float len2 = dot(world_normal, world_normal);
-  if (len2 > 1e-20) {
-    return world_normal * inversesqrt(len2);
-  }
-  vec3 face = cross(dFdx(p), dFdy(p));
-  float flen2 = dot(face, face);
-  return flen2 > 0.0 ? face * inversesqrt(flen2) : vec3(0.0, 0.0, 1.0);
-}
-
 /* Light i's data: row i of the light texture, one texel per vec4 of LightData. The position and
  * reach first (light culling tests them alone), then the texels the light's kind reads: a point
  * light has no direction, only an area light has axes, only lights with a size have a shape
@@ -151,8 +138,49 @@ void shade_group(inout vec3 c, Surface s, vec3 ng, ivec2 listed, inout int k, in
   }
 }
 
+#ifdef SL_DEFERRED
+/* The material of G-buffer row `row` (addon/gpu_scene.py's material table: MaterialData's vec4s in
+ * order, one row per material). */
+MaterialData load_material(int row)
+{
+  MaterialData m;
+  m.base_color = texelFetch(material_table, ivec2(0, row), 0);
+  m.diffuse_color = texelFetch(material_table, ivec2(1, row), 0);
+  m.specular_color = texelFetch(material_table, ivec2(2, row), 0);
+  m.ambient_color = texelFetch(material_table, ivec2(3, row), 0);
+  m.params = texelFetch(material_table, ivec2(4, row), 0);
+  m.fresnel = texelFetch(material_table, ivec2(5, row), 0);
+  m.ior_n = texelFetch(material_table, ivec2(6, row), 0);
+  m.ior_k = texelFetch(material_table, ivec2(7, row), 0);
+  m.emission = texelFetch(material_table, ivec2(8, row), 0);
+  m.uv_x = texelFetch(material_table, ivec2(9, row), 0);
+  m.uv_y = texelFetch(material_table, ivec2(10, row), 0);
+  return m;
+}
+#endif
+
 void main()
 {
+#ifdef SL_DEFERRED
+  /* Deferred: the surface this pixel sees, as the G-buffer pass left it (glsl/gbuffer.frag.glsl),
+   * shaded here where this program's group drew it: each pixel once, in whole quads (small
+   * triangles shaded forward cost the rasteriser's partly covered blocks whole) */
+  ivec2 texel = ivec2(gl_FragCoord.xy);
+  vec4 g_normal = texelFetch(gbuffer_normal, texel, 0);
+  if (int(g_normal.w) != deferred_group) {
+    discard; /* another group's surface, or none */
+  }
+  vec4 g_position = texelFetch(gbuffer_position, texel, 0);
+  vec3 p = g_position.xyz;
+  vec3 n = g_normal.xyz; /* facing the viewer */
+#  ifdef SL_SHADOWS
+  vec3 ng = texelFetch(gbuffer_face, texel, 0).xyz;
+#  else
+  vec3 ng = n; /* no shadow lookups */
+#  endif
+  MaterialData m = load_material(int(g_position.w));
+  Surface s = make_surface(p, n, view_direction(p), m);
+#else
   /* textures and screen derivatives first: they need every fragment of the quad alive */
   vec2 uv = map_uv(material, world_uv);
   vec3 n = apply_normal_map(shading_normal(world_position), uv, world_tangent,
@@ -178,6 +206,7 @@ void main()
   }
 #endif
   Surface s = make_surface(world_position, facing_outward() ? n : -n, view_direction(world_position), m);
+#endif
   /* ambient and emission: neither a diffuse nor a specular lobe (weight z, off in lobe passes) */
   vec3 c = (shade_ambient(s, frame.ambient.rgb) + m.emission.rgb) * lobes.z;
   /* the world is a light: its diffuse and specular parts go to the lobes' passes */

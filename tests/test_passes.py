@@ -84,6 +84,7 @@ def test_opaque_surfaces_drawn_against_the_occlusion_prepass_change_no_pixel(pre
 
     def job(depsgraph):
         out = {}
+        passes.DEFERRED = False  # forward: the prepass's depth or the target's own
         for once in (True, False):
             passes.SHADE_ONCE = once
             out[once] = r.render(extract.snapshot(depsgraph, w, h))
@@ -95,6 +96,7 @@ def test_opaque_surfaces_drawn_against_the_occlusion_prepass_change_no_pixel(pre
         out = run_on_gpu(job)
     finally:
         passes.SHADE_ONCE = True
+        passes.DEFERRED = True
         run_on_gpu(lambda _d: r.free())
     assert out[True, "shared"] and not out[False, "shared"], "the preset's shading asks for a prepass"
     assert out[True, "occlusion"] == (preset != "softbox"), "occlusion only where the world lights"
@@ -121,3 +123,89 @@ def test_the_depth_prepass_is_drawn_where_shading_is_costly_and_the_geometry_is_
     for features in costly:
         assert passes.depth_prepass_pays([(cheap, []), (features, [])], 1000, pixels), features
         assert not passes.depth_prepass_pays([(features, [])], pixels + 1, pixels), features
+
+
+@pytest.mark.parametrize("preset", ["material_grid", "softbox", "world"])
+def test_deferred_shading_changes_no_pixel(preset):
+    """Shading the opaque surfaces deferred (their G-buffer first, then each program over its own
+    pixels) gives exactly the forward image: with a surface that stays forward (an image-mapped
+    plane), a mirrored object, a partly transparent veil in front and 2 x 2 supersampling."""
+    from gpu_harness import run_on_gpu
+    from mathutils import Matrix
+
+    from addon import extract, passes, presets, renderer, scene_builder
+
+    scene = scenes.reset()
+    scene_builder.build_scene(presets.load_scene_preset(preset), scene)
+    scene.render.resolution_x, scene.render.resolution_y = 96, 54
+    image = bpy.data.images.new("Checks", 4, 4)
+    image.pixels.foreach_set(np.tile([0.9, 0.2, 0.1, 1.0, 0.1, 0.3, 0.8, 1.0], 8).astype(np.float32))
+    mapped = scenes.material("Mapped", roughness=0.4)
+    tree = mapped.node_tree
+    node = tree.nodes.new("ShaderNodeTexImage")
+    node.image = image
+    tree.links.new(node.outputs["Color"], tree.nodes["Principled BSDF"].inputs["Base Color"])
+    board = scenes.plane(scene, size=1.5, location=(0.3, 0.2, 0.9), rotation=(1.2, 0.0, 0.4), material=mapped)
+    board.data.uv_layers.new(name="UVMap").data.foreach_set(
+        "uv", np.array([(0, 0), (1, 0), (1, 1), (0, 1)], np.float32).ravel())
+    mirrored = scenes.plane(scene, size=1.0, location=(-1.0, -0.5, 0.6), rotation=(0.9, 0.0, 0.0),
+                            material=scenes.material("Mirrored", base_color=(0.2, 0.8, 0.3)))
+    mirrored.scale = (-1.0, 1.0, 1.0)
+    glass = scenes.material("Veil", base_color=(0.2, 0.5, 0.9), roughness=0.3)
+    glass.node_tree.nodes["Principled BSDF"].inputs["Alpha"].default_value = 0.5
+    veil = scenes.plane(scene, size=30.0, material=glass)
+    veil.matrix_world = scene.camera.matrix_world @ Matrix.Translation((0.0, 0.0, -3.0))
+    r = renderer.Renderer()
+
+    def job(depsgraph):
+        out = {}
+        snapshot = extract.snapshot(depsgraph, 96, 54)
+        for deferred in (True, False):
+            passes.DEFERRED = deferred
+            out[deferred] = r.render(snapshot, samples=2).copy()
+            out[deferred, "gbuffer"] = r._passes[passes.OpaquePass, "main"].gbuffer is not None
+            out[deferred, "kinds"] = {passes.deferred_pays(f, snapshot.triangle_count, 4 * 96 * 54)
+                                      for f, _ in r.scene.draw_lists(None, False).opaque}
+        return out
+
+    try:
+        out = run_on_gpu(job)
+    finally:
+        passes.DEFERRED = True
+        run_on_gpu(lambda _d: r.free())
+    assert out[True, "kinds"] == {True, False}, "the mapped plane forward, the rest deferred"
+    assert out[True, "gbuffer"] and not out[False, "gbuffer"]
+    lit = out[False][..., :3].max(axis=2) > 0.0
+    assert lit.mean() > 0.5, lit.mean()
+    differ = np.abs(out[True] - out[False]).max()
+    assert differ == 0.0, f"{differ} largest difference"
+
+
+def test_views_beyond_the_deferred_budget_are_shaded_forward():
+    """A view with more pixels than passes.DEFERRED_PIXELS keeps no G-buffer (its memory) and
+    gives the deferred image exactly."""
+    from gpu_harness import run_on_gpu
+
+    from addon import extract, passes, presets, renderer, scene_builder
+
+    scene = scenes.reset()
+    scene_builder.build_scene(presets.load_scene_preset("material_grid"), scene)
+    r = renderer.Renderer()
+
+    def job(depsgraph):
+        out = {}
+        snapshot = extract.snapshot(depsgraph, 64, 36)
+        for budget in (64 * 36, 64 * 36 - 1):
+            passes.DEFERRED_PIXELS = budget
+            out[budget] = r.render(snapshot).copy()
+            out[budget, "gbuffer"] = r._passes[passes.OpaquePass, "main"].gbuffer is not None
+        return out
+
+    try:
+        out = run_on_gpu(job)
+    finally:
+        passes.DEFERRED_PIXELS = 3840 * 2160
+        run_on_gpu(lambda _d: r.free())
+    assert out[64 * 36, "gbuffer"] and not out[64 * 36 - 1, "gbuffer"]
+    differ = np.abs(out[64 * 36] - out[64 * 36 - 1]).max()
+    assert differ == 0.0, f"{differ} largest difference"

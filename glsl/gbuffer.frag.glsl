@@ -1,0 +1,17 @@
+/* The G-buffer of the opaque surfaces shaded deferred (addon/passes.py's OpaquePass): per pixel the
+ * nearest surface's world position, its normal facing the viewer and its flat face's normal, as
+ * glsl/mesh.frag.glsl's forward main computes them, in float32, so that the deferred program
+ * shades exactly what the forward one would. frag_color: position, w the material's row in the
+ * material table; gbuffer_normal: w the group of the program that shades it (gbuffer.y);
+ * gbuffer_face: the receiver's plane for shadow lookups. Materials with image maps are shaded
+ * forward (their group -1: no deferred program claims the pixel). */
+
+void main()
+{
+  vec3 n = shading_normal(world_position);
+  vec3 face = cross(dFdx(world_position), dFdy(world_position));
+  vec3 ng = dot(face, face) > 1e-30 ? normalize(face) : n;
+  frag_color = vec4(world_position, float(gbuffer.x));
+  gbuffer_normal = vec4(facing_outward() ? n : -n, float(gbuffer.y));
+  gbuffer_face = vec4(ng, 0.0);
+}
