@@ -498,6 +498,8 @@ class SceneResources:
         self._draw_lists.clear()
         self._programs.clear()
         self._lights = _RowTexture()
+        self._material_table = _RowTexture()
+        self.material_rows = {}
         self._light_tiles = _RowTexture(channels=2)
         self._tiles = None
         self._frame = _Block()

@@ -100,10 +100,20 @@ class _TrackedRenderer(renderer.Renderer):
 
 
 def test_1000_renders_free_every_gpu_object_they_make_and_keep_memory_flat(tmp_path, monkeypatch):
+    from addon import passes
+
+    original_gbuffer = passes.GBuffer
     monkeypatch.setattr(engine, "Renderer", _TrackedRenderer)
+    # every other render shades deferred (its G-buffer and material table made and freed too)
+    monkeypatch.setattr(passes, "deferred_pays", lambda features, _triangles, _pixels:
+                        deferred[0] and not features.peel and not features.maps)
+    deferred = [False]
+    gbuffers = []
+    monkeypatch.setattr(passes, "GBuffer", lambda *args: gbuffers.append(1) or original_gbuffer(*args))
     scene = _scene()
     for i in range(5 * len(CONFIGS)):  # warm-up: every program compiled, every cache filled
         _configure(scene, CONFIGS[i % len(CONFIGS)])
+        deferred[0] = i % 2 == 0
         bpy.ops.render.render()
     programs_before = gpu_library.LIBRARY.program_count()
     made_before = _TrackedRenderer.made
@@ -112,6 +122,7 @@ def test_1000_renders_free_every_gpu_object_they_make_and_keep_memory_flat(tmp_p
     with census.active():
         for i in range(RENDERS):
             _configure(scene, CONFIGS[i % len(CONFIGS)])
+            deferred[0] = i % 2 == 0
             bpy.ops.render.render()
             alive = census.settle()
             assert not alive, f"render {i} ({CONFIGS[i % len(CONFIGS)]}) left alive {dict(alive)}"
@@ -123,6 +134,7 @@ def test_1000_renders_free_every_gpu_object_they_make_and_keep_memory_flat(tmp_p
     assert census.made["GPUTexture"] >= 2 * RENDERS and census.made["GPUFrameBuffer"] >= RENDERS, (
         f"the census did not see the renders' targets: {dict(census.made)}")
     assert _TrackedRenderer.made - made_before == RENDERS, "every render must go through the engine"
+    assert len(gbuffers) >= RENDERS // 2, f"{len(gbuffers)} G-buffers made: deferred every other render"
     assert len(_TrackedRenderer.live) == 0, "a renderer (and its GPU batches) outlived its render"
     assert programs_after == programs_before, "re-rendering the same scenes compiled new programs"
     assert rss_after - rss_before < RENDER_MARGIN_MB, f"RSS grew {rss_after - rss_before:.2f} MB"
