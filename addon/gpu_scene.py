@@ -139,6 +139,11 @@ class _RowTexture:
         return True
 
 
+def _stopped(draw: Draw, should_stop: Callable[[], bool] | None) -> bool:
+    """Cancellation, polled every 64 draw items."""
+    return should_stop is not None and draw.order % 64 == 0 and should_stop()
+
+
 class SceneResources:
     def __init__(self):
         self.snapshot: Snapshot | None = None
@@ -418,18 +423,23 @@ class SceneResources:
         samplers = [(name.removesuffix("_CLOSEST").lower() + "_map") for name in features.maps]
         block = -1
         for draw in draws:
-            if should_stop is not None and draw.order % 64 == 0 and should_stop():
+            if _stopped(draw, should_stop):
                 return False
-            if draw.block != block:
-                block = draw.block
-                shader.uniform_block("objects", self._objects[block].ubo)
-            shader.uniform_int("object_index", draw.index)
+            block = self._bind_object(shader, draw, block)
             shader.uniform_block("material", self._materials[draw.material].ubo)
             for sampler in samplers:
                 image_key = getattr(materials[draw.material], sampler)[0]
                 gpu_library.bind_sampler(shader, sampler, self._textures[image_key][1])
             draw.batch.draw(shader)
         return True
+
+    def _bind_object(self, shader, draw: Draw, block: int) -> int:
+        """Bind ``draw``'s object: its block of objects (unless ``block``, the one bound, holds it)
+        and its index there; returns the block bound."""
+        if draw.block != block:
+            shader.uniform_block("objects", self._objects[draw.block].ubo)
+        shader.uniform_int("object_index", draw.index)
+        return draw.block
 
     def draw_gbuffer(self, groups: list[tuple[int, list[Draw]]],
                      should_stop: Callable[[], bool] | None = None) -> bool:
@@ -441,12 +451,9 @@ class SceneResources:
         block = -1
         for group, draws in groups:
             for draw in draws:
-                if should_stop is not None and draw.order % 64 == 0 and should_stop():
+                if _stopped(draw, should_stop):
                     return False
-                if draw.block != block:
-                    block = draw.block
-                    shader.uniform_block("objects", self._objects[block].ubo)
-                shader.uniform_int("object_index", draw.index)
+                block = self._bind_object(shader, draw, block)
                 shader.uniform_int("gbuffer", (self.material_rows[draw.material], group))
                 draw.batch.draw(shader)
         return True
@@ -483,10 +490,7 @@ class SceneResources:
             shader.uniform_block("frame", self._frame.ubo)
         block = -1
         for draw in draws:
-            if draw.block != block:
-                block = draw.block
-                shader.uniform_block("objects", self._objects[block].ubo)
-            shader.uniform_int("object_index", draw.index)
+            block = self._bind_object(shader, draw, block)
             draw.batch.draw(shader)
 
     def free(self) -> None:

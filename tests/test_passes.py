@@ -60,6 +60,16 @@ def test_pass_names_are_eevees(tmp_path):
     assert set(LIGHT_PASSES) <= eevee, f"EEVEE wrote {sorted(eevee)}"
 
 
+def _veil(scene) -> None:
+    """A partly transparent plane across the camera's view, 3 m in front of it."""
+    from mathutils import Matrix
+
+    glass = scenes.material("Veil", base_color=(0.2, 0.5, 0.9), roughness=0.3)
+    glass.node_tree.nodes["Principled BSDF"].inputs["Alpha"].default_value = 0.5
+    veil = scenes.plane(scene, size=30.0, material=glass)
+    veil.matrix_world = scene.camera.matrix_world @ Matrix.Translation((0.0, 0.0, -3.0))
+
+
 @pytest.mark.parametrize("preset", ["material_grid", "world", "portability", "softbox"])
 def test_opaque_surfaces_drawn_against_the_occlusion_prepass_change_no_pixel(preset):
     """Where the world's occlusion draws its prepass (or, in a black world, costly shading asks for
@@ -67,7 +77,6 @@ def test_opaque_surfaces_drawn_against_the_occlusion_prepass_change_no_pixel(pre
     each pixel once: exactly the image drawn with a depth test of its own (and a partly
     transparent plane in front, which peels against that depth, blends as before)."""
     from gpu_harness import run_on_gpu
-    from mathutils import Matrix
 
     from addon import extract, passes, presets, renderer, scene_builder
 
@@ -76,10 +85,7 @@ def test_opaque_surfaces_drawn_against_the_occlusion_prepass_change_no_pixel(pre
     # softbox's prepass pays only with more pixels than its spheres' ~28k triangles
     w, h = (256, 144) if preset == "softbox" else (96, 54)
     scene.render.resolution_x, scene.render.resolution_y = w, h
-    glass = scenes.material("Veil", base_color=(0.2, 0.5, 0.9), roughness=0.3)
-    glass.node_tree.nodes["Principled BSDF"].inputs["Alpha"].default_value = 0.5
-    veil = scenes.plane(scene, size=30.0, material=glass)
-    veil.matrix_world = scene.camera.matrix_world @ Matrix.Translation((0.0, 0.0, -3.0))
+    _veil(scene)
     r = renderer.Renderer()
 
     def job(depsgraph):
@@ -131,7 +137,6 @@ def test_deferred_shading_changes_no_pixel(preset):
     pixels) gives exactly the forward image: with a surface that stays forward (an image-mapped
     plane), a mirrored object, a partly transparent veil in front and 2 x 2 supersampling."""
     from gpu_harness import run_on_gpu
-    from mathutils import Matrix
 
     from addon import extract, passes, presets, renderer, scene_builder
 
@@ -151,10 +156,7 @@ def test_deferred_shading_changes_no_pixel(preset):
     mirrored = scenes.plane(scene, size=1.0, location=(-1.0, -0.5, 0.6), rotation=(0.9, 0.0, 0.0),
                             material=scenes.material("Mirrored", base_color=(0.2, 0.8, 0.3)))
     mirrored.scale = (-1.0, 1.0, 1.0)
-    glass = scenes.material("Veil", base_color=(0.2, 0.5, 0.9), roughness=0.3)
-    glass.node_tree.nodes["Principled BSDF"].inputs["Alpha"].default_value = 0.5
-    veil = scenes.plane(scene, size=30.0, material=glass)
-    veil.matrix_world = scene.camera.matrix_world @ Matrix.Translation((0.0, 0.0, -3.0))
+    _veil(scene)
     r = renderer.Renderer()
 
     def job(depsgraph):
