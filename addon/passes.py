@@ -480,8 +480,9 @@ def deferred_pays(features: programs.Features, triangles: int, pixels: int) -> b
     blocks of pixels the rasteriser shades whole, forward; not for image-mapped surfaces
     (Features), nor beyond DEFERRED_PIXELS (the G-buffer's memory). Measured (640 x 360,
     Principled set, in-process alternating medians of 5): furnace 490 -> 318 ms, softbox 195 ->
-    165, roughness_sweep 165 -> 149; a light or two without penumbrae on larger triangles lost
-    4-16 % (the G-buffer's writes): those stay forward."""
+    165, roughness_sweep 141 -> 123; shading all surfaces deferred lost 4-16 % on the presets of
+    one or two lights without penumbrae (fresnel, hdr, long_tail: the G-buffer's writes), and
+    portability and world (larger triangles) gained nothing: those stay forward."""
     return (DEFERRED and not features.peel and not features.maps and pixels <= DEFERRED_PIXELS
             and 16 * triangles >= pixels and costly_shading(features))
 
@@ -496,9 +497,9 @@ def opaque_groups(frame: Frame, view: View) -> list:
 
 def depth_prepass_pays(opaque, triangles: int, pixels: int) -> bool:
     """Whether drawing the opaque surfaces' depth ahead of their shading (the prepass alone, where
-    no occlusion asks for it) saves more than it costs: where some surface's program is costly per
-    pixel (penumbrae searched in shadow maps, area lights, the world sampled per pixel, many
-    lights), each pixel hidden behind another surface then costs no shading; the geometry drawn
+    no occlusion asks for it) saves more than it costs: where some surface shaded forward has a
+    program costly per pixel (``costly_shading``), each pixel hidden behind another surface then
+    costs no shading; the geometry drawn
     twice costs its vertices and rasterising again, which a scene of many more triangles than
     pixels does not win back. Measured (docs/bench/peers.md's presets, 640 x 360): softbox
     and furnace gain, scenes of a light or two without penumbrae lose a few ms."""
@@ -545,11 +546,11 @@ class OpaquePass(TargetPass):
     """The view's scene target (colour and depth, supersampled size), cleared to the background
     colour, and every opaque surface drawn into it. Where the occlusion pass drew its prepass
     (``<view>.prepass``), the target takes that depth and draws against it without writing it:
-    hidden surfaces cost no shading. Surfaces without image maps are shaded deferred
-    (``gpu_scene.DEFERRED``): their G-buffer drawn first (it writes the depth where no prepass
-    did), then each program once over its own pixels, in whole quads of pixels (small triangles
-    shaded forward pay for the partly covered blocks of pixels they touch); the others are drawn
-    forward against the finished depth. Writes ``<view>.scene``."""
+    hidden surfaces cost no shading. Where shading is costly and the triangles small
+    (``deferred_pays``), surfaces are shaded deferred: their G-buffer drawn first (it writes the
+    depth where no prepass did), then each program once over its own pixels, in whole quads of
+    pixels (small triangles shaded forward pay for the partly covered blocks of pixels they
+    touch); the others are drawn forward against the finished depth. Writes ``<view>.scene``."""
 
     draws_geometry = True
 
