@@ -283,13 +283,14 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
             info.sampler(slot, "FLOAT_2D", name)
         if features.shadow_layers:
             info.sampler(20, "FLOAT_2D", "gbuffer_face")
-        info.push_constant("VEC4", "lobes")
         info.push_constant("INT", "deferred_group")
-        info.vertex_in(0, "VEC2", "pos")
-        return
     for kind, name in _PUSH_CONSTANTS:
-        info.push_constant(kind, name)
-    _declare_mesh_stage(info, "shading_lab_iface")
+        if not (features.deferred and name == "object_index"):  # the G-buffer knew the object
+            info.push_constant(kind, name)
+    if features.deferred:
+        info.vertex_in(0, "VEC2", "pos")  # post.vert.glsl's full-screen triangle
+    else:
+        _declare_mesh_stage(info, "shading_lab_iface")
 
 
 def _declare_mesh_stage(info, interface: str) -> None:

@@ -21,3 +21,11 @@ vec3 shading_normal(vec3 p)
   float flen2 = dot(face, face);
   return flen2 > 0.0 ? face * inversesqrt(flen2) : vec3(0.0, 0.0, 1.0);
 }
+
+/* The flat face's normal at p from screen derivatives (the receiver's plane for shadow lookups),
+ * n where the face is degenerate: the forward program and the G-buffer take it here alike. */
+vec3 face_normal(vec3 p, vec3 n)
+{
+  vec3 face = cross(dFdx(p), dFdy(p));
+  return dot(face, face) > 1e-30 ? normalize(face) : n;
+}

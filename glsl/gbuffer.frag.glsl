@@ -9,8 +9,7 @@
 void main()
 {
   vec3 n = shading_normal(world_position);
-  vec3 face = cross(dFdx(world_position), dFdy(world_position));
-  vec3 ng = dot(face, face) > 1e-30 ? normalize(face) : n;
+  vec3 ng = face_normal(world_position, n);
   frag_color = vec4(world_position, float(gbuffer.x));
   gbuffer_normal = vec4(facing_outward() ? n : -n, float(gbuffer.y));
   gbuffer_face = vec4(ng, 0.0);

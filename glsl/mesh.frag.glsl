@@ -187,8 +187,7 @@ void main()
                             material.fresnel.w);
 #ifdef SL_SHADOWS
   /* the flat face's normal, for shadow lookups (the receiver's plane) */
-  vec3 face = cross(dFdx(world_position), dFdy(world_position));
-  vec3 ng = dot(face, face) > 1e-30 ? normalize(face) : n;
+  vec3 ng = face_normal(world_position, n);
 #else
   vec3 ng = n; /* no shadow lookups */
 #endif
