@@ -870,6 +870,7 @@ def scene_settings(scene) -> S.Settings:
                       shadows=bool(props.shadows), shadow_map_size=int(props.shadow_map_size),
                       soft_shadows=bool(props.soft_shadows),
                       light_threshold=float(props.light_threshold), light_culling=bool(props.light_culling),
+                      persistent_data=bool(getattr(scene.render, "use_persistent_data", False)),
                       auto_error_bound=(float(props.auto_error_bound) if props.term_set == "AUTO" else None),
                       auto_quantile=float(props.auto_quantile) / 100.0,
                       environment_samples=(int(props.world_samples) if props.world_specular == "SAMPLED"
@@ -899,7 +900,8 @@ def preview_settings(preview_scene) -> S.Settings:
     """
     artist = _ARTIST_SETTINGS[0]
     settings = artist if artist is not None else scene_settings(preview_scene)
-    return dataclasses.replace(settings, samples=1, compare_mode="OFF", auto_exposure=None)
+    return dataclasses.replace(settings, samples=1, compare_mode="OFF", auto_exposure=None,
+                               persistent_data=False)
 
 
 def geometry_updates(depsgraph) -> set[str]:

@@ -14,7 +14,8 @@ main thread) all draw with the same programs, so they live here, once, behind on
   cleanly.
 - ``take_spare(key)`` / ``keep_spare(key, ...)``: textures a finished renderer handed back (its
   shadow maps) for the next one of the same shape, within ``SPARE_BYTES``, with what the
-  renderer says of their content (the shadow maps' layers that hold nothing).
+  renderer says of their content (the shadow maps' layers that hold nothing, and with Persistent
+  Data what they hold).
 - ``image_texture(image, build)``: each image's texture, uploaded once per read of its pixels,
   within ``IMAGE_BYTES``.
 
@@ -52,8 +53,9 @@ PROGRAMS_KEPT = 96
 #: costs more to allocate than to draw on the CPU rasteriser (a softbox scene's 12 layers of
 #: 1024^2: ~40 ms of its ~90 ms shadow pass): the next render of the same shape takes the texture
 #: back and draws every layer a caster reaches again; of the others it clears only those that do
-#: not hold "nothing" already (the renderer that kept it says which, passes.ShadowPass.far).
-#: Textures larger than this are freed as before.
+#: not hold "nothing" already (the renderer that kept it says which, passes.ShadowPass.far), or,
+#: with Persistent Data, draws nothing where the maps hold what it would draw
+#: (passes.ShadowPass.content). Textures larger than this are freed as before.
 SPARE_BYTES = 256 << 20
 #: Image textures kept between renderers, in bytes of GPU memory (least recently used dropped
 #: first). A final render makes a new renderer each time, and uploading an image costs it again:

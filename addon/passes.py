@@ -224,7 +224,11 @@ class ShadowPass(Pass):
     depth texture per map, each holding the casters' distances from its light
     (glsl/shadow.frag.glsl). Drawn again only when the plan (lights, map size, the scene's
     bounds) or a caster (its matrix or geometry) changed: a camera orbit or a material edit
-    re-renders nothing. Sets ``SceneResources.shadow_maps``; nothing when no light casts."""
+    re-renders nothing. With Persistent Data (a final render's ``Settings.persistent_data``) a
+    final render that takes the last one's texture keeps its maps where they hold the same content
+    (``SceneResources.shadow_content_key``): re-rendering a still scene, or one where only the
+    camera or materials change, draws no map. Sets ``SceneResources.shadow_maps``; nothing when
+    no light casts."""
 
     draws_geometry = True
 
@@ -237,6 +241,10 @@ class ShadowPass(Pass):
         self.drawn_casters = 0  # (layer, caster) pairs the last drawing of the maps drew
         self.cleared = 0  # layers the last drawing of the maps cleared
         self.far: set[int] = set()  # layers that hold "nothing" alone: cleared, nothing drawn since
+        #: the maps' content key (SceneResources.shadow_content_key) once every layer is drawn with
+        #: Persistent Data on; None: not known
+        self.content: bytes | None = None
+        self.kept = 0  # renders that kept the maps a finished renderer left (Persistent Data)
 
     def run(self, frame: Frame, _spec=None) -> bool:
         scene = frame.scene
@@ -251,12 +259,13 @@ class ShadowPass(Pass):
             self.free()
             spare = gpu_library.LIBRARY.take_spare(("shadow maps", shape))
             if spare is not None:
-                self.texture, far = spare
+                self.texture, (far, self.content) = spare
                 self.far = set(far)
             else:
                 self.texture = gpu.types.GPUTexture((plan.size, plan.size), layers=plan.layers,
                                                     format="DEPTH_COMPONENT32F")
                 self.far = set()
+                self.content = None
             self.framebuffers = [gpu.types.GPUFrameBuffer(depth_slot={"texture": self.texture, "layer": i})
                                  for i in range(plan.layers)]
             self._shape = shape
@@ -265,6 +274,14 @@ class ShadowPass(Pass):
             return True
         self.key = None  # until every layer is drawn
         casters = scene.shadow_casters()
+        content = None
+        if frame.snapshot.settings.persistent_data:
+            content = scene.shadow_content_key(casters, (SKIP_SHADOWLESS, CULL_CLOSED_CASTERS))
+            if content == self.content:  # the maps the last final render of this content drew
+                self.key = key
+                self.kept += 1
+                return True
+        self.content = None
         # each layer draws only the casters that reach its volume (a cube face sees a sixth)
         spheres = scene.caster_spheres(casters)
         reach = shadows.layer_casters(plan.matrices, spheres)
@@ -321,18 +338,21 @@ class ShadowPass(Pass):
                     gpu.state.face_culling_set("NONE")
             self.renders += 1
         self.key = key
+        self.content = content
         return True
 
     def free(self) -> None:
         """Hand the maps' texture to the library for the next renderer of its shape (a final
         render's successor draws every layer a caster reaches again, and clears the others unless
-        they hold nothing already: ``far``); the framebuffers belong to this context."""
+        they hold nothing already: ``far``; with Persistent Data it keeps them all where
+        ``content`` is its own); the framebuffers belong to this context."""
         if self.texture is not None:
             size, layers = self._shape
             gpu_library.LIBRARY.keep_spare(("shadow maps", self._shape), self.texture,
-                                           4 * size * size * layers, frozenset(self.far))
+                                           4 * size * size * layers, (frozenset(self.far), self.content))
         self.texture = None
         self.far = set()
+        self.content = None
         self.framebuffers = []
         self.key = None
         self._shape = None

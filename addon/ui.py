@@ -132,6 +132,9 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
         col.prop(props, "light_culling", text="Culling")
         layout.prop(props, "samples")
         layout.prop(props, "transparency_layers")
+        # Blender's own setting (Cycles shows it under Performance): final renders keep the shadow
+        # maps the last one drew where the lights and casters are the same
+        layout.prop(context.scene.render, "use_persistent_data", text="Persistent Data")
         layout.separator()
         layout.prop(props, "compare_mode")
         if props.compare_mode != "OFF":

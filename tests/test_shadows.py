@@ -720,6 +720,67 @@ def test_a_render_takes_back_the_last_ones_shadow_texture_and_draws_every_layer_
     assert np.array_equal(reused, fresh), float(np.abs(reused - fresh).max())
 
 
+def test_persistent_data_keeps_the_maps_while_their_content_is_the_same(tmp_path, monkeypatch):
+    """With Blender's Persistent Data on, a final render that takes the last one's texture keeps
+    its maps where lights and casters are the same by content (a fresh read of the scene, new
+    uploads): the second render of a still scene and a render after the camera moved draw no
+    layer, and each is bit for bit a render with a fresh texture. A moved caster, a mesh edited
+    in place (same object, same name) and a light moved draw the maps again; and a scene with
+    Persistent Data off draws them every time (the render's successor keeps nothing)."""
+    from addon import gpu_library, passes
+
+    library = gpu_library.LIBRARY
+    scene, light = _scene("POINT", 0.2, resolution=48)
+    scene.render.use_persistent_data = True
+    seen = []
+    original = passes.ShadowPass.run
+
+    def run(self, frame, spec=None):
+        kept, renders = self.kept, self.renders
+        done = original(self, frame, spec)
+        seen.append((self.kept - kept, self.renders - renders))
+        return done
+
+    monkeypatch.setattr(passes.ShadowPass, "run", run)
+
+    def render(name, fresh=False):
+        if fresh:
+            library.drop_spares()
+        return scenes.render(scene, tmp_path / f"{name}.exr")
+
+    first = render("first", fresh=True)
+    drawn = seen[-1][1]  # the cube faces a caster reaches
+    assert seen[-1][0] == 0 and drawn > 0, seen
+    again = render("again")
+    assert seen[-1] == (1, 0), seen
+    assert np.array_equal(first, again), float(np.abs(first - again).max())
+    scene.camera.location.x += 0.5
+    orbit = render("orbit")
+    assert seen[-1] == (1, 0), seen
+    fresh = render("orbit_fresh", fresh=True)
+    assert np.array_equal(orbit, fresh), float(np.abs(orbit - fresh).max())
+
+    sphere = bpy.data.objects["Sphere"]
+    for name, change in (("moved", lambda: setattr(sphere.location, "x", sphere.location.x + 0.4)),
+                         ("edited", lambda: sphere.data.vertices[0].co.__setitem__(2, 0.9)),
+                         ("light", lambda: setattr(light.location, "z", light.location.z + 0.3))):
+        change()
+        changed = render(name)
+        assert seen[-1][0] == 0 and seen[-1][1] > 0, (name, seen)
+        moved = float(np.abs(changed - first).max())
+        assert moved > 0.01, f"{name}: the change moved the image by only {moved}"
+        fresh = render(f"{name}_fresh", fresh=True)
+        assert np.array_equal(changed, fresh), (name, float(np.abs(changed - fresh).max()))
+        render(f"{name}_again")  # the fresh texture's content, for the next change
+        assert seen[-1] == (1, 0), (name, seen)
+
+    scene.render.use_persistent_data = False
+    render("off")
+    render("off_again")
+    assert seen[-1][0] == 0 and seen[-1][1] > 0, seen
+    library.drop_spares()
+
+
 def test_layers_no_caster_reaches_are_cleared_once_and_the_others_drawn_again(tmp_path, monkeypatch):
     """A point light a metre over the ground and a small sphere beside it (the ground leaves the
     maps: it can shadow nothing): the cube faces no caster reaches hold nothing, and a render
