@@ -494,17 +494,37 @@ def costly_shading(features: programs.Features) -> bool:
             or features.env_samples > 0 or features.max_lights >= 8)
 
 
+def heaviest_shading(features: programs.Features) -> bool:
+    """Among the costly programs (``costly_shading``), those whose every pixel costs the most:
+    area lights (their polygons, and their penumbrae in six maps), or 5 lights or more."""
+    return "AREA" in features.light_kinds or features.max_lights >= 8
+
+
+#: The most pixels per triangle, on average over the view, at which deferred shading pays: for a
+#: costly program, and for one of the heaviest (``heaviest_shading``). A forward program shades
+#: the partly covered blocks of pixels along each triangle's edges whole, so the smaller the
+#: triangles the more it shades twice; the G-buffer's writes cost the same whatever their size.
+DEFERRED_PIXELS_PER_TRIANGLE = 32
+DEFERRED_PIXELS_PER_TRIANGLE_HEAVIEST = 64
+
+
 def deferred_pays(features: programs.Features, triangles: int, pixels: int) -> bool:
     """Whether ``features``' surfaces are shaded deferred (passes.OpaquePass): where their shading
-    is costly and the triangles small (one per 16 pixels or more on average), whose partly covered
-    blocks of pixels the rasteriser shades whole, forward; not for image-mapped surfaces
-    (Features), nor beyond DEFERRED_PIXELS (the G-buffer's memory). Measured (640 x 360,
-    Principled set, in-process alternating medians of 5): furnace 490 -> 318 ms, softbox 195 ->
-    165, roughness_sweep 141 -> 123; shading all surfaces deferred lost 4-16 % on the presets of
-    one or two lights without penumbrae (fresnel, hdr, long_tail: the G-buffer's writes), and
-    portability and world (larger triangles) gained nothing: those stay forward."""
-    return (DEFERRED and not features.peel and not features.maps and pixels <= DEFERRED_PIXELS
-            and 16 * triangles >= pixels and costly_shading(features))
+    is costly and the triangles small against what a pixel costs (DEFERRED_PIXELS_PER_TRIANGLE);
+    not for image-mapped surfaces (Features), nor beyond DEFERRED_PIXELS (the G-buffer's memory).
+    Measured (Principled set, in-process alternating medians of min-of-3, forward -> deferred):
+    640 x 360: furnace 490 -> 318 ms, softbox 195 -> 165, roughness_sweep 141 -> 123,
+    material_grid (22 px a triangle) 125 -> 112; 1280 x 720 (35 px a triangle): furnace 834 ->
+    503, softbox 465 -> 368, roughness_sweep 379 -> 370; softbox at 1920 x 1080 (78 px) 869 ->
+    817; material_grid at 960 x 720 (65 px) 274 -> 288, world at 640 x 360 (48 px) 84 -> 86
+    (those stay forward). Shading all surfaces deferred lost 4-16 % on the presets of one or two
+    lights without penumbrae (fresnel, hdr, long_tail: the G-buffer's writes)."""
+    if not (DEFERRED and not features.peel and not features.maps and pixels <= DEFERRED_PIXELS
+            and costly_shading(features)):
+        return False
+    heaviest = heaviest_shading(features)
+    most = DEFERRED_PIXELS_PER_TRIANGLE_HEAVIEST if heaviest else DEFERRED_PIXELS_PER_TRIANGLE
+    return most * triangles >= pixels
 
 
 def opaque_groups(frame: Frame, view: View) -> list:

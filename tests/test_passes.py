@@ -5,6 +5,7 @@ the model's clamp for Blinn-Phong)."""
 from __future__ import annotations
 
 import math
+from dataclasses import replace
 
 import bpy
 import numpy as np
@@ -129,6 +130,27 @@ def test_the_depth_prepass_is_drawn_where_shading_is_costly_and_the_geometry_is_
     for features in costly:
         assert passes.depth_prepass_pays([(cheap, []), (features, [])], 1000, pixels), features
         assert not passes.depth_prepass_pays([(features, [])], pixels + 1, pixels), features
+
+
+def test_deferred_shading_is_chosen_by_the_shading_cost_and_the_triangles_size():
+    """passes.deferred_pays: costly programs on triangles of 32 px or less on average, the
+    heaviest (area lights, 5+ lights) up to 64 px; never a cheap program, an image-mapped or
+    peeled surface, or a view beyond DEFERRED_PIXELS."""
+    from addon import passes, programs
+
+    pixels = 640 * 360
+    cheap = programs.Features(model="PBR", max_lights=2, light_kinds=frozenset({"POINT"}))
+    world = replace(cheap, environment="UNIFORM")
+    area = replace(cheap, light_kinds=frozenset({"AREA"}))
+    many = replace(cheap, max_lights=8, shadow_layers=8)
+    cases = [(cheap, 10 ** 6, False), (world, pixels // 32, True), (world, pixels // 32 - 1, False),
+             (area, pixels // 64, True), (area, pixels // 64 - 1, False), (many, pixels // 64, True),
+             (replace(area, maps=frozenset({"BASE_COLOR"})), 10 ** 6, False),
+             (replace(area, peel=True), 10 ** 6, False)]
+    for features, triangles, expected in cases:
+        assert passes.deferred_pays(features, triangles, pixels) == expected, (features, triangles)
+    big = passes.DEFERRED_PIXELS + 1
+    assert not passes.deferred_pays(area, big, big)
 
 
 @pytest.mark.parametrize("preset", ["material_grid", "softbox", "world"])
