@@ -185,6 +185,9 @@ def add_shadow_options(parser) -> None:
                          help="texels per side of each shadow map")
     shadows.add_argument("--soft-shadows", action=argparse.BooleanOptionalAction, default=None,
                          help="penumbrae from the lights' sizes")
+    shadows.add_argument("--persistent-data", action=argparse.BooleanOptionalAction, default=None,
+                         help="keep the shadow maps from one frame to the next where lights and casters "
+                              "are the same (Blender's Persistent Data)")
     lights = parser.add_argument_group("lights (default: the scene's settings)")
     lights.add_argument("--light-threshold", type=float, metavar="W/M2",
                         help="irradiance below which a light stops (0: every light reaches everywhere)")
@@ -252,6 +255,8 @@ def configure(scene, args) -> None:
         props.world_samples = world_samples
     if getattr(args, "shadow_map_size", None) is not None:
         props.shadow_map_size = str(args.shadow_map_size)
+    if getattr(args, "persistent_data", None) is not None:
+        scene.render.use_persistent_data = args.persistent_data
     threshold = getattr(args, "light_threshold", None)
     if threshold is not None:
         if not threshold >= 0.0:  # also refuses NaN

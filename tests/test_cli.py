@@ -111,9 +111,14 @@ def test_shadow_options_reach_the_scene():
     cli.configure(scene, cli.parse_args(["x"]))
     props = scene.shading_lab
     assert (props.shadows, props.shadow_map_size, props.soft_shadows) == (True, "1024", True)
-    args = cli.parse_args(["x", "--no-shadows", "--shadow-map-size", "2048", "--no-soft-shadows"])
+    assert not scene.render.use_persistent_data
+    args = cli.parse_args(["x", "--no-shadows", "--shadow-map-size", "2048", "--no-soft-shadows",
+                           "--persistent-data"])
     cli.configure(scene, args)
     assert (props.shadows, props.shadow_map_size, props.soft_shadows) == (False, "2048", False)
+    assert scene.render.use_persistent_data
+    cli.configure(scene, cli.parse_args(["x", "--no-persistent-data"]))
+    assert not scene.render.use_persistent_data
     with pytest.raises(SystemExit):
         cli.parse_args(["x", "--shadow-map-size", "300"])
 
