@@ -425,7 +425,7 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
             if self.is_preview:
                 settings = extract.preview_settings(scene)
             else:
-                settings = None
+                settings = extract.final_render_settings(scene)
                 extract.remember_settings(scene)  # the scene being rendered is the artist's
             snap = extract.snapshot(depsgraph, width, height, settings=settings)
         except extract.ExtractError as exc:

@@ -870,11 +870,17 @@ def scene_settings(scene) -> S.Settings:
                       shadows=bool(props.shadows), shadow_map_size=int(props.shadow_map_size),
                       soft_shadows=bool(props.soft_shadows),
                       light_threshold=float(props.light_threshold), light_culling=bool(props.light_culling),
-                      persistent_data=bool(getattr(scene.render, "use_persistent_data", False)),
                       auto_error_bound=(float(props.auto_error_bound) if props.term_set == "AUTO" else None),
                       auto_quantile=float(props.auto_quantile) / 100.0,
                       environment_samples=(int(props.world_samples) if props.world_specular == "SAMPLED"
                                            else 0))
+
+
+def final_render_settings(scene) -> S.Settings:
+    """``scene_settings`` for a final render: with Blender's Persistent Data (Render > Performance),
+    which only final renders honour (a viewport keeps its renderer anyway; previews keep nothing)."""
+    return dataclasses.replace(scene_settings(scene),
+                               persistent_data=bool(getattr(scene.render, "use_persistent_data", False)))
 
 
 #: The artist's scene settings for previews, captured on the main thread (see ``remember_settings``).
@@ -900,8 +906,7 @@ def preview_settings(preview_scene) -> S.Settings:
     """
     artist = _ARTIST_SETTINGS[0]
     settings = artist if artist is not None else scene_settings(preview_scene)
-    return dataclasses.replace(settings, samples=1, compare_mode="OFF", auto_exposure=None,
-                               persistent_data=False)
+    return dataclasses.replace(settings, samples=1, compare_mode="OFF", auto_exposure=None)
 
 
 def geometry_updates(depsgraph) -> set[str]:

@@ -224,7 +224,7 @@ class ShadowPass(Pass):
     depth texture per map, each holding the casters' distances from its light
     (glsl/shadow.frag.glsl). Drawn again only when the plan (lights, map size, the scene's
     bounds) or a caster (its matrix or geometry) changed: a camera orbit or a material edit
-    re-renders nothing. With Persistent Data (a final render's ``Settings.persistent_data``) a
+    re-renders nothing. With Persistent Data (``Settings.persistent_data``, final renders) a
     final render that takes the last one's texture keeps its maps where they hold the same content
     (``SceneResources.shadow_content_key``): re-rendering a still scene, or one where only the
     camera or materials change, draws no map. Sets ``SceneResources.shadow_maps``; nothing when
@@ -253,7 +253,9 @@ class ShadowPass(Pass):
             self.free()
             scene.shadow_maps = None
             return True
-        key = (plan.key(), scene.caster_key)
+        # the lights' extents decide which flat casters a layer leaves out (shadowless_casters)
+        extents = tuple(shadows.light_extent(light) for light in frame.snapshot.lights)
+        key = (plan.key(), scene.caster_key, extents)
         shape = (plan.size, plan.layers)
         if self.texture is None or self._shape != shape:
             self.free()
@@ -276,7 +278,7 @@ class ShadowPass(Pass):
         casters = scene.shadow_casters()
         content = None
         if frame.snapshot.settings.persistent_data:
-            content = scene.shadow_content_key(casters, (SKIP_SHADOWLESS, CULL_CLOSED_CASTERS))
+            content = scene.shadow_content_key(casters, (SKIP_SHADOWLESS, CULL_CLOSED_CASTERS, extents))
             if content == self.content:  # the maps the last final render of this content drew
                 self.key = key
                 self.kept += 1
@@ -516,9 +518,10 @@ def deferred_pays(features: programs.Features, triangles: int, pixels: int) -> b
     640 x 360: furnace 490 -> 318 ms, softbox 195 -> 165, roughness_sweep 141 -> 123,
     material_grid (22 px a triangle) 125 -> 112; 1280 x 720 (35 px a triangle): furnace 834 ->
     503, softbox 465 -> 368, roughness_sweep 379 -> 370; softbox at 1920 x 1080 (78 px) 869 ->
-    817; material_grid at 960 x 720 (65 px) 274 -> 288, world at 640 x 360 (48 px) 84 -> 86
-    (those stay forward). Shading all surfaces deferred lost 4-16 % on the presets of one or two
-    lights without penumbrae (fresnel, hdr, long_tail: the G-buffer's writes)."""
+    817 (within this machine's noise: left forward, beyond the 64 px); material_grid at 960 x 720
+    (65 px) 274 -> 288, world at 640 x 360 (48 px) 84 -> 86 (those stay forward). Shading all
+    surfaces deferred lost 4-16 % on the presets of one or two lights without penumbrae (fresnel,
+    hdr, long_tail: the G-buffer's writes)."""
     if not (DEFERRED and not features.peel and not features.maps and pixels <= DEFERRED_PIXELS
             and costly_shading(features)):
         return False

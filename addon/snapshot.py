@@ -418,8 +418,9 @@ class Settings:
     soft_shadows: bool = True  # penumbrae from the lights' sizes (else hard, filtered over a texel)
     light_threshold: float = 0.01  # W/m^2: a light reaches where its irradiance is above this
     light_culling: bool = True  # each screen tile shades only the lights that reach it
-    #: Blender's Persistent Data (Render > Performance): a final render may keep what the last
-    #: final render of the same content drew (its shadow maps) instead of drawing it again
+    #: Blender's Persistent Data (Render > Performance), final renders only
+    #: (extract.final_render_settings): a final render may keep what the last final render of the
+    #: same content drew (its shadow maps) instead of drawing it again
     persistent_data: bool = False
     #: the Auto term set: per material the cheapest terms whose predicted Delta E_ITP against the
     #: Principled set (at ``auto_quantile`` of its pixels) is within this bound; None: off

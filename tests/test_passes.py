@@ -143,8 +143,11 @@ def test_deferred_shading_is_chosen_by_the_shading_cost_and_the_triangles_size()
     world = replace(cheap, environment="UNIFORM")
     area = replace(cheap, light_kinds=frozenset({"AREA"}))
     many = replace(cheap, max_lights=8, shadow_layers=8)
+    penumbrae = replace(cheap, soft_shadows=True, shadow_layers=6)  # costly, not of the heaviest
     cases = [(cheap, 10 ** 6, False), (world, pixels // 32, True), (world, pixels // 32 - 1, False),
+             (penumbrae, pixels // 32, True), (penumbrae, pixels // 32 - 1, False),
              (area, pixels // 64, True), (area, pixels // 64 - 1, False), (many, pixels // 64, True),
+             (many, pixels // 64 - 1, False),
              (replace(area, maps=frozenset({"BASE_COLOR"})), 10 ** 6, False),
              (replace(area, peel=True), 10 ** 6, False)]
     for features, triangles, expected in cases:

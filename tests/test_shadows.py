@@ -727,11 +727,14 @@ def test_persistent_data_keeps_the_maps_while_their_content_is_the_same(tmp_path
     layer, and each is bit for bit a render with a fresh texture. A moved caster, a mesh edited
     in place (same object, same name) and a light moved draw the maps again; and a scene with
     Persistent Data off draws them every time (the render's successor keeps nothing)."""
-    from addon import gpu_library, passes
+    from addon import extract, gpu_library, passes
 
     library = gpu_library.LIBRARY
     scene, light = _scene("POINT", 0.2, resolution=48)
     scene.render.use_persistent_data = True
+    # final renders alone honour it (a viewport keeps its renderer; previews keep nothing)
+    assert extract.final_render_settings(scene).persistent_data
+    assert not extract.scene_settings(scene).persistent_data
     seen = []
     original = passes.ShadowPass.run
 
@@ -761,14 +764,29 @@ def test_persistent_data_keeps_the_maps_while_their_content_is_the_same(tmp_path
     assert np.array_equal(orbit, fresh), float(np.abs(orbit - fresh).max())
 
     sphere = bpy.data.objects["Sphere"]
+    glass = scenes.material("Glass", base_color=(0.2, 0.5, 0.9))
+    glass.node_tree.nodes["Principled BSDF"].inputs["Alpha"].default_value = 0.5  # casts nothing
+    sphere.data.materials.append(glass)
+    for polygon in sphere.data.polygons:
+        polygon.material_index = int(polygon.center.x > 0.0)  # the sphere's +x half in glass
+    render("slots_first")
+    render("slots_again")
+    assert seen[-1] == (1, 0), seen
+
+    def swap_slots():  # the same slots' materials the other way round: the -x half casts now
+        materials = sphere.data.materials
+        materials[0], materials[1] = materials[1], materials[0]
+
     for name, change in (("moved", lambda: setattr(sphere.location, "x", sphere.location.x + 0.4)),
                          ("edited", lambda: sphere.data.vertices[0].co.__setitem__(2, 0.9)),
+                         ("slots", swap_slots),
                          ("light", lambda: setattr(light.location, "z", light.location.z + 0.3))):
         change()
         changed = render(name)
         assert seen[-1][0] == 0 and seen[-1][1] > 0, (name, seen)
-        moved = float(np.abs(changed - first).max())
-        assert moved > 0.01, f"{name}: the change moved the image by only {moved}"
+        if name != "slots":  # (the slots were swapped from a render after ``first``)
+            moved = float(np.abs(changed - first).max())
+            assert moved > 0.01, f"{name}: the change moved the image by only {moved}"
         fresh = render(f"{name}_fresh", fresh=True)
         assert np.array_equal(changed, fresh), (name, float(np.abs(changed - fresh).max()))
         render(f"{name}_again")  # the fresh texture's content, for the next change
@@ -779,6 +797,44 @@ def test_persistent_data_keeps_the_maps_while_their_content_is_the_same(tmp_path
     render("off_again")
     assert seen[-1][0] == 0 and seen[-1][1] > 0, seen
     library.drop_spares()
+
+
+def test_persistent_data_draws_the_maps_again_for_an_area_light_of_another_shape(tmp_path, monkeypatch):
+    """An area light reshaped at the same area (1 x 1 m to 2 x 0.5 m: the same penumbra radius, a
+    wider reach) changes which flat casters its layers may leave out (shadows.light_extent): the
+    maps are drawn again, with Persistent Data and without it, as a fresh texture's."""
+    from addon import gpu_library, passes
+
+    library = gpu_library.LIBRARY
+    scene = scenes.reset(size=48)
+    scene.shading_lab.model = "PBR"
+    scenes.ortho_camera(scene, location=(0.0, -6.0, 5.0), rotation=(math.radians(50.0), 0.0, 0.0), scale=5.0)
+    mat = _white()
+    scenes.plane(scene, size=8.0, material=mat)
+    _sphere(scene, 0.6, (-0.8, 0.0, 0.9), mat)
+    # 0.85 m over the ground: the square's corners (0.71 m from its centre) stay above the ground's
+    # plane, which then can shadow nothing and is left out; the long one's (1.03 m) reach below it
+    light = scenes.light(scene, "AREA", energy=300.0, location=(0.5, -0.5, 0.85), shape="RECTANGLE",
+                         size=1.0, size_y=1.0)
+    light.data.use_shadow = True
+    scene.render.use_persistent_data = True
+    drawn = []
+    original = passes.ShadowPass.run
+
+    def run(self, frame, spec=None):
+        done = original(self, frame, spec)
+        drawn.append(self.drawn_casters if self.key is not None and not self.kept else None)
+        return done
+
+    monkeypatch.setattr(passes.ShadowPass, "run", run)
+    library.drop_spares()
+    scenes.render(scene, tmp_path / "square.exr")
+    square = drawn[-1]
+    light.data.size, light.data.size_y = 2.0, 0.5
+    scenes.render(scene, tmp_path / "long.exr")
+    assert drawn[-1] is not None and drawn[-1] != square, (square, drawn)
+    library.drop_spares()
+    scene.render.use_persistent_data = False
 
 
 def test_layers_no_caster_reaches_are_cleared_once_and_the_others_drawn_again(tmp_path, monkeypatch):
