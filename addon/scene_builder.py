@@ -140,6 +140,19 @@ def _torus(bm, major: float, minor: float, segments: int):
             bm.faces.new((a, b, c, d))
 
 
+def _sort_faces(bm) -> None:
+    """Order ``bm``'s faces by their centres. bmesh's primitives weld their seams through a hash
+    of element addresses, so the same primitive's faces (their corners) came out in another order
+    in each process: the same triangles, interpolated by the rasteriser from other first corners,
+    made renders of a preset differ in the last bits from run to run."""
+    bm.faces.index_update()
+    centres = [tuple(round(c, 6) for c in face.calc_center_median()) for face in bm.faces]
+    rank = [0] * len(centres)
+    for position, index in enumerate(sorted(range(len(centres)), key=centres.__getitem__)):
+        rank[index] = position
+    bm.faces.sort(key=lambda face: rank[face.index])
+
+
 def primitive_mesh(obj: P.ObjectPreset) -> bpy.types.Mesh:
     """A new mesh for ``obj.primitive``, centred on the origin."""
     mesh = bpy.data.meshes.new(obj.name)
@@ -164,6 +177,7 @@ def primitive_mesh(obj: P.ObjectPreset) -> bpy.types.Mesh:
                 _torus(bm, obj.radius, obj.minor_radius, obj.segments)
             else:
                 raise ValueError(f"unknown primitive {kind!r}")
+            _sort_faces(bm)
             bm.to_mesh(mesh)
         finally:
             bm.free()
