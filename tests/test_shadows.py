@@ -801,17 +801,14 @@ def test_persistent_data_keeps_the_maps_while_their_content_is_the_same(tmp_path
 
 def test_persistent_data_draws_the_maps_again_for_an_area_light_of_another_shape(tmp_path, monkeypatch):
     """An area light reshaped at the same area (1 x 1 m to 2 x 0.5 m: the same penumbra radius, a
-    wider reach) changes which flat casters its layers may leave out (shadows.light_extent): the
-    maps are drawn again, with Persistent Data and without it, as a fresh texture's."""
+    wider reach) changes which flat casters its layers may leave out (shadows.light_extent): with
+    Persistent Data the next render draws the maps again, and other casters than before (the
+    lights' extents are in the content key, as in the renderer's own)."""
     from addon import gpu_library, passes
 
     library = gpu_library.LIBRARY
-    scene = scenes.reset(size=48)
-    scene.shading_lab.model = "PBR"
-    scenes.ortho_camera(scene, location=(0.0, -6.0, 5.0), rotation=(math.radians(50.0), 0.0, 0.0), scale=5.0)
-    mat = _white()
-    scenes.plane(scene, size=8.0, material=mat)
-    _sphere(scene, 0.6, (-0.8, 0.0, 0.9), mat)
+    scene, point = _scene("POINT", resolution=48)
+    bpy.data.objects.remove(point)
     # 0.85 m over the ground: the square's corners (0.71 m from its centre) stay above the ground's
     # plane, which then can shadow nothing and is left out; the long one's (1.03 m) reach below it
     light = scenes.light(scene, "AREA", energy=300.0, location=(0.5, -0.5, 0.85), shape="RECTANGLE",
