@@ -725,8 +725,9 @@ def test_persistent_data_keeps_the_maps_while_their_content_is_the_same(tmp_path
     its maps where lights and casters are the same by content (a fresh read of the scene, new
     uploads): the second render of a still scene and a render after the camera moved draw no
     layer, and each is bit for bit a render with a fresh texture. A moved caster, a mesh edited
-    in place (same object, same name) and a light moved draw the maps again; and a scene with
-    Persistent Data off draws them every time (the render's successor keeps nothing)."""
+    in place (same object, same name), two slots' materials swapped (one of them partly
+    transparent: the other half of the sphere casts) and a light moved draw the maps again, each
+    as a fresh texture's; and a scene with Persistent Data off draws them every time."""
     from addon import extract, gpu_library, passes
 
     library = gpu_library.LIBRARY
