@@ -362,7 +362,7 @@ def shadow_program(orthographic: bool = False) -> gpu.types.GPUShader:
 
 def occlusion_depths_program() -> gpu.types.GPUShader:
     return LIBRARY.program(("occlusion depths",), "ambient occlusion", programs.occlusion_depths_source(),
-                           _declare_full_screen("depth_map", "back_depth_map", "normal_map"))
+                           _declare_full_screen("depth_map", "back_depth_map", "facing_map"))
 
 
 def gtao_program(scale: int = 1) -> gpu.types.GPUShader:

@@ -150,6 +150,8 @@ class Frame:
     # frames); None: the metered value
     adapt: Callable[[View, float], float] | None = None
     exposures: dict[str, tuple[float, float]] = field(default_factory=dict)  # view -> (stops, metered)
+    # view output -> the G-buffer the occlusion pass drew for it ahead of the opaque pass
+    gbuffers: dict[str, GBuffer] = field(default_factory=dict)
 
     def exposure(self, view: View) -> float:
         """The view's exposure in stops: metered (and adapted) when automatic, else its own."""
@@ -364,6 +366,11 @@ class ShadowPass(Pass):
 #: it off to compare).
 SKIP_FAR_LAYERS = True
 
+#: Where a view's surfaces are shaded deferred, the occlusion pass draws their G-buffer in place
+#: of its prepass (the same depth and normals: one drawing of the geometry fewer; tests turn it
+#: off to compare).
+GBUFFER_AHEAD = True
+
 #: Draw the occlusion's back-face prepass with the faces towards the viewer culled (the same
 #: depths as discarding them in the program; tests turn it off to compare).
 CULL_BACK_PREPASS = True
@@ -373,8 +380,9 @@ class OcclusionPass(Pass):
     """Screen-space ambient occlusion of the world's light (glsl/gtao.frag.glsl), for the views
     whose programs use it: the opaque surfaces' depth and normals drawn first (a prepass), then
     the visible fraction of the hemisphere per sub-pixel. Writes ``<view>.occlusion`` and
-    ``<view>.prepass`` (its depth, the opaque pass's). Nothing
-    when the world sends no light or occlusion is off."""
+    ``<view>.prepass`` (its depth, the opaque pass's) -- or, where the view's surfaces are shaded
+    deferred (``GBUFFER_AHEAD``), draws their G-buffer instead of the prepass, for the opaque
+    pass to shade (``Frame.gbuffers``). Nothing when the world sends no light or occlusion is off."""
 
     draws_geometry = True
 
@@ -384,6 +392,8 @@ class OcclusionPass(Pass):
         self.depths: Target | None = None
         self.raw: Target | None = None  # the interleaved trace, before its resolve
         self.target: Target | None = None
+        self.gbuffer: GBuffer | None = None  # drawn in place of the prepass (GBUFFER_AHEAD)
+        self.depth: gpu.types.GPUTexture | None = None  # that G-buffer's depth
 
     def run(self, frame: Frame, view: View) -> bool:
         lists = frame.scene.draw_lists(view.model, view.half_target)
@@ -400,20 +410,44 @@ class OcclusionPass(Pass):
                 if target is not None:
                     target.free()
             self.back = self.depths = self.raw = self.target = None
-            self.prepass = _fitted(self.prepass, w, h, "RGBA16F", depth=True)
+            self._free_gbuffer()
+            self.prepass = _fitted(self.prepass, w, h, "RGBA16F", depth=True)  # its depth alone is read
             frame.scene.put_frame(view.view_projection, view.width, view.height, view.samples)
             self._draw_prepass(frame, lists, self.prepass, back_faces=False)
             frame.outputs[view.output("prepass")] = self.prepass
             return True
-        self.prepass = _fitted(self.prepass, w, h, "RGBA16F", depth=True)
+        opaque = opaque_groups(frame, view)
+        ahead = GBUFFER_AHEAD and any(features.deferred for features, _ in opaque)
+        if ahead:
+            if self.prepass is not None:
+                self.prepass.free()
+                self.prepass = None
+            if self.depth is None or (self.depth.width, self.depth.height) != (w, h):
+                self.depth = gpu.types.GPUTexture((w, h), format="DEPTH_COMPONENT32F")
+            if self.gbuffer is None or not self.gbuffer.fits(w, h, self.depth, True):
+                self.gbuffer = GBuffer(w, h, self.depth, True)
+        else:
+            self._free_gbuffer()
+            # float32 normals, as the G-buffer's: the same occlusion forward and deferred
+            self.prepass = _fitted(self.prepass, w, h, "RGBA32F", depth=True)
         self.back = _fitted(self.back, w, h, "R16F", depth=True)
         self.depths = _fitted(self.depths, w, h, "RG32F")
         scale = programs.OCCLUSION_SCALES[frame.snapshot.settings.occlusion_resolution]
         self.raw = _fitted(self.raw, -(-w // scale), -(-h // scale), "RGBA32F")
         self.target = _fitted(self.target, w, h, "RGBA16F")
         frame.scene.put_frame(view.view_projection, view.width, view.height, view.samples)
-        for target, back_faces in ((self.prepass, False), (self.back, True)):
-            self._draw_prepass(frame, lists, target, back_faces)
+        if ahead:
+            # the G-buffer's depth and normals are the prepass's (the same vertex program and
+            # normal), its face texture's w the prepass's alpha
+            if not draw_gbuffer(frame, opaque, self.gbuffer, write_depth=True):
+                return False
+            frame.gbuffers[view.output("gbuffer")] = self.gbuffer
+            depth_map, normal_map, facing_map = self.depth, self.gbuffer.textures[1], self.gbuffer.textures[2]
+        else:
+            self._draw_prepass(frame, lists, self.prepass, back_faces=False)
+            depth_map = self.prepass.texture_depth
+            normal_map = facing_map = self.prepass.texture_color
+        self._draw_prepass(frame, lists, self.back, back_faces=True)
         camera = frame.snapshot.camera
         vp = camera.view_projection if view.view_projection is None else view.view_projection
         projection = np.asarray(vp, np.float64) @ np.linalg.inv(np.asarray(camera.view, np.float64))
@@ -424,16 +458,16 @@ class OcclusionPass(Pass):
         perspective = 1.0 if camera.is_perspective else 0.0
         rows[48:52] = (frame.snapshot.settings.occlusion_distance, perspective, w, h)
         block = gpu.types.GPUUniformBuf(rows.tobytes())
-        prepass, back, depths, raw = self.prepass, self.back, self.depths, self.raw
+        back, depths, raw = self.back, self.depths, self.raw
 
         def bind_depths(shader):
-            gpu_library.bind_sampler(shader, "depth_map", prepass.texture_depth)
+            gpu_library.bind_sampler(shader, "depth_map", depth_map)
             gpu_library.bind_sampler(shader, "back_depth_map", back.texture_depth)
-            gpu_library.bind_sampler(shader, "normal_map", prepass.texture_color)
+            gpu_library.bind_sampler(shader, "facing_map", facing_map)
 
         def bind(shader):
             gpu_library.bind_sampler(shader, "depths", depths.texture_color)
-            gpu_library.bind_sampler(shader, "normal_map", prepass.texture_color)
+            gpu_library.bind_sampler(shader, "normal_map", normal_map)
             shader.uniform_block("occlusion", block)
 
         frame.draw_full_screen(gpu_library.occlusion_depths_program(), bind_depths, self.depths)
@@ -445,7 +479,8 @@ class OcclusionPass(Pass):
         frame.draw_full_screen(gpu_library.gtao_program(scale), bind, self.raw)
         frame.draw_full_screen(gpu_library.occlusion_resolve_program(scale), bind_resolve, self.target)
         frame.outputs[view.output("occlusion")] = self.target
-        frame.outputs[view.output("prepass")] = self.prepass
+        if not ahead:
+            frame.outputs[view.output("prepass")] = self.prepass
         return True
 
     @staticmethod
@@ -473,11 +508,17 @@ class OcclusionPass(Pass):
                 gpu.state.depth_mask_set(False)
                 gpu.state.face_culling_set("NONE")
 
+    def _free_gbuffer(self) -> None:
+        if self.gbuffer is not None:
+            self.gbuffer.free()
+        self.gbuffer = self.depth = None
+
     def free(self) -> None:
         for target in (self.prepass, self.back, self.depths, self.raw, self.target):
             if target is not None:
                 target.free()
         self.prepass = self.back = self.depths = self.raw = self.target = None
+        self._free_gbuffer()
 
 
 #: Draw the opaque surfaces against the occlusion prepass's depth where there is one, so that
@@ -585,13 +626,33 @@ class GBuffer:
         self.framebuffer = self.groups = self.textures = self.depth = None
 
 
+def draw_gbuffer(frame: Frame, opaque, gbuffer: GBuffer, write_depth: bool) -> bool:
+    """Every opaque surface of ``opaque`` (``opaque_groups``) into ``gbuffer``, each with its
+    group's number (-1 where shaded forward), against the G-buffer's depth -- written where
+    ``write_depth`` (no prepass drew it). False if cancelled."""
+    gbuffer.clear(depth=write_depth)
+    with gbuffer.framebuffer.bind():
+        gpu.state.depth_test_set("LESS_EQUAL")
+        gpu.state.depth_mask_set(write_depth)
+        gpu.state.face_culling_set("NONE")
+        gpu.state.blend_set("NONE")
+        try:
+            groups = [(group if features.deferred else -1, draws)
+                      for group, (features, draws) in enumerate(opaque)]
+            return frame.scene.draw_gbuffer(groups, frame.should_stop)
+        finally:
+            gpu.state.depth_test_set("NONE")
+            gpu.state.depth_mask_set(False)
+
+
 class OpaquePass(TargetPass):
     """The view's scene target (colour and depth, supersampled size), cleared to the background
     colour, and every opaque surface drawn into it. Where the occlusion pass drew its prepass
     (``<view>.prepass``), the target takes that depth and draws against it without writing it:
     hidden surfaces cost no shading. Where shading is costly and the triangles small
-    (``deferred_pays``), surfaces are shaded deferred: their G-buffer drawn first (it writes the
-    depth where no prepass did), then each program once over its own pixels, in whole quads of
+    (``deferred_pays``), surfaces are shaded deferred: their G-buffer drawn first (by the occlusion
+    pass, in its prepass's place, where there is occlusion; it writes the depth where no prepass
+    did), then each program once over its own pixels, in whole quads of
     pixels (small triangles shaded forward pay for the partly covered blocks of pixels they
     touch); the others are drawn forward against the finished depth. Writes ``<view>.scene``."""
 
@@ -610,9 +671,11 @@ class OpaquePass(TargetPass):
         prepass = frame.outputs.get(view.output("prepass")) if SHADE_ONCE else None
         if prepass is not None and not prepass.fits(w, h, prepass.format, True):
             prepass = None
+        ahead = frame.gbuffers.get(view.output("gbuffer")) if deferred else None
         # the depth drawn against: the prepass's (the nearest opaque surface's, by the same vertex
-        # program: each pixel is shaded once), else the G-buffer's, else the target's own
-        shared = prepass.texture_depth if prepass is not None else None
+        # program: each pixel is shaded once) or that of the G-buffer the occlusion pass drew,
+        # else the G-buffer's own, else the target's own
+        shared = prepass.texture_depth if prepass is not None else ahead.depth if ahead is not None else None
         if deferred and shared is None:
             if self.depth is None or (self.depth.width, self.depth.height) != (w, h):
                 self.depth = gpu.types.GPUTexture((w, h), format="DEPTH_COMPONENT32F")
@@ -637,23 +700,13 @@ class OpaquePass(TargetPass):
             gpu_library.bind_sampler(shader, "env_occlusion_map", occlusion.texture_color)
 
         drawn = True  # every G-buffer draw done (a cancel shades what was drawn, no more)
-        if deferred:
+        gbuffer = ahead
+        if deferred and ahead is None:
             face = any(features.deferred and features.shadow_layers for features, _ in opaque)
             if self.gbuffer is None or not self.gbuffer.fits(w, h, shared, face):
                 self.gbuffer = GBuffer(w, h, shared, face)
-            self.gbuffer.clear(depth=prepass is None)
-            with self.gbuffer.framebuffer.bind():
-                gpu.state.depth_test_set("LESS_EQUAL")
-                gpu.state.depth_mask_set(prepass is None)
-                gpu.state.face_culling_set("NONE")
-                gpu.state.blend_set("NONE")
-                try:
-                    groups = [(group if features.deferred else -1, draws)
-                              for group, (features, draws) in enumerate(opaque)]
-                    drawn = frame.scene.draw_gbuffer(groups, frame.should_stop)
-                finally:
-                    gpu.state.depth_test_set("NONE")
-                    gpu.state.depth_mask_set(False)
+            gbuffer = self.gbuffer
+            drawn = draw_gbuffer(frame, opaque, gbuffer, write_depth=prepass is None)
         elif self.gbuffer is not None:
             self.gbuffer.free()
             self.gbuffer = None
@@ -668,7 +721,7 @@ class OpaquePass(TargetPass):
                 for group, (features, _draws) in enumerate(opaque):
                     if not features.deferred:
                         continue
-                    frame.scene.shade_deferred(features, group, view.lobes, self.gbuffer.textures,
+                    frame.scene.shade_deferred(features, group, view.lobes, gbuffer.textures,
                                                frame.full_screen, bind if features.occlusion else None)
                 if not drawn:
                     return False

@@ -7,6 +7,6 @@ void main()
   ivec2 texel = ivec2(gl_FragCoord.xy);
   float front = texelFetch(depth_map, texel, 0).r;
   float back = texelFetch(back_depth_map, texel, 0).r;
-  bool outside = texelFetch(normal_map, texel, 0).a > 0.75;
+  bool outside = texelFetch(facing_map, texel, 0).a > 0.75;
   frag_color = vec4(front, outside && back > front ? back : 1.0, 0.0, 1.0);
 }

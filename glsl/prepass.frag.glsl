@@ -1,6 +1,7 @@
 /* Depth and normals of the opaque surfaces, ahead of shading, for the occlusion pass: the
- * interpolated normal (flipped towards the viewer on back faces, as the shading does) in world
- * space, alpha 1 where the surface is seen from outside and 0.5 from inside. With SL_BACK_FACES,
+ * shading normal (flipped towards the viewer on back faces, as the shading does) in world space,
+ * float32 as the G-buffer's (glsl/gbuffer.frag.glsl, drawn in its place for surfaces shaded
+ * deferred), alpha 1 where the surface is seen from outside and 0.5 from inside. With SL_BACK_FACES,
  * only the faces turned away from the viewer, depth alone: where rays leave the objects. */
 
 void main()
@@ -11,9 +12,7 @@ void main()
   }
   frag_color = vec4(0.0);
 #else
-  vec3 n = world_normal;
-  float len2 = dot(n, n);
-  n = len2 > 1e-20 ? n * inversesqrt(len2) : vec3(0.0, 0.0, 1.0);
+  vec3 n = shading_normal(world_position);
   bool outward = facing_outward();
   frag_color = vec4(outward ? n : -n, outward ? 1.0 : 0.5);
 #endif

@@ -160,7 +160,9 @@ def test_deferred_shading_is_chosen_by_the_shading_cost_and_the_triangles_size()
 def test_deferred_shading_changes_no_pixel(preset):
     """Shading the opaque surfaces deferred (their G-buffer first, then each program over its own
     pixels) gives exactly the forward image: with a surface that stays forward (an image-mapped
-    plane), a mirrored object, a partly transparent veil in front and 2 x 2 supersampling."""
+    plane), a mirrored object, a partly transparent veil in front and 2 x 2 supersampling; and so
+    does the G-buffer drawn by the occlusion pass in its prepass's place (the same depth, normals
+    and facing)."""
     from gpu_harness import run_on_gpu
 
     from addon import extract, passes, presets, renderer, scene_builder
@@ -187,10 +189,12 @@ def test_deferred_shading_changes_no_pixel(preset):
     def job(depsgraph):
         out = {}
         snapshot = extract.snapshot(depsgraph, 96, 54)
-        for deferred in (True, False):
-            passes.DEFERRED = deferred
-            out[deferred] = r.render(snapshot, samples=2).copy()
-            out[deferred, "gbuffer"] = r._passes[passes.OpaquePass, "main"].gbuffer is not None
+        for deferred, ahead in ((True, True), (True, False), (False, True)):
+            passes.DEFERRED, passes.GBUFFER_AHEAD = deferred, ahead
+            out[deferred, ahead] = r.render(snapshot, samples=2).copy()
+            occlusion = r._passes[passes.OcclusionPass, "main"]
+            out[deferred, ahead, "gbuffer"] = (r._passes[passes.OpaquePass, "main"].gbuffer is not None,
+                                               occlusion.gbuffer is not None, occlusion.prepass is not None)
             out[deferred, "kinds"] = {passes.deferred_pays(f, snapshot.triangle_count, 4 * 96 * 54)
                                       for f, _ in r.scene.draw_lists(None, False).opaque}
         return out
@@ -198,14 +202,19 @@ def test_deferred_shading_changes_no_pixel(preset):
     try:
         out = run_on_gpu(job)
     finally:
-        passes.DEFERRED = True
+        passes.DEFERRED = passes.GBUFFER_AHEAD = True
         run_on_gpu(lambda _d: r.free())
     assert out[True, "kinds"] == {True, False}, "the mapped plane forward, the rest deferred"
-    assert out[True, "gbuffer"] and not out[False, "gbuffer"]
-    lit = out[False][..., :3].max(axis=2) > 0.0
+    # where the world lights, the occlusion pass draws the G-buffer in its prepass's place
+    occluded = preset != "softbox"
+    assert out[True, True, "gbuffer"] == (not occluded, occluded, False), out[True, True, "gbuffer"]
+    assert out[True, False, "gbuffer"] == (True, False, occluded), out[True, False, "gbuffer"]
+    assert out[False, True, "gbuffer"] == (False, False, occluded), out[False, True, "gbuffer"]
+    lit = out[False, True][..., :3].max(axis=2) > 0.0
     assert lit.mean() > 0.5, lit.mean()
-    differ = np.abs(out[True] - out[False]).max()
-    assert differ == 0.0, f"{differ} largest difference"
+    for deferred in ((True, True), (True, False)):
+        differ = np.abs(out[deferred] - out[False, True]).max()
+        assert differ == 0.0, f"{differ} largest difference ({deferred})"
 
 
 def test_views_beyond_the_deferred_budget_are_shaded_forward():
@@ -225,7 +234,8 @@ def test_views_beyond_the_deferred_budget_are_shaded_forward():
         for budget in (64 * 36, 64 * 36 - 1):
             passes.DEFERRED_PIXELS = budget
             out[budget] = r.render(snapshot).copy()
-            out[budget, "gbuffer"] = r._passes[passes.OpaquePass, "main"].gbuffer is not None
+            out[budget, "gbuffer"] = any(r._passes[kind, "main"].gbuffer is not None
+                                         for kind in (passes.OpaquePass, passes.OcclusionPass))
         return out
 
     try:
