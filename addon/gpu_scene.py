@@ -145,6 +145,17 @@ def _stopped(draw: Draw, should_stop: Callable[[], bool] | None) -> bool:
     return should_stop is not None and draw.order % 64 == 0 and should_stop()
 
 
+def _cull(culling: Callable[[Draw], str] | None, draw: Draw, mode: str | None) -> str | None:
+    """Set the faces culled for ``draw`` where ``culling`` says and they differ from ``mode``
+    (the last set); returns the mode now set."""
+    if culling is None:
+        return mode
+    wanted = culling(draw)
+    if wanted != mode:
+        gpu.state.face_culling_set(wanted)
+    return wanted
+
+
 class SceneResources:
     def __init__(self):
         self.snapshot: Snapshot | None = None
@@ -308,6 +319,24 @@ class SceneResources:
             out[i] *= geometry.winding if whole else 0
         return out
 
+    def view_facing(self, draws: list[Draw], view_projection) -> np.ndarray:
+        """Per draw, as ``caster_facing`` (+1 closed facing out, -1 in, 0 open), where the item's
+        bounding sphere lies wholly beyond the view's near plane (``view_projection``: world ->
+        clip), else 0: every ray of the view then enters the closed surface from outside, so its
+        nearest face along each faces the viewer and its other faces are hidden behind that one.
+        ``draws``: every opaque draw of the view (an item's slots are whole only together)."""
+        facing = self.caster_facing(draws)
+        if not facing.any():
+            return facing
+        m = np.asarray(view_projection, np.float64)
+        plane = m[3] + m[2]  # clip w + z >= 0: on the near plane's far side
+        length = float(np.linalg.norm(plane[:3]))
+        if not np.isfinite(length) or length <= 0.0:
+            return np.zeros_like(facing)
+        spheres = self.caster_spheres(draws)
+        beyond = (spheres[:, :3] @ plane[:3] + plane[3]) / length > spheres[:, 3] * 1.001 + 1e-6
+        return np.where(beyond, facing, 0).astype(np.int8)
+
     def shadow_casters(self) -> list[Draw]:
         """The opaque draws of the items that cast shadows (partly transparent surfaces cast none)."""
         items = self.snapshot.items
@@ -452,15 +481,20 @@ class SceneResources:
 
     def draw_group(self, features: programs.Features, draws: list[Draw], lobes,
                    should_stop: Callable[[], bool] | None = None,
-                   bind: Callable[[gpu.types.GPUShader], None] | None = None) -> bool:
-        """Draw ``draws`` (one feature set's) into the bound framebuffer; False if cancelled."""
+                   bind: Callable[[gpu.types.GPUShader], None] | None = None,
+                   culling: Callable[[Draw], str] | None = None) -> bool:
+        """Draw ``draws`` (one feature set's) into the bound framebuffer; False if cancelled.
+        ``culling``: the faces the rasteriser drops per draw (the state is left at the last
+        draw's: callers restore it)."""
         shader = self._bind_program(features, lobes, bind)
         materials = self.snapshot.materials
         samplers = [(name.removesuffix("_CLOSEST").lower() + "_map") for name in features.maps]
         block = -1
+        mode = None
         for draw in draws:
             if _stopped(draw, should_stop):
                 return False
+            mode = _cull(culling, draw, mode)
             block = self._bind_object(shader, draw, block)
             shader.uniform_block("material", self._materials[draw.material].ubo)
             for sampler in samplers:
@@ -478,17 +512,20 @@ class SceneResources:
         return draw.block
 
     def draw_gbuffer(self, groups: list[tuple[int, list[Draw]]],
-                     should_stop: Callable[[], bool] | None = None) -> bool:
+                     should_stop: Callable[[], bool] | None = None,
+                     culling: Callable[[Draw], str] | None = None) -> bool:
         """Draw each (group, draws) into the bound G-buffer (glsl/gbuffer.frag.glsl): group -1 for
-        surfaces shaded forward; False if cancelled."""
+        surfaces shaded forward; False if cancelled. ``culling`` as ``draw_group``'s."""
         shader = gpu_library.gbuffer_program()
         shader.bind()
         shader.uniform_block("frame", self._frame.ubo)
         block = -1
+        mode = None
         for group, draws in groups:
             for draw in draws:
                 if _stopped(draw, should_stop):
                     return False
+                mode = _cull(culling, draw, mode)
                 block = self._bind_object(shader, draw, block)
                 shader.uniform_int("gbuffer", (self.material_rows[draw.material], group))
                 draw.batch.draw(shader)

@@ -30,7 +30,7 @@ import gpu
 import numpy as np
 
 from . import exposure, gpu_library, programs, shadows
-from .gpu_scene import SceneResources
+from .gpu_scene import Draw, SceneResources
 from .snapshot import MAX_ENVIRONMENT_IMAGES, Snapshot, World
 
 
@@ -152,6 +152,8 @@ class Frame:
     exposures: dict[str, tuple[float, float]] = field(default_factory=dict)  # view -> (stops, metered)
     # view output -> the G-buffer the occlusion pass drew for it ahead of the opaque pass
     gbuffers: dict[str, GBuffer] = field(default_factory=dict)
+    # view name -> the faces culled per opaque draw (``view_culling``), worked out once a frame
+    cullings: dict[str, Callable[[Draw], str] | None] = field(default_factory=dict)
 
     def exposure(self, view: View) -> float:
         """The view's exposure in stops: metered (and adapted) when automatic, else its own."""
@@ -219,6 +221,29 @@ CULL_CLOSED_CASTERS = True
 SKIP_SHADOWLESS = True
 #: The faces culled for a caster's facing (``SceneResources.caster_facing``): open, out, in.
 CULLING = {0: "NONE", 1: "BACK", -1: "FRONT"}
+#: Cull the faces of closed surfaces that a view sees wholly from outside where they turn away
+#: from it: each is hidden behind a nearer face of its own (``SceneResources.view_facing``; the
+#: prepass, the G-buffer and forward shading; tests turn it off to compare).
+CULL_CLOSED_SURFACES = True
+
+
+def view_culling(frame: Frame, view: View, opaque) -> Callable[[Draw], str] | None:
+    """The faces culled per draw of ``opaque`` ((features, draws) groups: all of the view's
+    opaque surfaces) as ``view`` sees them, or None where none is."""
+    if not CULL_CLOSED_SURFACES:
+        return None
+    if view.name in frame.cullings:
+        return frame.cullings[view.name]
+    frame.cullings[view.name] = None
+    draws = [draw for _features, group in opaque for draw in group]
+    camera = frame.snapshot.camera
+    facing = frame.scene.view_facing(
+        draws, camera.view_projection if view.view_projection is None else view.view_projection)
+    if not facing.any():
+        return None
+    modes = {id(draw): CULLING[int(f)] for draw, f in zip(draws, facing)}
+    frame.cullings[view.name] = culling = lambda draw: modes.get(id(draw), "NONE")  # noqa: E731
+    return culling
 
 
 class ShadowPass(Pass):
@@ -413,7 +438,7 @@ class OcclusionPass(Pass):
             self._free_gbuffer()
             self.prepass = _fitted(self.prepass, w, h, "RGBA16F", depth=True)  # its depth alone is read
             frame.scene.put_frame(view.view_projection, view.width, view.height, view.samples)
-            self._draw_prepass(frame, lists, self.prepass, back_faces=False)
+            self._draw_prepass(frame, view, lists, self.prepass, back_faces=False)
             frame.outputs[view.output("prepass")] = self.prepass
             return True
         opaque = opaque_groups(frame, view)
@@ -439,15 +464,15 @@ class OcclusionPass(Pass):
         if ahead:
             # the G-buffer's depth and normals are the prepass's (the same vertex program and
             # normal), its face texture's w the prepass's alpha
-            if not draw_gbuffer(frame, opaque, self.gbuffer, write_depth=True):
+            if not draw_gbuffer(frame, view, opaque, self.gbuffer, write_depth=True):
                 return False
             frame.gbuffers[view.output("gbuffer")] = self.gbuffer
             depth_map, normal_map, facing_map = self.depth, self.gbuffer.textures[1], self.gbuffer.textures[2]
         else:
-            self._draw_prepass(frame, lists, self.prepass, back_faces=False)
+            self._draw_prepass(frame, view, lists, self.prepass, back_faces=False)
             depth_map = self.prepass.texture_depth
             normal_map = facing_map = self.prepass.texture_color
-        self._draw_prepass(frame, lists, self.back, back_faces=True)
+        self._draw_prepass(frame, view, lists, self.back, back_faces=True)
         camera = frame.snapshot.camera
         vp = camera.view_projection if view.view_projection is None else view.view_projection
         projection = np.asarray(vp, np.float64) @ np.linalg.inv(np.asarray(camera.view, np.float64))
@@ -484,9 +509,10 @@ class OcclusionPass(Pass):
         return True
 
     @staticmethod
-    def _draw_prepass(frame: Frame, lists, target: Target, back_faces: bool) -> None:
+    def _draw_prepass(frame: Frame, view: View, lists, target: Target, back_faces: bool) -> None:
         """The opaque surfaces' nearest depth and normals into ``target`` (``back_faces``: the
         nearest faces turned away, depth alone)."""
+        front_culling = None if back_faces else view_culling(frame, view, lists.opaque)
         with target.bind():
             target.framebuffer.clear(color=(0.0, 0.0, 1.0, 0.0), depth=1.0)
             gpu.state.depth_test_set("LESS_EQUAL")
@@ -502,6 +528,8 @@ class OcclusionPass(Pass):
                         # wind the other way (turning the winding with front_facing_set would
                         # turn the program's gl_FrontFacing too)
                         culling = ["BACK" if h < 0 else "FRONT" for h in frame.scene.handedness(draws)]
+                    elif front_culling is not None:
+                        culling = [front_culling(draw) for draw in draws]
                     frame.scene.draw_positions(draws, shader, culling=culling)
             finally:
                 gpu.state.depth_test_set("NONE")
@@ -626,10 +654,11 @@ class GBuffer:
         self.framebuffer = self.groups = self.textures = self.depth = None
 
 
-def draw_gbuffer(frame: Frame, opaque, gbuffer: GBuffer, write_depth: bool) -> bool:
+def draw_gbuffer(frame: Frame, view: View, opaque, gbuffer: GBuffer, write_depth: bool) -> bool:
     """Every opaque surface of ``opaque`` (``opaque_groups``) into ``gbuffer``, each with its
     group's number (-1 where shaded forward), against the G-buffer's depth -- written where
     ``write_depth`` (no prepass drew it). False if cancelled."""
+    culling = view_culling(frame, view, opaque)
     gbuffer.clear(depth=write_depth)
     with gbuffer.framebuffer.bind():
         gpu.state.depth_test_set("LESS_EQUAL")
@@ -639,10 +668,11 @@ def draw_gbuffer(frame: Frame, opaque, gbuffer: GBuffer, write_depth: bool) -> b
         try:
             groups = [(group if features.deferred else -1, draws)
                       for group, (features, draws) in enumerate(opaque)]
-            return frame.scene.draw_gbuffer(groups, frame.should_stop)
+            return frame.scene.draw_gbuffer(groups, frame.should_stop, culling)
         finally:
             gpu.state.depth_test_set("NONE")
             gpu.state.depth_mask_set(False)
+            gpu.state.face_culling_set("NONE")
 
 
 class OpaquePass(TargetPass):
@@ -706,7 +736,7 @@ class OpaquePass(TargetPass):
             if self.gbuffer is None or not self.gbuffer.fits(w, h, shared, face):
                 self.gbuffer = GBuffer(w, h, shared, face)
             gbuffer = self.gbuffer
-            drawn = draw_gbuffer(frame, opaque, gbuffer, write_depth=prepass is None)
+            drawn = draw_gbuffer(frame, view, opaque, gbuffer, write_depth=prepass is None)
         elif self.gbuffer is not None:
             self.gbuffer.free()
             self.gbuffer = None
@@ -727,15 +757,17 @@ class OpaquePass(TargetPass):
                     return False
                 gpu.state.depth_test_set("LESS_EQUAL")
                 gpu.state.depth_mask_set(shared is None)
+                culling = view_culling(frame, view, opaque)
                 for features, draws in opaque:
                     if features.deferred:
                         continue
                     if not frame.scene.draw_group(features, draws, view.lobes, frame.should_stop,
-                                                  bind if features.occlusion else None):
+                                                  bind if features.occlusion else None, culling):
                         return False
             finally:
                 gpu.state.depth_test_set("NONE")
                 gpu.state.depth_mask_set(False)
+                gpu.state.face_culling_set("NONE")
         return True
 
     def free(self) -> None:

@@ -217,6 +217,86 @@ def test_deferred_shading_changes_no_pixel(preset):
         assert differ == 0.0, f"{differ} largest difference ({deferred})"
 
 
+def _closed_sphere(scene, name, radius, location, inward=False, scale=(1.0, 1.0, 1.0)):
+    """A closed UV sphere object with its own material (``inward``: its faces turned in)."""
+    import bmesh
+
+    mesh = bpy.data.meshes.new(name)
+    bm = bmesh.new()
+    bmesh.ops.create_uvsphere(bm, u_segments=24, v_segments=12, radius=radius)
+    if inward:
+        bmesh.ops.reverse_faces(bm, faces=bm.faces[:])
+    bm.to_mesh(mesh)
+    bm.free()
+    mesh.materials.append(scenes.material(name, base_color=(0.7, 0.6, 0.5), roughness=0.5))
+    obj = bpy.data.objects.new(name, mesh)
+    scene.collection.objects.link(obj)
+    obj.location, obj.scale = location, scale
+    return obj
+
+
+def test_closed_surfaces_seen_from_outside_cull_their_hidden_faces_changing_no_pixel():
+    """Closed surfaces wholly beyond the camera's near plane are drawn with the faces turned from
+    the camera culled (prepass, G-buffer and forward shading): their nearest face along each ray
+    faces the camera, so nothing changes to the bit, forward and deferred; a mirrored sphere and
+    one whose faces turn in cull the other side; a sphere around the camera (seen from inside)
+    and a box the near plane cuts (its inside seen through the cut) cull nothing."""
+    from gpu_harness import run_on_gpu
+    from mathutils import Vector
+
+    from addon import extract, passes, presets, renderer, scene_builder
+
+    scene = scenes.reset()
+    scene_builder.build_scene(presets.load_scene_preset("material_grid"), scene)
+    scene.render.resolution_x, scene.render.resolution_y = 96, 54
+    camera = scene.camera.matrix_world
+    forward = (camera.to_3x3() @ Vector((0.0, 0.0, -1.0))).normalized()
+    right = (camera.to_3x3() @ Vector((1.0, 0.0, 0.0))).normalized()
+    eye = camera.translation
+    _closed_sphere(scene, "Mirrored", 0.5, eye + 6.0 * forward - 1.0 * right, scale=(-1.0, 1.0, 1.0))
+    _closed_sphere(scene, "Inward", 0.5, eye + 6.0 * forward + 1.0 * right, inward=True)
+    # around everything, the camera inside: its inside is what the camera sees beyond the spheres
+    # (the floor taken away)
+    bpy.data.objects.remove(scene.objects["Floor"])
+    _closed_sphere(scene, "Room", 15.0, eye)
+    scene.camera.data.clip_end = 100.0
+    # across the near plane (0.1 m): its inside seen through the cut, on the right of the view
+    _closed_sphere(scene, "Cut", 0.3, eye + (scene.camera.data.clip_start + 0.05) * forward + 0.35 * right)
+    r = renderer.Renderer()
+
+    def job(depsgraph):
+        out = {}
+        snapshot = extract.snapshot(depsgraph, 96, 54)
+        for deferred in (True, False):
+            for cull in (True, False):
+                passes.DEFERRED, passes.CULL_CLOSED_SURFACES = deferred, cull
+                out[deferred, cull] = r.render(snapshot).copy()
+        draws = [d for _f, group in r.scene.draw_lists(None, False).opaque for d in group]
+        facing = r.scene.view_facing(draws, snapshot.camera.view_projection)
+        out["facing"] = {}
+        for draw, f in zip(draws, facing):
+            out["facing"].setdefault(snapshot.items[draw.order].materials[0], set()).add(int(f))
+        return out
+
+    try:
+        out = run_on_gpu(job)
+    finally:
+        passes.DEFERRED = passes.CULL_CLOSED_SURFACES = True
+        run_on_gpu(lambda _d: r.free())
+    facing = {next((n for n in ("Mirrored", "Inward", "Room", "Cut") if n in key), key): f
+              for key, f in out["facing"].items()}
+    assert facing["Mirrored"] == {-1} and facing["Inward"] == {-1}, facing
+    assert facing["Room"] == {0} and facing["Cut"] == {0}, facing
+    grid = {key: f for key, f in facing.items() if key not in ("Mirrored", "Inward", "Room", "Cut")}
+    assert len(grid) == 11 and all(f == {1} for f in grid.values()), f"the grid's spheres: {facing}"
+    for deferred in (True, False):
+        image = out[deferred, True]
+        lit = (image[..., :3].max(axis=2) > 0.0).mean()
+        assert lit > 0.9, f"the room's inside fills the background: {lit:.3f} of the pixels lit"
+        differ = np.abs(image - out[deferred, False]).max()
+        assert differ == 0.0, f"{differ} largest difference (deferred {deferred})"
+
+
 def test_views_beyond_the_deferred_budget_are_shaded_forward():
     """A view with more pixels than passes.DEFERRED_PIXELS keeps no G-buffer (its memory) and
     gives the deferred image exactly."""

@@ -633,7 +633,8 @@ def test_closed_casters_drawn_by_their_lit_faces_cast_the_same_shadows(tmp_path,
     torus and an inside-out sphere (their faces turn), under a point light (cube maps), a spot and
     a sun, each with a size; the ground (open) and a cube with a partly transparent face (the rest
     of it open) drawn whole; a second point light inside a closed sphere (a bulb), which sees its
-    inside: drawn whole for it, the bulb keeps its light in."""
+    inside: drawn whole for it, the bulb keeps its light in. And the camera's passes culling the
+    faces these closed surfaces turn from it (passes.CULL_CLOSED_SURFACES) give the same image."""
     from addon import gpu_scene, passes
 
     scene = scenes.reset(size=64)
@@ -680,6 +681,7 @@ def test_closed_casters_drawn_by_their_lit_faces_cast_the_same_shadows(tmp_path,
         return out
 
     monkeypatch.setattr(gpu_scene.SceneResources, "caster_facing", caster_facing)
+    monkeypatch.setattr(passes, "CULL_CLOSED_SURFACES", False)  # the camera's culling: below
     culled = scenes.render(scene, tmp_path / "culled.exr")
     monkeypatch.setattr(passes, "CULL_CLOSED_CASTERS", False)
     whole = scenes.render(scene, tmp_path / "whole.exr")
@@ -689,6 +691,20 @@ def test_closed_casters_drawn_by_their_lit_faces_cast_the_same_shadows(tmp_path,
     shadowed = float(np.mean(whole[..., :3].sum(-1) < 0.5 * np.median(whole[..., :3].sum(-1))))
     assert shadowed > 0.03, f"only {shadowed:.1%} of the pixels in shadow"
     assert np.array_equal(culled, whole), float(np.abs(culled - whole).max())
+    # the camera's passes culling the same closed surfaces' faces turned from it: the same image
+    monkeypatch.setattr(passes, "CULL_CLOSED_SURFACES", True)
+    seen_facing = []
+    view_facing = gpu_scene.SceneResources.view_facing
+
+    def record(self, draws, view_projection):
+        out = view_facing(self, draws, view_projection)
+        seen_facing.append(sorted(int(f) for f in out))
+        return out
+
+    monkeypatch.setattr(gpu_scene.SceneResources, "view_facing", record)
+    seen = scenes.render(scene, tmp_path / "seen.exr")
+    assert seen_facing == [[-1, -1, 0, 0, 1, 1, 1]], seen_facing
+    assert np.array_equal(seen, whole), float(np.abs(seen - whole).max())
 
 
 # --- the maps' texture between renders ------------------------------------------------------------
