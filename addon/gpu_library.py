@@ -13,7 +13,8 @@ main thread) all draw with the same programs, so they live here, once, behind on
 - The message of the last failed compile is kept for the Render panel until a render compiles
   cleanly.
 - ``take_spare(key)`` / ``keep_spare(key, ...)``: textures a finished renderer handed back (its
-  shadow maps) for the next one of the same shape, within ``SPARE_BYTES``, with what the
+  shadow maps; its targets' textures, ``take_texture`` / ``keep_textures``) for the next one of
+  the same shape, within ``SPARE_BYTES``, with what the
   renderer says of their content (the shadow maps' layers that hold nothing, and with Persistent
   Data what they hold).
 - ``image_texture(image, build)``: each image's texture, uploaded once per read of its pixels,
@@ -55,8 +56,13 @@ PROGRAMS_KEPT = 96
 #: back and draws every layer a caster reaches again; of the others it clears only those that do
 #: not hold "nothing" already (the renderer that kept it says which, passes.ShadowPass.far), or,
 #: with Persistent Data, draws nothing where the maps hold what it would draw
-#: (passes.ShadowPass.content). Textures larger than this are freed as before.
+#: (passes.ShadowPass.content). Textures larger than this are freed as before. The passes'
+#: targets go the same way (``keep_textures``): a fresh 640 x 360 float texture cost 1-3 ms to
+#: allocate, ~8 ms of a world-lit frame's targets.
 SPARE_BYTES = 256 << 20
+#: Bytes per texel of the formats passes' targets use (``keep_textures``' accounting).
+TEXEL_BYTES = {"RGBA32F": 16, "RGBA16F": 8, "RG32F": 8, "R32F": 4, "R16F": 2, "RGBA8": 4,
+               "DEPTH_COMPONENT32F": 4, "DEPTH_COMPONENT24": 4, "DEPTH24_STENCIL8": 4}
 #: Image textures kept between renderers, in bytes of GPU memory (least recently used dropped
 #: first). A final render makes a new renderer each time, and uploading an image costs it again:
 #: 12 ms of the world preset's ~110 ms frame for its 1024 x 512 half-float world (the conversion
@@ -178,9 +184,22 @@ class _Library:
             while sum(entry[2] for entry in self._spares) > SPARE_BYTES:
                 del self._spares[0]
 
-    def spare_bytes(self) -> int:
+    def take_texture(self, width: int, height: int, format: str) -> gpu.types.GPUTexture | None:
+        """A 2D texture of this size and format a finished renderer handed back, or None."""
+        spare = self.take_spare(("texture", width, height, format))
+        return None if spare is None else spare[0]
+
+    def keep_textures(self, textures) -> None:
+        """Keep a finished renderer's 2D ``textures`` for the next renderers' targets of their size
+        and format (their content is not kept: a target is drawn before it is read)."""
+        for texture in textures:
+            size = texture.width * texture.height * TEXEL_BYTES.get(texture.format, 16)
+            self.keep_spare(("texture", texture.width, texture.height, texture.format), texture, size)
+
+    def spare_bytes(self, kind: str | None = None) -> int:
+        """Bytes of the textures kept (of ``kind`` alone: "shadow maps", "texture")."""
         with self._lock:
-            return sum(entry[2] for entry in self._spares)
+            return sum(entry[2] for entry in self._spares if kind is None or entry[0][0] == kind)
 
     def drop_spares(self) -> None:
         with self._lock:

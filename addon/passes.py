@@ -34,6 +34,14 @@ from .gpu_scene import Draw, SceneResources
 from .snapshot import MAX_ENVIRONMENT_IMAGES, Snapshot, World
 
 
+def new_texture(width: int, height: int, format: str) -> gpu.types.GPUTexture:
+    """A 2D texture for a target: one a finished renderer handed back (``Renderer.free``), else a
+    new one. Its content is undefined either way: every target is drawn (or cleared) before it
+    is read."""
+    texture = gpu_library.LIBRARY.take_texture(width, height, format)
+    return texture if texture is not None else gpu.types.GPUTexture((width, height), format=format)
+
+
 class Target:
     """A float colour texture and (unless ``depth`` is False) a depth texture drawn into
     together, both readable by shaders (depth peeling samples the opaque depth)."""
@@ -43,10 +51,10 @@ class Target:
         """``depth_texture``: another target's depth (of this size) to draw against instead of a
         depth texture of its own."""
         self.width, self.height, self.format, self.depth = width, height, format, depth
-        self.texture_color = gpu.types.GPUTexture((width, height), format=format)
+        self.texture_color = new_texture(width, height, format)
         self.shares_depth = depth and depth_texture is not None
         if depth and depth_texture is None:
-            depth_texture = gpu.types.GPUTexture((width, height), format="DEPTH_COMPONENT32F")
+            depth_texture = new_texture(width, height, "DEPTH_COMPONENT32F")
         self.texture_depth = depth_texture if depth else None
         if depth:
             self.framebuffer = gpu.types.GPUFrameBuffer(color_slots=self.texture_color,
@@ -75,6 +83,12 @@ class Target:
         """Wait until everything drawn into the target is done (one texel read back)."""
         with self.bind():
             self.framebuffer.read_color(0, 0, 1, 1, 4, 0, "FLOAT")
+
+    def owned(self) -> list:
+        """The textures this target made (not a depth it shares)."""
+        if self.texture_color is None:
+            return []
+        return [self.texture_color] + ([self.texture_depth] if self.depth and not self.shares_depth else [])
 
     def free(self) -> None:
         """Drop the textures and framebuffer (Blender frees them with their last reference)."""
@@ -196,6 +210,10 @@ class Pass:
     def free(self) -> None:
         """Drop the pass's own GPU objects."""
 
+    def textures(self) -> list:
+        """The 2D textures the pass made for its targets (``Renderer.free`` hands them back)."""
+        return []
+
 
 class TargetPass(Pass):
     """A pass drawing into one target of its own, kept while its size and format hold."""
@@ -211,6 +229,9 @@ class TargetPass(Pass):
         if self.target is not None:
             self.target.free()
             self.target = None
+
+    def textures(self) -> list:
+        return self.target.owned() if self.target is not None else []
 
 
 #: Draw only the light-facing faces of closed casters into the shadow maps (the same depths as
@@ -448,7 +469,7 @@ class OcclusionPass(Pass):
                 self.prepass.free()
                 self.prepass = None
             if self.depth is None or (self.depth.width, self.depth.height) != (w, h):
-                self.depth = gpu.types.GPUTexture((w, h), format="DEPTH_COMPONENT32F")
+                self.depth = new_texture(w, h, "DEPTH_COMPONENT32F")
             if self.gbuffer is None or not self.gbuffer.fits(w, h, self.depth, True):
                 self.gbuffer = GBuffer(w, h, self.depth, True)
         else:
@@ -540,6 +561,13 @@ class OcclusionPass(Pass):
         if self.gbuffer is not None:
             self.gbuffer.free()
         self.gbuffer = self.depth = None
+
+    def textures(self) -> list:
+        out = [t for target in (self.prepass, self.back, self.depths, self.raw, self.target)
+               if target is not None for t in target.owned()]
+        if self.gbuffer is not None:
+            out += list(self.gbuffer.textures)
+        return out + ([self.depth] if self.depth is not None else [])
 
     def free(self) -> None:
         for target in (self.prepass, self.back, self.depths, self.raw, self.target):
@@ -633,8 +661,7 @@ class GBuffer:
 
     def __init__(self, width: int, height: int, depth: gpu.types.GPUTexture, face: bool):
         self.width, self.height, self.depth, self.face = width, height, depth, face
-        self.textures = tuple(gpu.types.GPUTexture((width, height), format="RGBA32F")
-                              for _ in range(3 if face else 2))
+        self.textures = tuple(new_texture(width, height, "RGBA32F") for _ in range(3 if face else 2))
         self.framebuffer = gpu.types.GPUFrameBuffer(color_slots=self.textures, depth_slot=depth)
         # the groups alone are cleared (to -1: no surface): a pixel's other texels are read only
         # where a surface wrote them this frame
@@ -708,7 +735,7 @@ class OpaquePass(TargetPass):
         shared = prepass.texture_depth if prepass is not None else ahead.depth if ahead is not None else None
         if deferred and shared is None:
             if self.depth is None or (self.depth.width, self.depth.height) != (w, h):
-                self.depth = gpu.types.GPUTexture((w, h), format="DEPTH_COMPONENT32F")
+                self.depth = new_texture(w, h, "DEPTH_COMPONENT32F")
             shared = self.depth
         elif self.depth is not None and shared is not self.depth:
             self.depth = None
@@ -776,6 +803,10 @@ class OpaquePass(TargetPass):
             self.gbuffer.free()
         self.gbuffer = self.depth = None
 
+    def textures(self) -> list:
+        out = super().textures() + ([self.depth] if self.depth is not None else [])
+        return out + (list(self.gbuffer.textures) if self.gbuffer is not None else [])
+
 
 class BackgroundPass(Pass):
     """Where the camera sees no opaque surface (depth still at the far plane) and environment
@@ -826,9 +857,8 @@ class TransparencyPass(Pass):
     def _buffers(self, width: int, height: int, format: str) -> None:
         if self._size == (width, height, format):
             return
-        size = (width, height)
-        self.colour = gpu.types.GPUTexture(size, format=format)
-        self.depths = [gpu.types.GPUTexture(size, format="DEPTH_COMPONENT32F") for _ in range(2)]
+        self.colour = new_texture(width, height, format)
+        self.depths = [new_texture(width, height, "DEPTH_COMPONENT32F") for _ in range(2)]
         # layer i writes depth (i + 1) % 2 and reads depth i % 2, the previous layer's
         self.layer_fbs = [gpu.types.GPUFrameBuffer(color_slots=self.colour, depth_slot=depth)
                           for depth in (self.depths[1], self.depths[0])]
@@ -918,6 +948,12 @@ class TransparencyPass(Pass):
             self.accumulators = self.occupancy = None
             self._size = None
 
+    def textures(self) -> list:
+        if self._size is None:
+            return []
+        return [self.colour, *self.depths] + [t for target in (*self.accumulators, self.occupancy)
+                                              for t in target.owned()]
+
 
 class ResolvePass(TargetPass):
     """Averages each pixel's ``samples`` x ``samples`` sub-pixels (a box filter) of
@@ -983,6 +1019,9 @@ class ExposurePass(Pass):
         for target in self.targets.values():
             target.free()
         self.targets = {}
+
+    def textures(self) -> list:
+        return [t for target in self.targets.values() for t in target.owned()]
 
 
 class DisplayPass(TargetPass):

@@ -18,7 +18,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from . import programs
+from . import gpu_library, programs
 from .gpu_environment import EnvironmentPass
 from .gpu_scene import SceneResources
 from .passes import VIEW_PASSES, ComparePass, Comparison, Frame, Pass, ShadowPass, View, full_screen_batch
@@ -142,7 +142,14 @@ class Renderer:
             view.output("radiance")]
 
     def free(self) -> None:
-        for step in self._passes.values():
+        """Drop every GPU object; the passes' target textures go to the library for the next
+        renderer's (a final render makes a renderer per frame), then the shadow maps' (kept
+        last, so the first to stay within the library's budget)."""
+        steps = list(self._passes.values())
+        seen = set()
+        gpu_library.LIBRARY.keep_textures(
+            t for step in steps for t in step.textures() if id(t) not in seen and not seen.add(id(t)))
+        for step in steps:
             step.free()
         self._passes.clear()
         self.scene.free()

@@ -297,6 +297,56 @@ def test_closed_surfaces_seen_from_outside_cull_their_hidden_faces_changing_no_p
         assert differ == 0.0, f"{differ} largest difference (deferred {deferred})"
 
 
+def test_a_renderer_takes_the_last_ones_target_textures_and_shows_none_of_their_pixels():
+    """A finished renderer hands its targets' textures (G-buffer, occlusion, scene, peeling) to
+    the library, and the next renderer's targets of the same size and format take them instead of
+    allocating: its image, of another view of the scene, is bit for bit the one drawn into fresh
+    textures -- nothing of the pixels they held shows."""
+    from gpu_harness import run_on_gpu
+    from mathutils import Matrix
+
+    from addon import extract, gpu_library, presets, renderer, scene_builder
+
+    library = gpu_library.LIBRARY
+    scene = scenes.reset()
+    scene_builder.build_scene(presets.load_scene_preset("material_grid"), scene)
+    bpy.data.objects.remove(scene.objects["Floor"])  # pixels without a surface, where they had one
+    scene.render.resolution_x, scene.render.resolution_y = 96, 54
+    _veil(scene)
+
+    def render(depsgraph):
+        r = renderer.Renderer()
+        try:
+            image = r.render(extract.snapshot(depsgraph, 96, 54), samples=2).copy()
+            kinds = {type(step).__name__ for step in r._passes.values() if step.textures()}
+        finally:
+            r.free()
+        return image, kinds
+
+    library.drop_spares()
+    first, kinds = run_on_gpu(render)
+    assert {"OcclusionPass", "OpaquePass", "TransparencyPass"} <= kinds, kinds
+    kept = library.spare_bytes("texture")
+    # 2 x 2 supersampled 96 x 54: the G-buffer's three float32 textures alone are 248,832 bytes
+    assert kept > 3 * 16 * 192 * 108, kept
+    scene.camera.matrix_world = Matrix.Translation((0.4, 0.3, 0.0)) @ scene.camera.matrix_world
+    taken = []
+    take = library.take_texture
+    try:
+        library.take_texture = lambda *key: taken.append(take(*key)) or taken[-1]
+        reused, _ = run_on_gpu(render)
+        library.drop_spares()
+        fresh, _ = run_on_gpu(render)
+    finally:
+        del library.take_texture
+    made = len(taken) // 2
+    assert made >= 10 and all(t is not None for t in taken[:made]), taken
+    assert all(t is None for t in taken[made:]), "the spares were dropped"
+    moved = float(np.abs(reused - first).max())
+    assert moved > 0.05, f"moving the camera changed the image by only {moved}"
+    assert np.array_equal(reused, fresh), float(np.abs(reused - fresh).max())
+
+
 def test_views_beyond_the_deferred_budget_are_shaded_forward():
     """A view with more pixels than passes.DEFERRED_PIXELS keeps no G-buffer (its memory) and
     gives the deferred image exactly."""
