@@ -61,6 +61,20 @@ def test_pass_names_are_eevees(tmp_path):
     assert set(LIGHT_PASSES) <= eevee, f"EEVEE wrote {sorted(eevee)}"
 
 
+def _run(job, r, **switches):
+    """``run_on_gpu(job)``, then the passes' ``switches`` set back (name=value) and ``r`` freed."""
+    from gpu_harness import run_on_gpu
+
+    from addon import passes
+
+    try:
+        return run_on_gpu(job)
+    finally:
+        for name, value in switches.items():
+            setattr(passes, name, value)
+        run_on_gpu(lambda _d: r.free())
+
+
 def _veil(scene) -> None:
     """A partly transparent plane across the camera's view, 3 m in front of it."""
     from mathutils import Matrix
@@ -163,7 +177,6 @@ def test_deferred_shading_changes_no_pixel(preset):
     plane), a mirrored object, a partly transparent veil in front and 2 x 2 supersampling; and so
     does the G-buffer drawn by the occlusion pass in its prepass's place (the same depth, normals
     and facing)."""
-    from gpu_harness import run_on_gpu
 
     from addon import extract, passes, presets, renderer, scene_builder
 
@@ -199,11 +212,7 @@ def test_deferred_shading_changes_no_pixel(preset):
                                       for f, _ in r.scene.draw_lists(None, False).opaque}
         return out
 
-    try:
-        out = run_on_gpu(job)
-    finally:
-        passes.DEFERRED = passes.GBUFFER_AHEAD = True
-        run_on_gpu(lambda _d: r.free())
+    out = _run(job, r, DEFERRED=True, GBUFFER_AHEAD=True)
     assert out[True, "kinds"] == {True, False}, "the mapped plane forward, the rest deferred"
     # where the world lights, the occlusion pass draws the G-buffer in its prepass's place
     occluded = preset != "softbox"
@@ -241,7 +250,6 @@ def test_closed_surfaces_seen_from_outside_cull_their_hidden_faces_changing_no_p
     faces the camera, so nothing changes to the bit, forward and deferred; a mirrored sphere and
     one whose faces turn in cull the other side; a sphere around the camera (seen from inside)
     and a box the near plane cuts (its inside seen through the cut) cull nothing."""
-    from gpu_harness import run_on_gpu
     from mathutils import Vector
 
     from addon import extract, passes, presets, renderer, scene_builder
@@ -278,11 +286,7 @@ def test_closed_surfaces_seen_from_outside_cull_their_hidden_faces_changing_no_p
             out["facing"].setdefault(snapshot.items[draw.order].materials[0], set()).add(int(f))
         return out
 
-    try:
-        out = run_on_gpu(job)
-    finally:
-        passes.DEFERRED = passes.CULL_CLOSED_SURFACES = True
-        run_on_gpu(lambda _d: r.free())
+    out = _run(job, r, DEFERRED=True, CULL_CLOSED_SURFACES=True)
     facing = {next((n for n in ("Mirrored", "Inward", "Room", "Cut") if n in key), key): f
               for key, f in out["facing"].items()}
     assert facing["Mirrored"] == {-1} and facing["Inward"] == {-1}, facing
