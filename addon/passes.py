@@ -169,6 +169,10 @@ class Frame:
     # view name -> the faces culled per opaque draw (``view_culling``), worked out once a frame
     cullings: dict[str, Callable[[Draw], str] | None] = field(default_factory=dict)
 
+    def view_projection(self, view: View):
+        """The view's world -> clip matrix: its own, else the camera's."""
+        return self.snapshot.camera.view_projection if view.view_projection is None else view.view_projection
+
     def exposure(self, view: View) -> float:
         """The view's exposure in stops: metered (and adapted) when automatic, else its own."""
         return self.exposures[view.name][0] if view.name in self.exposures else view.exposure
@@ -257,9 +261,7 @@ def view_culling(frame: Frame, view: View, opaque) -> Callable[[Draw], str] | No
         return frame.cullings[view.name]
     frame.cullings[view.name] = None
     draws = [draw for _features, group in opaque for draw in group]
-    camera = frame.snapshot.camera
-    facing = frame.scene.view_facing(
-        draws, camera.view_projection if view.view_projection is None else view.view_projection)
+    facing = frame.scene.view_facing(draws, frame.view_projection(view))
     if not facing.any():
         return None
     modes = {id(draw): CULLING[int(f)] for draw, f in zip(draws, facing)}
@@ -495,8 +497,8 @@ class OcclusionPass(Pass):
             normal_map = facing_map = self.prepass.texture_color
         self._draw_prepass(frame, view, lists, self.back, back_faces=True)
         camera = frame.snapshot.camera
-        vp = camera.view_projection if view.view_projection is None else view.view_projection
-        projection = np.asarray(vp, np.float64) @ np.linalg.inv(np.asarray(camera.view, np.float64))
+        projection = (np.asarray(frame.view_projection(view), np.float64)
+                      @ np.linalg.inv(np.asarray(camera.view, np.float64)))
         rows = np.zeros((3 * 16 + 4,), np.float32)
         rows[0:16] = np.linalg.inv(projection).T.ravel()
         rows[16:32] = projection.T.ravel()
@@ -823,7 +825,7 @@ class BackgroundPass(Pass):
         model = view.model or frame.snapshot.settings.model
         features = programs.BackgroundFeatures(images, clamp=model != "PBR", half_target=view.half_target)
         shader = gpu_library.background_program(features)
-        vp = frame.snapshot.camera.view_projection if view.view_projection is None else view.view_projection
+        vp = frame.view_projection(view)
         inverse = np.linalg.inv(np.asarray(vp, np.float64)).astype(np.float32)
         with target.bind():
             gpu.state.depth_test_set("LESS_EQUAL")  # the triangle lies at the far plane
