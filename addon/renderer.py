@@ -146,9 +146,8 @@ class Renderer:
         renderer's (a final render makes a renderer per frame), then the shadow maps' (kept
         last, so the first to stay within the library's budget)."""
         steps = list(self._passes.values())
-        seen = set()
-        gpu_library.LIBRARY.keep_textures(
-            t for step in steps for t in step.textures() if id(t) not in seen and not seen.add(id(t)))
+        textures = {id(t): t for step in steps for t in step.textures()}  # each once
+        gpu_library.LIBRARY.keep_textures(textures.values())
         for step in steps:
             step.free()
         self._passes.clear()

@@ -249,7 +249,7 @@ def test_closed_surfaces_seen_from_outside_cull_their_hidden_faces_changing_no_p
     the camera culled (prepass, G-buffer and forward shading): their nearest face along each ray
     faces the camera, so nothing changes to the bit, forward and deferred; a mirrored sphere and
     one whose faces turn in cull the other side; a sphere around the camera (seen from inside)
-    and a box the near plane cuts (its inside seen through the cut) cull nothing."""
+    and a sphere the near plane cuts (its inside seen through the cut) cull nothing."""
     from mathutils import Vector
 
     from addon import extract, passes, presets, renderer, scene_builder
@@ -301,7 +301,7 @@ def test_closed_surfaces_seen_from_outside_cull_their_hidden_faces_changing_no_p
         assert differ == 0.0, f"{differ} largest difference (deferred {deferred})"
 
 
-def test_a_renderer_takes_the_last_ones_target_textures_and_shows_none_of_their_pixels():
+def test_a_renderer_takes_the_last_ones_target_textures_and_shows_none_of_their_pixels(monkeypatch):
     """A finished renderer hands its targets' textures (G-buffer, occlusion, scene, peeling) to
     the library, and the next renderer's targets of the same size and format take them instead of
     allocating: its image, of another view of the scene, is bit for bit the one drawn into fresh
@@ -336,13 +336,10 @@ def test_a_renderer_takes_the_last_ones_target_textures_and_shows_none_of_their_
     scene.camera.matrix_world = Matrix.Translation((0.4, 0.3, 0.0)) @ scene.camera.matrix_world
     taken = []
     take = library.take_texture
-    try:
-        library.take_texture = lambda *key: taken.append(take(*key)) or taken[-1]
-        reused, _ = run_on_gpu(render)
-        library.drop_spares()
-        fresh, _ = run_on_gpu(render)
-    finally:
-        del library.take_texture
+    monkeypatch.setattr(library, "take_texture", lambda *key: taken.append(take(*key)) or taken[-1])
+    reused, _ = run_on_gpu(render)
+    library.drop_spares()
+    fresh, _ = run_on_gpu(render)
     made = len(taken) // 2
     assert made >= 10 and all(t is not None for t in taken[:made]), taken
     assert all(t is None for t in taken[made:]), "the spares were dropped"
