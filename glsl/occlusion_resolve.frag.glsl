@@ -7,6 +7,10 @@
  * keeps fewer slices rather than another surface's occlusion.
  * At half resolution (SL_OCCLUSION_SCALE 2) the neighbourhood is the 3 x 3 cells of the trace
  * around the pixel's own, each tested at the pixel it traced (glsl/occlusion.glsl).
+ * Each neighbour's test is written without branches and in its clip coordinates (the plane's
+ * equation taken through the inverse projection once per pixel): on the CPU rasteriser every
+ * branch's both sides run, and a neighbour's view position cost a matrix product and a division
+ * (measured: the resolve 18.7 -> 14.4 ms at 640x360, the same image bit for bit).
  * The visibility is the ratio of the merged sums (visible over unoccluded arcs, glsl/gtao.frag.glsl).
  * raw: the trace (xyz bent-normal sum, w the two sums packed); depths, normal_map as the trace's.
  * Output: xyz the world-space bent normal (the normal where nothing is visible), w visibility. */
@@ -17,7 +21,6 @@
 void main()
 {
   ivec2 texel = ivec2(gl_FragCoord.xy);
-  ivec2 size = ivec2(occlusion.params.zw);
   float depth = texelFetch(depths, texel, 0).r;
   if (depth >= 1.0) {
     frag_color = vec4(1.0); /* the sky: nothing to occlude */
@@ -26,29 +29,28 @@ void main()
   vec3 N = texelFetch(normal_map, texel, 0).xyz;
   vec3 P = view_position((vec2(texel) + 0.5) / occlusion.params.zw, depth);
   vec3 Nv = mat3(occlusion.view) * N;
+  /* the plane through P (normal Nv) in the neighbours' clip coordinates x: dot(Q - P, Nv) w_q =
+   * dot(x, plane) with Q = (ip x).xyz / (ip x).w */
+  mat4 ip = occlusion.inverse_projection;
+  vec4 row_w = vec4(ip[0][3], ip[1][3], ip[2][3], ip[3][3]);
+  vec4 plane = transpose(ip) * vec4(Nv, 0.0) - dot(P, Nv) * row_w;
   float tolerance = PLANE_TOLERANCE * abs(P.z);
+  vec2 to_ndc = 2.0 / occlusion.params.zw;
   vec3 bent = vec3(0.0);
   vec2 sums = vec2(0.0); /* visible, unoccluded */
   ivec2 cells = ivec2(textureSize(raw, 0));
   ivec2 own = texel / SL_OCCLUSION_SCALE;
   for (int dy = -1; dy <= 1; dy++) {
     for (int dx = -1; dx <= 1; dx++) {
-      ivec2 c = own + ivec2(dx, dy);
-      if (any(lessThan(c, ivec2(0))) || any(greaterThanEqual(c, cells))) {
-        continue;
-      }
+      ivec2 c = clamp(own + ivec2(dx, dy), ivec2(0), cells - 1);
       ivec2 t = traced_texel(c);
       float w = (dx == 0 ? 1.0 : 0.5) * (dy == 0 ? 1.0 : 0.5);
-      if (t != texel) {
-        float d = texelFetch(depths, t, 0).r;
-        if (d >= 1.0 || dot(texelFetch(normal_map, t, 0).xyz, N) < NORMAL_TOLERANCE) {
-          continue;
-        }
-        vec3 Q = view_position((vec2(t) + 0.5) / occlusion.params.zw, d);
-        if (abs(dot(Q - P, Nv)) > tolerance) {
-          continue;
-        }
-      }
+      float d = texelFetch(depths, t, 0).r;
+      vec4 x = vec4((vec2(t) + 0.5) * to_ndc - 1.0, d * 2.0 - 1.0, 1.0);
+      bool keep = c == own + ivec2(dx, dy) &&
+                  (t == texel || (d < 1.0 && dot(texelFetch(normal_map, t, 0).xyz, N) >= NORMAL_TOLERANCE &&
+                                  abs(dot(x, plane)) <= tolerance * abs(dot(x, row_w))));
+      w = keep ? w : 0.0;
       vec4 s = texelFetch(raw, c, 0);
       bent += w * s.xyz;
       sums += w * unpackHalf2x16(floatBitsToUint(s.w));

@@ -36,25 +36,29 @@ int shadow_face(vec3 d)
 }
 
 /* Where the map ray through texel position uv_texels (in texels) meets the plane (p, ng), as a
- * stored distance in metres, for a layer seen from a point (`to_world`: the layer's view ->
- * world, `tan_half` its projection's half extent): the ray from the view and half extent, not the
- * inverse projection (with the near plane close to the light, its depth rows lose float
- * precision). A cube's faces give to_world without reading it (cube_face_view). */
-float shadow_plane_distance(mat3 to_world, vec3 o, float tan_half, vec2 uv_texels, vec3 p, vec3 ng)
+ * stored distance in metres, for a layer seen from a point o (`to_world`: the layer's view ->
+ * world rotation, `tan_half` its projection's half extent): the ray from the view and half extent,
+ * not the inverse projection (with the near plane close to the light, its depth rows lose float
+ * precision). The ray r = (ndc tan_half, -1) in the layer's view, the plane's normal turned into
+ * that view once (n_view = ng to_world): the ray's cosine with the plane dot(r, n_view) / |r|,
+ * no rotation per ray. */
+float shadow_plane_distance(vec2 uv_texels, float tan_half, vec3 n_view, float plane_offset)
 {
-  vec2 ndc = uv_texels * (2.0 / float(SL_SHADOW_SIZE)) - 1.0;
-  vec3 dir = normalize(to_world * vec3(ndc * tan_half, -1.0));
-  float cosine = dot(dir, ng);
-  return dot(p - o, ng) / (abs(cosine) > 1e-4 ? cosine : (cosine < 0.0 ? -1e-4 : 1e-4));
+  vec3 r = vec3((uv_texels * (2.0 / float(SL_SHADOW_SIZE)) - 1.0) * tan_half, -1.0);
+  float cosine = dot(r, n_view) * inversesqrt(dot(r, r));
+  return plane_offset / (abs(cosine) > 1e-4 ? cosine : (cosine < 0.0 ? -1e-4 : 1e-4));
 }
 
 /* The receiver's plane at the texels right of and above uv_texels, less at uv_texels (stored
- * metres per texel), for a layer seen from a point (shadow_plane_distance). */
+ * metres per texel), for a layer seen from a point (shadow_plane_distance). A cube's faces give
+ * to_world without reading it (cube_face_view). */
 vec2 perspective_gradient(mat3 to_world, vec3 o, float tan_half, vec2 uv_texels, vec3 p, vec3 ng)
 {
-  return vec2(shadow_plane_distance(to_world, o, tan_half, uv_texels + vec2(1.0, 0.0), p, ng),
-              shadow_plane_distance(to_world, o, tan_half, uv_texels + vec2(0.0, 1.0), p, ng)) -
-         shadow_plane_distance(to_world, o, tan_half, uv_texels, p, ng);
+  vec3 n_view = ng * to_world;
+  float plane_offset = dot(p - o, ng);
+  float at = shadow_plane_distance(uv_texels, tan_half, n_view, plane_offset);
+  return vec2(shadow_plane_distance(uv_texels + vec2(1.0, 0.0), tan_half, n_view, plane_offset),
+              shadow_plane_distance(uv_texels + vec2(0.0, 1.0), tan_half, n_view, plane_offset)) - at;
 }
 
 /* Where a receiver falls in a light's shadow map: the layer and texel position, its stored
