@@ -12,6 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from .brdf import MIN_PERCEPTUAL_ROUGHNESS
+from .matrices import invert
 from .snapshot import MAX_ENVIRONMENT_IMAGES, EnvironmentTerm, ImageData, World
 from .tonemap import srgb_to_linear
 
@@ -586,7 +587,7 @@ def split_suns(term: EnvironmentTerm, threshold: float, max_suns: int = MAX_SUNS
     omega = texel_solid_angles(h, w)[ys]
     excess = (bright - clamp_luminance(bright, threshold)) * omega[:, None]
     # texture-space directions back to the world through the Mapping's rotation and scale
-    inverse = np.linalg.inv(np.asarray(term.lookup, np.float64)[:3, :3])
+    inverse = invert(np.asarray(term.lookup, np.float64)[:3, :3])
     directions = equirect_direction((xs + 0.5) / w, (ys + 0.5) / h) @ inverse.T
     directions /= np.linalg.norm(directions, axis=-1, keepdims=True)
     labels = _clusters(mask, ys, xs)

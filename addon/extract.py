@@ -15,6 +15,7 @@ import numpy as np
 
 from . import auto_terms, light_tiles, shadows
 from . import snapshot as S
+from .matrices import invert
 
 LIGHT_KIND = {"POINT": "POINT", "SPOT": "SPOT", "SUN": "SUN", "AREA": "AREA"}
 
@@ -645,7 +646,7 @@ def make_camera(depsgraph, camera_obj, width: int, height: int) -> S.Camera:
     projection = cam_eval.calc_matrix_camera(
         depsgraph, x=width, y=height, scale_x=r.pixel_aspect_x, scale_y=r.pixel_aspect_y
     )
-    view = np.linalg.inv(np.array(cam_eval.matrix_world, np.float64))
+    view = invert(np.array(cam_eval.matrix_world, np.float64))
     return S.Camera.from_matrices(view, np.array(projection), cam_eval.data.type != "ORTHO")
 
 

@@ -25,6 +25,8 @@ from functools import lru_cache
 
 import numpy as np
 
+from .matrices import invert
+
 #: Pixels per tile side, in final-image pixels (a supersampled target scales it).
 TILE = 8
 #: Light indices per texture row (the index list is a width x rows float texture).
@@ -117,7 +119,7 @@ def tile_lists(centres, radii, view_projection, width: int, height: int, tile: i
     if not _orthographic(vp) and bounded.any():
         # a sphere that holds the camera's centre meets every tile's frustum (they share its
         # apex): listed everywhere without the tests (often the scene's few large lights)
-        bounded &= np.linalg.norm(centres - _camera_centre(np.linalg.inv(vp)), axis=1) > radii
+        bounded &= np.linalg.norm(centres - _camera_centre(invert(vp)), axis=1) > radii
     if bounded.any():
         boxes = _screen_boxes(centres[bounded], radii[bounded], vp, width, height)
         x0[bounded] = np.clip(np.floor(boxes[:, 0] / tile), 0, columns)
@@ -222,7 +224,7 @@ def _tile_cones(vp_bytes: bytes, xs_bytes: bytes, ys_bytes: bytes):
     by them: a view's renders and passes ask again, and the cones are most of the lists' work)."""
     vp = np.frombuffer(vp_bytes).reshape(4, 4)
     xs, ys = np.frombuffer(xs_bytes), np.frombuffer(ys_bytes)
-    inverse = np.linalg.inv(vp)
+    inverse = invert(vp)
 
     def unproject(x, y):  # points on the rays through ndc (x, y), at ndc depth 0
         q = np.stack([x, y, np.zeros_like(x), np.ones_like(x)], axis=-1) @ inverse.T

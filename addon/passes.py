@@ -31,6 +31,7 @@ import numpy as np
 
 from . import exposure, gpu_library, programs, shadows
 from .gpu_scene import Draw, SceneResources
+from .matrices import invert
 from .snapshot import MAX_ENVIRONMENT_IMAGES, Snapshot, World
 
 
@@ -498,9 +499,9 @@ class OcclusionPass(Pass):
         self._draw_prepass(frame, view, lists, self.back, back_faces=True)
         camera = frame.snapshot.camera
         projection = (np.asarray(frame.view_projection(view), np.float64)
-                      @ np.linalg.inv(np.asarray(camera.view, np.float64)))
+                      @ invert(np.asarray(camera.view, np.float64)))
         rows = np.zeros((3 * 16 + 4,), np.float32)
-        rows[0:16] = np.linalg.inv(projection).T.ravel()
+        rows[0:16] = invert(projection).T.ravel()
         rows[16:32] = projection.T.ravel()
         rows[32:48] = np.asarray(camera.view, np.float64).T.ravel()
         perspective = 1.0 if camera.is_perspective else 0.0
@@ -826,7 +827,7 @@ class BackgroundPass(Pass):
         features = programs.BackgroundFeatures(images, clamp=model != "PBR", half_target=view.half_target)
         shader = gpu_library.background_program(features)
         vp = frame.view_projection(view)
-        inverse = np.linalg.inv(np.asarray(vp, np.float64)).astype(np.float32)
+        inverse = invert(np.asarray(vp, np.float64)).astype(np.float32)
         with target.bind():
             gpu.state.depth_test_set("LESS_EQUAL")  # the triangle lies at the far plane
             gpu.state.depth_mask_set(False)

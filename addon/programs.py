@@ -13,6 +13,7 @@ from pathlib import Path
 import numpy as np
 
 from . import light_tiles, shadows
+from .matrices import invert
 from .snapshot import (
     LIGHT_KINDS,
     MAX_ENVIRONMENT_IMAGES,
@@ -632,7 +633,7 @@ def pack_shadows(plan: shadows.ShadowPlan, slots: int) -> bytes:
     """The ShadowBlock (glsl/uniforms.glsl) of ``plan``'s layers, ``slots`` entries each."""
     matrices = np.tile(np.eye(4, dtype=np.float32), (2, slots, 1, 1))
     matrices[0, :plan.layers] = plan.matrices
-    matrices[1, :plan.layers] = np.linalg.inv(plan.views.astype(np.float64))  # view -> world
+    matrices[1, :plan.layers] = invert(plan.views.astype(np.float64))  # view -> world
     rows = np.zeros((4, slots, 4), np.float32)
     rows[0, :plan.layers] = plan.info
     rows[1, :plan.layers] = plan.origins

@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .matrices import invert
 from .snapshot import Light, Snapshot
 
 #: Layers one frame may use (a point light takes six): lights beyond them cast no shadow (a warning
@@ -181,7 +182,7 @@ def _sun_layer(light: Light, lo, hi, size: int, region=None, cascades: int = 1):
     half_y *= 1.0 + 8.0 / size
     top = float(points[:, 2].max()) + 1e-3  # view space looks down -Z: the box's side nearest the sun
     depth = max(top - float(points[:, 2].min()) + 2e-3, 1e-3)
-    to_world = np.linalg.inv(view)
+    to_world = invert(view)
     near_centre = (to_world @ np.array([centre_x, centre_y, top, 1.0]))[:3]  # the map's near plane
     view = look_at(near_centre, direction, (0.0, 0.0, 1.0))
     matrix = orthographic(half_x, half_y, depth) @ view
@@ -225,7 +226,7 @@ def _frustum_slice(camera, near: float, far: float) -> np.ndarray:
                 x = d * (sx + projection[0, 2]) / projection[0, 0]
                 y = d * (sy + projection[1, 2]) / projection[1, 1]
                 corners.append((x, y, -d, 1.0))
-    to_world = np.linalg.inv(np.asarray(camera.view, np.float64))
+    to_world = invert(np.asarray(camera.view, np.float64))
     return (to_world @ np.array(corners).T).T[:, :3]
 
 
@@ -395,7 +396,7 @@ def flat_planes(boxes: np.ndarray, matrices: np.ndarray) -> np.ndarray:
     m3 = matrices[:, :3, :3]
     flat &= np.abs(np.linalg.det(m3)) > 1e-30
     for i in np.flatnonzero(flat):
-        normal = np.linalg.inv(m3[i]).T[:, axis[i]]  # the axis's normal carried to the world
+        normal = invert(m3[i]).T[:, axis[i]]  # the axis's normal carried to the world
         normal /= np.linalg.norm(normal)
         point = m3[i] @ (0.5 * (boxes[i, 0] + boxes[i, 1])) + matrices[i, :3, 3]
         out[i] = (*normal, -float(normal @ point))

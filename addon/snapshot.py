@@ -12,6 +12,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from .exposure import AutoExposure
+from .matrices import invert
 
 
 @dataclass(frozen=True)
@@ -308,7 +309,7 @@ def normal_matrices(matrices: np.ndarray) -> np.ndarray:
     out = np.zeros((len(m3), 4, 4), np.float32)
     invertible = np.abs(np.linalg.det(m3)) > 1e-30
     if invertible.any():
-        out[invertible, :3, :3] = np.linalg.inv(m3[invertible]).transpose(0, 2, 1)
+        out[invertible, :3, :3] = invert(m3[invertible]).transpose(0, 2, 1)
     out[:, 3, 3] = 1.0
     return out
 
@@ -381,7 +382,7 @@ class Camera:
     def from_matrices(cls, view, projection, is_perspective: bool) -> Camera:
         """A camera from a view matrix and a projection (what a 3D viewport region passes)."""
         view = np.asarray(view, np.float64)
-        world = np.linalg.inv(view)
+        world = invert(view)
         axis = world[:3, 2]
         forward = -axis / max(np.linalg.norm(axis), 1e-30)
         return cls(view.astype(np.float32), np.asarray(projection, np.float32), bool(is_perspective),
