@@ -384,6 +384,8 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
                 passes[pass_name].rect.foreach_set(region.reshape(-1))
         finally:
             self.end_result(result)
+        # Blender holds its copy now: the next render reads into these buffers
+        LIBRARY.keep_read_buffers(images.values())
         said_exposure = exposure_text(exposures)
         if said_exposure:  # into the EXR's header and the image editor's metadata, as Cycles does
             self.get_result().stamp_data_add_field("Shading Lab Exposure", said_exposure)

@@ -73,11 +73,12 @@ class Target:
         """(height, width, 4) float32, bottom row first, of the whole texture or of ``region``
         (x, y, width, height): a view of the buffer the texels were read into (main memory, kept
         alive by the array), not a copy of it (a 1280 x 720 copy took 3-30 ms, most of it the
-        fresh memory's first touch)."""
+        fresh memory's first touch); a buffer a final render handed back once Blender had the
+        pixels (``gpu_library.LIBRARY.keep_read_buffers``) where one of this size is kept."""
         x, y, w, h = (0, 0, self.width, self.height) if region is None else region
+        buffer = gpu_library.LIBRARY.take_read_buffer(w * h * 4)
         with self.bind():
-            buffer = self.framebuffer.read_color(x, y, w, h, 4, 0, "FLOAT")
-        buffer.dimensions = w * h * 4
+            self.framebuffer.read_color(x, y, w, h, 4, 0, "FLOAT", data=buffer)
         return np.frombuffer(buffer, np.float32).reshape(h, w, 4)
 
     def fence(self) -> None:

@@ -14,7 +14,8 @@ from pathlib import Path
 import pytest
 
 ADDON = Path(__file__).resolve().parent.parent / "addon"
-PURE = ("snapshot", "programs", "brdf", "multiscatter", "ltc", "shading", "tonemap", "presets", "world_cache")
+PURE = ("snapshot", "programs", "brdf", "multiscatter", "ltc", "shading", "tonemap", "presets", "world_cache",
+        "matrices")
 GPU_SIDE = ("gpu_library", "gpu_scene", "passes", "renderer")
 
 

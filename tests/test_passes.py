@@ -49,6 +49,36 @@ def test_light_passes_sum_to_combined(model, tmp_path):
         assert (total + ambient).max() > 1.0, "the Blinn-Phong passes stay unclamped"
 
 
+def test_renders_read_into_the_buffers_the_last_one_handed_back(tmp_path):
+    """A final render reads each output into a buffer of its own, hands the buffers back once
+    Blender has the pixels, and the next render reads into them: every pass keeps its own
+    pixels (the lobes still sum to Combined), a changed scene changes them, and the first scene
+    again gives its first image bit for bit."""
+    from addon.engine import LIGHT_PASSES
+    from addon.gpu_library import LIBRARY
+
+    scene = _scene("PBR")
+    material = scene.objects["Plane"].active_material
+    LIBRARY.drop_spares()
+    layers = []
+    for colour in ((0.6, 0.4, 0.2), (0.1, 0.5, 0.7), (0.6, 0.4, 0.2)):
+        material.shading_lab.base_color = colour
+        bpy.ops.render.render()
+        saved = scenes.save_result(scene, tmp_path / "passes.exr", "MULTILAYER")
+        layers.append(scenes.read_exr_layers(saved))
+        kept = LIBRARY.spare_bytes("read buffer")
+        assert kept == 3 * 32 * 32 * 16, f"{kept} bytes kept: Combined's, the two lobes' buffers"
+    diffuse_name, glossy_name = LIGHT_PASSES
+    for frame in layers:
+        total = frame[diffuse_name][..., :3].astype(np.float64) + frame[glossy_name][..., :3]
+        np.testing.assert_allclose(frame["Combined"][..., :3], total, rtol=1e-5, atol=1e-6)
+    changed = np.abs(layers[1]["Combined"] - layers[0]["Combined"]).max()
+    assert changed > 0.05, f"{changed}: the second scene's image"
+    for name in ("Combined", diffuse_name, glossy_name):
+        again = np.abs(layers[2][name] - layers[0][name]).max()
+        assert again == 0.0, f"{name}: {again} from the first render of the same scene"
+
+
 def test_pass_names_are_eevees(tmp_path):
     """The same strings EEVEE writes for the same view-layer toggles in this Blender."""
     from addon.engine import LIGHT_PASSES
