@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .matrices import invert
+from .matrices import cross3, invert
 from .snapshot import Light, Snapshot
 
 #: Layers one frame may use (a point light takes six): lights beyond them cast no shadow (a warning
@@ -87,9 +87,9 @@ def look_at(eye, forward, up) -> np.ndarray:
     up = np.asarray(up, np.float64)
     if abs(float(np.dot(up, f))) > 0.999:
         up = np.array([1.0, 0.0, 0.0]) if abs(f[0]) < 0.9 else np.array([0.0, 1.0, 0.0])
-    r = np.cross(f, up)
+    r = cross3(f, up)
     r /= np.linalg.norm(r)
-    u = np.cross(r, f)
+    u = cross3(r, f)
     m = np.eye(4)
     m[0, :3], m[1, :3], m[2, :3] = r, u, -f
     m[:3, 3] = -m[:3, :3] @ np.asarray(eye, np.float64)

@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from addon.matrices import invert
+from addon.matrices import cross3, invert
 
 
 def _affine(rng) -> np.ndarray:
@@ -58,6 +58,13 @@ def test_projections_with_extreme_clip_ranges(near, far):
 def test_singular_matrices_raise_as_numpy_does(m):
     with pytest.raises(np.linalg.LinAlgError):
         invert(m)
+
+
+def test_cross3_is_the_cross_product():
+    rng = np.random.default_rng(3)
+    for a, b in rng.normal(size=(20, 2, 3)):
+        np.testing.assert_array_equal(cross3(a, b), np.cross(a, b))
+    np.testing.assert_array_equal(cross3((1.0, 0.0, 0.0), (0.0, 1.0, 0.0)), (0.0, 0.0, 1.0))
 
 
 def test_other_shapes_are_refused():
