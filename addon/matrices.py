@@ -35,21 +35,15 @@ def _inverse3(a) -> tuple[list, object]:
     return rows, a[0][0] * rows[0][0] + a[0][1] * rows[1][0] + a[0][2] * rows[2][0]
 
 
+_PAIRS = ((0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3))
+
+
 def _inverse4(a) -> tuple[list, object]:
     """The adjugate (rows) and determinant of [[a[r][c]]], by Laplace expansion over the 2x2
     minors of the top two rows (s) and of the bottom two (c)."""
-    s0 = a[0][0] * a[1][1] - a[1][0] * a[0][1]
-    s1 = a[0][0] * a[1][2] - a[1][0] * a[0][2]
-    s2 = a[0][0] * a[1][3] - a[1][0] * a[0][3]
-    s3 = a[0][1] * a[1][2] - a[1][1] * a[0][2]
-    s4 = a[0][1] * a[1][3] - a[1][1] * a[0][3]
-    s5 = a[0][2] * a[1][3] - a[1][2] * a[0][3]
-    c5 = a[2][2] * a[3][3] - a[3][2] * a[2][3]
-    c4 = a[2][1] * a[3][3] - a[3][1] * a[2][3]
-    c3 = a[2][1] * a[3][2] - a[3][1] * a[2][2]
-    c2 = a[2][0] * a[3][3] - a[3][0] * a[2][3]
-    c1 = a[2][0] * a[3][2] - a[3][0] * a[2][2]
-    c0 = a[2][0] * a[3][1] - a[3][0] * a[2][1]
+    # the 2x2 minors over column pairs (0, 1), (0, 2), (0, 3), (1, 2), (1, 3), (2, 3)
+    s0, s1, s2, s3, s4, s5 = (a[0][i] * a[1][j] - a[1][i] * a[0][j] for i, j in _PAIRS)
+    c0, c1, c2, c3, c4, c5 = (a[2][i] * a[3][j] - a[3][i] * a[2][j] for i, j in _PAIRS)
     det = s0 * c5 - s1 * c4 + s2 * c3 + s3 * c2 - s4 * c1 + s5 * c0
     rows = [[a[1][1] * c5 - a[1][2] * c4 + a[1][3] * c3, -a[0][1] * c5 + a[0][2] * c4 - a[0][3] * c3,
              a[3][1] * s5 - a[3][2] * s4 + a[3][3] * s3, -a[2][1] * s5 + a[2][2] * s4 - a[2][3] * s3],
