@@ -174,14 +174,17 @@ class _Library:
                     return texture, state
             return None
 
-    def keep_spare(self, key, texture, size: int, state=None) -> None:
+    def keep_spare(self, key, texture, size: int, state=None, first_out: bool = False) -> None:
         """Keep a renderer's ``texture`` (``size`` bytes) and ``state`` (what its content is, for
         the next user) for the next renderer asking for ``key``, within ``SPARE_BYTES`` (the
-        oldest dropped first)."""
+        oldest dropped first; ``first_out``: dropped before everything kept so far)."""
         if size > SPARE_BYTES:
             return
         with self._lock:
-            self._spares.append((key, texture, size, state))
+            if first_out:
+                self._spares.insert(0, (key, texture, size, state))
+            else:
+                self._spares.append((key, texture, size, state))
             while sum(entry[2] for entry in self._spares) > SPARE_BYTES:
                 del self._spares[0]
 
@@ -217,8 +220,8 @@ class _Library:
                 owner = owner.obj if isinstance(owner, memoryview) else getattr(owner, "base", None)
             if owner is not None:
                 buffers[id(owner)] = owner  # once each, though two images share it
-        for buffer in buffers.values():
-            self.keep_spare(("read buffer", len(buffer)), buffer, 4 * len(buffer))
+        for buffer in buffers.values():  # the first to go: a texture saves more per byte
+            self.keep_spare(("read buffer", len(buffer)), buffer, 4 * len(buffer), first_out=True)
 
     def spare_bytes(self, kind: str | None = None) -> int:
         """Bytes of the textures kept (of ``kind`` alone: "shadow maps", "texture")."""

@@ -64,7 +64,7 @@ def invert(m) -> np.ndarray:
     m = np.asarray(m, np.float64)
     n = m.shape[-1]
     if m.ndim < 2 or m.shape[-2:] not in ((3, 3), (4, 4)):
-        raise ValueError(f"inverse takes 3x3 or 4x4 matrices, not {m.shape}")
+        raise ValueError(f"invert takes 3x3 or 4x4 matrices, not {m.shape}")
     single = m.ndim == 2
     entries = m.tolist() if single else [[m[..., r, c] for c in range(n)] for r in range(n)]
     rows, det = (_inverse3 if n == 3 else _inverse4)(entries)

@@ -917,6 +917,15 @@ def test_spare_textures_stay_within_their_budget(monkeypatch):
     library.keep_spare("big", d, 101)  # larger than the budget: not kept
     assert library.take_spare("big") is None and library.take_spare("j") == (c, None)
     assert library.spare_bytes() == 0 and library.held() == []
+    # what is kept first-out (read-back buffers) leaves before the textures kept earlier
+    library.keep_spare("k", a, 40)
+    library.keep_spare("j", c, 40)
+    library.keep_spare("read", d, 40, first_out=True)  # over the budget: itself the one to go
+    assert library.take_spare("read") is None and library.spare_bytes() == 80
+    library.keep_spare("read", d, 20, first_out=True)
+    library.keep_spare("k", b, 40)  # over: the first-out one goes, then the oldest (a)
+    assert library.take_spare("read") is None and library.take_spare("j") == (c, None)
+    assert library.take_spare("k") == (b, None) and library.spare_bytes() == 0
 
 
 # --- lights without a shadow map: a loop of their own ---------------------------------------------
