@@ -35,13 +35,13 @@ int shadow_face(vec3 d)
   return d.z > 0.0 ? 4 : 5;
 }
 
-/* Where the map ray through texel position uv_texels (in texels) meets the plane (p, ng), as a
- * stored distance in metres, for a layer seen from a point o (`to_world`: the layer's view ->
- * world rotation, `tan_half` its projection's half extent): the ray from the view and half extent,
- * not the inverse projection (with the near plane close to the light, its depth rows lose float
- * precision). The ray r = (ndc tan_half, -1) in the layer's view, the plane's normal turned into
- * that view once (n_view = ng to_world): the ray's cosine with the plane dot(r, n_view) / |r|,
- * no rotation per ray. */
+/* Where the map ray through texel position uv_texels (in texels) meets the receiver's plane, as
+ * a stored distance in metres, for a layer seen from a point (`tan_half` its projection's half
+ * extent): the ray from the view and half extent, not the inverse projection (with the near plane
+ * close to the light, its depth rows lose float precision). The ray r = (ndc tan_half, -1) in
+ * the layer's view and the plane's normal in that view, n_view: the ray's cosine with the plane
+ * dot(r, n_view) / |r|, no rotation per ray; plane_offset the plane's distance from the point
+ * along its normal. */
 float shadow_plane_distance(vec2 uv_texels, float tan_half, vec3 n_view, float plane_offset)
 {
   vec3 r = vec3((uv_texels * (2.0 / float(SL_SHADOW_SIZE)) - 1.0) * tan_half, -1.0);
@@ -49,9 +49,10 @@ float shadow_plane_distance(vec2 uv_texels, float tan_half, vec3 n_view, float p
   return plane_offset / (abs(cosine) > 1e-4 ? cosine : (cosine < 0.0 ? -1e-4 : 1e-4));
 }
 
-/* The receiver's plane at the texels right of and above uv_texels, less at uv_texels (stored
- * metres per texel), for a layer seen from a point (shadow_plane_distance). A cube's faces give
- * to_world without reading it (cube_face_view). */
+/* The receiver's plane (p, ng) at the texels right of and above uv_texels, less at uv_texels
+ * (stored metres per texel), for a layer seen from o (`to_world`: the layer's view -> world
+ * rotation; shadow_plane_distance). A cube's faces give to_world without reading it
+ * (cube_face_view). */
 vec2 perspective_gradient(mat3 to_world, vec3 o, float tan_half, vec2 uv_texels, vec3 p, vec3 ng)
 {
   vec3 n_view = ng * to_world;
@@ -77,7 +78,7 @@ struct ShadowPoint {
  * any filter returns the texel itself. Not texelFetch: the CPU rasteriser's code for it loaded
  * per-lane offsets before each fetch of the array texture, and the blocker search's 16 reads a
  * light were the hottest code of a softbox frame (perf); sampling took 2-3 % off its shading
- * (fenced minima over 25 draws each, two runs; the same image bit for bit). */
+ * (fenced minima over 20-25 draws, three runs; the same image bit for bit). */
 float shadow_texel(ShadowPoint q, ivec2 texel)
 {
   texel = clamp(texel, ivec2(0), ivec2(SL_SHADOW_SIZE - 1));
