@@ -73,7 +73,8 @@ def test_renders_read_into_the_buffers_the_last_one_handed_back(tmp_path):
         total = frame[diffuse_name][..., :3].astype(np.float64) + frame[glossy_name][..., :3]
         np.testing.assert_allclose(frame["Combined"][..., :3], total, rtol=1e-5, atol=1e-6)
     changed = np.abs(layers[1]["Combined"] - layers[0]["Combined"]).max()
-    assert changed > 0.05, f"{changed}: the second scene's image"
+    print(f"the second scene changed Combined by up to {changed:.3f}")
+    assert changed > 0.25, f"{changed}: the second scene's image (measured 0.55)"
     for name in ("Combined", diffuse_name, glossy_name):
         again = np.abs(layers[2][name] - layers[0][name]).max()
         assert again == 0.0, f"{name}: {again} from the first render of the same scene"
