@@ -57,7 +57,7 @@ PROGRAMS_KEPT = 96
 #: back and draws every layer a caster reaches again; of the others it clears only those that do
 #: not hold "nothing" already (the renderer that kept it says which, passes.ShadowPass.far), or,
 #: with Persistent Data, draws nothing where the maps hold what it would draw
-#: (passes.ShadowPass.content). Textures larger than this are freed as before. The passes'
+#: (passes.ShadowPass.content and .held). Textures larger than this are freed as before. The passes'
 #: targets go the same way (``keep_textures``): a fresh 640 x 360 float texture cost 1-3 ms to
 #: allocate, ~8 ms of a world-lit frame's targets.
 SPARE_BYTES = 256 << 20

@@ -246,6 +246,9 @@ CULL_CLOSED_CASTERS = True
 #: Leave out of a layer the flat casters that can shadow nothing in it (a ground under the scene
 #: and its light: ``shadows.shadowless_casters``; tests turn it off to compare).
 SKIP_SHADOWLESS = True
+#: Leave out of a layer the casters whose shadow falls where no view of the frame looks
+#: (``shadows.receiving_casters``: the same image; tests turn it off to compare).
+VIEW_CULLED_CASTERS = True
 #: The faces culled for a caster's facing (``SceneResources.caster_facing``): open, out, in.
 CULLING = {0: "NONE", 1: "BACK", -1: "FRONT"}
 #: Cull the faces of closed surfaces that a view sees wholly from outside where they turn away
@@ -274,13 +277,18 @@ def view_culling(frame: Frame, view: View, opaque) -> Callable[[Draw], str] | No
 class ShadowPass(Pass):
     """The frame's shadow maps (``gpu_scene.SceneResources.shadow_plan``): one layer of a 2D-array
     depth texture per map, each holding the casters' distances from its light
-    (glsl/shadow.frag.glsl). Drawn again only when the plan (lights, map size, the scene's
-    bounds) or a caster (its matrix or geometry) changed: a camera orbit or a material edit
-    re-renders nothing. With Persistent Data (``Settings.persistent_data``, final renders) a
+    (glsl/shadow.frag.glsl). A layer holds the casters that reach its volume and whose shadow can
+    fall where the frame's views look (``VIEW_CULLED_CASTERS``: a caster behind the camera, whose
+    shadow falls behind it too, is left out). Drawn again only when the plan (lights, map size,
+    the scene's bounds) or a caster (its matrix or geometry) changed, or when a view looks where a
+    layer lacks a caster (drawn then with the casters it held as well: a camera orbiting a still
+    scene re-renders a layer at most until it holds every caster that reaches it); a material
+    edit re-renders nothing. With Persistent Data (``Settings.persistent_data``, final renders) a
     final render that takes the last one's texture keeps its maps where they hold the same content
-    (``SceneResources.shadow_content_key``): re-rendering a still scene, or one where only the
-    camera or materials change, draws no map. Sets ``SceneResources.shadow_maps``; nothing when
-    no light casts."""
+    (``SceneResources.shadow_content_key``) and every caster its views need: re-rendering a still
+    scene, or one where only materials change, draws no map. Sets ``SceneResources.shadow_maps``;
+    nothing when no light casts. ``views``: the frame's views (None: every caster that reaches a
+    layer)."""
 
     draws_geometry = True
 
@@ -297,8 +305,26 @@ class ShadowPass(Pass):
         #: Persistent Data on; None: not known
         self.content: bytes | None = None
         self.kept = 0  # renders that kept the maps a finished renderer left (Persistent Data)
+        #: (layers, casters): which casters each layer holds, where ``key`` (or ``content``) says
+        #: what they are; None: not known
+        self.held: np.ndarray | None = None
+        self._casters = None  # ((key, casters), the casters' spheres, which reach each layer)
 
-    def run(self, frame: Frame, _spec=None) -> bool:
+    def _reach(self, frame: Frame, key) -> tuple[list, np.ndarray, np.ndarray]:
+        """The casters, their spheres and which of them reach each layer (shadows.layer_casters,
+        less the flat casters that can shadow nothing there); the last two worked out once per
+        ``key`` (a viewport redrawing a still scene does not again)."""
+        scene = frame.scene
+        casters = scene.shadow_casters()
+        if self._casters is None or self._casters[0] != (key, len(casters)):
+            spheres = scene.caster_spheres(casters)
+            reach = shadows.layer_casters(scene.shadow_plan.matrices, spheres)
+            if SKIP_SHADOWLESS:
+                reach &= ~scene.shadowless_casters(casters)
+            self._casters = ((key, len(casters)), spheres, reach)
+        return casters, self._casters[1], self._casters[2]
+
+    def run(self, frame: Frame, views: list[View] | None = None) -> bool:
         scene = frame.scene
         plan = scene.shadow_plan
         if plan is None or plan.layers == 0:
@@ -313,41 +339,52 @@ class ShadowPass(Pass):
             self.free()
             spare = gpu_library.LIBRARY.take_spare(("shadow maps", shape))
             if spare is not None:
-                self.texture, (far, self.content) = spare
+                self.texture, (far, self.content, self.held) = spare
                 self.far = set(far)
             else:
                 self.texture = gpu.types.GPUTexture((plan.size, plan.size), layers=plan.layers,
                                                     format="DEPTH_COMPONENT32F")
                 self.far = set()
-                self.content = None
+                self.content = self.held = None
             self.framebuffers = [gpu.types.GPUFrameBuffer(depth_slot={"texture": self.texture, "layer": i})
                                  for i in range(plan.layers)]
             self._shape = shape
         scene.shadow_maps = self.texture
-        if key == self.key:
-            return True
-        self.key = None  # until every layer is drawn
-        casters = scene.shadow_casters()
-        content = None
-        if frame.snapshot.settings.persistent_data:
+        casters, spheres, reach = self._reach(frame, key)
+        needed = reach
+        if VIEW_CULLED_CASTERS and views and plan.box is not None:
+            regions = [shadows.visible_region(frame.view_projection(view), *plan.box) for view in views]
+            needed = reach & shadows.receiving_casters(plan.matrices, plan.size, spheres, regions)
+        same = key == self.key
+        content = self.content if same else None
+        if not same and frame.snapshot.settings.persistent_data:
             content = scene.shadow_content_key(casters, (SKIP_SHADOWLESS, CULL_CLOSED_CASTERS, extents))
-            if content == self.content:  # the maps the last final render of this content drew
+            same = content == self.content  # the maps the last final render of this content drew
+        held = self.held if same and self.held is not None and self.held.shape == needed.shape else None
+        if held is not None:
+            redraw = (needed & ~held).any(axis=1)  # layers lacking a caster a view needs
+            if not redraw.any():
+                if self.key != key:
+                    self.kept += 1
                 self.key = key
-                self.kept += 1
                 return True
-        self.content = None
-        # each layer draws only the casters that reach its volume (a cube face sees a sixth)
-        spheres = scene.caster_spheres(casters)
-        reach = shadows.layer_casters(plan.matrices, spheres)
-        if SKIP_SHADOWLESS:
-            reach &= ~scene.shadowless_casters(casters)
-        self.drawn_casters = int(reach.sum())
+            want = needed | held
+        else:
+            redraw = np.ones(plan.layers, bool)
+            want = needed
+            held = np.zeros_like(want)
+        self.key = None  # until every layer is drawn
+        self.held = None
+        self.drawn_casters = int(want[redraw].sum())
         self.cleared = 0
         facing = scene.caster_facing(casters) if CULL_CLOSED_CASTERS else np.zeros(len(casters), np.int8)
         for layer, framebuffer in enumerate(self.framebuffers):
+            if not redraw[layer]:
+                continue
             if frame.should_stop is not None and frame.should_stop():
                 return False
-            if not reach[layer].any():
+            held[layer] = want[layer]
+            if not want[layer].any():
                 # a layer no caster reaches holds "nothing": cleared unless it already does (a
                 # cube face turned away from every caster; clearing a 1024^2 layer costs ~0.5 ms)
                 if layer not in self.far or not SKIP_FAR_LAYERS:
@@ -383,7 +420,7 @@ class ShadowPass(Pass):
                     # a closed caster's nearest face to the light faces it: its other faces are
                     # culled (counter-clockwise faces the light; mirrored or inward-facing ones
                     # wind the other way)
-                    drawn = [(c, CULLING[f]) for c, r, f in zip(casters, reach[layer], layer_facing) if r]
+                    drawn = [(c, CULLING[f]) for c, r, f in zip(casters, want[layer], layer_facing) if r]
                     scene.draw_positions([c for c, _ in drawn], shader, frame_block=False,
                                          culling=[m for _, m in drawn])
                 finally:
@@ -392,6 +429,7 @@ class ShadowPass(Pass):
                     gpu.state.face_culling_set("NONE")
             self.renders += 1
         self.key = key
+        self.held = held
         self.content = content
         return True
 
@@ -402,11 +440,12 @@ class ShadowPass(Pass):
         ``content`` is its own); the framebuffers belong to this context."""
         if self.texture is not None:
             size, layers = self._shape
+            state = (frozenset(self.far), self.content, self.held)
             gpu_library.LIBRARY.keep_spare(("shadow maps", self._shape), self.texture,
-                                           4 * size * size * layers, (frozenset(self.far), self.content))
+                                           4 * size * size * layers, state)
         self.texture = None
         self.far = set()
-        self.content = None
+        self.content = self.held = None
         self.framebuffers = []
         self.key = None
         self._shape = None

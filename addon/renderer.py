@@ -97,7 +97,7 @@ class Renderer:
     def steps(self, views: list[View], comparison: Comparison | None = None) -> list[tuple[Pass, object]]:
         """The frame: each view's passes in order, then the comparison if any."""
         steps = [(self._pass(EnvironmentPass, "world"), None),  # once per frame, for every view
-                 (self._pass(ShadowPass, "shadows"), None)]
+                 (self._pass(ShadowPass, "shadows"), views)]  # the casters their views need
         steps += [(self._pass(kind, view.name), view) for view in views for kind in VIEW_PASSES]
         if comparison is not None:
             steps.append((self._pass(ComparePass, "compare"), comparison))

@@ -69,6 +69,7 @@ class ShadowPlan:
     views: np.ndarray = None  # (n, 4, 4) world -> the layer's view (camera looking down -Z)
     extents: np.ndarray = None  # (n, 4) x, y: tan of the half field of view, or half widths (m)
     dropped: int = 0  # shadowed lights left out (no layers left)
+    box: tuple[np.ndarray, np.ndarray] | None = None  # (min, max): the drawn items' world box, padded
 
     @property
     def layers(self) -> int:
@@ -331,7 +332,7 @@ def plan(snapshot: Snapshot, bounds: dict[str, np.ndarray]) -> ShadowPlan:
     matrices, info, origins, views, extents = zip(*layers)
     return ShadowPlan(size, np.stack(matrices).astype(np.float32), np.array(info, np.float32),
                       np.array(origins, np.float32), first, views=np.stack(views).astype(np.float32),
-                      extents=np.array(extents, np.float32), dropped=dropped)
+                      extents=np.array(extents, np.float32), dropped=dropped, box=(lo, hi))
 
 
 def bounding_spheres(boxes: np.ndarray, matrices: np.ndarray) -> np.ndarray:
@@ -359,6 +360,125 @@ def layer_casters(matrices: np.ndarray, spheres: np.ndarray) -> np.ndarray:
     norms = np.linalg.norm(planes[..., :3], axis=-1)  # (layers, 6)
     signed = np.einsum("lpk,nk->lpn", planes[..., :3], spheres[:, :3]) + planes[..., 3:4]
     return np.all(signed >= -(spheres[:, 3][None, None] * norms[..., None]), axis=1)
+
+
+
+#: How far from a receiver's own position a shadow lookup reads its map, in texels: the penumbra's
+#: blocker search and filter reach SHADOW_MAX_RADIUS (48, glsl/shadows.glsl) at most, a tap's
+#: bilinear filter one texel beyond, rounded up (tests/test_shadows.py reads the GLSL's value).
+LOOKUP_REACH = 50
+
+#: The 12 edges of a box or frustum whose 8 corners are indexed by 3 bits (``_box_corners``' order,
+#: ``visible_region``'s clip corners): pairs of corners differing in one bit.
+_EDGES = np.array([(a, a | bit) for bit in (1, 2, 4) for a in range(8) if not a & bit])
+
+
+def _corner_signs() -> np.ndarray:
+    return np.array([[(-1.0, 1.0)[i], (-1.0, 1.0)[j], (-1.0, 1.0)[k]]
+                     for i in (0, 1) for j in (0, 1) for k in (0, 1)])
+
+
+def _edge_crossings(corners: np.ndarray, planes: np.ndarray) -> np.ndarray:
+    """(m, 3): where the edges of a box-like solid (``corners`` (8, 3), ``_EDGES``) cross
+    ``planes`` ((p, 4), n.x + d = 0)."""
+    a, b = corners[_EDGES[:, 0]], corners[_EDGES[:, 1]]  # (12, 3)
+    da = a @ planes[:, :3].T + planes[:, 3]  # (12, p)
+    db = b @ planes[:, :3].T + planes[:, 3]
+    cross = (da * db <= 0.0) & (da != db)
+    t = np.divide(da, da - db, out=np.zeros_like(da), where=cross)
+    points = a[:, None] + t[..., None] * (b - a)[:, None]  # (12, p, 3)
+    return points[cross]
+
+
+def visible_region(view_projection: np.ndarray, lo, hi) -> np.ndarray | None:
+    """(k, 3) world points whose convex hull holds every point of the box (lo, hi) that a view
+    (``view_projection``: world -> clip) sees: the vertices of the box clipped to the view's clip
+    volume (each solid's corners inside the other, each one's edges across the other's faces).
+    Empty where the view sees none of the box; None where the clip volume is not a bounded
+    solid (a projection without an inverse)."""
+    m = np.asarray(view_projection, np.float64)
+    try:
+        to_world = invert(m)
+    except (ValueError, np.linalg.LinAlgError):
+        return None
+    ndc = np.concatenate([_corner_signs(), np.ones((8, 1))], axis=1)
+    corners = ndc @ to_world.T
+    if not np.all(np.isfinite(corners)) or np.any(corners[:, 3] <= 0.0):
+        return None
+    view_corners = corners[:, :3] / corners[:, 3:]
+    view_planes = np.concatenate([m[3:4] + m[:3], m[3:4] - m[:3]])  # (6, 4): inside >= 0
+    view_planes /= np.maximum(np.linalg.norm(view_planes[:, :3], axis=1), 1e-300)[:, None]
+    lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
+    eye = np.eye(3)
+    box_planes = np.concatenate([np.column_stack([eye, -lo]), np.column_stack([-eye, hi])])
+    box_corners = _box_corners(lo, hi)
+    eps = 1e-6 * max(float(np.max(hi - lo)), 1.0)
+    if np.all(box_corners @ view_planes[:, :3].T + view_planes[:, 3] >= -eps):
+        return box_corners  # the whole box in view
+    candidates = np.concatenate([view_corners, box_corners, _edge_crossings(view_corners, box_planes),
+                                 _edge_crossings(box_corners, view_planes)])
+    inside = np.all(candidates @ view_planes[:, :3].T + view_planes[:, 3] >= -eps, axis=1) & \
+        np.all(candidates @ box_planes[:, :3].T + box_planes[:, 3] >= -eps, axis=1)
+    return candidates[inside]
+
+
+def _map_rectangles(clip: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Per layer, the (lo, hi) normalised device xy of the convex hull of points given in its clip
+    coordinates (``clip``: (layers, k, 4)) clipped to the side of its eye's plane it looks into
+    (w > 0: the points there and, where some are not, each segment between two points across
+    the plane cut at it -- the hull's edges among them); lo > hi where no point lies there."""
+    w = clip[..., 3]
+    eps = 1e-6 * np.abs(w).max(axis=1, keepdims=True) + 1e-12  # (layers, 1)
+    front = w >= eps
+    ndc = clip[..., :2] / np.where(front, w, 1.0)[..., None]
+    lo = np.where(front[..., None], ndc, np.inf).min(axis=1)
+    hi = np.where(front[..., None], ndc, -np.inf).max(axis=1)
+    across = np.flatnonzero(front.any(axis=1) & ~front.all(axis=1))  # layers whose eye's plane cuts it
+    if len(across):
+        c, wa, e = clip[across], w[across], eps[across][..., None]  # (a, k, 4), (a, k), (a, 1, 1)
+        pair = (wa[:, :, None] >= e) & (wa[:, None, :] < e)  # (a, k, k): i in front, j behind
+        t = np.divide(wa[:, :, None] - e, wa[:, :, None] - wa[:, None, :], out=np.zeros(pair.shape),
+                      where=pair)
+        cut = c[:, :, None, :] + t[..., None] * (c[:, None, :, :] - c[:, :, None, :])  # (a, k, k, 4)
+        cut_ndc = cut[..., :2] / np.where(pair, cut[..., 3], 1.0)[..., None]
+        lo[across] = np.minimum(lo[across], np.where(pair[..., None], cut_ndc, np.inf).min(axis=(1, 2)))
+        hi[across] = np.maximum(hi[across], np.where(pair[..., None], cut_ndc, -np.inf).max(axis=(1, 2)))
+    return lo, hi
+
+
+def receiving_casters(matrices: np.ndarray, size: int, spheres: np.ndarray, regions: list) -> np.ndarray:
+    """(layers, n) bool: which casters (world spheres, ``bounding_spheres``) a layer's map holds
+    where a shadow lookup from a point the views see can read it: the caster's sphere not wholly
+    beyond the rectangle of the map that holds the views' ``regions`` (``visible_region``; any of
+    them None holds everything), widened by ``LOOKUP_REACH`` texels. The lookups of the points the
+    views see read only there, so a caster left out elsewhere (its shadow falls where no view
+    looks) changes no pixel. No test of depth: a receiver's plane, extrapolated over the filter's
+    texels, can pass behind a caster beyond every visible point."""
+    m = np.asarray(matrices, np.float64).reshape(-1, 4, 4)
+    spheres = np.asarray(spheres, np.float64).reshape(-1, 4)
+    out = np.zeros((len(m), len(spheres)), bool)
+    if any(region is None for region in regions):
+        return ~out
+    reach = LOOKUP_REACH * 2.0 / size
+    rows, w_row = m[:, :2], m[:, 3:4]  # (layers, 2, 4), (layers, 1, 4)
+    for region in regions:
+        if not len(region) or not len(spheres):
+            continue
+        homogeneous = np.concatenate([region, np.ones((len(region), 1))], axis=1)
+        lo, hi = _map_rectangles(np.einsum("lij,pj->lpi", m, homogeneous))
+        whole = np.all(lo <= -1.0, axis=1) & np.all(hi >= 1.0, axis=1)  # the whole map: every caster
+        out[whole] = True
+        part = np.flatnonzero(np.all(lo <= hi, axis=1) & ~whole)
+        if not len(part):
+            continue
+        lo = np.maximum(lo[part], -1.0) - reach
+        hi = np.minimum(hi[part], 1.0) + reach
+        planes = np.concatenate([rows[part] - lo[..., None] * w_row[part],
+                                 hi[..., None] * w_row[part] - rows[part]], axis=1)
+        norms = np.linalg.norm(planes[..., :3], axis=-1)  # (part, 4)
+        signed = np.einsum("lpk,nk->lpn", planes[..., :3], spheres[:, :3]) + planes[..., 3:4]
+        out[part] |= np.all(signed >= -(spheres[:, 3][None, None] * norms[..., None]), axis=1)
+    return out
 
 
 #: A box this thin along one of its axes, relative to its largest extent, holds a flat object (a

@@ -19,7 +19,7 @@
 #define SHADOW_ORTHOGRAPHIC 2
 #define SHADOW_SEARCH_TAPS 16 /* half of them for a search within 2 texels */
 #define SHADOW_FILTER_TAPS 24 /* half of them for a penumbra within 3 texels */
-#define SHADOW_MAX_RADIUS 48.0 /* texels */
+#define SHADOW_MAX_RADIUS 48.0 /* texels (addon/shadows.py LOOKUP_REACH: it and a tap's texel) */
 #define SHADOW_CASCADE_ROOM 32.0 /* texels: a cascade is left this far inside its edge */
 
 /* The cube face holding direction d (from the light), in addon/shadows.py's CUBE_FACES order. */

@@ -9,6 +9,7 @@ visibility > 0.5. Cycles renders direct light only, the light's soft falloff off
 from __future__ import annotations
 
 import math
+import re
 
 import bpy
 import numpy as np
@@ -199,6 +200,7 @@ def test_a_ground_that_can_shadow_nothing_leaves_the_maps_and_the_shadows(tmp_pa
     layer, and each pixel's lit/shadowed state against Cycles is as good as with it drawn."""
     from addon import passes
 
+    monkeypatch.setattr(passes, "VIEW_CULLED_CASTERS", False)  # the pairs the ground alone leaves
     scene = _cube_scene(False)
     sun = scenes.light(scene, "SUN", energy=2.0, rotation=(math.radians(-30.0), math.radians(20.0), 0.0))
     sun.data.use_shadow = True
@@ -596,6 +598,7 @@ def test_culled_casters_draw_the_same_shadows(tmp_path, monkeypatch):
     from addon import passes
 
     monkeypatch.setattr(passes, "SKIP_SHADOWLESS", False)
+    monkeypatch.setattr(passes, "VIEW_CULLED_CASTERS", False)  # (its own test below)
 
     scene = scenes.reset(size=48)
     scene.shading_lab.model = "PBR"
@@ -625,6 +628,153 @@ def test_culled_casters_draw_the_same_shadows(tmp_path, monkeypatch):
     print(f"layers x casters {layers} x {casters} = {all_pairs}; drawn with culling {pairs}")
     assert all_pairs == layers * casters and pairs < 0.5 * all_pairs, (pairs, all_pairs)  # measured 31 of 91
     assert np.array_equal(culled, every)
+
+
+def test_lookup_reach_covers_the_glsl_lookups_radius():
+    """shadows.LOOKUP_REACH (texels a lookup reads from its receiver's own) holds the penumbra's
+    largest search and filter radius in glsl/shadows.glsl and a bilinear tap's texel beyond it."""
+    source = (programs.glsl_dir() / "shadows.glsl").read_text()
+    radius = float(re.search(r"#define SHADOW_MAX_RADIUS ([0-9.]+)", source).group(1))
+    assert radius + 1.0 <= shadows.LOOKUP_REACH <= radius + 4.0, (radius, shadows.LOOKUP_REACH)
+
+
+def test_visible_region_holds_what_the_view_sees_of_the_box():
+    """visible_region against random points: every point of the box that the view (a perspective
+    camera looking into the box, the box partly behind it and beside it) sees lies within the
+    region's bounds, and the region's points lie in the box and the clip volume (it is no larger
+    than it must be); a view that sees nothing of the box: no points."""
+    rng = np.random.default_rng(7)
+    view = shadows.look_at(np.array([1.0, -3.0, 2.0]), np.array([0.3, 1.0, -0.4]), (0.0, 0.0, 1.0))
+    view_projection = shadows.perspective(0.7, 0.1, 30.0) @ view
+    lo, hi = np.array([-4.0, -5.0, 0.0]), np.array([5.0, 6.0, 3.0])
+    region = shadows.visible_region(view_projection, lo, hi)
+    points = lo + (hi - lo) * rng.random((200_000, 3))
+    seen = points[_inside_clip(view_projection, points)]
+    print(f"region: {len(region)} points; {len(seen)} of 200,000 box points seen")
+    assert 1000 < len(seen) < 150_000
+    assert np.all(seen >= region.min(0) - 1e-9) and np.all(seen <= region.max(0) + 1e-9)
+    assert np.all(region >= lo - 1e-5) and np.all(region <= hi + 1e-5)
+    clip = np.concatenate([region, np.ones((len(region), 1))], axis=1) @ view_projection.T
+    assert np.all(np.abs(clip[:, :3]) <= clip[:, 3:] * (1 + 1e-6) + 1e-6)
+    # the seen points reach the region's bounds to within a few percent of the box (tight)
+    assert np.all(np.abs(seen.min(0) - region.min(0)) < 0.03 * (hi - lo)), (seen.min(0), region.min(0))
+    assert np.all(np.abs(seen.max(0) - region.max(0)) < 0.03 * (hi - lo)), (seen.max(0), region.max(0))
+    away = shadows.look_at(np.array([1.0, -8.0, 2.0]), np.array([0.0, -1.0, 0.0]), (0.0, 0.0, 1.0))
+    assert len(shadows.visible_region(shadows.perspective(0.7, 0.1, 30.0) @ away, lo, hi)) == 0
+
+
+def test_receiving_casters_keeps_the_casters_a_lookup_can_read():
+    """A sun's map straight down over a 20 m square (1024 texels: 2 cm each; a lookup reads up to
+    LOOKUP_REACH = 50 texels, ~1 m): the visible region a 2 m square at the centre. Casters over
+    it, overhanging its edge, or within the lookup's reach are kept; one just beyond the reach and
+    one far away are left out. A perspective map holds what lies on its side of its eye's plane."""
+    down = shadows.look_at(np.array([0.0, 0.0, 5.0]), np.array([0.0, 0.0, -1.0]), (0.0, 1.0, 0.0))
+    matrix = shadows.orthographic(10.0, 10.0, 10.0) @ down
+    texel = 20.0 / 1024
+    reach = shadows.LOOKUP_REACH * texel
+    region = np.array([[x, y, z] for x in (-1.0, 1.0) for y in (-1.0, 1.0) for z in (0.0, 0.5)])
+    r = 0.2
+    spheres = np.array([[0.0, 0.0, 2.0, r],  # over the region
+                        [1.1, 0.0, 2.0, r],  # overhanging its edge
+                        [1.0 + r + 0.9 * reach, 0.0, 2.0, r],  # within the lookup's reach
+                        [1.0 + r + 1.1 * reach, 0.0, 2.0, r],  # just beyond it
+                        [-6.0, 7.0, 2.0, r]])  # far away
+    kept = shadows.receiving_casters(matrix[None], 1024, spheres, [region])[0]
+    print(f"texel {texel:.4f} m, reach {reach:.3f} m: kept {kept}")
+    assert kept.tolist() == [True, True, True, False, False]
+    assert shadows.receiving_casters(matrix[None], 1024, spheres, [region, None]).all()
+    # a perspective map looking down -z from the origin; the region a segment through its eye's
+    # plane, x = 0.5: at depth 2 in the map's x 0.25, towards the eye's plane beyond its edge
+    eye = shadows.perspective(1.0, 0.1, 20.0) @ shadows.look_at(np.zeros(3), np.array([0.0, 0.0, -1.0]),
+                                                                (0.0, 1.0, 0.0))
+    segment = np.array([[0.5, 0.0, -2.0], [0.5, 0.0, 2.0]])
+    casters = np.array([[0.9, 0.0, -1.0, 0.05], [0.3, 0.0, -1.0, 0.05], [-1.0, 0.0, -2.0, 0.05]])
+    assert shadows.receiving_casters(eye[None], 1024, casters, [segment])[0].tolist() == [True, True, False]
+    assert not shadows.receiving_casters(eye[None], 1024, casters, [segment[1:]]).any()  # behind it
+
+
+def _off_screen_scene():
+    """A ground seen at an angle from an orthographic camera (a 4 m patch), a sphere in view, one
+    off-screen beyond the patch (its shadow beyond it too) and one above the view whose shadow
+    falls in it, under a sun from straight above and a point light."""
+    scene = scenes.reset(size=64)
+    scene.shading_lab.model = "PBR"
+    scenes.ortho_camera(scene, location=(0.0, -6.0, 5.0), rotation=(math.radians(50.0), 0.0, 0.0), scale=4.0)
+    mat = _white()
+    scenes.plane(scene, size=40.0, material=mat)
+    for name, radius, location in (("In view", 0.5, (0.0, 0.0, 0.5)), ("Beyond", 0.5, (0.0, 12.0, 0.5)),
+                                   ("Above", 0.4, (0.5, 0.3, 7.0))):
+        _sphere(scene, radius, location, mat).data.name = name
+    sun = scenes.light(scene, "SUN", energy=2.0)
+    point = scenes.light(scene, "POINT", energy=300.0, location=(-1.0, 1.0, 4.0))
+    sun.data.use_shadow = point.data.use_shadow = True
+    return scene, sun, point
+
+
+def test_casters_whose_shadows_fall_where_no_view_looks_leave_the_maps(tmp_path, monkeypatch):
+    """The sun's map leaves out the sphere beyond the view (its shadow falls beyond it too) and
+    keeps the one above the view (its shadow falls in it); the point light's six faces keep the
+    casters whose shadows can fall where the camera looks. The image is the one drawn with every
+    caster, bit for bit."""
+    from addon import passes
+
+    scene, sun, point = _off_screen_scene()
+    drawn = []
+    original = passes.ShadowPass.run
+
+    def run(self, frame, views=None):
+        done = original(self, frame, views)
+        names = [frame.snapshot.items[c.order].geometry.split(":")[1] for c in frame.scene.shadow_casters()]
+        drawn.append([[n for n, h in zip(names, row) if h] for row in self.held])
+        return done
+
+    monkeypatch.setattr(passes.ShadowPass, "run", run)
+    images = {}
+    for culled in (True, False):
+        monkeypatch.setattr(passes, "VIEW_CULLED_CASTERS", culled)
+        images[culled] = scenes.render(scene, tmp_path / f"culled{culled}.exr")
+    (sun_only, *faces), (sun_all, *faces_all) = drawn
+    pairs, all_pairs = sum(map(len, drawn[0])), sum(map(len, drawn[1]))
+    print(f"sun's map: {sun_only} of {sun_all}; point light's faces {faces} of {faces_all}; "
+          f"pairs {pairs} of {all_pairs}")
+    assert sorted(sun_only) == ["Above", "In view"] and sorted(sun_all) == ["Above", "Beyond", "In view"]
+    assert pairs < all_pairs and not any("Beyond" in face for face in faces)
+    lit = images[True][..., :3].max()
+    assert lit > 0.1 and np.array_equal(images[True], images[False])
+
+
+def test_a_view_that_looks_elsewhere_draws_a_layer_again_with_what_it_held(monkeypatch):
+    """As the viewport does: a renderer kept across draws. The camera moved to look at the far
+    sphere's shadow draws the sun's layer again with that sphere and the casters it held (the
+    image that of a fresh renderer), and the camera back where it was draws nothing again."""
+    scene, sun, point = _off_screen_scene()
+    point.data.use_shadow = False
+    r = renderer.Renderer()
+    depsgraph = bpy.context.evaluated_depsgraph_get
+
+    def draw(rend):
+        def job(_depsgraph):
+            image = rend.render(extract.snapshot(depsgraph(), 32, 32))
+            return rend.shadow_layers_drawn, image
+        return run_on_gpu(job)
+
+    try:
+        counts = [draw(r)[0]]
+        scene.camera.location.y += 12.0
+        count, moved = draw(r)
+        counts.append(count)
+        fresh = renderer.Renderer()
+        try:
+            _, alone = draw(fresh)
+        finally:
+            run_on_gpu(lambda _d: fresh.free())
+        scene.camera.location.y -= 12.0
+        counts.append(draw(r)[0])
+    finally:
+        run_on_gpu(lambda _d: r.free())
+    print(f"layers drawn after each draw: {counts}")
+    assert counts == [1, 2, 2], counts
+    assert moved[..., :3].max() > 0.1 and np.array_equal(moved, alone)
 
 
 def test_closed_casters_drawn_by_their_lit_faces_cast_the_same_shadows(tmp_path, monkeypatch):
