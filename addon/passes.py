@@ -283,7 +283,8 @@ class ShadowPass(Pass):
     the scene's bounds) or a caster (its matrix or geometry) changed, or when a view looks where a
     layer lacks a caster (drawn then with the casters it held as well: a camera orbiting a still
     scene re-renders a layer at most until it holds every caster that reaches it); a material
-    edit re-renders nothing. With Persistent Data (``Settings.persistent_data``, final renders) a
+    edit re-renders nothing unless it changes which surfaces cast (a slot made partly
+    transparent casts nothing). With Persistent Data (``Settings.persistent_data``, final renders) a
     final render that takes the last one's texture keeps its maps where they hold the same content
     (``SceneResources.shadow_content_key``) and every caster its views need: re-rendering a still
     scene, or one where only materials change, draws no map. Sets ``SceneResources.shadow_maps``;
@@ -308,21 +309,24 @@ class ShadowPass(Pass):
         #: (layers, casters): which casters each layer holds, where ``key`` (or ``content``) says
         #: what they are; None: not known
         self.held: np.ndarray | None = None
-        self._casters = None  # ((key, casters), the casters' spheres, which reach each layer)
+        self._held_casters: tuple | None = None  # held's columns: (item, material) per caster
+        self._casters = None  # ((key, the casters), the casters' spheres, which reach each layer)
 
-    def _reach(self, frame: Frame, key) -> tuple[list, np.ndarray, np.ndarray]:
+    def _reach(self, frame: Frame, key) -> tuple[list, np.ndarray, np.ndarray, tuple]:
         """The casters, their spheres and which of them reach each layer (shadows.layer_casters,
         less the flat casters that can shadow nothing there); the last two worked out once per
-        ``key`` (a viewport redrawing a still scene does not again)."""
+        ``key`` and casters (a viewport redrawing a still scene does not again); last, the casters
+        by item and material (what ``held``'s columns are)."""
         scene = frame.scene
         casters = scene.shadow_casters()
-        if self._casters is None or self._casters[0] != (key, len(casters)):
+        which = (key, tuple((draw.order, draw.material) for draw in casters))
+        if self._casters is None or self._casters[0] != which:
             spheres = scene.caster_spheres(casters)
             reach = shadows.layer_casters(scene.shadow_plan.matrices, spheres)
             if SKIP_SHADOWLESS:
                 reach &= ~scene.shadowless_casters(casters)
-            self._casters = ((key, len(casters)), spheres, reach)
-        return casters, self._casters[1], self._casters[2]
+            self._casters = (which, spheres, reach)
+        return casters, self._casters[1], self._casters[2], which[1]
 
     def run(self, frame: Frame, views: list[View] | None = None) -> bool:
         scene = frame.scene
@@ -339,18 +343,18 @@ class ShadowPass(Pass):
             self.free()
             spare = gpu_library.LIBRARY.take_spare(("shadow maps", shape))
             if spare is not None:
-                self.texture, (far, self.content, self.held) = spare
+                self.texture, (far, self.content, self.held, self._held_casters) = spare
                 self.far = set(far)
             else:
                 self.texture = gpu.types.GPUTexture((plan.size, plan.size), layers=plan.layers,
                                                     format="DEPTH_COMPONENT32F")
                 self.far = set()
-                self.content = self.held = None
+                self.content = self.held = self._held_casters = None
             self.framebuffers = [gpu.types.GPUFrameBuffer(depth_slot={"texture": self.texture, "layer": i})
                                  for i in range(plan.layers)]
             self._shape = shape
         scene.shadow_maps = self.texture
-        casters, spheres, reach = self._reach(frame, key)
+        casters, spheres, reach, which = self._reach(frame, key)
         needed = reach
         if VIEW_CULLED_CASTERS and views and plan.box is not None:
             regions = [shadows.visible_region(frame.view_projection(view), *plan.box) for view in views]
@@ -360,7 +364,7 @@ class ShadowPass(Pass):
         if not same and frame.snapshot.settings.persistent_data:
             content = scene.shadow_content_key(casters, (SKIP_SHADOWLESS, CULL_CLOSED_CASTERS, extents))
             same = content == self.content  # the maps the last final render of this content drew
-        held = self.held if same and self.held is not None and self.held.shape == needed.shape else None
+        held = self.held if same and self.held is not None and self._held_casters == which else None
         if held is not None:
             redraw = (needed & ~held).any(axis=1)  # layers lacking a caster a view needs
             if not redraw.any():
@@ -429,7 +433,7 @@ class ShadowPass(Pass):
                     gpu.state.face_culling_set("NONE")
             self.renders += 1
         self.key = key
-        self.held = held
+        self.held, self._held_casters = held, which
         self.content = content
         return True
 
@@ -440,12 +444,12 @@ class ShadowPass(Pass):
         ``content`` is its own); the framebuffers belong to this context."""
         if self.texture is not None:
             size, layers = self._shape
-            state = (frozenset(self.far), self.content, self.held)
+            state = (frozenset(self.far), self.content, self.held, self._held_casters)
             gpu_library.LIBRARY.keep_spare(("shadow maps", self._shape), self.texture,
                                            4 * size * size * layers, state)
         self.texture = None
         self.far = set()
-        self.content = self.held = None
+        self.content = self.held = self._held_casters = None
         self.framebuffers = []
         self.key = None
         self._shape = None

@@ -777,6 +777,43 @@ def test_a_view_that_looks_elsewhere_draws_a_layer_again_with_what_it_held(monke
     assert moved[..., :3].max() > 0.1 and np.array_equal(moved, alone)
 
 
+def test_a_caster_made_partly_transparent_leaves_a_kept_renderers_maps():
+    """A renderer kept across draws (the viewport): the sphere in view made partly transparent (it
+    casts nothing then) and the one beyond the view, partly transparent before, made opaque (as
+    many casters as before, others) draws the maps again: the image a fresh renderer draws."""
+    scene, sun, point = _off_screen_scene()
+    point.data.use_shadow = False
+    depsgraph = bpy.context.evaluated_depsgraph_get
+    r = renderer.Renderer()
+
+    def draw(rend):
+        def job(_depsgraph):
+            image = rend.render(extract.snapshot(depsgraph(), 32, 32))
+            return rend.shadow_layers_drawn, image
+        return run_on_gpu(job)
+
+    alpha = {}
+    for name, value in (("In view", 1.0), ("Beyond", 0.5)):  # a material each, edited below
+        mat = bpy.data.meshes[name].materials[0] = _white(name)
+        alpha[name] = scenes.node_tree(mat).nodes.get("Principled BSDF").inputs["Alpha"]
+        alpha[name].default_value = value
+    try:
+        counts = [draw(r)[0]]
+        alpha["In view"].default_value, alpha["Beyond"].default_value = 0.5, 1.0
+        count, image = draw(r)
+        counts.append(count)
+        fresh = renderer.Renderer()
+        try:
+            _, alone = draw(fresh)
+        finally:
+            run_on_gpu(lambda _d: fresh.free())
+    finally:
+        run_on_gpu(lambda _d: r.free())
+    print(f"layers drawn after each draw: {counts}")
+    assert counts == [1, 2], counts
+    assert np.array_equal(image, alone)
+
+
 def test_closed_casters_drawn_by_their_lit_faces_cast_the_same_shadows(tmp_path, monkeypatch):
     """Closed casters drawn into the maps by their faces towards the light alone (the rest culled)
     give, bit for bit, the image drawn with every face: spheres and a torus facing out, a mirrored
