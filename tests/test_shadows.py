@@ -356,17 +356,30 @@ def test_layers_per_light_kind():
     assert shadows.assign(extract.snapshot(bpy.context.evaluated_depsgraph_get()))[1] == 6
 
 
-def _drawing(r):
-    """A function that renders the current scene with renderer ``r`` (as the viewport does) and
-    returns how many shadow-map layers that render drew."""
+def _draw_kept(r, size: int = 32):
+    """Render the current scene with renderer ``r``, kept across draws as the viewport keeps its
+    own: (the shadow-map layers it has drawn since it was made, the image)."""
     depsgraph = bpy.context.evaluated_depsgraph_get
 
-    def draw():
-        def job(_depsgraph):
-            r.render(extract.snapshot(depsgraph(), 16, 16))
-            return r.shadow_layers_drawn
-        return run_on_gpu(job)
-    return draw
+    def job(_depsgraph):
+        image = r.render(extract.snapshot(depsgraph(), size, size))
+        return r.shadow_layers_drawn, image
+    return run_on_gpu(job)
+
+
+def _fresh_image():
+    """The current scene's image from a renderer made for it alone."""
+    fresh = renderer.Renderer()
+    try:
+        return _draw_kept(fresh)[1]
+    finally:
+        run_on_gpu(lambda _d: fresh.free())
+
+
+def _drawing(r):
+    """A function that renders the current scene with renderer ``r`` (as the viewport does) and
+    returns how many shadow-map layers it has drawn."""
+    return lambda: _draw_kept(r, 16)[0]
 
 
 def test_viewport_redraws_shadow_maps_only_when_lights_or_casters_move():
@@ -750,26 +763,14 @@ def test_a_view_that_looks_elsewhere_draws_a_layer_again_with_what_it_held(monke
     scene, sun, point = _off_screen_scene()
     point.data.use_shadow = False
     r = renderer.Renderer()
-    depsgraph = bpy.context.evaluated_depsgraph_get
-
-    def draw(rend):
-        def job(_depsgraph):
-            image = rend.render(extract.snapshot(depsgraph(), 32, 32))
-            return rend.shadow_layers_drawn, image
-        return run_on_gpu(job)
-
     try:
-        counts = [draw(r)[0]]
+        counts = [_draw_kept(r)[0]]
         scene.camera.location.y += 12.0
-        count, moved = draw(r)
+        count, moved = _draw_kept(r)
         counts.append(count)
-        fresh = renderer.Renderer()
-        try:
-            _, alone = draw(fresh)
-        finally:
-            run_on_gpu(lambda _d: fresh.free())
+        alone = _fresh_image()
         scene.camera.location.y -= 12.0
-        counts.append(draw(r)[0])
+        counts.append(_draw_kept(r)[0])
     finally:
         run_on_gpu(lambda _d: r.free())
     print(f"layers drawn after each draw: {counts}")
@@ -783,30 +784,18 @@ def test_a_caster_made_partly_transparent_leaves_a_kept_renderers_maps():
     many casters as before, others) draws the maps again: the image a fresh renderer draws."""
     scene, sun, point = _off_screen_scene()
     point.data.use_shadow = False
-    depsgraph = bpy.context.evaluated_depsgraph_get
     r = renderer.Renderer()
-
-    def draw(rend):
-        def job(_depsgraph):
-            image = rend.render(extract.snapshot(depsgraph(), 32, 32))
-            return rend.shadow_layers_drawn, image
-        return run_on_gpu(job)
-
     alpha = {}
     for name, value in (("In view", 1.0), ("Beyond", 0.5)):  # a material each, edited below
         mat = bpy.data.meshes[name].materials[0] = _white(name)
         alpha[name] = scenes.node_tree(mat).nodes.get("Principled BSDF").inputs["Alpha"]
         alpha[name].default_value = value
     try:
-        counts = [draw(r)[0]]
+        counts = [_draw_kept(r)[0]]
         alpha["In view"].default_value, alpha["Beyond"].default_value = 0.5, 1.0
-        count, image = draw(r)
+        count, image = _draw_kept(r)
         counts.append(count)
-        fresh = renderer.Renderer()
-        try:
-            _, alone = draw(fresh)
-        finally:
-            run_on_gpu(lambda _d: fresh.free())
+        alone = _fresh_image()
     finally:
         run_on_gpu(lambda _d: r.free())
     print(f"layers drawn after each draw: {counts}")
