@@ -30,7 +30,7 @@ from dataclasses import dataclass, replace
 import gpu
 import numpy as np
 
-from . import gpu_library, light_tiles, programs, shadows
+from . import gpu_library, light_tiles, matrices, programs, shadows
 from .snapshot import MAX_ENVIRONMENT_IMAGES, ImageData, MeshGeometry, Snapshot, World
 
 #: GPU texture format per ``ImageData.storage``: byte images keep their bytes (an sRGB one is
@@ -303,9 +303,11 @@ class SceneResources:
     def handedness(self, draws: list[Draw]) -> np.ndarray:
         """Per draw, the sign of its item's matrix's determinant: -1 where it mirrors (turning its
         triangles' winding), 0 where it flattens."""
+        if not draws:
+            return np.zeros(0, np.int8)
         items = self.snapshot.items
-        return np.array([np.sign(np.linalg.det(np.asarray(items[d.order].matrix, np.float64)[:3, :3]))
-                         for d in draws], np.int8)
+        m = np.stack([items[d.order].matrix[:3, :3] for d in draws])
+        return np.sign(matrices.determinant3(m)).astype(np.int8)
 
     def caster_facing(self, casters: list[Draw]) -> np.ndarray:
         """Per caster draw: +1 where its item is a closed surface facing out as drawn (the mesh's
