@@ -803,6 +803,42 @@ def test_a_caster_made_partly_transparent_leaves_a_kept_renderers_maps():
     assert np.array_equal(image, alone)
 
 
+def test_persistent_data_draws_again_only_the_maps_a_moved_camera_needs(tmp_path, monkeypatch):
+    """Persistent Data, final renders: the camera moved to look at the far sphere's shadow draws
+    the sun's map again (it lacked that sphere; the image a fresh texture's), and moved back draws
+    nothing (the map holds every caster both views need)."""
+    from addon import gpu_library, passes
+
+    scene, sun, point = _off_screen_scene()
+    point.data.use_shadow = False
+    scene.render.use_persistent_data = True
+    seen = []
+    original = passes.ShadowPass.run
+
+    def run(self, frame, views=None):
+        kept, renders = self.kept, self.renders
+        done = original(self, frame, views)
+        seen.append((self.kept - kept, self.renders - renders))
+        return done
+
+    monkeypatch.setattr(passes.ShadowPass, "run", run)
+    gpu_library.LIBRARY.drop_spares()
+    try:
+        scenes.render(scene, tmp_path / "first.exr")
+        scene.camera.location.y += 12.0
+        moved = scenes.render(scene, tmp_path / "moved.exr")
+        scene.camera.location.y -= 12.0
+        scenes.render(scene, tmp_path / "back.exr")
+        scene.camera.location.y += 12.0
+        gpu_library.LIBRARY.drop_spares()
+        fresh = scenes.render(scene, tmp_path / "fresh.exr")
+    finally:
+        gpu_library.LIBRARY.drop_spares()
+    print(f"(kept, layers drawn) per render: {seen}")
+    assert seen[:3] == [(0, 1), (0, 1), (1, 0)], seen
+    assert moved[..., :3].max() > 0.1 and np.array_equal(moved, fresh)
+
+
 def test_closed_casters_drawn_by_their_lit_faces_cast_the_same_shadows(tmp_path, monkeypatch):
     """Closed casters drawn into the maps by their faces towards the light alone (the rest culled)
     give, bit for bit, the image drawn with every face: spheres and a torus facing out, a mirrored
