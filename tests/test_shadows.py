@@ -655,7 +655,8 @@ def test_visible_region_holds_what_the_view_sees_of_the_box():
     """visible_region against random points: every point of the box that the view (a perspective
     camera looking into the box, the box partly behind it and beside it) sees lies within the
     region's bounds, and the region's points lie in the box and the clip volume (it is no larger
-    than it must be); a view that sees nothing of the box: no points."""
+    than it must be: its bounds within 2 % of the box's size of the seen points'); a view that sees
+    nothing of the box: no points."""
     rng = np.random.default_rng(7)
     view = shadows.look_at(np.array([1.0, -3.0, 2.0]), np.array([0.3, 1.0, -0.4]), (0.0, 0.0, 1.0))
     view_projection = shadows.perspective(0.7, 0.1, 30.0) @ view
@@ -669,9 +670,10 @@ def test_visible_region_holds_what_the_view_sees_of_the_box():
     assert np.all(region >= lo - 1e-5) and np.all(region <= hi + 1e-5)
     clip = np.concatenate([region, np.ones((len(region), 1))], axis=1) @ view_projection.T
     assert np.all(np.abs(clip[:, :3]) <= clip[:, 3:] * (1 + 1e-6) + 1e-6)
-    # the seen points reach the region's bounds to within a few percent of the box (tight)
-    assert np.all(np.abs(seen.min(0) - region.min(0)) < 0.03 * (hi - lo)), (seen.min(0), region.min(0))
-    assert np.all(np.abs(seen.max(0) - region.max(0)) < 0.03 * (hi - lo)), (seen.max(0), region.max(0))
+    # the seen points reach the region's bounds (tight): measured within 0.64 % of the box's size
+    gap = max(float((np.abs(seen.min(0) - region.min(0)) / (hi - lo)).max()),
+              float((np.abs(seen.max(0) - region.max(0)) / (hi - lo)).max()))
+    assert gap < 0.02, f"the region's bounds reach {100 * gap:.2f} % of the box beyond what the view sees"
     away = shadows.look_at(np.array([1.0, -8.0, 2.0]), np.array([0.0, -1.0, 0.0]), (0.0, 0.0, 1.0))
     assert len(shadows.visible_region(shadows.perspective(0.7, 0.1, 30.0) @ away, lo, hi)) == 0
 
