@@ -805,15 +805,11 @@ def test_a_caster_made_partly_transparent_leaves_a_kept_renderers_maps():
     assert np.array_equal(image, alone)
 
 
-def test_persistent_data_draws_again_only_the_maps_a_moved_camera_needs(tmp_path, monkeypatch):
-    """Persistent Data, final renders: the camera moved to look at the far sphere's shadow draws
-    the sun's map again (it lacked that sphere; the image a fresh texture's), and moved back draws
-    nothing (the map holds every caster both views need)."""
-    from addon import gpu_library, passes
+def _kept_and_drawn(monkeypatch) -> list:
+    """A list that each run of the shadow pass appends to: (1 if it kept the maps a finished
+    renderer left, else 0; the layers it drew)."""
+    from addon import passes
 
-    scene, sun, point = _off_screen_scene()
-    point.data.use_shadow = False
-    scene.render.use_persistent_data = True
     seen = []
     original = passes.ShadowPass.run
 
@@ -824,6 +820,19 @@ def test_persistent_data_draws_again_only_the_maps_a_moved_camera_needs(tmp_path
         return done
 
     monkeypatch.setattr(passes.ShadowPass, "run", run)
+    return seen
+
+
+def test_persistent_data_draws_again_only_the_maps_a_moved_camera_needs(tmp_path, monkeypatch):
+    """Persistent Data, final renders: the camera moved to look at the far sphere's shadow draws
+    the sun's map again (it lacked that sphere; the image a fresh texture's), and moved back draws
+    nothing (the map holds every caster both views need)."""
+    from addon import gpu_library
+
+    scene, sun, point = _off_screen_scene()
+    point.data.use_shadow = False
+    scene.render.use_persistent_data = True
+    seen = _kept_and_drawn(monkeypatch)
     gpu_library.LIBRARY.drop_spares()
     try:
         scenes.render(scene, tmp_path / "first.exr")
@@ -960,7 +969,7 @@ def test_persistent_data_keeps_the_maps_while_their_content_is_the_same(tmp_path
     in place (same object, same name), two slots' materials swapped (one of them partly
     transparent: the other half of the sphere casts) and a light moved draw the maps again, each
     as a fresh texture's; and a scene with Persistent Data off draws them every time."""
-    from addon import extract, gpu_library, passes
+    from addon import extract, gpu_library
 
     library = gpu_library.LIBRARY
     scene, light = _scene("POINT", 0.2, resolution=48)
@@ -968,16 +977,7 @@ def test_persistent_data_keeps_the_maps_while_their_content_is_the_same(tmp_path
     # final renders alone honour it (a viewport keeps its renderer; previews keep nothing)
     assert extract.final_render_settings(scene).persistent_data
     assert not extract.scene_settings(scene).persistent_data
-    seen = []
-    original = passes.ShadowPass.run
-
-    def run(self, frame, spec=None):
-        kept, renders = self.kept, self.renders
-        done = original(self, frame, spec)
-        seen.append((self.kept - kept, self.renders - renders))
-        return done
-
-    monkeypatch.setattr(passes.ShadowPass, "run", run)
+    seen = _kept_and_drawn(monkeypatch)
 
     def render(name, fresh=False):
         if fresh:
