@@ -202,10 +202,12 @@ def _within_tile_bound(centres, radii, light, tx, ty, edges, vp: np.ndarray) -> 
         cx, cy = ((centres @ vp[i, :3] + vp[i, 3]) / w for i in (0, 1))  # the centres' ndc
         # world units per unit of ndc along the view's x and y (the camera's axes)
         sx, sy = (1.0 / np.linalg.norm(vp[i, :3]) for i in (0, 1))
-        cx, cy = cx[light], cy[light]
-        dx = np.maximum(np.maximum(xs[tx] - cx, cx - xs[tx + 1]), 0.0) * sx
-        dy = np.maximum(np.maximum(ys[ty] - cy, cy - ys[ty + 1]), 0.0) * sy
-        return dx * dx + dy * dy <= radii[light] ** 2 * (1.0 + 1e-9)  # rounding keeps a tangent sphere
+        # the squared distances per light and column, and per light and row (tables a few
+        # thousand entries large, where the pairs are tens of thousands), read per pair
+        dx = np.maximum(np.maximum(xs[None, :-1] - cx[:, None], cx[:, None] - xs[None, 1:]), 0.0) * sx
+        dy = np.maximum(np.maximum(ys[None, :-1] - cy[:, None], cy[:, None] - ys[None, 1:]), 0.0) * sy
+        reach = radii ** 2 * (1.0 + 1e-9)  # rounding keeps a tangent sphere
+        return (dx * dx)[light, tx] + (dy * dy)[light, ty] <= reach[light]
 
     eye, axis, half_angle = _tile_cones(vp.tobytes(), xs.tobytes(), ys.tobytes())
     v = centres - eye  # per light
