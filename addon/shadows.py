@@ -355,12 +355,16 @@ def layer_casters(matrices: np.ndarray, spheres: np.ndarray) -> np.ndarray:
     wholly outside would be clipped away in the layer's map, so leaving it out draws the same
     map; a sphere meeting a plane's outside near a corner is kept (conservative)."""
     m = np.asarray(matrices, np.float64).reshape(-1, 4, 4)
-    spheres = np.asarray(spheres, np.float64).reshape(-1, 4)
     planes = np.concatenate([m[:, 3:4] + m[:, :3], m[:, 3:4] - m[:, :3]], axis=1)  # (layers, 6, 4)
-    norms = np.linalg.norm(planes[..., :3], axis=-1)  # (layers, 6)
+    return _within_planes(planes, np.asarray(spheres, np.float64).reshape(-1, 4))
+
+
+def _within_planes(planes: np.ndarray, spheres: np.ndarray) -> np.ndarray:
+    """(layers, n) bool: which spheres (n, 4) are not wholly outside any of each layer's planes
+    ((layers, p, 4), inside: n.x + d >= 0, n not normalised)."""
+    norms = np.linalg.norm(planes[..., :3], axis=-1)  # (layers, p)
     signed = np.einsum("lpk,nk->lpn", planes[..., :3], spheres[:, :3]) + planes[..., 3:4]
     return np.all(signed >= -(spheres[:, 3][None, None] * norms[..., None]), axis=1)
-
 
 
 #: How far from a receiver's own position a shadow lookup reads its map, in texels: the penumbra's
@@ -369,13 +373,8 @@ def layer_casters(matrices: np.ndarray, spheres: np.ndarray) -> np.ndarray:
 LOOKUP_REACH = 50
 
 #: The 12 edges of a box or frustum whose 8 corners are indexed by 3 bits (``_box_corners``' order,
-#: ``visible_region``'s clip corners): pairs of corners differing in one bit.
+#: the clip volume's corners in ``visible_region``): pairs of corners differing in one bit.
 _EDGES = np.array([(a, a | bit) for bit in (1, 2, 4) for a in range(8) if not a & bit])
-
-
-def _corner_signs() -> np.ndarray:
-    return np.array([[(-1.0, 1.0)[i], (-1.0, 1.0)[j], (-1.0, 1.0)[k]]
-                     for i in (0, 1) for j in (0, 1) for k in (0, 1)])
 
 
 def _edge_crossings(corners: np.ndarray, planes: np.ndarray) -> np.ndarray:
@@ -401,7 +400,7 @@ def visible_region(view_projection: np.ndarray, lo, hi) -> np.ndarray | None:
         to_world = invert(m)
     except (ValueError, np.linalg.LinAlgError):
         return None
-    ndc = np.concatenate([_corner_signs(), np.ones((8, 1))], axis=1)
+    ndc = np.concatenate([_box_corners(-np.ones(3), np.ones(3)), np.ones((8, 1))], axis=1)
     corners = ndc @ to_world.T
     if not np.all(np.isfinite(corners)) or np.any(corners[:, 3] <= 0.0):
         return None
@@ -475,9 +474,7 @@ def receiving_casters(matrices: np.ndarray, size: int, spheres: np.ndarray, regi
         hi = np.minimum(hi[part], 1.0) + reach
         planes = np.concatenate([rows[part] - lo[..., None] * w_row[part],
                                  hi[..., None] * w_row[part] - rows[part]], axis=1)
-        norms = np.linalg.norm(planes[..., :3], axis=-1)  # (part, 4)
-        signed = np.einsum("lpk,nk->lpn", planes[..., :3], spheres[:, :3]) + planes[..., 3:4]
-        out[part] |= np.all(signed >= -(spheres[:, 3][None, None] * norms[..., None]), axis=1)
+        out[part] |= _within_planes(planes, spheres)
     return out
 
 

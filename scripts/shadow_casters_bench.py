@@ -31,6 +31,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "scripts"), str(ROOT / "tests")]
 
 import render as cli  # noqa: E402
+import round_robin  # noqa: E402
 
 #: camera -> (location, rotation in degrees, lens in mm)
 CAMERAS = {
@@ -156,10 +157,7 @@ def main(argv=None) -> int:
     stamp = time.strftime("%Y-%m-%d %H:%M")
     with tempfile.TemporaryDirectory() as tmp:
         rows = run(args, Path(tmp), lambda text: print(text, flush=True))
-    text = report(args, rows, stamp)
-    args.out.mkdir(parents=True, exist_ok=True)
-    (args.out / "shadow_casters.md").write_text(text, encoding="utf-8")
-    print(text)
+    round_robin.write_table(args.out / "shadow_casters.md", report(args, rows, stamp))
     return 0
 
 
