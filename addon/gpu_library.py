@@ -314,7 +314,10 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     if features.shadow_layers:
         info.sampler(13, "FLOAT_2D_ARRAY", "shadow_maps")
         info.uniform_buf(len(_BLOCKS) + 2, "ShadowBlock", "shadow")
-    info.sampler(14, "FLOAT_2D", "light_data")
+    if features.light_block:
+        info.uniform_buf(len(_BLOCKS) + 3, "LightBlock", "light_block")
+    else:
+        info.sampler(14, "FLOAT_2D", "light_data")
     if features.light_tiles:
         info.sampler(15, "FLOAT_2D", "light_tiles")
     if features.uses_ltc:

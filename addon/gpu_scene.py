@@ -166,7 +166,8 @@ class SceneResources:
         # material is the G-buffer's row), and each material's row
         self._material_table = _RowTexture()
         self.material_rows: dict[str, int] = {}
-        self._lights = _RowTexture()
+        self._lights = _RowTexture()  # beyond what a uniform block holds
+        self._light_block = _Block()  # where it holds them (programs.light_block_fits)
         self._light_tiles = _RowTexture(channels=2)  # light culling's tiles and lists (per view)
         self._tiles = None  # (what they were made from, the lists) of the last lists uploaded
         self._objects: list[_Block] = []
@@ -230,7 +231,12 @@ class SceneResources:
         order, self.light_group_ends = programs.light_order(snapshot.lights, first)
         self.lights = [snapshot.lights[i] for i in order]
         lights = programs.pack_lights(self.lights, slots, [first[i] for i in order])
-        self.uploads["lights"] += self._lights.put(lights)
+        if programs.light_block_fits(slots):  # the one or the other, the other dropped
+            self.uploads["lights"] += self._light_block.put(lights.tobytes())
+            self._lights = _RowTexture()
+        else:
+            self.uploads["lights"] += self._lights.put(lights)
+            self._light_block = _Block()
         blocks = programs.pack_objects(snapshot.items)
         del self._objects[len(blocks):]
         while len(self._objects) < len(blocks):
@@ -378,27 +384,41 @@ class SceneResources:
         """The frame block for a view (the camera's, unless the viewport passes its own) of
         ``width`` x ``height`` pixels at ``samples`` x ``samples``, and its light tiles when light
         culling is on (``light_tiles``)."""
-        tiles = None
-        if programs.uses_light_tiles(self.snapshot):
-            lights = self.lights
-            vp = self.snapshot.camera.view_projection if view_projection is None else view_projection
-            centres = np.array([light.position for light in lights], np.float64).reshape(-1, 3)
-            radii = np.array([light.influence for light in lights], np.float64)
-            # the passes of one view ask again (the occlusion's and the opaque pass's): the lists
-            # are the last ones' while lights, view and size are (~7 ms of numpy for 3 lights at
-            # 640 x 360 on this machine)
-            key = (centres.tobytes(), radii.tobytes(), np.asarray(vp, np.float64).tobytes(), width, height,
-                   samples)
-            if self._tiles is not None and self._tiles[0] == key:
-                tiles = self._tiles[1]
-            else:
-                tiles = light_tiles.tile_lists(centres, radii, vp, width * samples, height * samples,
-                                               light_tiles.TILE * samples)
-                self._tiles = (key, tiles)
-                texels = tiles.texels()
-                self.uploads["light tiles"] += self._light_tiles.put(texels.reshape(len(texels), -1))
+        tiles = self.tile_lists(view_projection, width, height, samples)
         self.uploads["frame"] += self._frame.put(programs.pack_frame(self.snapshot, view_projection, tiles,
                                                                      self.light_group_ends))
+
+    def tile_lists(self, view_projection: np.ndarray | None, width: int, height: int,
+                   samples: int = 1) -> light_tiles.TileLists | None:
+        """The view's light tiles (uploaded), None where light culling is off or does not pay
+        (``programs.uses_light_tiles``)."""
+        if not programs.uses_light_tiles(self.snapshot):
+            return None
+        lights = self.lights
+        vp = self.snapshot.camera.view_projection if view_projection is None else view_projection
+        centres = np.array([light.position for light in lights], np.float64).reshape(-1, 3)
+        radii = np.array([light.influence for light in lights], np.float64)
+        # the passes of one view ask again (the occlusion's and the opaque pass's): the lists
+        # are the last ones' while lights, view and size are (~7 ms of numpy for 3 lights at
+        # 640 x 360 on this machine)
+        key = (centres.tobytes(), radii.tobytes(), np.asarray(vp, np.float64).tobytes(), width, height,
+               samples)
+        if self._tiles is None or self._tiles[0] != key:
+            tiles = light_tiles.tile_lists(centres, radii, vp, width * samples, height * samples,
+                                           light_tiles.TILE * samples)
+            self._tiles = (key, tiles)
+            texels = tiles.texels()
+            self.uploads["light tiles"] += self._light_tiles.put(texels.reshape(len(texels), -1))
+        return self._tiles[1]
+
+    def lights_per_pixel(self, view_projection: np.ndarray | None, width: int, height: int,
+                         samples: int = 1) -> float:
+        """How many lights a pixel of the view evaluates, on average: its tile's with light
+        culling, else every light."""
+        tiles = self.tile_lists(view_projection, width, height, samples)
+        if tiles is None:
+            return float(len(self.lights))
+        return tiles.entry_count / tiles.header_texels
 
     @property
     def geometry_count(self) -> int:
@@ -457,7 +477,10 @@ class SceneResources:
         shader = self.program(features)
         shader.bind()
         shader.uniform_block("frame", self._frame.ubo)
-        gpu_library.bind_sampler(shader, "light_data", self._lights.texture)
+        if features.light_block:
+            shader.uniform_block("light_block", self._light_block.ubo)
+        else:
+            gpu_library.bind_sampler(shader, "light_data", self._lights.texture)
         if features.light_tiles:
             gpu_library.bind_sampler(shader, "light_tiles", self._light_tiles.texture)
         shader.uniform_float("lobes", lobes)
@@ -581,6 +604,7 @@ class SceneResources:
         self._draw_lists.clear()
         self._programs.clear()
         self._lights = _RowTexture()
+        self._light_block = _Block()
         self._material_table = _RowTexture()
         self.material_rows = {}
         self._light_tiles = _RowTexture(channels=2)

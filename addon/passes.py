@@ -494,7 +494,8 @@ class OcclusionPass(Pass):
         w, h = view.width * s, view.height * s
         if not any(features.occlusion for features, _ in lists.opaque):
             groups = opaque_groups(frame, view)
-            if not (SHADE_ONCE and depth_prepass_pays(groups, frame.snapshot.triangle_count, w * h)):
+            if not (SHADE_ONCE and depth_prepass_pays(groups, frame.snapshot.triangle_count, w * h,
+                                                      pixel_lights(frame, view))):
                 self.free()
                 return True
             # no occlusion, but shading costly enough that the opaque surfaces' depth is worth
@@ -633,17 +634,33 @@ SHADE_ONCE = True
 DEFERRED = True
 
 
-def costly_shading(features: programs.Features) -> bool:
+#: The lights a pixel evaluates from which its shading counts as costly (``costly_shading``).
+MANY_LIGHTS = 5
+
+
+def costly_shading(features: programs.Features, lights: float | None = None) -> bool:
     """A program costly per pixel: penumbrae searched in shadow maps, area lights, the world's
-    light (its maps and occlusion), the world sampled per pixel, many lights."""
+    light (its maps and occlusion), the world sampled per pixel, many lights: ``lights``, those
+    a pixel evaluates (``pixel_lights``: with light culling its tile's, on average), by default
+    every light the program holds."""
     return (features.soft_shadows or "AREA" in features.light_kinds or bool(features.environment)
-            or features.env_samples > 0 or features.max_lights >= 8)
+            or features.env_samples > 0 or _many_lights(features, lights))
 
 
-def heaviest_shading(features: programs.Features) -> bool:
+def heaviest_shading(features: programs.Features, lights: float | None = None) -> bool:
     """Among the costly programs (``costly_shading``), those whose every pixel costs the most:
-    area lights (their polygons, and their penumbrae in six maps), or 5 lights or more."""
-    return "AREA" in features.light_kinds or features.max_lights >= 8
+    area lights (their polygons, and their penumbrae in six maps), or many lights."""
+    return "AREA" in features.light_kinds or _many_lights(features, lights)
+
+
+def _many_lights(features: programs.Features, lights: float | None) -> bool:
+    return (features.max_lights if lights is None else lights) >= MANY_LIGHTS
+
+
+def pixel_lights(frame: Frame, view: View) -> float:
+    """How many lights a pixel of ``view`` evaluates, on average (light culling lists a screen
+    tile's: 64 lights that each reach a sixteenth of the view are ~4 a pixel)."""
+    return frame.scene.lights_per_pixel(view.view_projection, view.width, view.height, view.samples)
 
 
 #: The most pixels per triangle, on average over the view, at which deferred shading pays: for a
@@ -654,7 +671,8 @@ DEFERRED_PIXELS_PER_TRIANGLE = 32
 DEFERRED_PIXELS_PER_TRIANGLE_HEAVIEST = 64
 
 
-def deferred_pays(features: programs.Features, triangles: int, pixels: int) -> bool:
+def deferred_pays(features: programs.Features, triangles: int, pixels: int,
+                  lights: float | None = None) -> bool:
     """Whether ``features``' surfaces are shaded deferred (passes.OpaquePass): where their shading
     is costly and the triangles small against what a pixel costs (DEFERRED_PIXELS_PER_TRIANGLE);
     not for image-mapped surfaces (Features), nor beyond DEFERRED_PIXELS (the G-buffer's memory).
@@ -665,11 +683,11 @@ def deferred_pays(features: programs.Features, triangles: int, pixels: int) -> b
     817 (within this machine's noise: left forward, beyond the 64 px); material_grid at 960 x 720
     (65 px) 274 -> 288, world at 640 x 360 (48 px) 84 -> 86 (those stay forward). Shading all
     surfaces deferred lost 4-16 % on the presets of one or two lights without penumbrae (fresnel,
-    hdr, long_tail: the G-buffer's writes)."""
+    hdr, long_tail: the G-buffer's writes). ``lights``: as ``costly_shading``'s."""
     if not (DEFERRED and not features.peel and not features.maps and pixels <= DEFERRED_PIXELS
-            and costly_shading(features)):
+            and costly_shading(features, lights)):
         return False
-    heaviest = heaviest_shading(features)
+    heaviest = heaviest_shading(features, lights)
     most = DEFERRED_PIXELS_PER_TRIANGLE_HEAVIEST if heaviest else DEFERRED_PIXELS_PER_TRIANGLE
     return most * triangles >= pixels
 
@@ -678,21 +696,25 @@ def opaque_groups(frame: Frame, view: View) -> list:
     """The view's opaque (features, draws) groups, each marked deferred where that pays."""
     pixels = view.width * view.height * view.samples ** 2
     triangles = frame.snapshot.triangle_count
-    return [(replace(features, deferred=deferred_pays(features, triangles, pixels)), draws)
+    lights = pixel_lights(frame, view)
+    return [(replace(features, deferred=deferred_pays(features, triangles, pixels, lights)), draws)
             for features, draws in frame.scene.draw_lists(view.model, view.half_target).opaque]
 
 
-def depth_prepass_pays(opaque, triangles: int, pixels: int) -> bool:
+def depth_prepass_pays(opaque, triangles: int, pixels: int, lights: float | None = None) -> bool:
     """Whether drawing the opaque surfaces' depth ahead of their shading (the prepass alone, where
     no occlusion asks for it) saves more than it costs: where some surface shaded forward has a
     program costly per pixel (``costly_shading``), each pixel hidden behind another surface then
     costs no shading; the geometry drawn
     twice costs its vertices and rasterising again, which a scene of many more triangles than
     pixels does not win back. Measured (docs/bench/peers.md's presets, 640 x 360): softbox
-    and furnace gain, scenes of a light or two without penumbrae lose a few ms."""
+    and furnace gain, scenes of a light or two without penumbrae lose a few ms; so do 64 lights over
+    a plane with light culling, ~4 a pixel (1280 x 720: 53.8 ms a frame with the prepass, 49.7 without).
+    ``lights``: as ``costly_shading``'s."""
     if triangles > pixels:
         return False
-    return any(costly_shading(f) for f, _ in opaque if not f.deferred)  # a G-buffer is a prepass already
+    # a G-buffer is a prepass already
+    return any(costly_shading(f, lights) for f, _ in opaque if not f.deferred)
 
 
 #: The most pixels (supersampled) a view shades deferred: its G-buffer holds 48 bytes a pixel

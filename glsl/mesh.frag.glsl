@@ -9,39 +9,47 @@ vec3 view_direction(vec3 p)
   return -frame.camera_forward.xyz; /* orthographic: parallel view rays */
 }
 
-/* Light i's data: row i of the light texture, one texel per vec4 of LightData. The position and
+/* Texel t of light i (glsl/uniforms.glsl): from the lights' uniform block where they fit (a
+ * block's load costs less than a texel fetch on a software rasteriser), else their texture. */
+#ifdef SL_LIGHT_BLOCK
+#  define LIGHT_TEXEL(i, t) light_block.texels[(i) * LIGHT_TEXELS + (t)]
+#else
+#  define LIGHT_TEXEL(i, t) texelFetch(light_data, ivec2(t, i), 0)
+#endif
+
+/* Light i's data, one texel per vec4 of LightData (LIGHT_TEXEL). The position and
  * reach first (light culling tests them alone), then the texels the light's kind reads: a point
  * light has no direction, only an area light has axes, only lights with a size have a shape
  * (fetches are most of a light's cost on a software rasteriser). */
 LightData load_light_reach(int i)
 {
   LightData light;
-  light.position_kind = texelFetch(light_data, ivec2(0, i), 0);
-  light.influence = texelFetch(light_data, ivec2(6, i), 0);
+  light.position_kind = LIGHT_TEXEL(i, 0);
+  light.influence = LIGHT_TEXEL(i, 6);
   return light;
 }
 
 LightData load_light_rest(LightData light, int i)
 {
-  light.intensity_blend = texelFetch(light_data, ivec2(2, i), 0);
-  light.factors = texelFetch(light_data, ivec2(3, i), 0);
+  light.intensity_blend = LIGHT_TEXEL(i, 2);
+  light.factors = LIGHT_TEXEL(i, 3);
   /* and only the texels some light of the scene needs: a runtime test would not save the fetch
    * here (both sides of an `if` run), so the kinds and radii present decide at compile time */
   light.shape = vec4(0.0);
 #if defined(SL_LIGHT_RADII) || defined(SL_HAS_AREA)
-  light.shape = texelFetch(light_data, ivec2(4, i), 0);
+  light.shape = LIGHT_TEXEL(i, 4);
 #endif
   int kind = int(light.position_kind.w);
   light.direction_cone = vec4(0.0, 0.0, -1.0, 1.0);
 #if defined(SL_HAS_SPOT) || defined(SL_HAS_SUN) || defined(SL_HAS_AREA)
   if (kind != LIGHT_POINT) {
-    light.direction_cone = texelFetch(light_data, ivec2(1, i), 0);
+    light.direction_cone = LIGHT_TEXEL(i, 1);
   }
 #endif
   light.area = vec4(1.0, 0.0, 0.0, 0.0);
 #ifdef SL_HAS_AREA
   if (kind == LIGHT_AREA) {
-    light.area = texelFetch(light_data, ivec2(5, i), 0);
+    light.area = LIGHT_TEXEL(i, 5);
   }
 #endif
   return light;

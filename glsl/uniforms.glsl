@@ -29,11 +29,19 @@ struct LightData {
                           * 180 degrees, none) */
 };
 
-/* The lights are not a uniform block (64 KiB would hold 585 of them): each is a row of a texture,
- * light_data, its seven vec4 in LightData's order (mesh.frag.glsl's load_light_reach and
- * load_light_rest). With light culling (SL_LIGHT_TILES, addon/light_tiles.py), light_tiles holds
- * each screen tile's (first, count) and then the tiles' light indices, SL_LIGHT_LIST_WIDTH texels
- * per row. */
+/* Each light is LIGHT_TEXELS vec4 in LightData's order (mesh.frag.glsl's load_light_reach and
+ * load_light_rest): up to 512 lights, where a uniform block of 64 KiB holds them (SL_LIGHT_BLOCK,
+ * addon/programs.py's light_block_fits), the block's texels light after light; more, the rows of a
+ * texture, light_data, a light's texels in its row. With light culling (SL_LIGHT_TILES,
+ * addon/light_tiles.py), light_tiles holds each screen tile's (first, count) and then the tiles'
+ * light indices, SL_LIGHT_LIST_WIDTH texels per row. */
+#define LIGHT_TEXELS 7
+
+#ifdef SL_LIGHT_BLOCK
+struct LightBlock {
+  vec4 texels[SL_MAX_LIGHTS * LIGHT_TEXELS];
+};
+#endif
 
 struct MaterialData {
   vec4 base_color;       /* rgb: PBR base colour */

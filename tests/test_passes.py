@@ -175,6 +175,54 @@ def test_the_depth_prepass_is_drawn_where_shading_is_costly_and_the_geometry_is_
     for features in costly:
         assert passes.depth_prepass_pays([(cheap, []), (features, [])], 1000, pixels), features
         assert not passes.depth_prepass_pays([(features, [])], pixels + 1, pixels), features
+    # many lights count by those a pixel evaluates: light culling's ~4 of 64 are not many
+    many = replace(cheap, max_lights=64, light_tiles=True)
+    assert passes.depth_prepass_pays([(many, [])], 1000, pixels)
+    assert not passes.depth_prepass_pays([(many, [])], 1000, pixels, lights=4.1)
+    assert passes.depth_prepass_pays([(many, [])], 1000, pixels, lights=passes.MANY_LIGHTS)
+
+
+def test_light_culling_counts_the_lights_a_pixel_evaluates():
+    """64 point lights that each reach a disc of a sixteenth of the view: with light culling a
+    pixel evaluates the lights of its tile, on average a little more than reach it (counted here
+    pixel by pixel: 3.55, the discs at the border partly outside; a tile lists every light
+    reaching some of its pixels), too few for the depth prepass; without culling every light, and
+    the prepass drawn."""
+    import math
+
+    from addon import extract, passes, renderer
+
+    size, view = 1024, 8.0  # 16-pixel tiles of 0.125 m, a light's disc 1.13 m across
+    scene = scenes.reset(size=size)
+    scenes.ortho_camera(scene, scale=view)
+    scenes.plane(scene, size=2 * view)
+    disc = math.sqrt(view * view / 16.0 / math.pi)
+    centres = ((np.arange(8) + 0.5) / 8 - 0.5) * view
+    for y in centres:
+        for x in centres:
+            light = scenes.light(scene, "POINT", energy=20.0, location=(x, y, 0.25))
+            light.data.use_custom_distance, light.data.cutoff_distance = True, math.hypot(disc, 0.25)
+    grid = (np.arange(256) + 0.5) / 256 * view - view / 2  # points on the plane, a grid
+    dx2 = (grid[:, None] - centres[None, :]) ** 2  # (point x, light x)
+    reaching = (dx2[:, None, :, None] + dx2[None, :, None, :] < disc * disc).sum(axis=(2, 3)).mean()
+    r = renderer.Renderer()
+
+    def job(depsgraph):
+        out = {}
+        for culling in (True, False):
+            scene.shading_lab.light_culling = culling
+            snapshot = extract.snapshot(depsgraph, size, size)
+            r.render(snapshot)
+            out[culling] = (r.scene.lights_per_pixel(None, size, size),
+                            r._passes[passes.OcclusionPass, "main"].prepass is not None)
+        return out
+
+    out = _run(job, r)
+    lights, prepass = out[True]
+    print(f"lights a pixel evaluates with culling: {lights:.3f}, reaching it: {reaching:.3f}")
+    assert reaching <= lights <= 1.2 * reaching, f"{lights:.3f} lights a pixel, {reaching:.3f} reach it"
+    assert not prepass, "no prepass for ~4 lights a pixel"
+    assert out[False] == (64.0, True), out[False]
 
 
 def test_deferred_shading_is_chosen_by_the_shading_cost_and_the_triangles_size():

@@ -90,10 +90,10 @@ def test_viewport_matrices_give_the_camera_image():
     np.testing.assert_array_equal(viewport, reference)
 
 
-@pytest.mark.parametrize("count", [700, 4096])
+@pytest.mark.parametrize("count", [512, 700, 4096])
 def test_thousands_of_coincident_lights_equal_that_many_times_one(count, tmp_path):
-    """The lights are rows of a texture, not a uniform block (which held 1,024 of 64 bytes, and
-    682 of 96): ``count`` coincident point lights render as one of ``count`` times the power,
+    """Up to 512 lights are read from a uniform block (512 fill it), more from the rows of a
+    texture: ``count`` coincident point lights render as one of ``count`` times the power,
     within float32 summation (measured 7.9e-6 for 700, 4.8e-5 for 4,096). Light Threshold 0: a weak
     light reaches less far than a strong one (each fades out where its irradiance falls to the
     threshold), which is not what this test is about (tests/test_light_tiles.py is)."""
@@ -118,3 +118,41 @@ def test_thousands_of_coincident_lights_equal_that_many_times_one(count, tmp_pat
     error = float(np.abs(many - single)[..., :3].max() / single[..., :3].max())
     print(f"{count} coincident lights vs one: {error:.2e}")
     assert error < 4e-8 * count, f"{count} lights vs one: max relative difference {error:.2e}"
+
+
+@pytest.mark.parametrize("model", ["BLINN_PHONG", "PBR"])
+def test_lights_from_the_uniform_block_equal_the_texture_bit_for_bit(model, tmp_path, monkeypatch):
+    """Every kind of light, with a size, a spot's blend, an area light's shape and spread, shadow
+    maps and a Custom Distance (light culling): read from the lights' uniform block, the image is
+    the one read from the light texture, to the bit."""
+    scene = scenes.reset(size=48)
+    scene.shading_lab.model = model
+    scenes.ortho_camera(scene, scale=3.0)
+    scenes.plane(scene, size=4.0)
+    scenes.plane(scene, size=0.6, location=(0.1, 0.0, 0.4), rotation=(0.3, 0.2, 0.0))  # a caster
+    scenes.light(scene, "POINT", energy=60.0, location=(0.5, 0.3, 1.2), shadow_soft_size=0.1,
+                 use_shadow=True)
+    scenes.light(scene, "SPOT", energy=80.0, location=(-0.6, 0.2, 1.5), rotation=(0.2, -0.3, 0.0),
+                 spot_size=1.0, spot_blend=0.3, use_shadow=True)
+    scenes.light(scene, "SUN", energy=1.5, rotation=(0.3, 0.2, 0.0), angle=0.05, use_shadow=True)
+    scenes.light(scene, "AREA", energy=40.0, location=(0.2, -0.6, 1.0), size=0.4, use_shadow=True)
+    scenes.light(scene, "AREA", energy=30.0, location=(-0.4, -0.5, 0.8), shape="DISK", size=0.3,
+                 spread=1.0)
+    scenes.light(scene, "POINT", energy=20.0, location=(0.8, -0.8, 0.3), use_custom_distance=True,
+                 cutoff_distance=1.0)
+    read = []
+    compile_program = gpu_library.shading_program
+
+    def spy(features):
+        read.append(features.light_block)
+        return compile_program(features)
+
+    monkeypatch.setattr(gpu_library, "shading_program", spy)
+    block = scenes.render(scene, tmp_path / "block.exr")
+    assert read and all(read), "the lights fit the uniform block"
+    read.clear()
+    monkeypatch.setattr(programs, "LIGHT_BLOCK", False)
+    texture = scenes.render(scene, tmp_path / "texture.exr")
+    assert read and not any(read)
+    assert block[..., :3].max() > 0.1, "lit"
+    assert np.array_equal(block, texture), f"max difference {np.abs(block - texture).max():.3g}"

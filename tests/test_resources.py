@@ -105,7 +105,7 @@ def test_1000_renders_free_every_gpu_object_they_make_and_keep_memory_flat(tmp_p
     original_gbuffer = passes.GBuffer
     monkeypatch.setattr(engine, "Renderer", _TrackedRenderer)
     # every other render shades deferred (its G-buffer and material table made and freed too)
-    monkeypatch.setattr(passes, "deferred_pays", lambda features, _triangles, _pixels:
+    monkeypatch.setattr(passes, "deferred_pays", lambda features, *_counts:
                         deferred[0] and not features.peel and not features.maps)
     deferred = [False]
     gbuffers = []
@@ -131,7 +131,8 @@ def test_1000_renders_free_every_gpu_object_they_make_and_keep_memory_flat(tmp_p
     print(f"\n{RENDERS} renders (16x16): made {dict(census.made)} GPU objects, all freed; RSS "
           f"{rss_before:.1f} -> {rss_after:.1f} MB ({rss_after - rss_before:+.2f} MB, margin "
           f"{RENDER_MARGIN_MB} MB); programs {programs_before} -> {programs_after}")
-    assert census.made["GPUTexture"] >= 2 * RENDERS and census.made["GPUFrameBuffer"] >= RENDERS, (
+    # each render makes textures, uniform blocks (its lights among them) and framebuffers
+    assert min(census.made[kind] for kind in ("GPUTexture", "GPUUniformBuf", "GPUFrameBuffer")) >= RENDERS, (
         f"the census did not see the renders' targets: {dict(census.made)}")
     assert _TrackedRenderer.made - made_before == RENDERS, "every render must go through the engine"
     assert len(gbuffers) >= RENDERS // 2, f"{len(gbuffers)} G-buffers made: deferred every other render"
