@@ -110,10 +110,11 @@ def tile_lists(centres, radii, view_projection, width: int, height: int, tile: i
     radii = np.asarray(radii, np.float64).reshape(-1)
     n = len(radii)
     columns, rows = -(-width // tile), -(-height // tile)
-    x0 = np.zeros(n, np.int64)
-    y0 = np.zeros(n, np.int64)
-    x1 = np.full(n, columns, np.int64)
-    y1 = np.full(n, rows, np.int64)
+    # int32 throughout: the pairs' arrays are tens of thousands long, made afresh each frame
+    x0 = np.zeros(n, np.int32)
+    y0 = np.zeros(n, np.int32)
+    x1 = np.full(n, columns, np.int32)
+    y1 = np.full(n, rows, np.int32)
     vp = np.asarray(view_projection, np.float64)
     bounded = np.isfinite(radii)
     if not _orthographic(vp) and bounded.any():
@@ -131,27 +132,45 @@ def tile_lists(centres, radii, view_projection, width: int, height: int, tile: i
     total = int(counts.sum())
     if total > MAX_ENTRIES:  # too many to list: one tile, every light
         return _one_list(n)
-    light = np.repeat(np.arange(n), counts)
-    k = np.arange(total) - np.repeat(np.cumsum(counts) - counts, counts)  # index within the box
-    span = np.repeat(np.maximum(spans_x, 1), counts)
-    tx, ty = np.repeat(x0, counts) + k % span, np.repeat(y0, counts) + k // span
+    light, tx, ty = _box_pairs(x0, y0, spans_x, spans_y)
     tested = bounded[light]
     if total <= SPHERE_TESTED and tested.any():
         edges = _tile_edges(tile, width, height, columns, rows)
         finite = np.where(bounded, radii, 0.0)
-        pairs = light[tested], tx[tested], ty[tested]
+        every = bool(tested.all())  # (often: no sun among the lights)
+        pairs = (light, tx, ty) if every else (light[tested], tx[tested], ty[tested])
         met = _within_tile_bound(centres, finite, *pairs, edges, vp)
         if not _orthographic(vp):  # (orthographic: the rectangle is exact, the planes add nothing)
             met &= _meets_tile(centres, finite, *pairs, edges, vp)
-        keep = ~tested
-        keep[tested] = met
+        if every:
+            keep = met
+        else:
+            keep = ~tested
+            keep[tested] = met
         light, tx, ty = light[keep], tx[keep], ty[keep]
     tiles = ty * columns + tx
-    order = np.argsort(tiles, kind="stable")  # by tile; lights in their own order within one
+    # by tile, lights in their own order within one (16-bit keys sort by radix: ~5x faster)
+    order = np.argsort(tiles.astype(np.uint16) if columns * rows <= 1 << 16 else tiles, kind="stable")
     per_tile = np.bincount(tiles, minlength=columns * rows)
     first = np.concatenate([[0], np.cumsum(per_tile)[:-1]])
     header = np.stack([first, per_tile], axis=-1).reshape(rows, columns, 2).astype(np.float32)
     return TileLists(tile, header, _padded(light[order]))
+
+
+def _box_pairs(x0, y0, spans_x, spans_y):
+    """(light, tx, ty) of every tile in each light's box (columns x0 + [0, spans_x), rows y0 +
+    [0, spans_y)), light by light, each box row by row: made from the boxes' rows (a few
+    thousand), without a division per pair."""
+    n = len(x0)
+    row_light = np.repeat(np.arange(n, dtype=np.int32), spans_y)  # one per (light, row)
+    row_start = np.cumsum(spans_y, dtype=np.int32) - spans_y
+    row = y0[row_light] + (np.arange(len(row_light), dtype=np.int32) - row_start[row_light])
+    widths = spans_x[row_light]
+    light = np.repeat(row_light, widths)
+    # each row's first pair is its box's column x0
+    pair_start = np.cumsum(widths, dtype=np.int32) - widths
+    tx = np.arange(len(light), dtype=np.int32) - np.repeat(pair_start - x0[row_light], widths)
+    return light, tx, np.repeat(row, widths)
 
 
 def _camera_centre(inverse: np.ndarray) -> np.ndarray:
@@ -182,10 +201,12 @@ def _meets_tile(centres, radii, light, tx, ty, edges, vp: np.ndarray) -> np.ndar
     nx = np.linalg.norm(vp[0, :3][None] - xs[:, None] * vp[3, :3][None], axis=1)
     ny = np.linalg.norm(vp[1, :3][None] - ys[:, None] * vp[3, :3][None], axis=1)
     clip = centres @ vp[(0, 1, 3), :3].T + vp[(0, 1, 3), 3]  # the centres' clip x, y, w, per light
-    rx, ry, rw = clip[light].T
-    r = radii[light]
-    return ((rx - xs[tx] * rw >= -r * nx[tx]) & (xs[tx + 1] * rw - rx >= -r * nx[tx + 1])
-            & (ry - ys[ty] * rw >= -r * ny[ty]) & (ys[ty + 1] * rw - ry >= -r * ny[ty + 1]))
+    rx, ry, rw = (clip[:, i].take(light) for i in range(3))
+    r = radii.take(light)
+    return ((rx - xs.take(tx) * rw >= -r * nx.take(tx))
+            & (xs.take(tx + 1) * rw - rx >= -r * nx.take(tx + 1))
+            & (ry - ys.take(ty) * rw >= -r * ny.take(ty))
+            & (ys.take(ty + 1) * rw - ry >= -r * ny.take(ty + 1)))
 
 
 def _within_tile_bound(centres, radii, light, tx, ty, edges, vp: np.ndarray) -> np.ndarray:
@@ -207,16 +228,24 @@ def _within_tile_bound(centres, radii, light, tx, ty, edges, vp: np.ndarray) -> 
         dx = np.maximum(np.maximum(xs[None, :-1] - cx[:, None], cx[:, None] - xs[None, 1:]), 0.0) * sx
         dy = np.maximum(np.maximum(ys[None, :-1] - cy[:, None], cy[:, None] - ys[None, 1:]), 0.0) * sy
         reach = radii ** 2 * (1.0 + 1e-9)  # rounding keeps a tangent sphere
-        return (dx * dx)[light, tx] + (dy * dy)[light, ty] <= reach[light]
+        return ((dx * dx).take(light * dx.shape[1] + tx) + (dy * dy).take(light * dy.shape[1] + ty)
+                <= reach.take(light))
 
     eye, axis, half_angle = _tile_cones(vp.tobytes(), xs.tobytes(), ys.tobytes())
     v = centres - eye  # per light
     dist = np.linalg.norm(v, axis=1)
     reach = np.arcsin(np.clip(radii / np.maximum(dist, 1e-300), 0.0, 1.0))
     unit = v / np.maximum(dist, 1e-300)[:, None]
-    angle = np.arccos(np.clip(np.sum(unit[light] * axis[ty, tx], axis=1), -1.0, 1.0))
-    inside = dist[light] <= radii[light]
-    return inside | (angle <= half_angle[ty, tx] + reach[light] + 1e-9)  # rounding, as above
+    tile = ty * axis.shape[1] + tx
+    axes = axis.reshape(-1, 3)
+    # per pair by flat reads of small tables (each component apart: no (pairs, 3) arrays)
+    cosine = unit[:, 0].take(light) * axes[:, 0].take(tile)
+    for i in (1, 2):
+        cosine += unit[:, i].take(light) * axes[:, i].take(tile)
+    angle = np.arccos(np.clip(cosine, -1.0, 1.0))
+    inside = dist.take(light) <= radii.take(light)
+    # (rounding, as above)
+    return inside | (angle <= half_angle.reshape(-1).take(tile) + reach.take(light) + 1e-9)
 
 
 @lru_cache(maxsize=4)
