@@ -584,7 +584,8 @@ def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None,
     return np.concatenate([np.asarray(r, np.float32) for r in rows]).tobytes()
 
 
-#: Floats per light: LightData's seven vec4 (glsl/uniforms.glsl), one row of the light texture.
+#: Floats per light: LightData's seven vec4 (glsl/uniforms.glsl, LIGHT_TEXELS), one row of the
+#: light texture (or one light's span of the lights' uniform block).
 LIGHT_FLOATS = 28
 
 #: The bytes a uniform block holds (OpenGL's GL_MAX_UNIFORM_BLOCK_SIZE on the platforms Blender

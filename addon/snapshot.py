@@ -89,8 +89,8 @@ class Terms:
         changes = {k: v for k, v in families.items() if v}
         return replace(self, **changes) if changes else self
 LIGHT_KINDS = ("POINT", "SPOT", "SUN", "AREA")
-#: Lights one frame draws (rows of the light texture: GPUs hold 16,384 at least); further ones
-#: are left out with a warning.
+#: Lights one frame draws (up to 512 in a uniform block, more as rows of the light texture:
+#: GPUs hold 16,384 rows at least); further ones are left out with a warning.
 MAX_LIGHTS = 16384
 
 #: Fresnel reflectance at normal incidence of a dielectric with IOR 1.5 (most plastics, glass).

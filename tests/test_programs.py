@@ -126,3 +126,16 @@ def test_compile_error_reaches_the_user_and_clears(tmp_path, monkeypatch):
     gpu_library.LIBRARY.clear()
     assert scenes.render(scene, tmp_path / "ok.exr")[..., 0].max() > 0
     assert gpu_library.LIBRARY.compile_error == ""
+
+
+def test_the_lights_block_holds_512_lights_of_the_texels_the_shaders_read():
+    """A light is LIGHT_FLOATS floats on the CPU and LIGHT_TEXELS vec4 in the shaders
+    (glsl/uniforms.glsl); the uniform block (64 KiB) holds the 512-light slot, the 1,024 go to the
+    light texture."""
+    source = (programs.glsl_dir() / "uniforms.glsl").read_text()
+    texels = int(re.search(r"#define LIGHT_TEXELS (\d+)", source).group(1))
+    assert programs.LIGHT_FLOATS == 4 * texels, (programs.LIGHT_FLOATS, texels)
+    assert programs.light_block_fits(512) and not programs.light_block_fits(1024)
+    assert 512 * texels * 16 <= programs.UNIFORM_BLOCK_BYTES < 1024 * texels * 16
+    assert ("SL_LIGHT_BLOCK", "1") in programs.Features(max_lights=512, light_block=True).defines()
+    assert ("SL_LIGHT_BLOCK", "1") not in programs.Features(max_lights=1024).defines()
