@@ -419,6 +419,7 @@ def gtao_program(scale: int = 1) -> gpu.types.GPUShader:
         info.typedef_source(programs.read_glsl("chain_data.glsl"))
         _declare_full_screen("depths", "normal_map")(info)
         info.uniform_buf(0, "OcclusionData", "occlusion")
+        info.fragment_out(1, "VEC4", "cell_data")  # the traced pixel's normal and depth
 
     return LIBRARY.program(("gtao", scale), "ambient occlusion", programs.gtao_source(scale), declare)
 
@@ -426,7 +427,7 @@ def gtao_program(scale: int = 1) -> gpu.types.GPUShader:
 def occlusion_resolve_program(scale: int = 1) -> gpu.types.GPUShader:
     def declare(info):
         info.typedef_source(programs.read_glsl("chain_data.glsl"))
-        _declare_full_screen("raw", "depths", "normal_map")(info)
+        _declare_full_screen("raw", "traced_cells", "depths", "normal_map")(info)
         info.uniform_buf(0, "OcclusionData", "occlusion")
 
     return LIBRARY.program(("occlusion resolve", scale), "ambient occlusion",

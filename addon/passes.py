@@ -48,26 +48,29 @@ class Target:
     together, both readable by shaders (depth peeling samples the opaque depth)."""
 
     def __init__(self, width: int, height: int, format: str = "RGBA32F", depth: bool = True,
-                 depth_texture: gpu.types.GPUTexture | None = None):
+                 depth_texture: gpu.types.GPUTexture | None = None, colors: int = 1):
         """``depth_texture``: another target's depth (of this size) to draw against instead of a
-        depth texture of its own."""
+        depth texture of its own; ``colors``: colour textures drawn into at once (a program's
+        outputs 0, 1, ...: ``texture_color`` and then ``more_colors``)."""
         self.width, self.height, self.format, self.depth = width, height, format, depth
         self.texture_color = new_texture(width, height, format)
+        self.more_colors = tuple(new_texture(width, height, format) for _ in range(colors - 1))
         self.shares_depth = depth and depth_texture is not None
         if depth and depth_texture is None:
             depth_texture = new_texture(width, height, "DEPTH_COMPONENT32F")
         self.texture_depth = depth_texture if depth else None
+        slots = (self.texture_color, *self.more_colors) if self.more_colors else self.texture_color
         if depth:
-            self.framebuffer = gpu.types.GPUFrameBuffer(color_slots=self.texture_color,
-                                                        depth_slot=self.texture_depth)
+            self.framebuffer = gpu.types.GPUFrameBuffer(color_slots=slots, depth_slot=self.texture_depth)
         else:
-            self.framebuffer = gpu.types.GPUFrameBuffer(color_slots=self.texture_color)
+            self.framebuffer = gpu.types.GPUFrameBuffer(color_slots=slots)
 
     def bind(self):
         return self.framebuffer.bind()
 
-    def fits(self, width: int, height: int, format: str, depth: bool) -> bool:
-        return (self.width, self.height, self.format, self.depth) == (width, height, format, depth)
+    def fits(self, width: int, height: int, format: str, depth: bool, colors: int = 1) -> bool:
+        return (self.width, self.height, self.format, self.depth, 1 + len(self.more_colors)) == \
+            (width, height, format, depth, colors)
 
     def read(self, region: tuple[int, int, int, int] | None = None) -> np.ndarray:
         """(height, width, 4) float32, bottom row first, of the whole texture or of ``region``
@@ -90,21 +93,23 @@ class Target:
         """The textures this target made (not a depth it shares)."""
         if self.texture_color is None:
             return []
-        return [self.texture_color] + ([self.texture_depth] if self.depth and not self.shares_depth else [])
+        return [self.texture_color, *self.more_colors] + (
+            [self.texture_depth] if self.depth and not self.shares_depth else [])
 
     def free(self) -> None:
         """Drop the textures and framebuffer (Blender frees them with their last reference)."""
         self.framebuffer = self.texture_color = self.texture_depth = None
+        self.more_colors = ()
 
 
 def _fitted(target: Target | None, width: int, height: int, format: str = "RGBA32F",
-            depth: bool = False) -> Target:
+            depth: bool = False, colors: int = 1) -> Target:
     """``target`` if it has this size and format, else a new one (the old one freed)."""
-    if target is not None and target.fits(width, height, format, depth):
+    if target is not None and target.fits(width, height, format, depth, colors):
         return target
     if target is not None:
         target.free()
-    return Target(width, height, format, depth)
+    return Target(width, height, format, depth, colors=colors)
 
 
 @dataclass(frozen=True)
@@ -527,7 +532,8 @@ class OcclusionPass(Pass):
         self.back = _fitted(self.back, w, h, "R16F", depth=True)
         self.depths = _fitted(self.depths, w, h, "RG32F")
         scale = programs.OCCLUSION_SCALES[frame.snapshot.settings.occlusion_resolution]
-        self.raw = _fitted(self.raw, -(-w // scale), -(-h // scale), "RGBA32F")
+        # the trace, and each cell's traced normal and depth for the resolve (colors 2)
+        self.raw = _fitted(self.raw, -(-w // scale), -(-h // scale), "RGBA32F", colors=2)
         self.target = _fitted(self.target, w, h, "RGBA16F")
         frame.scene.put_frame(view.view_projection, view.width, view.height, view.samples)
         if ahead:
@@ -568,6 +574,7 @@ class OcclusionPass(Pass):
 
         def bind_resolve(shader):
             gpu_library.bind_sampler(shader, "raw", raw.texture_color)
+            gpu_library.bind_sampler(shader, "traced_cells", raw.more_colors[0])
             bind(shader)
 
         frame.draw_full_screen(gpu_library.gtao_program(scale), bind, self.raw)

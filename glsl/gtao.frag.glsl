@@ -28,7 +28,9 @@
  * without bias where nothing occludes (2 slices alone are off by up to 2 % of the hemisphere's
  * cosine), and the resolve merges numerators and denominators.
  * Output: xyz the world-space bent normal's unnormalised sum over the pixel's slices, w both
- * sums of the ratio as two halves (packHalf2x16: visible, unoccluded) in an RGBA32F texel.
+ * sums of the ratio as two halves (packHalf2x16: visible, unoccluded) in an RGBA32F texel; cell_data:
+ * the traced pixel's world normal (xyz, normal_map's) and depth (w, depths' x), which the resolve
+ * reads for each of its neighbours in one texel instead of two.
  *
  * occlusion: inverse_projection, projection, view (world -> view rotation), params: x = the
  * occlusion distance in world units, y = 1 perspective / 0 orthographic, zw = target size.
@@ -89,13 +91,15 @@ void main()
   ivec2 texel = traced_texel(cell);
   vec2 uv = (vec2(texel) + 0.5) / size;
   float depth = texelFetch(depths, texel, 0).r;
+  vec3 world_normal = texelFetch(normal_map, texel, 0).xyz;
+  cell_data = vec4(world_normal, depth);
   if (depth >= 1.0) {
     frag_color = vec4(0.0); /* the sky: nothing to occlude (the resolve leaves it out) */
     return;
   }
   vec3 P = view_position(uv, depth);
   vec3 V = occlusion.params.y > 0.5 ? normalize(-P) : vec3(0.0, 0.0, 1.0);
-  vec3 N = normalize(mat3(occlusion.view) * texelFetch(normal_map, texel, 0).xyz);
+  vec3 N = normalize(mat3(occlusion.view) * world_normal);
   /* the occlusion distance on screen, in uv units, at this point's depth */
   vec4 edge = occlusion.projection * vec4(P + vec3(occlusion.params.x, 0.0, 0.0), 1.0);
   vec4 centre = occlusion.projection * vec4(P, 1.0);

@@ -12,7 +12,9 @@
  * branch's both sides run, and a neighbour's view position cost a matrix product and a division
  * (measured: the resolve 18.7 -> 14.4 ms at 640x360, the same image bit for bit).
  * The visibility is the ratio of the merged sums (visible over unoccluded arcs, glsl/gtao.frag.glsl).
- * raw: the trace (xyz bent-normal sum, w the two sums packed); depths, normal_map as the trace's.
+ * raw: the trace (xyz bent-normal sum, w the two sums packed); traced_cells: each cell's traced
+ * pixel's normal and depth (the trace's second output: one texel a neighbour, not two); depths,
+ * normal_map as the trace's, for the pixel itself.
  * Output: xyz the world-space bent normal (the normal where nothing is visible), w visibility. */
 
 #define PLANE_TOLERANCE 0.02
@@ -45,10 +47,11 @@ void main()
       ivec2 c = clamp(own + ivec2(dx, dy), ivec2(0), cells - 1);
       ivec2 t = traced_texel(c);
       float w = (dx == 0 ? 1.0 : 0.5) * (dy == 0 ? 1.0 : 0.5);
-      float d = texelFetch(depths, t, 0).r;
+      vec4 traced = texelFetch(traced_cells, c, 0); /* xyz: the normal at t, w: the depth */
+      float d = traced.w;
       vec4 x = vec4((vec2(t) + 0.5) * to_ndc - 1.0, d * 2.0 - 1.0, 1.0);
       bool keep = c == own + ivec2(dx, dy) &&
-                  (t == texel || (d < 1.0 && dot(texelFetch(normal_map, t, 0).xyz, N) >= NORMAL_TOLERANCE &&
+                  (t == texel || (d < 1.0 && dot(traced.xyz, N) >= NORMAL_TOLERANCE &&
                                   abs(dot(x, plane)) <= tolerance * abs(dot(x, row_w))));
       w = keep ? w : 0.0;
       vec4 s = texelFetch(raw, c, 0);
