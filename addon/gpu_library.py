@@ -354,10 +354,10 @@ def _declare_mesh_stage(info, interface: str) -> None:
     info.vertex_out(iface)
 
 
-def prepass_program(back_faces: bool = False) -> gpu.types.GPUShader:
-    """Depth and world normals of opaque surfaces, or the depth of the faces turned away (for the
-    occlusion pass)."""
-    src = programs.prepass_source(back_faces)
+def prepass_program(back_faces: bool = False, depth_only: bool = False) -> gpu.types.GPUShader:
+    """Depth and world normals of opaque surfaces, their depth alone (``depth_only``: a target
+    without colour), or the depth of the faces turned away (for the occlusion pass)."""
+    src = programs.prepass_source(back_faces, depth_only)
 
     def declare(info):
         info.typedef_source(src.typedefs)
@@ -366,7 +366,7 @@ def prepass_program(back_faces: bool = False) -> gpu.types.GPUShader:
         info.push_constant("INT", "object_index")
         _declare_mesh_stage(info, "shading_lab_prepass_iface")
 
-    return LIBRARY.program(("prepass", back_faces), "depth and normal", src, declare)
+    return LIBRARY.program(("prepass", back_faces, depth_only), "depth and normal", src, declare)
 
 
 def gbuffer_program() -> gpu.types.GPUShader:

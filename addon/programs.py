@@ -465,16 +465,18 @@ def env_prefilter_source() -> ProgramSource:
                                defines=(("SL_CHAIN", "1"),), typedefs=read_glsl("chain_data.glsl"))
 
 
-@lru_cache(maxsize=1)
-def prepass_source(back_faces: bool = False) -> ProgramSource:
-    """Depth and normals of the opaque surfaces, or (``back_faces``) the depth of the faces turned
-    away from the viewer (the occlusion pass's input)."""
+@lru_cache(maxsize=4)
+def prepass_source(back_faces: bool = False, depth_only: bool = False) -> ProgramSource:
+    """Depth and normals of the opaque surfaces, their depth alone (``depth_only``), or
+    (``back_faces``) the depth of the faces turned away from the viewer (the occlusion pass's
+    input)."""
     return ProgramSource(
         typedefs=read_glsl("uniforms.glsl") + "\n" + read_glsl("chain_data.glsl"),
         vertex=read_glsl("mesh.vert.glsl"),
         fragment=read_glsl("facing.glsl") + "\n" + read_glsl("prepass.frag.glsl"),
         defines=(("SL_MAX_LIGHTS", "1"), ("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)))
-        + ((("SL_BACK_FACES", "1"),) if back_faces else ()),
+        + ((("SL_BACK_FACES", "1"),) if back_faces else ())
+        + ((("SL_DEPTH_ONLY", "1"),) if depth_only else ()),
     )
 
 

@@ -119,7 +119,7 @@ def _veil(scene) -> None:
 @pytest.mark.parametrize("preset", ["material_grid", "world", "portability", "softbox"])
 def test_opaque_surfaces_drawn_against_the_occlusion_prepass_change_no_pixel(preset):
     """Where the world's occlusion draws its prepass (or, in a black world, costly shading asks for
-    the prepass alone: softbox's area lights), the opaque pass takes that depth and shades
+    the prepass alone, depth alone: softbox's area lights), the opaque pass takes that depth and shades
     each pixel once: exactly the image drawn with a depth test of its own (and a partly
     transparent plane in front, which peels against that depth, blends as before)."""
     from gpu_harness import run_on_gpu
@@ -141,7 +141,9 @@ def test_opaque_surfaces_drawn_against_the_occlusion_prepass_change_no_pixel(pre
             passes.SHADE_ONCE = once
             out[once] = r.render(extract.snapshot(depsgraph, w, h))
             out[once, "shared"] = r._passes[passes.OpaquePass, "main"].target.shares_depth
-            out[once, "occlusion"] = r._passes[passes.OcclusionPass, "main"].target is not None
+            occlusion = r._passes[passes.OcclusionPass, "main"]
+            out[once, "occlusion"] = occlusion.target is not None
+            out[once, "depth alone"] = occlusion.prepass is not None and occlusion.prepass.colors == 0
         return out
 
     try:
@@ -152,6 +154,8 @@ def test_opaque_surfaces_drawn_against_the_occlusion_prepass_change_no_pixel(pre
         run_on_gpu(lambda _d: r.free())
     assert out[True, "shared"] and not out[False, "shared"], "the preset's shading asks for a prepass"
     assert out[True, "occlusion"] == (preset != "softbox"), "occlusion only where the world lights"
+    # the prepass alone draws depth alone: no colour target (its normals would go unread)
+    assert out[True, "depth alone"] == (preset == "softbox"), out[True, "depth alone"]
     lit = out[False][..., :3].max(axis=2) > 0.0
     assert lit.mean() > 0.5, lit.mean()
     differ = np.abs(out[True] - out[False]).max()
