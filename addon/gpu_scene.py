@@ -233,10 +233,12 @@ class SceneResources:
         lights = programs.pack_lights(self.lights, slots, [first[i] for i in order])
         if programs.light_block_fits(slots):  # the one or the other, the other dropped
             self.uploads["lights"] += self._light_block.put(lights.tobytes())
-            self._lights = _RowTexture()
+            if self._lights.texture is not None:
+                self._lights = _RowTexture()
         else:
             self.uploads["lights"] += self._lights.put(lights)
-            self._light_block = _Block()
+            if self._light_block.ubo is not None:
+                self._light_block = _Block()
         blocks = programs.pack_objects(snapshot.items)
         del self._objects[len(blocks):]
         while len(self._objects) < len(blocks):
