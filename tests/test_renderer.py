@@ -120,6 +120,44 @@ def test_thousands_of_coincident_lights_equal_that_many_times_one(count, tmp_pat
     assert error < 4e-8 * count, f"{count} lights vs one: max relative difference {error:.2e}"
 
 
+def test_a_kept_renderer_moves_between_the_light_block_and_the_light_texture():
+    """A scene's lights grow past what the uniform block holds (600: the light texture) and shrink
+    back (3: the block): a kept renderer (the viewport's) draws each as a fresh one does, to the
+    bit, holding the lights in the one or the other (the other dropped)."""
+    scene = _lit_scene(())
+    rng = np.random.default_rng(3)
+    lights = [scenes.light(scene, "POINT", energy=float(rng.uniform(0.2, 2.0)),
+                           location=(*rng.uniform(-1.5, 1.5, 2), float(rng.uniform(0.3, 1.5))))
+              for _ in range(600)]
+    many = run_on_gpu(lambda d: extract.snapshot(d, 16, 16))
+    for obj in lights[3:]:
+        bpy.data.objects.remove(obj)
+    few = run_on_gpu(lambda d: extract.snapshot(d, 16, 16))
+
+    def job(_depsgraph):
+        kept = renderer.Renderer()
+        out = []
+        try:
+            for snap in (few, many, few):
+                image = kept.render(snap).copy()
+                where = (kept.scene._light_block.ubo is not None, kept.scene._lights.texture is not None)
+                fresh = renderer.Renderer()
+                try:
+                    out.append((image, fresh.render(snap).copy(), where))
+                finally:
+                    fresh.free()
+        finally:
+            kept.free()
+        return out
+
+    out = run_on_gpu(job)
+    assert [where for _, _, where in out] == [(True, False), (False, True), (True, False)]
+    for i, (image, reference, _) in enumerate(out):
+        assert np.array_equal(image, reference), f"render {i}: max {np.abs(image - reference).max():.3g}"
+    assert not np.array_equal(out[0][0], out[1][0]), "600 lights drawn as 3"
+    assert np.array_equal(out[0][0], out[2][0]), "back to 3 lights: the first image again"
+
+
 @pytest.mark.parametrize("model", ["BLINN_PHONG", "PBR"])
 def test_lights_from_the_uniform_block_equal_the_texture_bit_for_bit(model, tmp_path, monkeypatch):
     """Every kind of light, with a size, a spot's blend, an area light's shape and spread, shadow
