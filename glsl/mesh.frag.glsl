@@ -19,8 +19,9 @@ vec3 view_direction(vec3 p)
 
 /* Light i's data, one texel per vec4 of LightData (LIGHT_TEXEL). The position and
  * reach first (light culling tests them alone), then the texels the light's kind reads: a point
- * light has no direction, only an area light has axes, only lights with a size have a shape
- * (fetches are most of a light's cost on a software rasteriser). */
+ * light has no direction, only an area light has axes, only lights with a size have a shape (on a
+ * software rasteriser each read is a gather per pixel, even where every pixel reads one light:
+ * ~20 % of a culled point light's cost from the block, more from the texture). */
 LightData load_light_reach(int i)
 {
   LightData light;
