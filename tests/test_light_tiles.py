@@ -223,6 +223,37 @@ def test_culling_on_equals_off_bit_for_bit(model, tmp_path):
     assert engine.last_timings  # rendered by the engine
 
 
+@pytest.mark.parametrize("model", ["BLINN_PHONG", "PBR"])
+def test_culling_on_equals_off_with_shadows_and_light_sizes(model, tmp_path):
+    """Culling with what real lights have on: 6 point lights with a radius and a spot light,
+    reaching 1.2 m each and casting soft shadows from two tilted plates above the plane, and a
+    shadowed sun: the culled frame equals the frame shading every light, to the bit (a culled
+    light is skipped before its shadow lookup, which the tile's list must not change)."""
+    scene = _lights_over_a_plane(96, 6, cutoff=1.2, seed=5)
+    scene.shading_lab.model = model
+    for obj in scene.objects:
+        if obj.type == "LIGHT":
+            obj.data.use_shadow = True
+            if obj.data.type == "POINT":
+                obj.data.shadow_soft_size = 0.08
+    spot = scenes.light(scene, "SPOT", energy=60.0, location=(0.4, -0.6, 1.2), spot_size=1.2,
+                        shadow_soft_size=0.05, use_shadow=True)
+    spot.data.use_custom_distance, spot.data.cutoff_distance = True, 1.5
+    scenes.plane(scene, size=1.0, location=(-0.6, 0.4, 0.15), rotation=(0.3, 0.0, 0.0))
+    scenes.plane(scene, size=0.8, location=(0.7, -0.5, 0.2), rotation=(0.0, 0.4, 0.2))
+    culled = scenes.render(scene, tmp_path / "culled.exr")
+    scene.shading_lab.light_culling = False
+    every = scenes.render(scene, tmp_path / "every.exr")
+    assert np.array_equal(culled, every), f"max difference {np.abs(culled - every).max():.3g}"
+    for obj in scene.objects:
+        if obj.type == "LIGHT":
+            obj.data.use_shadow = False
+    unshadowed = scenes.render(scene, tmp_path / "unshadowed.exr")
+    shadowed = float((culled[..., :3].sum(axis=2) < 0.95 * unshadowed[..., :3].sum(axis=2)).mean())
+    print(f"shadowed: {shadowed:.3f} of the pixels")
+    assert shadowed > 0.02, f"the plates must shadow the plane: {shadowed:.3f} of the pixels"
+
+
 def test_a_light_reaches_exactly_its_custom_distance(tmp_path):
     scene = scenes.reset(size=64)
     scenes.ortho_camera(scene, scale=4.0)
