@@ -190,6 +190,8 @@ class SceneResources:
         # ends (programs.light_order)
         self.lights: list = []
         self.light_group_ends: tuple[int, ...] = ()
+        # their centres and reaches, as light culling's tiles read them (None: no culling)
+        self._reach: tuple[np.ndarray, np.ndarray] | None = None
 
     # --- keeping the GPU copy up to date ------------------------------------------------------
 
@@ -230,6 +232,10 @@ class SceneResources:
         first = self.shadow_plan.first_layer
         order, self.light_group_ends = programs.light_order(snapshot.lights, first)
         self.lights = [snapshot.lights[i] for i in order]
+        self._reach = None
+        if programs.uses_light_tiles(snapshot):  # made once here: every pass of every view asks
+            self._reach = (np.array([light.position for light in self.lights], np.float64).reshape(-1, 3),
+                           np.array([light.influence for light in self.lights], np.float64))
         lights = programs.pack_lights(self.lights, slots, [first[i] for i in order])
         if programs.light_block_fits(slots):  # the one or the other, the other dropped
             self.uploads["lights"] += self._light_block.put(lights.tobytes())
@@ -394,12 +400,10 @@ class SceneResources:
                    samples: int = 1) -> light_tiles.TileLists | None:
         """The view's light tiles (uploaded), None where light culling is off or does not pay
         (``programs.uses_light_tiles``)."""
-        if not programs.uses_light_tiles(self.snapshot):
+        if self._reach is None:
             return None
-        lights = self.lights
+        centres, radii = self._reach
         vp = self.snapshot.camera.view_projection if view_projection is None else view_projection
-        centres = np.array([light.position for light in lights], np.float64).reshape(-1, 3)
-        radii = np.array([light.influence for light in lights], np.float64)
         # the passes of one view ask again (the occlusion's and the opaque pass's): the lists
         # are the last ones' while lights, view and size are (~7 ms of numpy for 3 lights at
         # 640 x 360 on this machine)
@@ -611,6 +615,7 @@ class SceneResources:
         self.material_rows = {}
         self._light_tiles = _RowTexture(channels=2)
         self._tiles = None
+        self._reach = None
         self._frame = _Block()
         self._world_camera = _Block()
         self._world_lighting = _Block()

@@ -196,7 +196,7 @@ def test_light_culling_counts_the_lights_a_pixel_evaluates():
 
     from addon import extract, passes, renderer
 
-    size, view = 1024, 8.0  # 16-pixel tiles of 0.125 m, a light's disc 1.13 m across
+    size, view = 1024, 8.0  # 8-pixel tiles of 0.0625 m, a light's disc 2.26 m across
     scene = scenes.reset(size=size)
     scenes.ortho_camera(scene, scale=view)
     scenes.plane(scene, size=2 * view)
