@@ -410,8 +410,13 @@ def shadow_program(orthographic: bool = False) -> gpu.types.GPUShader:
 
 
 def occlusion_depths_program() -> gpu.types.GPUShader:
+    def declare(info):
+        info.typedef_source(programs.read_glsl("chain_data.glsl"))
+        _declare_full_screen("depth_map", "back_depth_map", "facing_map")(info)
+        info.uniform_buf(0, "OcclusionData", "occlusion")
+
     return LIBRARY.program(("occlusion depths",), "ambient occlusion", programs.occlusion_depths_source(),
-                           _declare_full_screen("depth_map", "back_depth_map", "facing_map"))
+                           declare)
 
 
 def gtao_program(scale: int = 1) -> gpu.types.GPUShader:

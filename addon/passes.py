@@ -569,12 +569,19 @@ class OcclusionPass(Pass):
         camera = frame.snapshot.camera
         projection = (np.asarray(frame.view_projection(view), np.float64)
                       @ invert(np.asarray(camera.view, np.float64)))
-        rows = np.zeros((3 * 16 + 4,), np.float32)
-        rows[0:16] = invert(projection).T.ravel()
+        rows = np.zeros((3 * 16 + 12,), np.float32)
+        inverse = invert(projection)
+        rows[0:16] = inverse.T.ravel()
         rows[16:32] = projection.T.ravel()
         rows[32:48] = np.asarray(camera.view, np.float64).T.ravel()
         perspective = 1.0 if camera.is_perspective else 0.0
         rows[48:52] = (frame.snapshot.settings.occlusion_distance, perspective, w, h)
+        # a view position's x and y at device coordinates (x, y) on the near plane: over its z
+        # (perspective, times the depth) or alone (orthographic), affine in x and y
+        near = inverse @ np.array([[0.0, 1.0, 0.0], [0.0, 0.0, 1.0], [-1.0, -1.0, -1.0], [1.0, 1.0, 1.0]])
+        lateral = near[:2] / near[2 if camera.is_perspective else 3]
+        rows[52:56] = np.concatenate([lateral[:, 1] - lateral[:, 0], lateral[:, 2] - lateral[:, 0]])
+        rows[56:58] = lateral[:, 0]
         block = gpu.types.GPUUniformBuf(rows.tobytes())
         back, depths, raw = self.back, self.depths, self.raw
 
@@ -582,6 +589,7 @@ class OcclusionPass(Pass):
             gpu_library.bind_sampler(shader, "depth_map", depth_map)
             gpu_library.bind_sampler(shader, "back_depth_map", back.texture_depth)
             gpu_library.bind_sampler(shader, "facing_map", facing_map)
+            shader.uniform_block("occlusion", block)
 
         def bind(shader):
             gpu_library.bind_sampler(shader, "depths", depths.texture_color)

@@ -531,7 +531,8 @@ def occlusion_resolve_source(scale: int = 1) -> ProgramSource:
 
 @lru_cache(maxsize=1)
 def occlusion_depths_source() -> ProgramSource:
-    return _full_screen_source("occlusion_depths.frag.glsl")
+    return _full_screen_source("occlusion.glsl", "occlusion_depths.frag.glsl",
+                               typedefs=read_glsl("chain_data.glsl"))
 
 
 #: Texels per side of a block summarised by one texel of a peeling layer's occupancy map.

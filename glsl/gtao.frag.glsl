@@ -29,13 +29,13 @@
  * cosine), and the resolve merges numerators and denominators.
  * Output: xyz the world-space bent normal's unnormalised sum over the pixel's slices, w both
  * sums of the ratio as two halves (packHalf2x16: visible, unoccluded) in an RGBA32F texel; cell_data:
- * the traced pixel's world normal (xyz, normal_map's) and depth (w, depths' x), which the resolve
+ * the traced pixel's world normal (xyz, normal_map's) and view depth (w, depths' x), which the resolve
  * reads for each of its neighbours in one texel instead of two.
  *
  * occlusion: inverse_projection, projection, view (world -> view rotation), params: x = the
  * occlusion distance in world units, y = 1 perspective / 0 orthographic, zw = target size.
- * normal_map: world normal; depths: x the nearest surface's depth, y the depth where the ray
- * leaves its object, 1 where unknown (glsl/occlusion_depths.frag.glsl). */
+ * normal_map: world normal; depths: view depths, x the nearest surface's, y where the ray leaves
+ * its object, SKY_Z where unknown (glsl/occlusion_depths.frag.glsl). */
 
 /* A surface occluding within HORIZON_BIAS of the point's own tangent plane is the surface itself,
  * facetted and quantised (a convex sphere would otherwise occlude itself at its rim). */
@@ -90,14 +90,14 @@ void main()
   ivec2 cell = ivec2(gl_FragCoord.xy);
   ivec2 texel = traced_texel(cell);
   vec2 uv = (vec2(texel) + 0.5) / size;
-  float depth = texelFetch(depths, texel, 0).r;
+  float z = texelFetch(depths, texel, 0).r;
   vec3 world_normal = texelFetch(normal_map, texel, 0).xyz;
-  cell_data = vec4(world_normal, depth);
-  if (depth >= 1.0) {
+  cell_data = vec4(world_normal, z);
+  if (z >= 0.0) {
     frag_color = vec4(0.0); /* the sky: nothing to occlude (the resolve leaves it out) */
     return;
   }
-  vec3 P = view_position(uv, depth);
+  vec3 P = view_at(uv * 2.0 - 1.0, z);
   vec3 V = occlusion.params.y > 0.5 ? normalize(-P) : vec3(0.0, 0.0, 1.0);
   vec3 N = normalize(mat3(occlusion.view) * world_normal);
   /* the occlusion distance on screen, in uv units, at this point's depth */
@@ -133,13 +133,12 @@ void main()
           break; /* off screen: nothing known there, nothing occludes */
         }
         ivec2 stexel = ivec2(suv * size);
-        vec2 scentre = (vec2(stexel) + 0.5) / size;
-        vec2 pair = texelFetch(depths, stexel, 0).rg;
-        float front_depth = pair.x;
-        if (front_depth >= 1.0) {
+        vec2 sndc = (vec2(stexel) + 0.5) * (2.0 / size) - 1.0;
+        vec2 pair = texelFetch(depths, stexel, 0).rg; /* view depths: front, back */
+        if (pair.x >= 0.0) {
           continue; /* the sky */
         }
-        vec3 F = view_position(scentre, front_depth);
+        vec3 F = view_at(sndc, pair.x);
         vec3 H = F - P;
         float dist = length(H);
         if (dist < 1e-6 || dist > occlusion.params.x) {
@@ -147,11 +146,9 @@ void main()
         }
         float front = acos_fast(dot(H / dist, V));
         float back = PI; /* everything behind the front surface */
-        if (pair.y < 1.0) {
-          /* the same pixel's ray, further: scaled (perspective) or moved along z (orthographic) */
-          float zb = view_z(pair.y);
-          vec3 B = (occlusion.params.y > 0.5 ? F * (zb / F.z) : vec3(F.xy, zb)) - P;
-          back = acos_fast(dot(normalize(B), V));
+        if (pair.y < 0.0) {
+          /* the same pixel's ray, further */
+          back = acos_fast(dot(normalize(view_at(sndc, pair.y) - P), V));
         }
         front += HORIZON_BIAS;
         back = max(back + HORIZON_BIAS, front);

@@ -1,10 +1,20 @@
 /* The occlusion pass's camera helpers (glsl/gtao.frag.glsl, glsl/occlusion_resolve.frag.glsl):
- * view-space positions from depth-buffer values, through the OcclusionData block. */
+ * view-space positions through the OcclusionData block. The pass's depths are view depths (z,
+ * negative in front of the camera; SKY_Z where nothing is), taken once a pixel by
+ * glsl/occlusion_depths.frag.glsl: a position is then a few products, where from a depth-buffer
+ * value it was a matrix product and a division, at each of the trace's samples (measured: the
+ * trace 17.9 -> 15.8 ms at 640x360, material_grid; the resolve 4.9 -> 4.6). */
 
-vec3 view_position(vec2 uv, float d)
+#define SKY_Z 1.0 /* a view depth no surface has: nothing there, or unknown */
+
+/* The view position at normalised device coordinates ndc and view depth z: on the pixel's ray
+ * (perspective: its x and y in proportion to z) or parallel to the view (orthographic). */
+vec3 view_at(vec2 ndc, float z)
 {
-  vec4 p = occlusion.inverse_projection * vec4(uv * 2.0 - 1.0, d * 2.0 - 1.0, 1.0);
-  return p.xyz / p.w;
+  vec2 lateral = occlusion.lateral_origin.xy + ndc.x * occlusion.lateral_axes.xy +
+                 ndc.y * occlusion.lateral_axes.zw;
+  float scale = occlusion.params.y > 0.5 ? z : 1.0;
+  return vec3(lateral * scale, z);
 }
 
 /* The view-space depth (z) at a depth-buffer value: perspective and orthographic projections

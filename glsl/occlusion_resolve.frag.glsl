@@ -12,10 +12,8 @@
  * 640 x 360 (material_grid); against Cycles the presets' FLIP moved 0.0322 -> 0.0323
  * (material_grid), 0.0194 -> 0.0194 (roughness_sweep), 0.0646 -> 0.0645 (world), and the
  * occlusion tests' errors by 0.03-0.09 points (tests/test_world_light.py's notes).
- * Each neighbour's test is written without branches and in its clip coordinates (the plane's
- * equation taken through the inverse projection once per pixel): on the CPU rasteriser every
- * branch's both sides run, and a neighbour's view position cost a matrix product and a division
- * (measured: the resolve 18.7 -> 14.4 ms at 640x360, the same image bit for bit).
+ * Each neighbour's test is written without branches, its view position from its view depth (no
+ * division: glsl/occlusion.glsl's view_at): on the CPU rasteriser every branch's both sides run.
  * The visibility is the ratio of the merged sums (visible over unoccluded arcs, glsl/gtao.frag.glsl).
  * raw: the trace (xyz bent-normal sum, w the two sums packed); traced_cells: each cell's traced
  * pixel's normal and depth (the trace's second output: one texel a neighbour, not two); depths,
@@ -28,21 +26,16 @@
 void main()
 {
   ivec2 texel = ivec2(gl_FragCoord.xy);
-  float depth = texelFetch(depths, texel, 0).r;
-  if (depth >= 1.0) {
+  float z = texelFetch(depths, texel, 0).r;
+  if (z >= 0.0) {
     frag_color = vec4(1.0); /* the sky: nothing to occlude */
     return;
   }
   vec3 N = texelFetch(normal_map, texel, 0).xyz;
-  vec3 P = view_position((vec2(texel) + 0.5) / occlusion.params.zw, depth);
-  vec3 Nv = mat3(occlusion.view) * N;
-  /* the plane through P (normal Nv) in the neighbours' clip coordinates x: dot(Q - P, Nv) w_q =
-   * dot(x, plane) with Q = (ip x).xyz / (ip x).w */
-  mat4 ip = occlusion.inverse_projection;
-  vec4 row_w = vec4(ip[0][3], ip[1][3], ip[2][3], ip[3][3]);
-  vec4 plane = transpose(ip) * vec4(Nv, 0.0) - dot(P, Nv) * row_w;
-  float tolerance = PLANE_TOLERANCE * abs(P.z);
   vec2 to_ndc = 2.0 / occlusion.params.zw;
+  vec3 P = view_at((vec2(texel) + 0.5) * to_ndc - 1.0, z);
+  vec3 Nv = mat3(occlusion.view) * N;
+  float tolerance = PLANE_TOLERANCE * abs(P.z);
   vec3 bent = vec3(0.0);
   vec2 sums = vec2(0.0); /* visible, unoccluded */
   ivec2 cells = ivec2(textureSize(raw, 0));
@@ -60,12 +53,11 @@ void main()
 #endif
       ivec2 c = clamp(own + ivec2(dx, dy), ivec2(0), cells - 1);
       ivec2 t = traced_texel(c);
-      vec4 traced = texelFetch(traced_cells, c, 0); /* xyz: the normal at t, w: the depth */
-      float d = traced.w;
-      vec4 x = vec4((vec2(t) + 0.5) * to_ndc - 1.0, d * 2.0 - 1.0, 1.0);
+      vec4 traced = texelFetch(traced_cells, c, 0); /* xyz: the normal at t, w: its view depth */
+      vec3 Q = view_at((vec2(t) + 0.5) * to_ndc - 1.0, traced.w);
       bool keep = c == own + ivec2(dx, dy) &&
-                  (t == texel || (d < 1.0 && dot(traced.xyz, N) >= NORMAL_TOLERANCE &&
-                                  abs(dot(x, plane)) <= tolerance * abs(dot(x, row_w))));
+                  (t == texel || (traced.w < 0.0 && dot(traced.xyz, N) >= NORMAL_TOLERANCE &&
+                                  abs(dot(Q - P, Nv)) <= tolerance));
       w = keep ? w : 0.0;
       vec4 s = texelFetch(raw, c, 0);
       bent += w * s.xyz;
