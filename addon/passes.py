@@ -271,6 +271,9 @@ SKIP_SHADOWLESS = True
 #: Leave out of a layer the casters whose shadow falls where no view of the frame looks
 #: (``shadows.receiving_casters``: the same image; tests turn it off to compare).
 VIEW_CULLED_CASTERS = True
+#: Leave out of a sun's coarser cascades the casters its finer ones hold for every lookup that
+#: could read them (``shadows.finer_cascades_hold``: the same image; tests turn it off to compare).
+CASCADE_CULLED_CASTERS = True
 #: The faces culled for a caster's facing (``SceneResources.caster_facing``): open, out, in.
 CULLING = {0: "NONE", 1: "BACK", -1: "FRONT"}
 #: Cull the faces of closed surfaces that a view sees wholly from outside where they turn away
@@ -336,7 +339,8 @@ class ShadowPass(Pass):
 
     def _reach(self, frame: Frame, key) -> tuple[list, np.ndarray, np.ndarray, tuple]:
         """The casters, their spheres and which of them reach each layer (shadows.layer_casters,
-        less the flat casters that can shadow nothing there); the last two worked out once per
+        less the flat casters that can shadow nothing there and the casters a sun's finer cascade
+        holds for every lookup that could read them); the last two worked out once per
         ``key`` and casters (a viewport redrawing a still scene does not again); last, the casters
         by item and material (what ``held``'s columns are)."""
         scene = frame.scene
@@ -347,6 +351,8 @@ class ShadowPass(Pass):
             reach = shadows.layer_casters(scene.shadow_plan.matrices, spheres)
             if SKIP_SHADOWLESS:
                 reach &= ~scene.shadowless_casters(casters)
+            if CASCADE_CULLED_CASTERS:
+                reach &= ~shadows.finer_cascades_hold(scene.shadow_plan, spheres)
             self._casters = (which, spheres, reach)
         return casters, self._casters[1], self._casters[2], which[1]
 

@@ -478,6 +478,43 @@ def receiving_casters(matrices: np.ndarray, size: int, spheres: np.ndarray, regi
     return out
 
 
+#: A sun's cascade serves a point only where the finer cascades cannot hold it this many texels
+#: inside their edges (glsl/shadows.glsl's SHADOW_CASCADE_ROOM: room for the filter).
+CASCADE_ROOM = 32
+
+
+def finer_cascades_hold(plan: ShadowPlan, spheres: np.ndarray) -> np.ndarray:
+    """(layers, n) bool: the casters (world spheres, ``bounding_spheres``) a sun's cascade can
+    leave out because no lookup reads them there. A point reads the finest cascade that holds it
+    ``CASCADE_ROOM`` texels inside its edges (glsl/shadows.glsl's sun_shadow_point; the cascades
+    share the sun's rotation, so "across" coordinates are the same in each); a lookup in cascade k
+    reads within ``LOOKUP_REACH`` texels of k of the point. So a caster whose disc across the sun,
+    widened by that reach, lies inside a finer cascade's held rectangle is read in cascade k by no
+    point: every point near enough to read it is served by the finer one. Casters near the camera
+    leave the coarse cascades, whose maps cover the whole view; the same image."""
+    spheres = np.asarray(spheres, np.float64).reshape(-1, 4)
+    out = np.zeros((plan.layers, len(spheres)), bool)
+    for first in plan.first_layer:
+        if first < 0 or plan.origins[first][3] != KIND_ORTHOGRAPHIC:
+            continue
+        count = int(round(float(plan.extents[first][2])))
+        if count < 2 or not len(spheres):
+            continue
+        axes = np.asarray(plan.views[first], np.float64)[:2, :3]  # the sun's right and up
+        across = spheres[:, :3] @ axes.T  # (n, 2)
+        layers = range(first, first + count)
+        centres = np.array([axes @ np.asarray(plan.origins[i][:3], np.float64) for i in layers])
+        # the held rectangles' half widths, a texel short of them (float32 in the program)
+        held = np.array([np.asarray(plan.extents[i][:2], np.float64) * (1.0 - CASCADE_ROOM / plan.size)
+                         - float(plan.info[i][1]) for i in layers])
+        for k in range(1, count):
+            radius = spheres[:, 3] + LOOKUP_REACH * float(plan.info[first + k][1])
+            for j in range(k):
+                inside = np.all(np.abs(across - centres[j]) + radius[:, None] <= held[j], axis=1)
+                out[first + k] |= inside
+    return out
+
+
 #: A box this thin along one of its axes, relative to its largest extent, holds a flat object (a
 #: plane): ``shadowless_casters`` may leave it out of the maps.
 FLAT = 1e-6

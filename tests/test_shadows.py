@@ -484,6 +484,88 @@ MEASURED_CASCADES = 0.0
 MEASURED_ONE_MAP = 0.0112
 
 
+def _sun_selection(plan, points, size):
+    """The cascade glsl/shadows.glsl's sun_shadow_point reads for each world point, written out
+    again here: the finest whose map holds the point SHADOW_CASCADE_ROOM texels inside its edges
+    (read from the GLSL), else the last."""
+    source = (programs.glsl_dir() / "shadows.glsl").read_text()
+    room = float(re.search(r"#define SHADOW_CASCADE_ROOM ([0-9.]+)", source).group(1))
+    axes = plan.views[0][:2, :3].astype(np.float64)
+    across = points @ axes.T
+    chosen = np.full(len(points), shadows.CASCADES - 1)
+    for c in reversed(range(shadows.CASCADES - 1)):
+        fit = axes @ plan.origins[c][:3].astype(np.float64)
+        at = (across - fit) / plan.extents[c][:2]
+        chosen = np.where(np.all(np.abs(at) < 1.0 - room / size, axis=1), c, chosen)
+    return chosen
+
+
+def test_finer_cascades_hold_what_no_lookup_reads_in_a_coarser_one():
+    """In the deep view, spheres near the camera leave the coarse cascades: for each caster left
+    out of cascade k, 20,000 points around it (along the sun, and across it out to the lookup's
+    reach in cascade k) are each served by a finer cascade (the selection written out again from
+    the GLSL's rule), so no lookup reads the caster there. Casters far away stay in them."""
+    _deep_scene()
+    snap = extract.snapshot(bpy.context.evaluated_depsgraph_get())
+    bounds = {key: np.stack([np.min(g.positions, 0), np.max(g.positions, 0)])
+              for key, g in snap.geometries.items()}
+    plan = shadows.plan(snap, bounds)
+    assert plan.layers == shadows.CASCADES
+    rng = np.random.default_rng(3)
+    spheres = np.array([[x, y, 0.2, r] for x, y, r in ((-0.5, -2.5, 0.1), (0.6, -1.5, 0.2),
+                                                       (0.0, 4.0, 0.15), (1.0, 12.0, 0.3),
+                                                       (-3.0, 30.0, 0.5), (2.0, 60.0, 1.0))])
+    # and one whose reach in cascade 1 ends 16 texels short of cascade 0's edge: inside its map,
+    # not inside the room the program keeps for the filter
+    axes = plan.views[0][:2, :3].astype(np.float64)
+    fit, half = axes @ plan.origins[0][:3].astype(np.float64), plan.extents[0][:2].astype(np.float64)
+    r, reach = 0.05, shadows.LOOKUP_REACH * float(plan.info[1][1])
+    edge = fit + [half[0] * (1.0 - 16.0 / plan.size) - r - reach, 0.0]
+    spheres = np.concatenate([spheres, [[*(edge @ axes), r]]])
+    left = shadows.finer_cascades_hold(plan, spheres)
+    print(f"casters left out (cascade x caster):\n{left.astype(int)}")
+    assert not left[1, -1]
+    spheres, left = spheres[:-1], left[:, :-1]
+    # measured: each of the five nearest leaves one or two cascades (the nearest two cascade 1
+    # alone: a coarser cascade's lookup reaches further, to points cascade 0 does not hold), the
+    # farthest none
+    assert not left[0].any() and left[:, :5].any(axis=0).all() and not left[:, -1].any()
+    normal = np.cross(axes[0], axes[1])
+    for k, c in zip(*np.nonzero(left)):
+        reach = spheres[c, 3] + shadows.LOOKUP_REACH * float(plan.info[k][1])
+        offsets = rng.uniform(-1.0, 1.0, (20000, 2))
+        offsets *= reach / np.maximum(np.linalg.norm(offsets, axis=1, keepdims=True), 1.0)
+        points = spheres[c, :3] + offsets @ axes + rng.uniform(-5.0, 5.0, (20000, 1)) * normal
+        served = _sun_selection(plan, points, plan.size)
+        assert np.all(served < k), (k, c, np.bincount(served))
+    assert _sun_selection(plan, (edge + [r + reach, 0.0]) @ axes[None], plan.size)[0] > 0
+
+
+def test_casters_a_finer_cascade_holds_leave_the_coarser_maps(tmp_path, monkeypatch):
+    """The deep view's spheres near the camera leave the sun's coarser cascades; the image is
+    the one drawn with them in every cascade, bit for bit."""
+    from addon import passes
+
+    scene = _deep_scene(resolution=128)
+    drawn = []
+    original = passes.ShadowPass.run
+
+    def run(self, frame, views=None):
+        done = original(self, frame, views)
+        drawn.append(self.held.sum(axis=1).tolist())
+        return done
+
+    monkeypatch.setattr(passes.ShadowPass, "run", run)
+    images = {}
+    for culled in (True, False):
+        monkeypatch.setattr(passes, "CASCADE_CULLED_CASTERS", culled)
+        images[culled] = scenes.render(scene, tmp_path / f"culled{culled}.exr")
+    print(f"casters per cascade: {drawn[0]} (every one held: {drawn[1]})")
+    assert sum(drawn[0]) < sum(drawn[1]) and drawn[0][0] == drawn[1][0], drawn
+    shadowed = images[True][..., :3].max(axis=-1) < 0.5 * images[True][..., :3].max()
+    assert shadowed.mean() > 0.005 and np.array_equal(images[True], images[False])
+
+
 def test_cascades_follow_the_camera_and_nothing_else():
     """In a deep view a sun's cascades are drawn again when the camera moves (they are fitted to
     its view), not for a redraw or a material edit."""
@@ -645,10 +727,13 @@ def test_culled_casters_draw_the_same_shadows(tmp_path, monkeypatch):
 
 def test_lookup_reach_covers_the_glsl_lookups_radius():
     """shadows.LOOKUP_REACH (texels a lookup reads from its receiver's own) holds the penumbra's
-    largest search and filter radius in glsl/shadows.glsl and a bilinear tap's texel beyond it."""
+    largest search and filter radius in glsl/shadows.glsl and a bilinear tap's texel beyond it;
+    shadows.CASCADE_ROOM is the room the program keeps inside a cascade's edge."""
     source = (programs.glsl_dir() / "shadows.glsl").read_text()
     radius = float(re.search(r"#define SHADOW_MAX_RADIUS ([0-9.]+)", source).group(1))
     assert radius + 1.0 <= shadows.LOOKUP_REACH <= radius + 4.0, (radius, shadows.LOOKUP_REACH)
+    room = float(re.search(r"#define SHADOW_CASCADE_ROOM ([0-9.]+)", source).group(1))
+    assert shadows.CASCADE_ROOM == room, (shadows.CASCADE_ROOM, room)  # finer_cascades_hold's
 
 
 def test_visible_region_holds_what_the_view_sees_of_the_box():
