@@ -166,10 +166,8 @@ vec3 polygon_form_factor(LightPolygon poly, mat3 map)
   vec3 t = map * poly.to_centre;
   vec3 V = vec3(0.0);
   vec3 oa = map * polygon_offset(poly, n - 1);
-  for (int i = 0; i < AREA_ELLIPSE_SIDES; i++) {
-    if (i >= n) {
-      break;
-    }
+  int i = 0;
+  do { /* tested at the end (glsl/README.md): a polygon has 4 sides or more */
     vec3 ob = map * polygon_offset(poly, i);
     /* corners a = t + oa, b = t + ob, a x b = t x (ob - oa) + oa x ob: taken from unit vectors
      * towards the corners it cancelled, since they nearly coincide seen from afar */
@@ -180,7 +178,7 @@ vec3 polygon_form_factor(LightPolygon poly, mat3 map)
       V += c * (atan2_accurate(s, dot(t + oa, t + ob)) / s);
     }
     oa = ob;
-  }
+  } while (++i < n && i < AREA_ELLIPSE_SIDES);
   V *= 0.5;
   return dot(V, t) < 0.0 ? -V : V; /* the corners' winding as seen from the point */
 }
@@ -301,14 +299,16 @@ float area_spread(LightData light, vec3 p, inout LightPolygon poly, bool lobe, v
   float weights = 0.0;
   float lobe_sum = 0.0;
   float lobe_weights = 0.0;
-  for (int i = 0; i < 4; i++) {
+  int i = 0;
+  do { /* tested at the end (glsl/README.md); `continue` goes to the test */
     vec2 a = vec2((i & 1) == 0 ? lo.x : split.x, (i & 2) == 0 ? lo.y : split.y);
     vec2 b = vec2((i & 1) == 0 ? split.x : hi.x, (i & 2) == 0 ? split.y : hi.y);
     vec2 size = b - a;
     if (size.x <= 0.0 || size.y <= 0.0) {
       continue;
     }
-    for (int j = 0; j < 4; j++) {
+    int j = 0;
+    do {
       vec2 g = vec2((j & 1) == 0 ? -SPREAD_GAUSS : SPREAD_GAUSS,
                     (j & 2) == 0 ? -SPREAD_GAUSS : SPREAD_GAUSS);
       vec2 at = 0.5 * (a + b + size * g);
@@ -337,8 +337,8 @@ float area_spread(LightData light, vec3 p, inout LightPolygon poly, bool lobe, v
         lobe_weights += lobe_w * (w_mean / max(w, 1e-37));
       }
 #endif
-    }
-  }
+    } while (++j < 4);
+  } while (++i < 4);
   lobe_mean = lobe_weights > 0.0 ? lobe_sum / lobe_weights : (weights > 0.0 ? sum / weights : 0.0);
   return weights > 0.0 ? sum / weights : 0.0;
 }

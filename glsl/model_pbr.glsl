@@ -83,7 +83,8 @@ vec3 env_sample_lobe(Surface s, sampler2D chain_map)
 #  endif
   }
   vec3 sum = vec3(0.0);
-  for (int i = 0; i < SL_ENV_SAMPLES; i++) {
+  int i = 0;
+  do { /* tested at the end (glsl/README.md); `continue` goes to the test */
     float phi = 2.0 * PI * (float(i) + 0.5) / float(SL_ENV_SAMPLES);
     float xi = radical_inverse(uint(i));
 #  ifdef SL_NDF_BECKMANN
@@ -114,7 +115,7 @@ vec3 env_sample_lobe(Surface s, sampler2D chain_map)
     float V = pbr_visibility(s.NoV, NoL, NoH, VoH, s.alpha);
 #  endif
     sum += L * F * (V * 4.0 * VoH * NoL / NoH);
-  }
+  } while (++i < SL_ENV_SAMPLES);
 #  ifdef SL_PRINCIPLED
   return sum / float(SL_ENV_SAMPLES);
 #  else

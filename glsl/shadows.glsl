@@ -148,9 +148,10 @@ float shadow_pcf(ShadowPoint q, float radius, vec2 first_direction, int tap_scal
   float lit = 0.0;
   vec2 direction = first_direction;
   int taps = (radius <= 3.0 ? SHADOW_FILTER_TAPS / 2 : SHADOW_FILTER_TAPS) * tap_scale;
-  for (int k = 0; k < taps; k++) {
+  int k = 0;
+  do { /* tested at the end: glsl/README.md */
     lit += shadow_bilinear_at(q, vogel_tap(q.uv_texels, radius, k, taps, direction));
-  }
+  } while (++k < taps);
   return lit / float(taps);
 }
 
@@ -217,14 +218,17 @@ bool sun_shadow_point(int first, vec3 direction, vec3 p, vec3 ng, out ShadowPoin
   vec2 half_extent = shadow.layer_extent[first].xy;
   vec2 at = (across - fit.xy) / half_extent;
   int cascades = int(shadow.layer_extent[first].z + 0.5);
-  for (int c = 1; c < cascades; c++) {
-    if (all(lessThan(abs(at), vec2(1.0 - SHADOW_CASCADE_ROOM / float(SL_SHADOW_SIZE))))) {
-      break;
-    }
-    q.layer++;
-    fit = shadow.layer_fit[q.layer];
-    half_extent = shadow.layer_extent[q.layer].xy;
-    at = (across - fit.xy) / half_extent;
+  if (cascades > 1) {
+    int c = 1;
+    do { /* tested at the end: glsl/README.md */
+      if (all(lessThan(abs(at), vec2(1.0 - SHADOW_CASCADE_ROOM / float(SL_SHADOW_SIZE))))) {
+        break;
+      }
+      q.layer++;
+      fit = shadow.layer_fit[q.layer];
+      half_extent = shadow.layer_extent[q.layer].xy;
+      at = (across - fit.xy) / half_extent;
+    } while (++c < cascades);
   }
   q.info = shadow.layer_info[q.layer];
   q.uv_texels = (at * 0.5 + 0.5) * float(SL_SHADOW_SIZE);
@@ -298,14 +302,15 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
     vec2 direction = first_direction;
     /* a search a few texels wide needs fewer taps (half of them within 2 texels) */
     int taps = (search <= 2.0 ? SHADOW_SEARCH_TAPS / 2 : SHADOW_SEARCH_TAPS) * tap_scale;
-    for (int k = 0; k < taps; k++) {
+    int k = 0;
+    do { /* tested at the end: glsl/README.md */
       ivec2 t = ivec2(floor(vogel_tap(q.uv_texels, search, k, taps, direction)));
       float stored = shadow_texel(q, t);
       if (stored < shadow_receiver(q, t)) {
         blockers += 1.0;
         blocker_sum += stored;
       }
-    }
+    } while (++k < taps);
     if (blockers == 0.0) {
       return 1.0;
     }
