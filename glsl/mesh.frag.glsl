@@ -132,18 +132,22 @@ void shade_group(inout vec3 c, Surface s, vec3 ng, ivec2 listed, inout int k, in
     return;
   }
   do {
-    LightData light = load_light_reach(index);
+    /* k and the next index move on first, so that a `continue` reaches the test with them */
+    int current = index;
+    k++;
+    index = k < listed.y ? listed_light(listed, k) : end;
+    LightData light = load_light_reach(current);
     if (kind >= 0) {
       light.position_kind.w = float(kind);
     }
 #ifdef SL_LIGHT_TILES
-    if (light_window(light, s.p) > 0.0)
-#endif
-    {
-      c += light_share(s, ng, load_light_rest(light, index), shadowed);
+    /* a tile lists every light whose reach meets some of its pixels: at the others the light's
+     * window is exactly 0 (light_window), known before the rest of its texels are read */
+    if (light_window(light, s.p) <= 0.0) {
+      continue;
     }
-    k++;
-    index = k < listed.y ? listed_light(listed, k) : end;
+#endif
+    c += light_share(s, ng, load_light_rest(light, current), shadowed);
   } while (index < end && k < SL_MAX_LIGHTS);
 }
 
