@@ -501,6 +501,27 @@ def _sun_selection(plan, points, size):
     return chosen
 
 
+def _shadow_maps_with_and_without(scene, tmp_path, monkeypatch, switch: str, record):
+    """``scene`` rendered with ``passes``' ``switch`` on, then off: the images by setting, and
+    ``record(shadow_pass, frame)`` after each render's shadow pass, in order."""
+    from addon import passes
+
+    drawn = []
+    original = passes.ShadowPass.run
+
+    def run(self, frame, views=None):
+        done = original(self, frame, views)
+        drawn.append(record(self, frame))
+        return done
+
+    monkeypatch.setattr(passes.ShadowPass, "run", run)
+    images = {}
+    for on in (True, False):
+        monkeypatch.setattr(passes, switch, on)
+        images[on] = scenes.render(scene, tmp_path / f"{switch.lower()}_{on}.exr")
+    return images, drawn
+
+
 def test_finer_cascades_hold_what_no_lookup_reads_in_a_coarser_one():
     """In the deep view, spheres near the camera leave the coarse cascades: for each caster left
     out of cascade k, 20,000 points around it (along the sun, and across it out to the lookup's
@@ -546,22 +567,10 @@ def test_finer_cascades_hold_what_no_lookup_reads_in_a_coarser_one():
 def test_casters_a_finer_cascade_holds_leave_the_coarser_maps(tmp_path, monkeypatch):
     """The deep view's spheres near the camera leave the sun's coarser cascades; the image is
     the one drawn with them in every cascade, bit for bit."""
-    from addon import passes
-
     scene = _deep_scene(resolution=128)
-    drawn = []
-    original = passes.ShadowPass.run
-
-    def run(self, frame, views=None):
-        done = original(self, frame, views)
-        drawn.append(self.held.sum(axis=1).tolist())
-        return done
-
-    monkeypatch.setattr(passes.ShadowPass, "run", run)
-    images = {}
-    for culled in (True, False):
-        monkeypatch.setattr(passes, "CASCADE_CULLED_CASTERS", culled)
-        images[culled] = scenes.render(scene, tmp_path / f"culled{culled}.exr")
+    images, drawn = _shadow_maps_with_and_without(
+        scene, tmp_path, monkeypatch, "CASCADE_CULLED_CASTERS",
+        lambda shadow_pass, _frame: shadow_pass.held.sum(axis=1).tolist())
     print(f"casters per cascade: {drawn[0]} (every one held: {drawn[1]})")
     assert sum(drawn[0]) < sum(drawn[1]) and drawn[0][0] == drawn[1][0], drawn
     shadowed = images[True][..., :3].max(axis=-1) < 0.5 * images[True][..., :3].max()
@@ -819,23 +828,14 @@ def test_casters_whose_shadows_fall_where_no_view_looks_leave_the_maps(tmp_path,
     keeps the one above the view (its shadow falls in it); the point light's six faces keep the
     casters whose shadows can fall where the camera looks. The image is the one drawn with every
     caster, bit for bit."""
-    from addon import passes
-
     scene, sun, point = _off_screen_scene()
-    drawn = []
-    original = passes.ShadowPass.run
 
-    def run(self, frame, views=None):
-        done = original(self, frame, views)
+    def held_names(shadow_pass, frame):
         names = [frame.snapshot.items[c.order].geometry.split(":")[1] for c in frame.scene.shadow_casters()]
-        drawn.append([[n for n, h in zip(names, row) if h] for row in self.held])
-        return done
+        return [[n for n, h in zip(names, row) if h] for row in shadow_pass.held]
 
-    monkeypatch.setattr(passes.ShadowPass, "run", run)
-    images = {}
-    for culled in (True, False):
-        monkeypatch.setattr(passes, "VIEW_CULLED_CASTERS", culled)
-        images[culled] = scenes.render(scene, tmp_path / f"culled{culled}.exr")
+    images, drawn = _shadow_maps_with_and_without(scene, tmp_path, monkeypatch, "VIEW_CULLED_CASTERS",
+                                                  held_names)
     (sun_only, *faces), (sun_all, *faces_all) = drawn
     pairs, all_pairs = sum(map(len, drawn[0])), sum(map(len, drawn[1]))
     print(f"sun's map: {sun_only} of {sun_all}; point light's faces {faces} of {faces_all}; "
