@@ -88,6 +88,12 @@ int listed_light(ivec2 listed, int k)
 #endif
 }
 
+/* The index of the k-th light of `listed`, or `end` past the list. */
+int listed_index(ivec2 listed, int k, int end)
+{
+  return k < listed.y ? listed_light(listed, k) : end;
+}
+
 /* A light's share of the radiance leaving s. shadowed: look its shadow up (where the light
  * has a shadow map; ng is the flat face's normal for it), a constant at each call, so a loop
  * over lights without shadows holds no lookup. */
@@ -127,7 +133,7 @@ vec3 light_share(Surface s, vec3 ng, LightData light, bool shadowed)
 void shade_group(inout vec3 c, Surface s, vec3 ng, ivec2 listed, inout int k, int end, int kind,
                  bool shadowed)
 {
-  int index = k < listed.y ? listed_light(listed, k) : end;
+  int index = listed_index(listed, k, end);
   if (index >= end) {
     return;
   }
@@ -135,7 +141,7 @@ void shade_group(inout vec3 c, Surface s, vec3 ng, ivec2 listed, inout int k, in
     /* k and the next index move on first, so that a `continue` reaches the test with them */
     int current = index;
     k++;
-    index = k < listed.y ? listed_light(listed, k) : end;
+    index = listed_index(listed, k, end);
     LightData light = load_light_reach(current);
     if (kind >= 0) {
       light.position_kind.w = float(kind);

@@ -8,10 +8,10 @@
  * At half resolution (SL_OCCLUSION_SCALE 2) the neighbourhood is the 2 x 2 cells of the trace
  * nearest the pixel's centre (its own and the three beside it towards the pixel's corner of
  * it), equally weighted: any 2 x 2 cells hold the pattern's four classes once each; each is
- * tested at the pixel it traced (glsl/occlusion.glsl). Four reads a pixel instead of nine: the resolve 9.5 -> 4.4 ms at
- * 640 x 360 (material_grid); against Cycles the presets' FLIP moved 0.0322 -> 0.0323
- * (material_grid), 0.0194 -> 0.0194 (roughness_sweep), 0.0646 -> 0.0645 (world), and the
- * occlusion tests' errors by 0.03-0.09 points (tests/test_world_light.py's notes).
+ * tested at the pixel it traced (glsl/occlusion.glsl). Four reads a pixel instead of nine: the
+ * resolve 9.5 -> 4.4 ms at 640 x 360 (material_grid); against Cycles the presets' FLIP moved
+ * 0.0322 -> 0.0323 (material_grid), 0.0194 -> 0.0194 (roughness_sweep), 0.0646 -> 0.0645
+ * (world), and the occlusion tests' errors by 0.03-0.09 points (tests/test_world_light.py's notes).
  * Each neighbour's test is written without branches, its view position from its view depth (no
  * division: glsl/occlusion.glsl's view_at): on the CPU rasteriser every branch's both sides run.
  * The visibility is the ratio of the merged sums (visible over unoccluded arcs, glsl/gtao.frag.glsl).
