@@ -144,12 +144,17 @@ vec2 vogel_tap(vec2 centre, float radius, int k, int taps, inout vec2 direction)
 /* Percentage-closer filter over a disc of `radius` texels (Vogel points from first_direction),
  * each tap a bilinear filter of the four texels around it (one gather): a tap's test is
  * continuous in its position, and on the CPU rasteriser a gather costs what one texel's read did
- * (measured: the same frame time on softbox; penumbrae against Cycles' 9 % closer). */
+ * (measured: the same frame time on softbox; penumbrae against Cycles' 9 % closer). A radius
+ * within a texel: one bilinear tap at the point. */
 float shadow_pcf(ShadowPoint q, float radius, vec2 first_direction, int tap_scale)
 {
   float lit = 0.0;
   vec2 direction = first_direction;
   int taps = (radius <= 3.0 ? SHADOW_FILTER_TAPS / 2 : SHADOW_FILTER_TAPS) * tap_scale;
+  if (radius <= 1.0) {
+    taps = 1;
+    radius = 0.0;
+  }
   int k = 0;
   do { /* tested at the end: glsl/README.md */
     lit += shadow_bilinear_at(q, vogel_tap(q.uv_texels, radius, k, taps, direction));
@@ -291,10 +296,13 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
   int tap_scale = filter_code < 0.0 ? 2 : 1;
   float filter_radius = min(max(filter_code < 0.0 ? -filter_code - 1.0 : filter_code, q.info.w / texel),
                             SHADOW_MAX_RADIUS);
+  /* one filter for every path, so the program holds one copy of its loop (each copy ran at least
+   * once, its lanes masked: glsl/README.md): softbox's shading 0.96x, the same images bit for bit */
+  float radius = filter_radius;
+  vec2 first_direction = shadow_first_direction();
 #ifdef SL_SOFT_SHADOWS
   float size = q.info.z;
   if (size > 0.0) {
-    vec2 first_direction = shadow_first_direction();
     /* blocker search: casters between the receiver and a quarter of its distance (the sun: the
      * map's top) that hide some of the light */
     float search = ortho ? q.d * size / texel : 3.0 * size / q.info.y / q.d;
@@ -318,16 +326,10 @@ float light_visibility(LightData light, vec3 p, vec3 ng)
     }
     float d_blocker = max(blocker_sum / blockers, 1e-4);
     float penumbra = ortho ? (q.d - d_blocker) * size : size * (q.d - d_blocker) / d_blocker;
-    float radius = min(max(max(penumbra, 0.0) / texel, filter_radius), SHADOW_MAX_RADIUS);
-    if (radius > 1.0) {
-      return shadow_pcf(q, radius, first_direction, tap_scale);
-    }
+    radius = min(max(max(penumbra, 0.0) / texel, filter_radius), SHADOW_MAX_RADIUS);
   }
 #endif
-  if (filter_radius > 1.0) {
-    return shadow_pcf(q, filter_radius, shadow_first_direction(), tap_scale);
-  }
-  return shadow_bilinear_at(q, q.uv_texels);
+  return shadow_pcf(q, radius, first_direction, tap_scale);
 }
 
 #endif
