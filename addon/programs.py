@@ -104,6 +104,9 @@ class Features:
     light_radii: bool = True
     #: an area light may have a Spread under 180 degrees; off, the program holds no spread code
     area_spread: bool = True
+    #: an area light may be a disk or an ellipse (a 16-gon); off, the program's area lights are
+    #: rectangles, whose corners need no sine and cosine (softbox's shading 0.95x)
+    area_ellipse: bool = True
     #: the groups of lights the program loops over, one loop each (``light_order`` lists the
     #: lights by group): a kind, "_SHADOWED" where those lights have a shadow map. A loop holds
     #: its kind's code alone, and the shadow lookup only with "_SHADOWED": both sides of an ``if``
@@ -135,6 +138,7 @@ class Features:
             object.__setattr__(self, "light_radii", False)  # no light that could have one
         if "AREA" not in self.light_kinds:
             object.__setattr__(self, "area_spread", False)
+            object.__setattr__(self, "area_ellipse", False)
         if self.model != "PBR" or not {"POINT", "SPOT"} & set(self.light_kinds):
             object.__setattr__(self, "sphere_lights", False)  # shaded by their irradiance alone
         if self.peel or not self.environment:  # a transparent surface lies in front of what the
@@ -197,6 +201,7 @@ class Features:
                             for light in snapshot.lights),
             area_spread=any(light.kind == "AREA" and light.spread_terms[1] > 0.0
                             for light in snapshot.lights),
+            area_ellipse=any(light.kind == "AREA" and light.ellipse for light in snapshot.lights),
             terms=terms,
             half_target=half_target,
             maps=maps,
@@ -269,6 +274,8 @@ class Features:
             out.append(("SL_LIGHT_RADII", "1"))
         if self.area_spread:
             out.append(("SL_AREA_SPREAD", "1"))
+        if self.area_ellipse:
+            out.append(("SL_AREA_ELLIPSE", "1"))
         if self.uses_ltc:
             out += [("SL_LTC", "1"), ("SL_LTC_SIZE", str(LTC_SIZE)),
                     ("SL_LTC_SPHERE_SIZE", str(LTC_SPHERE_SIZE))]

@@ -134,16 +134,16 @@ struct LightPolygon {
 /* Corner i of the polygon relative to its centre. */
 vec3 polygon_offset(LightPolygon poly, int i)
 {
-  vec2 uv;
+  vec2 uv = vec2(i == 0 || i == 3 ? -1.0 : 1.0, i < 2 ? -1.0 : 1.0);
+#if defined(SL_AREA_ELLIPSE) || defined(SL_SPHERE_LIGHTS) /* n-gons compiled only where some light
+                                                           * is one: both sides of the test run */
   if (poly.sides > 4) {
     /* an n-gon of the ellipse's area (16 sides; 8 for a sphere light under a wide lobe): radius
      * scaled by sqrt(2 pi / (n sin(2 pi / n))) */
     float phi = 6.2831853 * float(i) / float(poly.sides);
     uv = (poly.sides == AREA_ELLIPSE_SIDES ? 1.0130016 : 1.0539074) * vec2(cos(phi), sin(phi));
   }
-  else {
-    uv = vec2(i == 0 || i == 3 ? -1.0 : 1.0, i < 2 ? -1.0 : 1.0);
-  }
+#endif
   return poly.x_half * uv.x + poly.y_half * uv.y;
 }
 
@@ -236,7 +236,11 @@ LightPolygon area_polygon(LightData light, vec3 p)
   poly.to_centre = light.position_kind.xyz - p;
   poly.x_half = light.area.xyz * light.shape.z;
   poly.y_half = cross(-light.direction_cone.xyz, light.area.xyz) * light.shape.w;
+#ifdef SL_AREA_ELLIPSE
   poly.sides = light.area.w > 0.5 ? AREA_ELLIPSE_SIDES : 4;
+#else
+  poly.sides = 4; /* every area light of the scene is a rectangle (addon/programs.py) */
+#endif
   return poly;
 }
 

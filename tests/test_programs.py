@@ -97,6 +97,11 @@ def test_feature_keys():
     assert ("SL_AREA_SPREAD", "1") not in programs.Features("PBR", 4, frozenset({"AREA"}),
                                                             area_spread=False).defines()
     assert ("SL_AREA_SPREAD", "1") not in a.defines()
+    # and an area light's n-gon: only where one may be a disk or an ellipse
+    assert ("SL_AREA_ELLIPSE", "1") in programs.Features("PBR", 4, frozenset({"AREA"})).defines()
+    assert ("SL_AREA_ELLIPSE", "1") not in programs.Features("PBR", 4, frozenset({"AREA"}),
+                                                             area_ellipse=False).defines()
+    assert ("SL_AREA_ELLIPSE", "1") not in a.defines()
     # terms a model does not use do not split its programs
     bp = programs.Features("BLINN_PHONG", 4, frozenset({"POINT"}), S.Terms(ndf="BECKMANN", multiscatter=True))
     assert bp.defines() == programs.Features("BLINN_PHONG", 4, frozenset({"POINT"})).defines()
