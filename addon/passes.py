@@ -452,9 +452,10 @@ class ShadowPass(Pass):
                     # a closed caster's nearest face to the light faces it: its other faces are
                     # culled (counter-clockwise faces the light; mirrored or inward-facing ones
                     # wind the other way)
-                    drawn = [(c, CULLING[f]) for c, r, f in zip(casters, want[layer], layer_facing) if r]
-                    scene.draw_positions([c for c, _ in drawn], shader, frame_block=False,
-                                         culling=[m for _, m in drawn])
+                    drawn = np.flatnonzero(want[layer]).tolist()  # (indices: no per-element numpy)
+                    facing_drawn = layer_facing[drawn].tolist()
+                    scene.draw_positions([casters[i] for i in drawn], shader, frame_block=False,
+                                         culling=[CULLING[f] for f in facing_drawn])
                 finally:
                     gpu.state.depth_test_set("NONE")
                     gpu.state.depth_mask_set(False)

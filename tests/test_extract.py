@@ -623,3 +623,87 @@ def test_closed_surfaces_and_their_facing():
 
     bpy.ops.mesh.primitive_cube_add()
     assert edited(bpy.context.object, fin) == 0
+
+
+def _geometry_arrays(snap: S.Snapshot) -> list:
+    """Each drawn item's geometry as arrays, in the snapshot's order (a modifier renames the mesh)."""
+    return [(g.positions, g.normals, g.uvs, g.tangents, g.indices, g.ranges, g.winding)
+            for g in (snap.geometries[item.geometry] for item in snap.items)]
+
+
+def _same_arrays(a, b) -> bool:
+    return all((x is None and y is None) or (x is not None and y is not None and np.array_equal(x, y))
+               for x, y in zip(a, b))
+
+
+def test_geometry_memo_gives_what_reading_anew_gives():
+    """``extract.GEOMETRY_MEMO``: a still scene read again takes its meshes' geometry from the memo
+    (each mesh once), and after each kind of edit -- a vertex moved, a face's material, flat
+    shading, a UV, the faces flipped, a modifier added, a normal map's tangents asked for -- every
+    geometry equals the one read with the memo emptied (the edit reached it), and the edited mesh's
+    differs from before it."""
+    scene = new_scene()
+    bpy.ops.mesh.primitive_uv_sphere_add(segments=12, ring_count=6)  # UVs, tris and quads
+    sphere = bpy.context.object
+    bpy.ops.object.shade_smooth()
+    for name in ("A", "B"):
+        sphere.data.materials.append(bpy.data.materials.new(name))
+    cube = mesh_object(scene, "Box", CUBE_VERTS, CUBE_FACES, location=(3.0, 0.0, 0.0))
+    memo = extract.GEOMETRY_MEMO
+    memo.clear()
+    before = _geometry_arrays(snap_of())
+    hits = memo.hits
+    again = _geometry_arrays(snap_of())
+    assert memo.hits - hits == 2, f"{memo.hits - hits} of 2 meshes taken from the memo"
+    assert len(before) == len(again) == 2 and all(map(_same_arrays, before, again))
+
+    def normal_map():
+        material = sphere.data.materials[0]
+        nodes = scenes.node_tree(material).nodes
+        bsdf = nodes["Principled BSDF"]
+        image = bpy.data.images.new("Bumps", 4, 4)
+        tex, nmap = nodes.new("ShaderNodeTexImage"), nodes.new("ShaderNodeNormalMap")
+        tex.image = image
+        material.node_tree.links.new(tex.outputs["Color"], nmap.inputs["Color"])
+        material.node_tree.links.new(nmap.outputs["Normal"], bsdf.inputs["Normal"])
+
+    edits = {
+        "a vertex moved": lambda: setattr(sphere.data.vertices[5], "co", (0.0, 0.1, 1.2)),
+        "a face's material": lambda: setattr(sphere.data.polygons[3], "material_index", 1),
+        "flat shading": lambda: sphere.data.shade_flat(),
+        "a UV": lambda: setattr(sphere.data.uv_layers.active.data[7], "uv", (0.3, 0.9)),
+        "the faces flipped": lambda: cube.data.flip_normals(),
+        "a modifier": lambda: cube.modifiers.new("Sub", "SUBSURF"),
+        "tangents": normal_map,
+    }
+    last = again
+    for what, edit in edits.items():
+        edit()
+        for obj in (sphere, cube):
+            obj.data.update()
+        hits = memo.hits
+        read = _geometry_arrays(snap_of())
+        assert memo.hits - hits == 1, f"{what}: {memo.hits - hits} meshes from the memo, not the other one"
+        memo.clear()
+        fresh = _geometry_arrays(snap_of())
+        assert all(map(_same_arrays, read, fresh)), f"{what}: the memo's geometry is stale"
+        changed = [not _same_arrays(a, b) for a, b in zip(read, last)]
+        assert sum(changed) == 1, f"{what}: {sum(changed)} meshes read differently from before, not 1"
+        last = read
+
+
+def test_geometry_memo_keeps_at_most_its_limit():
+    memo = extract.GeometryMemo(limit=100)
+
+    def geometry(corners):
+        return S.MeshGeometry("g", np.zeros((corners, 3), np.float32), np.zeros((corners, 3), np.float32), [])
+
+    arrays = (np.arange(4),)
+    memo.put("a", arrays, False, geometry(60))
+    memo.put("b", arrays, False, geometry(30))
+    assert memo.get("a", arrays, False) is not None  # a is now the most recently used
+    memo.put("c", arrays, False, geometry(30))  # 120 corners: b, the least recently used, leaves
+    assert [k for k in ("a", "b", "c") if memo.get(k, arrays, False) is not None] == ["a", "c"]
+    memo.put("d", arrays, False, geometry(101))  # larger than the limit: not kept
+    assert memo.get("d", arrays, False) is None
+    assert memo.get("a", (np.arange(5),), False) is None and memo.get("a", arrays, True) is None
