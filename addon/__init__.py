@@ -111,3 +111,4 @@ def _unregister():
     _undo([*classes, *modules])
     gpu_library.LIBRARY.clear()
     extract.IMAGES.clear()
+    extract.GEOMETRY_MEMO.clear()

@@ -343,8 +343,9 @@ def _forget_changed_images(_scene, depsgraph):
 
 @persistent
 def _forget_all_images(*_args):
-    """Main-thread handler: a file load starts with no cached pixels."""
+    """Main-thread handler: a file load starts with no cached pixels, nor meshes' geometry."""
     extract.IMAGES.clear()
+    extract.GEOMETRY_MEMO.clear()
 
 
 def _handlers():
