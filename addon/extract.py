@@ -495,9 +495,8 @@ class GeometryMemo:
     def get(self, key: str, arrays: tuple, tangents: bool) -> S.MeshGeometry | None:
         with self._lock:
             entry = self._entries.get(key)
-            if entry is None or entry[1] != tangents or len(entry[0]) != len(arrays) or not all(
-                    (a is None and b is None) or (a is not None and b is not None and np.array_equal(a, b))
-                    for a, b in zip(entry[0], arrays)):
+            if entry is None or entry[1] != tangents or len(entry[0]) != len(arrays) or \
+                    not all(map(_same_bits, entry[0], arrays)):
                 return None
             self._entries.move_to_end(key)
             self.hits += 1
@@ -524,6 +523,17 @@ class GeometryMemo:
 
 
 GEOMETRY_MEMO = GeometryMemo()
+
+
+def _same_bits(a: np.ndarray | None, b: np.ndarray | None) -> bool:
+    """Whether two arrays hold the same bits (-0.0 is not 0.0 here, and a NaN equals itself)."""
+    if a is None or b is None:
+        return a is b
+    if a.dtype != b.dtype or a.shape != b.shape:
+        return False
+    if a.dtype.itemsize == 4:
+        return np.array_equal(a.reshape(-1).view(np.uint32), b.reshape(-1).view(np.uint32))
+    return a.tobytes() == b.tobytes()
 
 
 def _corner_verts(mesh) -> np.ndarray:

@@ -41,6 +41,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "scripts"), str(ROOT / "tests")]
 
 import render as cli  # noqa: E402
 
+from addon.extract import MEMO_CORNERS  # noqa: E402
 from addon.snapshot import LIGHT_KINDS, TERM_CHOICES  # noqa: E402
 
 DEFAULT_TERMS = {family: choices[0] for family, choices in TERM_CHOICES.items()}
@@ -475,7 +476,9 @@ def report(args, results, lights, tris, configs, peers, machine, elapsed) -> str
              f"compiles the programs, then {args.frames} timed rounds, order rotated each round), all "
              f"in one process. *total* is the engine's own time (`engine.last_timings`): scene "
              f"extraction + draw + read-back (the read-back fences the GPU work) + handing pixels to "
-             f"Blender; *wall* is `bpy.ops.render.render()` as a whole. Errors are against Cycles "
+             f"Blender; *wall* is `bpy.ops.render.render()` as a whole (a still scene rendered again: "
+             f"its meshes of up to {MEMO_CORNERS:,} corners come from the geometry memo, "
+             f"`extract.GEOMETRY_MEMO`, as at any re-render). Errors are against Cycles "
              f"(direct light only, world on and occluded, lights as the file has them, shadows included, "
              f"pixel centres, "
              f"{args.reference_samples} spp, "

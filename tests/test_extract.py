@@ -707,3 +707,9 @@ def test_geometry_memo_keeps_at_most_its_limit():
     memo.put("d", arrays, False, geometry(101))  # larger than the limit: not kept
     assert memo.get("d", arrays, False) is None
     assert memo.get("a", (np.arange(5),), False) is None and memo.get("a", arrays, True) is None
+    # equal bits, not equal values: -0.0 is another array than 0.0 (its geometry's signs differ),
+    # and a NaN matches itself
+    zeros = (np.array([0.0, np.nan], np.float32),)
+    memo.put("z", zeros, False, geometry(1))
+    assert memo.get("z", (np.array([0.0, np.nan], np.float32),), False) is not None
+    assert memo.get("z", (np.array([-0.0, np.nan], np.float32),), False) is None
