@@ -105,7 +105,7 @@ class Features:
     #: an area light may have a Spread under 180 degrees; off, the program holds no spread code
     area_spread: bool = True
     #: an area light may be a disk or an ellipse (a 16-gon); off, the program's area lights are
-    #: rectangles, whose corners need no sine and cosine (softbox's shading 0.95x)
+    #: rectangles, whose corners need no sine and cosine (softbox's shading 0.93x)
     area_ellipse: bool = True
     #: the groups of lights the program loops over, one loop each (``light_order`` lists the
     #: lights by group): a kind, "_SHADOWED" where those lights have a shadow map. A loop holds
