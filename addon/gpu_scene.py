@@ -23,6 +23,7 @@ It also groups the draws per shading program (``draw_lists``) and draws a group
 from __future__ import annotations
 
 import hashlib
+import math
 from collections import Counter
 from collections.abc import Callable
 from dataclasses import dataclass, replace
@@ -190,6 +191,7 @@ class SceneResources:
         # ends (programs.light_order)
         self.lights: list = []
         self.light_group_ends: tuple[int, ...] = ()
+        self.light_culling = False  # programs.uses_light_tiles, with the scene's bounds
         # their centres and reaches, as light culling's tiles read them (None: no culling)
         self._reach: tuple[np.ndarray, np.ndarray] | None = None
 
@@ -233,7 +235,11 @@ class SceneResources:
         order, self.light_group_ends = programs.light_order(snapshot.lights, first)
         self.lights = [snapshot.lights[i] for i in order]
         self._reach = None
-        if programs.uses_light_tiles(snapshot):  # made once here: every pass of every view asks
+        box = self.shadow_plan.box if self.shadow_plan.box is not None else (
+            shadows.scene_bounds(snapshot, self._bounds) if any(math.isfinite(light.influence)
+                                                                for light in snapshot.lights) else None)
+        self.light_culling = programs.uses_light_tiles(snapshot, box)
+        if self.light_culling:  # made once here: every pass of every view asks
             self._reach = (np.array([light.position for light in self.lights], np.float64).reshape(-1, 3),
                            np.array([light.influence for light in self.lights], np.float64))
         lights = programs.pack_lights(self.lights, slots, [first[i] for i in order])
@@ -450,7 +456,8 @@ class SceneResources:
         plan = self.shadow_plan  # planned once per sync, not counted again per material
         features = {key: programs.Features.from_snapshot(snapshot, model=model, material=m,
                                                          half_target=half_target, shadow_layers=plan.layers,
-                                                         first_layer=plan.first_layer)
+                                                         first_layer=plan.first_layer,
+                                                         light_culling=self.light_culling)
                     for key, m in snapshot.materials.items()}
         opaque: dict[programs.Features, list[Draw]] = {}
         blended: dict[programs.Features, list[Draw]] = {}

@@ -39,6 +39,16 @@ OBJECT_BLOCK = 256
 #: Shade the lights in groups, one loop per kind with and without a shadow map (``Features.
 #: light_groups``; the same image as one loop over them all; tests turn it off to compare).
 LIGHT_GROUPS = True
+#: A scene of at most this many lights, without light culling, shades each by its own call with
+#: its kind and index constants (``Features.light_sequence``): on the CPU rasteriser a loop's
+#: light index differs per pixel for all the compiler knows, so each read of the light's data is
+#: a gather, one per pixel; a constant index reads once for every pixel (measured, 640 x 360,
+#: fenced minima in one process: the shading passes of softbox, roughness_sweep, material_grid,
+#: fresnel and a part of portability 0.83-0.95x; roughness_sweep's frame 0.93x). Each light
+#: holds its kind's code, and the CPU rasteriser's compiler takes superlinearly longer: softbox's
+#: area lights unrolled, its first render without the shader cache +70 ms for two, +480 ms for
+#: three, +19 s for four.
+UNROLLED_LIGHTS = 2
 
 MODEL_FILES = {
     "BLINN_PHONG": "model_blinn_phong.glsl",
@@ -115,6 +125,10 @@ class Features:
     #: ``light_kinds``, with and (with shadows) without maps. Empty: one loop over every light
     #: (``LIGHT_GROUPS`` off)
     light_groups: frozenset[str] | None = None
+    #: each light's group (its index in ``LIGHT_GROUP_ORDER``), in ``light_order``: where not
+    #: empty, the program shades exactly these lights, each by its own call (``UNROLLED_LIGHTS``),
+    #: and no loop; empty: the loops of ``light_groups``
+    light_sequence: tuple[int, ...] = ()
     #: shaded deferred: a full-screen pass over the G-buffer's pixels of this group (passes.OpaquePass),
     #: not the surfaces' own fragments; opaque surfaces without image maps only
     deferred: bool = False
@@ -156,6 +170,12 @@ class Features:
         elif not self.shadow_layers:  # no light has a map
             object.__setattr__(self, "light_groups", frozenset(
                 group.removesuffix("_SHADOWED") for group in self.light_groups))
+        if self.light_tiles:  # a tile's own list of lights: loops
+            object.__setattr__(self, "light_sequence", ())
+        elif not self.shadow_layers:
+            object.__setattr__(self, "light_sequence", tuple(
+                LIGHT_GROUP_ORDER.index(LIGHT_GROUP_ORDER[g].removesuffix("_SHADOWED"))
+                for g in self.light_sequence))
         if self.model == "PBR" and self.terms.principled:
             canonical = Terms(principled=True)  # one fixed set: exact Fresnel, GGX, Smith, layered
         elif self.model == "PBR":
@@ -170,10 +190,13 @@ class Features:
     def from_snapshot(cls, snapshot: Snapshot, model: str | None = None,
                       material: MaterialParams | None = None, half_target: bool = False,
                       with_maps: bool = True, shadow_layers: int | None = None,
-                      first_layer: tuple[int, ...] | None = None) -> Features:
+                      first_layer: tuple[int, ...] | None = None,
+                      light_culling: bool | None = None) -> Features:
         """The scene's features, for ``model`` or for ``material`` (its model and term overrides).
         ``shadow_layers`` and ``first_layer``: the frame's shadow-map layers and each light's
-        first when the caller planned them (else given by ``shadows.assign``)."""
+        first when the caller planned them (else given by ``shadows.assign``); ``light_culling``:
+        whether light culling pays, as the caller found it (else ``uses_light_tiles`` without
+        the scene's bounds)."""
         terms = snapshot.settings.terms
         maps = frozenset()
         if material is not None and with_maps:
@@ -191,6 +214,8 @@ class Features:
             terms = material.terms or terms.override(fresnel=material.fresnel, ndf=material.ndf,
                                                      visibility=material.visibility,
                                                      diffuse=material.diffuse)
+        tiles = uses_light_tiles(snapshot) if light_culling is None else light_culling
+        sequence = () if tiles else light_sequence(snapshot.lights, first_layer)
         return cls(
             model=model or snapshot.settings.model,
             max_lights=light_slots(len(snapshot.lights)),
@@ -218,9 +243,10 @@ class Features:
             soft_shadows=snapshot.settings.soft_shadows and any(
                 shadows.penumbra_size(light) > 0.0 for light, first in zip(snapshot.lights, first_layer)
                 if first >= 0),
-            light_tiles=uses_light_tiles(snapshot),
+            light_tiles=tiles,
             light_block=light_block_fits(light_slots(len(snapshot.lights))),
             light_groups=frozenset(map(light_group, snapshot.lights, first_layer) if LIGHT_GROUPS else ()),
+            light_sequence=sequence,
         )
 
     @property
@@ -304,9 +330,12 @@ class Features:
                     ("SL_SHADOW_SIZE", str(self.shadow_size))]
             if self.soft_shadows:
                 out.append(("SL_SOFT_SHADOWS", "1"))
-        out += [("SL_LIGHTS_" + group, "1") for group in sorted(self.light_groups)]
-        if not self.light_groups:
-            out.append(("SL_ONE_LIGHT_LOOP", "1"))
+        if self.light_sequence:
+            out.append(("SL_LIGHT_SEQUENCE", sequence_source(self.light_sequence)))
+        else:
+            out += [("SL_LIGHTS_" + group, "1") for group in sorted(self.light_groups)]
+            if not self.light_groups:
+                out.append(("SL_ONE_LIGHT_LOOP", "1"))
         if self.environment:
             out.append(("SL_ENV_" + self.environment, "1"))
             if self.environment == "MAP" and self.env_diffuse == "SH9":
@@ -613,10 +642,22 @@ def light_block_fits(max_lights: int) -> bool:
     return LIGHT_BLOCK and max_lights * LIGHT_FLOATS * 4 <= UNIFORM_BLOCK_BYTES
 
 
-def uses_light_tiles(snapshot: Snapshot) -> bool:
-    """Light culling pays: it is on and some light reaches less than everywhere."""
+def uses_light_tiles(snapshot: Snapshot, box: tuple[np.ndarray, np.ndarray] | None = None) -> bool:
+    """Light culling pays: it is on and some light reaches less than everywhere -- less than the
+    whole of ``box`` (the drawn scene's world bounds, min and max) where given: a light whose
+    reach holds every corner of the box is listed by every tile that shows a surface, and its
+    window (glsl/lights.glsl's light_window) shades the same without the lists."""
     lights = snapshot.lights
-    return snapshot.settings.light_culling and any(math.isfinite(light.influence) for light in lights)
+    if not snapshot.settings.light_culling:
+        return False
+    finite = [light for light in lights if math.isfinite(light.influence)]
+    if not finite or box is None:
+        return bool(finite)
+    corners = np.array([[box[i][0], box[j][1], box[k][2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)],
+                       np.float64)
+    positions = np.array([light.position for light in finite], np.float64).reshape(-1, 3)
+    farthest = np.linalg.norm(corners[None] - positions[:, None], axis=2).max(axis=1)
+    return bool(np.any(farthest >= np.array([light.influence for light in finite], np.float64)))
 
 
 #: The groups of lights in the order the programs loop over them (``Features.light_groups``):
@@ -638,6 +679,28 @@ def light_order(lights, first_layer) -> tuple[list[int], tuple[int, ...]]:
     order = sorted(range(len(group)), key=group.__getitem__)
     ends = tuple(sum(1 for g in group if g <= i) for i in range(len(LIGHT_GROUP_ORDER)))
     return order, ends
+
+
+def light_sequence(lights, first_layer) -> tuple[int, ...]:
+    """``Features.light_sequence`` of a scene's lights (``first_layer[i]``: light i's first
+    shadow-map layer, -1 for none): each one's group in ``light_order``, where there are at most
+    UNROLLED_LIGHTS (and lights are shaded in groups); else empty."""
+    if not (LIGHT_GROUPS and 0 < len(lights) <= UNROLLED_LIGHTS):
+        return ()
+    return tuple(sorted(LIGHT_GROUP_ORDER.index(light_group(light, first))
+                        for light, first in zip(lights, first_layer)))
+
+
+def sequence_source(sequence: tuple[int, ...]) -> str:
+    """The statements (SL_LIGHT_SEQUENCE, glsl/mesh.frag.glsl) that shade ``light_sequence``'s
+    lights: the light at each index by its group's kind, its shadow looked up where the group's
+    lights have maps."""
+    calls = []
+    for index, group in enumerate(sequence):
+        name = LIGHT_GROUP_ORDER[group]
+        shadowed = "true" if name.endswith("_SHADOWED") else "false"
+        calls.append(f"shade_light(c, s, ng, {index}, LIGHT_{name.removesuffix('_SHADOWED')}, {shadowed});")
+    return " ".join(calls)
 
 
 def pack_lights(lights, max_lights: int, first_layer) -> np.ndarray:

@@ -157,6 +157,20 @@ void shade_group(inout vec3 c, Surface s, vec3 ng, ivec2 listed, inout int k, in
   } while (index < end && k < SL_MAX_LIGHTS);
 }
 
+#ifdef SL_LIGHT_SEQUENCE
+/* Shade light `index` (of kind `kind`; shadowed: as light_share's) into c: the calls of
+ * SL_LIGHT_SEQUENCE (addon/programs.py's sequence_source), one per light of a scene of a few, each
+ * with constants. A loop's index differs per pixel for all the CPU rasteriser's compiler knows,
+ * so each of the light's texels is a gather, a load per pixel; a constant's is one load for every
+ * pixel (the shading passes ~0.9x). */
+void shade_light(inout vec3 c, Surface s, vec3 ng, int index, int kind, bool shadowed)
+{
+  LightData light = load_light_reach(index);
+  light.position_kind.w = float(kind);
+  c += light_share(s, ng, load_light_rest(light, index), shadowed);
+}
+#endif
+
 #ifdef SL_DEFERRED
 /* The material of G-buffer row `row` (addon/gpu_scene.py's material table: MaterialData's vec4s in
  * order, one row per material). */
@@ -229,12 +243,16 @@ void main()
   vec3 c = (shade_ambient(s, frame.ambient.rgb) + m.emission.rgb) * lobes.z;
   /* the world is a light: its diffuse and specular parts go to the lobes' passes */
   c += shade_environment(s, lobes.xy);
-#ifdef SL_LIGHT_TILES
-  ivec2 listed = tile_lights();
+#ifdef SL_LIGHT_SEQUENCE
+  SL_LIGHT_SEQUENCE
 #else
+#  ifdef SL_LIGHT_TILES
+  ivec2 listed = tile_lights();
+#  else
   ivec2 listed = ivec2(0, int(frame.counts.x));
-#endif
+#  endif
   int k = 0;
+#endif
 #ifdef SL_ONE_LIGHT_LOOP
 #  ifdef SL_SHADOWS
   shade_group(c, s, ng, listed, k, SL_MAX_LIGHTS, -1, true);

@@ -300,3 +300,75 @@ def test_the_threshold_drops_at_most_its_irradiance(tmp_path):
     assert err < 1e-5 * irradiance.max(), f"dropped irradiance off the window's closed form by {err:.2e}"
     assert worst <= threshold, f"dropped {worst:.4f} W/m^2, threshold {threshold}"
     assert np.all(image[d2 >= reach ** 2] == 0.0)
+
+
+def test_culling_pays_only_where_some_light_reaches_less_than_the_scene():
+    """Light culling pays where some light's reach ends inside the drawn scene's box: a light
+    whose reach holds every corner of the box is listed by every tile, so the program shades
+    without lists (a scene of a few lights then shades each by its own call: programs.
+    light_sequence)."""
+    from types import SimpleNamespace
+
+    from addon import programs
+
+    def snap(*lights, culling=True):
+        return SimpleNamespace(settings=SimpleNamespace(light_culling=culling),
+                               lights=[SimpleNamespace(position=p, influence=r) for p, r in lights])
+
+    box = (np.array([-2.0, -2.0, 0.0]), np.array([2.0, 2.0, 1.0]))
+    far_corner = math.sqrt(2.0 ** 2 + 2.0 ** 2 + 1.0 ** 2)  # from the origin, the box's corners
+    everywhere = snap(((0.0, 0.0, 0.0), far_corner + 1e-3), ((0.0, 0.0, 5.0), math.inf))
+    assert not programs.uses_light_tiles(everywhere, box)
+    assert programs.uses_light_tiles(everywhere)  # without the box: some reach is finite
+    short = snap(((0.0, 0.0, 0.0), far_corner - 1e-3), ((0.0, 0.0, 5.0), math.inf))
+    assert programs.uses_light_tiles(short, box)
+    assert not programs.uses_light_tiles(snap(((0.0, 0.0, 0.0), 1.0), culling=False), box)
+    assert not programs.uses_light_tiles(snap(((0.0, 0.0, 5.0), math.inf)), box)
+
+
+def _two_lights_and_plates(size: int = 64):
+    """A plane under two tilted plates, lit by a square area light and a spot light (each of
+    size, casting soft shadows), neither with a Custom Distance: both reach the whole scene."""
+    import bpy
+
+    scene = _lights_over_a_plane(size, 0, cutoff=None)
+    for obj in [obj for obj in scene.objects if obj.type == "LIGHT"]:  # (its sun)
+        bpy.data.objects.remove(obj)
+    scene.shading_lab.model = "PBR"
+    scenes.plane(scene, size=1.0, location=(-0.6, 0.4, 0.25), rotation=(0.3, 0.0, 0.0))
+    scenes.plane(scene, size=0.8, location=(0.7, -0.5, 0.3), rotation=(0.0, 0.4, 0.2))
+    scenes.light(scene, "AREA", energy=40.0, location=(-0.3, 0.2, 1.5), size=0.4, use_shadow=True)
+    scenes.light(scene, "SPOT", energy=60.0, location=(0.4, -0.6, 1.2), spot_size=1.2,
+                 shadow_soft_size=0.05, use_shadow=True)
+    return scene
+
+
+def test_a_few_lights_each_shaded_by_its_own_call_equal_the_loops(tmp_path, monkeypatch):
+    """A scene of two lights (an area light and a spot, each casting soft shadows) shades each by
+    its own call with constants (programs.UNROLLED_LIGHTS): the same image, to the bit, as the
+    loops over each group of lights; a third light turns back to the loops."""
+    from addon import gpu_library, programs
+
+    scene = _two_lights_and_plates()
+    made = []
+    shading_program = gpu_library.shading_program
+    monkeypatch.setattr(gpu_library, "shading_program",
+                        lambda features: made.append(features) or shading_program(features))
+    called = scenes.render(scene, tmp_path / "called.exr")
+    area, spot = (programs.LIGHT_GROUP_ORDER.index(g) for g in ("AREA_SHADOWED", "SPOT_SHADOWED"))
+    assert {f.light_sequence for f in made} == {tuple(sorted((area, spot)))}, made
+    assert not any(f.light_tiles for f in made)
+    defines = dict(made[-1].defines())
+    assert defines["SL_LIGHT_SEQUENCE"] == programs.sequence_source(made[-1].light_sequence)
+    assert not any(name.startswith("SL_LIGHTS_") for name in defines)
+    made.clear()
+    monkeypatch.setattr(programs, "UNROLLED_LIGHTS", 0)
+    looped = scenes.render(scene, tmp_path / "looped.exr")
+    assert made and all(f.light_sequence == () for f in made), made
+    assert np.array_equal(called, looped), f"max difference {np.abs(called - looped).max():.3g}"
+    assert looped[..., :3].max() > 0.05, "the lights must light the plane"
+    monkeypatch.setattr(programs, "UNROLLED_LIGHTS", 2)
+    made.clear()
+    scenes.light(scene, "POINT", energy=20.0, location=(1.0, 1.0, 1.0))
+    scenes.render(scene, tmp_path / "three.exr")
+    assert made and all(f.light_sequence == () for f in made), made

@@ -144,3 +144,30 @@ def test_the_lights_block_holds_512_lights_of_the_texels_the_shaders_read():
     assert 512 * texels * 16 <= programs.UNIFORM_BLOCK_BYTES < 1024 * texels * 16
     assert ("SL_LIGHT_BLOCK", "1") in programs.Features(max_lights=512, light_block=True).defines()
     assert ("SL_LIGHT_BLOCK", "1") not in programs.Features(max_lights=1024).defines()
+
+
+def test_a_light_sequence_compiles_one_call_per_light_and_no_loop():
+    """A scene of a few lights (programs.UNROLLED_LIGHTS) shades each by its own call, its index
+    and kind constants: the define holds the calls in light_order's order; without shadow maps
+    none looks a shadow up; with light culling (a tile's own list) the loops come back."""
+    order = programs.LIGHT_GROUP_ORDER
+    sequence = (order.index("POINT_SHADOWED"), order.index("SUN"))
+    f = programs.Features("PBR", 2, frozenset({"POINT", "SUN"}), shadow_layers=6, shadow_size=1024,
+                          light_sequence=sequence)
+    defines = dict(f.defines())
+    assert defines["SL_LIGHT_SEQUENCE"] == ("shade_light(c, s, ng, 0, LIGHT_POINT, true); "
+                                            "shade_light(c, s, ng, 1, LIGHT_SUN, false);")
+    assert not any(name.startswith("SL_LIGHTS_") or name == "SL_ONE_LIGHT_LOOP" for name in defines)
+    code = _compiled(f)
+    assert "shade_light(" in code and "SL_LIGHT_SEQUENCE" in code
+    unshadowed = replace(f, shadow_layers=0)
+    assert unshadowed.light_sequence == (order.index("POINT"), order.index("SUN"))
+    assert "true" not in dict(unshadowed.defines())["SL_LIGHT_SEQUENCE"]
+    tiled = replace(f, light_tiles=True)
+    assert tiled.light_sequence == () and "SL_LIGHT_SEQUENCE" not in dict(tiled.defines())
+    assert ("SL_LIGHTS_POINT_SHADOWED", "1") in tiled.defines()
+    # from a scene's lights: at most UNROLLED_LIGHTS of them, in light_order's order
+    lights = [S.Light(kind="SUN", position=(0, 0, 0), direction=(0, 0, -1), intensity=(1, 1, 1)),
+              S.Light(kind="POINT", position=(0, 0, 1), direction=(0, 0, -1), intensity=(1, 1, 1))]
+    assert programs.light_sequence(lights, (-1, 0)) == sequence
+    assert programs.light_sequence(lights * 2, (-1, 0, -1, 0)) == ()
