@@ -42,12 +42,13 @@ LIGHT_GROUPS = True
 #: A scene of at most this many lights, without light culling, shades each by its own call with
 #: its kind and index constants (``Features.light_sequence``): on the CPU rasteriser a loop's
 #: light index differs per pixel for all the compiler knows, so each read of the light's data is
-#: a gather, one per pixel; a constant index reads once for every pixel (measured, 640 x 360,
-#: fenced minima in one process: the shading passes of softbox, roughness_sweep, material_grid,
-#: fresnel and a part of portability 0.83-0.95x; roughness_sweep's frame 0.93x). Each light
-#: holds its kind's code, and the CPU rasteriser's compiler takes superlinearly longer: softbox's
-#: area lights unrolled, its first render without the shader cache +70 ms for two, +480 ms for
-#: three, +19 s for four.
+#: a gather, one per pixel; a constant index reads once for every pixel. Measured against the
+#: loops, neither with light culling (640 x 360, fenced minima in one process): the shading
+#: passes of long_tail, softbox, roughness_sweep, material_grid and fresnel 0.96-0.98x; the
+#: frames within noise (docs/bench/light_sequence.md). Each light holds its kind's code, and the
+#: CPU rasteriser's compiler takes superlinearly longer: softbox's area lights unrolled, its
+#: first render without the shader cache +70 ms for two, +480 ms for three, +19 s for four
+#: (four point lights: no longer, but 0.92-0.96x; four spots +180-240 ms for 0.98x).
 UNROLLED_LIGHTS = 2
 
 MODEL_FILES = {
@@ -646,7 +647,10 @@ def uses_light_tiles(snapshot: Snapshot, box: tuple[np.ndarray, np.ndarray] | No
     """Light culling pays: it is on and some light reaches less than everywhere -- less than the
     whole of ``box`` (the drawn scene's world bounds, min and max) where given: a light whose
     reach holds every corner of the box is listed by every tile that shows a surface, and its
-    window (glsl/lights.glsl's light_window) shades the same without the lists."""
+    window (glsl/lights.glsl's light_window) shades the same without the lists, whose reads cost
+    a gather per pixel and light (the presets' point lights reach past their scenes: without the
+    lists their shading passes 0.85-0.95x, roughness_sweep's frame 0.87-0.93x;
+    docs/bench/light_sequence.md)."""
     lights = snapshot.lights
     if not snapshot.settings.light_culling:
         return False
