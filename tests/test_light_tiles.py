@@ -366,7 +366,8 @@ def test_a_few_lights_each_shaded_by_its_own_call_equal_the_loops(tmp_path, monk
     looped = scenes.render(scene, tmp_path / "looped.exr")
     assert made and all(f.light_sequence == () for f in made), made
     assert np.array_equal(called, looped), f"max difference {np.abs(called - looped).max():.3g}"
-    assert looped[..., :3].max() > 0.05, "the lights must light the plane"
+    brightest = float(looped[..., :3].max())  # measured 2.61: the area light under the plates
+    assert brightest > 1.0, f"the lights must light the plane: brightest pixel {brightest:.3f}"
     monkeypatch.setattr(programs, "UNROLLED_LIGHTS", 2)
     made.clear()
     scenes.light(scene, "POINT", energy=20.0, location=(1.0, 1.0, 1.0))
