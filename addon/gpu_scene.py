@@ -236,8 +236,8 @@ class SceneResources:
         self.lights = [snapshot.lights[i] for i in order]
         self._reach = None
         box = self.shadow_plan.box if self.shadow_plan.box is not None else (
-            shadows.scene_bounds(snapshot, self._bounds) if any(math.isfinite(light.influence)
-                                                                for light in snapshot.lights) else None)
+            shadows.scene_bounds(snapshot, self._bounds) if snapshot.settings.light_culling and any(
+                math.isfinite(light.influence) for light in snapshot.lights) else None)
         self.light_culling = programs.uses_light_tiles(snapshot, box)
         if self.light_culling:  # made once here: every pass of every view asks
             self._reach = (np.array([light.position for light in self.lights], np.float64).reshape(-1, 3),

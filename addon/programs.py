@@ -657,8 +657,7 @@ def uses_light_tiles(snapshot: Snapshot, box: tuple[np.ndarray, np.ndarray] | No
     finite = [light for light in lights if math.isfinite(light.influence)]
     if not finite or box is None:
         return bool(finite)
-    corners = np.array([[box[i][0], box[j][1], box[k][2]] for i in (0, 1) for j in (0, 1) for k in (0, 1)],
-                       np.float64)
+    corners = shadows.box_corners(*box)
     positions = np.array([light.position for light in finite], np.float64).reshape(-1, 3)
     farthest = np.linalg.norm(corners[None] - positions[:, None], axis=2).max(axis=1)
     return bool(np.any(farthest >= np.array([light.influence for light in finite], np.float64)))

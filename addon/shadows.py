@@ -132,14 +132,16 @@ def scene_bounds(snapshot: Snapshot, bounds: dict[str, np.ndarray]) -> tuple[np.
     return points.min(0), points.max(0)
 
 
-def _box_corners(lo, hi) -> np.ndarray:
+def box_corners(lo, hi) -> np.ndarray:
+    """(8, 3) the corners of the box (lo, hi), corner i taking hi's coordinate where its bit (4, 2, 1:
+    x, y, z) is set."""
     return np.array([[(lo, hi)[i][0], (lo, hi)[j][1], (lo, hi)[k][2]]
                      for i in (0, 1) for j in (0, 1) for k in (0, 1)], np.float64)
 
 
 def _far_near(position, lo, hi) -> tuple[float, float]:
     """Near and far distances of a perspective map at ``position`` that hold the whole box."""
-    corners = _box_corners(lo, hi)
+    corners = box_corners(lo, hi)
     far = float(np.linalg.norm(corners - np.asarray(position), axis=1).max()) * 1.01 + 1e-3
     near = max(far * 1e-4, 1e-3)
     return near, far
@@ -167,7 +169,7 @@ def _sun_layer(light: Light, lo, hi, size: int, region=None, cascades: int = 1):
     caster upstream). ``cascades``: the sun's number of maps, kept in its first map's extents."""
     direction = np.asarray(light.direction, np.float64)
     view = _sun_view(light, lo, hi)
-    points = (view[:3, :3] @ _box_corners(lo, hi).T).T + view[:3, 3]
+    points = (view[:3, :3] @ box_corners(lo, hi).T).T + view[:3, 3]
     x_lo, x_hi = points[:, 0].min(), points[:, 0].max()
     y_lo, y_hi = points[:, 1].min(), points[:, 1].max()
     if region is not None:
@@ -200,7 +202,7 @@ def view_depths(camera, lo, hi) -> tuple[float, float] | None:
     projection = np.asarray(camera.projection, np.float64)
     a, b = projection[2, 2], projection[2, 3]
     clip_start, clip_end = b / (a - 1.0), b / (a + 1.0)
-    corners = _box_corners(lo, hi)
+    corners = box_corners(lo, hi)
     view = np.asarray(camera.view, np.float64)
     depth = -((view[:3, :3] @ corners.T).T + view[:3, 3])[:, 2]
     far = min(float(depth.max()), clip_end)
@@ -372,7 +374,7 @@ def _within_planes(planes: np.ndarray, spheres: np.ndarray) -> np.ndarray:
 #: bilinear filter one texel beyond, rounded up (tests/test_shadows.py reads the GLSL's value).
 LOOKUP_REACH = 50
 
-#: The 12 edges of a box or frustum whose 8 corners are indexed by 3 bits (``_box_corners``' order,
+#: The 12 edges of a box or frustum whose 8 corners are indexed by 3 bits (``box_corners``' order,
 #: the clip volume's corners in ``visible_region``): pairs of corners differing in one bit.
 _EDGES = np.array([(a, a | bit) for bit in (1, 2, 4) for a in range(8) if not a & bit])
 
@@ -400,7 +402,7 @@ def visible_region(view_projection: np.ndarray, lo, hi) -> np.ndarray | None:
         to_world = invert(m)
     except (ValueError, np.linalg.LinAlgError):
         return None
-    ndc = np.concatenate([_box_corners(-np.ones(3), np.ones(3)), np.ones((8, 1))], axis=1)
+    ndc = np.concatenate([box_corners(-np.ones(3), np.ones(3)), np.ones((8, 1))], axis=1)
     corners = ndc @ to_world.T
     if not np.all(np.isfinite(corners)) or np.any(corners[:, 3] <= 0.0):
         return None
@@ -410,12 +412,12 @@ def visible_region(view_projection: np.ndarray, lo, hi) -> np.ndarray | None:
     lo, hi = np.asarray(lo, np.float64), np.asarray(hi, np.float64)
     eye = np.eye(3)
     box_planes = np.concatenate([np.column_stack([eye, -lo]), np.column_stack([-eye, hi])])
-    box_corners = _box_corners(lo, hi)
+    solid = box_corners(lo, hi)
     eps = 1e-6 * max(float(np.max(hi - lo)), 1.0)
-    if np.all(box_corners @ view_planes[:, :3].T + view_planes[:, 3] >= -eps):
-        return box_corners  # the whole box in view
-    candidates = np.concatenate([view_corners, box_corners, _edge_crossings(view_corners, box_planes),
-                                 _edge_crossings(box_corners, view_planes)])
+    if np.all(solid @ view_planes[:, :3].T + view_planes[:, 3] >= -eps):
+        return solid  # the whole box in view
+    candidates = np.concatenate([view_corners, solid, _edge_crossings(view_corners, box_planes),
+                                 _edge_crossings(solid, view_planes)])
     inside = np.all(candidates @ view_planes[:, :3].T + view_planes[:, 3] >= -eps, axis=1) & \
         np.all(candidates @ box_planes[:, :3].T + box_planes[:, 3] >= -eps, axis=1)
     return candidates[inside]
