@@ -170,14 +170,15 @@ class SceneResources:
         self._lights = _RowTexture()  # beyond what a uniform block holds
         self._light_block = _Block()  # where it holds them (programs.light_block_fits)
         self._light_tiles = _RowTexture(channels=2)  # light culling's tiles and lists (per view)
-        self._tiles = None  # (what they were made from, the lists) of the last lists uploaded
+        self._tiles = None  # (what they were made from, the lists) of the last view's lists
+        self._tiles_uploaded = False  # whether those are the lists on the GPU
         self._objects: list[_Block] = []
         self._frame = _Block()
         self._world_camera = _Block()
         self._world_lighting = _Block()
         self.environment = None  # the world's precomputed light (gpu_environment.EnvironmentPass)
         self._textures: dict[str, tuple[ImageData, gpu.types.GPUTexture]] = {}
-        self._draw_lists: dict[tuple[str, bool], DrawLists] = {}
+        self._draw_lists: dict[tuple[str, bool, bool], DrawLists] = {}
         # programs and tables drawn with, held for this scene's lifetime (see gpu_library)
         self._programs: dict[programs.Features, gpu.types.GPUShader] = {}
         self._bounds: dict[str, np.ndarray] = {}  # object-space (min, max) per geometry
@@ -191,7 +192,9 @@ class SceneResources:
         # ends (programs.light_order)
         self.lights: list = []
         self.light_group_ends: tuple[int, ...] = ()
-        self.light_culling = False  # programs.uses_light_tiles, with the scene's bounds
+        # programs.uses_light_tiles, with the scene's bounds: whether the views' tiles are made
+        # (each view then shades through them where they pay: culls)
+        self.light_culling = False
         # their centres and reaches, as light culling's tiles read them (None: no culling)
         self._reach: tuple[np.ndarray, np.ndarray] | None = None
 
@@ -396,31 +399,48 @@ class SceneResources:
     def put_frame(self, view_projection: np.ndarray | None, width: int, height: int,
                   samples: int = 1) -> None:
         """The frame block for a view (the camera's, unless the viewport passes its own) of
-        ``width`` x ``height`` pixels at ``samples`` x ``samples``, and its light tiles when light
-        culling is on (``light_tiles``)."""
+        ``width`` x ``height`` pixels at ``samples`` x ``samples``, and its light tiles where they
+        pay (``tile_lists``)."""
         tiles = self.tile_lists(view_projection, width, height, samples)
         self.uploads["frame"] += self._frame.put(programs.pack_frame(self.snapshot, view_projection, tiles,
                                                                      self.light_group_ends))
 
-    def tile_lists(self, view_projection: np.ndarray | None, width: int, height: int,
-                   samples: int = 1) -> light_tiles.TileLists | None:
-        """The view's light tiles (uploaded), None where light culling is off or does not pay
-        (``programs.uses_light_tiles``)."""
+    def _view_tiles(self, view_projection: np.ndarray | None, width: int, height: int,
+                    samples: int) -> light_tiles.TileLists | None:
+        """The view's light tiles, made where the scene's lights allow culling
+        (``programs.uses_light_tiles``), else None."""
         if self._reach is None:
             return None
         centres, radii = self._reach
         vp = self.snapshot.camera.view_projection if view_projection is None else view_projection
         # the passes of one view ask again (the occlusion's and the opaque pass's): the lists
-        # are the last ones' while lights, view and size are (~7 ms of numpy for 3 lights at
-        # 640 x 360 on this machine)
+        # are the last ones' while lights, view and size are (~1 ms of numpy for 2 lights at
+        # 640 x 360 on this machine, ~7 ms for 3 with their sphere tests)
         key = (centres.tobytes(), radii.tobytes(), np.asarray(vp, np.float64).tobytes(), width, height,
                samples)
         if self._tiles is None or self._tiles[0] != key:
-            tiles = light_tiles.tile_lists(centres, radii, vp, width * samples, height * samples,
-                                           light_tiles.TILE * samples)
-            self._tiles = (key, tiles)
-            texels = tiles.texels()
+            self._tiles = (key, light_tiles.tile_lists(centres, radii, vp, width * samples, height * samples,
+                                                       light_tiles.TILE * samples))
+            self._tiles_uploaded = False
+        return self._tiles[1]
+
+    def culls(self, view_projection: np.ndarray | None, width: int, height: int, samples: int = 1) -> bool:
+        """Whether the view's surfaces are shaded through light culling's tile lists: where the
+        scene's lights allow it and the view's lists leave out enough of them to pay
+        (``light_tiles.lists_pay``). Per view: a viewport turning away from a light's reach may
+        switch its programs (each variant compiled once)."""
+        tiles = self._view_tiles(view_projection, width, height, samples)
+        return tiles is not None and light_tiles.lists_pay(tiles, len(self.lights))
+
+    def tile_lists(self, view_projection: np.ndarray | None, width: int, height: int,
+                   samples: int = 1) -> light_tiles.TileLists | None:
+        """The view's light tiles (uploaded) where they pay (``culls``), else None."""
+        if not self.culls(view_projection, width, height, samples):
+            return None
+        if not self._tiles_uploaded:
+            texels = self._tiles[1].texels()
             self.uploads["light tiles"] += self._light_tiles.put(texels.reshape(len(texels), -1))
+            self._tiles_uploaded = True
         return self._tiles[1]
 
     def lights_per_pixel(self, view_projection: np.ndarray | None, width: int, height: int,
@@ -430,7 +450,7 @@ class SceneResources:
         tiles = self.tile_lists(view_projection, width, height, samples)
         if tiles is None:
             return float(len(self.lights))
-        return tiles.entry_count / tiles.header_texels
+        return tiles.mean_listed
 
     @property
     def geometry_count(self) -> int:
@@ -445,10 +465,11 @@ class SceneResources:
 
     # --- drawing ------------------------------------------------------------------------------
 
-    def draw_lists(self, model: str | None, half_target: bool) -> DrawLists:
+    def draw_lists(self, model: str | None, half_target: bool, light_culling: bool = False) -> DrawLists:
         """Every batch of every item, grouped by the program its material needs in ``model``
-        (a material's own model wins); made once per sync and view kind."""
-        view_kind = (model, half_target)
+        (a material's own model wins), shading through light culling's tile lists or not (the
+        view's ``culls``); made once per sync and view kind."""
+        view_kind = (model, half_target, light_culling)
         lists = self._draw_lists.get(view_kind)
         if lists is not None:
             return lists
@@ -457,7 +478,7 @@ class SceneResources:
         features = {key: programs.Features.from_snapshot(snapshot, model=model, material=m,
                                                          half_target=half_target, shadow_layers=plan.layers,
                                                          first_layer=plan.first_layer,
-                                                         light_culling=self.light_culling)
+                                                         light_culling=light_culling)
                     for key, m in snapshot.materials.items()}
         opaque: dict[programs.Features, list[Draw]] = {}
         blended: dict[programs.Features, list[Draw]] = {}

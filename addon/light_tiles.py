@@ -35,6 +35,9 @@ LIST_WIDTH = 4096
 MAX_ENTRIES = LIST_WIDTH * 2048
 #: Up to this many (light, tile) pairs from the boxes are also tested sphere against tile.
 SPHERE_TESTED = 1 << 21
+#: The share of the lights a view's tiles must leave out, on average, for their lists to pay
+#: (``lists_pay``).
+SKIPPED_TO_PAY = 0.2
 
 
 @dataclass(frozen=True)
@@ -58,6 +61,11 @@ class TileLists:
     @property
     def header_texels(self) -> int:
         return self.header.shape[0] * self.header.shape[1]
+
+    @property
+    def mean_listed(self) -> float:
+        """Lights a tile lists, on average over the view's tiles."""
+        return self.entry_count / self.header_texels
 
     def texels(self) -> np.ndarray:
         """What the shaders read (one RG32F texture, LIST_WIDTH texels a row): each tile's (first,
@@ -155,6 +163,17 @@ def tile_lists(centres, radii, view_projection, width: int, height: int, tile: i
     first = np.concatenate([[0], np.cumsum(per_tile)[:-1]])
     header = np.stack([first, per_tile], axis=-1).reshape(rows, columns, 2).astype(np.float32)
     return TileLists(tile, header, _padded(light[order]))
+
+
+def lists_pay(tiles: TileLists, lights: int) -> bool:
+    """Whether a view's tile lists save more than they cost: where its tiles leave out at least
+    SKIPPED_TO_PAY of the ``lights`` on average. A fragment reads its tile's list (a gather a
+    light on the software rasteriser: glsl/README.md) and shades each listed light; without lists it
+    shades every light, two or fewer each by its own call (programs.light_sequence). Measured
+    (640 x 360, frames, in-process alternating medians, culling on / off): hdr's two point lights,
+    6.5 % left out, 1.06x; softbox's two area lights with Custom Distance 5 m, 8 % left out, 1.03x;
+    4 m, 20 %, 1.00x; 3 m, 31 %, its shading 0.84x; 1.5 m, 79 %, 0.68x."""
+    return lights > 0 and tiles.mean_listed <= (1.0 - SKIPPED_TO_PAY) * lights
 
 
 def _box_pairs(x0, y0, spans_x, spans_y):

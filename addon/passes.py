@@ -518,7 +518,7 @@ class OcclusionPass(Pass):
         self.depth: gpu.types.GPUTexture | None = None  # that G-buffer's depth
 
     def run(self, frame: Frame, view: View) -> bool:
-        lists = frame.scene.draw_lists(view.model, view.half_target)
+        lists = view_lists(frame, view)
         s = view.samples
         w, h = view.width * s, view.height * s
         if not any(features.occlusion for features, _ in lists.opaque):
@@ -698,6 +698,14 @@ def _many_lights(features: programs.Features, lights: float | None) -> bool:
     return (features.max_lights if lights is None else lights) >= MANY_LIGHTS
 
 
+def view_lists(frame: Frame, view: View):
+    """``view``'s draws grouped by program (``SceneResources.draw_lists``), shading through light
+    culling's tile lists where they pay for the view (``SceneResources.culls``)."""
+    scene = frame.scene
+    return scene.draw_lists(view.model, view.half_target,
+                            scene.culls(view.view_projection, view.width, view.height, view.samples))
+
+
 def pixel_lights(frame: Frame, view: View) -> float:
     """How many lights a pixel of ``view`` evaluates, on average (light culling lists a screen
     tile's: 64 lights that each reach a sixteenth of the view are ~4 a pixel)."""
@@ -739,7 +747,7 @@ def opaque_groups(frame: Frame, view: View) -> list:
     triangles = frame.snapshot.triangle_count
     lights = pixel_lights(frame, view)
     return [(replace(features, deferred=deferred_pays(features, triangles, pixels, lights)), draws)
-            for features, draws in frame.scene.draw_lists(view.model, view.half_target).opaque]
+            for features, draws in view_lists(frame, view).opaque]
 
 
 def depth_prepass_pays(opaque, triangles: int, pixels: int, lights: float | None = None) -> bool:
@@ -986,7 +994,7 @@ class TransparencyPass(Pass):
         return bool(self.occupancy.read()[..., 0].max() > 0.0)
 
     def run(self, frame: Frame, view: View) -> bool:
-        groups = frame.scene.draw_lists(view.model, view.half_target).blended
+        groups = view_lists(frame, view).blended
         frame.peeled_layers = 0
         if not groups:
             self.free()  # a viewport keeps no peeling buffers once nothing is transparent

@@ -650,7 +650,8 @@ def uses_light_tiles(snapshot: Snapshot, box: tuple[np.ndarray, np.ndarray] | No
     window (glsl/lights.glsl's light_window) shades the same without the lists, whose reads cost
     a gather per pixel and light (the presets' point lights reach past their scenes: without the
     lists their shading passes 0.85-0.95x, roughness_sweep's frame 0.87-0.93x;
-    docs/bench/light_sequence.md)."""
+    docs/bench/light_sequence.md). The scene's condition: each view's tiles are then made, and
+    shaded through where they leave out enough lights (``light_tiles.lists_pay``)."""
     lights = snapshot.lights
     if not snapshot.settings.light_culling:
         return False

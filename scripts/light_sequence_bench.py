@@ -11,8 +11,9 @@ The presets of one or two lights, the Principled set, each in three configuratio
   rasteriser's compiler cannot tell is the same at every pixel: each read of a light's data is a
   gather per pixel;
 - *loops, tiles*: the loops with light culling's tiles wherever some light has a finite reach,
-  as before the tiles were made only where a reach ends inside the scene
-  (``programs.uses_light_tiles`` without the scene's box).
+  as before the tiles were made only where a reach ends inside the scene and their lists leave
+  out enough lights (``programs.uses_light_tiles`` without the scene's box, ``light_tiles.lists_pay``
+  always).
 Round-robin after a warm-up round, in one process; medians of the engine's draw time (GPU work
 fenced by the read-back), and the largest difference between the images of *calls* and of each
 other configuration. Times are CPU-rasteriser times (Mesa llvmpipe): compare ratios.
@@ -37,16 +38,19 @@ def main() -> int:
     import render
     import round_robin
 
-    from addon import programs
+    from addon import light_tiles, programs
 
     args, w, h = round_robin.parse_args(__doc__, "light_sequence.md")
     render.ensure_addon()
     unrolled, uses_light_tiles = programs.UNROLLED_LIGHTS, programs.uses_light_tiles
+    lists_pay = light_tiles.lists_pay
 
     def configure(config: str) -> None:
         programs.UNROLLED_LIGHTS = unrolled if config == "calls" else 0
-        programs.uses_light_tiles = (uses_light_tiles if config != "loops, tiles" else
-                                     lambda snapshot, box=None: uses_light_tiles(snapshot))
+        tiles = config == "loops, tiles"
+        programs.uses_light_tiles = ((lambda snapshot, box=None: uses_light_tiles(snapshot)) if tiles
+                                     else uses_light_tiles)
+        light_tiles.lists_pay = (lambda lists, lights: lights > 0) if tiles else lists_pay
 
     rows = []
     try:

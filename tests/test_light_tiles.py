@@ -178,6 +178,39 @@ def test_unbounded_lights_are_in_every_tile_and_too_many_entries_make_one_list()
     assert lists.tile >= 1 << 24  # every fragment reads tile (0, 0)
 
 
+def test_lists_pay_where_the_tiles_leave_out_a_fifth_of_the_lights():
+    """A view's lists pay where its tiles leave out SKIPPED_TO_PAY (a fifth) of the lights on
+    average: a light reaching everywhere and one reaching a disc of radius r about the middle of
+    an orthographic view 8 m x 4 m list 1 + f a tile, f between the disc's share of the view
+    (clipped to it, in closed form) and that of the disc widened by a tile's diagonal."""
+    width, height, tile = 256, 128, 8
+    vp = _ortho(8.0, width / height)
+    metres_per_tile = 8.0 / width * tile
+
+    def clipped_disc(r: float) -> float:  # the disc's area inside |y| <= 2 (r < 4: |x| <= 4 holds)
+        y = min(r, 2.0)
+        return 2.0 * (y * math.sqrt(r * r - y * y) + r * r * math.asin(y / r))
+
+    shares = {}
+    for r in (1.0, 3.0):
+        lists = light_tiles.tile_lists([[0.0, 0.0, 0.0]] * 2, [np.inf, r], vp, width, height, tile)
+        share = lists.mean_listed - 1.0
+        low, high = clipped_disc(r) / 32.0, clipped_disc(r + math.sqrt(2.0) * metres_per_tile) / 32.0
+        print(f"r = {r} m: a tile lists {lists.mean_listed:.3f} of 2 "
+              f"(the disc's share {low:.3f} to {high:.3f})")
+        assert low <= share <= high, (r, share, low, high)
+        shares[r] = lists_pay = light_tiles.lists_pay(lists, 2)
+        assert lists_pay == (lists.mean_listed <= 2.0 * (1.0 - light_tiles.SKIPPED_TO_PAY))
+    assert shares == {1.0: True, 3.0: False}  # leaving out 0.85 and 0.25 of a light
+    # at the threshold exactly: 1.6 of 2 listed pays, a little more does not
+    header = np.zeros((1, 5, 2), np.float32)
+    header[0, :, 1] = (2, 2, 2, 1, 1)
+    exact = light_tiles.TileLists(tile, header, np.zeros((1, light_tiles.LIST_WIDTH), np.float32))
+    assert exact.mean_listed == pytest.approx(1.6) and light_tiles.lists_pay(exact, 2)
+    header[0, 4, 1] = 2
+    assert not light_tiles.lists_pay(exact, 2) and not light_tiles.lists_pay(exact, 0)
+
+
 def test_influence_radius():
     assert light_tiles.influence_radius("POINT", (100.0, 50.0, 0.0), 0.01) == pytest.approx(100.0)
     assert light_tiles.influence_radius("POINT", (100.0, 50.0, 0.0), 0.01, custom=3.0) == 3.0
@@ -206,8 +239,19 @@ def _lights_over_a_plane(size: int, count: int, cutoff: float | None, seed: int 
     return scene
 
 
+def _record_programs(monkeypatch) -> list:
+    """The features of every shading program made from now on (the test's monkeypatch undoes it)."""
+    from addon import gpu_library
+
+    made = []
+    shading_program = gpu_library.shading_program
+    monkeypatch.setattr(gpu_library, "shading_program",
+                        lambda features: made.append(features) or shading_program(features))
+    return made
+
+
 @pytest.mark.parametrize("model", ["BLINN_PHONG", "PBR"])
-def test_culling_on_equals_off_bit_for_bit(model, tmp_path):
+def test_culling_on_equals_off_bit_for_bit(model, tmp_path, monkeypatch):
     """40 lights that each reach 0.8 m (a tenth of the view's width), a sun that reaches
     everywhere: the frame shading each tile's lights equals the frame shading every light, to the
     bit, and its tiles list far fewer lights than there are."""
@@ -215,7 +259,9 @@ def test_culling_on_equals_off_bit_for_bit(model, tmp_path):
 
     scene = _lights_over_a_plane(96, 40, cutoff=0.8)
     scene.shading_lab.model = model
+    made = _record_programs(monkeypatch)
     culled = scenes.render(scene, tmp_path / "culled.exr")
+    assert made and all(f.light_tiles for f in made), made
     scene.shading_lab.light_culling = False
     every = scenes.render(scene, tmp_path / "every.exr")
     assert np.array_equal(culled, every), f"max difference {np.abs(culled - every).max():.3g}"
@@ -224,7 +270,7 @@ def test_culling_on_equals_off_bit_for_bit(model, tmp_path):
 
 
 @pytest.mark.parametrize("model", ["BLINN_PHONG", "PBR"])
-def test_culling_on_equals_off_with_shadows_and_light_sizes(model, tmp_path):
+def test_culling_on_equals_off_with_shadows_and_light_sizes(model, tmp_path, monkeypatch):
     """Culling with what real lights have on: 6 point lights with a radius and a spot light,
     reaching 1.2 m each and casting soft shadows from two tilted plates above the plane, and a
     shadowed sun: the culled frame equals the frame shading every light, to the bit (a culled
@@ -241,7 +287,9 @@ def test_culling_on_equals_off_with_shadows_and_light_sizes(model, tmp_path):
     spot.data.use_custom_distance, spot.data.cutoff_distance = True, 1.5
     scenes.plane(scene, size=1.0, location=(-0.6, 0.4, 0.15), rotation=(0.3, 0.0, 0.0))
     scenes.plane(scene, size=0.8, location=(0.7, -0.5, 0.2), rotation=(0.0, 0.4, 0.2))
+    made = _record_programs(monkeypatch)
     culled = scenes.render(scene, tmp_path / "culled.exr")
+    assert made and all(f.light_tiles for f in made), made
     scene.shading_lab.light_culling = False
     every = scenes.render(scene, tmp_path / "every.exr")
     assert np.array_equal(culled, every), f"max difference {np.abs(culled - every).max():.3g}"
@@ -326,6 +374,33 @@ def test_culling_pays_only_where_some_light_reaches_less_than_the_scene():
     assert not programs.uses_light_tiles(snap(((0.0, 0.0, 5.0), math.inf)), box)
 
 
+def test_a_view_whose_tiles_leave_out_little_shades_without_them(tmp_path, monkeypatch):
+    """A point light whose reach ends just inside the plane's corners, beside a sun: its tiles
+    would list 1.9 of the 2 lights a tile, so the view shades without lists (its two lights
+    each by its own call); reaching 0.5 m, the lists leave out most of it and the view shades
+    through them. The same image either way as without culling, to the bit."""
+    scene = _lights_over_a_plane(48, 1, cutoff=2.5, seed=3)  # the plane's corners 2.86 m away
+    point = next(obj for obj in scene.objects if obj.type == "LIGHT" and obj.data.type == "POINT")
+    point.location = (0.0, 0.0, 0.4)
+    scene.shading_lab.model = "PBR"
+    made = _record_programs(monkeypatch)
+    images = {}
+    for cutoff in (2.5, 0.5):
+        point.data.cutoff_distance = cutoff
+        scene.shading_lab.light_culling = True
+        made.clear()
+        images[cutoff] = scenes.render(scene, tmp_path / f"culling_{cutoff}.exr")
+        assert made and all(f.light_tiles == (cutoff == 0.5) for f in made), (cutoff, made)
+        assert all(bool(f.light_sequence) == (cutoff == 2.5) for f in made), (cutoff, made)
+        scene.shading_lab.light_culling = False
+        every = scenes.render(scene, tmp_path / f"every_{cutoff}.exr")
+        difference = float(np.abs(images[cutoff] - every).max())
+        assert difference == 0.0, f"max difference {difference:.3g}"
+    lit = float(np.abs(images[2.5] - images[0.5])[..., :3].max())  # measured
+    print(f"the point light's reach changes a pixel by up to {lit:.3f}")
+    assert lit > 0.5, f"the point light must light the plane: {lit:.3f}"
+
+
 def _two_lights_and_plates(size: int = 64):
     """A plane under two tilted plates, lit by a square area light and a spot light (each of
     size, casting soft shadows), neither with a Custom Distance: both reach the whole scene."""
@@ -347,13 +422,10 @@ def test_a_few_lights_each_shaded_by_its_own_call_equal_the_loops(tmp_path, monk
     """A scene of two lights (an area light and a spot, each casting soft shadows) shades each by
     its own call with constants (programs.UNROLLED_LIGHTS): the same image, to the bit, as the
     loops over each group of lights; a third light turns back to the loops."""
-    from addon import gpu_library, programs
+    from addon import programs
 
     scene = _two_lights_and_plates()
-    made = []
-    shading_program = gpu_library.shading_program
-    monkeypatch.setattr(gpu_library, "shading_program",
-                        lambda features: made.append(features) or shading_program(features))
+    made = _record_programs(monkeypatch)
     called = scenes.render(scene, tmp_path / "called.exr")
     area, spot = (programs.LIGHT_GROUP_ORDER.index(g) for g in ("AREA_SHADOWED", "SPOT_SHADOWED"))
     assert {f.light_sequence for f in made} == {tuple(sorted((area, spot)))}, made
