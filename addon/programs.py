@@ -795,15 +795,15 @@ def pack_world(terms, threshold: float = 0.0) -> bytes:
 def pack_environment(sh: np.ndarray, rects, uniform_radiance, roughness=(), first_clamped: int = 0,
                      atlas_size=(0, 0)) -> bytes:
     """The EnvironmentData block: SH coefficients (9, 3) premultiplied by the cosine kernel's
-    band factors, the rectangles of the prefiltered levels (one per ``roughness``) and of the
-    irradiance map in a texture of ``atlas_size``, the radiance of a world without images."""
-    rows = np.zeros((9 + 8 + 1 + 2 + 1, 4), np.float32)
+    band factors, the rectangles of the prefiltered levels (one per ``roughness``, which
+    glsl/ibl.glsl's env_level_roughness gives in closed form) and of the irradiance map in a
+    texture of ``atlas_size``, the radiance of a world without images."""
+    rows = np.zeros((9 + 8 + 1 + 1, 4), np.float32)
     rows[:9, :3] = sh
     if len(rects):
         rows[9:9 + len(rects)] = rects
     rows[17] = (len(roughness), first_clamped, *atlas_size)
-    rows[18:20].ravel()[:len(roughness)] = roughness
-    rows[20, :3] = uniform_radiance
+    rows[18, :3] = uniform_radiance
     return rows.tobytes()
 
 

@@ -65,13 +65,12 @@ struct MaterialData {
  * height in texels) of the prefiltered levels and, last, of the irradiance map; info.x: the
  * number of prefiltered levels, info.y: the first level made from the world with its suns split
  * off (the smoother ones keep them: info.x when there are none), info.zw: the atlas' size (each
- * rectangle has a border of one texel around it); each level's roughness (4 per vec4); the
- * radiance of a world without images. */
+ * rectangle has a border of one texel around it); the radiance of a world without images. (Each
+ * level's roughness is glsl/ibl.glsl's env_level_roughness.) */
 struct EnvironmentData {
   vec4 sh[9];
   vec4 rect[8];
   vec4 info;
-  vec4 level_roughness[2];
   vec4 uniform_radiance;
 };
 

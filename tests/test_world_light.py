@@ -18,7 +18,7 @@ import pytest
 import scenes
 from test_cycles import _cycles
 
-from addon import environment, gpu_environment, gpu_library
+from addon import brdf, environment, gpu_environment, gpu_library
 from addon.scene_builder import principled_material
 
 ROUGHNESS = (0.0, 0.25, 0.5, 0.75, 1.0)
@@ -385,6 +385,28 @@ def _bilinear(texture: np.ndarray, s, t) -> np.ndarray:
     fx, fy = (x - x0)[..., None], (y - y0)[..., None]
     return ((texture[y0, x0] * (1 - fx) + texture[y0, x0 + 1] * fx) * (1 - fy)
             + (texture[y0 + 1, x0] * (1 - fx) + texture[y0 + 1, x0 + 1] * fx) * fy)
+
+
+def test_the_shading_finds_the_prefiltered_levels_of_the_table():
+    """glsl/ibl.glsl's closed forms of the prefiltered levels (env_level_roughness, and
+    env_level_below, the level a roughness reads with the next) equal environment.py's table
+    PREFILTER_ROUGHNESS and the numpy twin's search in it (environment.prefiltered_radiance):
+    every level, and roughness 0 to 1 in steps of 1/256 and at each level's own roughness."""
+    from glsl_harness import evaluate
+
+    table = np.asarray(environment.PREFILTER_ROUGHNESS)
+    levels = np.arange(len(table), dtype=np.float32)
+    got = evaluate("result = vec4(env_level_roughness(int(a.x)));",
+                   {"a": np.stack([levels] * 4, axis=1)})[:, 0]
+    want = np.concatenate([[brdf.MIN_PERCEPTUAL_ROUGHNESS], table[1:]])
+    assert np.array_equal(got, want.astype(np.float32)), (got, want)
+    roughness = np.unique(np.concatenate([np.arange(257) / 256.0, table, table + 1e-3]))
+    rows = np.stack([roughness] * 4, axis=1).astype(np.float32)
+    below = evaluate("result = vec4(float(min(env_level_below(a.x), {})));".format(len(table) - 2),
+                     {"a": rows})[:, 0]
+    twin = np.clip(np.searchsorted(table, rows[:, 0], side="left") - 1, 0, len(table) - 2)
+    wrong = np.flatnonzero(below != twin)
+    assert wrong.size == 0, [(float(rows[i, 0]), below[i], twin[i]) for i in wrong[:5]]
 
 
 def test_the_prefilter_reads_are_the_lobe_samples_reads():
