@@ -227,7 +227,7 @@ def candidate_order(lights: int, table: dict | None = None) -> list[str]:
 #: the driver's shader cache warm (~600 ms cold: the hdr preset's first render with Auto 2.0-2.2 s
 #: against the Principled set's 1.3 s, one program more) while that preset's one metal on
 #: multiple scattering saved ~0.3 ms a frame; no per-frame cost of a second program could be
-#: measured (+-5 % noise), so only the compile counts (2026-12-02).
+#: measured (+-5 % noise), so only the compile counts (2026-12-02; 11 ms warm on 2026-12-05).
 PAYBACK_FRAMES = 10
 
 
