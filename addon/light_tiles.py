@@ -94,8 +94,8 @@ def influence_radius(kind: str, intensity, threshold: float, custom: float | Non
     return math.sqrt(peak / threshold)
 
 
-def _screen_boxes(centres: np.ndarray, radii: np.ndarray, view_projection: np.ndarray,
-                  width: int, height: int) -> np.ndarray:
+def screen_boxes(centres: np.ndarray, radii: np.ndarray, view_projection: np.ndarray,
+                 width: int, height: int) -> np.ndarray:
     """(n, 4) pixel boxes (x0, y0, x1, y1) covering the spheres' projections; a sphere whose box
     reaches behind the camera covers the whole screen."""
     signs = np.array([[x, y, z] for x in (-1, 1) for y in (-1, 1) for z in (-1, 1)], np.float64)
@@ -130,7 +130,7 @@ def tile_lists(centres, radii, view_projection, width: int, height: int, tile: i
         # apex): listed everywhere without the tests (often the scene's few large lights)
         bounded &= np.linalg.norm(centres - _camera_centre(invert(vp)), axis=1) > radii
     if bounded.any():
-        boxes = _screen_boxes(centres[bounded], radii[bounded], vp, width, height)
+        boxes = screen_boxes(centres[bounded], radii[bounded], vp, width, height)
         x0[bounded] = np.clip(np.floor(boxes[:, 0] / tile), 0, columns)
         y0[bounded] = np.clip(np.floor(boxes[:, 1] / tile), 0, rows)
         x1[bounded] = np.clip(np.floor(boxes[:, 2] / tile) + 1, 0, columns)

@@ -29,7 +29,7 @@ from dataclasses import dataclass, field, replace
 import gpu
 import numpy as np
 
-from . import exposure, gpu_library, programs, shadows
+from . import exposure, gpu_library, light_tiles, programs, shadows
 from .gpu_scene import Draw, SceneResources
 from .matrices import invert
 from .snapshot import MAX_ENVIRONMENT_IMAGES, Snapshot, World
@@ -799,6 +799,36 @@ class GBuffer:
         self.framebuffer = self.groups = self.textures = self.depth = None
 
 
+#: Shade each deferred group over its surfaces' rectangle on screen alone (tests turn it off to
+#: compare).
+DEFERRED_SCISSOR = True
+
+
+def deferred_rectangle(frame: Frame, view: View, draws: list[Draw], width: int,
+                       height: int) -> tuple[int, int, int, int] | None:
+    """The pixels (x, y, width, height) of a ``width`` x ``height`` target where ``draws`` can
+    cover a pixel: the rectangle around their items' bounding spheres on screen (the whole target
+    where one reaches behind the camera, or without DEFERRED_SCISSOR); None where they cover none.
+    A deferred group's pass is a full-screen triangle whose every pixel reads the G-buffer to find
+    its group: outside the rectangle none is the group's (furnace with Auto's two programs,
+    640 x 360: the deferred passes 68 -> 61 ms, the one program's 60; one group over the whole
+    target 0.94-0.99x)."""
+    if not DEFERRED_SCISSOR:
+        return 0, 0, width, height
+    spheres = frame.scene.caster_spheres(draws)
+    if not len(spheres):
+        return None
+    boxes = light_tiles.screen_boxes(spheres[:, :3], spheres[:, 3],
+                                     np.asarray(frame.view_projection(view), np.float64), width, height)
+    if not np.all(np.isfinite(boxes)):
+        return 0, 0, width, height
+    x0, y0 = max(int(np.floor(boxes[:, 0].min())), 0), max(int(np.floor(boxes[:, 1].min())), 0)
+    x1, y1 = min(int(np.ceil(boxes[:, 2].max())), width), min(int(np.ceil(boxes[:, 3].max())), height)
+    if x1 <= x0 or y1 <= y0:
+        return None
+    return x0, y0, x1 - x0, y1 - y0
+
+
 def draw_gbuffer(frame: Frame, view: View, opaque, gbuffer: GBuffer, write_depth: bool) -> bool:
     """Every opaque surface of ``opaque`` (``opaque_groups``) into ``gbuffer``, each with its
     group's number (-1 where shaded forward), against the G-buffer's depth -- written where
@@ -893,11 +923,19 @@ class OpaquePass(TargetPass):
             gpu.state.face_culling_set("NONE")
             gpu.state.blend_set("NONE")
             try:
-                for group, (features, _draws) in enumerate(opaque):
+                for group, (features, group_draws) in enumerate(opaque):
                     if not features.deferred:
                         continue
-                    frame.scene.shade_deferred(features, group, view.lobes, gbuffer.textures,
-                                               frame.full_screen, bind if features.occlusion else None)
+                    rectangle = deferred_rectangle(frame, view, group_draws, w, h)
+                    if rectangle is None:
+                        continue
+                    gpu.state.scissor_test_set(True)
+                    gpu.state.scissor_set(*rectangle)
+                    try:
+                        frame.scene.shade_deferred(features, group, view.lobes, gbuffer.textures,
+                                                   frame.full_screen, bind if features.occlusion else None)
+                    finally:
+                        gpu.state.scissor_test_set(False)
                 if not drawn:
                     return False
                 gpu.state.depth_test_set("LESS_EQUAL")

@@ -309,6 +309,62 @@ def test_deferred_shading_changes_no_pixel(preset):
         assert differ == 0.0, f"{differ} largest difference ({deferred})"
 
 
+def test_each_deferred_group_shaded_over_its_rectangle_changes_no_pixel(monkeypatch):
+    """Two deferred groups (softbox's spheres, one of them on exact Fresnel: a program of its own),
+    each shaded over the rectangle around its surfaces on screen (deferred_rectangle): the image
+    equals the one shaded over the whole target and the forward one, to the bit, 2 x 2
+    supersampled; the one sphere's rectangle is a small part of the target; a rectangle a pixel
+    short on each side loses that sphere's edge pixels."""
+    from addon import extract, passes, presets, renderer, scene_builder
+
+    scene = scenes.reset()
+    scene_builder.build_scene(presets.load_scene_preset("softbox"), scene)
+    scene.render.resolution_x, scene.render.resolution_y = 96, 54
+    sphere = next(obj for obj in scene.objects if obj.type == "MESH" and obj.active_material is not None
+                  and "Floor" not in obj.name and "Ground" not in obj.name)
+    sphere.active_material = sphere.active_material.copy()
+    sphere.active_material.shading_lab.fresnel = "EXACT"
+    r = renderer.Renderer()
+    rectangles = []
+    deferred_rectangle = passes.deferred_rectangle
+
+    def recorded(frame, view, draws, width, height):
+        rectangles.append((len(draws), deferred_rectangle(frame, view, draws, width, height), width, height))
+        return rectangles[-1][1]
+
+    monkeypatch.setattr(passes, "deferred_rectangle", recorded)
+
+    def job(depsgraph):
+        out = {}
+        snapshot = extract.snapshot(depsgraph, 96, 54)
+        for label, deferred, scissor in (("scissor", True, True), ("whole", True, False),
+                                         ("forward", False, True)):
+            passes.DEFERRED, passes.DEFERRED_SCISSOR = deferred, scissor
+            out[label] = r.render(snapshot, samples=2).copy()
+        passes.DEFERRED, passes.DEFERRED_SCISSOR = True, True
+
+        def short(frame, view, draws, width, height):
+            x, y, w, h = deferred_rectangle(frame, view, draws, width, height)
+            return x + 1, y + 1, w - 2, h - 2
+
+        monkeypatch.setattr(passes, "deferred_rectangle", short)
+        out["short"] = r.render(snapshot, samples=2).copy()
+        return out
+
+    out = _run(job, r, DEFERRED=True, DEFERRED_SCISSOR=True)
+    assert len(rectangles) >= 2 and rectangles[0][0] != rectangles[1][0], rectangles  # two groups
+    one = min(rectangles[:2], key=lambda g: g[0])  # the one sphere's group
+    share = one[1][2] * one[1][3] / (one[2] * one[3])
+    print(f"the one sphere's rectangle {one[1]}: {share:.3f} of the {one[2]} x {one[3]} target")
+    assert 0.0 < share < 0.25, share
+    for label in ("whole", "forward"):
+        differ = float(np.abs(out["scissor"] - out[label]).max())
+        assert differ == 0.0, f"{differ} largest difference against {label}"
+    lost = float(np.abs(out["scissor"] - out["short"]).max())
+    print(f"a rectangle a pixel short on each side: largest difference {lost:.3f}")
+    assert lost > 0.3, f"a rectangle a pixel short changed no pixel: {lost}"  # measured 1.04
+
+
 def _closed_sphere(scene, name, radius, location, inward=False, scale=(1.0, 1.0, 1.0)):
     """A closed UV sphere object with its own material (``inward``: its faces turned in)."""
     import bmesh
