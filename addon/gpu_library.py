@@ -564,6 +564,15 @@ def occupancy_program() -> gpu.types.GPUShader:
                            _declare_full_screen("layer_depth"))
 
 
+def group_depth_program() -> gpu.types.GPUShader:
+    """Each pixel's deferred group as a depth (glsl/group_depth.frag.glsl)."""
+    def declare(info):
+        _declare_full_screen("gbuffer_normal")(info)
+        info.depth_write("ANY")
+
+    return LIBRARY.program(("group depth",), "deferred groups' depth", programs.group_depth_source(), declare)
+
+
 def under_program() -> gpu.types.GPUShader:
     return LIBRARY.program(("under",), "transparency composite", programs.under_source(),
                            _declare_full_screen("accumulated", "peeled"))

@@ -381,7 +381,8 @@ def program_source(features: Features) -> ProgramSource:
     fragment.append(read_glsl("mesh.frag.glsl"))
     return ProgramSource(
         typedefs=read_glsl("uniforms.glsl") + "\n" + read_glsl("chain_data.glsl"),
-        vertex=read_glsl("post.vert.glsl" if features.deferred else "mesh.vert.glsl"),
+        vertex=(read_glsl("deferred_depth.glsl") + "\n" + read_glsl("deferred.vert.glsl")
+                if features.deferred else read_glsl("mesh.vert.glsl")),
         fragment="\n".join(fragment),
         defines=tuple(sorted(features.defines() + (("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)),))),
     )
@@ -581,6 +582,12 @@ def occupancy_source() -> ProgramSource:
     return ProgramSource(typedefs="", vertex=read_glsl("post.vert.glsl"),
                          fragment=read_glsl("occupancy.frag.glsl"),
                          defines=(("SL_BLOCK", str(OCCUPANCY_BLOCK)),))
+
+
+@lru_cache(maxsize=1)
+def group_depth_source() -> ProgramSource:
+    fragment = read_glsl("deferred_depth.glsl") + "\n" + read_glsl("group_depth.frag.glsl")
+    return ProgramSource(typedefs="", vertex=read_glsl("post.vert.glsl"), fragment=fragment, defines=())
 
 
 @lru_cache(maxsize=1)

@@ -311,10 +311,11 @@ def test_deferred_shading_changes_no_pixel(preset):
 
 def test_each_deferred_group_shaded_over_its_rectangle_changes_no_pixel(monkeypatch):
     """Two deferred groups (softbox's spheres, one of them on exact Fresnel: a program of its own),
-    each shaded over the rectangle around its surfaces on screen (deferred_rectangle): the image
-    equals the one shaded over the whole target and the forward one, to the bit, 2 x 2
-    supersampled; the one sphere's rectangle is a small part of the target; a rectangle a pixel
-    short on each side loses that sphere's edge pixels."""
+    each shaded over the rectangle around its surfaces on screen (deferred_rectangle) and behind
+    the depth test against its pixels' groups (depth_gated: GBuffer.write_groups): the image
+    equals the one shaded over the whole target with neither and the forward one, to the bit,
+    2 x 2 supersampled; the one sphere's rectangle is a small part of the target; a rectangle a
+    pixel short on each side loses that sphere's edge pixels."""
     from addon import extract, passes, presets, renderer, scene_builder
 
     scene = scenes.reset()
@@ -340,8 +341,12 @@ def test_each_deferred_group_shaded_over_its_rectangle_changes_no_pixel(monkeypa
         for label, deferred, scissor in (("scissor", True, True), ("whole", True, False),
                                          ("forward", False, True)):
             passes.DEFERRED, passes.DEFERRED_SCISSOR = deferred, scissor
+            passes.DEFERRED_DEPTH_TEST = label == "scissor"
             out[label] = r.render(snapshot, samples=2).copy()
-        passes.DEFERRED, passes.DEFERRED_SCISSOR = True, True
+            if label == "scissor":
+                opaque = r._passes[passes.OpaquePass, "main"]
+                out["gated"] = opaque.gbuffer is not None and opaque.gbuffer.group_depth is not None
+        passes.DEFERRED, passes.DEFERRED_SCISSOR, passes.DEFERRED_DEPTH_TEST = True, True, True
 
         def short(frame, view, draws, width, height):
             x, y, w, h = deferred_rectangle(frame, view, draws, width, height)
@@ -351,7 +356,8 @@ def test_each_deferred_group_shaded_over_its_rectangle_changes_no_pixel(monkeypa
         out["short"] = r.render(snapshot, samples=2).copy()
         return out
 
-    out = _run(job, r, DEFERRED=True, DEFERRED_SCISSOR=True)
+    out = _run(job, r, DEFERRED=True, DEFERRED_SCISSOR=True, DEFERRED_DEPTH_TEST=True)
+    assert out["gated"], "two groups: the groups' depth written and tested"
     assert len(rectangles) >= 2 and rectangles[0][0] != rectangles[1][0], rectangles  # two groups
     one = min(rectangles[:2], key=lambda g: g[0])  # the one sphere's group
     share = one[1][2] * one[1][3] / (one[2] * one[3])
