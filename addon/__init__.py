@@ -1,10 +1,17 @@
 """Shading Lab: a render engine that draws scenes with Blinn-Phong, Phong and physically based
 GLSL shading, to see and measure what each model gets right and what it costs.
 
-Package layout: ``snapshot``/``programs``/``brdf``/``multiscatter``/``shading``/``tonemap``/
-``presets`` are pure Python (no ``bpy``); ``extract`` reads Blender data; ``gpu_library``,
-``gpu_scene``, ``passes`` and ``renderer`` draw with ``gpu`` and read no Blender data;
-``engine``/``viewport``/``properties``/``operators``/``ui`` are the Blender-facing layer.
+Packages, lowest first; each imports only those above it in this list (``tests/test_layers.py``).
+A render runs up the list: ``blender.extract`` reads the depsgraph into a ``scene`` snapshot,
+``plan`` decides what to compute, ``frame`` draws it, ``blender.engine`` hands back the result.
+
+- ``scene``: the snapshot, plain data; presets, exposure state, matrices. Pure Python.
+- ``reference``: the numpy twins of ``glsl/``'s shading math. Pure Python.
+- ``plan``: programs and their defines, shadow-map layout, light culling, the Auto term set,
+  the world cache. Pure Python.
+- ``frame``: the GPU frame (passes, programs, uploaded scene) through ``gpu``; no ``bpy``.
+- ``blender``: engine, viewport, extraction, properties, panels, operators; the only ``bpy``.
+
 Installed as an extension the package is ``bl_ext.<repo>.shading_lab``, so every import inside
 it is relative.
 """
@@ -14,7 +21,7 @@ it is relative.
 def _classes():
     # Imported here, not at the top: the pure modules (snapshot, programs, shading) must stay
     # importable without Blender, and importing this package runs this file first.
-    from . import engine, operators, properties, ui
+    from .blender import engine, operators, properties, ui
 
     return (*properties.classes, *engine.classes, *operators.classes, *ui.classes), (properties, ui, engine)
 
@@ -34,7 +41,7 @@ def _undo(items) -> None:
 
 
 def register():
-    from . import engine
+    from .blender import engine
 
     with engine.REGISTRATION:
         _register()
@@ -45,7 +52,7 @@ def _register():
 
     import bpy
 
-    from . import engine
+    from .blender import engine
 
     global _registered
     if _registered:
@@ -76,7 +83,7 @@ def _use_extension_folder() -> None:
     """Installed as an extension, the world cache lives in the extension's own user folder."""
     import bpy
 
-    from . import world_cache
+    from .plan import world_cache
 
     if __package__.startswith("bl_ext."):
         try:
@@ -90,14 +97,15 @@ RENDER_WAIT_S = 60.0
 
 
 def unregister():
-    from . import engine
+    from .blender import engine
 
     with engine.REGISTRATION:
         _unregister()
 
 
 def _unregister():
-    from . import engine, extract, gpu_library
+    from .blender import engine, extract
+    from .frame import gpu_library
 
     global _registered
     if not _registered:

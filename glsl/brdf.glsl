@@ -1,5 +1,5 @@
 /* BRDF terms, one function per term. Each has a numpy twin of the same name in
- * addon/shading.py. The 1/pi of diffuse lobes is inside the Fd_* functions, so radiance is
+ * addon/reference/shading.py. The 1/pi of diffuse lobes is inside the Fd_* functions, so radiance is
  * f * E * NoL with E the light's irradiance in W/m^2 (no leading pi, unlike eq. 1.19).
  * Visibility functions return V = G / (4 NoV NoL), the masking-shadowing term with the
  * denominator of eq. 1.10 folded in. Roughness: r is perceptual, alpha = r^2 (Burley 2012). */

@@ -3,7 +3,7 @@
  * prefiltered levels; params.x = 1 clamps the brightest texels (split off as suns).
  *
  * Drawn into its rectangle `rect` of the chain texture with the level's border (the viewport one
- * texel wider on every side; addon/environment.py chain_layout): a border column is the opposite
+ * texel wider on every side; addon/reference/environment.py chain_layout): a border column is the opposite
  * column's direction baked again (the same numbers, so the same value), a border row above or
  * below holds 2 P - the edge row's texel, P the edge row's mean, from `poles` (texel 1 north, 0
  * south; environment.glsl bordered_level_pole). A level wider than the chain's widest is baked

@@ -9,7 +9,7 @@ void main()
   /* a level copied into its rectangle of the chain texture (offset: the rectangle's origin),
    * drawn with the viewport one texel wider on every side: the border repeats the opposite
    * column at the sides, and above and below holds 2 P - the edge row, P the edge row's mean,
-   * the pole's value (environment.glsl bordered_level_pole; addon/environment.py chain_layout) */
+   * the pole's value (environment.glsl bordered_level_pole; addon/reference/environment.py chain_layout) */
   ivec2 size = textureSize(source, 0);
   ivec2 q = ivec2(floor(gl_FragCoord.xy - offset.xy));
   q.x = q.x < 0 ? size.x - 1 : (q.x >= size.x ? 0 : q.x);

@@ -8,7 +8,7 @@
  * small source is spread over the lobe instead of sparkling.
  * The texels of a row see one lobe turned about the pole by their longitude, which is u: the
  * samples come per row from `samples`, params.z of them, each as the two reads of the chain
- * that chain_lookup_uv would make for it (addon/environment.py prefilter_reads: level k's x
+ * that chain_lookup_uv would make for it (addon/reference/environment.py prefilter_reads: level k's x
  * origin, width and y in the texture, the weight on it, and the same for level k + 1, half as
  * wide), so that a texel computes only where in the row it reads; two more rows about the poles
  * give the border rows above and below the level their 2 P - T (environment.glsl

@@ -1,4 +1,4 @@
-/* The world as a radiance field (addon/extract.py reads it, addon/environment.py is the numpy
+/* The world as a radiance field (addon/blender/extract.py reads it, addon/reference/environment.py is the numpy
  * twin): the constant terms' sum plus up to SL_ENV_IMAGES image terms, each its Background
  * weight times an Environment Texture looked up in a direction, exactly as Cycles does
  * (kernel/camera/projection.h, svm_node_tex_environment). */
@@ -63,7 +63,7 @@ vec4 env_lookup(sampler2D map, vec2 uv, bool closest)
 
 /* One image term: the world direction through the Mapping node (lookup), then the projection.
  * For the lighting field, kind.z > 0 clamps the luminance there (keeping the colour): the light
- * above it was split off as suns (addon/environment.py split_suns). */
+ * above it was split off as suns (addon/reference/environment.py split_suns). */
 vec3 env_term(sampler2D map, mat4 lookup, vec4 kind, vec4 weight, vec3 d, bool clamp_bright)
 {
   vec3 v = (lookup * vec4(d, 1.0)).xyz;
@@ -75,7 +75,7 @@ vec3 env_term(sampler2D map, mat4 lookup, vec4 kind, vec4 weight, vec3 d, bool c
 
 /* One equirectangular level, in rectangle rect (x, y, width, height in texels) of a texture of
  * size texels holding several (the chain, the prefiltered atlas), at uv: bilinearly between
- * texel centres by the GPU's filter. The level's border of one texel (addon/environment.py
+ * texel centres by the GPU's filter. The level's border of one texel (addon/reference/environment.py
  * chain_layout) makes it repeat in u and reach the poles' values at v = 0 and 1
  * (bordered_level_pole), and keeps the filter off its neighbours. */
 vec3 bordered_level(sampler2D map, vec4 rect, vec2 size, vec2 uv)
@@ -109,7 +109,7 @@ float bordered_level_pole(vec4 rect)
 /* Filtered importance sampling (Krivanek & Colbert 2008, "Real-time Shading with Filtered
  * Importance Sampling") over the downsampled environment (all levels in one texture,
  * rectangles in chain.rect): a sample standing for the solid angle 1 / (N pdf) reads the level
- * whose texels cover that much (plus a bias: per prefiltered level addon/environment.py
+ * whose texels cover that much (plus a bias: per prefiltered level addon/reference/environment.py
  * PREFILTER_BIAS, none per pixel), trilinearly -- a bright small source spreads over the lobe
  * instead of sparkling. */
 

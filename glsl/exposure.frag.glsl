@@ -1,4 +1,4 @@
-/* Automatic exposure's reduction (addon/exposure.py has the numpy twin and the metering): a frame
+/* Automatic exposure's reduction (addon/scene/exposure.py has the numpy twin and the metering): a frame
  * to a histogram of log2 luminance, SL_EXPOSURE_BINS bins over [SL_LOG_MIN, SL_LOG_MAX], each
  * texel (sum of log2 L, pixel count) of the pixels in that bin, in three full-screen stages:
  *   BLOCKS   frame -> one texel per `block` x `block` pixels: (sum of log2 L, pixels counted);

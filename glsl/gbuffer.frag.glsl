@@ -1,4 +1,4 @@
-/* The G-buffer of the opaque surfaces shaded deferred (addon/passes.py's OpaquePass): per pixel the
+/* The G-buffer of the opaque surfaces shaded deferred (addon/frame/passes.py's OpaquePass): per pixel the
  * nearest surface's world position, its normal facing the viewer and its flat face's normal, as
  * glsl/mesh.frag.glsl's forward main computes them, in float32, so that the deferred program
  * shades exactly what the forward one would. frag_color: position, w the material's row in the

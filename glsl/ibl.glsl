@@ -1,4 +1,4 @@
-/* Image-based lighting from the world (addon/environment.py computes what is bound here):
+/* Image-based lighting from the world (addon/reference/environment.py computes what is bound here):
  * - diffuse: irradiance from nine spherical-harmonic coefficients (Ramamoorthi & Hanrahan 2001,
  *   "An Efficient Representation for Irradiance Environment Maps", eq. 7), premultiplied on
  *   the CPU by the cosine kernel's band factors;
@@ -9,7 +9,7 @@
  *   Real-Time Image-based Lighting", eq. 16-18) where the term set compensates.
  * SL_ENV_UNIFORM: a world without images, whose prefiltered radiance is the constant itself. */
 
-/* Prefiltered level k's perceptual roughness: addon/environment.py's PREFILTER_ROUGHNESS (steps
+/* Prefiltered level k's perceptual roughness: addon/reference/environment.py's PREFILTER_ROUGHNESS (steps
  * of 1/8 up to 0.5, then of 1/4) in closed form, which tests/test_world_light.py holds equal to
  * the table; level 0 is the mirror image, shown as is for the smoothest surfaces. Not the table
  * read from the world's block: read at a level that varies per pixel, a block's value is a

@@ -239,7 +239,7 @@ LightPolygon area_polygon(LightData light, vec3 p)
 #ifdef SL_AREA_ELLIPSE
   poly.sides = light.area.w > 0.5 ? AREA_ELLIPSE_SIDES : 4;
 #else
-  poly.sides = 4; /* every area light of the scene is a rectangle (addon/programs.py) */
+  poly.sides = 4; /* every area light of the scene is a rectangle (addon/plan/programs.py) */
 #endif
   return poly;
 }
@@ -402,7 +402,7 @@ vec3 E_Area(LightData light, vec3 p, out vec3 l)
 
 /* Dispatch on the light kind; only the kinds the scene has are compiled in. */
 /* A light's reach r (Blender's Custom Distance, else where I / d^2 falls to the scene's Light
- * Threshold t: addon/light_tiles.py) as a window on its irradiance, (1 - (d / r)^4)^2 clamped
+ * Threshold t: addon/plan/light_tiles.py) as a window on its irradiance, (1 - (d / r)^4)^2 clamped
  * (EEVEE's and Unreal's): 1 near the light, exactly 0 from r on, where light culling leaves the
  * light out. Below a threshold-derived r it removes at most t of irradiance anywhere. */
 float light_window(LightData light, vec3 p)

@@ -1,7 +1,7 @@
 /* Area and sphere lights' specular lobe by linearly transformed cosines (Heitz, Dupuy, Hill &
  * Neubelt 2016, "Real-Time Polygonal-Light Shading with Linearly Transformed Cosines"), and the horizon clipping
  * of a polygon's form factor by the sphere of the same vector form factor (Heitz & Hill 2017,
- * "Real-time area lighting: a journey from research to production"). Twin: addon/ltc.py.
+ * "Real-time area lighting: a journey from research to production"). Twin: addon/reference/ltc.py.
  *
  * The lobe f (n.l) / E(mu, r) of the program's distribution (GGX; Beckmann with SL_NDF_BECKMANN)
  * with Smith's height-correlated masking, seen at n.v = mu, is approximated by a clamped cosine

@@ -57,7 +57,7 @@ LightData load_light_rest(LightData light, int i)
 }
 
 #ifdef SL_LIGHT_TILES
-/* Light culling (addon/light_tiles.py): light_tiles holds each screen tile's (first, count), row
+/* Light culling (addon/plan/light_tiles.py): light_tiles holds each screen tile's (first, count), row
  * by row (frame.counts.z tiles a row of frame.counts.y pixels), then from texel frame.counts.w on
  * the tiles' light indices; a tile lists every light whose reach covers it, in light order. */
 vec4 tile_texel(int i)
@@ -159,10 +159,10 @@ void shade_group(inout vec3 c, Surface s, vec3 ng, ivec2 listed, inout int k, in
 
 #ifdef SL_LIGHT_SEQUENCE
 /* Shade light `index` (of kind `kind`; shadowed: as light_share's) into c: the calls of
- * SL_LIGHT_SEQUENCE (addon/programs.py's sequence_source), one per light of a scene of a few, each
+ * SL_LIGHT_SEQUENCE (addon/plan/programs.py's sequence_source), one per light of a scene of a few, each
  * with constants. A loop's index differs per pixel for all the CPU rasteriser's compiler knows,
  * so each of the light's texels is a gather, a load per pixel; a constant's is one load for every
- * pixel (the shading passes 0.96-0.98x: addon/programs.py's UNROLLED_LIGHTS). */
+ * pixel (the shading passes 0.96-0.98x: addon/plan/programs.py's UNROLLED_LIGHTS). */
 void shade_light(inout vec3 c, Surface s, vec3 ng, int index, int kind, bool shadowed)
 {
   LightData light = load_light_reach(index);
@@ -172,7 +172,7 @@ void shade_light(inout vec3 c, Surface s, vec3 ng, int index, int kind, bool sha
 #endif
 
 #ifdef SL_DEFERRED
-/* The material of G-buffer row `row` (addon/gpu_scene.py's material table: MaterialData's vec4s in
+/* The material of G-buffer row `row` (addon/frame/gpu_scene.py's material table: MaterialData's vec4s in
  * order, one row per material). */
 MaterialData load_material(int row)
 {

@@ -2,7 +2,7 @@
  * compensation for microfacet models"; Fdez-Aguera 2019): single-scatter microfacet lobes lose
  * the energy of light that bounces more than once between microfacets, 1 - E(mu) of it for a
  * white surface. Scaling f_spec by 1 + F0 (1 / E(mu_o) - 1) restores it, with E the directional
- * albedo of the chosen D and V with F = 1, tabulated by addon/multiscatter.py over
+ * albedo of the chosen D and V with F = 1, tabulated by addon/reference/multiscatter.py over
  * (mu = n.v, perceptual roughness) on the grid i / (N - 1), ends included, and interpolated
  * bilinearly here (texelFetch, so that the numpy twin interpolates identically). */
 

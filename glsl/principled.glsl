@@ -1,6 +1,6 @@
 /* The "Principled" term set: Blender's Principled BSDF as Cycles 5.0 evaluates it for opaque
  * materials (white specular tint, Multiscatter GGX, Lambert base), so that scenes authored with
- * Principled BSDFs render as in Cycles under direct light. Tables from addon/multiscatter.py:
+ * Principled BSDFs render as in Cycles under direct light. Tables from addon/reference/multiscatter.py:
  * ms_table rows 0..N-1 hold E(mu, r), row N holds Eavg(r); s_table is the 16^3 table S(r, mu, z)
  * laid out as 16 x 256 (y = mu index + 16 z index). */
 

@@ -1,4 +1,4 @@
-/* Shadows: how much of a light reaches a point, read from the light's shadow maps (addon/shadows.py
+/* Shadows: how much of a light reaches a point, read from the light's shadow maps (addon/plan/shadows.py
  * plans the layers, passes.ShadowPass draws them, glsl/shadow.frag.glsl stores distances).
  *
  * Each map texel holds the distance to the nearest caster along its ray, from the light's centre
@@ -21,10 +21,10 @@
  * Cycles 0.0343 either way, the penumbra tests' errors within 3 % (tests/test_shadows.py) */
 #define SHADOW_SEARCH_TAPS 8
 #define SHADOW_FILTER_TAPS 24 /* half of them for a penumbra within 3 texels */
-#define SHADOW_MAX_RADIUS 48.0 /* texels (addon/shadows.py LOOKUP_REACH: it and a tap's texel) */
+#define SHADOW_MAX_RADIUS 48.0 /* texels (addon/plan/shadows.py LOOKUP_REACH: it and a tap's texel) */
 #define SHADOW_CASCADE_ROOM 32.0 /* texels: a cascade is left this far inside its edge */
 
-/* The cube face holding direction d (from the light), in addon/shadows.py's CUBE_FACES order. */
+/* The cube face holding direction d (from the light), in addon/plan/shadows.py's CUBE_FACES order. */
 int shadow_face(vec3 d)
 {
   vec3 a = abs(d);
@@ -163,7 +163,7 @@ float shadow_pcf(ShadowPoint q, float radius, vec2 first_direction, int tap_scal
 }
 
 /* The kind of a light's maps: a sun's are orthographic, a point or area light's a cube's
- * (addon/shadows.py); a spot's follow its cone. A constant where the light's kind is one (the
+ * (addon/plan/shadows.py); a spot's follow its cone. A constant where the light's kind is one (the
  * light loop's groups), so each path below is compiled only where a light can take it: reading a
  * layer's data is a per-pixel gather on the software rasteriser (glsl/README.md), and the paths
  * of suns and cube faces read a few values instead of the layer's matrices. */
@@ -180,7 +180,7 @@ int shadow_kind(LightData light, int first)
 }
 
 /* A cube face's view -> world rotation: its columns the face's right, up and backward axes, as
- * addon/shadows.py's look_at makes them from CUBE_FACES (the face looking along +-axis, up -y,
+ * addon/plan/shadows.py's look_at makes them from CUBE_FACES (the face looking along +-axis, up -y,
  * but +z for +y and -z for -y). */
 mat3 cube_face_view(int face)
 {
@@ -209,7 +209,7 @@ bool cube_shadow_point(int first, vec3 position, vec3 p, vec3 ng, out ShadowPoin
   return -local.z > 0.0;
 }
 
-/* The point p in a sun's maps (`direction` the light's): its cascades (addon/shadows.py) share
+/* The point p in a sun's maps (`direction` the light's): its cascades (addon/plan/shadows.py) share
  * one rotation, so p's coordinates across the light are taken once and each cascade's fit
  * (glsl/uniforms.glsl's layer_fit) and half extents place them; the finest cascade whose map
  * holds p with room for the filter, else the last. The receiver's plane in closed form: the rays

@@ -1,7 +1,7 @@
 /* Display pipeline of the engine's own tone mappers (SPEC section 5): radiance x 2^EV, a tone
  * curve to display-linear [0, 1], and optionally the 2.2 gamma approximation. Blender's Standard
  * view transform then applies the exact sRGB encoding; for "gamma 2.2" the value is pre-decoded
- * so that Blender's encoding leaves y^(1/2.2) on the display. Numpy twin: addon/tonemap.py. */
+ * so that Blender's encoding leaves y^(1/2.2) on the display. Numpy twin: addon/reference/tonemap.py. */
 
 /* The seed's LDR pipeline: clip every channel to [0, 1]. */
 vec3 tonemap_clamp(vec3 x)

@@ -1,5 +1,5 @@
 /* Uniform-buffer layouts (std140: every member is a vec4 or mat4, so the numpy packers in
- * addon/programs.py can write them as flat float32 arrays without padding rules). Lights and
+ * addon/plan/programs.py can write them as flat float32 arrays without padding rules). Lights and
  * materials live in uniform buffers because push constants are capped at 128 bytes. */
 
 struct FrameData {
@@ -9,7 +9,7 @@ struct FrameData {
   vec4 ambient;          /* rgb: Blinn-Phong/Phong ambient constant x (eq. 1.4) */
   vec4 counts;           /* x: number of lights in use; light culling: y the tiles' side in pixels,
                           * z tiles per row, w where the light indices start in light_tiles */
-  vec4 group_ends[2];    /* where each group of lights ends (addon/programs.py's light_order lists
+  vec4 group_ends[2];    /* where each group of lights ends (addon/plan/programs.py's light_order lists
                           * them by group): [0] those with a shadow map, [1] those without, each
                           * x point, y spot, z sun, w area lights */
 };
@@ -31,9 +31,9 @@ struct LightData {
 
 /* Each light is LIGHT_TEXELS vec4 in LightData's order (mesh.frag.glsl's load_light_reach and
  * load_light_rest): up to 512 lights, where a uniform block of 64 KiB holds them (SL_LIGHT_BLOCK,
- * addon/programs.py's light_block_fits), the block's texels light after light; more, the rows of a
+ * addon/plan/programs.py's light_block_fits), the block's texels light after light; more, the rows of a
  * texture, light_data, a light's texels in its row. With light culling (SL_LIGHT_TILES,
- * addon/light_tiles.py), light_tiles holds each screen tile's (first, count) and then the tiles'
+ * addon/plan/light_tiles.py), light_tiles holds each screen tile's (first, count) and then the tiles'
  * light indices, SL_LIGHT_LIST_WIDTH texels per row. */
 #define LIGHT_TEXELS 7
 
@@ -60,7 +60,7 @@ struct MaterialData {
   vec4 uv_y;             /* v' = dot(uv_y.xy, uv) + uv_y.z */
 };
 
-/* The world's light, precomputed (glsl/ibl.glsl, addon/environment.py): nine SH coefficients
+/* The world's light, precomputed (glsl/ibl.glsl, addon/reference/environment.py): nine SH coefficients
  * premultiplied by the cosine kernel's band factors, the rectangles in the atlas (x, y, width,
  * height in texels) of the prefiltered levels and, last, of the irradiance map; info.x: the
  * number of prefiltered levels, info.y: the first level made from the world with its suns split
@@ -89,7 +89,7 @@ struct ObjectBlock {
 };
 
 #ifdef SL_SHADOWS
-/* The frame's shadow-map layers (addon/shadows.py's ShadowPlan): world -> clip, the layer's view
+/* The frame's shadow-map layers (addon/plan/shadows.py's ShadowPlan): world -> clip, the layer's view
  * -> world, and its projection's half extents (extent.xy: tan of half the field of view, or the
  * half widths in m); info.x:
  * far distance (m per unit of stored depth), y: a texel's width per metre of distance

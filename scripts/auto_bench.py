@@ -50,7 +50,8 @@ def main() -> int:
     import render as cli
 
     cli.ensure_addon()
-    from addon import auto_terms, engine
+    from addon.blender import engine
+    from addon.plan import auto_terms
 
     bounds = [float(b) for b in args.bound.split(",")]
     rows, ratios = [], []

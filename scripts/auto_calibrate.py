@@ -101,7 +101,7 @@ def main() -> int:
     cli.ensure_addon()
     import bench
 
-    from addon import auto_terms
+    from addon.plan import auto_terms
 
     auto_terms.PAYBACK_FRAMES = 1e12  # every material predicted (see the docstring)
     rows = {(world, bound): [] for world in worlds for bound in bounds}

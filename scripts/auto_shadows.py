@@ -36,7 +36,8 @@ def main() -> int:
     import render
     import round_robin
 
-    from addon import auto_terms, engine
+    from addon.blender import engine
+    from addon.plan import auto_terms
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--resolution", default="640x360")

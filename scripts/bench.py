@@ -41,8 +41,8 @@ sys.path[:0] = [str(ROOT), str(ROOT / "scripts"), str(ROOT / "tests")]
 
 import render as cli  # noqa: E402
 
-from addon.extract import MEMO_CORNERS  # noqa: E402
-from addon.snapshot import LIGHT_KINDS, TERM_CHOICES  # noqa: E402
+from addon.blender.extract import MEMO_CORNERS  # noqa: E402
+from addon.scene.snapshot import LIGHT_KINDS, TERM_CHOICES  # noqa: E402
 
 DEFAULT_TERMS = {family: choices[0] for family, choices in TERM_CHOICES.items()}
 LIGHT_COUNTS = (1, 2, 4, 8, 16, 32, 64)
@@ -118,7 +118,7 @@ def render_timed(scene) -> dict[str, float]:
     """One final render; the engine's phase times (Shading Lab only) and the operator's wall time."""
     import bpy
 
-    from addon import engine
+    from addon.blender import engine
 
     ours = scene.render.engine == "SHADING_LAB"
     engine.last_timings.clear()
@@ -206,8 +206,9 @@ def specialised_vs_generic(scene, frames: int, progress, label: str) -> dict:
     import gpu_harness
     import numpy as np
 
-    from addon import extract, programs
-    from addon.renderer import Renderer
+    from addon.blender import extract
+    from addon.frame.renderer import Renderer
+    from addon.plan import programs
 
     original = programs.Features.__dict__["from_snapshot"]
     generic = generic_from_snapshot(original)
@@ -278,7 +279,8 @@ def bench_preset(name: str, args, configs, peers, progress, tmp: Path) -> dict:
     import metrics
     import reference
 
-    from addon import auto_terms, engine
+    from addon.blender import engine
+    from addon.plan import auto_terms
 
     scene, _stem = cli.load_scene(name, None)
     if scene.camera is None:
@@ -633,7 +635,7 @@ def report(args, results, lights, tris, configs, peers, machine, elapsed) -> str
         lines += table(["preset", "bound", "time / Principled", "time / default", "FLIP Auto / Principled",
                         "chosen sets"], rows)
         lines += ["", "Bound: Delta E_ITP at the 99th percentile of a material's pixels against the "
-                  "Principled set (`addon/auto_terms.py`). Times include the prediction (in extraction).",
+                  "Principled set (`addon/plan/auto_terms.py`). Times include the prediction (in extraction).",
                   ""]
 
     # 7. detail per preset
@@ -892,7 +894,7 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
 
 
 def resolve(args) -> None:
-    from addon import presets
+    from addon.scene import presets
 
     shipped = presets.scene_preset_names()
     if args.presets:

@@ -1,11 +1,11 @@
-"""Regenerate the lookup tables the add-on ships (``addon/tables.npz``).
+"""Regenerate the lookup tables the add-on ships (``addon/reference/tables.npz``).
 
-    .venv/bin/python scripts/build_tables.py [--out addon/tables.npz]
+    .venv/bin/python scripts/build_tables.py [--out addon/reference/tables.npz]
 
 The directional-albedo and split-sum tables of every distribution and masking-shadowing pair,
-the average albedo and the Principled set's S table, computed by ``addon/multiscatter.py``'s
+the average albedo and the Principled set's S table, computed by ``addon/reference/multiscatter.py``'s
 ``compute_*`` functions, and the area lights' linearly-transformed-cosine fits ("ltc_GGX",
-"ltc_BECKMANN") and horizon-clipping sphere table ("ltc_sphere") by ``addon/ltc.py``'s (pure
+"ltc_BECKMANN") and horizon-clipping sphere table ("ltc_sphere") by ``addon/reference/ltc.py``'s (pure
 numpy, deterministic; the LTC fits take about two minutes), saved compressed. The engine loads
 them instead of computing them at its first render; tests/test_tables.py checks that the shipped
 file equals what this computes (tests/test_ltc.py refits sample LTC cells). Run it after changing
@@ -24,7 +24,7 @@ sys.path.insert(0, str(ROOT))
 
 import numpy as np  # noqa: E402
 
-from addon import ltc, multiscatter  # noqa: E402
+from addon.reference import ltc, multiscatter  # noqa: E402
 
 
 def main() -> int:

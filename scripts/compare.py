@@ -29,7 +29,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
 
 import render as cli  # noqa: E402
 
-from addon.snapshot import MODEL_CHOICES  # noqa: E402
+from addon.scene.snapshot import MODEL_CHOICES  # noqa: E402
 
 MODELS = tuple((c.cli, c.id, c.label) for c in MODEL_CHOICES)
 

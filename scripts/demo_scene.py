@@ -8,7 +8,7 @@ import math
 
 import bpy
 
-from addon.scene_builder import principled_material as _principled
+from addon.blender.scene_builder import principled_material as _principled
 
 ROUGHNESS = (0.1, 0.3, 0.5, 0.7, 0.9)
 

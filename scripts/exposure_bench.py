@@ -43,7 +43,8 @@ def main() -> int:
     import bpy
     import render
 
-    from addon import engine, presets
+    from addon.blender import engine
+    from addon.scene import presets
 
     render.ensure_addon()
     alone = reduction_ms(1280, 720)
@@ -101,8 +102,8 @@ def reduction_ms(width: int, height: int, repeats: int = 21) -> float:
     import gpu
     import numpy as np
 
-    from addon.gpu_scene import SceneResources
-    from addon.passes import ExposurePass, Frame, Target, full_screen_batch
+    from addon.frame.gpu_scene import SceneResources
+    from addon.frame.passes import ExposurePass, Frame, Target, full_screen_batch
 
     times = []
 

@@ -1,4 +1,4 @@
-"""Figures of the BRDF terms, drawn from the numpy twin (addon/shading.py): PNGs in docs/figures/.
+"""Figures of the BRDF terms, drawn from the numpy twin (addon/reference/shading.py): PNGs in docs/figures/.
 
     .venv/bin/python scripts/figures.py
 
@@ -27,8 +27,8 @@ import numpy as np  # noqa: E402
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from addon import brdf, shading  # noqa: E402
-from addon.snapshot import MaterialParams, Terms, shininess_from_roughness  # noqa: E402
+from addon.reference import brdf, shading  # noqa: E402
+from addon.scene.snapshot import MaterialParams, Terms, shininess_from_roughness  # noqa: E402
 
 OUT = ROOT / "docs" / "figures"
 DPI = 100

@@ -5,14 +5,14 @@ not a test): what an artist waits for the first time a term set is used in a ses
         [--table docs/bench/first_render.md] [--repeat 3]
 
 Each (preset, term set) runs in a fresh Python process, so that nothing is cached in memory:
-compiled programs, lookup tables (shipped in addon/tables.npz, loaded and uploaded at first use),
+compiled programs, lookup tables (shipped in addon/reference/tables.npz, loaded and uploaded at first use),
 world precomputation. The process loads the preset, renders it twice with the term set (wall time
 of ``bpy.ops.render.render``) and prints both; the difference is what the first render costs
 extra. Measured three times: cold, with Mesa's on-disk shader cache disabled
 (MESA_SHADER_CACHE_DISABLE) and the add-on's world cache off (SHADING_LAB_CACHE=off), so that every
 process compiles its programs and computes its world, as on a first start; warm, with Mesa's cache
 on, in a folder of its own that an earlier process filled, as an artist's later sessions find it;
-and warm with the world's maps cached too (``addon/world_cache.py``, in a folder the same earlier
+and warm with the world's maps cached too (``addon/plan/world_cache.py``, in a folder the same earlier
 process filled), as a later session that renders a world seen before finds it. Each is measured
 in ``--repeat`` fresh processes (the three kinds interleaved, as this machine's load drifts) and
 the table holds the medians. Times are CPU-rasteriser times (Mesa llvmpipe): compare them within
@@ -83,7 +83,7 @@ def main(argv: list[str] | None = None) -> int:
     if argv and argv[0] == "--child":
         child(argv[1], argv[2], int(argv[3]), int(argv[4]))
         return 0
-    from addon import presets
+    from addon.scene import presets
 
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("--presets", default=None, help="comma-separated preset names (default: all shipped)")
@@ -122,7 +122,7 @@ def main(argv: list[str] | None = None) -> int:
              f"shader cache filled by an earlier process, as from an artist's second session on (Mesa "
              f"keeps it on disk by default), the world's maps computed: what is left is the add-on's "
              f"own set-up (tables, the world's precomputation, scene upload); *world seen*: the "
-             f"world's maps also kept by that earlier process (`addon/world_cache.py`, on by "
+             f"world's maps also kept by that earlier process (`addon/plan/world_cache.py`, on by "
              f"default), as a later session that renders a world seen before finds them.", "",
              "| preset | term set | first ms | second ms | first costs (cold) | first costs (warm) "
              "| first costs (warm, world seen) |", "|---|---|---:|---:|---:|---:|---:|"]

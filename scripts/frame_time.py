@@ -30,11 +30,11 @@ def main() -> int:
     import bpy
     import demo_scene
 
-    from addon import engine
+    from addon.blender import engine
 
     scene = demo_scene.empty_scene(w, h)
     demo_scene.build(scene)
-    from addon.snapshot import MODELS as models
+    from addon.scene.snapshot import MODELS as models
     samples = {m: [] for m in models}
     for round_index in range(args.frames + 1):
         for model in models:

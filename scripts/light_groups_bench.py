@@ -88,7 +88,7 @@ def main() -> int:
     import render
     import round_robin
 
-    from addon import programs
+    from addon.plan import programs
 
     args, w, h = round_robin.parse_args(__doc__, "light_groups.md")
     render.ensure_addon()

@@ -38,7 +38,7 @@ def main() -> int:
     import render
     import round_robin
 
-    from addon import light_tiles, programs
+    from addon.plan import light_tiles, programs
 
     args, w, h = round_robin.parse_args(__doc__, "light_sequence.md")
     render.ensure_addon()

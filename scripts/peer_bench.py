@@ -129,7 +129,7 @@ def main(argv: list[str] | None = None) -> int:
         args.size = cli.parse_resolution(args.resolution)
         cli.check_output_dir(args.out)
         cli.ensure_addon()
-        from addon import presets
+        from addon.scene import presets
 
         shipped = presets.scene_preset_names()
         names = [p.strip() for p in args.presets.split(",") if p.strip()] or shipped

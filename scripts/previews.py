@@ -22,7 +22,7 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
 
-from addon.snapshot import MODEL_CHOICES  # noqa: E402  (pure module)
+from addon.scene.snapshot import MODEL_CHOICES  # noqa: E402  (pure module)
 
 MODELS = tuple((c.id, c.label) for c in MODEL_CHOICES)
 
@@ -41,7 +41,8 @@ def main() -> int:
     import matplotlib.pyplot as plt
     import numpy as np
 
-    from addon import engine, presets, scene_builder
+    from addon.blender import engine, scene_builder
+    from addon.scene import presets
 
     scene = demo_scene.empty_scene()
     library = presets.load_material_presets()

@@ -25,8 +25,8 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 # pure modules: no Blender needed to parse the arguments
-from addon.snapshot import MODEL_CHOICES, TERM_CHOICES, cli_names  # noqa: E402
-from addon.tonemap import TONE_MAPPER_CHOICES  # noqa: E402
+from addon.reference.tonemap import TONE_MAPPER_CHOICES  # noqa: E402
+from addon.scene.snapshot import MODEL_CHOICES, TERM_CHOICES, cli_names  # noqa: E402
 
 MODELS = cli_names(MODEL_CHOICES)
 TONE_MAPPERS = tuple(cli_names(TONE_MAPPER_CHOICES))
@@ -157,7 +157,8 @@ def load_scene(name: str, variant: str | None):
         except RuntimeError as exc:
             raise CliError(f"could not open {path}: {str(exc).strip()}") from None
         return bpy.context.scene, path.stem
-    from addon import presets, scene_builder
+    from addon.blender import scene_builder
+    from addon.scene import presets
 
     if path.suffix.lower() == ".toml" and not path.is_file():
         raise CliError(f"no such preset file: {path}")
@@ -352,7 +353,8 @@ def render_frame(args, scene, stem: str, models: list[str], frame: int | None, w
     """Render ``frame`` (None: the current one) with each model; the files written."""
     import bpy
 
-    from addon import auto_terms, engine
+    from addon.blender import engine
+    from addon.plan import auto_terms
 
     written = []
     if frame is not None:
@@ -414,7 +416,7 @@ def run(args: argparse.Namespace) -> list[Path]:
     written = []
     warned: dict[str, None] = {}
     progress = Progress(len(models) * len(frames or [None]))
-    from addon import exposure
+    from addon.scene import exposure
 
     # with --frames, automatic exposure adapts from each frame to the next, as in an animation
     with exposure.TRACK.sequence() if frames else contextlib.nullcontext():
@@ -431,7 +433,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parse_args(sys.argv[1:] if argv is None else argv)
     try:
         if args.list:
-            from addon import presets
+            from addon.scene import presets
 
             print(f"{'demo':18s} the built-in demo scene")
             print(f"{'startup':18s} Blender's startup file: the default cube, its light, the grey world")

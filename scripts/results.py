@@ -22,7 +22,7 @@ sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
 
 import compare  # noqa: E402
 
-from addon.snapshot import MODEL_CHOICES  # noqa: E402
+from addon.scene.snapshot import MODEL_CHOICES  # noqa: E402
 
 DOCS = ROOT / "docs"
 OUT = DOCS / "results"
@@ -63,7 +63,7 @@ def _portability_scene(args, variant):
 
 def _apply_blinn_phong(scene, spec_scale: float, shininess_scale: float, ambient: float) -> None:
     """Scale every material's Blinn-Phong specular colour and shininess (from its derived values)."""
-    from addon.extract import material_params
+    from addon.blender.extract import material_params
 
     scene.shading_lab.model = "BLINN_PHONG"
     scene.shading_lab.ambient = ambient
@@ -136,7 +136,8 @@ def main(argv=None) -> int:
     grid = run("material_grid", args)
     grid_principled = run("material_grid", args, tag="_principled", principled=True)
     grid_auto = run("material_grid", args, tag="_auto", term_set="auto", error_bound=AUTO_BOUND)
-    from addon import auto_terms, engine
+    from addon.blender import engine
+    from addon.plan import auto_terms
 
     grid_auto_sets = auto_terms.summary(engine.last_term_choices).removeprefix("Auto: ")
     lighting = {v: run("portability", args, variant=v) for v in VARIANTS}

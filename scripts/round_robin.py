@@ -54,7 +54,7 @@ def median_draw_ms(configs: Sequence[Hashable], apply: Callable[[Hashable], None
     ``frames`` rounds after the warm-up; ``apply(config)`` sets the scene up for one."""
     import bpy
 
-    from addon import engine
+    from addon.blender import engine
 
     times = {c: [] for c in configs}
     for round_index in range(frames + 1):

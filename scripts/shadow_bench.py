@@ -62,7 +62,7 @@ def _ours(scene, path: Path, frames: int) -> tuple:
     """(image, median engine ms) of ``frames`` renders after a warm-up."""
     import reference
 
-    from addon import engine
+    from addon.blender import engine
 
     image = reference.render_to_array(scene, path)
     times = []

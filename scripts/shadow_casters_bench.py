@@ -91,7 +91,8 @@ def run(args, tmp: Path, progress) -> list[dict]:
     import numpy as np
     import scenes
 
-    from addon import engine, passes
+    from addon.blender import engine
+    from addon.frame import passes
 
     drawn: list[int] = []
     original = passes.ShadowPass.run

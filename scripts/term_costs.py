@@ -2,13 +2,13 @@
 terms', per light count, measured here (a benchmark, not a test).
 
     .venv/bin/python scripts/term_costs.py [--resolution 1280x720] [--frames 5]
-        [--table docs/bench/term_costs.md] [--out addon/term_costs.json] [--world-only]
+        [--table docs/bench/term_costs.md] [--out addon/plan/term_costs.json] [--world-only]
 
 A plane fills an orthographic view under N point lights that each reach all of it (N = 2, 8, 32;
 no shadows, a black world: the shading is all the frame does), with a rough metal material.
 Every (candidate, N) is rendered round-robin after a warm-up round, in one process; the medians
 of the engine's draw time (GPU work fenced by the read-back) go to ``--out`` with their ratios to
-the default terms (``relative``), which ``addon/auto_terms.py`` orders its candidates by, with
+the default terms (``relative``), which ``addon/plan/auto_terms.py`` orders its candidates by, with
 the view's pixel count and a candidate program's first use (``first_use_ms``: its compile and
 first draw, the driver's shader cache warm), which it weighs a program of its own against. Then
 the world's specular (``world_ms``): the same plane under Blender's bundled forest world instead
@@ -49,7 +49,8 @@ def first_use_ms(names, apply) -> dict[str, float]:
     (the frame's other programs and the tables come back), then each other one twice."""
     import bpy
 
-    from addon import engine, gpu_library
+    from addon.blender import engine
+    from addon.frame import gpu_library
 
     gpu_library.LIBRARY.clear()
     out = {}
@@ -148,13 +149,13 @@ def main() -> int:
     parser.add_argument("--resolution", default="1280x720")
     parser.add_argument("--frames", type=int, default=5)
     parser.add_argument("--table", type=Path, default=ROOT / "docs" / "bench" / "term_costs.md")
-    parser.add_argument("--out", type=Path, default=ROOT / "addon" / "term_costs.json")
+    parser.add_argument("--out", type=Path, default=ROOT / "addon" / "plan" / "term_costs.json")
     parser.add_argument("--world-only", action="store_true",
                         help="measure the world's specular only; keep the candidates' times")
     args = parser.parse_args()
     w, h = (int(x) for x in args.resolution.split("x"))
 
-    from addon import auto_terms
+    from addon.plan import auto_terms
 
     scene, groups = build(w, h)
     if args.world_only:
@@ -206,7 +207,7 @@ def main() -> int:
     order = {n: auto_terms.candidate_order(n, data) for n in COUNTS}
     text = "\n".join([
         "The Auto term set's candidates: draw time per light count (`scripts/term_costs.py`; "
-        f"{data['scene']}). Written to `addon/term_costs.json`, which orders the candidates.",
+        f"{data['scene']}). Written to `addon/plan/term_costs.json`, which orders the candidates.",
         "", *rows, "",
         f"A candidate's program's first use (compile and first draw, the driver's shader cache warm), "
         f"median of {len(first_use)}: {data['first_use_ms']:.1f} ms "

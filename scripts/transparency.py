@@ -32,7 +32,7 @@ COLOURS = ((0.9, 0.2, 0.1), (0.9, 0.7, 0.1), (0.2, 0.8, 0.2), (0.1, 0.4, 0.9), (
 def build(scene):
     import bpy
 
-    from addon.scene_builder import principled_material
+    from addon.blender.scene_builder import principled_material
 
     scene.render.engine = "SHADING_LAB"
     scene.shading_lab.model = "PBR"
@@ -93,7 +93,7 @@ def main() -> int:
     import numpy as np
     import reference
 
-    from addon import engine
+    from addon.blender import engine
 
     scene = demo_scene.empty_scene(w, h)
     spheres = build(scene)

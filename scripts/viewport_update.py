@@ -32,10 +32,11 @@ def main() -> int:
     from gpu_harness import run_on_gpu
 
     import addon
-    from addon import gpu_library, programs
-    from addon.snapshot import MODELS
-    from addon.tonemap import TONE_MAPPERS
-    from addon.viewport import ViewportSession
+    from addon.blender.viewport import ViewportSession
+    from addon.frame import gpu_library
+    from addon.plan import programs
+    from addon.reference.tonemap import TONE_MAPPERS
+    from addon.scene.snapshot import MODELS
 
     addon.register()
     bpy.ops.wm.read_factory_settings(use_empty=True)

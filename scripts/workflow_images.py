@@ -35,7 +35,7 @@ def main() -> int:
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from addon import engine
+    from addon.blender import engine
 
     scene = demo_scene.empty_scene(w, h)
     demo_scene.build(scene)

@@ -17,7 +17,7 @@ image resampled to 4K (4096 x 2048), medians of ``--frames`` rebuilds (the world
 nudged each time so that the cache does not answer). Frame cost: the demo scene at 1280 x 720
 (its point light and sun) with a black world and with the forest world, medians of ``--frames``.
 
-The world cache (``addon/world_cache.py``) is off here: every build is computed, as a session's
+The world cache (``addon/plan/world_cache.py``) is off here: every build is computed, as a session's
 first render of a world it has not seen computes it.
 
 Writes ``OUT/world.md`` (also printed). Frame times are CPU-rasteriser times (Mesa llvmpipe):
@@ -104,7 +104,8 @@ def precomputation(frames: int, progress) -> dict:
     from gpu_harness import run_on_gpu
     from test_world_light import _hdri, _world
 
-    from addon import extract, renderer
+    from addon.blender import extract
+    from addon.frame import renderer
 
     out = {}
     for label, width in (("1K", 1024), ("4K", 4096)):
@@ -146,7 +147,7 @@ def frame_cost(frames: int, progress) -> dict:
     import demo_scene
     from test_world_light import _hdri, _world
 
-    from addon import engine
+    from addon.blender import engine
 
     scene = demo_scene.empty_scene(1280, 720)
     demo_scene.build(scene)

@@ -162,7 +162,7 @@ def material_masks(camera, names) -> dict[str, np.ndarray]:
 
 def measured_errors(image, reference, masks, quantile: float, min_pixels: int = 20) -> dict[str, float]:
     """Per material, Delta E_ITP of ``image`` against ``reference`` at ``quantile`` of its pixels."""
-    from addon import auto_terms
+    from addon.plan import auto_terms
 
     error = auto_terms.delta_e_itp(image[..., :3], reference[..., :3])
     return {name: float(np.quantile(error[mask], quantile)) for name, mask in masks.items()
@@ -173,7 +173,7 @@ def render_pairs(scene, camera, names, seed: int, bounds, folder: Path) -> dict[
     """{bound: [(seed, material, Choice, measured error)]}: ``scene`` rendered with the Principled
     set once and with Auto at each of ``bounds``, the error measured per material on its pixels
     (``material_masks``) at the scene's Auto quantile."""
-    from addon import engine
+    from addon.blender import engine
 
     props = scene.shading_lab
     props.term_set = "PRINCIPLED"

@@ -16,7 +16,8 @@ import gpu
 import numpy as np
 from gpu_harness import run_on_gpu
 
-from addon import gpu_library, programs
+from addon.frame import gpu_library
+from addon.plan import programs
 
 LIBRARY = programs.FRAGMENT_LIBRARY + programs.PBR_LIBRARY + ("tonemap.glsl",)
 WIDTH = 256

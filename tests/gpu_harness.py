@@ -81,7 +81,7 @@ def viewport_image(scene, size: int):
     fresh viewport session: (size, size, 4) float32, bottom row first."""
     import numpy as np
 
-    from addon.viewport import ViewportSession
+    from addon.blender.viewport import ViewportSession
 
     session = ViewportSession()
     try:

@@ -14,8 +14,10 @@ import numpy as np
 import pytest
 import scenes
 
-from addon import auto_terms, engine, extract, shading
-from addon import snapshot as S
+from addon.blender import engine, extract
+from addon.plan import auto_terms
+from addon.reference import shading
+from addon.scene import snapshot as S
 
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "scripts"))
@@ -52,7 +54,7 @@ def test_delta_e_itp_matches_colour_science():
 # --- the cost table ----------------------------------------------------------------------------
 
 def test_shipped_cost_table_is_what_the_script_derives():
-    """``addon/term_costs.json`` holds the script's measured draw times and exactly the ratios its
+    """``addon/plan/term_costs.json`` holds the script's measured draw times and exactly the ratios its
     ``derive`` computes from them; the order puts the Principled set last and drops candidates
     that cost more than it."""
     import term_costs
@@ -227,7 +229,8 @@ def test_the_hdr_presets_small_metal_stays_on_the_principled_program(tmp_path):
     next choice under the usual payback: its program is compiled by then."""
     import bpy
 
-    from addon import extract, presets, scene_builder
+    from addon.blender import extract, scene_builder
+    from addon.scene import presets
 
     scene = scenes.reset()
     scene_builder.build_scene(presets.load_scene_preset("hdr"), scene)
@@ -392,7 +395,7 @@ def test_the_uniform_world_twin_is_the_programs_world_term(name, tmp_path):
     the pixels whose 3x3 neighbourhood is on the sphere (normals from the analytic sphere)."""
     import bpy
 
-    from addon import shading
+    from addon.reference import shading
 
     worst = {}
     for metal, roughness in ((1.0, 0.6), (0.0, 0.35)):

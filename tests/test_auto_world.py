@@ -11,7 +11,8 @@ import bpy
 import numpy as np
 import pytest
 
-from addon import auto_terms, extract
+from addon.blender import extract
+from addon.plan import auto_terms
 
 #: Seeds apart from test_auto_terms.py's (0-49) and from the margin's calibration (1000-1029).
 SEEDS = range(2000, 2012)

@@ -20,7 +20,8 @@ import pytest
 import scenes
 from gpu_harness import run_on_gpu
 
-from addon import engine, extract, renderer
+from addon.blender import engine, extract
+from addon.frame import renderer
 
 ROOT = Path(__file__).resolve().parent.parent
 SCRIPT = ROOT / "scripts" / "render.py"

@@ -1,7 +1,7 @@
 """Colour management (SPEC section 5): with the engine's own tone mappers, Combined holds the
 display-linear tone-curve output, a Radiance pass keeps the HDR data, and Blender's Standard view
 transform encodes it; the saved PNG equals the formula applied to the raw radiance within 1/255.
-The formulas here are written from the papers, independently of addon/tonemap.py."""
+The formulas here are written from the papers, independently of addon/reference/tonemap.py."""
 
 from __future__ import annotations
 
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 import scenes
 
-from addon import tonemap
+from addon.reference import tonemap
 
 
 def srgb_encode(x):  # IEC 61966-2-1

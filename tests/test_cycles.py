@@ -147,7 +147,7 @@ def test_glossy_distributions_match_cycles(distribution, terms, roughness, tmp_p
 
 
 def _principled(base, metallic, roughness, ior=1.5):
-    from addon.scene_builder import principled_material
+    from addon.blender.scene_builder import principled_material
 
     return principled_material("principled", base, metallic, roughness, ior)
 

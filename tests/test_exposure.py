@@ -22,9 +22,10 @@ import pytest
 import scenes
 from gpu_harness import run_on_gpu
 
-from addon import engine, exposure
-from addon.gpu_scene import SceneResources
-from addon.passes import ExposurePass, Frame, Target, full_screen_batch
+from addon.blender import engine
+from addon.frame.gpu_scene import SceneResources
+from addon.frame.passes import ExposurePass, Frame, Target, full_screen_batch
+from addon.scene import exposure
 
 ROOT = Path(__file__).resolve().parent.parent
 KEY = 0.18
@@ -290,7 +291,7 @@ def test_viewport_adapts_by_the_time_between_draws():
     """The viewport's first draw is converged; after the light gets 100 x brighter, each draw moves
     the exposure by the formula over the (here simulated) time since the previous draw, asks for
     another redraw while it has not settled, and settles."""
-    from addon.viewport import ADAPTED_STOPS, ViewportSession
+    from addon.blender.viewport import ADAPTED_STOPS, ViewportSession
 
     scene = scenes.lambert_scene(size=16)
     props = scene.shading_lab
@@ -331,7 +332,7 @@ def test_viewport_adapts_by_the_time_between_draws():
 
 def test_previews_use_manual_exposure():
     """A material preview shows the material's own brightness: no metering to middle grey."""
-    from addon import extract
+    from addon.blender import extract
 
     scene, _ = _world_scene(40.0)
     bpy.ops.render.render()  # remembers the artist's settings, which previews follow

@@ -51,10 +51,12 @@ def built_zip(tmp_path_factory) -> Path:
 def test_zip_holds_the_package_at_the_top_level(built_zip):
     names = set(zipfile.ZipFile(built_zip).namelist())
     expected = {"blender_manifest.toml"}
-    expected |= {p.name for p in (ROOT / "addon").glob("*.py")}
+    # every file of the package, its sub-packages' modules and their data (tables.npz, term_costs.json)
+    expected |= {p.relative_to(ROOT / "addon").as_posix() for p in (ROOT / "addon").rglob("*")
+                 if p.is_file() and "__pycache__" not in p.parts}
     expected |= {f"glsl/{p.name}" for p in (ROOT / "glsl").iterdir() if p.is_file()}
     expected |= {f"presets/{p.name}" for p in (ROOT / "presets").iterdir() if p.is_file()}
-    assert "__init__.py" in expected
+    assert {"__init__.py", "reference/tables.npz", "plan/term_costs.json"} <= expected
     assert expected <= names, sorted(expected - names)
     assert not [n for n in names if "__pycache__" in n or n.endswith(".pyc")]
     assert not [n for n in names if n.split("/")[0] in ("addon", "tests", "scripts", ".venv", "dist")]

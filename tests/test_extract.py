@@ -10,8 +10,8 @@ import numpy as np
 import pytest
 import scenes
 
-from addon import extract
-from addon import snapshot as S
+from addon.blender import extract
+from addon.scene import snapshot as S
 
 SIZE = 32
 

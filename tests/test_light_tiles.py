@@ -1,4 +1,4 @@
-"""Light culling's tile lists (addon/light_tiles.py), against a brute-force expectation: every pixel
+"""Light culling's tile lists (addon/plan/light_tiles.py), against a brute-force expectation: every pixel
 of a ground plane lists, in light order, every light whose influence sphere holds the plane's
 point under that pixel."""
 
@@ -9,7 +9,7 @@ import math
 import numpy as np
 import pytest
 
-from addon import light_tiles
+from addon.plan import light_tiles
 
 
 def _perspective(fov_deg: float, aspect: float, near=0.1, far=100.0) -> np.ndarray:
@@ -241,7 +241,7 @@ def _lights_over_a_plane(size: int, count: int, cutoff: float | None, seed: int 
 
 def _record_programs(monkeypatch) -> list:
     """The features of every shading program made from now on (the test's monkeypatch undoes it)."""
-    from addon import gpu_library
+    from addon.frame import gpu_library
 
     made = []
     shading_program = gpu_library.shading_program
@@ -255,7 +255,7 @@ def test_culling_on_equals_off_bit_for_bit(model, tmp_path, monkeypatch):
     """40 lights that each reach 0.8 m (a tenth of the view's width), a sun that reaches
     everywhere: the frame shading each tile's lights equals the frame shading every light, to the
     bit, and its tiles list far fewer lights than there are."""
-    from addon import engine
+    from addon.blender import engine
 
     scene = _lights_over_a_plane(96, 40, cutoff=0.8)
     scene.shading_lab.model = model
@@ -357,7 +357,7 @@ def test_culling_pays_only_where_some_light_reaches_less_than_the_scene():
     light_sequence)."""
     from types import SimpleNamespace
 
-    from addon import programs
+    from addon.plan import programs
 
     def snap(*lights, culling=True):
         return SimpleNamespace(settings=SimpleNamespace(light_culling=culling),
@@ -422,7 +422,7 @@ def test_a_few_lights_each_shaded_by_its_own_call_equal_the_loops(tmp_path, monk
     """A scene of two lights (an area light and a spot, each casting soft shadows) shades each by
     its own call with constants (programs.UNROLLED_LIGHTS): the same image, to the bit, as the
     loops over each group of lights; a third light turns back to the loops."""
-    from addon import programs
+    from addon.plan import programs
 
     scene = _two_lights_and_plates()
     made = _record_programs(monkeypatch)

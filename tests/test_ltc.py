@@ -1,4 +1,4 @@
-"""Linearly transformed cosines (addon/ltc.py): the shipped fits are what the build computes, and
+"""Linearly transformed cosines (addon/reference/ltc.py): the shipped fits are what the build computes, and
 the area-light integrals they give agree with brute-force integration of the BRDF over the
 polygon, by amounts measured here. Every reference is computed independently of the code under
 test: adaptive quadrature over the polygon's area (dw = cos theta_light dA / d^2) of brdf.py's
@@ -9,7 +9,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from addon import brdf, ltc, multiscatter
+from addon.reference import brdf, ltc, multiscatter
 
 # --- brute force ------------------------------------------------------------------------------------
 

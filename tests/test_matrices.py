@@ -1,4 +1,4 @@
-"""The closed-form inverses of addon/matrices.py (no Blender needed), checked against numpy's
+"""The closed-form inverses of addon/scene/matrices.py (no Blender needed), checked against numpy's
 LAPACK inverse and against the identity; and a render that inverts nothing through LAPACK."""
 
 from __future__ import annotations
@@ -6,7 +6,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from addon.matrices import cross3, determinant3, invert
+from addon.scene.matrices import cross3, determinant3, invert
 
 
 def _affine(rng) -> np.ndarray:
@@ -92,11 +92,12 @@ def test_other_shapes_are_refused():
 
 def test_a_render_inverts_nothing_through_lapack(monkeypatch, tmp_path):
     """numpy's inverse and solve wake OpenBLAS's worker threads, which then spin beside the software
-    rasteriser's (addon/matrices.py): a render of a scene with shadow maps of both kinds (a point
+    rasteriser's (addon/scene/matrices.py): a render of a scene with shadow maps of both kinds (a point
     light's cube, a sun's), the world's occlusion and light tiles calls neither."""
     import scenes
 
-    from addon import presets, scene_builder
+    from addon.blender import scene_builder
+    from addon.scene import presets
 
     scene = scenes.reset()
     scene_builder.build_scene(presets.load_scene_preset("material_grid"), scene)

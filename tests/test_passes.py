@@ -33,7 +33,7 @@ def test_light_passes_sum_to_combined(model, tmp_path):
     scene = _scene(model)
     bpy.ops.render.render()
     layers = scenes.read_exr_layers(scenes.save_result(scene, tmp_path / "passes.exr", "MULTILAYER"))
-    from addon.engine import LIGHT_PASSES
+    from addon.blender.engine import LIGHT_PASSES
 
     diffuse_name, glossy_name = LIGHT_PASSES  # "Diffuse Direct", "Glossy Direct" (DiffDir, GlossDir in 4.x)
     assert {diffuse_name, glossy_name} <= set(layers)
@@ -54,8 +54,8 @@ def test_renders_read_into_the_buffers_the_last_one_handed_back(tmp_path):
     Blender has the pixels, and the next render reads into them: every pass keeps its own
     pixels (the lobes still sum to Combined), a changed scene changes them, and the first scene
     again gives its first image bit for bit."""
-    from addon.engine import LIGHT_PASSES
-    from addon.gpu_library import LIBRARY
+    from addon.blender.engine import LIGHT_PASSES
+    from addon.frame.gpu_library import LIBRARY
 
     scene = _scene("PBR")
     material = scene.objects["Plane"].active_material
@@ -82,7 +82,7 @@ def test_renders_read_into_the_buffers_the_last_one_handed_back(tmp_path):
 
 def test_pass_names_are_eevees(tmp_path):
     """The same strings EEVEE writes for the same view-layer toggles in this Blender."""
-    from addon.engine import LIGHT_PASSES
+    from addon.blender.engine import LIGHT_PASSES
 
     scene = _scene("PBR")
     scene.render.engine = "BLENDER_EEVEE" if bpy.app.version >= (5, 0, 0) else "BLENDER_EEVEE_NEXT"
@@ -96,7 +96,7 @@ def _run(job, r, **switches):
     """``run_on_gpu(job)``, then the passes' ``switches`` set back (name=value) and ``r`` freed."""
     from gpu_harness import run_on_gpu
 
-    from addon import passes
+    from addon.frame import passes
 
     try:
         return run_on_gpu(job)
@@ -124,7 +124,9 @@ def test_opaque_surfaces_drawn_against_the_occlusion_prepass_change_no_pixel(pre
     transparent plane in front, which peels against that depth, blends as before)."""
     from gpu_harness import run_on_gpu
 
-    from addon import extract, passes, presets, renderer, scene_builder
+    from addon.blender import extract, scene_builder
+    from addon.frame import passes, renderer
+    from addon.scene import presets
 
     scene = scenes.reset()
     scene_builder.build_scene(presets.load_scene_preset(preset), scene)
@@ -168,7 +170,8 @@ def test_the_depth_prepass_is_drawn_where_shading_is_costly_and_the_geometry_is_
     and not where the triangles outnumber the pixels (their second draw would cost more)."""
     from dataclasses import replace
 
-    from addon import passes, programs
+    from addon.frame import passes
+    from addon.plan import programs
 
     cheap = programs.Features(light_kinds=frozenset({"POINT"}), max_lights=2, shadow_layers=6,
                               shadow_size=1024)
@@ -194,7 +197,8 @@ def test_light_culling_counts_the_lights_a_pixel_evaluates():
     the prepass drawn."""
     import math
 
-    from addon import extract, passes, renderer
+    from addon.blender import extract
+    from addon.frame import passes, renderer
 
     size, view = 1024, 8.0  # 8-pixel tiles of 0.0625 m, a light's disc 2.26 m across
     scene = scenes.reset(size=size)
@@ -233,7 +237,8 @@ def test_deferred_shading_is_chosen_by_the_shading_cost_and_the_triangles_size()
     """passes.deferred_pays: costly programs on triangles of 32 px or less on average, the
     heaviest (area lights, 5+ lights) up to 64 px; never a cheap program, an image-mapped or
     peeled surface, or a view beyond DEFERRED_PIXELS."""
-    from addon import passes, programs
+    from addon.frame import passes
+    from addon.plan import programs
 
     pixels = 640 * 360
     cheap = programs.Features(model="PBR", max_lights=2, light_kinds=frozenset({"POINT"}))
@@ -261,7 +266,9 @@ def test_deferred_shading_changes_no_pixel(preset):
     does the G-buffer drawn by the occlusion pass in its prepass's place (the same depth, normals
     and facing)."""
 
-    from addon import extract, passes, presets, renderer, scene_builder
+    from addon.blender import extract, scene_builder
+    from addon.frame import passes, renderer
+    from addon.scene import presets
 
     scene = scenes.reset()
     scene_builder.build_scene(presets.load_scene_preset(preset), scene)
@@ -316,7 +323,9 @@ def test_each_deferred_group_shaded_over_its_rectangle_changes_no_pixel(monkeypa
     equals the one shaded over the whole target with neither and the forward one, to the bit,
     2 x 2 supersampled; the one sphere's rectangle is a small part of the target; a rectangle a
     pixel short on each side loses that sphere's edge pixels."""
-    from addon import extract, passes, presets, renderer, scene_builder
+    from addon.blender import extract, scene_builder
+    from addon.frame import passes, renderer
+    from addon.scene import presets
 
     scene = scenes.reset()
     scene_builder.build_scene(presets.load_scene_preset("softbox"), scene)
@@ -397,7 +406,9 @@ def test_closed_surfaces_seen_from_outside_cull_their_hidden_faces_changing_no_p
     and a sphere the near plane cuts (its inside seen through the cut) cull nothing."""
     from mathutils import Vector
 
-    from addon import extract, passes, presets, renderer, scene_builder
+    from addon.blender import extract, scene_builder
+    from addon.frame import passes, renderer
+    from addon.scene import presets
 
     scene = scenes.reset()
     scene_builder.build_scene(presets.load_scene_preset("material_grid"), scene)
@@ -454,7 +465,9 @@ def test_a_renderer_takes_the_last_ones_target_textures_and_shows_none_of_their_
     from gpu_harness import run_on_gpu
     from mathutils import Matrix
 
-    from addon import extract, gpu_library, presets, renderer, scene_builder
+    from addon.blender import extract, scene_builder
+    from addon.frame import gpu_library, renderer
+    from addon.scene import presets
 
     library = gpu_library.LIBRARY
     scene = scenes.reset()
@@ -498,7 +511,9 @@ def test_views_beyond_the_deferred_budget_are_shaded_forward():
     gives the deferred image exactly."""
     from gpu_harness import run_on_gpu
 
-    from addon import extract, passes, presets, renderer, scene_builder
+    from addon.blender import extract, scene_builder
+    from addon.frame import passes, renderer
+    from addon.scene import presets
 
     scene = scenes.reset()
     scene_builder.build_scene(presets.load_scene_preset("material_grid"), scene)

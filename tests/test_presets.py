@@ -17,8 +17,8 @@ import numpy as np
 import pytest
 import scenes
 
-from addon import extract, scene_builder
-from addon import presets as P
+from addon.blender import extract, scene_builder
+from addon.scene import presets as P
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -222,7 +222,7 @@ def test_lights_and_camera_follow_the_preset():
 
 
 def test_presets_module_does_not_import_bpy():
-    code = "import sys, addon.presets; sys.exit('bpy' in sys.modules)"
+    code = "import sys, addon.scene.presets; sys.exit('bpy' in sys.modules)"
     proc = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr
 
@@ -446,8 +446,8 @@ def test_furnace_preset_bounds_white_spheres(tmp_path):
     compensation (cross-checked with the numpy twin's furnace albedo in test_reference.py)."""
     import numpy as np
 
-    from addon import presets as P
-    from addon import scene_builder
+    from addon.blender import scene_builder
+    from addon.scene import presets as P
 
     scene = scenes.reset(size=8)
     scene_builder.build_scene(P.load_scene_preset("furnace"), scene)

@@ -14,7 +14,7 @@ import numpy as np
 import pytest
 import scenes
 
-from addon import engine
+from addon.blender import engine
 
 QUANTUM = 1.0 / 255.0
 

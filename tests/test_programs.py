@@ -9,8 +9,9 @@ import bpy
 import pytest
 import scenes
 
-from addon import gpu_library, programs
-from addon import snapshot as S
+from addon.frame import gpu_library
+from addon.plan import programs
+from addon.scene import snapshot as S
 
 
 def preprocess(source: str, defines: dict[str, str]) -> str:

@@ -1,4 +1,4 @@
-"""The numpy twin (addon/shading.py) against sources its author did not write.
+"""The numpy twin (addon/reference/shading.py) against sources its author did not write.
 
 The twin and the GLSL share an author, so agreement between them proves consistency, not
 correctness. Here each term is held to something independent:
@@ -22,8 +22,8 @@ import math
 import numpy as np
 import pytest
 
-from addon import brdf, multiscatter, shading
-from addon.snapshot import TERM_CHOICES, MaterialParams, Terms, shininess_from_roughness
+from addon.reference import brdf, multiscatter, shading
+from addon.scene.snapshot import TERM_CHOICES, MaterialParams, Terms, shininess_from_roughness
 
 trapezoid = getattr(np, "trapezoid", None) or np.trapz  # numpy 2 renamed trapz (bpy 4.2 pulls numpy 2)
 
@@ -597,7 +597,7 @@ def test_helmholtz_reciprocity():
 
 
 def test_multiscatter_table_agrees_with_this_quadrature():
-    """addon/multiscatter.py's E(mu, r) (stratified on D's CDF) vs this file's independent grid."""
+    """addon/reference/multiscatter.py's E(mu, r) (stratified on D's CDF) vs this file's independent grid."""
     worst = 0.0
     for ndf, vis in (("GGX", "SMITH_CORRELATED"), ("BECKMANN", "SMITH_SEPARABLE"), ("GGX", "VCAVITY")):
         for r in (0.1, 0.5, 0.9):

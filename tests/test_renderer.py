@@ -8,7 +8,9 @@ import pytest
 import scenes
 from gpu_harness import run_on_gpu
 
-from addon import extract, gpu_library, programs, renderer
+from addon.blender import extract
+from addon.frame import gpu_library, renderer
+from addon.plan import programs
 
 
 def _lit_scene(kinds=("POINT",)):

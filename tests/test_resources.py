@@ -32,7 +32,8 @@ from gpu_census import Census
 from gpu_harness import run_on_gpu
 
 import addon
-from addon import engine, gpu_library, renderer
+from addon.blender import engine
+from addon.frame import gpu_library, renderer
 
 ROOT = Path(__file__).resolve().parent.parent
 RENDER_MARGIN_MB = 8.0
@@ -65,7 +66,7 @@ def _rss_mb() -> float:
 def _scene(size: int = 16):
     """The Lambert scene under a fully transparent plane: the peeling passes, their textures and
     framebuffers run on every render, and the image stays the closed form (0 x L + 1 x behind)."""
-    from addon.scene_builder import principled_material
+    from addon.blender.scene_builder import principled_material
 
     scene = scenes.lambert_scene(size)
     cover = principled_material("Invisible", (1.0, 1.0, 1.0))
@@ -100,7 +101,7 @@ class _TrackedRenderer(renderer.Renderer):
 
 
 def test_1000_renders_free_every_gpu_object_they_make_and_keep_memory_flat(tmp_path, monkeypatch):
-    from addon import passes
+    from addon.frame import passes
 
     original_gbuffer = passes.GBuffer
     monkeypatch.setattr(engine, "Renderer", _TrackedRenderer)

@@ -18,7 +18,9 @@ import scenes
 from gpu_harness import run_on_gpu
 from test_cycles import _cycles
 
-from addon import extract, programs, renderer, shadows
+from addon.blender import extract
+from addon.frame import renderer
+from addon.plan import programs, shadows
 
 SIZE = 96
 LIGHTS = {
@@ -167,7 +169,7 @@ def test_flat_casters_that_can_shadow_nothing_are_left_out():
     straddles it, it stays. The sphere (not flat) always stays."""
     from types import SimpleNamespace
 
-    from addon.snapshot import Light
+    from addon.scene.snapshot import Light
 
     boxes = np.array([[[-4.0, -4.0, 0.0], [4.0, 4.0, 0.0]], [[-0.5, -0.5, 0.0], [0.5, 0.5, 1.0]]])
     planes = shadows.flat_planes(boxes, np.stack([np.eye(4)] * 2))
@@ -198,7 +200,7 @@ def test_flat_casters_that_can_shadow_nothing_are_left_out():
 def test_a_ground_that_can_shadow_nothing_leaves_the_maps_and_the_shadows(tmp_path, monkeypatch):
     """The cube-face scene (lit from above, hard shadows) and a sun's: the ground leaves every
     layer, and each pixel's lit/shadowed state against Cycles is as good as with it drawn."""
-    from addon import passes
+    from addon.frame import passes
 
     monkeypatch.setattr(passes, "VIEW_CULLED_CASTERS", False)  # the pairs the ground alone leaves
     scene = _cube_scene(False)
@@ -504,7 +506,7 @@ def _sun_selection(plan, points, size):
 def _shadow_maps_with_and_without(scene, tmp_path, monkeypatch, switch: str, record):
     """``scene`` rendered with ``passes``' ``switch`` on, then off: the images by setting, and
     ``record(shadow_pass, frame)`` after each render's shadow pass, in order."""
-    from addon import passes
+    from addon.frame import passes
 
     drawn = []
     original = passes.ShadowPass.run
@@ -702,7 +704,7 @@ def test_culled_casters_draw_the_same_shadows(tmp_path, monkeypatch):
     image with each layer drawing only the casters that reach it equals, bit for bit, the image
     with every caster drawn into every layer, and the layers drew far fewer casters (the ground
     drawn everywhere: test_a_ground_that_can_shadow_nothing_leaves_the_maps_and_the_shadows)."""
-    from addon import passes
+    from addon.frame import passes
 
     monkeypatch.setattr(passes, "SKIP_SHADOWLESS", False)
     monkeypatch.setattr(passes, "VIEW_CULLED_CASTERS", False)  # (its own test below)
@@ -896,7 +898,7 @@ def test_a_caster_made_partly_transparent_leaves_a_kept_renderers_maps():
 def _kept_and_drawn(monkeypatch) -> list:
     """A list that each run of the shadow pass appends to: (1 if it kept the maps a finished
     renderer left, else 0; the layers it drew)."""
-    from addon import passes
+    from addon.frame import passes
 
     seen = []
     original = passes.ShadowPass.run
@@ -915,7 +917,7 @@ def test_persistent_data_draws_again_only_the_maps_a_moved_camera_needs(tmp_path
     """Persistent Data, final renders: the camera moved to look at the far sphere's shadow draws
     the sun's map again (it lacked that sphere; the image a fresh texture's), and moved back draws
     nothing (the map holds every caster both views need)."""
-    from addon import gpu_library
+    from addon.frame import gpu_library
 
     scene, sun, point = _off_screen_scene()
     point.data.use_shadow = False
@@ -946,7 +948,7 @@ def test_closed_casters_drawn_by_their_lit_faces_cast_the_same_shadows(tmp_path,
     of it open) drawn whole; a second point light inside a closed sphere (a bulb), which sees its
     inside: drawn whole for it, the bulb keeps its light in. And the camera's passes culling the
     faces these closed surfaces turn from it (passes.CULL_CLOSED_SURFACES) give the same image."""
-    from addon import gpu_scene, passes
+    from addon.frame import gpu_scene, passes
 
     scene = scenes.reset(size=64)
     scene.shading_lab.model = "PBR"
@@ -1025,7 +1027,7 @@ def test_a_render_takes_back_the_last_ones_shadow_texture_and_draws_every_layer_
     """A final render hands its maps' texture to the library; the next render of the same shape
     takes it (no new allocation) and draws its layers again: after a caster moved, the image is
     bit for bit a render's with a fresh texture, not one with the old shadows."""
-    from addon import gpu_library
+    from addon.frame import gpu_library
 
     library = gpu_library.LIBRARY
     scene, _light = _scene("POINT", 0.2, resolution=48)
@@ -1057,7 +1059,8 @@ def test_persistent_data_keeps_the_maps_while_their_content_is_the_same(tmp_path
     in place (same object, same name), two slots' materials swapped (one of them partly
     transparent: the other half of the sphere casts) and a light moved draw the maps again, each
     as a fresh texture's; and a scene with Persistent Data off draws them every time."""
-    from addon import extract, gpu_library
+    from addon.blender import extract
+    from addon.frame import gpu_library
 
     library = gpu_library.LIBRARY
     scene, light = _scene("POINT", 0.2, resolution=48)
@@ -1125,7 +1128,7 @@ def test_persistent_data_draws_the_maps_again_for_an_area_light_of_another_shape
     wider reach) changes which flat casters its layers may leave out (shadows.light_extent): with
     Persistent Data the next render draws the maps again, and other casters than before (the
     lights' extents are in the content key, as in the renderer's own)."""
-    from addon import gpu_library, passes
+    from addon.frame import gpu_library, passes
 
     library = gpu_library.LIBRARY
     scene, point = _scene("POINT", resolution=48)
@@ -1162,7 +1165,7 @@ def test_layers_no_caster_reaches_are_cleared_once_and_the_others_drawn_again(tm
     Moving the sphere from the light's +x side to its +y side clears the face it left (the image
     is bit for bit a fresh texture's), and moving it back clears the other (the first image
     again): a face left as it was would keep the sphere's shadow on the ground in view."""
-    from addon import gpu_library, passes
+    from addon.frame import gpu_library, passes
 
     library = gpu_library.LIBRARY
     scene, light = _scene("POINT", 0.0, resolution=48)
@@ -1205,7 +1208,7 @@ def test_layers_no_caster_reaches_are_cleared_once_and_the_others_drawn_again(tm
 
 
 def test_spare_textures_stay_within_their_budget(monkeypatch):
-    from addon import gpu_library
+    from addon.frame import gpu_library
 
     monkeypatch.setattr(gpu_library, "SPARE_BYTES", 100)
     library = gpu_library._Library()
@@ -1252,7 +1255,7 @@ def test_lights_shaded_by_group_give_the_one_loops_image(culling, tmp_path, monk
     tested). The scene lists them mixed (a point, a sun and an area light without shadows before
     and between a casting spot, point and sun), and with light culling each tile's list keeps the
     same order."""
-    from addon import gpu_library
+    from addon.frame import gpu_library
 
     scene = scenes.reset(size=64)
     scene.shading_lab.model = "PBR"

@@ -4,7 +4,7 @@ import math
 
 import pytest
 
-from addon import snapshot as S
+from addon.scene import snapshot as S
 
 
 @pytest.mark.parametrize("r", [0.1, 0.25, 0.5, 0.75, 1.0])

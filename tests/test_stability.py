@@ -74,8 +74,9 @@ import pytest
 import scenes
 from glsl_harness import evaluate
 
-from addon import programs, shading
-from addon import snapshot as S
+from addon.plan import programs
+from addon.reference import shading
+from addon.scene import snapshot as S
 
 ROUGHNESS = (0.0, 1e-4, 0.045, 0.3, 1.0)
 METALNESS = (0.0, 1.0)

@@ -1,5 +1,5 @@
-"""The lookup tables the add-on ships (addon/tables.npz) are what scripts/build_tables.py computes
-from their definitions in addon/multiscatter.py, and the engine reads them instead of computing
+"""The lookup tables the add-on ships (addon/reference/tables.npz) are what scripts/build_tables.py computes
+from their definitions in addon/reference/multiscatter.py, and the engine reads them instead of computing
 them at its first render."""
 
 from __future__ import annotations
@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from addon import ltc, multiscatter
+from addon.reference import ltc, multiscatter
 
 #: The area lights' LTC fits take two minutes: tests/test_ltc.py refits sample cells of them
 #: instead, and recomputes the sphere table whole.

@@ -9,8 +9,8 @@ import numpy as np
 import pytest
 from glsl_harness import evaluate
 
-from addon import brdf as S
-from addon import tonemap as T
+from addon.reference import brdf as S
+from addon.reference import tonemap as T
 
 N = 4096
 RNG = np.random.default_rng(7)

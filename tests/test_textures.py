@@ -162,7 +162,7 @@ def _alpha_scene(alpha=1.0, image_alpha=None):
     """A red back plane (opaque) under a blue front plane of coverage ``alpha`` (or the alpha of
     its base colour image), both pure Lambert, a sun straight down with E = pi: radiance =
     albedo, and where the planes overlap a L_front + (1 - a) L_back."""
-    from addon.scene_builder import principled_material
+    from addon.blender.scene_builder import principled_material
 
     scene = scenes.reset(size=SIZE)
     scenes.ortho_camera(scene, scale=2.0)
@@ -220,7 +220,8 @@ def test_image_pixels_are_read_and_uploaded_once_and_again_after_an_edit(tmp_pat
     (each final render is a new renderer: the program library keeps the texture); an unsaved edit
     (new pixels, as painting makes) is read and uploaded again by the next render, and seen, and
     the old texture is not kept beside the new one."""
-    from addon import extract, gpu_library
+    from addon.blender import extract
+    from addon.frame import gpu_library
 
     rng = np.random.default_rng(11)
     first, second = rng.uniform(0.0, 1.0, (2, TEXELS, TEXELS, 3))
@@ -254,8 +255,8 @@ def test_kept_image_textures_stay_within_their_budget(monkeypatch):
     IMAGE_BYTES, an image larger than that not kept, an image read again (a new ImageData, even
     with the same pixels) uploaded again, and the textures of images nothing holds any more
     dropped at the next upload."""
-    from addon import gpu_library
-    from addon.snapshot import ImageData
+    from addon.frame import gpu_library
+    from addon.scene.snapshot import ImageData
 
     monkeypatch.setattr(gpu_library, "IMAGE_BYTES", 100)
     library = gpu_library._Library()
@@ -339,7 +340,7 @@ def test_image_from_a_linked_library_beside_a_local_one_of_the_same_name(tmp_pat
 def test_a_normal_map_on_n_gons_is_said_to_be_dropped():
     """Blender gives tangents to triangles and quads only: the normal map of a mesh with a
     pentagon is not drawn, and the render says so."""
-    from addon import extract
+    from addon.blender import extract
 
     scene = _textured_scene({"Normal": ("bumps", np.full((TEXELS, TEXELS, 3), (0.5, 0.5, 1.0)), True)})
     plane = next(o for o in scene.objects if o.type == "MESH")

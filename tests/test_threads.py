@@ -17,7 +17,8 @@ import numpy as np
 import scenes
 
 import addon
-from addon import engine, gpu_library, passes
+from addon.blender import engine
+from addon.frame import gpu_library, passes
 
 
 def _two_program_scene():
@@ -104,7 +105,7 @@ def test_library_lookups_racing_with_clears_from_8_threads():
     half-made one) and the library ends consistent."""
     from gpu_harness import run_on_gpu
 
-    from addon import programs
+    from addon.plan import programs
 
     features = programs.Features("PBR", 1, frozenset({"SUN"}))
 

@@ -16,8 +16,9 @@ import pytest
 import scenes
 from gpu_harness import run_on_gpu, viewport_image
 
-from addon import extract, renderer
-from addon.scene_builder import principled_material
+from addon.blender import extract
+from addon.blender.scene_builder import principled_material
+from addon.frame import renderer
 
 SIZE = 32
 RED, BLUE = np.array([0.8, 0.0, 0.0]), np.array([0.0, 0.0, 0.6])  # emitted radiance

@@ -1,4 +1,4 @@
-"""The GPU against its numpy twin (addon/shading.py) on random scenes: same terms, same lights,
+"""The GPU against its numpy twin (addon/reference/shading.py) on random scenes: same terms, same lights,
 float32 on the GPU vs float64 in numpy. The twin itself is held to closed forms in
 test_shading_twin.py and, through the renders, to Cycles."""
 
@@ -10,8 +10,9 @@ import numpy as np
 import pytest
 import scenes
 
-from addon import light_tiles, shading
-from addon import snapshot as S
+from addon.plan import light_tiles
+from addon.reference import shading
+from addon.scene import snapshot as S
 
 SIZE = 48
 SCALE = 2.0
@@ -113,7 +114,7 @@ def _compare(model, seed, tmp_path, sizes=False):
     p = scenes.intersect_plane(origins, direction, np.zeros(3), normal)
     v = np.broadcast_to(-direction, p.shape)
     n = np.broadcast_to(normal if normal @ -direction > 0 else -normal, p.shape)  # back face flip
-    # Blinn-Phong's diffuse colour falls back to base x (1 - metalness) (addon/extract.py)
+    # Blinn-Phong's diffuse colour falls back to base x (1 - metalness) (addon/blender/extract.py)
     diffuse = tuple(c * (1.0 - mat["metalness"]) for c in mat["base_color"])
     surface = shading.Surface(p, n, v, S.MaterialParams(**mat, diffuse_color=diffuse))
     want = shading.shade(model, surface, [_twin_light(dict(props)) for props in lights], ambient=0.05)

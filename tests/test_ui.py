@@ -9,7 +9,8 @@ import bpy
 import pytest
 import scenes
 
-from addon import gpu_library, ui
+from addon.blender import ui
+from addon.frame import gpu_library
 
 
 class Layout:
@@ -97,17 +98,17 @@ def test_blenders_panels_open_to_the_engine():
 
 
 def test_material_preset_operator_applies_measured_values():
-    from addon import presets
+    from addon.scene import presets
 
     scene = scenes.reset(size=8)
     mat = scenes.material("Target", roughness=0.9, shininess=5.0)  # explicit values to be replaced
     obj = scenes.plane(scene, material=mat)
     gold = presets.load_material_presets()["gold"]
-    from addon.operators import SHADINGLAB_OT_apply_material_preset as op
+    from addon.blender.operators import SHADINGLAB_OT_apply_material_preset as op
     assert "UNDO" in op.bl_options
     with bpy.context.temp_override(material=mat, object=obj):
         assert bpy.ops.shading_lab.apply_material_preset(preset="gold") == {"FINISHED"}
-    from addon import extract
+    from addon.blender import extract
 
     params = extract.material_params(mat)
     assert params.base_color == pytest.approx(gold.base_color, abs=1e-6)
@@ -119,8 +120,8 @@ def test_material_preset_operator_applies_measured_values():
 
 
 def test_conversion_operators_with_undo():
-    from addon import extract
-    from addon.operators import SHADINGLAB_OT_convert_roughness, SHADINGLAB_OT_principled_to_explicit
+    from addon.blender import extract
+    from addon.blender.operators import SHADINGLAB_OT_convert_roughness, SHADINGLAB_OT_principled_to_explicit
 
     assert "UNDO" in SHADINGLAB_OT_convert_roughness.bl_options
     assert "UNDO" in SHADINGLAB_OT_principled_to_explicit.bl_options
@@ -152,7 +153,8 @@ def test_conversion_operators_with_undo():
 def test_material_preset_menu_keeps_its_items_and_names_its_error(tmp_path, monkeypatch):
     """The dynamic menu returns the same (kept-alive) items while the library file is unchanged,
     reads it again when it changes, and a broken library is one item with a real identifier."""
-    from addon import operators, presets
+    from addon.blender import operators
+    from addon.scene import presets
 
     library = tmp_path / "materials.toml"
     library.write_text((presets.PRESETS_DIR / "materials.toml").read_text(encoding="utf-8"), encoding="utf-8")
@@ -189,7 +191,8 @@ def test_render_panel_says_how_the_empirical_models_white_is_displayed():
 
 
 def test_material_panel_shows_the_auto_choice_and_its_verification(monkeypatch):
-    from addon import auto_terms, engine
+    from addon.blender import engine
+    from addon.plan import auto_terms
 
     scene = scenes.reset(size=8)
     mat = scenes.material("Rough gold", roughness=0.6, metalness=1.0)

@@ -12,8 +12,9 @@ import pytest
 import scenes
 from gpu_harness import read_texture, run_on_gpu
 
-from addon import engine, extract, renderer
-from addon.viewport import ViewportSession
+from addon.blender import engine, extract
+from addon.blender.viewport import ViewportSession
+from addon.frame import renderer
 
 
 @pytest.fixture
@@ -200,7 +201,7 @@ def test_many_objects_upload_blocks_not_items_and_each_finds_its_matrix():
     """1,024 instances of one small plane tiling the view (4 object blocks): one geometry and
     4 blocks uploaded, and the image equals that of one plane covering the same square (an item
     reading another's matrix would leave a hole or an overlap)."""
-    from addon import programs
+    from addon.plan import programs
 
     size, tiles = 32, 32
     scene = scenes.reset(size=size)

@@ -12,8 +12,9 @@ import pytest
 import scenes
 from test_cycles import _cycles
 
-from addon import environment, extract
-from addon import snapshot as S
+from addon.blender import extract
+from addon.reference import environment
+from addon.scene import snapshot as S
 
 W, H = 48, 32  # the render; the environment image is 64 x 32
 
@@ -312,7 +313,7 @@ def test_splitting_suns_off_keeps_the_light_and_places_it_exactly(tmp_path):
 def test_bake_world_images_the_world_in_the_environment_convention():
     """A world whose image is a gradient (u in red, v in green) baked by Cycles' panoramic
     camera comes back as that image: the bake's orientation is the Environment Texture's."""
-    from addon import world_bake
+    from addon.blender import world_bake
 
     scene = scenes.reset(size=8)
     tree, out = _clear_world(scene)

@@ -1,4 +1,4 @@
-"""The world's maps kept on disk between sessions (addon/world_cache.py): a later session reads
+"""The world's maps kept on disk between sessions (addon/plan/world_cache.py): a later session reads
 them instead of computing them, and renders exactly what it would have computed; a changed world
 computes again; a broken file or a folder that cannot be written loses nothing."""
 
@@ -13,7 +13,8 @@ import pytest
 import scenes
 from test_world_light import _diffuse, _glossy, _sphere, _world
 
-from addon import gpu_environment, gpu_library, world_cache
+from addon.frame import gpu_environment, gpu_library
+from addon.plan import world_cache
 
 
 def _image(folder, seed: int = 0, bright: float = 500.0) -> bpy.types.Image:
@@ -184,7 +185,7 @@ def test_the_folder_keeps_within_its_budget_dropping_the_least_recently_used(tmp
 def test_the_key_is_the_content(tmp_path):
     """Same content, same key (whatever the image is called); any change in what the maps depend
     on, another key."""
-    from addon.snapshot import EnvironmentTerm, ImageData
+    from addon.scene.snapshot import EnvironmentTerm, ImageData
 
     pixels = np.random.default_rng(2).uniform(0.0, 1.0, (8, 16, 4)).astype(np.float32)
 
@@ -212,7 +213,7 @@ def test_the_world_panel_shows_what_is_kept_and_the_operator_clears_it(cache, tm
 
     from test_ui import _draw
 
-    from addon import ui
+    from addon.blender import ui
 
     scene = _scene(tmp_path)
     scenes.render(scene, tmp_path / "r.exr")

@@ -18,8 +18,9 @@ import pytest
 import scenes
 from test_cycles import _cycles
 
-from addon import brdf, environment, gpu_environment, gpu_library
-from addon.scene_builder import principled_material
+from addon.blender.scene_builder import principled_material
+from addon.frame import gpu_environment, gpu_library
+from addon.reference import brdf, environment
 
 ROUGHNESS = (0.0, 0.25, 0.5, 0.75, 1.0)
 W, H = 200, 40  # five spheres in a row, 20 px per metre
@@ -742,7 +743,8 @@ def test_world_preset_occlusion_against_cycles(resolution, tmp_path):
     sphere seen from the front hides the ground behind it, but it is not a column reaching to
     the horizon: the back-face prepass gives it its depth (without it the ground behind each
     sphere darkens in wedges: 4.5 % here, against 3.3 % with it)."""
-    from addon import presets, scene_builder
+    from addon.blender import scene_builder
+    from addon.scene import presets
 
     scene = scenes.reset()
     scene_builder.build_scene(presets.load_scene_preset("world"), scene)
@@ -840,7 +842,7 @@ def test_the_back_face_prepass_culled_is_the_prepass_discarded(tmp_path, monkeyp
     for bit, the image of the prepass that rasterises them and discards them: spheres on a ground,
     a mirrored torus (its winding turned) and a plane tilted to show its back; and the occlusion
     does darken it (against World Occlusion off)."""
-    from addon import passes
+    from addon.frame import passes
 
     scene = scenes.reset(size=48)
     scene.shading_lab.model = "PBR"

@@ -17,8 +17,10 @@ from gpu_harness import run_on_gpu
 from test_cycles import _cycles
 from test_world_light import _sphere, _world
 
-from addon import environment, extract, gpu_library, shading
-from addon.scene_builder import principled_material
+from addon.blender import extract
+from addon.blender.scene_builder import principled_material
+from addon.frame import gpu_library
+from addon.reference import environment, shading
 
 W, H, SCALE = 96, 48, 4.0  # orthographic, looking down -z; 24 px per metre
 CENTRES = (-1.3, 0.0, 1.3)

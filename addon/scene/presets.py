@@ -22,7 +22,7 @@ from .snapshot import MODEL_CHOICES, cli_names, f0_from_ior
 
 
 def _find_presets_dir() -> Path:
-    here = Path(__file__).resolve().parent
+    here = Path(__file__).resolve().parents[1]  # the package: addon/ in the source tree
     for candidate in (here / "presets", here.parent / "presets"):
         if candidate.is_dir():
             return candidate

@@ -15,10 +15,12 @@ import gpu
 import numpy as np
 from bpy.app.handlers import persistent
 
-from . import auto_terms, exposure, extract
-from .gpu_library import LIBRARY, ShaderCompileError
-from .passes import View
-from .renderer import Renderer, frame_views
+from ..frame.gpu_library import LIBRARY, ShaderCompileError
+from ..frame.passes import View
+from ..frame.renderer import Renderer, frame_views
+from ..plan import auto_terms
+from ..scene import exposure
+from . import extract
 
 ENGINE_ID = "SHADING_LAB"
 RADIANCE_PASS = "Radiance"  # raw HDR radiance when the engine's own tone mapper fills Combined

@@ -15,7 +15,7 @@ import bmesh
 import bpy
 from mathutils import Euler, Matrix, Vector
 
-from . import presets as P
+from ..scene import presets as P
 
 _CAMERA_TYPES = {"perspective": "PERSP", "orthographic": "ORTHO"}
 #: Principled IOR for F0 close to 1 (IOR -> infinity); beyond it the Shading Lab F0 is ticked.

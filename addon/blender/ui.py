@@ -44,7 +44,7 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
     bl_context = "render"
 
     def draw(self, context):
-        from .gpu_library import LIBRARY
+        from ..frame.gpu_library import LIBRARY
 
         layout = self.layout
         layout.use_property_split = True
@@ -214,7 +214,7 @@ class SHADINGLAB_PT_world(ShadingLabPanel, bpy.types.Panel):
 
 def _world_cache_row(layout) -> None:
     """What the world cache keeps on disk, and a button to clear it."""
-    from . import world_cache
+    from ..plan import world_cache
 
     col = layout.column(heading="Cache")
     if world_cache.folder() is None:
@@ -289,7 +289,7 @@ def _auto_choice(layout, context) -> None:
     scene_props = getattr(scene, "shading_lab", None)
     if scene_props is None or scene_props.term_set != "AUTO":
         return
-    from .auto_terms import label
+    from ..plan.auto_terms import label
     from .engine import last_term_choices, last_verification
 
     name = context.material.name_full

@@ -12,9 +12,9 @@ from pathlib import Path
 
 import numpy as np
 
-from . import light_tiles, shadows
-from .matrices import invert
-from .snapshot import (
+from ..reference.multiscatter import MS_SIZE, S_SIZE
+from ..scene.matrices import invert
+from ..scene.snapshot import (
     LIGHT_KINDS,
     MAX_ENVIRONMENT_IMAGES,
     MODELS,
@@ -24,13 +24,10 @@ from .snapshot import (
     World,
     normal_matrices,
 )
+from . import light_tiles, shadows
 
-#: Side of the multiple-scattering albedo table (addon/multiscatter.py), in texels.
-MS_SIZE = 32
-#: Side of the Principled set's 3D table S(r, mu, z), as Cycles' (16^3).
-S_SIZE = 16
 #: Sides of the linearly transformed cosines' table and of its horizon-clipping sphere table
-#: (addon/ltc.py, glsl/ltc.glsl), in texels.
+#: (addon/reference/ltc.py, glsl/ltc.glsl), in texels.
 LTC_SIZE = 64
 LTC_SPHERE_SIZE = 32
 #: Objects per uniform block of object data (128 bytes each: 32 KiB, within every GPU's limit);
@@ -66,7 +63,7 @@ ENVIRONMENTS = ("", "UNIFORM", "MAP")
 
 def glsl_dir() -> Path:
     """``glsl/`` beside the package when installed as an extension, else at the repository root."""
-    here = Path(__file__).resolve().parent
+    here = Path(__file__).resolve().parents[1]  # the package: addon/ in the source tree
     for candidate in (here / "glsl", here.parent / "glsl"):
         if (candidate / "brdf.glsl").is_file():
             return candidate
@@ -540,7 +537,7 @@ EXPOSURE_STAGES = ("BLOCKS", "ROWS", "COLUMNS")
 
 @lru_cache(maxsize=4)
 def exposure_source(stage: str) -> ProgramSource:
-    from . import exposure
+    from ..scene import exposure
 
     return _full_screen_source("exposure.frag.glsl", defines=(
         ("SL_EXPOSURE_" + stage, "1"), ("SL_EXPOSURE_BINS", str(exposure.BINS)),

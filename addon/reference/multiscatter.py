@@ -20,9 +20,13 @@ from pathlib import Path
 
 import numpy as np
 
+from ..scene.snapshot import TERM_CHOICES, Terms, f0_from_ior
 from . import brdf
-from .programs import MS_SIZE, S_SIZE
-from .snapshot import TERM_CHOICES, Terms, f0_from_ior
+
+#: Side of the multiple-scattering albedo table, in texels.
+MS_SIZE = 32
+#: Side of the Principled set's 3D table S(r, mu, z), as Cycles' (16^3).
+S_SIZE = 16
 
 
 def _half_vectors(ndf: str, alpha: float, strata: int, azimuths: int):

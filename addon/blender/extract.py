@@ -14,9 +14,9 @@ from collections import Counter, OrderedDict
 import bpy
 import numpy as np
 
-from . import auto_terms, light_tiles, shadows
-from . import snapshot as S
-from .matrices import invert
+from ..plan import auto_terms, light_tiles, shadows
+from ..scene import snapshot as S
+from ..scene.matrices import invert
 
 LIGHT_KIND = {"POINT": "POINT", "SPOT": "SPOT", "SUN": "SUN", "AREA": "AREA"}
 
@@ -879,7 +879,7 @@ _SUNS_LOCK = threading.Lock()
 
 def _world_suns(terms, threshold: float, angle: float) -> tuple[S.Light, ...]:
     """The lighting field's brightest texels as suns (``environment.split_suns``), cached."""
-    from . import environment
+    from ..reference import environment
 
     lights = []
     for term in S.World.images(terms)[:S.MAX_ENVIRONMENT_IMAGES]:

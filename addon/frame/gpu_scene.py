@@ -31,8 +31,10 @@ from dataclasses import dataclass, replace
 import gpu
 import numpy as np
 
-from . import gpu_library, light_tiles, matrices, programs, shadows
-from .snapshot import MAX_ENVIRONMENT_IMAGES, ImageData, MeshGeometry, Snapshot, World
+from ..plan import light_tiles, programs, shadows
+from ..scene import matrices
+from ..scene.snapshot import MAX_ENVIRONMENT_IMAGES, ImageData, MeshGeometry, Snapshot, World
+from . import gpu_library
 
 #: GPU texture format per ``ImageData.storage``: byte images keep their bytes (an sRGB one is
 #: decoded to linear by the sampler, before filtering, as Blender's own image textures are).

@@ -25,8 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .matrices import cross3, invert
-from .snapshot import Light, Snapshot
+from ..scene.matrices import cross3, invert
+from ..scene.snapshot import Light, Snapshot
 
 #: Layers one frame may use (a point light takes six): lights beyond them cast no shadow (a warning
 #: says so). The uniform block holds 160 bytes per layer.

@@ -221,7 +221,7 @@ class ImageData:
     storage: str = "FLOAT"
     revision: int = 0  # a new number each time the pixels are read (precomputation keys use it)
     # the pixels are a file's (or a packed file's), unedited: what is computed from them may be
-    # kept on disk between sessions (addon/world_cache.py); an image being painted is not
+    # kept on disk between sessions (addon/plan/world_cache.py); an image being painted is not
     saved: bool = False
 
     def __post_init__(self):

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .snapshot import Choice
+from ..scene.snapshot import Choice
 
 #: Who turns radiance into display values: Blender's view transform, or one of the engine's curves.
 TONE_MAPPER_CHOICES = (

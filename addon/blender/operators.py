@@ -7,7 +7,7 @@ from __future__ import annotations
 import bpy
 from bpy.props import EnumProperty
 
-from . import presets
+from ..scene import presets
 
 #: The menu's items, kept alive between draws (Blender does not copy the strings a dynamic enum
 #: returns: items built anew on every call may be freed while the menu shows them) and read again
@@ -133,7 +133,7 @@ class SHADINGLAB_OT_convert_roughness(_MaterialConversion, bpy.types.Operator):
     ))
 
     def convert(self, props, p):
-        from .snapshot import roughness_from_shininess, shininess_from_roughness
+        from ..scene.snapshot import roughness_from_shininess, shininess_from_roughness
 
         if self.direction == "TO_SHININESS":
             props.shininess, props.use_shininess = shininess_from_roughness(p.roughness), True
@@ -181,7 +181,7 @@ class SHADINGLAB_OT_clear_world_cache(bpy.types.Operator):
     bl_options = {"REGISTER"}
 
     def execute(self, context):
-        from . import world_cache
+        from ..plan import world_cache
 
         where = world_cache.folder()
         if where is None:

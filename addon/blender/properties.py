@@ -14,9 +14,9 @@ from bpy.props import (
     StringProperty,
 )
 
+from ..reference.tonemap import TONE_MAPPER_CHOICES
+from ..scene.snapshot import MODEL_CHOICES, enum_items
 from . import extract
-from .snapshot import MODEL_CHOICES, enum_items
-from .tonemap import TONE_MAPPER_CHOICES
 
 MODEL_ITEMS = enum_items(MODEL_CHOICES)
 

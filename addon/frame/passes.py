@@ -30,10 +30,12 @@ from dataclasses import dataclass, field, replace
 import gpu
 import numpy as np
 
-from . import exposure, gpu_library, light_tiles, programs, shadows
+from ..plan import light_tiles, programs, shadows
+from ..scene import exposure
+from ..scene.matrices import invert
+from ..scene.snapshot import MAX_ENVIRONMENT_IMAGES, Snapshot, World
+from . import gpu_library
 from .gpu_scene import Draw, SceneResources
-from .matrices import invert
-from .snapshot import MAX_ENVIRONMENT_IMAGES, Snapshot, World
 
 
 def new_texture(width: int, height: int, format: str) -> gpu.types.GPUTexture:

@@ -15,6 +15,7 @@ import math
 
 import numpy as np
 
+from ..scene.snapshot import Light, MaterialParams, Terms
 from . import environment, ltc
 from . import multiscatter as M
 from .brdf import (
@@ -43,7 +44,6 @@ from .brdf import (
     pbr_visibility,
     saturate,
 )
-from .snapshot import Light, MaterialParams, Terms
 
 DEFAULT_TERMS = Terms()
 PRINCIPLED_TERMS = Terms(principled=True)
@@ -419,7 +419,7 @@ def pbr_diffuse(s: Surface, F, NoV, NoL, NoH, LoH, LoV, terms: Terms):
 
 
 def specular_energy_compensation(s: Surface, terms: Terms):
-    """Turquin 2019: 1 + F0 (1 / E(mu_o) - 1), E from addon/multiscatter.py's table."""
+    """Turquin 2019: 1 + F0 (1 / E(mu_o) - 1), E from addon/reference/multiscatter.py's table."""
     if not terms.multiscatter:
         return np.ones(np.shape(s.NoV) + (3,))
     table = M.albedo_table(terms.ndf, terms.visibility)
@@ -703,7 +703,7 @@ def shade_polygon_light(s: Surface, offsets, to_centre, L, form_factor, l, facto
     over the polygon of corners ``offsets`` about its centre at ``to_centre`` from the points, of
     unclipped form factor ``form_factor``, on the physically based model: the diffuse lobe from
     the horizon-clipped irradiance, the specular from the linearly transformed cosine's integral
-    over the polygon (addon/ltc.py). ``ltc_jitter``: ltc.ltc_integral's, for tests. ``memo``
+    over the polygon (addon/reference/ltc.py). ``ltc_jitter``: ltc.ltc_integral's, for tests. ``memo``
     (with ``memo_key`` naming the polygon): where the same points are shaded with several term
     sets, what depends on the points, the polygon and the distribution alone is computed once."""
     L = np.asarray(L, np.float64)

@@ -11,9 +11,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ..scene.matrices import invert
+from ..scene.snapshot import MAX_ENVIRONMENT_IMAGES, EnvironmentTerm, ImageData, World
 from .brdf import MIN_PERCEPTUAL_ROUGHNESS
-from .matrices import invert
-from .snapshot import MAX_ENVIRONMENT_IMAGES, EnvironmentTerm, ImageData, World
 from .tonemap import srgb_to_linear
 
 

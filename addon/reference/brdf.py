@@ -11,7 +11,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .snapshot import Terms
+from ..scene.snapshot import Terms
 
 PI = np.pi
 INV_PI = 1.0 / np.pi

@@ -35,8 +35,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..scene.snapshot import MAX_ENVIRONMENT_IMAGES, World
 from . import programs
-from .snapshot import MAX_ENVIRONMENT_IMAGES, World
 
 DEFAULT_BUDGET_MB = 1024
 _OFF = {"off", "0", "none", "false", "no"}
@@ -83,9 +83,10 @@ def code_digest() -> str:
     (read once per session)."""
     global _code_digest
     if _code_digest is None:
-        here = Path(__file__).resolve().parent
+        package = Path(__file__).resolve().parents[1]
         h = hashlib.sha1()
-        modules = [here / name for name in ("environment.py", "gpu_environment.py", "world_cache.py")]
+        modules = [package / name for name in ("reference/environment.py", "frame/gpu_environment.py",
+                                               "plan/world_cache.py")]
         for path in sorted(programs.glsl_dir().glob("*.glsl")) + modules:
             h.update(path.name.encode())
             h.update(path.read_bytes() if path.is_file() else b"-")

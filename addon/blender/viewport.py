@@ -17,10 +17,11 @@ import time
 import gpu
 import numpy as np
 
-from . import exposure, extract
-from . import snapshot as S
-from .gpu_library import ShaderCompileError
-from .renderer import Renderer, frame_views
+from ..frame.gpu_library import ShaderCompileError
+from ..frame.renderer import Renderer, frame_views
+from ..scene import exposure
+from ..scene import snapshot as S
+from . import extract
 
 _NO_CAMERA = S.Camera(np.eye(4, dtype=np.float32), np.eye(4, dtype=np.float32), True, (0.0, 0.0, 0.0),
                       (0.0, 0.0, -1.0))

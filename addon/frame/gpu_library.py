@@ -36,8 +36,8 @@ from collections.abc import Callable
 import gpu
 import numpy as np
 
-from . import environment as env
-from . import programs
+from ..plan import programs
+from ..reference import environment as env
 
 
 class ShaderCompileError(RuntimeError):
@@ -548,7 +548,7 @@ def env_irradiance_program() -> gpu.types.GPUShader:
 def split_table(terms) -> gpu.types.GPUTexture:
     """E(mu, r) and B(mu, r) of ``terms``' D and V (RGBA32F, E in red, B in green): the split
     sum's second factor (the Principled set: GGX with Smith)."""
-    from . import multiscatter
+    from ..reference import multiscatter
 
     ndf, visibility = terms.lobe
 
@@ -597,7 +597,7 @@ def albedo_table(terms) -> gpu.types.GPUTexture:
     """The directional-albedo table of ``terms``' D and V as an R32F texture (built once); for the
     Principled set, GGX + Smith's table; with Eavg(r) (GGX + Smith's) as an extra row where the
     layering estimate reads it (the Principled set, the LAYERED diffuse)."""
-    from . import multiscatter
+    from ..reference import multiscatter
 
     ndf, visibility = terms.lobe
 
@@ -614,7 +614,7 @@ def ltc_table(terms) -> gpu.types.GPUTexture:
     """Area lights' linearly transformed cosines for ``terms``' distribution (the Principled set:
     GGX) with the horizon-clipping sphere table below them, as one RGBA32F texture
     (glsl/ltc.glsl)."""
-    from . import ltc
+    from ..reference import ltc
 
     ndf = terms.lobe[0]
 
@@ -630,7 +630,7 @@ def ltc_table(terms) -> gpu.types.GPUTexture:
 
 def s_table() -> gpu.types.GPUTexture:
     """The Principled set's S(r, mu, z) table as a 16 x 256 R32F atlas (rows: mu + 16 z)."""
-    from . import multiscatter
+    from ..reference import multiscatter
 
     def build():
         table = multiscatter.principled_s_table()

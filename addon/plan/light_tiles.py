@@ -25,7 +25,7 @@ from functools import lru_cache
 
 import numpy as np
 
-from .matrices import invert
+from ..scene.matrices import invert
 
 #: Pixels per tile side, in final-image pixels (a supersampled target scales it).
 TILE = 8

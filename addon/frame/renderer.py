@@ -18,11 +18,12 @@ from dataclasses import replace
 
 import numpy as np
 
-from . import gpu_library, programs
+from ..plan import programs
+from ..scene.snapshot import Snapshot
+from . import gpu_library
 from .gpu_environment import EnvironmentPass
 from .gpu_scene import SceneResources
 from .passes import VIEW_PASSES, ComparePass, Comparison, Frame, Pass, ShadowPass, View, full_screen_batch
-from .snapshot import Snapshot
 
 
 def frame_views(snapshot: Snapshot, background: Callable[[str | None], tuple], samples: int = 1,

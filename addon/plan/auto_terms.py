@@ -38,15 +38,16 @@ from typing import Callable
 
 import numpy as np
 
-from . import environment, programs, shading
-from .brdf import half_vector
-from .snapshot import (
+from ..reference import environment, shading
+from ..reference.brdf import half_vector
+from ..scene.snapshot import (
     ImageData,
     MaterialParams,
     Snapshot,
     Terms,
     World,
 )
+from . import programs
 
 #: The reference every candidate's error is measured against.
 REFERENCE = Terms(principled=True)

@@ -29,10 +29,11 @@ from dataclasses import dataclass
 import gpu
 import numpy as np
 
-from . import environment as env
-from . import gpu_library, programs, world_cache
+from ..plan import programs, world_cache
+from ..reference import environment as env
+from ..scene.snapshot import MAX_ENVIRONMENT_IMAGES, Snapshot, World
+from . import gpu_library
 from .passes import Frame, Pass, Target
-from .snapshot import MAX_ENVIRONMENT_IMAGES, Snapshot, World
 
 #: Environments precomputed since start (tests count them: an object edit must add none), and
 #: those read from the disk cache instead (``world_cache``).
