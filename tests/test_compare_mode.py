@@ -93,13 +93,37 @@ def test_viewport_compare_matches_final_render(tmp_path):
 
 @pytest.mark.parametrize("mode", ["SPLIT", "DIFFERENCE"])
 def test_compare_with_engine_tone_mapper(mode, tmp_path):
-    """Under an engine tone mapper a split shows each model's display values; a difference map
-    is not tone mapped; neither writes a Radiance pass."""
+    """Under an engine tone mapper a split shows each model's display values (each side equal to
+    that model's own render through the tone mapper); a difference map is the heat map of the two
+    models' radiance difference (the Range property's unit), not tone mapped itself: its colours
+    are the heat map's, exactly; neither writes a Radiance pass."""
     scene = _scene()
     props = scene.shading_lab
-    props.tone_mapper, props.compare_mode = "REINHARD", mode
+    radiance = _model_renders(scene, tmp_path)  # tone mapper "Blender": Combined is the radiance
+    props.tone_mapper = "REINHARD"
+    separate = _model_renders(scene, tmp_path)  # Combined: each model's display values
+    hdr = max(float(separate[m][..., :3].max()) for m in separate)
+    props.compare_mode, props.compare_a, props.compare_b = mode, "BLINN_PHONG", "PBR"
+    props.compare_split, props.compare_range = 0.5, 0.5
     bpy.ops.render.render()
     layers = scenes.read_exr_layers(scenes.save_result(scene, tmp_path / "all.exr", "MULTILAYER"))
     assert "Radiance" not in layers
     combined = layers["Combined"][..., :3]
     assert np.isfinite(combined).all() and 0.0 <= combined.min() and combined.max() <= 1.0 + 1e-6
+    a, b = separate["BLINN_PHONG"][..., :3], separate["PBR"][..., :3]
+    if mode == "SPLIT":
+        edge = SIZE // 2
+        np.testing.assert_array_equal(combined[:, :edge], a[:, :edge])
+        np.testing.assert_array_equal(combined[:, edge + 1:], b[:, edge + 1:])
+        assert hdr < 1.0 and np.abs(a - b).max() > 0.05, "display values on both sides, and they differ"
+    else:
+        weights = np.array([0.2126, 0.7152, 0.0722])
+        ra, rb = radiance["BLINN_PHONG"][..., :3], radiance["PBR"][..., :3]
+        want = srgb_decode(turbo(np.abs(ra @ weights - rb @ weights) / 0.5))
+        rows = SIZE - 8  # the legend's rows at the bottom
+        err = np.abs(combined[:rows] - want[:rows]).max()
+        reinhard = want / (1.0 + want)  # the map tone mapped again: what it must not be
+        apart = np.abs(reinhard - want)[:rows].max()
+        print(f"difference map: {err:.1e} off the radiance's heat map, {apart:.3f} from it tone mapped")
+        assert err < 5e-5, f"difference map off the heat map of the radiance by {err:.1e} (measured 1.4e-5)"
+        assert apart > 100 * err, f"the test tells a tone-mapped map apart ({apart:.3f})"

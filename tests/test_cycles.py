@@ -141,9 +141,12 @@ def test_glossy_distributions_match_cycles(distribution, terms, roughness, tmp_p
     rel = np.abs(ours[lit] - ref[lit]) / ref[lit]
     print(f"{distribution} r={roughness}: mean relative error {rel.mean():.4%}, max {rel.max():.4%}")
     assert lit.sum() > 200, "the highlight must cover enough pixels to compare"
-    measured = {("BECKMANN", 0.3): 3.95e-4, ("MULTI_GGX", 0.3): 2.71e-4, ("BECKMANN", 0.8): 3.5e-5,
-                ("MULTI_GGX", 0.8): 4.5e-5}[distribution, roughness]
-    _within(rel.mean(), measured, "mean")
+    # measured (mean, max) with bpy 5.0.1, 2026-12-06
+    mean, largest = {("BECKMANN", 0.3): (3.95e-4, 3.23e-3), ("MULTI_GGX", 0.3): (2.71e-4, 7.99e-3),
+                     ("BECKMANN", 0.8): (3.5e-5, 5.79e-3), ("MULTI_GGX", 0.8): (4.5e-5, 7.45e-3)}[
+        distribution, roughness]
+    _within(rel.mean(), mean, "mean")
+    _within(rel.max(), largest, "max")
 
 
 def _principled(base, metallic, roughness, ior=1.5):
@@ -174,8 +177,15 @@ def test_principled_term_set_matches_cycles(base, metallic, roughness, tmp_path)
     print(f"principled {base} m={metallic} r={roughness}: mean relative error {rel.mean():.3%}, "
           f"max {rel.max():.3%}, per channel mean {chan.mean():.3%}")
     assert lit.sum() > 200
-    measured = {0.5: 5e-5, 0.25: 5e-5, 0.35: 1.6e-4, 0.8: 4e-5, 0.6: 6e-5}[roughness]
-    _within(rel.mean(), measured, "mean")
+    # measured (mean, max) with bpy 5.0.1, 2026-12-06
+    mean, largest = {0.5: (5e-5, 6.69e-3), 0.25: (5e-5, 6.44e-3), 0.35: (1.6e-4, 9.38e-3),
+                     0.8: (4e-5, 7.05e-3), 0.6: (6e-5, 7.76e-3)}[roughness]
+    _within(rel.mean(), mean, "mean")
+    _within(rel.max(), largest, "max")
+
+
+#: The emission scene's largest relative error, measured with bpy 5.0.1 (2026-12-06).
+EMISSION_MAX = 9.21e-3
 
 
 def test_emission_matches_cycles(tmp_path):
@@ -192,6 +202,7 @@ def test_emission_matches_cycles(tmp_path):
     ours = scenes.render(scene, tmp_path / "ours.exr")[..., :3].astype(np.float64)
     ref = _cycles(scene, tmp_path / "cycles.exr")[..., :3].astype(np.float64)
     rel = np.abs(ours - ref) / ref
-    print(f"emission: mean relative error {rel.mean():.3%}")
+    print(f"emission: mean relative error {rel.mean():.3%}, max {rel.max():.3%}")
     assert ref[..., 2].min() > 0.8 * 0.25  # every pixel carries the emission
     _within(rel.mean(), 4e-5, "mean")  # measured 0.004 %
+    _within(rel.max(), EMISSION_MAX, "max")

@@ -43,6 +43,11 @@ def test_object_without_material_uses_documented_default(tmp_path):
     np.testing.assert_allclose(image[..., :3], want, rtol=1e-4)
 
 
+#: Perspective glossy plane against Cycles: relative error over the lit pixels, measured mean
+#: 0.018 %, largest 2.4 % (2026-12-06; Cycles' noise on the dimmest lit pixels): ~3x each.
+MEAN_BOUND, MAX_BOUND = 0.0005, 0.06
+
+
 def test_perspective_camera_matches_cycles(tmp_path):
     """A perspective camera (per-pixel view vectors) on a glossy plane, against Cycles."""
     from test_cycles import _cycles, _material
@@ -59,9 +64,11 @@ def test_perspective_camera_matches_cycles(tmp_path):
     ref = _cycles(scene, tmp_path / "cycles.exr")[..., :3].mean(-1).astype(np.float64)
     lit = ref > 0.02 * ref.max()
     rel = np.abs(ours[lit] - ref[lit]) / ref[lit]
-    print(f"perspective glossy: mean relative error {rel.mean():.4%} over {lit.sum()} pixels")
+    print(f"perspective glossy: relative error mean {rel.mean():.4%}, max {rel.max():.4%} "
+          f"over {lit.sum()} pixels")
     assert lit.mean() > 0.2
-    assert rel.mean() <= 0.02
+    assert rel.mean() <= MEAN_BOUND, f"mean relative error {rel.mean():.4%} (bound {MEAN_BOUND:.3%})"
+    assert rel.max() <= MAX_BOUND, f"largest relative error {rel.max():.4%} (bound {MAX_BOUND:.3%})"
 
 
 def test_render_without_camera_fails_cleanly_and_next_render_works(tmp_path):

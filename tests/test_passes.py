@@ -49,6 +49,53 @@ def test_light_passes_sum_to_combined(model, tmp_path):
         assert (total + ambient).max() > 1.0, "the Blinn-Phong passes stay unclamped"
 
 
+#: The closed-form scene's sun: straight above the camera's view, tilted 30 degrees about x, 2 W/m^2.
+SUN_TILT, SUN_E = math.radians(30.0), 2.0
+
+
+def _closed_form_lobes(model):
+    """Each lobe's radiance on a plane seen from straight above (n = v) under a sun 30 degrees
+    off the normal, written here from the definitions, not from the engine's twin: PBR's
+    Lambert (1 - F) rho / pi (eq. 1.18) and GGX D (1.15) x Smith height-correlated V (1.16-1.17)
+    x Schlick F (1.11) at h.v; Blinn-Phong's c_PL = E / pi (section 1.2.7) times the diffuse
+    colour (n.l) and the specular colour (n.h)^s (eq. 1.7)."""
+    base, NoL, NoH = np.array([0.6, 0.4, 0.2]), math.cos(SUN_TILT), math.cos(SUN_TILT / 2.0)
+    if model == "BLINN_PHONG":
+        spec, s = np.array([0.3, 0.25, 0.2]), 12.0
+        return base * SUN_E / math.pi * NoL, spec * SUN_E / math.pi * NoH ** s
+    f0, alpha = 0.04, 0.35 ** 2
+    a2 = alpha * alpha
+    D = a2 / (math.pi * (NoH * NoH * (a2 - 1.0) + 1.0) ** 2)
+    V = 0.5 / (NoL * math.sqrt(1.0 * (1.0 - a2) + a2) + 1.0 * math.sqrt(NoL * NoL * (1.0 - a2) + a2))
+    F = f0 + (1.0 - f0) * (1.0 - NoH) ** 5  # h.v = cos(15 degrees) = n.h here
+    return (1.0 - F) * base / math.pi * SUN_E * NoL, np.full(3, D * V * F * SUN_E * NoL)
+
+
+@pytest.mark.parametrize("model", ["PBR", "BLINN_PHONG"])
+def test_each_light_pass_holds_its_own_lobe(model, tmp_path):
+    """Diffuse Direct and Glossy Direct each equal their lobe's closed form: swapped passes, or a
+    lobe written to the wrong pass, fail here (the sum test above cannot see them)."""
+    scene = scenes.reset(size=8)
+    scene.shading_lab.model = model
+    scene.shading_lab.ambient = 0.1
+    scenes.ortho_camera(scene, scale=2.0)
+    scenes.plane(scene, size=8.0, material=scenes.material(
+        base_color=(0.6, 0.4, 0.2), roughness=0.35, specular_color=(0.3, 0.25, 0.2), shininess=12.0))
+    scenes.light(scene, "SUN", energy=SUN_E, rotation=(SUN_TILT, 0.0, 0.0))
+    vl = scene.view_layers[0]
+    vl.use_pass_diffuse_direct = vl.use_pass_glossy_direct = True
+    bpy.ops.render.render()
+    layers = scenes.read_exr_layers(scenes.save_result(scene, tmp_path / "lobes.exr", "MULTILAYER"))
+    from addon.blender.engine import LIGHT_PASSES
+
+    want = dict(zip(LIGHT_PASSES, _closed_form_lobes(model)))
+    for name, expected in want.items():
+        got = layers[name][..., :3].reshape(-1, 3).astype(np.float64)
+        err = np.abs(got / expected - 1.0).max()
+        print(f"{model} {name}: {got.mean(axis=0)} against {expected}, relative error {err:.2e}")
+        assert err < 5e-6, f"{name}: relative error {err:.2e} against its closed form (measured <= 8.8e-7)"
+
+
 def test_renders_read_into_the_buffers_the_last_one_handed_back(tmp_path):
     """A final render reads each output into a buffer of its own, hands the buffers back once
     Blender has the pixels, and the next render reads into them: every pass keeps its own

@@ -155,7 +155,9 @@ def test_textured_principled_matches_cycles(tmp_path):
     _, _, lit, rel = ours_and_cycles(scene, tmp_path)
     print(f"textured Principled vs Cycles: mean relative error {rel.mean():.3%}, max {rel.max():.3%}")
     assert lit.mean() > 0.5
-    assert rel.mean() <= 0.01
+    # measured (2026-12-06): mean 0.24 %, largest 0.97 % (Cycles' noise and its texel filtering)
+    assert rel.mean() <= 0.006, f"mean relative error {rel.mean():.3%} (bound 0.6 %, measured 0.24 %)"
+    assert rel.max() <= 0.025, f"largest relative error {rel.max():.3%} (bound 2.5 %, measured 0.97 %)"
 
 
 def _alpha_scene(alpha=1.0, image_alpha=None):

@@ -117,20 +117,22 @@ def _compare(scene, tmp_path, samples: int) -> list[tuple[float, float]]:
     return errors
 
 
-#: (kind, term set, sun, samples): the largest mean error and 95th percentile allowed per sphere.
-#: Measured (2026-12-03): no sun, split sum: metal mean <= 0.63 %, 95th percentile <= 1.98 %
-#: (the prefiltered levels read between texels), dielectric 0.08 % / 0.24 %; sampled (16): metal
-#: 0.13 % / 0.34 %, dielectric 0.05 % / 0.08 %. With a sun of 2000 (a texel of a 128-wide world),
-#: the roughness-0.12 metal's highlight: mean 25 % (split sum) and 12 % (sampled), 95th
-#: percentile 4.2 % / 3.8 % (its halo); the rougher spheres as without.
+#: (kind, term set, sun, samples): per sphere (roughness 0.12, 0.35, 0.7), the largest mean error
+#: and 95th percentile allowed, each about 2.5x what it measures (2026-12-06, printed by the test):
+#: no sun, split sum: metal mean 0.39 / 0.63 / 0.15 %, 95th percentile 1.28 / 1.98 / 0.44 % (the
+#: prefiltered levels read between texels), dielectric 0.065 / 0.077 / 0.044 %, 0.13 / 0.24 /
+#: 0.08 %; sampled (16): metal 0.13 / 0.10 / 0.07 %, 0.34 / 0.22 / 0.18 %, dielectric 0.046 /
+#: 0.041 / 0.043 %, 0.081 / 0.070 / 0.074 %. With a sun of 2000 (a texel of a 128-wide world) the
+#: roughness-0.12 metal's highlight: mean 25.9 % (split sum) and 11.3 % (sampled), 95th
+#: percentile 3.9 % / 3.8 % (its halo); the rougher spheres as without.
 CASES = {
-    ("metal", "CUSTOM", 0.0, 0): (0.015, 0.04),
-    ("metal", "PRINCIPLED", 0.0, 0): (0.015, 0.04),
-    ("dielectric", "PRINCIPLED", 0.0, 0): (0.002, 0.006),
-    ("metal", "CUSTOM", 0.0, 16): (0.004, 0.01),
-    ("dielectric", "PRINCIPLED", 0.0, 16): (0.0015, 0.003),
-    ("metal", "PRINCIPLED", 2000.0, 0): (0.5, 0.08),
-    ("metal", "PRINCIPLED", 2000.0, 16): (0.3, 0.08),
+    ("metal", "CUSTOM", 0.0, 0): ((0.010, 0.016, 0.004), (0.032, 0.05, 0.011)),
+    ("metal", "PRINCIPLED", 0.0, 0): ((0.010, 0.016, 0.004), (0.032, 0.05, 0.011)),
+    ("dielectric", "PRINCIPLED", 0.0, 0): ((0.0016, 0.002, 0.0011), (0.0033, 0.006, 0.002)),
+    ("metal", "CUSTOM", 0.0, 16): ((0.0034, 0.0025, 0.0017), (0.0085, 0.0055, 0.0046)),
+    ("dielectric", "PRINCIPLED", 0.0, 16): ((0.0012, 0.001, 0.0011), (0.002, 0.0018, 0.0019)),
+    ("metal", "PRINCIPLED", 2000.0, 0): ((0.5, 0.015, 0.0034), (0.08, 0.041, 0.0085)),
+    ("metal", "PRINCIPLED", 2000.0, 16): ((0.25, 0.007, 0.0026), (0.08, 0.011, 0.0057)),
 }
 
 
@@ -141,15 +143,17 @@ def test_gpu_matches_the_twin_under_an_image_world(case, tmp_path):
     errors = _compare(scene, tmp_path, samples)
     print(f"{case}: " + ", ".join(f"r {r}: mean {e:.3%}, 95th percentile {q:.3%}"
                                   for r, (e, q) in zip(ROUGHNESS, errors)))
-    mean_bound, percentile_bound = CASES[case]
-    assert max(e for e, _ in errors) < mean_bound, errors
-    assert max(q for _, q in errors) < percentile_bound, errors
+    for roughness, (mean, percentile), mean_bound, percentile_bound in zip(ROUGHNESS, errors, *CASES[case]):
+        assert mean < mean_bound, f"r {roughness}: mean {mean:.3%} (bound {mean_bound:.2%})"
+        assert percentile < percentile_bound, f"r {roughness}: 95th percentile {percentile:.3%} " \
+                                              f"(bound {percentile_bound:.2%})"
 
 
-#: Largest per-sphere error of the sampled twin against Cycles. Measured (2026-12-03): metal
-#: 0.17 / 1.03 / 1.34 % at roughness 0.12 / 0.35 / 0.7 (the split sum 0.55 / 1.18 / 4.16 %),
-#: dielectric 0.20 / 0.22 / 0.25 % (split sum 0.24 / 0.45 / 0.55 %).
-SAMPLED_VS_CYCLES = {"metal": 0.03, "dielectric": 0.006}
+#: Per sphere (roughness 0.12, 0.35, 0.7), the largest error of the sampled twin against Cycles
+#: (512 samples: its noise is part of what is measured). Measured: metal 0.17 / 1.03 / 1.34 %
+#: (2026-12-03), 0.17 / 0.92 / 1.21 % (2026-12-06); the split sum 0.38-0.55 / 1.18-1.21 / 4.16 %;
+#: dielectric 0.20 / 0.22 / 0.25 % (split sum 0.23 / 0.45 / 0.55 %).
+SAMPLED_VS_CYCLES = {"metal": (0.005, 0.025, 0.032), "dielectric": (0.005, 0.0055, 0.0065)}
 
 
 @pytest.mark.parametrize("kind", ["metal", "dielectric"])
@@ -167,8 +171,8 @@ def test_the_sampled_twin_converges_to_cycles_and_measures_the_split_sums_error(
         rows.append((roughness, float(np.abs(sampled[r_, c_] - ref).mean() / ref.mean()),
                      float(np.abs(split[r_, c_] - ref).mean() / ref.mean())))
     print(f"{kind}: " + ", ".join(f"r {r}: sampled {a:.2%}, split sum {b:.2%}" for r, a, b in rows))
-    for roughness, error, _ in rows:
-        assert error < SAMPLED_VS_CYCLES[kind], f"r {roughness}: sampled twin {error:.2%} from Cycles"
+    for (roughness, error, _), bound in zip(rows, SAMPLED_VS_CYCLES[kind]):
+        assert error < bound, f"r {roughness}: sampled twin {error:.2%} from Cycles (bound {bound:.2%})"
     worst_split, worst_sampled = max(b for _, _, b in rows), max(a for _, a, _ in rows)
     assert worst_split > 1.5 * worst_sampled, f"split sum {worst_split:.2%}, sampled {worst_sampled:.2%}"
 
