@@ -162,6 +162,57 @@ def test_final_render_of_a_uniform_world_shows_the_key(method, lum, tmp_path):
     assert stops == metered == pytest.approx(math.log2(KEY / lum), abs=1e-5)
 
 
+def _two_level_scene(dark: float = 0.01, bright: float = 0.8):
+    """20 x 20 pixels looking straight down: the bottom 6 rows (30 %) a plane of albedo ``dark``,
+    the rest one of albedo ``bright``, under a sun of pi W/m^2 overhead, F0 0: radiance = albedo."""
+    scene = scenes.reset(size=20)
+    scene.shading_lab.ambient = 0.0
+    scenes.ortho_camera(scene, scale=2.0)
+    for name, albedo, y0, y1 in (("dark", dark, -1.5, -0.4), ("bright", bright, -0.4, 1.5)):
+        mesh = bpy.data.meshes.new(name)
+        mesh.from_pydata([(-1.5, y0, 0), (1.5, y0, 0), (1.5, y1, 0), (-1.5, y1, 0)], [], [(0, 1, 2, 3)])
+        mesh.materials.append(scenes.material(name, base_color=(albedo,) * 3, f0=0.0, metalness=0.0))
+        scene.collection.objects.link(bpy.data.objects.new(name, mesh))
+    scenes.light(scene, "SUN", energy=math.pi)
+    props = scene.shading_lab
+    props.exposure_mode, props.exposure_method = "AUTO", "HISTOGRAM"
+    return scene
+
+
+def _kept_mean(p_dark, low, high, dark, bright):
+    """The mean log2 luminance of the ranks [low, high] of a frame whose darkest p_dark are at
+    ``dark`` and the rest at ``bright`` (as in the two-level test above)."""
+    kept_dark = max(min(high, p_dark) - low, 0.0)
+    kept_bright = max(high - max(low, p_dark), 0.0)
+    return (kept_dark * math.log2(dark) + kept_bright * math.log2(bright)) / (kept_dark + kept_bright)
+
+
+@pytest.mark.parametrize("setting,value", [("exposure_key", 0.36), ("exposure_low", 40.0),
+                                           ("exposure_high", 25.0), ("exposure_min", 3.0),
+                                           ("exposure_max", -2.0)])
+def test_each_automatic_exposure_setting_reaches_the_render(setting, value, tmp_path):
+    """Key, Low, High, Minimum and Maximum set in the Render panel, each away from its default,
+    change the final render's exposure as their closed forms say: log2(key) minus the mean log2
+    luminance of the kept ranks (Low and High in percent), then limited to [Minimum, Maximum]."""
+    scene = _two_level_scene()
+    props = scene.shading_lab
+    setattr(props, setting, value)
+    assert getattr(props, setting) == pytest.approx(value)
+    auto = dict(key=KEY, low=0.1, high=0.9, lo=-16.0, hi=16.0)
+    auto.update({"exposure_key": {"key": value}, "exposure_low": {"low": value / 100.0},  # percentages
+                 "exposure_high": {"high": value / 100.0}, "exposure_min": {"lo": value},
+                 "exposure_max": {"hi": value}}[setting])
+    free = math.log2(auto["key"]) - _kept_mean(0.3, auto["low"], auto["high"], 0.01, 0.8)
+    want = min(max(free, auto["lo"]), auto["hi"])
+    default = math.log2(KEY) - _kept_mean(0.3, 0.1, 0.9, 0.01, 0.8)
+    combined, radiance, _ = _combined_and_radiance(scene, tmp_path)
+    used, metered = engine.last_exposures["main"]
+    print(f"{setting} = {value}: exposure {used:.6f} stops (closed form {want:.6f}, defaults' {default:.6f})")
+    assert abs(used - want) < 1e-5 and abs(want - default) > 0.5, (used, want, default)
+    err = float(np.abs(combined[..., :3] / (radiance[..., :3] * 2.0 ** used) - 1.0).max())
+    assert err < 1e-5, f"Combined is not the radiance x 2^{used:.3f}: {err:.1e}"
+
+
 def test_engine_tone_mapper_gets_the_exposure_and_the_header_says_it(tmp_path):
     scene, _ = _world_scene(40.0)
     scene.shading_lab.tone_mapper = "REINHARD"

@@ -99,3 +99,66 @@ def test_hdr_range(model, tmp_path):
         saturated = strong >= 1.0
         assert saturated.mean() > 0.3, "the strong light must saturate much of the LDR frame"
         assert np.all(weak_part[saturated] == 0.0), "clamped pixels lose the weak light entirely"
+
+
+def test_f90_and_fresnel_p_shape_the_generalised_schlick(tmp_path):
+    """The material's F90 and Fresnel p (Fresnel: generalised Schlick, eq. 1.13): F = F0 +
+    (F90 - F0) (1 - cos theta)^(1/p), set away from their defaults (1, 0.2) and measured at 60
+    and 80 degrees."""
+    for theta in (60.0, 80.0):
+        scene_material = dict(base_color=(0, 0, 0), metalness=0.0, f0=0.04, f90=0.6, fresnel_p=0.35,
+                              roughness=0.3)
+        scene = _mirror_scene(theta, "PBR", **scene_material)
+        assert (scene.objects["Plane"].active_material.shading_lab.f90,
+                scene.objects["Plane"].active_material.shading_lab.fresnel_p) == pytest.approx((0.6, 0.35))
+        import bpy
+
+        bpy.context.scene.shading_lab.fresnel = "SCHLICK_GENERAL"
+        got = _fresnel_ratio_scene(scene, theta, tmp_path)
+        want = 0.04 + (0.6 - 0.04) * (1.0 - math.cos(math.radians(theta))) ** (1.0 / 0.35)
+        default = 0.04 + 0.96 * (1.0 - math.cos(math.radians(theta))) ** 5
+        err = float(np.abs(got / want - 1.0).max())
+        print(f"{theta} degrees: F {got.round(6)}, eq. 1.13 {want:.6f} (defaults' {default:.6f}), "
+              f"relative {err:.1e}")
+        assert err < 2e-6, f"{theta}: relative error {err:.1e} against eq. 1.13 (measured <= 3.8e-7)"
+        assert abs(want / default - 1.0) > 0.1, "the settings change F here"
+
+
+def _fresnel_ratio_scene(scene, theta_deg, tmp_path) -> np.ndarray:
+    measured = scenes.render(scene, tmp_path / "material.exr")[..., :3].astype(np.float64).mean(axis=(0, 1))
+    white_metal = _mirror_scene(theta_deg, "PBR", base_color=(1, 1, 1), metalness=1.0, roughness=0.3)
+    mirror = scenes.render(white_metal, tmp_path / "mirror.exr")[..., :3].astype(np.float64).mean(axis=(0, 1))
+    return measured / mirror
+
+
+def _conductor_fresnel(n, k, theta):
+    """Unpolarised reflectance of a conductor of complex index n + ik at incidence theta, from the
+    Fresnel equations in complex arithmetic (not the engine's real-valued rewriting)."""
+    eta = complex(n, k)
+    c = math.cos(theta)
+    s2 = 1.0 - c * c
+    t = np.sqrt(eta * eta - s2 + 0j)  # eta cos theta_t
+    rs = (c - t) / (c + t)
+    rp = (eta * eta * c - t) / (eta * eta * c + t)
+    return 0.5 * (abs(rs) ** 2 + abs(rp) ** 2)
+
+
+def test_complex_ior_sets_a_metals_exact_fresnel(tmp_path):
+    """Fresnel: Exact on a metal reads the material's IOR n and k (complex index per channel): F
+    at 0 and 70 degrees equals the Fresnel equations for n + ik, here a copper-like n, k set away
+    from the defaults."""
+    import bpy
+
+    n, k = (0.27, 0.68, 1.22), (3.61, 2.63, 2.29)
+    for theta in (0.0, 70.0):
+        scene = _mirror_scene(theta, "PBR", base_color=(1, 1, 1), metalness=1.0, ior_n=n, ior_k=k,
+                              roughness=0.3)
+        bpy.context.scene.shading_lab.fresnel = "EXACT"
+        material = scene.objects["Plane"].active_material.shading_lab
+        material.use_complex_ior = True  # the override that turns n and k on
+        assert tuple(material.ior_n) == pytest.approx(n) and tuple(material.ior_k) == pytest.approx(k)
+        got = _fresnel_ratio_scene(scene, theta, tmp_path)
+        want = np.array([_conductor_fresnel(a, b, math.radians(theta)) for a, b in zip(n, k)])
+        err = float(np.abs(got / want - 1.0).max())
+        print(f"{theta} degrees: F {got.round(6)}, Fresnel's equations {want.round(6)}, relative {err:.1e}")
+        assert err < 7e-7, f"{theta}: relative error {err:.1e} (measured <= 1.4e-7)"
