@@ -309,21 +309,29 @@ def random_results(tmp_path_factory):
     return rows
 
 
+#: Per bound: how many of the 250 materials may be measured over it (measured 2026-12-03: none at
+#: 0.5, one at 4: a rough dielectric at 4.59), and the least share that takes a set cheaper than
+#: the Principled one (measured: 59 of 250 at 0.5, 148 at 4): each within about 2-3x.
+MAX_OVER = {auto_terms.DEFAULT_BOUND: 2, 4.0: 3}
+MIN_CHEAPER = {auto_terms.DEFAULT_BOUND: 0.12, 4.0: 0.3}
+
+
 @pytest.mark.parametrize("bound", BOUNDS)
 def test_auto_keeps_random_materials_within_the_bound(random_results, bound):
     """On 50 random scenes (5 materials each, 1-8 lights of every kind, frontal and grazing views,
     shadows on, black or uniform worlds, 96 px): the measured error of Auto against the Principled
-    set, per material on all its pixels, is within the bound for >= 95 % of the materials
-    (measured: 100 % at 0.5, 99.6 % at 4: a rough dielectric at 4.59), and Auto does not simply
-    take the Principled set (bound 0.5: 191 of 250; 4: 102)."""
+    set, per material on all its pixels, is within the bound for all but MAX_OVER materials, and
+    Auto does not simply take the Principled set (at least MIN_CHEAPER take cheaper terms)."""
     rows = random_results[bound]
     within, chosen, over = auto_scenes.tally(rows, bound)
+    cheaper = 1.0 - chosen.get("PRINCIPLED", 0) / len(rows)
+    print(f"bound {bound}: within {within:.1%} of {len(rows)}; cheaper terms {cheaper:.1%}; chosen {chosen}; "
+          f"over: {over}")
     assert len(rows) >= 200, len(rows)
-    assert within >= 0.95, (f"{within:.1%} of {len(rows)} materials within {bound}; over: {over}; "
-                            f"chosen {chosen}")
-    principled = chosen.get("PRINCIPLED", 0)
-    assert principled < 0.9 * len(rows), f"Auto chose the Principled set nearly always: {chosen}"
-    print(f"bound {bound}: within {within:.1%} of {len(rows)}; chosen {chosen}; over: {over}")
+    assert len(over) <= MAX_OVER[bound], (f"{len(over)} of {len(rows)} materials over {bound} (at most "
+                                          f"{MAX_OVER[bound]}): {over}; chosen {chosen}")
+    least = MIN_CHEAPER[bound]
+    assert cheaper >= least, f"cheaper terms for {cheaper:.1%} (at least {least:.0%})"
 
 
 def test_measured_error_is_within_a_factor_two_of_the_prediction(random_results):

@@ -65,7 +65,7 @@ SPLIT_SHARE = {auto_terms.DEFAULT_BOUND: 0.08, 4.0: 0.2}
 @pytest.mark.parametrize("bound", BOUNDS)
 def test_auto_takes_the_split_sum_where_it_is_within_the_bound(world_results, bound):
     """Under sampled image worlds (16 samples a pixel), Auto's materials stay within the bound
-    measured against the Principled set sampled (>= 95 %), and some take the split sum. Few do at
+    measured against the Principled set sampled (all but one at most), and some take the split sum. Few do at
     the default bound: the split sum's error against the sampled lobe is large on metals (Delta
     E_ITP 5-30 at the 99th percentile, measured and predicted alike); rough dielectrics and dark
     materials take it."""
@@ -74,7 +74,7 @@ def test_auto_takes_the_split_sum_where_it_is_within_the_bound(world_results, bo
     split = sum(n for name, n in chosen.items() if name.endswith(auto_terms.SPLIT_SUM))
     print(f"bound {bound}: within {within:.1%} of {len(rows)}; chosen {chosen}; over: {over}")
     assert len(rows) >= 50, len(rows)
-    assert within >= 0.95, f"{within:.1%} within {bound}; over: {over}"
+    assert len(over) <= 1, f"{len(over)} of {len(rows)} over {bound} (at most 1; measured none): {over}"
     assert split >= SPLIT_SHARE[bound] * len(rows), f"the split sum by {split} of {len(rows)}: {chosen}"
 
 
@@ -98,13 +98,13 @@ def test_the_split_sums_predicted_error_against_the_measured(world_results):
 @pytest.mark.parametrize("bound", BOUNDS)
 def test_auto_on_the_split_sum_keeps_materials_within_the_bound(split_sum_results, bound):
     """Under image worlds on the split sum (the default World Specular), Auto's materials, predicted
-    lit by the image itself, stay within the bound (>= 95 %; measured 2026-12-03: all 60 at either
-    bound) and do not all take the Principled set (measured: 10 of 60 at 0.5, 30 at 4)."""
+    lit by the image itself, stay within the bound (all but one at most; measured 2026-12-03: all 60 at
+    either bound) and do not all take the Principled set (measured: 10 of 60 at 0.5, 30 at 4)."""
     rows = split_sum_results[bound]
     within, chosen, over = auto_scenes.tally(rows, bound)
     print(f"bound {bound}: within {within:.1%} of {len(rows)}; chosen {chosen}; over: {over}")
     assert len(rows) >= 50, len(rows)
-    assert within >= 0.95, f"{within:.1%} within {bound}; over: {over}"
+    assert len(over) <= 1, f"{len(over)} of {len(rows)} over {bound} (at most 1; measured none): {over}"
     assert chosen.get("PRINCIPLED", 0) <= CHEAPER_SHARE[bound] * len(rows), f"chosen {chosen}"
 
 
