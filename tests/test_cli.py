@@ -67,6 +67,46 @@ def test_bad_resolution(tmp_path):
     assert proc.returncode == 2 and "--resolution must look like 1280x720" in proc.stderr
 
 
+def test_demo_frames_and_lights_every_sphere(tmp_path):
+    """``./run demo``: the ten spheres whole inside the frame, and each lit in the physically
+    based render (the world and the key sun reach the gold too)."""
+    w, h = 96, 54
+    out = tmp_path / "out"
+    proc = _run("demo", "--model", "all", "--resolution", f"{w}x{h}", "--out", out)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    assert (out / "demo_comparison.png").is_file()
+    images = {model: scenes.read_exr(out / f"demo_{model}.exr") for model in ("blinn-phong", "phong", "pbr")}
+    for image in images.values():
+        assert image.shape == (h, w, 4) and np.isfinite(image).all() and image.min() >= 0.0
+
+    from bpy_extras.object_utils import world_to_camera_view
+    from mathutils import Vector
+
+    sys.path.insert(0, str(ROOT / "scripts"))
+    import demo_scene
+
+    scene = scenes.reset(size=8)
+    demo_scene.build(scene)
+    scene.render.resolution_x, scene.render.resolution_y = w, h
+    bpy.context.view_layer.update()
+    spheres = [ob for ob in scene.objects if ob.name.startswith("Sphere")]
+    assert len(spheres) == 10
+    luminance = images["pbr"][..., :3] @ np.array([0.2126, 0.7152, 0.0722], np.float32)
+    for ob in spheres:
+        centre = Vector(ob.location)
+        for d in ((1, 0, 0), (-1, 0, 0), (0, 0, 1), (0, 0, -1), (0, 1, 0), (0, -1, 0)):
+            p = world_to_camera_view(scene, scene.camera, centre + demo_scene.RADIUS * Vector(d))
+            assert 0.03 < p.x < 0.97 and 0.03 < p.y < 0.97 and p.z > 0.0, (ob.name, d, tuple(p))
+        p = world_to_camera_view(scene, scene.camera, centre)
+        edge = world_to_camera_view(scene, scene.camera, centre + Vector((demo_scene.RADIUS, 0.0, 0.0)))
+        r = 0.6 * (edge.x - p.x) * w  # the inner part of the sphere's disc, in pixels
+        ys, xs = np.mgrid[0:h, 0:w]
+        inside = (xs + 0.5 - p.x * w) ** 2 + (ys + 0.5 - (1.0 - p.y) * h) ** 2 < r * r
+        assert inside.sum() >= 4
+        mean = float(luminance[inside].mean())
+        assert mean > 0.05, (ob.data.materials[0].name, mean)
+
+
 def test_usage_inside_blender_argv_convention(tmp_path):
     """``blender -b --python render.py -- ARGS``: everything before ``--`` belongs to Blender."""
     sys.path.insert(0, str(ROOT / "scripts"))
