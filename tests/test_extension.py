@@ -2,7 +2,8 @@
 Blender's own tooling, Blender's validator accepts it, and a fresh Blender (a subprocess, since this
 session already registered the source tree's ``SHADING_LAB`` engine and ``Scene.shading_lab``)
 installs it into a temporary local repository, enables it as ``bl_ext.<repo>.shading_lab`` and
-renders a Lambert plane that the test checks against the closed form."""
+renders a Lambert plane that the test checks against the closed form, and a preset that reads every
+shipped table, which must equal the source tree's render to the bit."""
 
 from __future__ import annotations
 
@@ -97,7 +98,7 @@ def test_invalid_manifest_fails_with_one_line(tmp_path):
 # Runs in a fresh Python with bpy: nothing from the source tree is imported (only tests/scenes.py,
 # which has no add-on code). Arguments: zip, repository directory, EXR path, source addon/ folder.
 INSTALL_AND_RENDER = textwrap.dedent("""
-    import json, math, sys
+    import importlib, json, math, sys
     from pathlib import Path
 
     import bpy
@@ -139,7 +140,20 @@ INSTALL_AND_RENDER = textwrap.dedent("""
 
     engine = next(c for c in bpy.types.RenderEngine.__subclasses__()
                   if getattr(c, "bl_idname", None) == "SHADING_LAB")
-    programs = sys.modules[module + ".programs"]
+    programs = sys.modules[module + ".plan.programs"]
+
+    # a preset that reads every shipped table: area lights (the LTC tables), the Principled set
+    # (its S table, the albedo tables), Auto's cost table
+    presets = sys.modules[module + ".scene.presets"]
+    builder = importlib.import_module(module + ".blender.scene_builder")
+    multiscatter = importlib.import_module(module + ".reference.multiscatter")
+    auto_terms = importlib.import_module(module + ".plan.auto_terms")
+    preset_scene = scene  # factory settings would disable the extension: the same scene, emptied
+    for obj in list(preset_scene.objects):
+        bpy.data.objects.remove(obj)
+    builder.build_scene(presets.load_scene_preset("softbox"), preset_scene)
+    {configure}
+    scenes.render(preset_scene, Path(exr_path).with_name("preset.exr"))
     report = dict(
         module=module,
         addons=[a.module for a in prefs.addons],
@@ -152,6 +166,9 @@ INSTALL_AND_RENDER = textwrap.dedent("""
         glsl_dir=str(programs.glsl_dir()),
         user_resources=bpy.utils.resource_path("USER"),
         centre=pixels[{size} // 2, {size} // 2].tolist(),
+        tables=sorted(multiscatter._shipped()),
+        tables_file=str(multiscatter.SHIPPED),
+        cost_table=sorted(auto_terms.cost_table()),
     )
     bpy.ops.preferences.addon_disable(module=module)
     scene.render.engine = "CYCLES"
@@ -162,7 +179,27 @@ INSTALL_AND_RENDER = textwrap.dedent("""
     report["disabled"] = (module not in prefs.addons and not hasattr(scene, "shading_lab")
                           and scene.render.engine == "CYCLES")
     print("RESULT " + json.dumps(report))
-""").format(size=SIZE, repo_name=REPO_NAME, base=tuple(BASE.tolist()), sun=SUN_STRENGTH, angle=SUN_ANGLE)
+""").format(size=SIZE, repo_name=REPO_NAME, base=tuple(BASE.tolist()), sun=SUN_STRENGTH, angle=SUN_ANGLE,
+           configure="preset_scene.shading_lab.term_set = 'PRINCIPLED'; "
+                     "preset_scene.render.resolution_x, preset_scene.render.resolution_y = 64, 36")
+
+
+def _preset_from_the_source_tree(path: Path):
+    """The same preset, set up as the installed run sets it up, rendered by the source tree."""
+    import bpy
+
+    from addon.blender import scene_builder
+    from addon.scene import presets
+
+    scene = scenes.reset(size=SIZE)
+    scene.shading_lab.model = "PBR"
+    scenes.ortho_camera(scene, location=(0.0, 0.0, 3.0), scale=2.0)  # as the installed run's scene
+    for obj in list(scene.objects):
+        bpy.data.objects.remove(obj)
+    scene_builder.build_scene(presets.load_scene_preset("softbox"), scene)
+    scene.shading_lab.term_set = "PRINCIPLED"
+    scene.render.resolution_x, scene.render.resolution_y = 64, 36
+    return scenes.render(scene, path)
 
 
 def _blender_user_files(home: Path) -> set[Path]:
@@ -213,8 +250,23 @@ def test_installed_extension_renders(built_zip, tmp_path):
     np.testing.assert_allclose(pixels[..., 3], 1.0)
     np.testing.assert_allclose(report["centre"][:3], want, rtol=1e-4)
 
+    # The package's data came with it (a zip without them installs and computes or guesses), and
+    # a preset that reads them renders to the source tree's bits.
+    from addon.plan import auto_terms
+    from addon.reference import multiscatter
+
+    assert Path(report["tables_file"]) == installed / "reference" / "tables.npz"
+    tables, costs = report["tables"], report["cost_table"]
+    assert tables == sorted(multiscatter._shipped()) and len(tables) > 10, tables
+    assert costs == sorted(auto_terms.cost_table()) and costs, costs
+    installed_preset = scenes.read_exr(tmp_path / "preset.exr")
+    source_preset = _preset_from_the_source_tree(tmp_path / "source_preset.exr")
+    assert installed_preset.shape == (36, 64, 4) and source_preset[..., :3].max() > 0.05
+    differ = float(np.abs(installed_preset - source_preset).max())
+    assert differ == 0.0, f"the installed softbox differs from the source tree's by up to {differ:.3g}"
+
     # Nothing written to the real user configuration; the sandbox took Blender's user files.
     assert Path(report["user_resources"]).resolve() == user_resources.resolve()
     assert (user_resources / "extensions").is_dir()
     assert _blender_user_files(real_home) == before
-    assert time.perf_counter() - start < 60.0
+    assert time.perf_counter() - start < 90.0
