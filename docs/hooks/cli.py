@@ -26,7 +26,8 @@ PAGE = "command-line.md"
 MARKER = "<!-- render.py options -->"
 #: argparse's own groups by their headings here and their anchors; the script's groups keep their
 #: titles, anchored by a slug of the title up to its parenthesis.
-OWN_GROUPS = {"positional arguments": ("Positional argument", "scene"), "options": ("General options", "options")}
+OWN_GROUPS = {"positional arguments": ("Positional argument", "scene"),
+              "options": ("General options", "options")}
 
 
 def load_render_module():
