@@ -401,10 +401,11 @@ vec3 E_Area(LightData light, vec3 p, out vec3 l)
 #endif
 
 /* Dispatch on the light kind; only the kinds the scene has are compiled in. */
-/* A light's reach r (Blender's Custom Distance, else where I / d^2 falls to the scene's Light
- * Threshold t: addon/plan/light_tiles.py) as a window on its irradiance, (1 - (d / r)^4)^2 clamped
- * (EEVEE's and Unreal's): 1 near the light, exactly 0 from r on, where light culling leaves the
- * light out. Below a threshold-derived r it removes at most t of irradiance anywhere. */
+/* A light's reach r (Blender's Custom Distance, else where I / d^2 falls to the scene's scaled
+ * Light Threshold t over 1.0887: addon/plan/programs.py light_reaches, light_tiles.py) as a
+ * window on its irradiance, (1 - (d / r)^4)^2 clamped (EEVEE's and Unreal's): 1 near the light,
+ * exactly 0 from r on, where light culling leaves the light out. Below a threshold-derived r it
+ * removes at most t of irradiance anywhere. */
 float light_window(LightData light, vec3 p)
 {
   vec3 d = light.position_kind.xyz - p;

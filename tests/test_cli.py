@@ -366,24 +366,34 @@ def test_exposure_options_meter_and_compensate_as_they_say(tmp_path):
 
 
 def test_light_threshold_option_windows_each_light(tmp_path):
-    """--light-threshold t: a point light of intensity I fades by (1 - (d^2 t / I)^2)^2 at distance
-    d and is off beyond sqrt(I / t) (the window written here from its definition)."""
-    size, scale, height, power = 32, 6.0, 1.0, 100.0
+    """--light-threshold t: in a scene of more than two lights (two under the plane, lighting none
+    of it) a point light of intensity I fades by (1 - (d^2 t' / I)^2)^2 at distance d and is off
+    beyond sqrt(I / t'), t' the threshold scaled by the scene's brightness (3 I / 32 W/m^2: each
+    light within half the 8 m plane's diagonal of its centre) over pi, the window written here
+    from its definition."""
+    from addon.plan import light_tiles
+
+    size, scale, height, power, option = 32, 6.0, 1.0, 100.0, 4.0
     images = {}
-    for t in (0.0, 1.0):
-        scene = _configured(_gradient_scene(size), "--light-threshold", str(t))
+    for t in (0.0, option):
+        scene = _gradient_scene(size)
+        for x in (-1.0, 1.0):
+            scenes.light(scene, "POINT", energy=power, location=(x, 0.0, -2.0))
+        scene = _configured(scene, "--light-threshold", str(t))
         assert scene.shading_lab.light_threshold == pytest.approx(t)
         images[t] = scenes.render(scene, tmp_path / f"t{t}.exr")[..., 0].astype(np.float64)
     centres = ((np.arange(size) + 0.5) / size - 0.5) * scale
     x, y = np.meshgrid(centres, centres[::-1])
     d2 = x * x + y * y + height * height
     intensity = power / (4.0 * math.pi)
-    window = np.clip(1.0 - (d2 * 1.0 / intensity) ** 2, 0.0, 1.0) ** 2
+    effective = option * min(1.0, 3.0 * intensity / 32.0 / math.pi)
+    reach2 = intensity * light_tiles.WINDOW_PEAK_LOSS / effective  # where I / r^2 = t' / 1.0887
+    window = np.clip(1.0 - (d2 / reach2) ** 2, 0.0, 1.0) ** 2
     lit = images[0.0] > 1e-4
-    err = float(np.abs(images[1.0][lit] - window[lit] * images[0.0][lit]).max() / images[0.0].max())
-    print(f"threshold 1 W/m^2 against the window: {err:.1e}; dark beyond {math.sqrt(intensity):.2f} m: "
-          f"{(window == 0).mean():.0%} of the frame")
-    assert (window == 0).mean() > 0.2 and images[1.0][window == 0].max() == 0.0
+    err = float(np.abs(images[option][lit] - window[lit] * images[0.0][lit]).max() / images[0.0].max())
+    print(f"threshold {option} W/m^2 (scaled to {effective:.4f}) against the window: {err:.1e}; dark beyond "
+          f"{math.sqrt(reach2):.2f} m: {(window == 0).mean():.0%} of the frame")
+    assert (window == 0).mean() > 0.1 and images[option][window == 0].max() == 0.0
     assert err < 5e-7, f"the thresholded image off the window by {err:.1e} (of the peak; measured 1.2e-7)"
 
 

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 import scenes
 
-from addon.plan import light_tiles
+from addon.plan import programs
 from addon.reference import shading
 from addon.scene import snapshot as S
 
@@ -70,14 +70,19 @@ def _twin_light(props) -> S.Light:
         sy = props["size_y"] if props["shape"] in ("RECTANGLE", "ELLIPSE") else props["size"]
         extra = dict(axis_x=tuple(m[:, 0]), half_size=(props["size"] / 2, sy / 2),
                      ellipse=props["shape"] in ("DISK", "ELLIPSE"), spread=props["spread"])
-    # the reach the scene's default Light Threshold gives it (faded to nothing there)
-    factor = max(1.0, props["diffuse_factor"], props["specular_factor"])
-    influence = light_tiles.influence_radius(kind, intensity * factor, S.Settings().light_threshold)
     return S.Light(kind, tuple(props["location"]), direction, tuple(intensity),
                    diffuse_factor=props["diffuse_factor"], specular_factor=props["specular_factor"],
                    radius=props.get("shadow_soft_size", 0.0),
-                   soft_falloff=props.get("use_soft_falloff", False), influence=influence,
-                   **extra)
+                   soft_falloff=props.get("use_soft_falloff", False), **extra)
+
+
+def _reaches(lights, tilt, size=10.0):
+    """The lights with the reach the scene's default Light Threshold gives them (faded to nothing
+    there), as extraction gives it: from the box of the tilted plane of ``size``."""
+    half = size / 2.0
+    corners = np.array([[x, y, 0.0] for x in (-half, half) for y in (-half, half)])
+    corners = corners @ scenes.euler_matrix(tilt).T
+    return programs.light_reaches(lights, S.Settings().light_threshold, (corners.min(0), corners.max(0)))
 
 
 @pytest.mark.parametrize("seed", range(6))
@@ -117,7 +122,8 @@ def _compare(model, seed, tmp_path, sizes=False):
     # Blinn-Phong's diffuse colour falls back to base x (1 - metalness) (addon/blender/extract.py)
     diffuse = tuple(c * (1.0 - mat["metalness"]) for c in mat["base_color"])
     surface = shading.Surface(p, n, v, S.MaterialParams(**mat, diffuse_color=diffuse))
-    want = shading.shade(model, surface, [_twin_light(dict(props)) for props in lights], ambient=0.05)
+    twin_lights = _reaches([_twin_light(dict(props)) for props in lights], tilt)
+    want = shading.shade(model, surface, twin_lights, ambient=0.05)
 
     assert np.all(np.isfinite(got))
     scale = max(float(want.max()), 1e-3)

@@ -14,7 +14,7 @@ from collections import Counter, OrderedDict
 import bpy
 import numpy as np
 
-from ..plan import auto_terms, light_tiles, shadows
+from ..plan import auto_terms, light_tiles, programs, shadows
 from ..scene import snapshot as S
 from ..scene.matrices import invert
 
@@ -674,9 +674,9 @@ def light_strength(light: bpy.types.Light) -> np.ndarray:
     return color * float(light.energy) * 2.0 ** float(getattr(light, "exposure", 0.0))
 
 
-def make_light(light: bpy.types.Light, matrix, threshold: float = 0.0) -> S.Light:
-    """The light as the shaders see it; ``threshold`` (W/m^2, the scene's Light Threshold) sets how
-    far it reaches unless its Custom Distance does."""
+def make_light(light: bpy.types.Light, matrix) -> S.Light:
+    """The light as the shaders see it, reaching as far as its Custom Distance (everywhere
+    without one); the Light Threshold's reach is the scene's to give (``programs.light_reaches``)."""
     m = np.array(matrix, np.float64)
     position = tuple(float(x) for x in m[:3, 3])
     axis = -m[:3, 2]
@@ -719,8 +719,7 @@ def make_light(light: bpy.types.Light, matrix, threshold: float = 0.0) -> S.Ligh
         extra["radius"] = max(float(light.shadow_soft_size), 0.0)
         extra["soft_falloff"] = bool(getattr(light, "use_soft_falloff", False))
     custom = float(light.cutoff_distance) if getattr(light, "use_custom_distance", False) else None
-    factor = max(1.0, float(light.diffuse_factor), float(light.specular_factor))
-    extra["influence"] = light_tiles.influence_radius(kind, np.asarray(intensity) * factor, threshold, custom)
+    extra["cutoff"] = extra["influence"] = light_tiles.influence_radius(kind, intensity, 0.0, custom)
     return S.Light(
         kind=kind,
         position=position,
@@ -1082,7 +1081,7 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
         obj = inst.object
         if obj.type == "LIGHT":
             if obj.data.type in LIGHT_KIND:
-                snap.lights.append(make_light(obj.data, inst.matrix_world, snap.settings.light_threshold))
+                snap.lights.append(make_light(obj.data, inst.matrix_world))
             continue
         # Curves, surfaces, text, metaballs and geometry-node output reach the depsgraph as mesh
         # instances of their own, beside the source object: take geometry from meshes only, or
@@ -1122,6 +1121,10 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
             snap.geometries[key] = geometry
         snap.items.append(S.DrawItem(key, _matrix(inst.matrix_world), slots or [""],
                                      casts_shadow=bool(getattr(obj, "visible_shadow", True))))
+    if snap.settings.light_threshold > 0.0 and len(snap.lights) > programs.UNROLLED_LIGHTS:
+        bounds = {key: geometry.bounds for key, geometry in snap.geometries.items()}
+        box = shadows.scene_bounds(snap, bounds)  # before the shadow maps: they fit to the reaches
+        snap.lights[:] = programs.light_reaches(snap.lights, snap.settings.light_threshold, box)
     _first, _layers, dropped = shadows.assign(snap)
     if dropped:
         snap.warnings.append(f"{dropped} shadowed light(s) cast no shadow: a frame holds "

@@ -91,10 +91,11 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
                     "Standard view transform")
     light_threshold: FloatProperty(
         name="Light Threshold", default=0.01, min=0.0, soft_max=1.0, precision=4, update=_redraw,
-        description="Irradiance (W/m^2) below which a light stops: each light reaches the distance where "
-                    "its inverse-square irradiance falls to this (unless its Custom Distance is set) and is "
-                    "faded to nothing there, dropping at most this much irradiance anywhere. 0: every light "
-                    "reaches everywhere")
+        description="Irradiance (W/m^2) below which a light stops, in scenes of three or more lights: each "
+                    "light reaches the distance where its irradiance falls to this (scaled down in a scene "
+                    "dimmer than one lit for exposure 0; its Custom Distance where nearer) and is faded to "
+                    "nothing there, dropping at most this much irradiance anywhere. 0: every light reaches "
+                    "everywhere")
     light_culling: BoolProperty(
         name="Light Culling", default=True, update=_redraw,
         description="Shade each part of the screen with only the lights that reach it (the image is the "

@@ -79,11 +79,19 @@ class TileLists:
         return out.reshape(rows, LIST_WIDTH, 2)
 
 
+#: The most a window (1 - (d/r)^4)^2 at reach r removes of an inverse-square irradiance I / d^2,
+#: in units of I / r^2: with x = (d/r)^2 the loss is (I / r^2)(2x - x^3), largest at x = sqrt(2/3),
+#: 4/3 sqrt(2/3) = 1.0887. The reach is set where I / r^2 is the threshold over this, so that the
+#: window removes at most the threshold anywhere.
+WINDOW_PEAK_LOSS = 4.0 / 3.0 * math.sqrt(2.0 / 3.0)
+
+
 def influence_radius(kind: str, intensity, threshold: float, custom: float | None = None) -> float:
     """How far a light reaches (m): ``custom`` if set, else where its inverse-square irradiance
-    max(I) / d^2 falls to ``threshold`` W/m^2; unbounded (inf) for suns and a threshold of 0. A
-    sphere light's and an area light's irradiance stay below I / d^2 (I / (d^2 + r^2) and
-    I A / (A + pi d^2) on the axis), so the radius holds for them too."""
+    max(I) / d^2 falls to ``threshold`` / WINDOW_PEAK_LOSS W/m^2, so that its window removes at
+    most ``threshold`` anywhere; unbounded (inf) for suns and a threshold of 0. A sphere light's
+    and an area light's irradiance stay below I / d^2 (I / (d^2 + r^2) and I A / (A + pi d^2) on
+    the axis), so the radius holds for them too."""
     if kind == "SUN":
         return math.inf
     if custom is not None and custom > 0.0:
@@ -91,7 +99,7 @@ def influence_radius(kind: str, intensity, threshold: float, custom: float | Non
     peak = max(float(max(intensity)), 0.0)
     if threshold <= 0.0:
         return math.inf
-    return math.sqrt(peak / threshold)
+    return math.sqrt(peak * WINDOW_PEAK_LOSS / threshold)
 
 
 def screen_boxes(centres: np.ndarray, radii: np.ndarray, view_projection: np.ndarray,
