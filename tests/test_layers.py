@@ -110,7 +110,8 @@ def test_the_scanner_sees_every_form_of_relative_import(tmp_path, monkeypatch):
                      "def f():\n    from ..blender.extract import X\n    from .. import blender\n"
                      "import gpu.types\n")
     monkeypatch.setattr(sys.modules[__name__], "ADDON", fake)
-    assert imports(probe) == {"addon:frame.passes", "addon:blender.extract", "addon:blender", "gpu"}, imports(probe)
+    expected = {"addon:frame.passes", "addon:blender.extract", "addon:blender", "gpu"}
+    assert imports(probe) == expected, imports(probe)
 
 
 def test_pure_packages_import_without_blender():

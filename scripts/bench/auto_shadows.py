@@ -1,9 +1,5 @@
 """Would a cheaper shadow filter per material pay as an Auto candidate? Per preset: each
-material's error with hard shadows against soft ones, and the frame time of each (a benchmark,
-not a test).
-
-    .venv/bin/python scripts/auto_shadows.py [--resolution 640x360] [--frames 5]
-        [--table docs/bench/auto_shadows.md] [--bound 0.5]
+material's error with hard shadows against soft ones, and the frame time of each.
 
 The only shadow setting a material could choose is the filter: soft shadows (penumbrae from the
 light's size: a blocker search and a wider filter) or hard ones (a bilinear filter over one
@@ -12,98 +8,81 @@ that casts a shadow, each material's Delta E_ITP at the Auto quantile between th
 shadows and the frame with soft ones (the Verify operator's measurement, with its reference
 frame drawn with hard shadows), and how many materials a hard-shadow candidate would pass at
 ``--bound`` with Auto's margin; and the frame time with soft and with hard shadows (medians of
-``--frames`` round-robin renders, the Principled set). Times are CPU-rasteriser times: compare
-ratios.
+``--frames`` round-robin renders, the Principled set).
 """
 
 from __future__ import annotations
 
-import sys
 from dataclasses import replace
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
+from .harness import page, scenes, standard, timing
 
-PRESETS = ("fresnel", "furnace", "hdr", "long_tail", "material_grid", "portability", "roughness_sweep",
-           "softbox", "world")
+PAGE = "auto_shadows.md"
+QUICK = dict(resolution="160x90", frames=1, presets="softbox")
+PRESETS = "fresnel,furnace,hdr,long_tail,material_grid,portability,roughness_sweep,softbox,world"
 
 
-def main() -> int:
-    import argparse
+def options(parser) -> None:
+    standard(parser, resolution="640x360", frames=5, presets=PRESETS)
+    parser.add_argument("--bound", type=float, default=0.5, help="Delta E_ITP bound (default 0.5)")
 
+
+def hard_vs_soft(props, auto_terms) -> list[float]:
+    """Each material's error, hard shadows against soft: Auto at the smallest bound keeps every
+    material on the Principled set, so Verify measures the shadows alone, against its reference
+    drawn with hard shadows."""
     import bpy
-    import render
-    import round_robin
 
     from addon.blender import engine
-    from addon.plan import auto_terms
 
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--resolution", default="640x360")
-    parser.add_argument("--frames", type=int, default=5)
-    parser.add_argument("--bound", type=float, default=0.5)
-    parser.add_argument("--table", type=Path, default=ROOT / "docs" / "bench" / "auto_shadows.md")
-    args = parser.parse_args()
-    w, h = (int(x) for x in args.resolution.split("x"))
-    render.ensure_addon()
     principled = auto_terms.principled_snapshot
 
-    def hard_reference(snapshot):  # the Verify operator's reference, drawn with hard shadows
+    def hard_reference(snapshot):
         reference = principled(snapshot)
         return replace(reference, settings=replace(reference.settings, soft_shadows=False))
 
+    props.term_set, props.auto_error_bound = "AUTO", 0.01
+    auto_terms.principled_snapshot = hard_reference
+    engine.request_verification()
+    try:
+        bpy.ops.render.render()
+    finally:
+        auto_terms.principled_snapshot = principled
+    return sorted(v.measured for v in engine.last_verification.values())
+
+
+def run(ctx) -> None:
+    from addon.plan import auto_terms
+
+    args = ctx.args
     rows = []
-    for name in PRESETS:
-        scene, _ = render.load_scene(name, None)
-        scene.render.engine = "SHADING_LAB"
-        scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = w, h, 100
+    for name in args.presets:
+        scene = scenes.preset(name, args.resolution)
         props = scene.shading_lab
-        lights = [obj.data for obj in scene.objects if obj.type == "LIGHT" and obj.data.use_shadow]
+        lights = scenes.lights(scene, casting=True)
         if not (props.shadows and lights):
             continue
         sized = sum(1 for data in lights if data.type == "AREA"
                     or (data.angle if data.type == "SUN" else data.shadow_soft_size) > 0.0)
-        # Auto at the smallest bound keeps every material on the Principled set: Verify then
-        # measures hard shadows against soft ones alone
-        props.term_set, props.auto_error_bound = "AUTO", 0.01
-        auto_terms.principled_snapshot = hard_reference
-        engine.request_verification()
-        try:
-            bpy.ops.render.render()
-        finally:
-            auto_terms.principled_snapshot = principled
-        errors = sorted(v.measured for v in engine.last_verification.values())
+        errors = hard_vs_soft(props, auto_terms)
         passing = sum(1 for e in errors if e * auto_terms.MARGIN <= args.bound)
         props.term_set = "PRINCIPLED"
 
         def apply(soft, props=props):
             props.soft_shadows = soft
 
-        med = round_robin.median_draw_ms([True, False], apply, args.frames)
+        med = timing.median_ms([True, False], apply, args.frames, ctx.progress, name)
         props.soft_shadows = True
-        spread = f"{errors[0]:.2f} – {errors[-1]:.2f}" if errors else "–"
-        rows.append(f"| {name} | {len(lights)} ({sized} with a size) | {len(errors)} | {spread} | "
-                    f"{passing} of {len(errors)} | {med[True]:.1f} | {med[False]:.1f} | "
-                    f"{med[False] / med[True]:.2f}x |")
-        print(rows[-1], flush=True)
-    table = "\n".join([
-        f"Shadows as an Auto candidate, {w}x{h} (`scripts/auto_shadows.py`). Per preset with casting "
-        "lights: each material's Delta E_ITP at the 99th percentile of its pixels between hard and "
-        f"soft shadows (the Verify operator's measurement), how many a hard-shadow candidate would "
-        f"pass at bound {args.bound:g} with Auto's margin {auto_terms.MARGIN:g}, and the frame with "
-        "soft and with hard shadows (the Principled set; draw + read-back ms, medians of "
-        f"{args.frames} round-robin renders after a warm-up). A program holds the penumbrae's code "
-        "only where a light with a shadow map has a size, so where none has one the two frames run "
-        "the same program.",
-        "",
-        "| preset | casting lights | materials | hard vs soft Delta E_ITP | within the bound | soft ms "
-        "| hard ms | hard / soft |",
-        "|---|---|---:|---|---|---:|---:|---:|",
-        *rows, ""])
-    round_robin.write_table(args.table, table)
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
+        rows.append([name, f"{len(lights)} ({sized} with a size)", len(errors),
+                     f"{errors[0]:.2f} – {errors[-1]:.2f}" if errors else "–", f"{passing} of {len(errors)}",
+                     f"{med[True]:.1f}", f"{med[False]:.1f}", f"{med[False] / med[True]:.2f}x"])
+    ctx.page("Shadows as an Auto candidate", [
+        f"{page.res(args.resolution)}. Per preset with casting lights: each material's Delta E_ITP at "
+        "the 99th percentile of its pixels between hard and soft shadows (the Verify operator's "
+        f"measurement), how many a hard-shadow candidate would pass at bound {args.bound:g} with "
+        f"Auto's margin {auto_terms.MARGIN:g}, and the frame with soft and with hard shadows (the "
+        f"Principled set; draw + read-back ms, medians of {args.frames} round-robin renders after a "
+        "warm-up). A program holds the penumbrae's code only where a light with a shadow map has a "
+        "size, so where none has one the two frames run the same program.", "",
+        *page.table(["preset", "casting lights", "materials", "hard vs soft Delta E_ITP", "within the bound",
+                     "soft ms", "hard ms", "hard / soft"], rows, "llrllrrr")])

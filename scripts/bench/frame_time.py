@@ -1,60 +1,39 @@
-"""Frame time of each shading model on the demo scene (a benchmark, not a test).
+"""Frame time of each shading model on the demo scene.
 
-    .venv/bin/python scripts/frame_time.py [--resolution 1280x720] [--frames 7]
-
-Renders the demo scene with every model in the same process, interleaving the models round by
-round so that machine noise hits them alike, after one warm-up render each (program compile).
-Reports medians of the engine's phases: scene extraction, GPU draw + read-back (fenced by the
-read-back), and handing the pixels to Blender. Frame times here are CPU-rasteriser times (Mesa
-llvmpipe on a machine without a GPU): compare them as ratios within one run.
+Renders the demo scene with every model round-robin in one process, after a warm-up round
+(program compiles). Reports medians of the engine's phases: scene extraction, GPU draw +
+read-back (fenced by the read-back), and handing the pixels to Blender.
 """
 
 from __future__ import annotations
 
-import argparse
-import statistics
-import sys
-from pathlib import Path
+from .harness import page, scenes, standard, timing
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
+PAGE = "frame_time.md"
+QUICK = dict(resolution="320x180", frames=1)
 
 
-def main() -> int:
-    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--resolution", default="1280x720")
-    parser.add_argument("--frames", type=int, default=7)
-    args = parser.parse_args()
-    w, h = (int(x) for x in args.resolution.split("x"))
-
-    import bpy
-    import demo_scene
-
-    from addon.blender import engine
-
-    scene = demo_scene.empty_scene(w, h)
-    demo_scene.build(scene)
-    from addon.scene.snapshot import MODELS as models
-    samples = {m: [] for m in models}
-    for round_index in range(args.frames + 1):
-        for model in models:
-            scene.shading_lab.model = model
-            bpy.ops.render.render()
-            if round_index > 0:  # round 0 is the warm-up
-                samples[model].append(dict(engine.last_timings))
-        print(f"\rround {round_index}/{args.frames}", end="", file=sys.stderr, flush=True)
-    print(file=sys.stderr)
-    tris = sum(len(o.data.polygons) for o in scene.objects if o.type == "MESH")
-    print(f"demo scene, {w}x{h}, {args.frames} frames per model after a warm-up, ~{tris:,} faces")
-    print("| model | total ms (median) | extract ms | draw + read-back ms | result ms | vs Blinn-Phong |")
-    print("|---|---:|---:|---:|---:|---:|")
-    base = statistics.median(t["total_ms"] for t in samples["BLINN_PHONG"])
-    for model in models:
-        med = {k: statistics.median(t[k] for t in samples[model]) for k in samples[model][0]}
-        print(f"| {model} | {med['total_ms']:.1f} | {med['extract_ms']:.1f} | {med['draw_ms']:.1f} | "
-              f"{med['result_ms']:.1f} | {med['total_ms'] / base:.2f}x |")
-    return 0
+def options(parser) -> None:
+    standard(parser, resolution="1280x720", frames=7)
 
 
-if __name__ == "__main__":
-    sys.exit(main())
+def run(ctx) -> None:
+    from addon.scene.snapshot import MODELS
+
+    args = ctx.args
+    scene = scenes.demo(args.resolution)
+
+    def render(model):
+        scene.shading_lab.model = model
+        return timing.render_timed(scene)
+
+    med = dict(zip(MODELS, timing.round_robin(list(MODELS), args.frames, render, ctx.progress)))
+    base = med["BLINN_PHONG"]["total_ms"]
+    faces = sum(len(o.data.polygons) for o in scene.objects if o.type == "MESH")
+    ctx.page("Frame time per model, demo scene", [
+        f"The demo scene (~{faces:,} faces), {page.res(args.resolution)}, {args.frames} frames per "
+        "model after a warm-up, round-robin.", "",
+        *page.table(["model", "total ms (median)", "extract ms", "draw + read-back ms", "result ms",
+                     "vs Blinn-Phong"],
+                    [[model, *(f"{m[k]:.1f}" for k in ("total_ms", "extract_ms", "draw_ms", "result_ms")),
+                      f"{m['total_ms'] / base:.2f}x"] for model, m in med.items()])])

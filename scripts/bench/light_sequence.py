@@ -1,8 +1,4 @@
-"""A scene of one or two lights shaded each by its own call against the loops (a benchmark, not a
-test).
-
-    .venv/bin/python scripts/light_sequence_bench.py [--resolution 640x360] [--frames 5]
-        [--table docs/bench/light_sequence.md]
+"""A scene of one or two lights shaded each by its own call against the loops.
 
 The presets of one or two lights, the Principled set, each in three configurations:
 - *calls* (the default): each light shaded by its own call, its index and kind constants
@@ -16,32 +12,32 @@ The presets of one or two lights, the Principled set, each in three configuratio
   always).
 Round-robin after a warm-up round, in one process; medians of the engine's draw time (GPU work
 fenced by the read-back), and the largest difference between the images of *calls* and of each
-other configuration. Times are CPU-rasteriser times (Mesa llvmpipe): compare ratios.
+other configuration.
 """
 
 from __future__ import annotations
 
-import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
+from .harness import engines, page, scenes, standard, timing
 
-PRESETS = ("long_tail", "fresnel", "hdr", "material_grid", "roughness_sweep", "softbox")
+PAGE = "light_sequence.md"
+QUICK = dict(resolution="160x90", frames=1, presets="long_tail")
+PRESETS = "long_tail,fresnel,hdr,material_grid,roughness_sweep,softbox"
 CONFIGS = ("calls", "loops", "loops, tiles")
 
 
-def main() -> int:
-    import bpy
-    import render
-    import round_robin
+def options(parser) -> None:
+    standard(parser, resolution="640x360", frames=5, presets=PRESETS)
 
+
+def run(ctx) -> None:
     from addon.plan import light_tiles, programs
 
-    args, w, h = round_robin.parse_args(__doc__, "light_sequence.md")
-    render.ensure_addon()
+    args = ctx.args
     unrolled, uses_light_tiles = programs.UNROLLED_LIGHTS, programs.uses_light_tiles
     lists_pay = light_tiles.lists_pay
 
@@ -54,48 +50,29 @@ def main() -> int:
 
     rows = []
     try:
-        for name in PRESETS:
-            scene, _ = render.load_scene(name, None)
-            scene.render.engine = "SHADING_LAB"
-            scene.render.resolution_x, scene.render.resolution_y = w, h
-            scene.render.resolution_percentage = 100
+        for name in args.presets:
+            scene = scenes.preset(name, args.resolution)
             scene.shading_lab.term_set = "PRINCIPLED"
             lights = sum(1 for obj in scene.objects if obj.type == "LIGHT" and not obj.hide_render)
-
-            def image(config: str, scene=scene, name=name) -> np.ndarray:
-                configure(config)
-                path = Path(bpy.app.tempdir) / f"light_sequence_bench_{name}.exr"
-                scene.render.filepath = str(path)
-                scene.render.image_settings.file_format = "OPEN_EXR"
-                bpy.ops.render.render(write_still=True)
-                return np.array(bpy.data.images.load(str(path), check_existing=False).pixels[:])
-
-            images = {config: image(config) for config in CONFIGS}
+            images = {}
+            with tempfile.TemporaryDirectory() as tmp:
+                for config in CONFIGS:
+                    configure(config)
+                    images[config] = engines.image(scene, Path(tmp) / f"{name}.exr")[0]
             differences = [float(np.abs(images["calls"] - images[c]).max()) for c in CONFIGS[1:]]
-            med = round_robin.median_draw_ms(CONFIGS, configure, args.frames)
-            rows.append(f"| {name} | {lights} | {med['calls']:.1f} | {med['loops']:.1f} | "
-                        f"{med['loops, tiles']:.1f} | {med['calls'] / med['loops']:.2f}x | "
-                        f"{med['calls'] / med['loops, tiles']:.2f}x | {differences[0]:.3g} / "
-                        f"{differences[1]:.3g} |")
+            med = timing.median_ms(CONFIGS, configure, args.frames, ctx.progress, name)
+            rows.append([name, lights, *(f"{med[c]:.1f}" for c in CONFIGS),
+                         f"{med['calls'] / med['loops']:.2f}x", f"{med['calls'] / med['loops, tiles']:.2f}x",
+                         f"{differences[0]:.3g} / {differences[1]:.3g}"])
     finally:
         configure("calls")
-    table = "\n".join([
-        f"A scene of one or two lights shaded each by its own call, {w}x{h}, the Principled set "
-        f"(`scripts/light_sequence_bench.py`, {args.frames} frames per configuration after a "
-        "warm-up, round-robin; draw + read-back ms, medians). *Calls*: each light by its own call, "
-        "its index and kind constants (the default); *loops*: the loop over each group of lights, "
-        "each read of a light's data a gather per pixel on this machine's rasteriser; *loops, "
-        "tiles*: the loops with light culling's tiles wherever a light's reach is finite (before "
-        "the tiles were made only where a reach ends inside the scene); the largest difference of "
-        "each one's image from the calls'.",
-        "",
-        "| preset | lights | calls ms | loops ms | loops, tiles ms | calls / loops | "
-        "calls / loops, tiles | largest difference |",
-        "|---|---:|---:|---:|---:|---:|---:|---:|",
-        *rows, ""])
-    round_robin.write_table(args.table, table)
-    return 0
-
-
-if __name__ == "__main__":
-    sys.exit(main())
+    ctx.page("Each light by its own call", [
+        f"A scene of one or two lights shaded each by its own call, {page.res(args.resolution)}, the "
+        f"Principled set, {args.frames} frames per configuration after a warm-up, round-robin; draw + "
+        "read-back ms, medians. *Calls*: each light by its own call, its index and kind constants "
+        "(the default); *loops*: the loop over each group of lights, each read of a light's data a "
+        "gather per pixel on this machine's rasteriser; *loops, tiles*: the loops with light "
+        "culling's tiles wherever a light's reach is finite (before the tiles were made only where a "
+        "reach ends inside the scene); the largest difference of each one's image from the calls'.", "",
+        *page.table(["preset", "lights", "calls ms", "loops ms", "loops, tiles ms", "calls / loops",
+                     "calls / loops, tiles", "largest difference"], rows)])

@@ -1,81 +1,108 @@
-"""Round-robin timing for the benchmarks: every configuration rendered in turn, round after
-round, so that machine noise hits them alike; round 0 is a warm-up (program compiles)."""
+"""Timing in one process, round-robin: every configuration rendered in turn, round after round
+with the order rotated each round, so that machine noise hits them alike; round 0 is an untimed
+warm-up (program compiles, tables, caches), the medians are over the timed rounds. What the
+benchmarks compare are ratios measured in one such run (CPU-rasteriser times: Mesa llvmpipe).
+
+A run's configurations share one process on purpose: a ratio between two configurations is
+only as good as the conditions they share. Where a first use is what is measured, the
+benchmark starts a fresh process per case instead (``process.run_case``)."""
 
 from __future__ import annotations
 
-import argparse
 import statistics
-import sys
+import time
 from collections.abc import Callable, Hashable, Sequence
-from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-
-
-def parse_args(doc: str, table: str) -> tuple[argparse.Namespace, int, int]:
-    """(args, width, height) of a round-robin benchmark: --resolution, --frames and --table
-    (default docs/bench/``table``)."""
-    parser = argparse.ArgumentParser(description=doc.split("\n\n")[0])
-    parser.add_argument("--resolution", default="1280x720")
-    parser.add_argument("--frames", type=int, default=5)
-    parser.add_argument("--table", type=Path, default=ROOT / "docs" / "bench" / table)
-    args = parser.parse_args()
-    w, h = (int(x) for x in args.resolution.split("x"))
-    return args, w, h
+import render as cli
 
 
-def empty_scene(w: int, h: int):
-    """Blender's empty factory scene rendering with Shading Lab at w x h (the add-on registered)."""
-    import bpy
-    import render
+class Progress(cli.Progress):
+    """render.py's progress line, its total growing as the run announces what comes."""
 
-    render.ensure_addon()
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    scene.render.engine = "SHADING_LAB"
-    scene.render.resolution_x, scene.render.resolution_y, scene.render.resolution_percentage = w, h, 100
-    return scene
+    def __init__(self):
+        super().__init__(0)
 
+    def expect(self, steps: int) -> None:
+        self.total += steps
 
-def ortho_camera(scene, width: float, location=(0.0, 0.0, 5.0)):
-    """An orthographic camera ``width`` metres across, looking down -Z, made the scene's."""
-    import bpy
-
-    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    cam.data.type, cam.data.ortho_scale = "ORTHO", width
-    cam.location = location
-    scene.collection.objects.link(cam)
-    scene.camera = cam
-    return cam
+    def step(self, label: str) -> None:
+        self.total = max(self.total, self.done + 1)
+        super().step(label)
 
 
-def median_draw_ms(configs: Sequence[Hashable], apply: Callable[[Hashable], None], frames: int) -> dict:
-    """{config: median of the engine's draw time (ms, GPU work fenced by the read-back)} over
-    ``frames`` rounds after the warm-up; ``apply(config)`` sets the scene up for one."""
+def render_timed(scene=None) -> dict[str, float]:
+    """One final render: the engine's phase times (``engine.last_timings``: extraction, draw with
+    the GPU work fenced by the read-back, result; Shading Lab only) and the operator's
+    ``wall_ms``."""
     import bpy
 
     from addon.blender import engine
 
-    times = {c: [] for c in configs}
-    for round_index in range(frames + 1):
-        for config in configs:
-            apply(config)
-            bpy.ops.render.render()
-            if round_index > 0:
-                times[config].append(engine.last_timings["draw_ms"])
-        print(f"\rround {round_index}/{frames}", end="", file=sys.stderr, flush=True)
-    print(file=sys.stderr)
-    return {c: statistics.median(t) for c, t in times.items()}
+    scene = scene or bpy.context.scene
+    ours = scene.render.engine == "SHADING_LAB"
+    engine.last_timings.clear()
+    start = time.perf_counter()
+    try:
+        bpy.ops.render.render()
+    except RuntimeError as exc:
+        raise cli.CliError(f"render failed ({scene.render.engine}): {str(exc).strip()}") from None
+    wall = 1e3 * (time.perf_counter() - start)
+    if ours and not engine.last_timings:
+        raise cli.CliError("Shading Lab reported no timings: the render failed (see the console)")
+    return {**(dict(engine.last_timings) if ours else {}), "wall_ms": wall}
 
 
-def show_only(groups: dict, key) -> None:
-    """Render only the objects of ``groups[key]`` among the groups' objects."""
-    for name, objs in groups.items():
-        for obj in objs:
-            obj.hide_render = name != key
+def medians(samples: list[dict[str, float]]) -> dict[str, float]:
+    return {k: statistics.median(s[k] for s in samples) for k in samples[0]}
 
 
-def write_table(path: Path, table: str) -> None:
-    print(table)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    path.write_text(table)
+def collect(items: Sequence, rounds: int, run: Callable, progress: Progress | None = None, label: str = "",
+            state_of: Callable | None = None) -> list[list[dict[str, float]]]:
+    """``run(item)`` -> timings, for one warm-up round then ``rounds`` timed rounds, the order
+    rotated each round; every timed round's timings of each item, in ``items``' order.
+
+    ``state_of(item)``: what a render leaves behind that the next one pays for (the engine it
+    drew with, the size of its shadow maps ...). A timed render that follows a render of another
+    state is preceded by an untimed one of its own, so that each item is timed in its steady
+    state (on the CPU rasteriser our first render after an EEVEE render took 50-100 ms longer,
+    1.5-2.5x on hdr's ~95 ms frame, its shadow pass 23-33 -> 91-113 ms; a Workbench render in
+    between cost nothing: consistent with EEVEE's hundreds of programs displacing ours from the
+    rasteriser's cache of compiled code, not established)."""
+    if progress is not None:
+        progress.expect((rounds + 1) * len(items))
+    samples: list[list[dict[str, float]]] = [[] for _ in items]
+    order = list(range(len(items)))
+    last = None
+    for r in range(rounds + 1):
+        k = r % len(items)
+        for i in order[k:] + order[:k]:
+            state = state_of(items[i]) if state_of is not None else None
+            if r > 0 and state != last:
+                run(items[i])  # settles this state after another's render
+            t = run(items[i])
+            last = state
+            if r > 0:
+                samples[i].append(t)
+            if progress is not None:
+                progress.step(f"{label} round {r}/{rounds}".strip())
+    return samples
+
+
+def round_robin(items: Sequence, rounds: int, run: Callable, progress: Progress | None = None,
+                label: str = "", state_of: Callable | None = None) -> list[dict[str, float]]:
+    """``collect``'s median timings of each item, in ``items``' order."""
+    return [medians(s) for s in collect(items, rounds, run, progress, label, state_of)]
+
+
+def median_ms(configs: Sequence[Hashable], apply: Callable[[Hashable], None], rounds: int,
+              progress: Progress | None = None, label: str = "", key: str = "draw_ms",
+              state_of: Callable | None = None) -> dict:
+    """{config: median ``key`` of the scene's render (default the engine's draw time, GPU work
+    fenced by the read-back)}; ``apply(config)`` sets the scene up for one."""
+
+    def run(config):
+        apply(config)
+        return render_timed()
+
+    times = round_robin(list(configs), rounds, run, progress, label, state_of)
+    return {c: t[key] for c, t in zip(configs, times)}
