@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import time
 from pathlib import Path
 
 import bpy
@@ -193,15 +192,3 @@ def use_engine(scene, engine: str, samples: int = 1) -> None:
         scene.eevee.taa_render_samples = samples
         scene.eevee.light_threshold = 1e-6
 
-
-def render_peer(scene, engine: str, samples: int, path: Path) -> tuple[np.ndarray, float]:
-    """(image, seconds) of EEVEE (light threshold lowered so weak lights are not culled; lights
-    as the file has them, shadows included) or Workbench on the same scene."""
-    previous = scene.render.engine
-    try:
-        use_engine(scene, engine, samples)
-        start = time.perf_counter()
-        image = render_to_array(scene, path)
-        return image, time.perf_counter() - start
-    finally:
-        scene.render.engine = previous

@@ -69,7 +69,8 @@ def figure(path: Path, images: dict, cycles, rows, base: float) -> None:
              (f"{LAYERS[-1]} layers", f"{LAYERS[-1]} layers")]
     for i, (key, title) in enumerate(shown + [(None, "Cycles")]):
         plots.image_panel(fig.add_subplot(grid[0, 2 * i:2 * i + 2]),
-                          plots.display(images[key] if key is not None else cycles), title)
+                          plots.display(images[key] if key is not None else cycles), title,
+                          interpolation="nearest")
     ax_t = fig.add_subplot(grid[1, 0:5])
     ax_t.plot([r[1] for r in peeled], [r[3] for r in peeled], "o-", label="transparent spheres")
     ax_t.axhline(base, color="grey", ls="--", label="opaque spheres")

@@ -38,9 +38,11 @@ def display(linear):
     return linear_to_srgb(np.clip(np.asarray(linear, np.float64)[..., :3], 0.0, 1.0))
 
 
-def image_panel(ax, picture, title: str = "", fontsize: float = 8, ylabel: str = "") -> None:
-    """``picture`` (display-encoded) in ``ax``, without ticks, titled."""
-    ax.imshow(picture, interpolation="nearest")
+def image_panel(ax, picture, title: str = "", fontsize: float | None = 8, ylabel: str = "",
+                interpolation: str | None = None) -> None:
+    """``picture`` (display-encoded) in ``ax``, without ticks, titled; ``interpolation``
+    matplotlib's (None: its default, which filters a picture shown smaller than it is)."""
+    ax.imshow(picture, interpolation=interpolation)
     ax.set_xticks([])
     ax.set_yticks([])
     if title:
