@@ -52,10 +52,10 @@ def load(name: str) -> ModuleType:
     return importlib.import_module(f"bench.{name}")
 
 
-def summary(module: ModuleType) -> str:
-    """The first sentence of a benchmark's docstring, on one line."""
-    text = " ".join((module.__doc__ or "").split("\n\n")[0].split())
-    return text.split(". ")[0].rstrip(".")
+def summary(module: ModuleType, width: int = 72) -> str:
+    """The first sentence of a benchmark's docstring, on one line of at most ``width``."""
+    text = " ".join((module.__doc__ or "").split("\n\n")[0].split()).split(". ")[0].rstrip(".")
+    return text if len(text) <= width else text[:width - 1].rsplit(" ", 1)[0] + " …"
 
 
 def list_benchmarks() -> int:
