@@ -73,25 +73,17 @@ def write_multilayer(path: Path, layers: dict[str, np.ndarray]) -> None:
     partial.replace(path)
 
 
-def display(image: np.ndarray) -> np.ndarray:
-    """Radiance to an sRGB-encoded picture for the PNG (clip to 1, exact sRGB): the same for
-    every panel, so the panels compare; exposure is not adjusted."""
-    x = np.clip(np.asarray(image, np.float64)[..., :3], 0.0, 1.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * x ** (1 / 2.4) - 0.055)
-
-
 def labelled_png(path: Path, panels: list[tuple[str, np.ndarray]], flips: list[tuple[str, np.ndarray]],
                  title: str) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    """The panels through one display transform (clip to 1, exact sRGB: the panels compare;
+    exposure is not adjusted), the FLIP maps below."""
+    from bench.harness import plots
 
     h, w = panels[0][1].shape[:2]
     cols = len(panels)
-    fig, axes = plt.subplots(2, cols, figsize=(cols * 3.2, 2 * 3.2 * h / w + 0.8), dpi=100)
+    fig, axes = plots.pyplot().subplots(2, cols, figsize=(cols * 3.2, 2 * 3.2 * h / w + 0.8), dpi=100)
     for ax, (label, image) in zip(axes[0], panels):
-        ax.imshow(display(image))
+        ax.imshow(plots.display(image))
         ax.set_title(label, fontsize=9)
         ax.axis("off")
     for ax, (label, fmap) in zip(axes[1], flips):
@@ -102,10 +94,7 @@ def labelled_png(path: Path, panels: list[tuple[str, np.ndarray]], flips: list[t
         ax.axis("off")
     fig.suptitle(title, fontsize=9)
     fig.tight_layout()
-    partial = path.with_name(f".{path.stem}.partial.png")
-    fig.savefig(partial)
-    plt.close(fig)
-    partial.replace(path)
+    plots.save(fig, path)
 
 
 def main(argv=None) -> int:

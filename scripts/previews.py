@@ -35,11 +35,8 @@ def main() -> int:
 
     import bpy
     import demo_scene
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
     import numpy as np
+    from bench.harness import page, plots, timing
 
     from addon.blender import engine, scene_builder
     from addon.scene import presets
@@ -48,55 +45,44 @@ def main() -> int:
     library = presets.load_material_presets()
     materials = {name: scene_builder.apply_material_preset(bpy.data.materials.new(name), preset)
                  for name, preset in library.items()}
-
     images: dict[tuple[str, str], np.ndarray] = {}
-    engine_ms: dict[str, list[float]] = {m: [] for m, _ in MODELS}
-    wall_ms: dict[str, list[float]] = {m: [] for m, _ in MODELS}
-    for round_ in range(args.rounds + 1):
-        for model, _ in MODELS:
-            scene.shading_lab.model = model
-            for name, material in materials.items():
-                engine.last_timings.clear()
-                start = time.perf_counter()
-                material.asset_generate_preview()
-                wall = 1e3 * (time.perf_counter() - start)
-                if not engine.last_timings:
-                    print(f"error: the preview of {name} was not rendered by Shading Lab", file=sys.stderr)
-                    return 1
-                if round_ > 0:
-                    engine_ms[model].append(engine.last_timings["total_ms"])
-                    wall_ms[model].append(wall)
-                preview = material.preview
-                w, h = preview.image_size
-                pixels = np.array(preview.image_pixels_float[:], np.float32).reshape(h, w, 4)
-                images[model, name] = pixels[::-1, :, :3]  # top row first for the figure
-        print(f"round {round_}/{args.rounds} done", file=sys.stderr)
 
+    def preview(item) -> dict[str, float]:
+        model, name = item
+        scene.shading_lab.model = model
+        engine.last_timings.clear()
+        start = time.perf_counter()
+        materials[name].asset_generate_preview()
+        wall = 1e3 * (time.perf_counter() - start)
+        if not engine.last_timings:
+            raise SystemExit(f"error: the preview of {name} was not rendered by Shading Lab")
+        w, h = materials[name].preview.image_size
+        pixels = np.array(materials[name].preview.image_pixels_float[:], np.float32).reshape(h, w, 4)
+        images[model, name] = pixels[::-1, :, :3]  # top row first for the figure
+        return {"engine_ms": engine.last_timings["total_ms"], "wall_ms": wall}
+
+    # round-robin over every (model, material), one warm-up round (program compiles)
+    items = [(model, name) for model, _ in MODELS for name in materials]
+    samples = dict(zip(items, timing.collect(items, args.rounds, preview, timing.Progress(), "previews")))
+    per_model = {m: [t for (model, _), ts in samples.items() if model == m for t in ts] for m, _ in MODELS}
+    base = statistics.median(t["engine_ms"] for t in per_model["BLINN_PHONG"])
     print(f"\nMaterial previews, 128 x 128, {len(materials)} materials x {args.rounds} rounds per model")
-    print("| model | engine ms (median) | whole preview ms (median) | vs Blinn-Phong |")
-    print("|---|---:|---:|---:|")
-    base = statistics.median(engine_ms["BLINN_PHONG"])
-    for model, label in MODELS:
-        med = statistics.median(engine_ms[model])
-        print(f"| {label} | {med:.1f} | {statistics.median(wall_ms[model]):.1f} | {med / base:.2f}x |")
+    print("\n".join(page.table(
+        ["model", "engine ms (median)", "whole preview ms (median)", "vs Blinn-Phong"],
+        [[label, f"{statistics.median(t['engine_ms'] for t in per_model[m]):.1f}",
+          f"{statistics.median(t['wall_ms'] for t in per_model[m]):.1f}",
+          f"{statistics.median(t['engine_ms'] for t in per_model[m]) / base:.2f}x"] for m, label in MODELS])))
 
     rows, cols = len(MODELS), len(materials)
-    fig, axes = plt.subplots(rows, cols, figsize=(1.3 * cols, 1.45 * rows), dpi=100, squeeze=False)
+    fig, axes = plots.pyplot().subplots(rows, cols, figsize=(1.3 * cols, 1.45 * rows), dpi=100, squeeze=False)
     for r, (model, label) in enumerate(MODELS):
         for c, name in enumerate(materials):
-            ax = axes[r][c]
-            ax.imshow(images[model, name], interpolation="nearest")
-            ax.set_xticks([])
-            ax.set_yticks([])
-            if r == 0:
-                ax.set_title(name, fontsize=8)
-            if c == 0:
-                ax.set_ylabel(label, fontsize=8)
+            plots.image_panel(axes[r][c], images[model, name], name if r == 0 else "",
+                              ylabel=label if c == 0 else "", interpolation="nearest")
     fig.suptitle("Material previews drawn by Shading Lab (preset library, Blender's preview scene)",
                  fontsize=9)
     fig.tight_layout()
-    args.out.parent.mkdir(parents=True, exist_ok=True)
-    fig.savefig(args.out)
+    plots.save(fig, args.out)
     print(f"wrote {args.out}")
     return 0
 

@@ -13,7 +13,6 @@ from __future__ import annotations
 
 import hashlib
 import json
-import time
 from pathlib import Path
 
 import bpy
@@ -146,13 +145,27 @@ def render_to_array(scene, path: Path) -> np.ndarray:
     return read_exr_rgba(path)
 
 
-def render_reference(scene, samples: int = 256, cache_dir: Path = CACHE_DIR) -> tuple[np.ndarray, bool]:
-    """(Cycles reference image, whether it came from the cache)."""
+def render_reference(scene, samples: int = 256,
+                     cache_dir: Path | None = CACHE_DIR) -> tuple[np.ndarray, bool]:
+    """(Cycles reference image, whether it came from the cache); ``cache_dir`` None: rendered,
+    not cached (for scenes whose fingerprint misses what sets them apart, such as rays' visibility)."""
+    if cache_dir is None:
+        import tempfile
+
+        with tempfile.TemporaryDirectory() as tmp:
+            return _render_cycles(scene, samples, Path(tmp) / "reference.exr"), False
     cache_dir.mkdir(parents=True, exist_ok=True)
     key = f"{scene_fingerprint(scene)}-s{samples}"
     cached = cache_dir / f"{key}.exr"
     if cached.is_file():
         return read_exr_rgba(cached), True
+    partial = cache_dir / f".{key}.partial.exr"
+    image = _render_cycles(scene, samples, partial)
+    partial.replace(cached)
+    return image, False
+
+
+def _render_cycles(scene, samples: int, path: Path) -> np.ndarray:
     engine = scene.render.engine
     try:
         scene.render.engine = "CYCLES"
@@ -165,25 +178,17 @@ def render_reference(scene, samples: int = 256, cache_dir: Path = CACHE_DIR) -> 
         c.pixel_filter_type = "GAUSSIAN"
         c.filter_width = 0.01
         c.seed = 0
-        partial = cache_dir / f".{key}.partial.exr"
-        image = render_to_array(scene, partial)
-        partial.replace(cached)
+        return render_to_array(scene, path)
     finally:
         scene.render.engine = engine
-    return image, False
 
 
-def render_peer(scene, engine: str, samples: int, path: Path) -> tuple[np.ndarray, float]:
-    """(image, seconds) of EEVEE (light threshold lowered so weak lights are not culled; lights
-    as the file has them, shadows included) or Workbench on the same scene."""
-    previous = scene.render.engine
-    try:
-        scene.render.engine = engine
-        if engine == EEVEE:
-            scene.eevee.taa_render_samples = samples
-            scene.eevee.light_threshold = 1e-6
-        start = time.perf_counter()
-        image = render_to_array(scene, path)
-        return image, time.perf_counter() - start
-    finally:
-        scene.render.engine = previous
+def use_engine(scene, engine: str, samples: int = 1) -> None:
+    """Render ``scene`` with ``engine`` as every comparison sets the peers up: EEVEE at ``samples``
+    per pixel with its light threshold lowered so that weak lights are not culled (lights as the
+    file has them, shadows included); Workbench as it is (its studio lighting)."""
+    scene.render.engine = engine
+    if engine == EEVEE:
+        scene.eevee.taa_render_samples = samples
+        scene.eevee.light_threshold = 1e-6
+

@@ -21,6 +21,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path[:0] = [str(ROOT), str(ROOT / "scripts")]
 
 import compare  # noqa: E402
+from bench.harness import page  # noqa: E402
 
 from addon.scene.snapshot import MODEL_CHOICES  # noqa: E402
 
@@ -147,12 +148,11 @@ def main(argv=None) -> int:
     softbox = run("softbox", args)
 
     def table(rows):
-        out = ["| scene | Blinn-Phong FLIP | Phong FLIP | PBR FLIP | Blinn-Phong rel. error "
-               "| PBR rel. error |", "|---|---:|---:|---:|---:|---:|"]
-        for name, r in rows:
-            out.append(f"| {name} | {_flip(r, BP):.3f} | {_flip(r, PH):.3f} | {_flip(r, PBR):.3f} | "
-                       f"{_relerr(r, BP):.1%} | {_relerr(r, PBR):.1%} |")
-        return "\n".join(out)
+        return "\n".join(page.table(
+            ["scene", "Blinn-Phong FLIP", "Phong FLIP", "PBR FLIP", "Blinn-Phong rel. error",
+             "PBR rel. error"],
+            [[name, *(f"{_flip(r, m):.3f}" for m in (BP, PH, PBR)), f"{_relerr(r, BP):.1%}",
+              f"{_relerr(r, PBR):.1%}"] for name, r in rows]))
 
     port_bp = [_flip(r, BP) for r in lighting.values()]
     port_pbr = [_flip(r, PBR) for r in lighting.values()]

@@ -28,12 +28,9 @@ def main() -> int:
 
     import bpy
     import demo_scene
-    import matplotlib
     import numpy as np
     import OpenEXR
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    from bench.harness import plots
 
     from addon.blender import engine
 
@@ -78,15 +75,11 @@ def main() -> int:
         for part in f.parts:
             for key, channel in part.channels.items():
                 images[key.split(".")[-1]] = np.asarray(channel.pixels, np.float32)[..., :3]
-    fig, axes = plt.subplots(1, len(names), figsize=(4.2 * len(names), 4.2 * h / w + 0.5), dpi=100)
+    fig, axes = plots.pyplot().subplots(1, len(names), figsize=(4.2 * len(names), 4.2 * h / w + 0.5), dpi=100)
     for ax, name in zip(axes, names):
-        c = np.clip(images[name], 0.0, 1.0)
-        ax.imshow(np.where(c <= 0.0031308, 12.92 * c, 1.055 * c ** (1 / 2.4) - 0.055))
-        ax.set_title(name, fontsize=10)
-        ax.set_xticks([])
-        ax.set_yticks([])
+        plots.image_panel(ax, plots.display(images[name]), name, fontsize=10)
     fig.tight_layout()
-    fig.savefig(args.out / "passes.png")
+    plots.save(fig, args.out / "passes.png")
     print(f"wrote {args.out / 'passes.png'}")
     return 0
 

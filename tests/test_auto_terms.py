@@ -22,7 +22,7 @@ from addon.scene import snapshot as S
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "scripts"))
 
-#: Seeds of the test scenes; scripts/auto_calibrate.py calibrates the margin on others (1000+).
+#: Seeds of the test scenes; scripts/bench/auto_calibration.py calibrates the margin on others (1000+).
 SEEDS = range(50)
 
 
@@ -57,10 +57,10 @@ def test_shipped_cost_table_is_what_the_script_derives():
     """``addon/plan/term_costs.json`` holds the script's measured draw times and exactly the ratios its
     ``derive`` computes from them; the order puts the Principled set last and drops candidates
     that cost more than it."""
-    import term_costs
+    from bench import term_costs
 
     data = json.loads(auto_terms.COSTS_FILE.read_text())
-    assert data["generated_by"] == "scripts/term_costs.py"
+    assert data["generated_by"] == "scripts/bench/term_costs.py"
     assert set(data["draw_ms"]) == set(auto_terms.CANDIDATE_TERMS)
     assert data["relative"] == term_costs.derive(data["draw_ms"])
     for lights in (1, 2, 8, 32, 64):
@@ -457,32 +457,31 @@ def test_predictions_are_kept_for_an_unchanged_scene_and_redone_on_a_change(monk
 
 
 def test_the_calibration_script_end_to_end(tmp_path):
-    """scripts/auto_calibrate.py on one scene under its own world and one under an image world on
-    the split sum: a row per world and bound, each material's row in the CSV with the set Auto
-    chose and the measured error; a world it does not know and an unwritable table are one clear
-    error each (exit 2), nothing written."""
+    """The calibration (scripts/bench/auto_calibration.py) on one scene under its own world and one
+    under an image world on the split sum: a row per world and bound, each material's row in the
+    CSV with the set Auto chose and the measured error; a world it does not know and an unwritable
+    page are one clear error each (exit 2), nothing written."""
     import csv
     import subprocess
 
-    script = ROOT / "scripts" / "auto_calibrate.py"
-
     def run(*options):
-        return subprocess.run([sys.executable, str(script), "--seeds", "1000", "--bounds", "4", *options],
+        return subprocess.run([sys.executable, str(ROOT / "scripts" / "bench"), "run", "auto_calibration",
+                               "--seeds", "1000", "--bounds", "4", *options],
                               capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
 
-    table, rows = tmp_path / "calibration.md", tmp_path / "rows.csv"
-    proc = run("--worlds", "uniform,split-sum", "--table", str(table), "--rows", str(rows))
+    table, rows = tmp_path / "auto_calibration.md", tmp_path / "rows.csv"
+    proc = run("--worlds", "uniform,split-sum", "--out", str(tmp_path), "--rows", str(rows))
     assert proc.returncode == 0, proc.stderr[-2000:]
     text = table.read_text()
     assert "| uniform | 4 | 5 |" in text and "| split-sum | 4 | 5 |" in text, text
     found = list(csv.DictReader(rows.open()))
     assert len(found) == 10 and {r["world"] for r in found} == {"uniform", "split-sum"}, found
     assert all(r["set"] in auto_terms.CANDIDATE_TERMS and float(r["measured"]) >= 0.0 for r in found), found
-    bad = run("--worlds", "uniform,cloudy", "--table", str(tmp_path / "bad.md"))
-    assert bad.returncode == 2 and "unknown world(s) cloudy" in bad.stderr, bad.stderr[-500:]
-    assert not (tmp_path / "bad.md").exists()
-    (tmp_path / "folder").mkdir()
-    unwritable = run("--worlds", "uniform", "--table", str(tmp_path / "folder"))
+    bad = run("--worlds", "uniform,cloudy", "--out", str(tmp_path / "bad"))
+    assert bad.returncode == 2 and "unknown cloudy" in bad.stderr, bad.stderr[-500:]
+    assert not (tmp_path / "bad").exists()
+    (tmp_path / "a file").write_text("")
+    unwritable = run("--worlds", "uniform", "--out", str(tmp_path / "a file"))
     assert unwritable.returncode == 2 and "cannot write" in unwritable.stderr, unwritable.stderr[-500:]
 
 

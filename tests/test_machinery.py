@@ -135,9 +135,10 @@ def test_results_script_drives_compare(tmp_path, monkeypatch):
 
 
 def test_round_robin_settles_an_engine_after_another_engines_render():
-    """bench.round_robin times each item in rotated rounds; a timed render that follows another
-    engine's render comes after an untimed one of its own (that render's time is discarded)."""
-    import bench
+    """The benchmarks' round robin (scripts/bench/harness/timing.py) times each item in rotated
+    rounds; a timed render that follows another engine's render comes after an untimed one of its
+    own (that render's time is discarded)."""
+    from bench.harness import timing
 
     calls = []
     items = [("ours-a", "ours"), ("ours-b", "ours"), ("peer", "peer")]
@@ -148,14 +149,16 @@ def test_round_robin_settles_an_engine_after_another_engines_render():
         switched = len(calls) > 1 and dict(items)[calls[-2]] != item[1]
         return {"ms": 100.0 if switched else 1.0}
 
-    progress = types.SimpleNamespace(step=lambda _label: None)
-    times = bench.round_robin(items, 3, run, progress, "test", engine_of=lambda item: item[1])
+    steps = []
+    progress = types.SimpleNamespace(step=steps.append, expect=lambda n: steps.append(n))
+    times = timing.round_robin(items, 3, run, progress, "test", state_of=lambda item: item[1])
     assert [t["ms"] for t in times] == [1.0, 1.0, 1.0], (times, calls)
     a, b, peer = (item[0] for item in items)
     assert calls == [a, b, peer,  # the warm-up round, then rounds rotated by one each
                      b, b, peer, peer, a, a,  # each switch of engine: an untimed render first
                      peer, peer, a, a, b,
                      a, b, peer, peer], calls
+    assert steps[0] == 4 * len(items) and len(steps) == 1 + 4 * len(items), steps  # announced, then each
     calls.clear()
-    plain = bench.round_robin(items, 3, run, progress, "test")  # without engine_of: no settling
+    plain = timing.round_robin(items, 3, run)  # without state_of: no settling
     assert max(t["ms"] for t in plain) == 100.0, plain

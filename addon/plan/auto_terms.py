@@ -8,7 +8,7 @@ checked against the GLSL, Mitsuba and Cycles) shades every candidate term set an
 set; the error is Delta E_ITP (ITU-R BT.2124) between the two, on the radiance as a display of
 100 cd/m^2 white and 0.1 cd/m^2 black shows it after the exposure, and its ``quantile`` over the
 points (the 99th percentile by default) is the material's predicted error. Candidates are tried
-cheap -> accurate (``term_costs.json``, measured by ``scripts/term_costs.py``); the first whose
+cheap -> accurate (``term_costs.json``, measured by ``scripts/bench/term_costs.py``); the first whose
 predicted error, times a calibrated margin, is within the bound wins, else the Principled set.
 Shadows are left out of the prediction where the world is black (they darken candidate and
 reference alike); with the world occluded, a share of the points lies in creases
@@ -99,7 +99,7 @@ PREDICTION_WORLD_WIDTH = 512
 PREDICTION_PREFILTER_SAMPLES = 128
 #: Where the scene is on the split sum, every candidate and the reference read the same
 #: prefiltered light, whose precision then matters little: 32 lobe samples a level gave the same
-#: predictions as 128 (scripts/auto_calibrate.py --worlds split-sum, 63 materials: measured /
+#: predictions as 128 (scripts/bench/auto_calibration.py --worlds split-sum, 63 materials: measured /
 #: predicted 95th percentile 1.11 against 1.09, at most 1.38 against 1.39) in a quarter of the
 #: time (a material's prediction ~140 -> ~40 ms).
 SPLIT_SUM_PREFILTER_SAMPLES = 32
@@ -134,7 +134,7 @@ SAMPLES = 1024
 #: Points added where the lights' highlights are (a share of SAMPLES; ``_highlight_points``).
 HIGHLIGHT_SHARE = 1.0 / 32.0
 #: The predicted error is multiplied by this before it is held to the bound. Calibrated by
-#: scripts/auto_calibrate.py (docs/bench/auto_calibration.md) on the random scenes of
+#: scripts/bench/auto_calibration.py (docs/bench/auto_calibration.md) on the random scenes of
 #: tests/auto_scenes.py with seeds 1000-1029 (apart from the tests'), at bounds 0.5 and 4, measured
 #: on every pixel of each material: where either error is >= 0.1, measured / predicted has its
 #: 95th percentile at 1.14 under black or uniform worlds (93 pairs), 1.11 under image worlds on

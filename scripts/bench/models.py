@@ -1,49 +1,39 @@
-"""Benchmark: frame time and error against Cycles of every model and term variant, the peers
-(EEVEE, Workbench), and how the frame time scales (a benchmark, not a test).
-
-    .venv/bin/python scripts/bench.py [--presets a,b] [--frames 5] [--resolution 1280x720]
-                                      [--reference-resolution 640x360] [--reference-samples 128]
-                                      [--peer-frames 3] [--out docs/bench] [--quick]
+"""Every model and term variant: frame time and error against Cycles, the peers (EEVEE,
+Workbench), and how the frame time scales.
 
 For each preset, every configuration (Blinn-Phong, Phong, and the physically based model with its
-default terms, each Fresnel, Beckmann, each masking-shadowing, each diffuse, multiple scattering
-and the Principled set) is rendered in the same process, round-robin (one warm-up round, then
-``--frames`` timed rounds, the order rotated each round) so that machine noise hits them alike.
-Frame times are the engine's own phase times (``engine.last_timings``; GPU work is fenced by the
-read-back inside ``draw_ms``) plus the wall time of ``bpy.ops.render.render``. Errors are against
-the Cycles reference (``reference.render_reference``, cached on disk) at ``--reference-resolution``:
-every image compared is rendered at that resolution, and the peers are timed there too, next to
-Shading Lab in the same rounds. Then: frame time against the number of point lights and the number
-of triangles, extraction time against triangles, and the draw time of the scene's specialised
-program against one generic program (every light kind compiled in, 64 light slots).
-
-Writes ``OUT/bench.md`` (the tables, also printed), ``OUT/pareto.png`` (time against FLIP) and
-``OUT/scaling.png``. Frame times here are CPU-rasteriser times (Mesa llvmpipe on a machine without
-a GPU): compare ratios within one run.
+default terms, each Fresnel, Beckmann, each masking-shadowing, each diffuse, multiple scattering,
+the Principled set and Auto at three bounds) is rendered in the same process, round-robin (one
+warm-up round, then ``--frames`` timed rounds, the order rotated each round) so that machine noise
+hits them alike. Frame times are the engine's own phase times (``engine.last_timings``; GPU work is
+fenced by the read-back inside ``draw_ms``) plus the wall time of ``bpy.ops.render.render``. Errors
+are against the Cycles reference (cached on disk) at ``--reference-resolution``: every image
+compared is rendered at that resolution, and the peers are timed there too, next to Shading Lab in
+the same rounds. Then: frame time against the number of point lights and the number of triangles,
+extraction time against triangles, and the draw time of the scene's specialised program against
+one generic program (every light kind compiled in, 64 light slots). Writes ``bench.md``,
+``pareto.png`` (time against FLIP) and ``scaling.png``; ``--quick``: one preset, fewer variants.
 """
 
 from __future__ import annotations
 
-import argparse
 import dataclasses
 import math
-import os
-import platform
 import statistics
-import subprocess
-import sys
 import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parent.parent
-sys.path[:0] = [str(ROOT), str(ROOT / "scripts"), str(ROOT / "tests")]
+import render as cli
 
-import render as cli  # noqa: E402
+from addon.blender.extract import MEMO_CORNERS
+from addon.scene.snapshot import LIGHT_KINDS, TERM_CHOICES
 
-from addon.blender.extract import MEMO_CORNERS  # noqa: E402
-from addon.scene.snapshot import LIGHT_KINDS, TERM_CHOICES  # noqa: E402
+from .harness import engines, page, plots, scenes, shipped_presets, size, standard, timing
 
+PAGE = "bench.md"
+QUICK = dict(presets="long_tail", resolution="320x180", frames=1, peer_frames=1, reference_samples=16,
+             peers="eevee-1,workbench")
 DEFAULT_TERMS = {family: choices[0] for family, choices in TERM_CHOICES.items()}
 LIGHT_COUNTS = (1, 2, 4, 8, 16, 32, 64)
 TRIANGLE_COUNTS = (10_000, 100_000, 1_000_000)
@@ -109,86 +99,6 @@ def apply(scene, config: Config) -> None:
 # --- measuring --------------------------------------------------------------------------------
 
 
-def set_resolution(scene, size: tuple[int, int]) -> None:
-    scene.render.resolution_x, scene.render.resolution_y = size
-    scene.render.resolution_percentage = 100
-
-
-def render_timed(scene) -> dict[str, float]:
-    """One final render; the engine's phase times (Shading Lab only) and the operator's wall time."""
-    import bpy
-
-    from addon.blender import engine
-
-    ours = scene.render.engine == "SHADING_LAB"
-    engine.last_timings.clear()
-    start = time.perf_counter()
-    try:
-        bpy.ops.render.render()
-    except RuntimeError as exc:
-        raise cli.CliError(f"render failed ({scene.render.engine}): {str(exc).strip()}") from None
-    wall = 1e3 * (time.perf_counter() - start)
-    if ours and not engine.last_timings:
-        raise cli.CliError("Shading Lab reported no timings: the render failed (see the console)")
-    return {**(dict(engine.last_timings) if ours else {}), "wall_ms": wall}
-
-
-def medians(samples: list[dict[str, float]]) -> dict[str, float]:
-    return {k: statistics.median(s[k] for s in samples) for k in samples[0]}
-
-
-def round_robin(items: list, frames: int, run, progress, label: str,
-                engine_of=None) -> list[dict[str, float]]:
-    """``run(item)`` -> timings, for one warm-up round then ``frames`` timed rounds, the order
-    rotated each round; returns the median timings of each item, in ``items``' order.
-
-    ``engine_of(item)``: the render engine an item draws with. A timed render that follows
-    another engine's render is preceded by an untimed one of its own: each engine is timed in its
-    steady state, not paying for what the other left behind (on the CPU rasteriser our first
-    render after an EEVEE render took 50-100 ms longer, 1.5-2.5x on hdr's ~95 ms frame, its shadow
-    pass 23-33 -> 91-113 ms; a Workbench render in between cost nothing: consistent with EEVEE's
-    hundreds of programs displacing ours from the rasteriser's cache of compiled code, not
-    established)."""
-    samples: list[list[dict[str, float]]] = [[] for _ in items]
-    order = list(range(len(items)))
-    last = None
-    for r in range(frames + 1):
-        k = r % len(items)
-        for i in order[k:] + order[:k]:
-            engine = engine_of(items[i]) if engine_of is not None else None
-            if r > 0 and engine != last:
-                run(items[i])  # settles this engine after another's render
-            t = run(items[i])
-            last = engine
-            if r > 0:
-                samples[i].append(t)
-            progress.step(f"{label} round {r}/{frames}")
-    return [medians(s) for s in samples]
-
-
-def set_peer(scene, peer: tuple[str, str, int]) -> None:
-    import reference
-
-    _key, engine_id, samples = peer
-    scene.render.engine = engine_id
-    if engine_id == reference.EEVEE:
-        scene.eevee.taa_render_samples = samples
-        scene.eevee.light_threshold = 1e-6  # as render_peer: weak lights are not culled
-
-
-def save_result(scene, path: Path):
-    """The Render Result of the last render as an array (top row first), through a 32-bit EXR."""
-    import bpy
-    import reference
-
-    settings = scene.render.image_settings
-    if hasattr(settings, "media_type"):
-        settings.media_type = "IMAGE"
-    settings.file_format, settings.color_depth, settings.exr_codec = "OPEN_EXR", "32", "ZIP"
-    bpy.data.images["Render Result"].save_render(filepath=str(path), scene=scene)
-    return reference.read_exr_rgba(path)
-
-
 def generic_from_snapshot(original):
     """A Features.from_snapshot that compiles every light kind in and 64 light slots."""
 
@@ -218,40 +128,28 @@ def specialised_vs_generic(scene, frames: int, progress, label: str) -> dict:
         snap = extract.snapshot(depsgraph, w, h)
         features = programs.Features.from_snapshot(snap)
         renderer = Renderer()
-        times = {"specialised": [], "generic": []}
         images = {}
+
+        def draw(mode):
+            if mode == "generic":
+                programs.Features.from_snapshot = generic
+            try:
+                start = time.perf_counter()
+                images[mode] = renderer.render(snap)
+                return {"ms": 1e3 * (time.perf_counter() - start)}
+            finally:
+                programs.Features.from_snapshot = original
+
         try:
             renderer.sync(snap)
-            for r in range(frames + 1):
-                for mode in (("specialised", "generic") if r % 2 == 0 else ("generic", "specialised")):
-                    if mode == "generic":
-                        programs.Features.from_snapshot = generic
-                    try:
-                        start = time.perf_counter()
-                        images[mode] = renderer.render(snap)
-                        ms = 1e3 * (time.perf_counter() - start)
-                    finally:
-                        programs.Features.from_snapshot = original
-                    if r > 0:
-                        times[mode].append(ms)
-                progress.step(f"{label} specialised vs generic round {r}/{frames}")
+            specialised, generic_ms = (t["ms"] for t in timing.round_robin(
+                ["specialised", "generic"], frames, draw, progress, f"{label} specialised vs generic"))
         finally:
             renderer.free()
         diff = float(np.abs(images["specialised"] - images["generic"]).max())
         return {"kinds": sorted(features.light_kinds), "max_lights": features.max_lights,
-                "lights": len(snap.lights), "specialised": statistics.median(times["specialised"]),
-                "generic": statistics.median(times["generic"]), "max_diff": diff}
-
-    return gpu_harness.run_on_gpu(job)
-
-
-def gpu_info() -> tuple[str, str]:
-    import gpu_harness
-
-    def job(_depsgraph):
-        import gpu
-
-        return gpu.platform.renderer_get(), gpu.platform.version_get()
+                "lights": len(snap.lights), "specialised": specialised, "generic": generic_ms,
+                "max_diff": diff}
 
     return gpu_harness.run_on_gpu(job)
 
@@ -277,35 +175,32 @@ def scene_triangles(scene) -> int:
 
 def bench_preset(name: str, args, configs, peers, progress, tmp: Path) -> dict:
     import metrics
-    import reference
 
     from addon.blender import engine
     from addon.plan import auto_terms
 
-    scene, _stem = cli.load_scene(name, None)
-    if scene.camera is None:
-        raise cli.CliError(f"{name}: the scene has no active camera")
+    scene = scenes.preset(name, args.size)
     out = {"name": name, "times": {}, "errors": {}, "peer_times": {}, "peer_errors": {}}
     out["triangles"] = scene_triangles(scene)
     out["lights"] = sum(1 for o in scene.objects if o.type == "LIGHT")
 
     def run_config(config):
         apply(scene, config)
-        return render_timed(scene)
+        return timing.render_timed(scene)
 
-    for size in args.sizes:
-        set_resolution(scene, size)
-        med = round_robin(configs, args.frames, run_config, progress, f"{name} {size[0]}x{size[1]}")
-        out["times"][size] = {c.key: m for c, m in zip(configs, med)}
+    for size_ in args.sizes:
+        scenes.ready(scene, size_)
+        med = timing.round_robin(configs, args.frames, run_config, progress, f"{name} {page.res(size_)}")
+        out["times"][size_] = {c.key: m for c, m in zip(configs, med)}
 
-    set_resolution(scene, args.ref_size)
-    ref, cached = reference.render_reference(scene, samples=args.reference_samples)
+    scenes.ready(scene, args.ref_size)
+    ref, cached = engines.cycles(scene, args.reference_samples)
     out["reference_cached"] = cached
     progress.step(f"{name} Cycles reference{' (cached)' if cached else ''}")
     out["auto_sets"] = {}
     for config in configs:
         apply(scene, config)
-        image = reference.render_to_array(scene, tmp / f"{name}_{config.key}.exr")
+        image = engines.image(scene, tmp / f"{name}_{config.key}.exr")[0]
         out["errors"][config.key] = metrics.errors(ref, image)
         if config.auto_bound:
             out["auto_sets"][config.key] = auto_terms.summary(engine.last_term_choices).removeprefix("Auto: ")
@@ -314,23 +209,23 @@ def bench_preset(name: str, args, configs, peers, progress, tmp: Path) -> dict:
     images = {}
 
     def run_peer(peer):
-        if peer[1] == "SHADING_LAB":
-            apply(scene, next(c for c in configs if c.key == peer[0].removeprefix("sl-")))
-        else:
-            set_peer(scene, peer)
-        t = render_timed(scene)
-        if peer[1] != "SHADING_LAB" and peer[0] not in images:  # the warm-up render's image
-            images[peer[0]] = save_result(scene, tmp / f"{name}_{peer[0]}.exr")
-        return t
+        if peer not in engines.PEERS:
+            apply(scene, next(c for c in configs if c.key == peer.removeprefix("sl-")))
+            return timing.render_timed(scene)
+        if peer not in images:  # the warm-up round: the image compared
+            images[peer], ms = engines.image(scene, tmp / f"{name}_{peer}.exr", peer)
+            return {"wall_ms": ms}
+        return engines.timed(scene, peer)
 
-    med = round_robin(peers, args.peer_frames, run_peer, progress, f"{name} peers", engine_of=lambda p: p[1])
+    med = timing.round_robin(peers, args.peer_frames, run_peer, progress, f"{name} peers",
+                             state_of=lambda p: engines.PEERS[p][1] if p in engines.PEERS else engines.OURS)
     apply(scene, configs[0])
-    out["peer_times"] = {p[0]: m for p, m in zip(peers, med)}
+    out["peer_times"] = dict(zip(peers, med))
     for key, image in images.items():
         out["peer_errors"][key] = metrics.errors(ref, image)
         progress.step(f"{name} error {key}")
 
-    set_resolution(scene, args.size)
+    scenes.ready(scene, args.size)
     apply(scene, next(c for c in configs if c.key == "pbr"))
     out["generic"] = specialised_vs_generic(scene, args.frames, progress, name)
     return out
@@ -341,8 +236,7 @@ def bench_lights(args, progress) -> dict:
     point lights; the first N are rendered, the others hidden from the render)."""
     import bpy
 
-    scene, _ = cli.load_scene(args.scaling_preset, None)
-    set_resolution(scene, args.size)
+    scene = scenes.preset(args.scaling_preset, args.size)
     for obj in [o for o in scene.objects if o.type == "LIGHT"]:
         bpy.data.objects.remove(obj)
     meshes = [o for o in scene.objects if o.type == "MESH"]
@@ -352,14 +246,10 @@ def bench_lights(args, progress) -> dict:
     lights = []
     golden = math.pi * (3.0 - math.sqrt(5.0))  # any prefix of the ring is spread evenly
     for i in range(max(counts)):
-        data = bpy.data.lights.new(f"Bench point {i}", "POINT")
-        data.shadow_soft_size = 0.0
-        obj = bpy.data.objects.new(data.name, data)
-        scene.collection.objects.link(obj)
         a = i * golden
-        obj.location = (centre[0] + radius * math.cos(a), centre[1] + radius * math.sin(a),
-                        centre[2] + 3.0 + 0.5 * math.sin(3 * a))
-        lights.append(obj)
+        lights.append(scenes.light(scene, f"Bench point {i}", "POINT",
+                                   (centre[0] + radius * math.cos(a), centre[1] + radius * math.sin(a),
+                                    centre[2] + 3.0 + 0.5 * math.sin(3 * a)), shadow_soft_size=0.0))
     total_power = 3000.0
     models = [c for c in all_configs(True) if c.key in ("blinn-phong", "phong", "pbr")]
     items = [(n, m) for n in counts for m in models]
@@ -370,9 +260,9 @@ def bench_lights(args, progress) -> dict:
             obj.hide_render = i >= n
             obj.data.energy = total_power / n
         apply(scene, model)
-        return render_timed(scene)
+        return timing.render_timed(scene)
 
-    med = round_robin(items, args.frames, run, progress, "lights scaling")
+    med = timing.round_robin(items, args.frames, run, progress, "lights scaling")
     return {"preset": args.scaling_preset, "rows": {(n, m.key): t for (n, m), t in zip(items, med)}}
 
 
@@ -381,19 +271,10 @@ def bench_triangles(args, progress) -> dict:
     view, only one rendered at a time, two point lights, Blender's default surface."""
     import bpy
 
-    bpy.ops.wm.read_factory_settings(use_empty=True)
-    scene = bpy.context.scene
-    set_resolution(scene, args.size)
-    cam = bpy.data.objects.new("Camera", bpy.data.cameras.new("Camera"))
-    scene.collection.objects.link(cam)
-    cam.location = (0.0, 0.0, 3.0)
-    scene.camera = cam
+    scene = scenes.empty(args.size)
+    scenes.camera(scene, (0.0, 0.0, 3.0))
     for i, loc in enumerate(((1.0, 0.8, 1.5), (-1.2, -0.6, 2.0))):
-        data = bpy.data.lights.new(f"Point {i}", "POINT")
-        data.energy, data.shadow_soft_size = 200.0, 0.0
-        obj = bpy.data.objects.new(data.name, data)
-        scene.collection.objects.link(obj)
-        obj.location = loc
+        scenes.light(scene, f"Point {i}", "POINT", loc, energy=200.0, shadow_soft_size=0.0)
     grids = {}
     for target in args.triangle_counts:
         n = max(1, round(math.sqrt(target / 2)))
@@ -408,9 +289,9 @@ def bench_triangles(args, progress) -> dict:
         for t, (obj, _) in grids.items():
             obj.hide_render = t != target
         apply(scene, model)
-        return render_timed(scene)
+        return timing.render_timed(scene)
 
-    med = round_robin(items, args.frames, run, progress, "triangles scaling")
+    med = timing.round_robin(items, args.frames, run, progress, "triangles scaling")
     return {"triangles": {t: tris for t, (_, tris) in grids.items()},
             "rows": {(t, m.key): x for (t, m), x in zip(items, med)}}
 
@@ -418,63 +299,12 @@ def bench_triangles(args, progress) -> dict:
 # --- report -----------------------------------------------------------------------------------
 
 
-def cpu_model() -> str:
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                return line.split(":", 1)[1].strip()
-    except OSError:
-        pass
-    return platform.processor() or "unknown CPU"
-
-
-def load_average() -> str:
-    try:
-        return Path("/proc/loadavg").read_text().split()[0]
-    except (OSError, IndexError):
-        return "?"
-
-
-def git_state() -> str:
-    try:
-        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, capture_output=True,
-                              text=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT,
-                               capture_output=True, text=True, check=True).stdout.strip()
-        return head + (" (with uncommitted changes)" if dirty else "")
-    except (OSError, subprocess.CalledProcessError):
-        return "unknown"
-
-
-def table(header: list[str], rows: list[list[str]], align: str | None = None) -> list[str]:
-    align = align or "l" + "r" * (len(header) - 1)
-    return ["| " + " | ".join(header) + " |",
-            "|" + "|".join("---" if a == "l" else "---:" for a in align) + "|",
-            *("| " + " | ".join(r) + " |" for r in rows)]
-
-
-def geomean(values) -> float:
-    values = list(values)
-    return math.exp(sum(math.log(v) for v in values) / len(values))
-
-
-def res(size) -> str:
-    return f"{size[0]}×{size[1]}"
-
-
-def report(args, results, lights, tris, configs, peers, machine, elapsed) -> str:
+def report(args, results, lights, tris, configs, peers) -> list[str]:
+    """The page's body (the harness writes the header)."""
     main, ref = args.size, args.ref_size
-    lines = ["# Shading Lab benchmark", "",
-             f"`scripts/bench.py {' '.join(args.argv)}` — {time.strftime('%Y-%m-%d %H:%M')}, "
-             f"{elapsed / 60:.1f} min.", "",
-             f"**Machine:** {machine['cpu']}, {os.cpu_count()} logical CPUs; GPU: {machine['gl']} "
-             f"(OpenGL {machine['gl_version']}); Blender {machine['blender']} (bpy), Python "
-             f"{platform.python_version()}; commit {machine['git']}. Load average (1 min) at start "
-             f"{machine['load'][0]}, at end {machine['load'][1]} (other work on the CPUs adds noise; "
-             f"interleaving makes it hit every configuration alike).", "",
-             "**Frame times are CPU-rasteriser times (Mesa llvmpipe, no GPU): compare ratios within "
-             "one run, not absolute times.**", "",
-             f"Method: per preset, every configuration is rendered round-robin (one warm-up round that "
+    res, table, geomean = page.res, page.table, page.geomean
+    others = [p for p in peers if p in engines.PEERS]
+    lines = [f"Method: per preset, every configuration is rendered round-robin (one warm-up round that "
              f"compiles the programs, then {args.frames} timed rounds, order rotated each round), all "
              f"in one process. *total* is the engine's own time (`engine.last_timings`): scene "
              f"extraction + draw + read-back (the read-back fences the GPU work) + handing pixels to "
@@ -484,13 +314,13 @@ def report(args, results, lights, tris, configs, peers, machine, elapsed) -> str
              f"(direct light only, world on and occluded, lights as the file has them, shadows included, "
              f"pixel centres, "
              f"{args.reference_samples} spp, "
-             f"`reference.render_reference`, cached) **at {res(ref)}**: every compared image, ours and "
+             f"`harness.engines.cycles`, cached) **at {res(ref)}**: every compared image, ours and "
              f"the peers', is rendered at {res(ref)}. FLIP is mean HDR-FLIP; *rel* the mean relative "
              f"luminance error on lit pixels. Peers (EEVEE, Workbench) are timed at {res(ref)} in the "
              f"same rounds as Shading Lab's Blinn-Phong and default PBR (wall times, median of "
              f"{args.peer_frames} after a warm-up; a timed render that follows another engine's is "
              f"preceded by an untimed one of its own, so that each engine is timed in its steady state: "
-             f"`bench.round_robin`), lights as for the reference.", ""]
+             f"`harness.timing.collect`), lights as for the reference.", ""]
     summary_at = len(lines)
 
     # 1. headline per preset
@@ -518,25 +348,22 @@ def report(args, results, lights, tris, configs, peers, machine, elapsed) -> str
         pt, pe = r["peer_times"], r["peer_errors"]
         ours = pt["sl-pbr"]["wall_ms"]
         cells = [r["name"], f"{pt['sl-blinn-phong']['wall_ms']:.0f}", f"{ours:.0f}"]
-        for p in peers:
-            if p[1] == "SHADING_LAB":
-                continue
-            cells.append(f"{pt[p[0]]['wall_ms']:.0f} ({pt[p[0]]['wall_ms'] / ours:.0f}×)")
-            cells.append(f"{pe[p[0]].flip:.3f} / {pe[p[0]].mean_relative:.1%}")
+        for p in others:
+            cells.append(f"{pt[p]['wall_ms']:.0f} ({pt[p]['wall_ms'] / ours:.0f}×)")
+            cells.append(f"{pe[p].flip:.3f} / {pe[p].mean_relative:.1%}")
         cells.append(f"{r['errors']['pbr'].flip:.3f} / {r['errors']['pbr'].mean_relative:.1%}")
         rows.append(cells)
     header = ["preset", "SL BP ms", "SL PBR ms"]
-    for p in peers:
-        if p[1] != "SHADING_LAB":
-            header += [f"{PEER_LABELS[p[0]]} ms (× SL PBR)", f"{PEER_LABELS[p[0]]} FLIP / rel"]
+    for p in others:
+        header += [f"{engines.label(p)} ms (× SL PBR)", f"{engines.label(p)} FLIP / rel"]
     lines += table(header + ["SL PBR FLIP / rel"], rows)
-    lines += ["", "Set up as `reference.render_peer`: EEVEE with light threshold 1e-6 and the lights as "
-              "the file has them (shadows on); Workbench with its default studio lighting (not the "
-              "scene's lights), so its error is large by design. The reference samples pixel centres "
-              "(no anti-aliasing): EEVEE at 1 sample does too, EEVEE at 16 samples jitters over "
-              "Blender's 1.5 px film filter, and the metrics count that smoothing as error — which "
-              "is why 16 samples can score worse than 1 here. Peer times are whole-render wall "
-              "times, including EEVEE's per-render set-up.", ""]
+    lines += ["", "Set up by `harness.engines` (`reference.use_engine`): EEVEE with light threshold "
+              "1e-6 and the lights as the file has them (shadows on); Workbench with its default "
+              "studio lighting (not the scene's lights), so its error is large by design. The "
+              "reference samples pixel centres (no anti-aliasing): EEVEE at 1 sample does too, EEVEE "
+              "at 16 samples jitters over Blender's 1.5 px film filter, and the metrics count that "
+              "smoothing as error — which is why 16 samples can score worse than 1 here. Peer times "
+              "are whole-render wall times, including EEVEE's per-render set-up.", ""]
 
     # 3. variants across presets
     lines += [f"## Every configuration, across presets ({len(results)})", ""]
@@ -635,7 +462,8 @@ def report(args, results, lights, tris, configs, peers, machine, elapsed) -> str
         lines += table(["preset", "bound", "time / Principled", "time / default", "FLIP Auto / Principled",
                         "chosen sets"], rows)
         lines += ["", "Bound: Delta E_ITP at the 99th percentile of a material's pixels against the "
-                  "Principled set (`addon/plan/auto_terms.py`). Times include the prediction (in extraction).",
+                  "Principled set (`addon/plan/auto_terms.py`). Times include the prediction (in "
+                  "extraction).",
                   ""]
 
     # 7. detail per preset
@@ -652,39 +480,40 @@ def report(args, results, lights, tris, configs, peers, machine, elapsed) -> str
             if ref != main:
                 cells.append(f"{r['times'][ref][c.key]['total_ms']:.1f}")
             rows.append(cells + [f"{e.flip:.4f}", f"{e.mean_relative:.2%}", f"{e.max_abs:.3g}"])
-        for p in peers:
-            if p[1] != "SHADING_LAB":
-                e = r["peer_errors"][p[0]]
-                cells = [PEER_LABELS[p[0]], "–", "–", "–", "–"]
-                if ref != main:
-                    cells.append(f"{r['peer_times'][p[0]]['wall_ms']:.0f} (wall)")
-                rows.append(cells + [f"{e.flip:.4f}", f"{e.mean_relative:.2%}", f"{e.max_abs:.3g}"])
+        for p in others:
+            e = r["peer_errors"][p]
+            cells = [engines.label(p), "–", "–", "–", "–"]
+            if ref != main:
+                cells.append(f"{r['peer_times'][p]['wall_ms']:.0f} (wall)")
+            rows.append(cells + [f"{e.flip:.4f}", f"{e.mean_relative:.2%}", f"{e.max_abs:.3g}"])
         header = ["configuration", "total ms", "extract ms", "draw ms", "/ BP"]
         if ref != main:
             header.append(f"total ms {res(ref)}")
         lines += table(header + ["FLIP", "rel", "max abs"], rows)
         lines.append("")
-    lines[summary_at:summary_at] = summary(args, results, lights, tris, peers)
-    return "\n".join(lines) + "\n"
+    lines[summary_at:summary_at] = summary(args, results, lights, tris, others)
+    return lines
 
 
 def _spread(values: list[float], fmt: str) -> str:
     """geometric mean (min–max) of positive values."""
     if len(values) == 1:
         return format(values[0], fmt)
-    return f"{format(geomean(values), fmt)} ({format(min(values), fmt)}–{format(max(values), fmt)})"
+    return f"{format(page.geomean(values), fmt)} ({format(min(values), fmt)}–{format(max(values), fmt)})"
 
 
 def summary(args, results, lights, tris, peers) -> list[str]:
+    """The summary's bullets; ``peers``: the other engines' keys."""
     main, ref = args.size, args.ref_size
+    res = page.res
     n = len(results)
     ratio = {k: [r["times"][main][k]["total_ms"] / r["times"][main]["blinn-phong"]["total_ms"]
                  for r in results] for k in ("phong", "pbr", "pbr-principled")}
     flip = {k: statistics.mean(r["errors"][k].flip for r in results)
             for k in ("blinn-phong", "phong", "pbr", "pbr-principled")}
     rel = {k: statistics.mean(r["errors"][k].mean_relative for r in results) for k in flip}
-    peer_ratio = {p[0]: [r["peer_times"][p[0]]["wall_ms"] / r["peer_times"]["sl-pbr"]["wall_ms"]
-                         for r in results] for p in peers if p[1] != "SHADING_LAB"}
+    peer_ratio = {p: [r["peer_times"][p]["wall_ms"] / r["peer_times"]["sl-pbr"]["wall_ms"] for r in results]
+                  for p in peers}
     out = ["## Summary", "",
            f"- Time / Blinn-Phong at {res(main)} (geometric mean over {n} preset(s), min–max): Phong "
            f"{_spread(ratio['phong'], '.2f')}×, PBR default {_spread(ratio['pbr'], '.2f')}×, Principled "
@@ -693,11 +522,11 @@ def summary(args, results, lights, tris, peers) -> list[str]:
                f"{label} {flip[k]:.3f} / {rel[k]:.1%}" for k, label in
                (("blinn-phong", "Blinn-Phong"), ("phong", "Phong"), ("pbr", "PBR default"),
                 ("pbr-principled", "Principled set"))) + "; " + "; ".join(
-               f"{PEER_LABELS[p[0]]} {statistics.mean(r['peer_errors'][p[0]].flip for r in results):.3f} / "
-               f"{statistics.mean(r['peer_errors'][p[0]].mean_relative for r in results):.1%}"
-               for p in peers if p[1] != "SHADING_LAB") + ".",
+               f"{engines.label(p)} {statistics.mean(r['peer_errors'][p].flip for r in results):.3f} / "
+               f"{statistics.mean(r['peer_errors'][p].mean_relative for r in results):.1%}"
+               for p in peers) + ".",
            f"- Peers' wall time / Shading Lab PBR's at {res(ref)}: " + ", ".join(
-               f"{PEER_LABELS[k]} {_spread(v, '.0f')}×" for k, v in peer_ratio.items()) + "."]
+               f"{engines.label(k)} {_spread(v, '.0f')}×" for k, v in peer_ratio.items()) + "."]
     if lights:
         rows_l = lights["rows"]
         counts = sorted({c for c, _ in rows_l})
@@ -718,7 +547,6 @@ def summary(args, results, lights, tris, peers) -> list[str]:
 
 
 MODEL_LABELS = {"blinn-phong": "Blinn-Phong", "phong": "Phong", "pbr": "PBR"}
-PEER_LABELS = {"eevee-1": "EEVEE 1 spp", "eevee-16": "EEVEE 16 spp", "workbench": "Workbench"}
 
 
 SHORT = {"fresnel": "F", "ndf": "D", "visibility": "V", "diffuse": "diff."}
@@ -764,21 +592,16 @@ def _labels(ax, points, fontsize=6) -> None:
 
 
 def pareto_plot(path: Path, args, results, configs, peers) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = plots.pyplot()
     ref = args.ref_size
     points = []  # (label, ms, flip, kind)
     for c in configs:
         points.append((short_label(c), statistics.mean(r["times"][ref][c.key]["wall_ms"] for r in results),
                        statistics.mean(r["errors"][c.key].flip for r in results), c.group))
     for p in peers:
-        if p[1] != "SHADING_LAB":
-            points.append((PEER_LABELS[p[0]],
-                           statistics.mean(r["peer_times"][p[0]]["wall_ms"] for r in results),
-                           statistics.mean(r["peer_errors"][p[0]].flip for r in results), "peer"))
+        if p in engines.PEERS:
+            points.append((engines.label(p), statistics.mean(r["peer_times"][p]["wall_ms"] for r in results),
+                           statistics.mean(r["peer_errors"][p].flip for r in results), "peer"))
     front = pareto_front(points)
     colours = {"Blinn-Phong": "tab:blue", "Phong": "tab:green", "PBR": "tab:red", "peer": "tab:gray"}
     fig, axes = plt.subplots(1, 2, figsize=(12, 5.2), dpi=80, gridspec_kw={"width_ratios": [1, 1.15]})
@@ -807,15 +630,11 @@ def pareto_plot(path: Path, args, results, configs, peers) -> None:
     fig.suptitle(f"Time vs error — {len(results)} preset(s): {', '.join(r['name'] for r in results)}; "
                  "Mesa llvmpipe, compare ratios", fontsize=9)
     fig.tight_layout(rect=(0, 0.05, 1, 1))
-    save_png(fig, path)
+    plots.save(fig, path)
 
 
 def scaling_plot(path: Path, args, lights, tris, results) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = plots.pyplot()
     fig, axes = plt.subplots(1, 3, figsize=(13, 4), dpi=80)
     ax = axes[0]
     if lights:
@@ -859,59 +678,28 @@ def scaling_plot(path: Path, args, lights, tris, results) -> None:
     ax.legend(fontsize=7)
     fig.suptitle(f"Scaling at {args.size[0]}×{args.size[1]} (Mesa llvmpipe: compare ratios)", fontsize=9)
     fig.tight_layout()
-    save_png(fig, path)
-
-
-def save_png(fig, path: Path) -> None:
-    import matplotlib.pyplot as plt
-
-    partial = path.with_name(f".{path.stem}.partial.png")
-    fig.savefig(partial, pil_kwargs={"optimize": True})
-    plt.close(fig)
-    partial.replace(path)
+    plots.save(fig, path)
 
 
 # --- command line -----------------------------------------------------------------------------
 
 
-def parse_args(argv: list[str]) -> argparse.Namespace:
-    parser = argparse.ArgumentParser(prog="bench.py", description=__doc__.split("\n\n")[0])
-    parser.add_argument("--presets", default=None, help="comma-separated preset names (default: all shipped)")
-    parser.add_argument("--frames", type=int, default=None, help="timed frames after the warm-up (default 5)")
-    parser.add_argument("--resolution", default=None, metavar="WxH",
-                        help="timed resolution (default 1280x720)")
-    parser.add_argument("--reference-resolution", default=None, metavar="WxH",
+def options(parser) -> None:
+    standard(parser, resolution="1280x720", frames=5, presets="all", reference_samples=128,
+             peers=",".join(engines.PEERS))
+    parser.add_argument("--reference-resolution", type=size, default=None, metavar="WxH",
                         help="resolution of the error comparisons and the peers' timing (default: half "
-                             "of --resolution)")
-    parser.add_argument("--reference-samples", type=int, default=128, help="Cycles samples (default 128)")
+                             "of --resolution; with --quick or from 640 px down, --resolution)")
     parser.add_argument("--peer-frames", type=int, default=3, help="timed frames per peer (default 3)")
-    parser.add_argument("--out", type=Path, default=ROOT / "docs" / "bench")
-    parser.add_argument("--quick", action="store_true",
-                        help=f"smoke test: one preset ({QUICK_PRESET}), 320x180, 3 frames, fewer variants")
-    args = parser.parse_args(argv)
-    args.argv = argv
-    return args
 
 
 def resolve(args) -> None:
-    from addon.scene import presets
-
-    shipped = presets.scene_preset_names()
-    if args.presets:
-        args.preset_list = [p.strip() for p in args.presets.split(",") if p.strip()]
-        unknown = [p for p in args.preset_list if p not in shipped]
-        if unknown:
-            raise cli.CliError(f"--presets: unknown {', '.join(unknown)}; shipped: {', '.join(shipped)}")
-    else:
-        args.preset_list = [QUICK_PRESET] if args.quick else list(shipped)
-    if args.quick:
-        args.preset_list = args.preset_list[:1]
-    args.frames = args.frames or (3 if args.quick else 5)
-    if args.frames < 1 or args.peer_frames < 1:
-        raise cli.CliError("--frames and --peer-frames must be at least 1")
-    args.size = cli.parse_resolution(args.resolution or ("320x180" if args.quick else "1280x720"))
+    if args.peer_frames < 1:
+        raise cli.CliError("--peer-frames must be at least 1")
+    args.preset_list = args.presets[:1] if args.quick else args.presets
+    args.size = args.resolution
     if args.reference_resolution:
-        args.ref_size = cli.parse_resolution(args.reference_resolution)
+        args.ref_size = args.reference_resolution
     elif args.quick or args.size[0] <= 640:
         args.ref_size = args.size
     else:
@@ -919,63 +707,22 @@ def resolve(args) -> None:
     args.sizes = [args.size] + ([args.ref_size] if args.ref_size != args.size else [])
     args.light_counts = (1, 4, 16, 64) if args.quick else LIGHT_COUNTS
     args.triangle_counts = TRIANGLE_COUNTS[:2] if args.quick else TRIANGLE_COUNTS
-    args.scaling_preset = (SCALING_PRESET if SCALING_PRESET in shipped and not args.quick
+    args.scaling_preset = (SCALING_PRESET if SCALING_PRESET in shipped_presets() and not args.quick
                            else args.preset_list[0])
 
 
-def main(argv: list[str] | None = None) -> int:
-    args = parse_args(sys.argv[1:] if argv is None else argv)
-    started = time.perf_counter()
-    load_start = load_average()
-    try:
-        resolve(args)
-        cli.check_output_dir(args.out)
-        import bpy
-        import reference
-
-        cli.ensure_addon()
-        configs = all_configs(args.quick)
-        peers = [("sl-blinn-phong", "SHADING_LAB", 1), ("sl-pbr", "SHADING_LAB", 1),
-                 ("eevee-1", reference.EEVEE, 1), ("eevee-16", reference.EEVEE, 16),
-                 ("workbench", "BLENDER_WORKBENCH", 1)]
-        n = len(configs)
-        per_preset = (len(args.sizes) * (args.frames + 1) * n + 1 + n + (args.peer_frames + 1) * len(peers)
-                      + (len(peers) - 2) + (args.frames + 1))
-        total = (len(args.preset_list) * per_preset + (args.frames + 1) * len(args.light_counts) * 3
-                 + (args.frames + 1) * len(args.triangle_counts) * 2)
-        print(f"bench: {len(args.preset_list)} preset(s) x {n} configurations, {res(args.size)} "
-              f"(errors and peers at {res(args.ref_size)}), {args.frames} frames; {total} renders",
-              file=sys.stderr)
-        progress = cli.Progress(total)
-        results = []
-        with tempfile.TemporaryDirectory() as tmp:
-            for name in args.preset_list:
-                results.append(bench_preset(name, args, configs, peers, progress, Path(tmp)))
-        lights = bench_lights(args, progress)
-        tris = bench_triangles(args, progress)
-        gl, gl_version = gpu_info()
-        machine = {"cpu": cpu_model(), "gl": gl, "gl_version": gl_version,
-                   "load": (load_start, load_average()),
-                   "blender": bpy.app.version_string, "git": git_state()}
-        args.argv = args.argv or ["(defaults)"]
-        text = report(args, results, lights, tris, configs, peers, machine,
-                                 time.perf_counter() - started)
-        md = args.out / "bench.md"
-        partial = md.with_name(".bench.partial.md")
-        partial.write_text(text, encoding="utf-8")
-        partial.replace(md)
-        pareto_plot(args.out / "pareto.png", args, results, configs, peers)
-        scaling_plot(args.out / "scaling.png", args, lights, tris, results)
-        print(text)
-        print(f"wrote {md}, {args.out / 'pareto.png'}, {args.out / 'scaling.png'} "
-              f"({(time.perf_counter() - started) / 60:.1f} min)")
-    except (cli.CliError, ValueError) as exc:
-        print(f"\nbench.py: error: {exc}", file=sys.stderr)
-        return 2
-    return 0
-
-
-if __name__ == "__main__":
-    code = main()
-    sys.stdout.flush()
-    sys.exit(code)
+def run(ctx) -> None:
+    args = ctx.args
+    resolve(args)
+    configs = all_configs(args.quick)
+    peers = ["sl-blinn-phong", "sl-pbr", *args.peers]
+    print(f"bench: {len(args.preset_list)} preset(s) x {len(configs)} configurations, {page.res(args.size)} "
+          f"(errors and peers at {page.res(args.ref_size)}), {args.frames} frames")
+    with tempfile.TemporaryDirectory() as tmp:
+        results = [bench_preset(name, args, configs, peers, ctx.progress, Path(tmp))
+                   for name in args.preset_list]
+    lights = bench_lights(args, ctx.progress)
+    tris = bench_triangles(args, ctx.progress)
+    ctx.page("Shading Lab benchmark", report(args, results, lights, tris, configs, peers))
+    pareto_plot(args.out / "pareto.png", args, results, configs, peers)
+    scaling_plot(args.out / "scaling.png", args, lights, tris, results)
