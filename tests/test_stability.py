@@ -594,11 +594,25 @@ def test_every_term_combination_at_the_extremes(group):
             raise AssertionError(f"{_label(('PBR', terms))}: {error}") from None
 
 
-def test_bounds_are_tight():
-    """After the sweeps: REL_TOL and SPREAD_FACTOR sit within 3x of the largest error measured."""
+#: The tests whose sweeps test_bounds_are_tight reads.
+SWEEP_TESTS = ("test_crossed_sweep_pairwise_terms", "test_crossed_sweep_every_light",
+               "test_every_term_combination_at_the_extremes")
+
+
+def test_bounds_are_tight(request):
+    """After the sweeps: REL_TOL and SPREAD_FACTOR sit within 3x of the largest error measured.
+    Where the run selected every sweep (the whole file, in one worker: ``--dist loadfile``) and
+    fewer ran, it fails: the bounds would go unchecked. Only a selection of some sweeps (-k, a node
+    id) skips it, saying so."""
     expected = len(PAIRWISE) + 1 + len(EMPIRICAL) + sum(len(group) for group in TERM_GROUPS.values())
+    selected = sum(1 for item in request.session.items
+                   if item.module is request.module and item.originalname in SWEEP_TESTS)
     if MEASURED["checks"] < expected:
-        pytest.skip(f"only {MEASURED['checks']} of {expected} sweeps ran")
+        sweeps = sum(len(group) for group in TERM_GROUPS.values())
+        assert selected < len(PAIRWISE) + 1 + len(EMPIRICAL) + len(TERM_GROUPS), (
+            f"every sweep was selected but only {MEASURED['checks']} of {expected} ran in this process "
+            f"({sweeps} term combinations in {len(TERM_GROUPS)} groups): run the file in one worker")
+        pytest.skip(f"only {MEASURED['checks']} of {expected} sweeps ran (a selection of the file)")
     print(f"\nGPU vs twin over {MEASURED['checks']} sweeps: {MEASURED['plain']:.3g} relative where the "
           f"spread is negligible (REL_TOL {REL_TOL:g}), {MEASURED['ratio']:.3g} x the spread beyond it "
           f"(SPREAD_FACTOR {SPREAD_FACTOR:g})")
