@@ -7,6 +7,8 @@ A render runs up the list: ``blender.extract`` reads the depsgraph into a ``scen
 
 - ``scene``: the snapshot, plain data; presets, exposure state, matrices. Pure Python.
 - ``reference``: the numpy twins of ``glsl/``'s shading math. Pure Python.
+- ``materials``: the material compiler: shader node trees flattened as Blender evaluates them.
+  Pure Python.
 - ``plan``: programs and their defines, shadow-map layout, light culling, the Auto term set,
   the world cache. Pure Python.
 - ``frame``: the GPU frame (passes, programs, uploaded scene) through ``gpu``; no ``bpy``.

@@ -1,6 +1,6 @@
-"""The package's layers (``addon/__init__.py``): ``scene``, ``reference``, ``plan``, ``frame``,
-``blender``, each importing only the packages before it; ``bpy`` (and ``mathutils``) only in the
-Blender layer, ``gpu`` only in the frame and the Blender layer. Checked on the source: every
+"""The package's layers (``addon/__init__.py``): ``scene``, ``reference``, ``materials``,
+``plan``, ``frame``, ``blender``, each importing only the packages before it; ``bpy`` (and
+``mathutils``) only in the Blender layer, ``gpu`` only in the frame and the Blender layer. Checked on the source: every
 import at any depth (inside functions too), relative ones resolved to the module they name
 (``from . import extract``, ``from ..plan import programs``, ``from .snapshot import X``); and the
 pure packages by importing every module of theirs in a Python without Blender."""
@@ -20,11 +20,12 @@ ADDON = Path(__file__).resolve().parent.parent / "addon"
 LAYERS = {
     "scene": set(),
     "reference": set(),
+    "materials": set(),
     "plan": set(),
     "frame": {"gpu", "gpu_extras"},
     "blender": {"bpy", "bpy_extras", "gpu", "gpu_extras", "mathutils", "addon_utils", "bmesh"},
 }
-PURE = ("scene", "reference", "plan")
+PURE = ("scene", "reference", "materials", "plan")
 BLENDER_MODULES = {"bpy", "bpy_extras", "gpu", "gpu_extras", "mathutils", "addon_utils", "bmesh", "bgl"}
 
 

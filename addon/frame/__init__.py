@@ -4,6 +4,6 @@
 G-buffer, shading, transparency, exposure, post), ``gpu_scene`` holds one scene's GPU copy
 (geometry, uniform buffers, textures, uploaded on change), ``gpu_library`` the compiled programs
 and tables every renderer shares, ``gpu_environment`` the world's light precomputed on the GPU.
-Imports ``gpu``, ``scene``, ``reference``, ``plan`` and itself; never ``bpy`` nor the Blender
+Imports ``gpu``, ``scene``, ``reference``, ``materials``, ``plan`` and itself; never ``bpy`` nor the Blender
 layer: images and meshes arrive as arrays (``tests/test_layers.py``).
 """

@@ -1,0 +1,109 @@
+"""Reads a material's shader node tree into plain data (``scene.nodes``) for the material compiler:
+nodes with their settings and available sockets by identifier, the links Blender evaluates, the
+output in use, and the trees of the node groups it uses (nested ones too), each read once.
+
+What Blender evaluates: a link that is muted, invalid (a cycle, a shader into a value socket) or
+touches an unavailable socket (a Mix node's inputs of another data type, a Math node's unused
+second value) carries nothing; a muted node passes on its ``internal_links``; the material's
+output is the one Blender's ``get_output_node`` picks for the target (``ALL`` outputs serve every
+renderer, an ``EEVEE`` or ``CYCLES`` one is preferred by its renderer).
+"""
+
+from __future__ import annotations
+
+import bpy
+
+from ..scene import nodes as N
+
+#: The output target a material is read for (Material Output > Target): EEVEE's outputs, as the
+#: engine draws what EEVEE draws; ``ALL`` outputs serve it where the file has no EEVEE one.
+TARGET = "EEVEE"
+
+#: Properties every node has, which choose nothing it computes.
+_NODE_PROPS = {prop.identifier for prop in bpy.types.ShaderNode.bl_rna.properties} | {"rna_type"}
+#: Property kinds the compiler reads (pointers such as an Image Texture's image are read apart).
+_VALUE_PROPS = {"ENUM", "BOOLEAN", "INT", "FLOAT", "STRING"}
+
+
+def _available(socket) -> bool:
+    """Blender 5 says ``is_unavailable``; 4.x ``enabled``."""
+    unavailable = getattr(socket, "is_unavailable", None)
+    return not unavailable if unavailable is not None else bool(getattr(socket, "enabled", True))
+
+
+def _default(socket):
+    value = getattr(socket, "default_value", None)
+    if value is None or isinstance(value, (str, bool, int, float)):
+        return value
+    try:
+        return tuple(float(v) for v in value)
+    except TypeError:  # a datablock pointer (an object, an image socket's image)
+        return None
+
+
+def _props(node) -> dict:
+    out = {}
+    for prop in node.bl_rna.properties:
+        name = prop.identifier
+        if name in _NODE_PROPS or prop.type not in _VALUE_PROPS or name.startswith("bl_"):
+            continue
+        value = getattr(node, name, None)
+        if prop.type in ("INT", "FLOAT") and getattr(prop, "is_array", False):
+            value = tuple(value)
+        out[name] = value
+    return out
+
+
+def _group_key(tree) -> str:
+    """A node group's identity in the file: its full name (a linked library's groups repeat names)."""
+    return tree.name_full
+
+
+def read_node(node) -> N.Node:
+    inputs = {s.identifier: N.Socket(s.identifier, s.type, _default(s)) for s in node.inputs
+              if _available(s) and s.identifier != "__extend__"}
+    outputs = {s.identifier: s.type for s in node.outputs if _available(s) and s.identifier != "__extend__"}
+    passes = tuple((link.from_socket.identifier, link.to_socket.identifier) for link in node.internal_links) \
+        if node.mute else ()
+    tree = getattr(node, "node_tree", None) if node.bl_idname == N.GROUP else None
+    return N.Node(name=node.name, kind=node.bl_idname, inputs=inputs, outputs=outputs, props=_props(node),
+                  muted=bool(node.mute), passes=passes, group=_group_key(tree) if tree is not None else None,
+                  active_output=bool(getattr(node, "is_active_output", False)))
+
+
+def _groups_in(tree) -> list:
+    return [node.node_tree for node in tree.nodes if node.bl_idname == N.GROUP and node.node_tree is not None]
+
+
+def read_tree(tree, output=None) -> N.Graph:
+    """One tree as plain data; ``output``: the name of its output node in use (None for a group)."""
+    nodes = {node.name: read_node(node) for node in tree.nodes}
+    links = []
+    for link in tree.links:
+        if link.is_muted or not link.is_valid or link.from_node is None or link.to_node is None:
+            continue
+        if not (_available(link.from_socket) and _available(link.to_socket)):
+            continue
+        links.append(N.Link(link.from_node.name, link.from_socket.identifier,
+                            link.to_node.name, link.to_socket.identifier))
+    return N.Graph(nodes, tuple(links), output)
+
+
+def read_material(material, target: str = TARGET) -> tuple[N.Graph, dict[str, N.Graph]] | None:
+    """A material's tree and its node groups' trees (by ``_group_key``), nested ones too; None for
+    a material without a node tree."""
+    tree = getattr(material, "node_tree", None)
+    if tree is None:
+        return None
+    output = tree.get_output_node(target)
+    graph = read_tree(tree, output.name if output is not None else None)
+    groups: dict[str, N.Graph] = {}
+    pending = _groups_in(tree)
+    while pending:
+        group = pending.pop()
+        key = _group_key(group)
+        if key in groups:
+            continue
+        groups[key] = read_tree(group)
+        pending += _groups_in(group)
+    return graph, groups
