@@ -1,9 +1,10 @@
 """The package's layers (``addon/__init__.py``): ``scene``, ``reference``, ``materials``,
 ``plan``, ``frame``, ``blender``, each importing only the packages before it; ``bpy`` (and
-``mathutils``) only in the Blender layer, ``gpu`` only in the frame and the Blender layer. Checked on the source: every
-import at any depth (inside functions too), relative ones resolved to the module they name
-(``from . import extract``, ``from ..plan import programs``, ``from .snapshot import X``); and the
-pure packages by importing every module of theirs in a Python without Blender."""
+``mathutils``) only in the Blender layer, ``gpu`` only in the frame and the Blender layer.
+Checked on the source: every import at any depth (inside functions too), relative ones resolved
+to the module they name (``from . import extract``, ``from ..plan import programs``, ``from
+.snapshot import X``); and the pure packages by importing every module of theirs in a Python
+without Blender."""
 
 from __future__ import annotations
 

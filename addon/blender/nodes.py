@@ -21,6 +21,8 @@ TARGET = "EEVEE"
 
 #: Properties every node has, which choose nothing it computes.
 _NODE_PROPS = {prop.identifier for prop in bpy.types.ShaderNode.bl_rna.properties} | {"rna_type"}
+#: Nodes whose outputs hold the value they give (the output socket's own value).
+_VALUE_NODES = ("ShaderNodeValue", "ShaderNodeRGB")
 #: Property kinds the compiler reads (pointers such as an Image Texture's image are read apart).
 _VALUE_PROPS = {"ENUM", "BOOLEAN", "INT", "FLOAT", "STRING"}
 
@@ -66,9 +68,11 @@ def read_node(node) -> N.Node:
     passes = tuple((link.from_socket.identifier, link.to_socket.identifier) for link in node.internal_links) \
         if node.mute else ()
     tree = getattr(node, "node_tree", None) if node.bl_idname == N.GROUP else None
+    values = {s.identifier: _default(s) for s in node.outputs} if node.bl_idname in _VALUE_NODES else {}
     return N.Node(name=node.name, kind=node.bl_idname, inputs=inputs, outputs=outputs, props=_props(node),
                   muted=bool(node.mute), passes=passes, group=_group_key(tree) if tree is not None else None,
-                  active_output=bool(getattr(node, "is_active_output", False)))
+                  active_output=bool(getattr(node, "is_active_output", False)),
+                  values=values)
 
 
 def _groups_in(tree) -> list:

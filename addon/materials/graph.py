@@ -55,11 +55,13 @@ Source = Const | Ref
 
 @dataclass(frozen=True)
 class FlatInput:
-    """An input as the node reads it: its own socket type and where its value comes from (a
-    ``Ref`` of the same type: conversions are nodes of their own)."""
+    """An input as the node reads it: its own socket type, where its value comes from (a ``Ref``
+    of the same type: conversions are nodes of their own), and the socket's own value, which it
+    falls back to where what is linked to it cannot be compiled."""
 
     type: str
     source: Source
+    default: object = None
 
 
 @dataclass(frozen=True)
@@ -71,6 +73,7 @@ class FlatNode:
     inputs: dict[str, FlatInput]
     outputs: dict[str, str]
     props: dict = field(default_factory=dict)
+    values: dict = field(default_factory=dict)  # outputs that hold their value (Value, RGB nodes)
 
 
 @dataclass
@@ -172,7 +175,7 @@ class _Flattener:
             return Const(to_type, convert.zero(to_type))
         name = f"{source.node}{PATH}{source.socket}>{to_type}"  # one per output and target type
         if name not in self.flat.nodes:
-            self.flat.nodes[name] = FlatNode(name, CONVERT, {"Value": FlatInput(source.type, source)},
+            self.flat.nodes[name] = FlatNode(name, CONVERT, {"Value": FlatInput(source.type, source, None)},
                                              {"Value": to_type}, {"from": source.type, "to": to_type})
         return Ref(name, "Value", to_type)
 
@@ -184,18 +187,26 @@ class _Flattener:
         if name in self.flat.nodes or name in self.visiting:
             return  # done, or a cycle (Blender marks such links invalid: the reader drops them)
         self.visiting.add(name)
-        inputs = {socket: FlatInput(spec.type, self.input_source(scope, node, socket))
+        inputs = {socket: FlatInput(spec.type, self.input_source(scope, node, socket), spec.default)
                   for socket, spec in node.inputs.items()}
         self.visiting.discard(name)
-        self.flat.nodes[name] = FlatNode(name, node.kind, inputs, dict(node.outputs), dict(node.props))
+        self.flat.nodes[name] = FlatNode(name, node.kind, inputs, dict(node.outputs), dict(node.props),
+                                         dict(node.values))
+
+
+#: Output nodes a tree evaluates besides its material output: AOV Outputs.
+AOV_OUTPUT = "ShaderNodeOutputAOV"
 
 
 def flatten(graph: Graph, groups: dict[str, Graph] | None = None) -> FlatGraph:
-    """``graph`` flattened from its output node (module docstring); ``groups`` holds the trees
-    its group nodes name, nested ones too."""
+    """``graph`` flattened from its output node and its AOV Outputs (module docstring); ``groups``
+    holds the trees its group nodes name, nested ones too."""
     flattener = _Flattener(groups or {})
     output = graph.nodes.get(graph.output) if graph.output is not None else None
     if output is not None:
         flattener.add(_Scope(graph), output)
         flattener.flat.output = output.name
+    for node in graph.nodes.values():
+        if node.kind == AOV_OUTPUT and not node.muted:
+            flattener.add(_Scope(graph), node)
     return flattener.flat

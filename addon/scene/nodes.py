@@ -59,6 +59,7 @@ class Node:
     passes: tuple[tuple[str, str], ...] = ()  # (input, output) identifiers a muted node passes on
     group: str | None = None
     active_output: bool = False
+    values: dict = field(default_factory=dict)  # outputs that hold a value: a Value or RGB node's
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,183 @@
+"""A flat node graph (``graph.flatten``) as one GLSL function evaluated per fragment.
+
+``compile_graph(flat, targets)`` writes a function that computes the inputs of the nodes the
+targets name (an AOV Output's Color and Value, later the closures' inputs) from the fragment's
+``GraphInputs`` (glsl/node_inputs.glsl: its texture coordinates ...), each node's outputs once,
+in the flat graph's order, each node through one library function per node variant
+(``glsl/node_*.glsl``; the node's settings choose the function, as EEVEE's ``gpu_fn`` does).
+
+Constants are not in the source: every constant a node reads (an unlinked socket, a Value or RGB
+node) is a slot of ``Compiled.constants`` read through ``GRAPH_CONST(i)`` (a vec4), which the
+program defines (a uniform block in the engine, an array in the tests). Two graphs of one
+structure compile to the same source and share one program; editing a value compiles nothing.
+
+A node no emitter knows compiles to nothing: every input linked to it reads its own socket value
+instead (Blender's fallback for what a renderer cannot evaluate); ``Compiled.missing`` names it.
+"""
+
+from __future__ import annotations
+
+import hashlib
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .graph import CONVERT, Const, FlatGraph, FlatNode, Ref
+
+#: GLSL type of each socket type.
+GLSL_TYPES = {"VALUE": "float", "INT": "float", "BOOLEAN": "float", "VECTOR": "vec3", "RGBA": "vec4"}
+#: The library files a compiled graph reads, in order.
+LIBRARY = ("node_inputs.glsl", "node_convert.glsl", "node_math.glsl")
+
+#: The Math node's operations, each its library function (glsl/node_math.glsl).
+MATH_OPERATIONS = (
+    "ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "MULTIPLY_ADD", "POWER", "LOGARITHM", "SQRT",
+    "INVERSE_SQRT", "ABSOLUTE", "EXPONENT", "MINIMUM", "MAXIMUM", "LESS_THAN", "GREATER_THAN", "SIGN",
+    "COMPARE", "SMOOTH_MIN", "SMOOTH_MAX", "ROUND", "FLOOR", "CEIL", "TRUNC", "FRACT", "MODULO",
+    "FLOORED_MODULO", "WRAP", "SNAP", "PINGPONG", "SINE", "COSINE", "TANGENT", "ARCSINE", "ARCCOSINE",
+    "ARCTANGENT", "ARCTAN2", "SINH", "COSH", "TANH", "RADIANS", "DEGREES",
+)
+_MATH_FUNCTIONS = {op: "math_" + {"FRACT": "fraction"}.get(op, op.lower()) for op in MATH_OPERATIONS}
+
+
+@dataclass
+class Compiled:
+    """A graph's GLSL: ``source`` (the function ``name``), the constants it reads
+    (``GRAPH_CONST(i)``, (n, 4) float32), the GLSL type of each target (its ``out`` parameter, in
+    order), the nodes it could not compile (``"name (kind)"``), and a key of its structure."""
+
+    name: str
+    source: str
+    constants: np.ndarray
+    targets: dict[str, str]
+    missing: list[str] = field(default_factory=list)
+
+    @property
+    def key(self) -> str:
+        return hashlib.sha1(self.source.encode()).hexdigest()[:16]
+
+
+class _Writer:
+    def __init__(self, flat: FlatGraph):
+        self.flat = flat
+        self.lines: list[str] = []
+        self.constants: list[tuple[float, float, float, float]] = []
+        self.values: dict[tuple[str, str], str] = {}  # (node, output) -> GLSL variable
+        self.skipped: set[str] = set()
+        self.missing: list[str] = []
+
+    def constant(self, value, type_: str) -> str:
+        if type_ == "RGBA":
+            v = tuple(float(x) for x in value[:4])
+        elif type_ == "VECTOR":
+            v = (*(float(x) for x in value[:3]), 0.0)
+        else:
+            v = (float(value), 0.0, 0.0, 0.0)
+        self.constants.append(v)
+        read = f"GRAPH_CONST({len(self.constants) - 1})"
+        return {"RGBA": read, "VECTOR": read + ".xyz"}.get(type_, read + ".x")
+
+    def arg(self, node: FlatNode, socket: str) -> str:
+        """The GLSL expression of ``node``'s input ``socket``."""
+        spec = node.inputs[socket]
+        source = spec.source
+        if isinstance(source, Ref):
+            known = self.values.get((source.node, source.socket))
+            if known is not None:
+                return known
+            if spec.default is not None:  # linked to what did not compile: the socket's own value
+                return self.constant(spec.default, spec.type)
+            return self.constant(_zero(spec.type), spec.type)
+        assert isinstance(source, Const)
+        value = source.value if source.value is not None else _zero(source.type)
+        return self.constant(value, source.type)
+
+    def define(self, node: FlatNode, outputs: dict[str, str]) -> None:
+        """Declare ``node``'s outputs (socket -> GLSL expression), each once."""
+        index = len(self.values)
+        for socket, expr in outputs.items():
+            type_ = node.outputs.get(socket, "VALUE")
+            var = f"n{index}_{''.join(c if c.isalnum() else '_' for c in socket)}"
+            index += 1
+            self.lines.append(f"  {GLSL_TYPES.get(type_, 'float')} {var} = {expr};")
+            self.values[(node.name, socket)] = var
+
+
+def _zero(type_: str):
+    return {"RGBA": (0.0, 0.0, 0.0, 1.0), "VECTOR": (0.0, 0.0, 0.0)}.get(type_, 0.0)
+
+
+# --- emitters: node -> {output socket: GLSL expression} -----------------------------------------
+
+def _value(w: _Writer, node: FlatNode) -> dict:
+    return {s: w.constant(node.values.get(s, _zero(t)), t) for s, t in node.outputs.items()}
+
+
+def _texcoord(w: _Writer, node: FlatNode) -> dict | None:
+    return {"UV": "g.uv"} if "UV" in node.outputs else None
+
+
+def _math(w: _Writer, node: FlatNode) -> dict | None:
+    fn = _MATH_FUNCTIONS.get(node.props.get("operation"))
+    if fn is None:
+        return None
+    args = [w.arg(node, s) if s in node.inputs else "0.0" for s in ("Value", "Value_001", "Value_002")]
+    expr = f"{fn}({', '.join(args)})"
+    if node.props.get("use_clamp"):
+        expr = f"clamp({expr}, 0.0, 1.0)"
+    return {"Value": expr}
+
+
+def _separate_xyz(w: _Writer, node: FlatNode) -> dict:
+    v = w.arg(node, "Vector")
+    return {axis: f"{v}.{axis.lower()}" for axis in ("X", "Y", "Z") if axis in node.outputs}
+
+
+def _combine_xyz(w: _Writer, node: FlatNode) -> dict:
+    return {"Vector": f"vec3({', '.join(w.arg(node, s) for s in ('X', 'Y', 'Z'))})"}
+
+
+def _convert(w: _Writer, node: FlatNode) -> dict:
+    f, t = node.props["from"], node.props["to"]
+    kind = {"INT": "VALUE", "BOOLEAN": "VALUE"}
+    f, t = kind.get(f, f), kind.get(t, t)
+    expr = w.arg(node, "Value")
+    return {"Value": expr if f == t else f"convert_{f.lower()}_to_{t.lower()}({expr})"}
+
+
+EMITTERS = {
+    "ShaderNodeValue": _value,
+    "ShaderNodeRGB": _value,
+    "ShaderNodeTexCoord": _texcoord,
+    "ShaderNodeUVMap": _texcoord,
+    "ShaderNodeMath": _math,
+    "ShaderNodeSeparateXYZ": _separate_xyz,
+    "ShaderNodeCombineXYZ": _combine_xyz,
+    CONVERT: _convert,
+}
+#: Nodes that compute nothing themselves: the outputs whose inputs are the targets.
+SINKS = ("ShaderNodeOutputAOV", "ShaderNodeOutputMaterial")
+
+
+def compile_graph(flat: FlatGraph, targets: dict[str, tuple[str, str]], name: str = "graph") -> Compiled:
+    """The GLSL function ``name`` computing each target (a name -> (flat node, input socket)):
+    ``void name(GraphInputs g, out T target ...)`` in the order ``targets`` lists them."""
+    w = _Writer(flat)
+    for node in flat.nodes.values():
+        if node.kind in SINKS:
+            continue
+        emit = EMITTERS.get(node.kind)
+        outputs = emit(w, node) if emit is not None else None
+        if outputs is None:
+            w.missing.append(f"{node.name} ({node.kind})")
+            continue
+        w.define(node, outputs)
+    types, assigns = {}, []
+    for target, (node_name, socket) in targets.items():
+        node = flat.nodes[node_name]
+        types[target] = GLSL_TYPES.get(node.inputs[socket].type, "float")
+        assigns.append(f"  {target} = {w.arg(node, socket)};")
+    params = ", ".join(["GraphInputs g", *(f"out {t} {n}" for n, t in types.items())])
+    source = "\n".join([f"void {name}({params})", "{", *w.lines, *assigns, "}", ""])
+    constants = np.array(w.constants or [(0.0, 0.0, 0.0, 0.0)], np.float32).reshape(-1, 4)
+    return Compiled(name, source, constants, types, w.missing)
