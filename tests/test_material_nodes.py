@@ -2,14 +2,15 @@
 
 Cycles renders a plane whose graph writes each node's result into an AOV Output (and the plane's
 UV into one more); our compiled function is evaluated on the GPU (glsl_harness) at the very UVs
-Cycles wrote, so the two differ only by the nodes' own arithmetic. Inputs span the functions'
-domains: a = 8 u - 4 and b = 8 v - 4 from the UV, c a constant, on a 33 x 33 grid of pixel
-centres (u = 0.5 lands on a = 0)."""
+Cycles wrote, so the two differ only by the nodes' own arithmetic. Inputs are made from the UV
+(u, v on a 33 x 33 grid of pixel centres; u = 0.5 lands on a = 8u - 4 = 0) to span the
+functions' domains."""
 
 from __future__ import annotations
 
 import bpy
 import numpy as np
+import OpenEXR
 import pytest
 import scenes
 from glsl_harness import evaluate
@@ -21,10 +22,6 @@ from addon.materials import codegen, graph
 SIZE = 33
 
 
-def _socket(sockets, identifier):
-    return next(s for s in sockets if s.identifier == identifier)
-
-
 def _plane_scene():
     scene = scenes.reset(size=SIZE)
     scenes.ortho_camera(scene, scale=2.0)
@@ -34,7 +31,11 @@ def _plane_scene():
     tree = scenes.node_tree(mat)
     tree.nodes.clear()
     plane.data.materials.append(mat)
-    return scene, mat, tree
+    coord = tree.nodes.new("ShaderNodeTexCoord")
+    sep = tree.nodes.new("ShaderNodeSeparateXYZ")
+    tree.links.new(coord.outputs["UV"], sep.inputs["Vector"])
+    _aov(scene, tree, "uv", coord.outputs["UV"], "COLOR")
+    return scene, mat, tree, sep.outputs["X"], sep.outputs["Y"]
 
 
 def _aov(scene, tree, name, socket, kind="VALUE"):
@@ -46,94 +47,161 @@ def _aov(scene, tree, name, socket, kind="VALUE"):
     return node
 
 
-def _cycles_aovs(scene, tmp_path) -> dict[str, np.ndarray]:
-    _cycles(scene, tmp_path / "cycles.exr", samples=1)
-    path = scenes.save_result(scene, tmp_path / "aovs.exr", "MULTILAYER")
-    import OpenEXR
-
-    out = {}
-    with OpenEXR.File(str(path)) as f:
-        for part in f.parts:
-            for name, channel in part.channels.items():
-                out[name] = np.asarray(channel.pixels, np.float64)
-    return out
+def _affine(tree, socket, scale, offset):
+    """scale x socket + offset, through a Math node (itself compiled and compared)."""
+    node = tree.nodes.new("ShaderNodeMath")
+    node.operation = "MULTIPLY_ADD"
+    tree.links.new(socket, node.inputs[0])
+    node.inputs[1].default_value, node.inputs[2].default_value = scale, offset
+    return node.outputs[0]
 
 
-def _ours(compiled: codegen.Compiled, uv: np.ndarray) -> dict[str, np.ndarray]:
+def _combine(tree, *values):
+    node = tree.nodes.new("ShaderNodeCombineXYZ")
+    for axis, value in zip("XYZ", values):
+        if isinstance(value, float):
+            node.inputs[axis].default_value = value
+        else:
+            tree.links.new(value, node.inputs[axis])
+    return node.outputs["Vector"]
+
+
+def _evaluate(compiled: codegen.Compiled, uv: np.ndarray) -> dict[str, np.ndarray]:
+    """Each target of the compiled function at each UV: (N, 1) floats, (N, 3) colours' RGB."""
     consts = ", ".join(f"vec4({', '.join(repr(float(x)) for x in row)})" for row in compiled.constants)
     source = (f"const vec4 graph_constants[{len(compiled.constants)}] = vec4[]({consts});\n"
               f"#define GRAPH_CONST(i) graph_constants[i]\n{compiled.source}")
     names = list(compiled.targets)
+    decls = " ".join(f"{compiled.targets[n]} {n};" for n in names)
+    call = f"GraphInputs g; g.uv = vec3(uv.xy, 0.0); {decls} {compiled.name}(g, {', '.join(names)});"
+    floats = [n for n in names if compiled.targets[n] == "float"]
+    passes = [floats[i:i + 4] for i in range(0, len(floats), 4)] + [[n] for n in names if n not in floats]
     out = {}
-    for start in range(0, len(names), 4):  # four floats a pass
-        chunk = names[start:start + 4]
-        decls = " ".join(f"{compiled.targets[n]} {n};" for n in names)
-        call = f"{compiled.name}(g, {', '.join(names)});"
-        body = (f"GraphInputs g; g.uv = vec3(uv.xy, 0.0); {decls} {call} "
-                f"result = vec4({', '.join(chunk + ['0.0'] * (4 - len(chunk)))});")
-        values = evaluate(body, {"uv": uv}, extra=codegen.LIBRARY, source=source)
+    for chunk in passes:
+        if compiled.targets[chunk[0]] == "float":
+            result = f"vec4({', '.join(chunk + ['0.0'] * (4 - len(chunk)))})"
+        else:
+            result = f"vec4(vec3({chunk[0]}.xyz), 0.0)"
+        values = evaluate(f"{call} result = {result};", {"uv": uv}, extra=codegen.LIBRARY, source=source)
         for i, n in enumerate(chunk):
-            out[n] = values[:, i].astype(np.float64)
+            out[n] = values[:, i:i + 1] if len(chunk) > 1 or compiled.targets[n] == "float" else values[:, :3]
+    return {n: v.astype(np.float64) for n, v in out.items()}
+
+
+def _against_cycles(scene, mat, tmp) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Every AOV but the UV's: (ours, Cycles') by AOV name, (N, 1) or (N, 3)."""
+    _cycles(scene, tmp / "cycles.exr", samples=1)
+    path = scenes.save_result(scene, tmp / "aovs.exr", "MULTILAYER")
+    with OpenEXR.File(str(path)) as f:
+        cycles = {name: np.asarray(ch.pixels, np.float64)
+                  for part in f.parts for name, ch in part.channels.items()}
+    g, groups = reader.read_material(mat, "ALL")
+    flat = graph.flatten(g, groups)
+    aovs = scene.view_layers[0].aovs
+    targets = {}
+    for node in flat.nodes.values():
+        name = node.props.get("aov_name")
+        if node.kind == "ShaderNodeOutputAOV" and name != "uv":
+            targets[f"r_{name}"] = (node.name, "Color" if aovs[name].type == "COLOR" else "Value")
+    compiled = codegen.compile_graph(flat, targets)
+    assert not compiled.missing, compiled.missing
+    uv = cycles["ViewLayer.uv"].reshape(SIZE * SIZE, -1)[:, :2]
+    ours = _evaluate(compiled, np.concatenate([uv, np.zeros((len(uv), 2))], axis=1))
+    out = {}
+    for target, value in ours.items():
+        name = target[2:]
+        ref = cycles.get(f"ViewLayer.{name}.X", cycles.get(f"ViewLayer.{name}"))
+        out[name] = (value, ref.reshape(SIZE * SIZE, -1)[:, :value.shape[1]])
     return out
+
+
+def _compare(results, name, bound, measured):
+    ours, ref = results[name]
+    scale = max(float(np.abs(ref).max()), 1.0)
+    err = np.abs(ours - ref)
+    worst = float(err.max() / scale)
+    print(f"{name}: largest difference {worst:.2e} of {scale:.3g}")
+    assert np.isfinite(ours).all()
+    assert worst < bound, f"{name}: {worst:.2e} of the range {scale:.3g} (measured {measured})"
+
+
+# --- Math ---------------------------------------------------------------------------------------
+
+#: Variants beyond each operation with c = 0.75: clamped results, c = 0 (equality within
+#: FLT_EPSILON; a plain minimum), a wrap range of 0.
+MATH_VARIANTS = {f"{op.lower()}_clamped": (op, True, 0.75) for op in ("ADD", "SINE", "MULTIPLY")}
+MATH_VARIANTS.update({"compare_exact": ("COMPARE", False, 0.0),
+                      "smooth_min_zero": ("SMOOTH_MIN", False, 0.0), "wrap_empty": ("WRAP", False, -4.0)})
+MATH_CASES = {op.lower(): (op, False, 0.75) for op in codegen.MATH_OPERATIONS} | MATH_VARIANTS
 
 
 @pytest.fixture(scope="module")
 def math_results(tmp_path_factory):
-    """Every Math operation, a = 8u - 4, b = 8v - 4, c = 0.75, against Cycles; and with Clamp."""
-    tmp = tmp_path_factory.mktemp("math")
-    scene, mat, tree = _plane_scene()
-    coord = tree.nodes.new("ShaderNodeTexCoord")
-    sep = tree.nodes.new("ShaderNodeSeparateXYZ")
-    tree.links.new(coord.outputs["UV"], sep.inputs["Vector"])
-    ab = []
-    for axis in ("X", "Y"):
-        scale = tree.nodes.new("ShaderNodeMath")
-        scale.operation = "MULTIPLY_ADD"
-        tree.links.new(sep.outputs[axis], scale.inputs[0])
-        scale.inputs[1].default_value, scale.inputs[2].default_value = 8.0, -4.0
-        ab.append(scale)
-    _aov(scene, tree, "uv", coord.outputs["UV"], "COLOR")
-    ops = [(op.lower(), op, False, 0.75) for op in codegen.MATH_OPERATIONS]
-    ops += [(f"{op.lower()}_clamped", op, True, 0.75) for op in ("ADD", "SINE", "MULTIPLY")]
-    ops += [("compare_exact", "COMPARE", False, 0.0), ("smooth_min_zero", "SMOOTH_MIN", False, 0.0),
-            ("wrap_empty", "WRAP", False, -4.0)]  # c = 0: equality within FLT_EPSILON; min; a range of 0
-    for name, op, clamp, c in ops:
+    """Every Math operation, a = 8u - 4, b = 8v - 4, against Cycles."""
+    scene, mat, tree, u, v = _plane_scene()
+    a, b = _affine(tree, u, 8.0, -4.0), _affine(tree, v, 8.0, -4.0)
+    for name, (op, clamp, c) in MATH_CASES.items():
         node = tree.nodes.new("ShaderNodeMath")
         node.operation, node.use_clamp = op, clamp
-        tree.links.new(ab[0].outputs[0], node.inputs[0])
-        tree.links.new(ab[1].outputs[0], node.inputs[1])
+        tree.links.new(a, node.inputs[0])
+        tree.links.new(b, node.inputs[1])
         node.inputs[2].default_value = c
         _aov(scene, tree, name, node.outputs[0])
-    cycles = _cycles_aovs(scene, tmp)
-    g, groups = reader.read_material(mat, "ALL")
-    flat = graph.flatten(g, groups)
-    targets = {}
-    for node in flat.nodes.values():
-        if node.kind == "ShaderNodeOutputAOV" and node.props["aov_name"] != "uv":
-            targets["r_" + node.props["aov_name"]] = (node.name, "Value")
-    compiled = codegen.compile_graph(flat, targets)
-    assert not compiled.missing, compiled.missing
-    uv = cycles["ViewLayer.uv"].reshape(-1, cycles["ViewLayer.uv"].shape[-1])[:, :2]
-    uv = np.concatenate([uv, np.zeros((len(uv), 2))], axis=1)
-    ours = _ours(compiled, uv)
-    out = {}
-    for name in targets:
-        out[name[2:]] = (ours[name], cycles[f"ViewLayer.{name[2:]}.X"].reshape(-1))
-    return out
+    return _against_cycles(scene, mat, tmp_path_factory.mktemp("math"))
 
 
-CLAMPED = ("add_clamped", "sine_clamped", "multiply_clamped", "compare_exact", "smooth_min_zero",
-           "wrap_empty")
-
-
-@pytest.mark.parametrize("op", [op.lower() for op in codegen.MATH_OPERATIONS] + list(CLAMPED))
-def test_math_node_matches_cycles(math_results, op):
-    ours, ref = math_results[op]
-    scale = max(float(np.abs(ref).max()), 1.0)
-    err = np.abs(ours - ref)
-    worst = float(err.max() / scale)
-    off = float(np.mean(err > 1e-4 * scale))
-    print(f"{op}: largest difference {worst:.2e} of {scale:.3g}, {off:.2%} of the pixels off by > 1e-4")
-    assert np.isfinite(ours).all()
+@pytest.mark.parametrize("case", MATH_CASES)
+def test_math_node_matches_cycles(math_results, case):
     # measured: 0 for most, at most 1.7e-6 (logarithm; exp, sin ... 1e-7 to 1e-6: GPU and C libm)
-    assert worst < 5e-6, f"{op}: {worst:.2e} of the range {scale:.3g} (measured <= 1.7e-6)"
+    _compare(math_results, case, 5e-6, "<= 1.7e-6")
+
+
+# --- Mix ----------------------------------------------------------------------------------------
+
+#: Colour blend modes with the factor clamped (the node's default), and variants: factor not
+#: clamped, result clamped; float and vector (uniform and per component) mixes.
+MIX_CASES = {mode.lower(): ("RGBA", mode, True, False) for mode in codegen.MIX_BLEND_TYPES}
+MIX_CASES.update({f"{mode.lower()}_free": ("RGBA", mode, False, False)
+                  for mode in ("MIX", "ADD", "SCREEN", "BURN")})
+MIX_CASES.update({f"{mode.lower()}_clamped": ("RGBA", mode, True, True) for mode in ("ADD", "LINEAR_LIGHT")})
+MIX_CASES.update({"float": ("FLOAT", "MIX", True, False), "float_free": ("FLOAT", "MIX", False, False),
+                  "vector": ("VECTOR", "MIX", True, False),
+                  "vector_components": ("VECTOR", "NON_UNIFORM", True, False)})
+
+
+@pytest.fixture(scope="module")
+def mix_results(tmp_path_factory):
+    """A = (2u - 0.5, 1.5v, 0.3), B = (0.8 - v, 1.2u - 0.1, 0.6) as colours or vectors (from a
+    Combine XYZ), factor 1.4 u - 0.2 (beyond [0, 1] at the edges), against Cycles."""
+    scene, mat, tree, u, v = _plane_scene()
+    color_a = _combine(tree, _affine(tree, u, 2.0, -0.5), _affine(tree, v, 1.5, 0.0), 0.3)
+    color_b = _combine(tree, _affine(tree, v, -1.0, 0.8), _affine(tree, u, 1.2, -0.1), 0.6)
+    fac = _affine(tree, u, 1.4, -0.2)
+    fac_vector = _combine(tree, fac, _affine(tree, v, 1.2, -0.1), 0.5)
+    for name, (kind, mode, clamp_factor, clamp_result) in MIX_CASES.items():
+        node = tree.nodes.new("ShaderNodeMix")
+        node.data_type = kind
+        if kind == "RGBA":
+            node.blend_type = mode
+        elif mode == "NON_UNIFORM":
+            node.factor_mode = "NON_UNIFORM"
+        node.clamp_factor, node.clamp_result = clamp_factor, clamp_result
+        suffix = {"RGBA": "Color", "FLOAT": "Float", "VECTOR": "Vector"}[kind]
+        inputs = {s.identifier: s for s in node.inputs}
+        factor = inputs["Factor_Vector" if mode == "NON_UNIFORM" else "Factor_Float"]
+        tree.links.new(fac_vector if mode == "NON_UNIFORM" else fac, factor)
+        if kind == "FLOAT":
+            tree.links.new(u, inputs["A_Float"])
+            tree.links.new(v, inputs["B_Float"])
+        else:
+            tree.links.new(color_a, inputs[f"A_{suffix}"])
+            tree.links.new(color_b, inputs[f"B_{suffix}"])
+        result = next(s for s in node.outputs if s.identifier == f"Result_{suffix}")
+        _aov(scene, tree, name, result, "VALUE" if kind == "FLOAT" else "COLOR")
+    return _against_cycles(scene, mat, tmp_path_factory.mktemp("mix"))
+
+
+@pytest.mark.parametrize("case", MIX_CASES)
+def test_mix_node_matches_cycles(mix_results, case):
+    # measured: at most 1.8e-6 (dodge's division), most 1e-7
+    _compare(mix_results, case, 5e-6, "<= 1.8e-6")

@@ -27,7 +27,7 @@ from .graph import CONVERT, Const, FlatGraph, FlatNode, Ref
 #: GLSL type of each socket type.
 GLSL_TYPES = {"VALUE": "float", "INT": "float", "BOOLEAN": "float", "VECTOR": "vec3", "RGBA": "vec4"}
 #: The library files a compiled graph reads, in order.
-LIBRARY = ("node_inputs.glsl", "node_convert.glsl", "node_math.glsl")
+LIBRARY = ("node_inputs.glsl", "node_convert.glsl", "node_color.glsl", "node_math.glsl", "node_mix.glsl")
 
 #: The Math node's operations, each its library function (glsl/node_math.glsl).
 MATH_OPERATIONS = (
@@ -38,6 +38,11 @@ MATH_OPERATIONS = (
     "ARCTANGENT", "ARCTAN2", "SINH", "COSH", "TANH", "RADIANS", "DEGREES",
 )
 _MATH_FUNCTIONS = {op: "math_" + {"FRACT": "fraction"}.get(op, op.lower()) for op in MATH_OPERATIONS}
+#: The Mix node's colour blend modes, each its library function (glsl/node_mix.glsl).
+MIX_BLEND_TYPES = ("MIX", "DARKEN", "MULTIPLY", "BURN", "LIGHTEN", "SCREEN", "DODGE", "ADD", "OVERLAY",
+                   "SOFT_LIGHT", "LINEAR_LIGHT", "DIFFERENCE", "EXCLUSION", "SUBTRACT", "DIVIDE", "HUE",
+                   "SATURATION", "COLOR", "VALUE")
+_MIX_FUNCTIONS = {mode: "mix_" + {"MIX": "blend"}.get(mode, mode.lower()) for mode in MIX_BLEND_TYPES}
 
 
 @dataclass
@@ -128,6 +133,29 @@ def _math(w: _Writer, node: FlatNode) -> dict | None:
     return {"Value": expr}
 
 
+def _mix(w: _Writer, node: FlatNode) -> dict | None:
+    """The Mix node: floats and vectors interpolated (a vector by one factor or by one per
+    component), colours by their blend mode; the factor clamped to [0, 1] where the node says so
+    (Clamp Factor), a colour's result too (Clamp Result); a colour keeps A's alpha."""
+    kind = node.props.get("data_type")
+    uniform = node.props.get("factor_mode", "UNIFORM") == "UNIFORM" or kind != "VECTOR"
+    fac = w.arg(node, "Factor_Float" if uniform else "Factor_Vector")
+    if node.props.get("clamp_factor", True):
+        fac = f"clamp({fac}, 0.0, 1.0)"
+    if kind == "FLOAT":
+        return {"Result_Float": f"mix({w.arg(node, 'A_Float')}, {w.arg(node, 'B_Float')}, {fac})"}
+    if kind == "VECTOR":
+        return {"Result_Vector": f"mix({w.arg(node, 'A_Vector')}, {w.arg(node, 'B_Vector')}, {fac})"}
+    fn = _MIX_FUNCTIONS.get(node.props.get("blend_type"))
+    if kind != "RGBA" or fn is None:
+        return None
+    a = w.arg(node, "A_Color")
+    rgb = f"{fn}({fac}, {a}.rgb, {w.arg(node, 'B_Color')}.rgb)"
+    if node.props.get("clamp_result"):
+        rgb = f"clamp({rgb}, 0.0, 1.0)"
+    return {"Result_Color": f"vec4({rgb}, {a}.a)"}
+
+
 def _separate_xyz(w: _Writer, node: FlatNode) -> dict:
     v = w.arg(node, "Vector")
     return {axis: f"{v}.{axis.lower()}" for axis in ("X", "Y", "Z") if axis in node.outputs}
@@ -151,6 +179,7 @@ EMITTERS = {
     "ShaderNodeTexCoord": _texcoord,
     "ShaderNodeUVMap": _texcoord,
     "ShaderNodeMath": _math,
+    "ShaderNodeMix": _mix,
     "ShaderNodeSeparateXYZ": _separate_xyz,
     "ShaderNodeCombineXYZ": _combine_xyz,
     CONVERT: _convert,
