@@ -4,7 +4,7 @@ nodes and links, unavailable sockets, the output Blender picks, Blender's implic
 
 Expected values are Blender's semantics written here from its documentation and behaviour: a
 muted node passes on its internal links, a muted link or one into an unavailable socket carries
-nothing, a colour read as a float is its Rec. 709 luminance, a vector read as a float the mean of
+nothing, a colour read as a float is its luminance, a vector read as a float the mean of
 its components, a float read as a colour grey with alpha 1."""
 
 from __future__ import annotations
@@ -266,7 +266,7 @@ def test_a_group_containing_itself_is_cut():
 @pytest.mark.parametrize("value,from_type,to_type,want", [
     (0.25, "VALUE", "RGBA", (0.25, 0.25, 0.25, 1.0)),
     (0.25, "VALUE", "VECTOR", (0.25, 0.25, 0.25)),
-    ((0.2, 0.4, 0.6, 0.5), "RGBA", "VALUE", 0.2126 * 0.2 + 0.7152 * 0.4 + 0.0722 * 0.6),
+    ((0.2, 0.4, 0.6, 0.5), "RGBA", "VALUE", 0.2126390 * 0.2 + 0.7151687 * 0.4 + 0.0721923 * 0.6),
     ((0.3, 0.6, 1.5), "VECTOR", "VALUE", 0.8),
     ((0.2, 0.4, 0.6, 0.5), "RGBA", "VECTOR", (0.2, 0.4, 0.6)),
     ((1.0, -2.0, 3.0), "VECTOR", "RGBA", (1.0, -2.0, 3.0, 1.0)),

@@ -27,7 +27,8 @@ from .graph import CONVERT, Const, FlatGraph, FlatNode, Ref
 #: GLSL type of each socket type.
 GLSL_TYPES = {"VALUE": "float", "INT": "float", "BOOLEAN": "float", "VECTOR": "vec3", "RGBA": "vec4"}
 #: The library files a compiled graph reads, in order.
-LIBRARY = ("node_inputs.glsl", "node_convert.glsl", "node_color.glsl", "node_math.glsl", "node_mix.glsl")
+LIBRARY = ("node_inputs.glsl", "node_convert.glsl", "node_color.glsl", "node_math.glsl", "node_mix.glsl",
+           "node_converter.glsl")
 
 #: The Math node's operations, each its library function (glsl/node_math.glsl).
 MATH_OPERATIONS = (
@@ -156,6 +157,47 @@ def _mix(w: _Writer, node: FlatNode) -> dict | None:
     return {"Result_Color": f"vec4({rgb}, {a}.a)"}
 
 
+def _call(fn: str, w: _Writer, node: FlatNode, inputs: tuple[str, ...], output: str) -> dict:
+    return {output: f"{fn}({', '.join(w.arg(node, s) for s in inputs)})"}
+
+
+def _clamp(w: _Writer, node: FlatNode) -> dict:
+    fn = "clamp_range" if node.props.get("clamp_type") == "RANGE" else "clamp_minmax"
+    return _call(fn, w, node, ("Value", "Min", "Max"), "Result")
+
+
+def _map_range(w: _Writer, node: FlatNode) -> dict | None:
+    """Map Range on a float (Cycles adds a Clamp, in either order of the target range, after a
+    linear or stepped mapping whose Clamp is on)."""
+    kind = node.props.get("interpolation_type", "LINEAR")
+    if node.props.get("data_type", "FLOAT") != "FLOAT" or kind not in ("LINEAR", "STEPPED", "SMOOTHSTEP",
+                                                                        "SMOOTHERSTEP"):
+        return None
+    args = [w.arg(node, s) for s in ("Value", "From Min", "From Max", "To Min", "To Max")]
+    args.append(w.arg(node, "Steps") if "Steps" in node.inputs else "0.0")
+    expr = f"map_range_{kind.lower()}({', '.join(args)})"
+    if node.props.get("clamp") and kind in ("LINEAR", "STEPPED"):
+        expr = f"clamp_range({expr}, {args[3]}, {args[4]})"
+    return {"Result": expr}
+
+
+def _separate_color(w: _Writer, node: FlatNode) -> dict | None:
+    mode = node.props.get("mode", "RGB")
+    if mode not in ("RGB", "HSV"):
+        return None
+    color = w.arg(node, "Color")
+    value = f"color_rgb_to_hsv({color}.rgb)" if mode == "HSV" else f"{color}.rgb"
+    return {"Red": f"{value}.x", "Green": f"{value}.y", "Blue": f"{value}.z"}
+
+
+def _combine_color(w: _Writer, node: FlatNode) -> dict | None:
+    mode = node.props.get("mode", "RGB")
+    if mode not in ("RGB", "HSV"):
+        return None
+    rgb = f"vec3({', '.join(w.arg(node, s) for s in ('Red', 'Green', 'Blue'))})"
+    return {"Color": f"vec4({'color_hsv_to_rgb(' + rgb + ')' if mode == 'HSV' else rgb}, 1.0)"}
+
+
 def _separate_xyz(w: _Writer, node: FlatNode) -> dict:
     v = w.arg(node, "Vector")
     return {axis: f"{v}.{axis.lower()}" for axis in ("X", "Y", "Z") if axis in node.outputs}
@@ -180,6 +222,17 @@ EMITTERS = {
     "ShaderNodeUVMap": _texcoord,
     "ShaderNodeMath": _math,
     "ShaderNodeMix": _mix,
+    "ShaderNodeClamp": _clamp,
+    "ShaderNodeMapRange": _map_range,
+    "ShaderNodeSeparateColor": _separate_color,
+    "ShaderNodeCombineColor": _combine_color,
+    "ShaderNodeInvert": lambda w, n: _call("invert_color", w, n, ("Fac", "Color"), "Color"),
+    "ShaderNodeGamma": lambda w, n: _call("gamma_color", w, n, ("Color", "Gamma"), "Color"),
+    "ShaderNodeBrightContrast": lambda w, n: _call("brightness_contrast", w, n,
+                                                   ("Color", "Bright", "Contrast"), "Color"),
+    "ShaderNodeRGBToBW": lambda w, n: _call("convert_rgba_to_value", w, n, ("Color",), "Val"),
+    "ShaderNodeHueSaturation": lambda w, n: _call("hue_saturation_value", w, n,
+                                                  ("Hue", "Saturation", "Value", "Fac", "Color"), "Color"),
     "ShaderNodeSeparateXYZ": _separate_xyz,
     "ShaderNodeCombineXYZ": _combine_xyz,
     CONVERT: _convert,

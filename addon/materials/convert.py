@@ -1,17 +1,17 @@
 """Blender's implicit conversions between socket types, in one table: what a link between sockets
 of two types carries, as Cycles and EEVEE convert it (Cycles' ``svm_node_convert``, EEVEE's
-``GPU_link`` conversions): a colour read as a float is its luminance under the colour
-configuration's luma coefficients (Blender's default OCIO config: Rec. 709's), a vector read as a
-float the average of its components, a float read as a colour grey with alpha 1, a colour read as
+``GPU_link`` conversions): a colour read as a float is its luminance (``LUMA``), a vector read
+as a float the average of its components, a float read as a colour grey with alpha 1, a colour read as
 a vector its RGB, a vector read as a colour its XYZ with alpha 1. Shaders convert to nothing: a
 link from a shader to a value socket is invalid in Blender, and the input keeps a zero.
 """
 
 from __future__ import annotations
 
-#: The default colour configuration's luma coefficients (``luma`` in Blender's config.ocio, the
-#: same in 4.2, 4.5 and 5.0): colour -> float.
-LUMA = (0.2126, 0.7152, 0.0722)
+#: Colour -> float: the Y row of the default colour configuration's scene linear (Rec. 709) to
+#: XYZ D65 matrix, as Cycles' rgb_to_y holds it: against Cycles' RGB to BW node 8e-7 (the
+#: config's rounded ``luma``, 0.2126 / 0.7152 / 0.0722, was 4.8e-5 off; tests/test_material_nodes.py).
+LUMA = (0.2126390, 0.7151687, 0.0721923)
 
 #: Socket types that carry one number, three, or a colour (four, alpha last).
 SCALARS = ("VALUE", "INT", "BOOLEAN")
