@@ -28,7 +28,7 @@ from .graph import CONVERT, Const, FlatGraph, FlatNode, Ref
 GLSL_TYPES = {"VALUE": "float", "INT": "float", "BOOLEAN": "float", "VECTOR": "vec3", "RGBA": "vec4"}
 #: The library files a compiled graph reads, in order.
 LIBRARY = ("node_inputs.glsl", "node_convert.glsl", "node_color.glsl", "node_math.glsl", "node_mix.glsl",
-           "node_converter.glsl")
+           "node_converter.glsl", "node_vector_math.glsl")
 
 #: The Math node's operations, each its library function (glsl/node_math.glsl).
 MATH_OPERATIONS = (
@@ -39,6 +39,14 @@ MATH_OPERATIONS = (
     "ARCTANGENT", "ARCTAN2", "SINH", "COSH", "TANH", "RADIANS", "DEGREES",
 )
 _MATH_FUNCTIONS = {op: "math_" + {"FRACT": "fraction"}.get(op, op.lower()) for op in MATH_OPERATIONS}
+#: The Vector Math node's operations (glsl/node_vector_math.glsl's vmath_*), and those giving a float.
+VECTOR_MATH_OPERATIONS = (
+    "ADD", "SUBTRACT", "MULTIPLY", "DIVIDE", "MULTIPLY_ADD", "CROSS_PRODUCT", "PROJECT", "REFLECT",
+    "REFRACT", "FACEFORWARD", "DOT_PRODUCT", "DISTANCE", "LENGTH", "SCALE", "NORMALIZE", "ABSOLUTE",
+    "POWER", "SIGN", "MINIMUM", "MAXIMUM", "FLOOR", "CEIL", "FRACTION", "MODULO", "WRAP", "SNAP", "SINE",
+    "COSINE", "TANGENT",
+)
+VECTOR_MATH_VALUES = ("DOT_PRODUCT", "DISTANCE", "LENGTH")
 #: The Mix node's colour blend modes, each its library function (glsl/node_mix.glsl).
 MIX_BLEND_TYPES = ("MIX", "DARKEN", "MULTIPLY", "BURN", "LIGHTEN", "SCREEN", "DODGE", "ADD", "OVERLAY",
                    "SOFT_LIGHT", "LINEAR_LIGHT", "DIFFERENCE", "EXCLUSION", "SUBTRACT", "DIVIDE", "HUE",
@@ -198,6 +206,17 @@ def _combine_color(w: _Writer, node: FlatNode) -> dict | None:
     return {"Color": f"vec4({'color_hsv_to_rgb(' + rgb + ')' if mode == 'HSV' else rgb}, 1.0)"}
 
 
+def _vector_math(w: _Writer, node: FlatNode) -> dict | None:
+    op = node.props.get("operation")
+    if op not in VECTOR_MATH_OPERATIONS:
+        return None
+    vectors = ("Vector", "Vector_001", "Vector_002")
+    args = [w.arg(node, s) if s in node.inputs else "vec3(0.0)" for s in vectors]
+    args.append(w.arg(node, "Scale") if "Scale" in node.inputs else "1.0")
+    call = f"vmath_{op.lower()}({', '.join(args)})"
+    return {"Value": f"{call}.w"} if op in VECTOR_MATH_VALUES else {"Vector": f"{call}.xyz"}
+
+
 def _separate_xyz(w: _Writer, node: FlatNode) -> dict:
     v = w.arg(node, "Vector")
     return {axis: f"{v}.{axis.lower()}" for axis in ("X", "Y", "Z") if axis in node.outputs}
@@ -222,6 +241,7 @@ EMITTERS = {
     "ShaderNodeUVMap": _texcoord,
     "ShaderNodeMath": _math,
     "ShaderNodeMix": _mix,
+    "ShaderNodeVectorMath": _vector_math,
     "ShaderNodeClamp": _clamp,
     "ShaderNodeMapRange": _map_range,
     "ShaderNodeSeparateColor": _separate_color,
