@@ -272,6 +272,24 @@ LIBRARY = _Library()
 
 # --- the programs -----------------------------------------------------------------------------
 
+
+def _depth_write(info) -> None:
+    """The program writes gl_FragDepth. Blender 4.2 and 4.5 have no ``depth_write`` on a create
+    info; their OpenGL programs write gl_FragDepth without the declaration."""
+    if hasattr(info, "depth_write"):
+        info.depth_write("ANY")
+
+
+def layer_framebuffer(texture, layer: int):
+    """A framebuffer whose depth attachment is one layer of a 2D-array depth texture. Blender 4.2
+    and 4.5 read the slot's {"texture", "layer"} dict with its two values swapped ("'GPUTexture'
+    object cannot be interpreted as an integer"; a (texture, layer) tuple binds every layer
+    there): that reading is what the error says, so it gets the values it reads."""
+    try:
+        return gpu.types.GPUFrameBuffer(depth_slot={"texture": texture, "layer": layer})
+    except TypeError:
+        return gpu.types.GPUFrameBuffer(depth_slot={"texture": layer, "layer": texture})
+
 def bind_sampler(shader, name: str, texture) -> None:
     """``shader.uniform_sampler(name, texture)``, unless the compiler removed the sampler (unused
     in this variant of the program): Blender binds a sampler it cannot find to texture unit -1,
@@ -404,7 +422,7 @@ def shadow_program(orthographic: bool = False) -> gpu.types.GPUShader:
         iface.smooth("VEC3", "world_position")
         info.vertex_out(iface)
         if not orthographic:
-            info.depth_write("ANY")
+            _depth_write(info)
 
     return LIBRARY.program(("shadow", orthographic), "shadow map", src, declare)
 
@@ -568,7 +586,7 @@ def group_depth_program() -> gpu.types.GPUShader:
     """Each pixel's deferred group as a depth (glsl/group_depth.frag.glsl)."""
     def declare(info):
         _declare_full_screen("gbuffer_normal")(info)
-        info.depth_write("ANY")
+        _depth_write(info)
 
     return LIBRARY.program(("group depth",), "deferred groups' depth", programs.group_depth_source(), declare)
 

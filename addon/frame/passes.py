@@ -381,9 +381,8 @@ class ShadowPass(Pass):
                                                     format="DEPTH_COMPONENT32F")
                 self.far = set()
                 self.content = self.held = self._held_casters = None
-            self.framebuffers = [gpu.types.GPUFrameBuffer(depth_slot={"texture": self.texture, "layer": i})
-                                 for i in range(plan.layers)]
             self._shape = shape
+            self.framebuffers = [gpu_library.layer_framebuffer(self.texture, i) for i in range(plan.layers)]
         scene.shadow_maps = self.texture
         casters, spheres, reach, which = self._reach(frame, key)
         needed = reach
@@ -474,7 +473,7 @@ class ShadowPass(Pass):
         render's successor draws every layer a caster reaches again, and clears the others unless
         they hold nothing already: ``far``; with Persistent Data it keeps them all where
         ``content`` is its own); the framebuffers belong to this context."""
-        if self.texture is not None:
+        if self.texture is not None and self._shape is not None:
             size, layers = self._shape
             state = (frozenset(self.far), self.content, self.held, self._held_casters)
             gpu_library.LIBRARY.keep_spare(("shadow maps", self._shape), self.texture,
