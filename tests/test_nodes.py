@@ -123,9 +123,9 @@ def test_reroutes_muted_nodes_and_muted_links_pass_as_blender_passes_them():
     assert "Value_001" not in flat.nodes[sqrt.name].inputs and value.name not in flat.nodes
 
 
-def test_a_muted_node_converts_what_it_passes():
-    """A muted Math node fed a colour passes it converted to a float (its luminance) and, read as a
-    colour, back to a colour (grey): two conversions, not the colour itself."""
+def test_a_muted_node_passes_what_it_passes_unconverted():
+    """A muted Math node fed a colour passes the colour itself to a colour input (not through its
+    own float output: Cycles does so, tests/test_material_nodes.py)."""
     mat, tree = _material()
     bsdf, _ = _principled(tree)
     rgb = tree.nodes.new("ShaderNodeRGB")
@@ -135,12 +135,8 @@ def test_a_muted_node_converts_what_it_passes():
     tree.links.new(rgb.outputs[0], math.inputs[0])
     tree.links.new(math.outputs[0], bsdf.inputs["Base Color"])
     flat = _flat(mat)
-    base = _input(flat, bsdf.name, "Base Color")
-    to_color = flat.nodes[base.node]
-    assert to_color.props == {"from": "VALUE", "to": "RGBA"}
-    to_float = flat.nodes[to_color.inputs["Value"].source.node]
-    assert to_float.props == {"from": "RGBA", "to": "VALUE"}
-    assert to_float.inputs["Value"].source == Ref(rgb.name, "Color", "RGBA")
+    assert _input(flat, bsdf.name, "Base Color") == Ref(rgb.name, "Color", "RGBA")
+    assert math.name not in flat.nodes
 
 
 def _group(name, inner=None):

@@ -13,8 +13,10 @@ input of a node it reaches becomes a ``Const`` (the socket's value where nothing
   what reaches its *active* Group Output (the first one where none is marked). Groups nest to any
   depth; a group that contains itself is cut (Blender does not allow it);
 * a **reroute** passes its input on;
-* a **muted node** passes on the inputs Blender links through it (``Node.passes``), converted to
-  the output's type; an output with nothing passed on reads a zero;
+* a **muted node** passes on the inputs Blender links through it (``Node.passes``) as they are,
+  converted only to the type of what reads them (Cycles does so: a colour through a muted Math
+  node into a colour input stays the colour, measured against its AOVs); an output with nothing
+  passed on reads a zero;
 * nodes the output does not reach are dropped.
 
 The flat graph lists its nodes dependencies first, each once however many inputs read it.
@@ -117,14 +119,16 @@ class _Flattener:
 
     # -- sources --------------------------------------------------------------------------------
 
-    def input_source(self, scope: _Scope, node: Node, socket: str) -> Source:
-        """What ``node``'s input ``socket`` reads, converted to the input's type."""
+    def input_source(self, scope: _Scope, node: Node, socket: str, raw: bool = False) -> Source:
+        """What ``node``'s input ``socket`` reads, converted to the input's type (``raw``: as
+        linked, unconverted)."""
         want = node.inputs[socket].type if socket in node.inputs else "VALUE"
         link = self.link_into(scope, node.name, socket)
         if link is None:
             spec = node.inputs.get(socket)
             return Const(want, spec.default if spec is not None else convert.zero(want))
-        return self.converted(self.output_source(scope, link.from_node, link.from_socket), want)
+        source = self.output_source(scope, link.from_node, link.from_socket)
+        return source if raw else self.converted(source, want)
 
     def output_source(self, scope: _Scope, name: str, socket: str) -> Source:
         """What output ``socket`` of the node ``name`` in ``scope`` gives."""
@@ -140,7 +144,7 @@ class _Flattener:
             passed = next((i for i, o in node.passes if o == socket), None)
             if passed is None:
                 return Const(out_type, convert.zero(out_type))
-            return self.converted(self.input_source(scope, node, passed), out_type)
+            return self.input_source(scope, node, passed, raw=True)
         if node.kind == GROUP_INPUT:
             if scope.group_node is None:  # a Group Input outside a group
                 return Const(out_type, convert.zero(out_type))
