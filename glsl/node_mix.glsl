@@ -69,7 +69,8 @@ vec3 mix_burn(float t, vec3 c1, vec3 c2)
               mix_burn_channel(t, c1.b, c2.b));
 }
 
-vec3 mix_hue(float t, vec3 c1, vec3 c2)
+/* HUE and COLOR: c1 given c2's hue (and, for COLOR, its saturation), where c2 has a hue */
+vec3 mix_take_hue(float t, vec3 c1, vec3 c2, bool with_saturation)
 {
   vec3 hsv2 = color_rgb_to_hsv(c2);
   if (hsv2.y == 0.0) {
@@ -77,8 +78,13 @@ vec3 mix_hue(float t, vec3 c1, vec3 c2)
   }
   vec3 hsv = color_rgb_to_hsv(c1);
   hsv.x = hsv2.x;
+  if (with_saturation) {
+    hsv.y = hsv2.y;
+  }
   return mix(c1, color_hsv_to_rgb(hsv), t);
 }
+
+vec3 mix_hue(float t, vec3 c1, vec3 c2) { return mix_take_hue(t, c1, c2, false); }
 
 vec3 mix_saturation(float t, vec3 c1, vec3 c2)
 {
@@ -97,16 +103,7 @@ vec3 mix_value(float t, vec3 c1, vec3 c2)
   return color_hsv_to_rgb(hsv);
 }
 
-vec3 mix_color(float t, vec3 c1, vec3 c2)
-{
-  vec3 hsv2 = color_rgb_to_hsv(c2);
-  if (hsv2.y == 0.0) {
-    return c1;
-  }
-  vec3 hsv = color_rgb_to_hsv(c1);
-  hsv.xy = hsv2.xy;
-  return mix(c1, color_hsv_to_rgb(hsv), t);
-}
+vec3 mix_color(float t, vec3 c1, vec3 c2) { return mix_take_hue(t, c1, c2, true); }
 
 vec3 mix_soft_light(float t, vec3 c1, vec3 c2)
 {

@@ -15,6 +15,7 @@ import pytest
 import scenes
 from glsl_harness import evaluate
 from test_cycles import _cycles
+from test_nodes import _group
 
 from addon.blender import nodes as reader
 from addon.materials import codegen, graph
@@ -328,27 +329,6 @@ def test_vector_math_node_matches_cycles(vector_results, case):
 
 
 # --- the flattening against Cycles: groups, reroutes, muted nodes and links -----------------------
-
-def _group(name, inner=None):
-    """A group: Fac (float, default 0.3) and Color in, Out = Color x Fac (Mix, Multiply), passed
-    through the nested group ``inner`` when given, Fac with it."""
-    g = bpy.data.node_groups.new(name, "ShaderNodeTree")
-    g.interface.new_socket("Fac", in_out="INPUT", socket_type="NodeSocketFloat").default_value = 0.3
-    g.interface.new_socket("Color", in_out="INPUT", socket_type="NodeSocketColor")
-    g.interface.new_socket("Out", in_out="OUTPUT", socket_type="NodeSocketColor")
-    gin, gout = g.nodes.new("NodeGroupInput"), g.nodes.new("NodeGroupOutput")
-    result = _node(g, "ShaderNodeMix", {"Factor_Float": 1.0, "A_Color": gin.outputs["Color"],
-                                        "B_Color": gin.outputs["Fac"]}, "Result_Color",
-                   data_type="RGBA", blend_type="MULTIPLY")
-    if inner is not None:
-        node = g.nodes.new("ShaderNodeGroup")
-        node.node_tree = inner
-        g.links.new(result, node.inputs["Color"])
-        g.links.new(gin.outputs["Fac"], node.inputs["Fac"])
-        result = node.outputs["Out"]
-    g.links.new(result, gout.inputs["Out"])
-    return g
-
 
 @pytest.fixture(scope="module")
 def flattening_results(tmp_path_factory):
