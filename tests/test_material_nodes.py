@@ -248,7 +248,7 @@ def _converter_cases(tree, u, v):
             reversed_["Steps"] = 4.0
         mapped = _node(tree, "ShaderNodeMapRange", reversed_, "Result", interpolation_type=kind)
         cases[f"map_{kind.lower()}_reversed"] = (mapped, "VALUE")
-    for mode in ("RGB", "HSV"):
+    for mode in ("RGB", "HSV", "HSL"):
         for channel in ("Red", "Green", "Blue"):
             separated = _node(tree, "ShaderNodeSeparateColor", {"Color": color}, channel, mode=mode)
             cases[f"separate_{mode.lower()}_{channel.lower()}"] = (separated, "VALUE")
@@ -272,9 +272,9 @@ def _converter_cases(tree, u, v):
 CONVERTER_CASES = ["clamp_minmax", "clamp_range"]
 CONVERTER_CASES += [f"map_{k}{s}" for k in ("linear", "stepped", "smoothstep", "smootherstep")
                     for s in ("", "_clamped", "_reversed")]
-CONVERTER_CASES += [f"separate_{m}_{c}" for m in ("rgb", "hsv") for c in ("red", "green", "blue")]
-CONVERTER_CASES += ["combine_rgb", "combine_hsv", "invert", "gamma_0", "gamma_22", "gamma_linked",
-                    "bright_contrast", "rgb_to_bw", "hue_saturation"]
+CONVERTER_CASES += [f"separate_{m}_{c}" for m in ("rgb", "hsv", "hsl") for c in ("red", "green", "blue")]
+CONVERTER_CASES += ["combine_rgb", "combine_hsv", "combine_hsl", "invert", "gamma_0", "gamma_22",
+                    "gamma_linked", "bright_contrast", "rgb_to_bw", "hue_saturation"]
 
 
 @pytest.fixture(scope="module")

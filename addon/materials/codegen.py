@@ -191,19 +191,19 @@ def _map_range(w: _Writer, node: FlatNode) -> dict | None:
 
 def _separate_color(w: _Writer, node: FlatNode) -> dict | None:
     mode = node.props.get("mode", "RGB")
-    if mode not in ("RGB", "HSV"):
+    if mode not in ("RGB", "HSV", "HSL"):
         return None
-    color = w.arg(node, "Color")
-    value = f"color_rgb_to_hsv({color}.rgb)" if mode == "HSV" else f"{color}.rgb"
+    color = f"{w.arg(node, 'Color')}.rgb"
+    value = color if mode == "RGB" else f"color_rgb_to_{mode.lower()}({color})"
     return {"Red": f"{value}.x", "Green": f"{value}.y", "Blue": f"{value}.z"}
 
 
 def _combine_color(w: _Writer, node: FlatNode) -> dict | None:
     mode = node.props.get("mode", "RGB")
-    if mode not in ("RGB", "HSV"):
+    if mode not in ("RGB", "HSV", "HSL"):
         return None
     rgb = f"vec3({', '.join(w.arg(node, s) for s in ('Red', 'Green', 'Blue'))})"
-    return {"Color": f"vec4({'color_hsv_to_rgb(' + rgb + ')' if mode == 'HSV' else rgb}, 1.0)"}
+    return {"Color": f"vec4({rgb if mode == 'RGB' else f'color_{mode.lower()}_to_rgb({rgb})'}, 1.0)"}
 
 
 def _vector_math(w: _Writer, node: FlatNode) -> dict | None:
