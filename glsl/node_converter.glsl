@@ -88,3 +88,34 @@ vec4 hue_saturation_value(float hue, float saturation, float value, float fac, v
   vec3 rgb = fac * color_hsv_to_rgb(hsv) + (1.0 - fac) * color.rgb;
   return vec4(max(rgb, 0.0), color.a);
 }
+
+/* Map Range on vectors, per component, as Cycles' svm_node_vector_map_range: a division by an
+ * empty source range gives 0; Clamp (linear and stepped) to the target range in either order */
+vec3 map_range_vector_factor(int kind, vec3 x, vec3 a, vec3 b, vec3 steps)
+{
+  vec3 f = vec3(math_safe_divide(x.x - a.x, b.x - a.x), math_safe_divide(x.y - a.y, b.y - a.y),
+                math_safe_divide(x.z - a.z, b.z - a.z));
+  if (kind == 1) {
+    return vec3(steps.x > 0.0 ? floor(f.x * (steps.x + 1.0)) / steps.x : 0.0,
+                steps.y > 0.0 ? floor(f.y * (steps.y + 1.0)) / steps.y : 0.0,
+                steps.z > 0.0 ? floor(f.z * (steps.z + 1.0)) / steps.z : 0.0);
+  }
+  if (kind == 2) {
+    f = clamp(f, 0.0, 1.0);
+    return (vec3(3.0) - 2.0 * f) * (f * f);
+  }
+  if (kind == 3) {
+    f = clamp(f, 0.0, 1.0);
+    return f * f * f * (f * (f * 6.0 - 15.0) + 10.0);
+  }
+  return f;
+}
+
+vec3 map_range_vector(int kind, bool use_clamp, vec3 x, vec3 a, vec3 b, vec3 c, vec3 d, vec3 steps)
+{
+  vec3 r = c + map_range_vector_factor(kind, x, a, b, steps) * (d - c);
+  if (use_clamp && kind < 2) {
+    r = vec3(clamp_range(r.x, c.x, d.x), clamp_range(r.y, c.y, d.y), clamp_range(r.z, c.z, d.z));
+  }
+  return r;
+}

@@ -248,6 +248,15 @@ def _converter_cases(tree, u, v):
             reversed_["Steps"] = 4.0
         mapped = _node(tree, "ShaderNodeMapRange", reversed_, "Result", interpolation_type=kind)
         cases[f"map_{kind.lower()}_reversed"] = (mapped, "VALUE")
+    vector = _combine(tree, x, y, _affine(tree, u, -2.0, 1.0))
+    for kind in ("LINEAR", "STEPPED", "SMOOTHSTEP", "SMOOTHERSTEP"):
+        inputs = {"Vector": vector, "From_Min_FLOAT3": (-0.5, 1.5, 0.0), "From_Max_FLOAT3": (1.5, -0.5, 0.0),
+                  "To_Min_FLOAT3": (2.0, 0.0, 1.0), "To_Max_FLOAT3": color, "Steps_FLOAT3": (3.0, 4.0, 2.0)}
+        if kind not in ("STEPPED",):
+            inputs.pop("Steps_FLOAT3")
+        mapped = _node(tree, "ShaderNodeMapRange", inputs, "Vector", data_type="FLOAT_VECTOR",
+                       interpolation_type=kind, clamp=True)
+        cases[f"map_vector_{kind.lower()}"] = (mapped, "COLOR")
     for mode in ("RGB", "HSV", "HSL"):
         for channel in ("Red", "Green", "Blue"):
             separated = _node(tree, "ShaderNodeSeparateColor", {"Color": color}, channel, mode=mode)
@@ -272,6 +281,7 @@ def _converter_cases(tree, u, v):
 CONVERTER_CASES = ["clamp_minmax", "clamp_range"]
 CONVERTER_CASES += [f"map_{k}{s}" for k in ("linear", "stepped", "smoothstep", "smootherstep")
                     for s in ("", "_clamped", "_reversed")]
+CONVERTER_CASES += [f"map_vector_{k}" for k in ("linear", "stepped", "smoothstep", "smootherstep")]
 CONVERTER_CASES += [f"separate_{m}_{c}" for m in ("rgb", "hsv", "hsl") for c in ("red", "green", "blue")]
 CONVERTER_CASES += ["combine_rgb", "combine_hsv", "combine_hsl", "invert", "gamma_0", "gamma_22",
                     "gamma_linked", "bright_contrast", "rgb_to_bw", "hue_saturation"]

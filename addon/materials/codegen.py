@@ -174,17 +174,26 @@ def _clamp(w: _Writer, node: FlatNode) -> dict:
     return _call(fn, w, node, ("Value", "Min", "Max"), "Result")
 
 
+_MAP_RANGE_KINDS = ("LINEAR", "STEPPED", "SMOOTHSTEP", "SMOOTHERSTEP")
+
+
 def _map_range(w: _Writer, node: FlatNode) -> dict | None:
-    """Map Range on a float (Cycles adds a Clamp, in either order of the target range, after a
-    linear or stepped mapping whose Clamp is on)."""
+    """Map Range: on a float (Cycles adds a Clamp, in either order of the target range, after a
+    linear or stepped mapping whose Clamp is on), or per component of a vector."""
     kind = node.props.get("interpolation_type", "LINEAR")
-    if node.props.get("data_type", "FLOAT") != "FLOAT" or kind not in ("LINEAR", "STEPPED", "SMOOTHSTEP",
-                                                                        "SMOOTHERSTEP"):
+    if kind not in _MAP_RANGE_KINDS:
         return None
+    clamp = bool(node.props.get("clamp"))
+    if node.props.get("data_type", "FLOAT") == "FLOAT_VECTOR":
+        names = ("Vector", "From_Min_FLOAT3", "From_Max_FLOAT3", "To_Min_FLOAT3", "To_Max_FLOAT3")
+        args = [w.arg(node, s) for s in names]
+        args.append(w.arg(node, "Steps_FLOAT3") if "Steps_FLOAT3" in node.inputs else "vec3(0.0)")
+        kinds = _MAP_RANGE_KINDS.index(kind)
+        return {"Vector": f"map_range_vector({kinds}, {str(clamp).lower()}, {', '.join(args)})"}
     args = [w.arg(node, s) for s in ("Value", "From Min", "From Max", "To Min", "To Max")]
     args.append(w.arg(node, "Steps") if "Steps" in node.inputs else "0.0")
     expr = f"map_range_{kind.lower()}({', '.join(args)})"
-    if node.props.get("clamp") and kind in ("LINEAR", "STEPPED"):
+    if clamp and kind in ("LINEAR", "STEPPED"):
         expr = f"clamp_range({expr}, {args[3]}, {args[4]})"
     return {"Result": expr}
 
