@@ -10,6 +10,7 @@ its components, a float read as a colour grey with alpha 1."""
 from __future__ import annotations
 
 import bpy
+import numpy as np
 import pytest
 import scenes
 
@@ -282,3 +283,40 @@ def test_a_muted_output_with_nothing_passed_reads_zero():
     assert flat.nodes["O"].inputs["A"].source == Const("VALUE", 0.0)
     assert flat.nodes["O"].inputs["B"].source == Const("VALUE", pytest.approx(1.0))  # white's luminance
     assert list(flat.nodes) == ["O"]
+
+
+def test_graphs_of_one_structure_share_their_source_and_differ_in_constants():
+    """Two materials wired alike with other values (a Math node's second value, an RGB colour)
+    compile to one GLSL source (one program) and differ only in their constants; a different
+    operation is another source; an unknown node is named, and what reads it its socket's value."""
+    from addon.materials import codegen
+
+    def build(name, value, color, operation="ADD", unknown=False):
+        mat, tree = _material(name) if name == "A" else (bpy.data.materials.new(name), None)
+        tree = scenes.node_tree(mat) if tree is None else tree
+        tree.nodes.clear()
+        bsdf, _ = _principled(tree)
+        rgb = tree.nodes.new("ShaderNodeRGB")
+        rgb.outputs[0].default_value = color
+        math = tree.nodes.new("ShaderNodeMath")
+        math.operation = operation
+        math.inputs[1].default_value = value
+        tree.links.new(rgb.outputs[0], math.inputs[0])
+        tree.links.new(math.outputs[0], bsdf.inputs["Roughness"])
+        if unknown:
+            tex = tree.nodes.new("ShaderNodeTexWave")
+            tree.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+        flat = _flat(mat)
+        return codegen.compile_graph(flat, {"roughness": (bsdf.name, "Roughness"),
+                                            "base": (bsdf.name, "Base Color")})
+
+    a = build("A", 0.25, (0.2, 0.4, 0.6, 1.0))
+    b = build("B", 0.75, (0.9, 0.1, 0.3, 1.0))
+    assert a.source == b.source and a.key == b.key
+    assert not np.array_equal(a.constants, b.constants)
+    c = build("C", 0.25, (0.2, 0.4, 0.6, 1.0), operation="MULTIPLY")
+    assert c.key != a.key
+    d = build("D", 0.25, (0.2, 0.4, 0.6, 1.0), unknown=True)
+    assert d.missing == ["Wave Texture (ShaderNodeTexWave)"], d.missing
+    base = bpy.data.materials["D"].node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value
+    assert any(np.allclose(row, tuple(base)) for row in d.constants), "Base Color falls back to its socket"

@@ -275,8 +275,8 @@ def compile_graph(flat: FlatGraph, targets: dict[str, tuple[str, str]], name: st
     ``void name(GraphInputs g, out T target ...)`` in the order ``targets`` lists them."""
     w = _Writer(flat)
     for node in flat.nodes.values():
-        if node.kind in SINKS:
-            continue
+        if node.kind in SINKS or (node.outputs and set(node.outputs.values()) == {"SHADER"}):
+            continue  # outputs, and closures: what reads their inputs is the caller's
         emit = EMITTERS.get(node.kind)
         outputs = emit(w, node) if emit is not None else None
         if outputs is None:
