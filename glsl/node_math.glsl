@@ -23,7 +23,9 @@ float math_compatible_pow(float x, float y)
   return x == 0.0 ? 0.0 : pow(x, y);
 }
 
-/* C's fmodf: the remainder takes the dividend's sign (GLSL's mod takes the divisor's) */
+/* C's fmodf: the remainder takes the dividend's sign (GLSL's mod takes the divisor's). In float,
+ * as Cycles 5 computes it: where a / b rounds to an integer the remainder is 0 (C's exact fmodf,
+ * as Cycles 4.5 gives it, is then nearly b: tests/test_material_nodes.py counts those pixels) */
 float math_fmod(float a, float b)
 {
   return a - b * trunc(a / b);

@@ -125,8 +125,8 @@ def test_reroutes_muted_nodes_and_muted_links_pass_as_blender_passes_them():
 
 
 def test_a_muted_node_passes_what_it_passes_unconverted():
-    """A muted Math node fed a colour passes the colour itself to a colour input (not through its
-    own float output: Cycles does so, tests/test_material_nodes.py)."""
+    """A muted Math node fed a colour passes the colour itself to a colour input in Blender 5 (not
+    through its own float output, as Blender 4 does: Cycles' AOVs, tests/test_material_nodes.py)."""
     mat, tree = _material()
     bsdf, _ = _principled(tree)
     rgb = tree.nodes.new("ShaderNodeRGB")
@@ -136,7 +136,11 @@ def test_a_muted_node_passes_what_it_passes_unconverted():
     tree.links.new(rgb.outputs[0], math.inputs[0])
     tree.links.new(math.outputs[0], bsdf.inputs["Base Color"])
     flat = _flat(mat)
-    assert _input(flat, bsdf.name, "Base Color") == Ref(rgb.name, "Color", "RGBA")
+    if bpy.app.version >= (5, 0, 0):
+        assert _input(flat, bsdf.name, "Base Color") == Ref(rgb.name, "Color", "RGBA")
+    else:  # Blender 4 passes it through the muted node's float output: grey
+        to_color = flat.nodes[_input(flat, bsdf.name, "Base Color").node]
+        assert to_color.props == {"from": "VALUE", "to": "RGBA"}
     assert math.name not in flat.nodes
 
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import bpy
 
+from ..materials import convert
 from ..scene import nodes as N
 
 #: The output target a material is read for (Material Output > Target): EEVEE's outputs, as the
@@ -54,6 +55,12 @@ def _props(node) -> dict:
             value = tuple(value)
         out[name] = value
     return out
+
+
+def luma() -> tuple[float, float, float]:
+    """A colour's weights read as a float, as this Blender's Cycles holds them (its rgb_to_y:
+    Blender 5's colour management moved them)."""
+    return convert.LUMA if bpy.app.version >= (5, 0, 0) else convert.LUMA_4
 
 
 def _group_key(tree) -> str:
@@ -101,6 +108,7 @@ def read_material(material, target: str = TARGET) -> tuple[N.Graph, dict[str, N.
         return None
     output = tree.get_output_node(target)
     graph = read_tree(tree, output.name if output is not None else None)
+    graph = N.Graph(graph.nodes, graph.links, graph.output, luma(), mute_converts=bpy.app.version < (5, 0, 0))
     groups: dict[str, N.Graph] = {}
     pending = _groups_in(tree)
     while pending:

@@ -240,7 +240,11 @@ def _convert(w: _Writer, node: FlatNode) -> dict:
     kind = {"INT": "VALUE", "BOOLEAN": "VALUE"}
     f, t = kind.get(f, f), kind.get(t, t)
     expr = w.arg(node, "Value")
-    return {"Value": expr if f == t else f"convert_{f.lower()}_to_{t.lower()}({expr})"}
+    if f == t:
+        return {"Value": expr}
+    if f == "RGBA" and t == "VALUE":  # the running Blender's luminance, part of the program's source
+        return {"Value": f"convert_rgba_to_value({expr}, vec3({', '.join(repr(c) for c in w.flat.luma)}))"}
+    return {"Value": f"convert_{f.lower()}_to_{t.lower()}({expr})"}
 
 
 EMITTERS = {
@@ -259,7 +263,8 @@ EMITTERS = {
     "ShaderNodeGamma": lambda w, n: _call("gamma_color", w, n, ("Color", "Gamma"), "Color"),
     "ShaderNodeBrightContrast": lambda w, n: _call("brightness_contrast", w, n,
                                                    ("Color", "Bright", "Contrast"), "Color"),
-    "ShaderNodeRGBToBW": lambda w, n: _call("convert_rgba_to_value", w, n, ("Color",), "Val"),
+    "ShaderNodeRGBToBW": lambda w, n: {"Val": f"convert_rgba_to_value({w.arg(n, 'Color')}, "
+                                              f"vec3({', '.join(repr(c) for c in w.flat.luma)}))"},
     "ShaderNodeHueSaturation": lambda w, n: _call("hue_saturation_value", w, n,
                                                   ("Hue", "Saturation", "Value", "Fac", "Color"), "Color"),
     "ShaderNodeSeparateXYZ": _separate_xyz,

@@ -9,9 +9,11 @@ link from a shader to a value socket is invalid in Blender, and the input keeps 
 from __future__ import annotations
 
 #: Colour -> float: the Y row of the default colour configuration's scene linear (Rec. 709) to
-#: XYZ D65 matrix, as Cycles' rgb_to_y holds it: against Cycles' RGB to BW node 8e-7 (the
-#: config's rounded ``luma``, 0.2126 / 0.7152 / 0.0722, was 4.8e-5 off; tests/test_material_nodes.py).
+#: XYZ D65 matrix, as Cycles' rgb_to_y holds it in Blender 5.0: against Cycles' RGB to BW node
+#: 8e-7 (the config's rounded ``luma``, 0.2126 / 0.7152 / 0.0722, was 4.8e-5 off). Blender 4.2 and
+#: 4.5 hold LUMA_4 (1.2e-6 there); the reader names the one of the running Blender (``Graph.luma``).
 LUMA = (0.2126390, 0.7151687, 0.0721923)
+LUMA_4 = (0.2126729, 0.7151522, 0.0721750)
 
 #: Socket types that carry one number, three, or a colour (four, alpha last).
 SCALARS = ("VALUE", "INT", "BOOLEAN")
@@ -31,27 +33,27 @@ def zero(type_: str):
     return ZERO.get(type_)
 
 
-def _as_float(type_: str, value) -> float:
+def _as_float(type_: str, value, luma) -> float:
     if type_ in SCALARS:
         return float(value)
     if type_ in VECTORS:
         return (float(value[0]) + float(value[1]) + float(value[2])) / 3.0
-    return sum(c * float(v) for c, v in zip(LUMA, value[:3]))
+    return sum(c * float(v) for c, v in zip(luma or LUMA, value[:3]))
 
 
-def value(value, from_type: str, to_type: str):
-    """A constant of ``from_type`` as a ``to_type`` socket reads it (None where the types do not
-    convert: the socket then keeps a zero)."""
+def value(value, from_type: str, to_type: str, luma=None):
+    """A constant of ``from_type`` as a ``to_type`` socket reads it (a zero where the types do
+    not convert); ``luma``: a colour's weights as a float (None: LUMA)."""
     if from_type == to_type:
         return value
     if from_type not in CONVERTIBLE or to_type not in CONVERTIBLE:
         return zero(to_type)
     if to_type == "VALUE":
-        return _as_float(from_type, value)
+        return _as_float(from_type, value, luma)
     if to_type == "INT":
-        return int(_as_float(from_type, value))  # truncated, as C converts
+        return int(_as_float(from_type, value, luma))  # truncated, as C converts
     if to_type == "BOOLEAN":
-        return _as_float(from_type, value) > 0.0
+        return _as_float(from_type, value, luma) > 0.0
     if from_type in SCALARS:
         f = float(value)
         return (f, f, f) if to_type == "VECTOR" else (f, f, f, 1.0)

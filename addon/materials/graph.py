@@ -14,9 +14,10 @@ input of a node it reaches becomes a ``Const`` (the socket's value where nothing
   depth; a group that contains itself is cut (Blender does not allow it);
 * a **reroute** passes its input on;
 * a **muted node** passes on the inputs Blender links through it (``Node.passes``) as they are,
-  converted only to the type of what reads them (Cycles does so: a colour through a muted Math
-  node into a colour input stays the colour, measured against its AOVs); an output with nothing
-  passed on reads a zero;
+  converted only to the type of what reads them (Cycles 5 does so: a colour through a muted Math
+  node into a colour input stays the colour, measured against its AOVs; Cycles 4 converts it
+  through the output's type first, ``Graph.mute_converts``); an output with nothing passed on
+  reads a zero;
 * nodes the output does not reach are dropped.
 
 The flat graph lists its nodes dependencies first, each once however many inputs read it.
@@ -87,6 +88,7 @@ class FlatGraph:
     nodes: dict[str, FlatNode] = field(default_factory=dict)
     output: str | None = None
     cut: list[str] = field(default_factory=list)
+    luma: tuple[float, float, float] = convert.LUMA  # a colour's weights read as a float
 
 
 @dataclass(frozen=True)
@@ -107,6 +109,7 @@ class _Flattener:
         self.flat = FlatGraph()
         self.links: dict[int, dict[tuple[str, str], Link]] = {}
         self.visiting: set[str] = set()
+        self.mute_converts = False
 
     def link_into(self, scope: _Scope, node: str, socket: str) -> Link | None:
         table = self.links.get(id(scope.graph))
@@ -144,7 +147,8 @@ class _Flattener:
             passed = next((i for i, o in node.passes if o == socket), None)
             if passed is None:
                 return Const(out_type, convert.zero(out_type))
-            return self.input_source(scope, node, passed, raw=True)
+            source = self.input_source(scope, node, passed, raw=True)
+            return self.converted(source, out_type) if self.mute_converts else source
         if node.kind == GROUP_INPUT:
             if scope.group_node is None:  # a Group Input outside a group
                 return Const(out_type, convert.zero(out_type))
@@ -174,7 +178,7 @@ class _Flattener:
         if source.type == to_type:
             return source
         if isinstance(source, Const):
-            return Const(to_type, convert.value(source.value, source.type, to_type))
+            return Const(to_type, convert.value(source.value, source.type, to_type, self.flat.luma))
         if not convert.converts(source.type, to_type):
             return Const(to_type, convert.zero(to_type))
         name = f"{source.node}{PATH}{source.socket}>{to_type}"  # one per output and target type
@@ -206,6 +210,8 @@ def flatten(graph: Graph, groups: dict[str, Graph] | None = None) -> FlatGraph:
     """``graph`` flattened from its output node and its AOV Outputs (module docstring); ``groups``
     holds the trees its group nodes name, nested ones too."""
     flattener = _Flattener(groups or {})
+    flattener.flat.luma = tuple(graph.luma) if graph.luma is not None else convert.LUMA
+    flattener.mute_converts = graph.mute_converts
     output = graph.nodes.get(graph.output) if graph.output is not None else None
     if output is not None:
         flattener.add(_Scope(graph), output)

@@ -71,3 +71,5 @@ class Graph:
     nodes: dict[str, Node]
     links: tuple[Link, ...]
     output: str | None = None
+    luma: tuple[float, float, float] | None = None  # colour -> float weights (None: convert.LUMA)
+    mute_converts: bool = False  # a muted node's input converted to its output's type (Blender 4)
