@@ -141,12 +141,15 @@ def test_glossy_distributions_match_cycles(distribution, terms, roughness, tmp_p
     rel = np.abs(ours[lit] - ref[lit]) / ref[lit]
     print(f"{distribution} r={roughness}: mean relative error {rel.mean():.4%}, max {rel.max():.4%}")
     assert lit.sum() > 200, "the highlight must cover enough pixels to compare"
-    # measured (mean, max) with bpy 5.0.1, 2026-12-06
+    # measured (mean, max) with bpy 5.0.1, 2026-12-06; Cycles 4.2 and 4.5 differ on the r = 0.3
+    # highlight's outermost lit pixels: max 8.74 % (Beckmann), 4.26 % (multiscatter GGX)
     mean, largest = {("BECKMANN", 0.3): (3.95e-4, 3.23e-3), ("MULTI_GGX", 0.3): (2.71e-4, 7.99e-3),
                      ("BECKMANN", 0.8): (3.5e-5, 5.79e-3), ("MULTI_GGX", 0.8): (4.5e-5, 7.45e-3)}[
         distribution, roughness]
+    if bpy.app.version < (5, 0, 0) and roughness == 0.3:
+        mean, largest = {"BECKMANN": (6.9e-4, 8.74e-2), "MULTI_GGX": (3.3e-4, 4.26e-2)}[distribution]
     _within(rel.mean(), mean, "mean")
-    _within(rel.max(), largest, "max")
+    _within(rel.max(), largest, "max", factor=1.5 if bpy.app.version < (5, 0, 0) else 3.0)
 
 
 def _principled(base, metallic, roughness, ior=1.5):
@@ -177,9 +180,12 @@ def test_principled_term_set_matches_cycles(base, metallic, roughness, tmp_path)
     print(f"principled {base} m={metallic} r={roughness}: mean relative error {rel.mean():.3%}, "
           f"max {rel.max():.3%}, per channel mean {chan.mean():.3%}")
     assert lit.sum() > 200
-    # measured (mean, max) with bpy 5.0.1, 2026-12-06
+    # measured (mean, max) with bpy 5.0.1, 2026-12-06; Cycles 4.2 and 4.5: max 1.53 % (r 0.25),
+    # 2.90 % (gold, r 0.35), the rest as 5.0
     mean, largest = {0.5: (5e-5, 6.69e-3), 0.25: (5e-5, 6.44e-3), 0.35: (1.6e-4, 9.38e-3),
                      0.8: (4e-5, 7.05e-3), 0.6: (6e-5, 7.76e-3)}[roughness]
+    if bpy.app.version < (5, 0, 0):
+        mean, largest = {0.25: (5e-5, 1.53e-2), 0.35: (2e-4, 2.9e-2)}.get(roughness, (mean, largest))
     _within(rel.mean(), mean, "mean")
     _within(rel.max(), largest, "max")
 

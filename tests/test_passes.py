@@ -158,7 +158,7 @@ def _veil(scene) -> None:
     from mathutils import Matrix
 
     glass = scenes.material("Veil", base_color=(0.2, 0.5, 0.9), roughness=0.3)
-    glass.node_tree.nodes["Principled BSDF"].inputs["Alpha"].default_value = 0.5
+    scenes.node_tree(glass).nodes["Principled BSDF"].inputs["Alpha"].default_value = 0.5
     veil = scenes.plane(scene, size=30.0, material=glass)
     veil.matrix_world = scene.camera.matrix_world @ Matrix.Translation((0.0, 0.0, -3.0))
 
@@ -323,7 +323,7 @@ def test_deferred_shading_changes_no_pixel(preset):
     image = bpy.data.images.new("Checks", 4, 4)
     image.pixels.foreach_set(np.tile([0.9, 0.2, 0.1, 1.0, 0.1, 0.3, 0.8, 1.0], 8).astype(np.float32))
     mapped = scenes.material("Mapped", roughness=0.4)
-    tree = mapped.node_tree
+    tree = scenes.node_tree(mapped)
     node = tree.nodes.new("ShaderNodeTexImage")
     node.image = image
     tree.links.new(node.outputs["Color"], tree.nodes["Principled BSDF"].inputs["Base Color"])

@@ -395,7 +395,7 @@ def test_viewport_redraws_shadow_maps_only_when_lights_or_casters_move():
         scene.camera.location.x += 0.3
         counts.append(draw())
         mat = bpy.data.materials["White"]
-        mat.node_tree.nodes["Principled BSDF"].inputs["Roughness"].default_value = 0.4
+        scenes.node_tree(mat).nodes["Principled BSDF"].inputs["Roughness"].default_value = 0.4
         counts.append(draw())
         light.rotation_euler.x += 0.1
         counts.append(draw())
@@ -590,7 +590,7 @@ def test_cascades_follow_the_camera_and_nothing_else():
     try:
         counts = [draw(), draw()]
         mat = bpy.data.materials["White"]
-        mat.node_tree.nodes["Principled BSDF"].inputs["Roughness"].default_value = 0.4
+        scenes.node_tree(mat).nodes["Principled BSDF"].inputs["Roughness"].default_value = 0.4
         counts.append(draw())
         scene.camera.location.x += 0.3
         counts.append(draw())
@@ -1089,7 +1089,7 @@ def test_persistent_data_keeps_the_maps_while_their_content_is_the_same(tmp_path
 
     sphere = bpy.data.objects["Sphere"]
     glass = scenes.material("Glass", base_color=(0.2, 0.5, 0.9))
-    glass.node_tree.nodes["Principled BSDF"].inputs["Alpha"].default_value = 0.5  # casts nothing
+    scenes.node_tree(glass).nodes["Principled BSDF"].inputs["Alpha"].default_value = 0.5  # casts nothing
     sphere.data.materials.append(glass)
     for polygon in sphere.data.polygons:
         polygon.material_index = int(polygon.center.x > 0.0)  # the sphere's +x half in glass
