@@ -131,6 +131,27 @@ def _texcoord(w: _Writer, node: FlatNode) -> dict | None:
     return {"UV": "g.uv"} if "UV" in node.outputs else None
 
 
+def _normal_input(w: _Writer, node: FlatNode) -> str:
+    """A node's Normal input: the fragment's shading normal where nothing is linked to it (its
+    socket's value is Blender's placeholder, not a normal)."""
+    spec = node.inputs.get("Normal")
+    return w.arg(node, "Normal") if spec is not None and isinstance(spec.source, Ref) else "g.n"
+
+
+def _geometry(w: _Writer, node: FlatNode) -> dict:
+    """The Geometry node's outputs that a rasterised fragment has (Position, Normal, True Normal
+    as the shading normal, Incoming, Backfacing); the rest are left to their readers' values."""
+    known = {"Position": "g.position", "Normal": "g.n", "Incoming": "g.i",
+             "Backfacing": "(g.backfacing ? 1.0 : 0.0)"}
+    return {s: e for s, e in known.items() if s in node.outputs}
+
+
+def _layer_weight(w: _Writer, node: FlatNode) -> dict:
+    blend, n = w.arg(node, "Blend"), _normal_input(w, node)
+    return {"Fresnel": f"node_layer_weight_fresnel({blend}, {n}, g)",
+            "Facing": f"node_layer_weight_facing({blend}, {n}, g)"}
+
+
 def _math(w: _Writer, node: FlatNode) -> dict | None:
     fn = _MATH_FUNCTIONS.get(node.props.get("operation"))
     if fn is None:
@@ -251,6 +272,9 @@ EMITTERS = {
     "ShaderNodeValue": _value,
     "ShaderNodeRGB": _value,
     "ShaderNodeTexCoord": _texcoord,
+    "ShaderNodeNewGeometry": _geometry,
+    "ShaderNodeFresnel": lambda w, n: {"Fac": f"node_fresnel({w.arg(n, 'IOR')}, {_normal_input(w, n)}, g)"},
+    "ShaderNodeLayerWeight": _layer_weight,
     "ShaderNodeUVMap": _texcoord,
     "ShaderNodeMath": _math,
     "ShaderNodeMix": _mix,
