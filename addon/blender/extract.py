@@ -1121,10 +1121,11 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
             snap.geometries[key] = geometry
         snap.items.append(S.DrawItem(key, _matrix(inst.matrix_world), slots or [""],
                                      casts_shadow=bool(getattr(obj, "visible_shadow", True))))
-    if snap.settings.light_threshold > 0.0 and len(snap.lights) > programs.UNROLLED_LIGHTS:
-        bounds = {key: geometry.bounds for key, geometry in snap.geometries.items()}
-        box = shadows.scene_bounds(snap, bounds)  # before the shadow maps: they fit to the reaches
-        snap.lights[:] = programs.light_reaches(snap.lights, snap.settings.light_threshold, box)
+    # before the shadow maps: they fit to the reaches; the scene's box only where a reach needs it
+    def box():
+        return shadows.scene_bounds(snap, {key: geometry.bounds for key, geometry in snap.geometries.items()})
+
+    snap.lights[:] = programs.light_reaches(snap.lights, snap.settings.light_threshold, box)
     _first, _layers, dropped = shadows.assign(snap)
     if dropped:
         snap.warnings.append(f"{dropped} shadowed light(s) cast no shadow: a frame holds "

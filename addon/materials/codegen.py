@@ -263,9 +263,15 @@ def _convert(w: _Writer, node: FlatNode) -> dict:
     expr = w.arg(node, "Value")
     if f == t:
         return {"Value": expr}
-    if f == "RGBA" and t == "VALUE":  # the running Blender's luminance, part of the program's source
-        return {"Value": f"convert_rgba_to_value({expr}, vec3({', '.join(repr(c) for c in w.flat.luma)}))"}
+    if f == "RGBA" and t == "VALUE":
+        return {"Value": _luminance(w, expr)}
     return {"Value": f"convert_{f.lower()}_to_{t.lower()}({expr})"}
+
+
+def _luminance(w: _Writer, color: str) -> str:
+    """A colour read as a float, with the running Blender's weights (part of the program's source:
+    one Blender, one set)."""
+    return f"convert_rgba_to_value({color}, vec3({', '.join(repr(c) for c in w.flat.luma)}))"
 
 
 EMITTERS = {
@@ -287,8 +293,7 @@ EMITTERS = {
     "ShaderNodeGamma": lambda w, n: _call("gamma_color", w, n, ("Color", "Gamma"), "Color"),
     "ShaderNodeBrightContrast": lambda w, n: _call("brightness_contrast", w, n,
                                                    ("Color", "Bright", "Contrast"), "Color"),
-    "ShaderNodeRGBToBW": lambda w, n: {"Val": f"convert_rgba_to_value({w.arg(n, 'Color')}, "
-                                              f"vec3({', '.join(repr(c) for c in w.flat.luma)}))"},
+    "ShaderNodeRGBToBW": lambda w, n: {"Val": _luminance(w, w.arg(n, "Color"))},
     "ShaderNodeHueSaturation": lambda w, n: _call("hue_saturation_value", w, n,
                                                   ("Hue", "Saturation", "Value", "Fac", "Color"), "Color"),
     "ShaderNodeSeparateXYZ": _separate_xyz,

@@ -104,12 +104,12 @@ class _Scope:
 
 
 class _Flattener:
-    def __init__(self, groups: dict[str, Graph]):
+    def __init__(self, graph: Graph, groups: dict[str, Graph]):
         self.groups = groups
-        self.flat = FlatGraph()
+        self.flat = FlatGraph(luma=tuple(graph.luma) if graph.luma is not None else convert.LUMA)
         self.links: dict[int, dict[tuple[str, str], Link]] = {}
         self.visiting: set[str] = set()
-        self.mute_converts = False
+        self.mute_converts = graph.mute_converts
 
     def link_into(self, scope: _Scope, node: str, socket: str) -> Link | None:
         table = self.links.get(id(scope.graph))
@@ -209,9 +209,7 @@ AOV_OUTPUT = "ShaderNodeOutputAOV"
 def flatten(graph: Graph, groups: dict[str, Graph] | None = None) -> FlatGraph:
     """``graph`` flattened from its output node and its AOV Outputs (module docstring); ``groups``
     holds the trees its group nodes name, nested ones too."""
-    flattener = _Flattener(groups or {})
-    flattener.flat.luma = tuple(graph.luma) if graph.luma is not None else convert.LUMA
-    flattener.mute_converts = graph.mute_converts
+    flattener = _Flattener(graph, groups or {})
     output = graph.nodes.get(graph.output) if graph.output is not None else None
     if output is not None:
         flattener.add(_Scope(graph), output)

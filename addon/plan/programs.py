@@ -679,9 +679,13 @@ def light_reaches(lights: list, threshold: float, box) -> list:
     Only in a scene of more than UNROLLED_LIGHTS lights, where light culling can repay the window:
     one or two lights are each shaded by their own call, where culling saves little (hdr's two
     point lights: 1.06x with the lists) and the window costs accuracy (a 1 W lamp 2 m from a wall
-    lost half its light there at 0.01 W/m^2); they reach as far as their Custom Distance."""
+    lost half its light there at 0.01 W/m^2); they reach as far as their Custom Distance.
+    ``box``: the drawn scene's box (min, max), or a function giving it, called only where a reach
+    is set (extraction's box reads every geometry's bounds)."""
     if threshold <= 0.0 or len(lights) <= UNROLLED_LIGHTS:
-        return [replace(light, influence=light.cutoff) for light in lights]
+        return [light if light.influence == light.cutoff else replace(light, influence=light.cutoff)
+                for light in lights]
+    box = box() if callable(box) else box
     scaled = threshold * min(1.0, scene_irradiance(lights, box) / EXPOSED_IRRADIANCE)
     out = []
     for light in lights:

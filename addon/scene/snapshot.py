@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
@@ -197,9 +198,10 @@ class MeshGeometry:
     def triangle_count(self) -> int:
         return len(self.indices) // 3
 
-    @property
+    @cached_property
     def bounds(self) -> np.ndarray:
-        """(2, 3) float32: the object-space box (min, max) of the positions, zeros when empty."""
+        """(2, 3) float32: the object-space box (min, max) of the positions, zeros when empty; once
+        per geometry (extraction and the GPU scene both ask, and the geometry memo reuses it)."""
         positions = np.asarray(self.positions, np.float32)
         if not len(positions):
             return np.zeros((2, 3), np.float32)
@@ -362,8 +364,8 @@ class Light:
     spread: float = math.pi  # an area light's Spread (radians): the cone its radiance is limited to
     influence: float = math.inf  # how far it reaches (m; light_tiles.influence_radius): windowed
     #                              to nothing there, and culled from the screen tiles beyond it
-    cutoff: float = math.inf  # Blender's Custom Distance (m), inf where unset: the part of
-    #                           ``influence`` that holds without light culling's tiles too
+    cutoff: float = math.inf  # Blender's Custom Distance (m), inf where unset: the reach a light
+    #                           keeps where the Light Threshold gives none (programs.light_reaches)
 
     @property
     def spread_terms(self) -> tuple[float, float]:
