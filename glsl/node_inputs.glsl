@@ -1,14 +1,33 @@
-/* What a compiled node graph (addon/materials/codegen.py) reads of the fragment: its texture
- * coordinates (the active UV map, z = 0, as Blender's UV output), the world position, the unit
- * shading normal n and the unit direction towards the viewer i (Cycles' sd->N and sd->wi), and
- * whether the fragment is a back face. */
+/* What a compiled node graph (addon/materials/codegen.py) reads of the fragment, filled by the
+ * program that calls it (glsl/mesh.frag.glsl's graph_inputs; the tests' harness from Cycles' own
+ * AOVs of the same fragment). World space unless said. */
+
+#ifndef GRAPH_ATTRIBUTES
+#  define GRAPH_ATTRIBUTES 1
+#endif
 
 struct GraphInputs {
-  vec3 uv;
-  vec3 position;
-  vec3 n;
-  vec3 i;
-  bool backfacing;
+  vec3 uv;              /* the active UV map's (u, v, 0), as Blender's UV outputs */
+  vec3 position;        /* the fragment's position */
+  vec3 n;               /* unit shading normal (Cycles' sd->N: facing the viewer) */
+  vec3 ng;              /* unit true normal, the flat face's (Cycles' sd->Ng, facing the viewer) */
+  vec3 i;               /* unit direction towards the viewer (Cycles' sd->wi) */
+  bool backfacing;      /* the fragment is a back face */
+  vec4 tangent;         /* xyz: unit tangent of the active UV map (0: none); w: the bitangent's sign */
+  vec3 object;          /* the position in object space */
+  vec3 generated;       /* Generated coordinates: the object-space position in the object's
+                         * original bounds, 0..1 (Blender's texture space) */
+  mat4 object_to_world; /* the object's matrix */
+  mat4 world_to_object;
+  mat4 world_to_view;   /* the camera's view matrix (world -> camera space, looking down -Z) */
+  mat4 view_to_world;
+  vec2 window;          /* the fragment's place in the view, 0..1 (Texture Coordinate's Window) */
+  vec4 object_color;    /* Object Info's Color (rgb) and Alpha (a) */
+  vec4 object_info;     /* Object Info's x: Object Index (pass index), y: Material Index
+                         * (the material's pass index), z: Random */
+  /* the attributes the graph reads (codegen's Compiled.attributes: named UV maps, colour
+   * attributes, generic attributes), in its order; vec4, a UV map's (u, v, 0, 1) */
+  vec4 attributes[GRAPH_ATTRIBUTES];
 };
 
 /* Cycles' fresnel_dielectric_cos (kernel/closure/bsdf_util.h): 1 where no light refracts */

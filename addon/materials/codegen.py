@@ -11,6 +11,12 @@ node) is a slot of ``Compiled.constants`` read through ``GRAPH_CONST(i)`` (a vec
 program defines (a uniform block in the engine, an array in the tests). Two graphs of one
 structure compile to the same source and share one program; editing a value compiles nothing.
 
+Images and attributes are not in the source either: an Image Texture node's image is sampler
+``graph_image_<k>`` (``Compiled.images[k]``: the image's key in ``Snapshot.images``), a named UV
+map, colour attribute or attribute is ``g.attributes[k]`` (``Compiled.attributes[k]``: its kind and
+name); the program binds the images and fills the attributes (the mesh's, by name). One image read
+by several nodes at one coordinate is sampled once (the expression is shared).
+
 A node no emitter knows compiles to nothing: every input linked to it reads its own socket value
 instead (Blender's fallback for what a renderer cannot evaluate); ``Compiled.missing`` names it.
 """
@@ -65,10 +71,20 @@ class Compiled:
     constants: np.ndarray
     targets: dict[str, str]
     missing: list[str] = field(default_factory=list)
+    #: the images the graph samples (``graph_image_<k>``), by key in ``Snapshot.images``
+    images: tuple[str, ...] = ()
+    #: the attributes the graph reads (``g.attributes[k]``): (kind, name), kind one of
+    #: ``ATTRIBUTE_KINDS``; an empty name is the mesh's default of that kind
+    attributes: tuple[tuple[str, str], ...] = ()
 
     @property
     def key(self) -> str:
         return hashlib.sha1(self.source.encode()).hexdigest()[:16]
+
+
+#: What ``g.attributes[k]`` holds: a UV map's (u, v, 0, 1), a colour attribute's RGBA (linear), a
+#: generic attribute's value (Attribute node: a float as (x, x, x, 1), a vector (x, y, z, 1)).
+ATTRIBUTE_KINDS = ("UV", "COLOR", "GENERIC")
 
 
 class _Writer:
@@ -79,6 +95,31 @@ class _Writer:
         self.values: dict[tuple[str, str], str] = {}  # (node, output) -> GLSL variable
         self.skipped: set[str] = set()
         self.missing: list[str] = []
+        self.images: list[str] = []
+        self.attributes: list[tuple[str, str]] = []
+        self.shared: dict[str, str] = {}  # an expression computed once -> its variable
+
+    def image(self, key: str) -> str:
+        """The sampler of image ``key`` (one per image, however many nodes read it)."""
+        if key not in self.images:
+            self.images.append(key)
+        return f"graph_image_{self.images.index(key)}"
+
+    def attribute(self, kind: str, name: str) -> str:
+        """``g.attributes[k]`` of the attribute (kind, name), one slot per attribute."""
+        assert kind in ATTRIBUTE_KINDS, kind
+        if (kind, name) not in self.attributes:
+            self.attributes.append((kind, name))
+        return f"g.attributes[{self.attributes.index((kind, name))}]"
+
+    def once(self, type_: str, expr: str) -> str:
+        """A variable holding ``expr`` (of GLSL ``type_``), declared the first time it is asked
+        for: the same image at the same coordinate sampled once for every node reading it."""
+        var = self.shared.get(expr)
+        if var is None:
+            var = self.shared[expr] = f"s{len(self.shared)}"
+            self.lines.append(f"  {type_} {var} = {expr};")
+        return var
 
     def constant(self, value, type_: str) -> str:
         if type_ == "RGBA":
@@ -325,4 +366,4 @@ def compile_graph(flat: FlatGraph, targets: dict[str, tuple[str, str]], name: st
     params = ", ".join(["GraphInputs g", *(f"out {t} {n}" for n, t in types.items())])
     source = "\n".join([f"void {name}({params})", "{", *w.lines, *assigns, "}", ""])
     constants = np.array(w.constants or [(0.0, 0.0, 0.0, 0.0)], np.float32).reshape(-1, 4)
-    return Compiled(name, source, constants, types, w.missing)
+    return Compiled(name, source, constants, types, w.missing, tuple(w.images), tuple(w.attributes))
