@@ -225,6 +225,19 @@ void main()
   vec3 ng = n; /* no shadow lookups */
 #endif
   MaterialData m = apply_material_maps(material, uv);
+  bool outward = facing_outward();
+  vec3 v = view_direction(world_position);
+#ifdef SL_GRAPH
+  /* the material's node graph: its closures' inputs at this fragment */
+  n = outward ? n : -n;
+  Closure closure;
+  material_graph(graph_inputs(n, v, !outward), closure);
+  float closure_scale;
+  m = apply_closure(m, closure, n, closure_scale);
+  outward = true; /* n faces the viewer already */
+#else
+  const float closure_scale = 1.0;
+#endif
 #ifdef SL_PEEL
   /* Depth peeling (Everitt 2001): each pass keeps, per pixel, the nearest partly transparent
    * fragment behind the layer peeled before (peel_depth) and not behind the opaque surface
@@ -237,10 +250,10 @@ void main()
     discard;
   }
 #endif
-  Surface s = make_surface(world_position, facing_outward() ? n : -n, view_direction(world_position), m);
+  Surface s = make_surface(world_position, outward ? n : -n, v, m);
 #endif
-  /* ambient and emission: neither a diffuse nor a specular lobe (weight z, off in lobe passes) */
-  vec3 c = (shade_ambient(s, frame.ambient.rgb) + m.emission.rgb) * lobes.z;
+  /* ambient: neither a diffuse nor a specular lobe (weight z, off in lobe passes) */
+  vec3 c = shade_ambient(s, frame.ambient.rgb) * lobes.z;
   /* the world is a light: its diffuse and specular parts go to the lobes' passes */
   c += shade_environment(s, lobes.xy);
 #ifdef SL_LIGHT_SEQUENCE
@@ -284,6 +297,12 @@ void main()
 #ifdef SL_LIGHTS_AREA
   shade_group(c, s, ng, listed, k, int(frame.group_ends[1].w), LIGHT_AREA, false);
 #endif
+  /* a node graph's BSDFs' weight over the coverage (1 without a graph), then the emission (neither
+   * lobe: weight z) */
+#ifndef SL_DEFERRED
+  c *= closure_scale;
+#endif
+  c += m.emission.rgb * lobes.z;
   /* alpha: coverage, blended over what is behind (L = a L_surface + (1 - a) L_behind, as Cycles'
    * transparency); the renderer peels partly transparent surfaces and composites them in depth order */
   frag_color = vec4(write_target(lobes.w > 0.5 ? shade_finish(c) : c), m.emission.w);

@@ -10,5 +10,11 @@ void main()
   world_uv = uv;
   /* a mirror reverses the bitangent too: B = sign x det-sign x (N x T) */
   world_tangent = vec4(mat3(object.model) * tangent.xyz, tangent.w * object.normal_matrix[3][3]);
+#ifdef SL_PASS_ATTRIBUTES
+  SL_PASS_ATTRIBUTES /* a node graph's attributes, as the mesh's corners hold them */
+#endif
+#if defined(SL_GRAPH_OBJECT) || defined(SL_GRAPH_GENERATED)
+  object_position = pos;
+#endif
   gl_Position = frame.view_proj * world;
 }

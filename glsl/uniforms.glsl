@@ -12,6 +12,8 @@ struct FrameData {
   vec4 group_ends[2];    /* where each group of lights ends (addon/plan/programs.py's light_order lists
                           * them by group): [0] those with a shadow map, [1] those without, each
                           * x point, y spot, z sun, w area lights */
+  mat4 view;             /* the camera's view matrix (world -> camera space) */
+  vec4 viewport;         /* xy: the target's size in pixels */
 };
 
 struct LightData {
@@ -40,6 +42,14 @@ struct LightData {
 #ifdef SL_LIGHT_BLOCK
 struct LightBlock {
   vec4 texels[SL_MAX_LIGHTS * LIGHT_TEXELS];
+};
+#endif
+
+#ifdef SL_GRAPH
+/* A compiled node graph's constants (addon/materials/codegen.py's GRAPH_CONST), one block per
+ * material: editing a value uploads them, the program stays. */
+struct GraphBlock {
+  vec4 constants[SL_GRAPH_CONSTANTS];
 };
 #endif
 

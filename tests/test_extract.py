@@ -483,9 +483,10 @@ def test_what_is_not_read_is_said_once():
     scene.collection.objects.link(bpy.data.objects.new("Smoke", bpy.data.volumes.new("Smoke")))
     snap = extract.snapshot(bpy.context.evaluated_depsgraph_get())
     said = "\n".join(snap.warnings)
-    assert len(snap.warnings) == 3, snap.warnings
-    assert "Material 'Mixed': its surface shader (Mix Shader) is not read" in said
-    assert "Material 'Ramped': Base Color, Coat Weight driven by nodes" in said
+    assert len(snap.warnings) == 4, snap.warnings
+    assert "Material 'Tooned': 1 of 1 nodes not compiled (Toon BSDF (ShaderNodeBsdfToon))" in said
+    assert "Material 'Ramped': 1 of 3 nodes not compiled (Color Ramp (ShaderNodeValToRGB))" in said
+    assert "Material 'Ramped': its Coat Weight (Principled BSDF) not drawn" in said
     assert "Not drawn (Shading Lab draws meshes): 2 hair curves object(s), 1 volume(s)" in said
 
 

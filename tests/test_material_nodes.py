@@ -91,7 +91,8 @@ def _evaluate(compiled: codegen.Compiled, fragment: dict[str, np.ndarray]) -> di
     names = list(compiled.targets)
     decls = " ".join(f"{compiled.targets[n]} {n};" for n in names)
     call = (f"GraphInputs g; g.uv = vec3(uv.xy, 0.0); g.position = g_position.xyz; g.n = g_normal.xyz; "
-            f"g.ng = g_normal.xyz; g.i = g_incoming.xyz; g.backfacing = false; {decls} {compiled.name}(g, {', '.join(names)});")
+            f"g.ng = g_normal.xyz; g.i = g_incoming.xyz; g.backfacing = false; {decls} "
+            f"{compiled.name}(g, {', '.join(names)});")
     floats = [n for n in names if compiled.targets[n] == "float"]
     passes = [floats[i:i + 4] for i in range(0, len(floats), 4)] + [[n] for n in names if n not in floats]
     out = {}

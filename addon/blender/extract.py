@@ -14,9 +14,11 @@ from collections import Counter, OrderedDict
 import bpy
 import numpy as np
 
+from ..materials import surface
 from ..plan import auto_terms, light_tiles, programs, shadows
 from ..scene import snapshot as S
 from ..scene.matrices import invert
+from . import nodes
 
 LIGHT_KIND = {"POINT": "POINT", "SPOT": "SPOT", "SUN": "SUN", "AREA": "AREA"}
 
@@ -175,8 +177,7 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
     f0 = S.DEFAULT_F0
     node = _linked_surface_node(material)
     kind = node.bl_idname if node is not None else ""
-    if warnings is not None:
-        warnings.extend(_unread_parts(material, node))
+    unread = _unread_parts(material, node)
     if kind == "ShaderNodeBsdfPrincipled":
         base = _rgb(_input(node, "Base Color", base))
         metal = float(_input(node, "Metallic", metal))
@@ -214,6 +215,12 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
     elif kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"):
         base, metal = _rgb(_input(node, "Color", base)), 1.0
         rough = float(_input(node, "Roughness", rough))
+    graph = _material_graph(material, warnings, bool(maps.get("base_color_map") or maps.get("metallic_map")
+                                                     or maps.get("roughness_map") or maps.get("normal_map")))
+    if graph is not None:  # the compiled graph reads every texture, per fragment
+        for key in S.MaterialParams.MAPS:
+            maps.pop(key, None)
+        maps.update(graph=graph, alpha_from_base_map=False)
     props = getattr(material, "shading_lab", None)
     if props is not None:  # explicit values win over the shader's, textures included
         base = _rgb(props.base_color) if props.use_base_color else base
@@ -224,6 +231,8 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
                           ("use_roughness", "roughness_map")):
             if getattr(props, flag):
                 maps.pop(key, None)
+    if warnings is not None and graph is None:
+        warnings.extend(unread)
     metal = min(max(metal, 0.0), 1.0)
     rough = min(max(rough, 0.0), 1.0)
     # Blinn-Phong/Phong fallbacks from the physically based values: a metal's colour goes to its
@@ -239,8 +248,11 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
         spec = _rgb(props.specular_color) if props.use_specular_color else spec
         shininess = float(props.shininess) if props.use_shininess else shininess
         ambient = _rgb(props.ambient_color) if props.use_ambient_color else ambient
+    if graph is not None and props is not None:
+        maps["graph_keep"] = frozenset(name for name, flag in GRAPH_KEEP.items() if getattr(props, flag))
     return S.MaterialParams(
         name=material.name,
+        pass_index=int(getattr(material, "pass_index", 0)),
         base_color=base,
         diffuse_color=diffuse,
         specular_color=spec,
@@ -252,6 +264,34 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
         **{k: v for k, v in maps.items() if v is not None},
         **_material_extras(props),
     )
+
+
+#: The Material panel's explicit values a compiled graph leaves as they are: its input -> the flag.
+GRAPH_KEEP = {"base_color": "use_base_color", "metalness": "use_metalness", "roughness": "use_roughness",
+              "f0": "use_f0", "specular_color": "use_specular_color", "shininess": "use_shininess",
+              "ambient_color": "use_ambient_color"}
+
+
+def _material_graph(material, warnings: list[str] | None, mapped: bool) -> surface.MaterialGraph | None:
+    """The material's node graph compiled (``surface.compile_material``), None where its surface is
+    one closure with nothing linked into it. The nodes it could not compile are said in
+    ``warnings``; where the constant path reads image maps the graph could not (``mapped``), that
+    path draws it."""
+    read = nodes.read_material(material)
+    if read is None:
+        return None
+    graph = surface.compile_material(*read)
+    if graph is None:
+        return None
+    if graph.missing and mapped:
+        return None
+    if graph.unread and warnings is not None:
+        warnings.append(f"Material '{material.name}': its {', '.join(graph.unread)} not drawn (the shading "
+                        f"models have no such input)")
+    if graph.missing and warnings is not None:
+        warnings.append(f"Material '{material.name}': {len(graph.missing)} of {graph.nodes} nodes not "
+                        f"compiled ({', '.join(graph.missing)}); what they feed takes its socket's own value")
+    return graph
 
 
 def _material_extras(props) -> dict:
@@ -608,6 +648,90 @@ def mesh_geometry(key: str, mesh: bpy.types.Mesh, tangents: bool = False,
                               winding=closed_winding(mesh, corner_verts, positions, tri_corners,
                                                      (corner_edge, edge_verts)))
     GEOMETRY_MEMO.put(memo_key, arrays, tangents, geometry)
+    return geometry
+
+
+def object_random(random_id: int) -> float:
+    """Object Info's Random of an instance: its depsgraph ``random_id`` as a float in [0, 1)."""
+    return (int(random_id) & 0xFFFFFFFF) / 4294967296.0
+
+
+def _corner_values(mesh, attribute, values: np.ndarray, width: int) -> np.ndarray | None:
+    """An attribute's (n, width) values per corner, from its domain (None: a domain a corner does
+    not map to)."""
+    domain = attribute.domain
+    if domain == "CORNER":
+        return values
+    if domain == "POINT":
+        return values[_corner_verts(mesh)]
+    if domain == "FACE":
+        sizes = np.empty(len(mesh.polygons), np.int32)
+        mesh.polygons.foreach_get("loop_total", sizes)
+        return np.repeat(values, sizes, axis=0)
+    return None
+
+
+#: Each generic attribute data type: the RNA property its values are read by and its width.
+_ATTRIBUTE_READS = {"FLOAT": ("value", 1), "INT": ("value", 1), "BOOLEAN": ("value", 1),
+                    "FLOAT_VECTOR": ("vector", 3), "FLOAT2": ("vector", 2), "INT8": ("value", 1),
+                    "FLOAT_COLOR": ("color", 4), "BYTE_COLOR": ("color", 4)}
+
+
+def read_attribute(mesh, kind: str, name: str) -> np.ndarray | None:
+    """A node graph's attribute (kind, name) per corner as (n, 4) float32 -- a UV map's (u, v, 0,
+    1), a colour attribute's linear RGBA, a generic one's value (x, x, x, 1) or vector (x, y, z,
+    1) -- or None where the mesh has none of that name."""
+    n = len(mesh.loops)
+    if kind == "UV":
+        layer = mesh.uv_layers.get(name) if name else (mesh.uv_layers.active or None)
+        if layer is None:
+            return None
+        uv = np.empty(n * 2, np.float32)
+        layer.uv.foreach_get("vector", uv)
+        out = np.zeros((n, 4), np.float32)
+        out[:, :2] = uv.reshape(-1, 2)
+        out[:, 3] = 1.0
+        return out
+    if kind == "COLOR":
+        colors = mesh.color_attributes
+        if name:
+            attribute = colors.get(name)
+        else:  # the mesh's default colour attribute (its render colour)
+            index = colors.render_color_index
+            attribute = colors[index] if 0 <= index < len(colors) else None
+    else:
+        attribute = mesh.attributes.get(name)
+    if attribute is None:
+        return None
+    prop, width = _ATTRIBUTE_READS.get(attribute.data_type, (None, 0))
+    if prop is None:
+        return None
+    raw = np.empty(len(attribute.data) * width, np.float32)
+    attribute.data.foreach_get(prop, raw)
+    values = _corner_values(mesh, attribute, raw.reshape(-1, width), width)
+    if values is None:
+        return None
+    out = np.zeros((n, 4), np.float32)
+    out[:, 3] = 1.0
+    if width == 1:
+        out[:, :3] = values
+    else:
+        out[:, :width] = values
+    return out
+
+
+def with_attributes(geometry: S.MeshGeometry, mesh, wanted, warnings: list[str]) -> S.MeshGeometry:
+    """``geometry`` (a copy: the memo's stays as it is) with the attributes ``wanted`` read from
+    ``mesh``; one it lacks reads zeros, said in ``warnings``."""
+    geometry = copy.copy(geometry)
+    geometry.attributes = {}
+    for kind, name in sorted(wanted):
+        values = read_attribute(mesh, kind, name)
+        if values is None:
+            warnings.append(f"Mesh '{mesh.name}': no {kind.lower()} attribute '{name or '(default)'}' "
+                            f"that its material reads (it reads zeros)")
+            continue
+        geometry.attributes[(kind, name)] = values
     return geometry
 
 
@@ -1102,12 +1226,18 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
             slots.append(mkey)
         if key not in snap.geometries:
             geometry = reusable.get(key)
-            tangents = any(snap.materials[m].normal_map is not None for m in slots)
-            if geometry is None or _is_dirty(obj, dirty) or (tangents and geometry.tangents is None):
+            graphs = [snap.materials[m].graph for m in slots if snap.materials[m].graph is not None]
+            tangents = any(snap.materials[m].normal_map is not None for m in slots) or any(
+                "tangent" in g.program.uses for g in graphs)
+            wanted = {a for g in graphs for a in g.attributes}
+            if geometry is None or _is_dirty(obj, dirty) or (tangents and geometry.tangents is None) or \
+                    not wanted <= geometry.attributes.keys():
                 mesh = obj.to_mesh()
                 try:
                     geometry = (mesh_geometry(key, mesh, tangents, _memo_key(obj))
                                 if mesh is not None else None)
+                    if geometry is not None and wanted:
+                        geometry = with_attributes(geometry, mesh, wanted, snap.warnings)
                 finally:
                     obj.to_mesh_clear()
                 if geometry is None:
@@ -1119,8 +1249,12 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
                                          f"gives tangents to triangles and quads with a UV map only: "
                                          f"triangulate its n-gons or add a UV map)")
             snap.geometries[key] = geometry
+        data = obj.data
         snap.items.append(S.DrawItem(key, _matrix(inst.matrix_world), slots or [""],
-                                     casts_shadow=bool(getattr(obj, "visible_shadow", True))))
+                                     casts_shadow=bool(getattr(obj, "visible_shadow", True)),
+                                     texspace=(tuple(data.texspace_location), tuple(data.texspace_size)),
+                                     color=tuple(float(c) for c in obj.color), pass_index=int(obj.pass_index),
+                                     random=object_random(inst.random_id)))
     # before the shadow maps: they fit to the reaches; the scene's box only where a reach needs it
     def box():
         return shadows.scene_bounds(snap, {key: geometry.bounds for key, geometry in snap.geometries.items()})

@@ -308,6 +308,19 @@ def bind_sampler(shader, name: str, texture) -> None:
 _BLOCKS = (("FrameData", "frame"), None, ("MaterialData", "material"),  # 1: was the lights' block
            ("ObjectBlock", "objects"))
 _PUSH_CONSTANTS = (("INT", "object_index"), ("VEC4", "lobes"))
+def graph_push_constants(graph) -> tuple[str, ...]:
+    """The per-draw vec4s a node graph's program reads (its object's texture space, colour and
+    Object Info), beside ``_PUSH_CONSTANTS``: 20 bytes of 128."""
+    names = ()
+    if graph.uses & {"object", "generated"}:
+        names += ("graph_texspace", "graph_texspace_size")
+    if graph.uses & {"object_color", "object_info"}:
+        names += ("graph_object_color", "graph_object_info")
+    return names
+
+
+#: The texture unit of a node graph's first image (``graph_image_0``; the programs' own end at 20).
+GRAPH_IMAGE_SLOT = 21
 _ATTRIBUTES = (("VEC3", "pos"), ("VEC3", "nor"), ("VEC2", "uv"), ("VEC4", "tangent"))
 _VARYINGS = (("VEC3", "world_position"), ("VEC3", "world_normal"), ("VEC2", "world_uv"),
              ("VEC4", "world_tangent"))
@@ -347,6 +360,12 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
         info.uniform_buf(len(_BLOCKS), "EnvironmentData", "env")
     if features.uses_env_chain:
         info.uniform_buf(len(_BLOCKS) + 1, "ChainData", "chain")
+    if features.graph is not None:  # the material's node graph: its constants, images, the object's data
+        info.uniform_buf(len(_BLOCKS) + 4, "GraphBlock", "graph")
+        for k in range(features.graph.images):
+            info.sampler(GRAPH_IMAGE_SLOT + k, "FLOAT_2D", f"graph_image_{k}")
+        for name in graph_push_constants(features.graph):
+            info.push_constant("VEC4", name)
     if features.deferred:  # a full-screen pass over the G-buffer (glsl/gbuffer.frag.glsl)
         for slot, name in enumerate(("material_table", "gbuffer_position", "gbuffer_normal"), start=17):
             info.sampler(slot, "FLOAT_2D", name)
@@ -359,16 +378,24 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     if features.deferred:
         info.vertex_in(0, "VEC2", "pos")  # post.vert.glsl's full-screen triangle
     else:
-        _declare_mesh_stage(info, "shading_lab_iface")
+        _declare_mesh_stage(info, "shading_lab_iface", features.graph)
 
 
-def _declare_mesh_stage(info, interface: str) -> None:
-    """mesh.vert.glsl's vertex attributes and what it hands the fragment stage."""
+def _declare_mesh_stage(info, interface: str, graph=None) -> None:
+    """mesh.vert.glsl's vertex attributes and what it hands the fragment stage; with a node
+    graph, its attributes (``attr<k>``, the draw's second vertex buffer) and the object-space
+    position where it reads one."""
     for location, (kind, name) in enumerate(_ATTRIBUTES):
         info.vertex_in(location, kind, name)
     iface = gpu.types.GPUStageInterfaceInfo(interface)
     for kind, name in _VARYINGS:
         iface.smooth(kind, name)
+    if graph is not None:
+        for k in range(graph.attributes):
+            info.vertex_in(len(_ATTRIBUTES) + k, "VEC4", f"attr{k}")
+            iface.smooth("VEC4", f"graph_attribute{k}")
+        if graph.uses & {"object", "generated"}:
+            iface.smooth("VEC3", "object_position")
     info.vertex_out(iface)
 
 
@@ -660,3 +687,13 @@ def s_table() -> gpu.types.GPUTexture:
 # Compiled programs outlive renders; free them before Blender tears its GPU module down, or it
 # reports them as leaked blocks at exit.
 atexit.register(LIBRARY.clear)
+
+
+#: What an image a node graph samples gives where its pixels could not be read: Blender's and
+#: Cycles' colour of a missing image.
+MISSING_IMAGE = (1.0, 0.0, 1.0, 1.0)
+
+
+def missing_texture() -> gpu.types.GPUTexture:
+    """A 1 x 1 texture of ``MISSING_IMAGE`` (built once)."""
+    return LIBRARY.table(("missing image",), lambda: rgba32f_texture(np.array([[MISSING_IMAGE]], np.float32)))

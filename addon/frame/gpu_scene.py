@@ -50,9 +50,25 @@ def _vertex_format() -> gpu.types.GPUVertFormat:
     return fmt
 
 
-def upload_geometry(geometry: MeshGeometry) -> list[tuple[int, gpu.types.GPUBatch]]:
+def attribute_buffer(geometry: MeshGeometry, attributes: tuple[tuple[str, str], ...]) -> gpu.types.GPUVertBuf:
+    """A vertex buffer of a node graph's ``attributes`` (``attr<k>``, vec4 per corner) from the
+    geometry's (zeros where the mesh has no such attribute: a reader of it sees 0, as in Cycles)."""
+    count = len(geometry.positions)
+    fmt = gpu.types.GPUVertFormat()
+    for k in range(len(attributes)):
+        fmt.attr_add(id=f"attr{k}", comp_type="F32", len=4, fetch_mode="FLOAT")
+    vbo = gpu.types.GPUVertBuf(fmt, count)
+    for k, attribute in enumerate(attributes):
+        values = geometry.attributes.get(attribute)
+        vbo.attr_fill(f"attr{k}", np.ascontiguousarray(values if values is not None else np.zeros((count, 4)),
+                                                       np.float32))
+    return vbo
+
+
+def upload_geometry(geometry: MeshGeometry) -> list[tuple[int, gpu.types.GPUBatch, tuple]]:
     """One vertex buffer of the mesh's corners and one indexed batch per material range:
-    ``[(slot, batch), ...]``."""
+    ``[(slot, batch, (vertex buffer, index buffer)), ...]`` (a batch with a node graph's attributes
+    is made from the buffers, ``attribute_buffer``'s added)."""
     count = len(geometry.positions)
     vbo = gpu.types.GPUVertBuf(_vertex_format(), count)
     vbo.attr_fill("pos", np.ascontiguousarray(geometry.positions, np.float32))
@@ -67,7 +83,7 @@ def upload_geometry(geometry: MeshGeometry) -> list[tuple[int, gpu.types.GPUBatc
             continue
         triangles = np.ascontiguousarray(geometry.indices[first:first + n], np.int32).reshape(-1, 3)
         elements = gpu.types.GPUIndexBuf(type="TRIS", seq=triangles)
-        batches.append((slot, gpu.types.GPUBatch(type="TRIS", buf=vbo, elem=elements)))
+        batches.append((slot, gpu.types.GPUBatch(type="TRIS", buf=vbo, elem=elements), (vbo, elements)))
     return batches
 
 
@@ -165,6 +181,10 @@ class SceneResources:
         self.uploads: Counter = Counter()
         self._batches: dict[str, list[tuple[int, gpu.types.GPUBatch]]] = {}
         self._materials: dict[str, _Block] = {}
+        self._graphs: dict[str, _Block] = {}  # node graphs' constants, per material
+        # batches with a node graph's attributes: (geometry, slot, attributes) -> (the geometry
+        # they were made from, batch, its attribute buffer)
+        self._attribute_batches: dict[tuple, tuple] = {}
         # the materials again as rows of one texture, for programs shading deferred (a pixel's
         # material is the G-buffer's row), and each material's row
         self._material_table = _RowTexture()
@@ -220,11 +240,20 @@ class SceneResources:
                 self._geometry_version[key] += 1
                 self._digests.pop(key, None)
                 self.uploads["geometry"] += 1
+        for key, held in list(self._attribute_batches.items()):
+            if snapshot.geometries.get(key[0]) is not held[0]:  # a geometry read anew, or gone
+                del self._attribute_batches[key]
         for key in set(self._materials) - set(snapshot.materials):
             del self._materials[key]
+        for key in set(self._graphs) - {k for k, m in snapshot.materials.items() if m.graph is not None}:
+            del self._graphs[key]
         for key, material in snapshot.materials.items():
             block = self._materials.setdefault(key, _Block())
             self.uploads["materials"] += block.put(programs.pack_material(material))
+            if material.graph is not None:
+                graph = self._graphs.setdefault(key, _Block())
+                self.uploads["graph constants"] += graph.put(np.ascontiguousarray(material.graph.constants,
+                                                                                  np.float32).tobytes())
         self.material_rows = {key: row for row, key in enumerate(snapshot.materials)}
         if snapshot.materials:
             self._material_table.put(np.stack([np.frombuffer(self._materials[key].data, np.float32)
@@ -400,7 +429,8 @@ class SceneResources:
         pay (``tile_lists``)."""
         tiles = self.tile_lists(view_projection, width, height, samples)
         self.uploads["frame"] += self._frame.put(programs.pack_frame(self.snapshot, view_projection, tiles,
-                                                                     self.light_group_ends))
+                                                                     self.light_group_ends,
+                                                                     (width * samples, height * samples)))
 
     def _view_tiles(self, view_projection: np.ndarray | None, width: int, height: int,
                     samples: int) -> light_tiles.TileLists | None:
@@ -481,11 +511,14 @@ class SceneResources:
         blended: dict[programs.Features, list[Draw]] = {}
         block_size = programs.OBJECT_BLOCK
         for order, item in enumerate(snapshot.items):
-            for slot, batch in self._batches.get(item.geometry, ()):
+            for slot, batch, parts in self._batches.get(item.geometry, ()):
                 key = item.materials[slot] if slot < len(item.materials) else item.materials[-1]
-                draw = Draw(order, order // block_size, order % block_size, key, batch)
                 material = snapshot.materials[key]
-                if material.alpha < 1.0 or features[key].alpha_from_base_map:
+                if material.graph is not None and material.graph.attributes:
+                    batch = self._attribute_batch(item.geometry, slot, parts, material.graph.attributes)
+                draw = Draw(order, order // block_size, order % block_size, key, batch)
+                if material.alpha < 1.0 or features[key].alpha_from_base_map or (
+                        material.graph is not None and material.graph.transparent):
                     blended.setdefault(replace(features[key], peel=True, occlusion=False), []).append(draw)
                 else:
                     opaque.setdefault(features[key], []).append(draw)
@@ -495,6 +528,21 @@ class SceneResources:
 
         lists = self._draw_lists[view_kind] = DrawLists(ordered(opaque), ordered(blended))
         return lists
+
+    def _attribute_batch(self, key: str, slot: int, parts: tuple, attributes: tuple) -> gpu.types.GPUBatch:
+        """The batch of ``key``'s ``slot`` with a node graph's ``attributes`` beside the mesh's own
+        (made once per geometry upload)."""
+        geometry = self.snapshot.geometries[key]
+        held = self._attribute_batches.get((key, slot, attributes))
+        if held is not None and held[0] is geometry:
+            return held[1]
+        vbo, elements = parts
+        extra = attribute_buffer(geometry, attributes)
+        batch = gpu.types.GPUBatch(type="TRIS", buf=vbo, elem=elements)
+        batch.vertbuf_add(extra)
+        self._attribute_batches[(key, slot, attributes)] = (geometry, batch, extra)
+        self.uploads["attributes"] += 1
+        return batch
 
     def program(self, features: programs.Features) -> gpu.types.GPUShader:
         shader = self._programs.get(features)
@@ -548,6 +596,7 @@ class SceneResources:
         shader = self._bind_program(features, lobes, bind)
         materials = self.snapshot.materials
         samplers = [(name.removesuffix("_CLOSEST").lower() + "_map") for name in features.maps]
+        pushed = gpu_library.graph_push_constants(features.graph) if features.graph is not None else ()
         block = -1
         mode = None
         for draw in draws:
@@ -559,8 +608,29 @@ class SceneResources:
             for sampler in samplers:
                 image_key = getattr(materials[draw.material], sampler)[0]
                 gpu_library.bind_sampler(shader, sampler, self._textures[image_key][1])
+            if features.graph is not None:
+                self._bind_graph(shader, draw, materials[draw.material].graph, pushed)
             draw.batch.draw(shader)
         return True
+
+    def _bind_graph(self, shader, draw: Draw, graph, pushed: tuple[str, ...]) -> None:
+        """A node graph's constants and images, and what it reads of the draw's object."""
+        shader.uniform_block("graph", self._graphs[draw.material].ubo)
+        for k, image in enumerate(graph.images):
+            held = self._textures.get(image)
+            gpu_library.bind_sampler(shader, f"graph_image_{k}",
+                                     held[1] if held is not None else gpu_library.missing_texture())
+        if pushed:
+            item = self.snapshot.items[draw.order]
+            material = self.snapshot.materials[draw.material]
+            values = {"graph_texspace": (*item.texspace[0], 0.0),
+                      # a flat mesh's texture space has a size of 0 along its normal: 1 there
+                      "graph_texspace_size": (*(s if abs(s) > 1e-12 else 1.0 for s in item.texspace[1]), 0.0),
+                      "graph_object_color": item.color,
+                      "graph_object_info": (float(item.pass_index), float(material.pass_index), item.random,
+                                            0.0)}
+            for name in pushed:
+                shader.uniform_float(name, values[name])
 
     def _bind_object(self, shader, draw: Draw, block: int) -> int:
         """Bind ``draw``'s object: its block of objects (unless ``block``, the one bound, holds it)
@@ -630,6 +700,8 @@ class SceneResources:
         self._batches.clear()
         self._digests.clear()
         self._materials.clear()
+        self._graphs.clear()
+        self._attribute_batches.clear()
         self._objects.clear()
         self._textures.clear()
         self._draw_lists.clear()

@@ -31,10 +31,11 @@ import numpy as np
 from .graph import CONVERT, Const, FlatGraph, FlatNode, Ref
 
 #: GLSL type of each socket type.
-GLSL_TYPES = {"VALUE": "float", "INT": "float", "BOOLEAN": "float", "VECTOR": "vec3", "RGBA": "vec4"}
+GLSL_TYPES = {"VALUE": "float", "INT": "float", "BOOLEAN": "float", "VECTOR": "vec3", "RGBA": "vec4",
+              "SHADER": "Closure"}
 #: The library files a compiled graph reads, in order.
 LIBRARY = ("node_inputs.glsl", "node_convert.glsl", "node_color.glsl", "node_math.glsl", "node_mix.glsl",
-           "node_converter.glsl", "node_vector_math.glsl")
+           "node_converter.glsl", "node_vector_math.glsl", "node_closure.glsl")
 
 #: The Math node's operations, each its library function (glsl/node_math.glsl).
 MATH_OPERATIONS = (
@@ -122,6 +123,8 @@ class _Writer:
         return var
 
     def constant(self, value, type_: str) -> str:
+        if type_ == "SHADER":  # an unlinked shader socket: no closure
+            return "closure_none()"
         if type_ == "RGBA":
             v = tuple(float(x) for x in value[:4])
         elif type_ == "VECTOR":
@@ -315,6 +318,56 @@ def _luminance(w: _Writer, color: str) -> str:
     return f"convert_rgba_to_value({color}, vec3({', '.join(repr(c) for c in w.flat.luma)}))"
 
 
+#: The Principled BSDF's inputs the models read, in glsl/node_closure.glsl's closure_principled order.
+PRINCIPLED_INPUTS = ("Base Color", "Metallic", "Roughness", "IOR", "Specular IOR Level", "Alpha",
+                     "Emission Color", "Emission Strength")
+
+
+def _principled(w: _Writer, node: FlatNode) -> dict:
+    args = [w.arg(node, s) for s in PRINCIPLED_INPUTS]
+    return {"BSDF": f"closure_principled({', '.join(args)}, {_normal_input(w, node)})"}
+
+
+def _closure_color(w: _Writer, node: FlatNode) -> str:
+    """A closure's colour input ("Color", the Metallic BSDF's "Base Color"); grey where it has none."""
+    for socket in ("Color", "Base Color"):
+        if socket in node.inputs:
+            return w.arg(node, socket)
+    return "vec4(0.8, 0.8, 0.8, 1.0)"
+
+
+def _closure_roughness(w: _Writer, node: FlatNode) -> str:
+    return w.arg(node, "Roughness") if "Roughness" in node.inputs else "0.5"
+
+
+def _unknown_closure(w: _Writer, node: FlatNode) -> dict:
+    """A closure no emitter knows (Glass, Toon, Subsurface ...): a dielectric of its colour and
+    roughness, so that the material keeps its colour; the node is reported as not compiled."""
+    color, rough = _closure_color(w, node), _closure_roughness(w, node)
+    return {s: f"closure_bsdf({color}.rgb, 0.0, {rough}, 0.04, {_normal_input(w, node)})"
+            for s, t in node.outputs.items() if t == "SHADER"}
+
+
+def _glossy(w: _Writer, node: FlatNode) -> dict:
+    """Glossy, Anisotropic and Metallic BSDFs: a metal of their colour and roughness."""
+    return {"BSDF": f"closure_glossy({_closure_color(w, node)}, {_closure_roughness(w, node)}, "
+                    f"{_normal_input(w, node)})"}
+
+
+CLOSURES = {
+    "ShaderNodeBsdfPrincipled": _principled,
+    "ShaderNodeBsdfDiffuse": lambda w, n: {"BSDF": f"closure_diffuse({_closure_color(w, n)}, "
+                                                   f"{_normal_input(w, n)})"},
+    "ShaderNodeBsdfGlossy": _glossy,
+    "ShaderNodeBsdfAnisotropic": _glossy,
+    "ShaderNodeBsdfMetallic": _glossy,
+    "ShaderNodeEmission": lambda w, n: _call("closure_emission", w, n, ("Color", "Strength"), "Emission"),
+    "ShaderNodeBsdfTransparent": lambda w, n: _call("closure_transparent", w, n, ("Color",), "BSDF"),
+    "ShaderNodeMixShader": lambda w, n: _call("closure_mix", w, n, ("Fac", "Shader", "Shader_001"), "Shader"),
+    "ShaderNodeAddShader": lambda w, n: _call("closure_add", w, n, ("Shader", "Shader_001"), "Shader"),
+}
+
+
 EMITTERS = {
     "ShaderNodeValue": _value,
     "ShaderNodeRGB": _value,
@@ -340,6 +393,7 @@ EMITTERS = {
     "ShaderNodeSeparateXYZ": _separate_xyz,
     "ShaderNodeCombineXYZ": _combine_xyz,
     CONVERT: _convert,
+    **CLOSURES,
 }
 #: Nodes that compute nothing themselves: the outputs whose inputs are the targets.
 SINKS = ("ShaderNodeOutputAOV", "ShaderNodeOutputMaterial")
@@ -350,13 +404,15 @@ def compile_graph(flat: FlatGraph, targets: dict[str, tuple[str, str]], name: st
     ``void name(GraphInputs g, out T target ...)`` in the order ``targets`` lists them."""
     w = _Writer(flat)
     for node in flat.nodes.values():
-        if node.kind in SINKS or (node.outputs and set(node.outputs.values()) == {"SHADER"}):
-            continue  # outputs, and closures: what reads their inputs is the caller's
+        if node.kind in SINKS:
+            continue  # outputs: what reads their inputs is the caller's
         emit = EMITTERS.get(node.kind)
         outputs = emit(w, node) if emit is not None else None
         if outputs is None:
             w.missing.append(f"{node.name} ({node.kind})")
-            continue
+            if "SHADER" not in node.outputs.values():
+                continue
+            outputs = _unknown_closure(w, node)
         w.define(node, outputs)
     types, assigns = {}, []
     for target, (node_name, socket) in targets.items():

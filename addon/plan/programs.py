@@ -12,6 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..materials import codegen
+from ..materials.surface import GraphProgram
 from ..reference.multiscatter import MS_SIZE, S_SIZE
 from ..scene.matrices import invert
 from ..scene.snapshot import (
@@ -128,8 +130,13 @@ class Features:
     #: and no loop; empty: the loops of ``light_groups``
     light_sequence: tuple[int, ...] = ()
     #: shaded deferred: a full-screen pass over the G-buffer's pixels of this group (passes.OpaquePass),
-    #: not the surfaces' own fragments; opaque surfaces without image maps only
+    #: not the surfaces' own fragments; opaque surfaces without image maps or node graphs only
     deferred: bool = False
+    #: the material's compiled node graph (``materials.surface.GraphProgram``: one program per
+    #: structure), evaluated per fragment; ``graph_keep``: the inputs the material's own values
+    #: keep (``MaterialParams.graph_keep``)
+    graph: GraphProgram | None = None
+    graph_keep: frozenset[str] = frozenset()
 
     def has_map(self, name: str) -> bool:
         return name in self.maps or name + "_CLOSEST" in self.maps
@@ -155,8 +162,10 @@ class Features:
             object.__setattr__(self, "sphere_lights", False)  # shaded by their irradiance alone
         if self.peel or not self.environment:  # a transparent surface lies in front of what the
             object.__setattr__(self, "occlusion", False)  # occlusion pass saw
-        if self.peel or self.maps:
+        if self.peel or self.maps or self.graph is not None:
             object.__setattr__(self, "deferred", False)
+        if self.graph is None:
+            object.__setattr__(self, "graph_keep", frozenset())
         if not self.shadow_layers:
             object.__setattr__(self, "shadow_size", 0)
             object.__setattr__(self, "soft_shadows", False)
@@ -230,6 +239,9 @@ class Features:
             maps=maps,
             alpha_from_base_map=bool(material is not None and material.alpha_from_base_map
                                      and material.base_color_map is not None and with_maps),
+            graph=material.graph.program if material is not None and material.graph is not None and with_maps
+            else None,
+            graph_keep=material.graph_keep if material is not None else frozenset(),
             environment=environment_kind(snapshot.world),
             env_diffuse=snapshot.settings.environment_diffuse,
             env_samples=env_samples,
@@ -342,6 +354,17 @@ class Features:
                 out += [("SL_ENV_SAMPLES", str(self.env_samples)), ("SL_CHAIN", "1")]
             if ("SL_MS_SIZE", str(MS_SIZE)) not in out:
                 out.append(("SL_MS_SIZE", str(MS_SIZE)))
+        if self.graph is not None:
+            g = self.graph
+            out += [("SL_GRAPH", g.key), ("SL_GRAPH_CONSTANTS", str(g.constants)),
+                    ("GRAPH_ATTRIBUTES", str(max(g.attributes, 1)))]
+            out += [("SL_GRAPH_" + field.upper(), "1") for field in sorted(g.uses)]
+            out += [("SL_KEEP_" + name.upper(), "1") for name in sorted(self.graph_keep)]
+            if g.attributes:
+                out.append(("SL_PASS_ATTRIBUTES", " ".join(f"graph_attribute{k} = attr{k};"
+                                                           for k in range(g.attributes))))
+                out.append(("SL_GRAPH_ATTRIBUTE_READS", " ".join(f"g.attributes[{k}] = graph_attribute{k};"
+                                                                 for k in range(g.attributes))))
         for name in sorted(self.maps):  # BASE_COLOR, or BASE_COLOR_CLOSEST for nearest filtering
             base = name.removesuffix("_CLOSEST")
             out.append((f"SL_HAS_{base}_MAP", "1"))
@@ -375,6 +398,10 @@ def program_source(features: Features) -> ProgramSource:
     if not features.deferred:  # reads the object block and the mesh's varyings
         fragment.append(read_glsl("facing.glsl"))
     fragment.append(read_glsl("shadows.glsl"))  # reads the shadow block (SL_SHADOWS)
+    if features.graph is not None:  # the node library, then the graph's function
+        fragment += [read_glsl(name) for name in codegen.LIBRARY]
+        fragment += ["#define GRAPH_CONST(i) graph.constants[i]", features.graph.source,
+                     read_glsl("graph_surface.glsl")]
     fragment.append(read_glsl("mesh.frag.glsl"))
     return ProgramSource(
         typedefs=read_glsl("uniforms.glsl") + "\n" + read_glsl("chain_data.glsl"),
@@ -609,9 +636,10 @@ ALL_LOBES = (1.0, 1.0, 1.0, 1.0)
 
 def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None,
                tiles: light_tiles.TileLists | None = None,
-               group_ends: tuple[int, ...] | None = None) -> bytes:
+               group_ends: tuple[int, ...] | None = None, size: tuple[int, int] | None = None) -> bytes:
     """The FrameData block; ``tiles``: the view's light tiles (light culling); ``group_ends``:
-    where each group of ``light_order`` ends (default: each after the last light)."""
+    where each group of ``light_order`` ends (default: each after the last light); ``size``: the
+    target's pixels (default: the snapshot's)."""
     cam = snapshot.camera
     vp = cam.view_projection if view_projection is None else view_projection
     ambient = snapshot.settings.ambient
@@ -624,6 +652,8 @@ def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None,
                                          if tiles is not None else (0.0, 0.0, 0.0))],
         *np.reshape(group_ends if group_ends is not None else [len(snapshot.lights)] * len(LIGHT_GROUP_ORDER),
                     (2, 4)),
+        _mat(cam.view),
+        [*(size or (snapshot.width, snapshot.height)), 0.0, 0.0],
     ]
     return np.concatenate([np.asarray(r, np.float32) for r in rows]).tobytes()
 

@@ -163,6 +163,13 @@ class MaterialParams:
     # the world's specular for this material: -1 follows the scene, 0 the split sum, n > 0 the lobe
     # sampled n times per pixel (physically based model, image worlds)
     environment_samples: int = -1
+    #: the material's node graph compiled (``materials.surface.MaterialGraph``): its closures'
+    #: inputs per fragment replace the values above, but those the user set in the Material panel
+    #: (``graph_keep``: "base_color", "metalness", "roughness", "f0", "specular_color", "shininess",
+    #: "ambient_color"); None: the values above are the material
+    graph: object | None = None
+    graph_keep: frozenset[str] = frozenset()
+    pass_index: int = 0  # the material's pass index (Object Info's Material Index)
 
 
 #: Objects without a material render with this: Blender's default surface (grey 0.8,
@@ -185,6 +192,9 @@ class MeshGeometry:
     uvs: np.ndarray | None = None  # (N, 2) float32, the active UV map (None: the mesh has none)
     tangents: np.ndarray | None = None  # (N, 4) float32: tangent xyz, bitangent sign (normal maps)
     indices: np.ndarray | None = None  # (3T,) int32 rows of the triangles' corners; None: 0, 1, 2, ...
+    #: the attributes its materials' graphs read, per corner row ((N, 4) float32), by (kind, name)
+    #: (``materials.codegen.ATTRIBUTE_KINDS``; an empty name: the mesh's default of that kind)
+    attributes: dict[tuple[str, str], np.ndarray] = field(default_factory=dict)
     #: +1: a closed surface facing out (every edge between two faces that run along it in opposite
     #: directions, positive volume), -1: closed facing in, 0: open or not known. Seen from outside,
     #: a closed surface's nearest face faces the viewer: shadow maps need draw only such faces.
@@ -309,6 +319,12 @@ class DrawItem:
     matrix: np.ndarray  # (4, 4) float32, object -> world
     materials: list[str]  # material key per slot
     casts_shadow: bool = True  # the object's shadow ray visibility
+    # what node graphs read of the object: its mesh's texture space (location, size: Generated
+    # coordinates), its colour (Object Info's Color and Alpha), pass index and random number
+    texspace: tuple[tuple[float, ...], tuple[float, ...]] = ((0.0, 0.0, 0.0), (1.0, 1.0, 1.0))
+    color: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
+    pass_index: int = 0
+    random: float = 0.0
 
     @property
     def normal_matrix(self) -> np.ndarray:

@@ -1,0 +1,144 @@
+"""A material's node graph as the shading programs draw it: the closures reaching its Material
+Output compiled into one GLSL function per structure (``codegen``), with what one material of
+that structure binds (its constants, images and attributes).
+
+``compile_material(graph, groups)`` flattens the graph and compiles the output's Surface into
+``material_graph(GraphInputs g, out Closure surface)`` (glsl/node_closure.glsl). A material whose
+surface is one closure node with nothing linked into it returns None: the constant path draws it
+as before, at no extra cost.
+"""
+
+from __future__ import annotations
+
+import re
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..scene.nodes import MATERIAL_OUTPUT, Graph
+from . import codegen
+from .graph import Const, FlatGraph, flatten
+
+#: The function every compiled material defines.
+FUNCTION = "material_graph"
+#: GraphInputs fields a program fills only where its graph reads them (each a define,
+#: ``SL_GRAPH_<FIELD>``): the rest cost nothing to fill.
+OPTIONAL_INPUTS = ("tangent", "object", "generated", "object_to_world", "world_to_object", "world_to_view",
+                   "view_to_world", "window", "object_color", "object_info", "ng")
+#: The most images one material samples (texture units left beside the programs' own).
+MAX_IMAGES = 10
+#: The most attributes one material reads (vertex inputs left beside the mesh's own four).
+MAX_ATTRIBUTES = 8
+
+
+@dataclass(frozen=True)
+class GraphProgram:
+    """What a program needs of a graph's structure: the function's source (``key`` names it),
+    how many constants, images and attributes it reads, which optional GraphInputs fields."""
+
+    key: str
+    source: str
+    constants: int
+    images: int
+    attributes: int
+    uses: frozenset[str]
+
+    def __eq__(self, other) -> bool:
+        return isinstance(other, GraphProgram) and other.key == self.key
+
+    def __hash__(self) -> int:
+        return hash(self.key)
+
+
+@dataclass(eq=False)
+class MaterialGraph:
+    """One material's compiled graph: its structure's program, its own constants ((n, 4)
+    float32, the program's ``GRAPH_CONST``), the images it samples (keys in ``Snapshot.images``)
+    and the attributes it reads ((kind, name), ``codegen.ATTRIBUTE_KINDS``); the nodes that did not
+    compile (``"name (kind)"``: their readers took their socket values) of ``nodes`` reached;
+    whether its surface can be partly transparent (drawn blended)."""
+
+    program: GraphProgram
+    constants: np.ndarray
+    images: tuple[str, ...]
+    attributes: tuple[tuple[str, str], ...]
+    missing: list[str]
+    nodes: int
+    transparent: bool
+    #: closures' inputs linked to nodes that the models do not read ("Coat Weight (Principled BSDF)")
+    unread: list[str] = ()
+
+    @property
+    def compiled_share(self) -> float:
+        """The share of the graph's nodes that compiled."""
+        return 1.0 - len(self.missing) / self.nodes if self.nodes else 1.0
+
+
+def _surface(flat: FlatGraph):
+    output = flat.nodes.get(flat.output) if flat.output else None
+    if output is None or output.kind != MATERIAL_OUTPUT or "Surface" not in output.inputs:
+        return None, None
+    return output, output.inputs["Surface"]
+
+
+def _plain(flat: FlatGraph) -> bool:
+    """Whether the surface is one closure node with nothing linked into it (or no closure)."""
+    output, surface = _surface(flat)
+    if surface is None or isinstance(surface.source, Const):
+        return True
+    node = flat.nodes[surface.source.node]
+    return node.kind in codegen.CLOSURES and node.kind not in ("ShaderNodeMixShader", "ShaderNodeAddShader") \
+        and all(isinstance(i.source, Const) for i in node.inputs.values())
+
+
+def _transparent(flat: FlatGraph) -> bool:
+    """Whether some fragment's coverage can be under 1: a Transparent BSDF, or a Principled BSDF
+    whose Alpha is linked or under 1."""
+    for node in flat.nodes.values():
+        if node.kind == "ShaderNodeBsdfTransparent":
+            return True
+        alpha = node.inputs.get("Alpha") if node.kind == "ShaderNodeBsdfPrincipled" else None
+        if alpha is not None and (not isinstance(alpha.source, Const) or float(alpha.source.value) < 1.0):
+            return True
+    return False
+
+
+def _node_count(flat: FlatGraph) -> int:
+    """The artist's nodes of the flat graph (not its conversions or outputs)."""
+    return sum(1 for n in flat.nodes.values() if n.kind not in ("Convert", *codegen.SINKS))
+
+
+def compile_material(graph: Graph, groups: dict[str, Graph]) -> MaterialGraph | None:
+    """The material's compiled surface, or None where the constant path draws it (no output, or
+    one closure with nothing linked into it)."""
+    flat = flatten(graph, groups)
+    if _plain(flat):
+        return None
+    output, _ = _surface(flat)
+    compiled = codegen.compile_graph(flat, {"surface": (output.name, "Surface")}, FUNCTION)
+    uses = frozenset(field for field in OPTIONAL_INPUTS if re.search(rf"\bg\.{field}\b", compiled.source))
+    program = GraphProgram(compiled.key, compiled.source, len(compiled.constants), len(compiled.images),
+                           len(compiled.attributes), uses)
+    return MaterialGraph(program, compiled.constants, compiled.images, compiled.attributes, compiled.missing,
+                         _node_count(flat), _transparent(flat),
+                         _unread(flat))
+
+
+#: What of each closure the shading models read (the rest is drawn as nothing: Principled BSDF's
+#: coat, sheen, transmission ...).
+READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_INPUTS) | {"Normal"},
+               "ShaderNodeBsdfDiffuse": {"Color", "Normal"},
+               "ShaderNodeBsdfGlossy": {"Color", "Roughness", "Normal"},
+               "ShaderNodeBsdfMetallic": {"Base Color", "Roughness", "Normal"}}
+
+
+def _unread(flat: FlatGraph) -> list[str]:
+    """The closures' linked inputs the models do not read, each "input (node)"."""
+    out = []
+    for node in flat.nodes.values():
+        read = READ_INPUTS.get(node.kind)
+        if read is None:
+            continue
+        out += [f"{socket} ({node.name.rsplit('/', 1)[-1]})" for socket, spec in node.inputs.items()
+                if socket not in read and not isinstance(spec.source, Const)]
+    return out

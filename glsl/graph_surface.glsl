@@ -1,0 +1,105 @@
+/* A material's compiled node graph in the mesh program (SL_GRAPH): its inputs filled from the
+ * fragment, its Surface closure (glsl/node_closure.glsl) turned into what the models read. */
+
+#ifdef SL_GRAPH
+/* The Blinn-Phong exponent of a perceptual roughness: addon/scene/snapshot.py's
+ * shininess_from_roughness (Walter et al. 2007, section 5.2: 2 / alpha^4 - 2 with alpha = r^2,
+ * r floored at MIN_PERCEPTUAL_ROUGHNESS), within [1, 1e4]. */
+float graph_shininess(float roughness)
+{
+  float a = max(roughness, MIN_PERCEPTUAL_ROUGHNESS);
+  a *= a;
+  return clamp(2.0 / (a * a) - 2.0, 1.0, 1e4);
+}
+
+/* The graph's inputs at this fragment: n the interpolated normal facing the viewer, v towards
+ * the viewer. The optional fields are filled where the graph reads them (SL_GRAPH_<FIELD>). */
+GraphInputs graph_inputs(vec3 n, vec3 v, bool backfacing)
+{
+  GraphInputs g;
+  g.uv = vec3(world_uv, 0.0);
+  g.position = world_position;
+  g.n = n;
+  g.i = v;
+  g.backfacing = backfacing;
+  g.ng = n;
+#ifdef SL_GRAPH_NG
+  vec3 face = face_normal(world_position, n);
+  g.ng = dot(face, v) < 0.0 ? -face : face;
+#endif
+  ObjectData object = objects.object[object_index];
+  g.tangent = vec4(0.0);
+#ifdef SL_GRAPH_TANGENT
+  float t2 = dot(world_tangent.xyz, world_tangent.xyz);
+  g.tangent = vec4(t2 > 1e-20 ? world_tangent.xyz * inversesqrt(t2) : vec3(0.0), world_tangent.w);
+#endif
+#if defined(SL_GRAPH_OBJECT) || defined(SL_GRAPH_GENERATED)
+  g.object = object_position;
+  /* Blender's texture space: Generated = (object position - location) / size / 2 + 1/2 */
+  g.generated = (object_position - graph_texspace.xyz) / graph_texspace_size.xyz * 0.5 + 0.5;
+#endif
+#if defined(SL_GRAPH_OBJECT_TO_WORLD) || defined(SL_GRAPH_WORLD_TO_OBJECT)
+  g.object_to_world = object.model;
+  g.world_to_object = inverse(object.model);
+#endif
+#if defined(SL_GRAPH_WORLD_TO_VIEW) || defined(SL_GRAPH_VIEW_TO_WORLD)
+  g.world_to_view = frame.view;
+  g.view_to_world = inverse(frame.view);
+#endif
+#ifdef SL_GRAPH_WINDOW
+  g.window = gl_FragCoord.xy / frame.viewport.xy;
+#endif
+#if defined(SL_GRAPH_OBJECT_COLOR) || defined(SL_GRAPH_OBJECT_INFO)
+  g.object_color = graph_object_color;
+  g.object_info = graph_object_info;
+#endif
+#ifdef SL_PASS_ATTRIBUTES
+  SL_GRAPH_ATTRIBUTE_READS
+#endif
+  return g;
+}
+
+/* The Surface closure as the models read it: its BSDFs' mean inputs replace the material's values
+ * (but those the Material panel sets, SL_KEEP_*), the empirical models' colours and exponent follow
+ * them as addon/blender/extract.py's material_params derives them, n becomes the BSDFs' normal,
+ * and `scale` is what the shaded radiance is multiplied by: the BSDFs' weight over the coverage
+ * (the fragment is composited over what lies behind with the coverage as alpha, L = a L_s +
+ * (1 - a) L_behind, so a L_s must be the BSDFs' radiance plus the emission). */
+MaterialData apply_closure(MaterialData m, Closure c, inout vec3 n, out float scale)
+{
+  float coverage = clamp(1.0 - c.transparency, 0.0, 1.0);
+  /* a fragment of no coverage is not drawn (the peeling discards it); 1e-6 keeps the division finite */
+  float inv_coverage = 1.0 / max(coverage, 1e-6);
+  scale = c.weight * inv_coverage;
+  float inv = c.weight > 1e-8 ? 1.0 / c.weight : 0.0; /* no BSDF: its inputs do not matter (scale 0) */
+#ifndef SL_KEEP_BASE_COLOR
+  m.base_color.rgb = c.base_color * inv;
+#endif
+#ifndef SL_KEEP_METALNESS
+  m.params.y = clamp(c.metallic * inv, 0.0, 1.0);
+#endif
+#ifndef SL_KEEP_ROUGHNESS
+  m.params.x = clamp(c.roughness * inv, 0.0, 1.0);
+#endif
+#ifndef SL_KEEP_SHININESS
+  m.params.z = graph_shininess(m.params.x);
+#endif
+#ifndef SL_KEEP_F0
+  m.params.w = clamp(c.specular * inv, 0.0, 1.0);
+#endif
+  float metal = m.params.y;
+  m.diffuse_color.rgb = m.base_color.rgb * (1.0 - metal);
+#ifndef SL_KEEP_SPECULAR_COLOR
+  m.specular_color.rgb = vec3((1.0 - metal) * (m.params.w > 0.0 ? 1.0 : 0.0)) + metal * m.base_color.rgb;
+#endif
+#ifndef SL_KEEP_AMBIENT_COLOR
+  m.ambient_color.rgb = m.diffuse_color.rgb;
+#endif
+  m.emission = vec4(c.emission * inv_coverage, coverage);
+  float len2 = dot(c.normal, c.normal);
+  if (len2 > 1e-20) {
+    n = c.normal * inversesqrt(len2);
+  }
+  return m;
+}
+#endif

@@ -1,0 +1,92 @@
+/* The shader nodes of a compiled graph (addon/materials/codegen.py): what each closure gives the
+ * shading models, per fragment. A rasteriser shades one set of inputs per fragment, so a closure is
+ * the inputs of the BSDFs under it, each times its weight and summed (Mix Shader and Add Shader are
+ * linear in their closures, and so are these sums), with the emitted radiance and the transparent
+ * share beside them. material_surface divides the inputs by the BSDFs' total weight and scales the
+ * shaded radiance by it: exact for one BSDF mixed with Transparent, Emission or nothing, and for
+ * BSDFs of equal inputs; BSDFs of different inputs are shaded with their weighted mean inputs
+ * (what a rasteriser with one lobe per fragment can do; the Material panel says so). */
+
+struct Closure {
+  float weight;        /* the BSDFs' total weight */
+  vec3 base_color;     /* the BSDFs' inputs, each times its weight */
+  float metallic;
+  float roughness;
+  float specular;      /* dielectric F0 (0: no specular lobe, a Diffuse BSDF's) */
+  vec3 normal;
+  vec3 emission;       /* emitted radiance, W/(m^2 sr) */
+  float transparency;  /* the Transparent BSDFs' weight (their colour's mean: the coverage is grey) */
+};
+
+Closure closure_none()
+{
+  return Closure(0.0, vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), 0.0);
+}
+
+/* A BSDF of weight 1 with these inputs. */
+Closure closure_bsdf(vec3 base_color, float metallic, float roughness, float specular, vec3 n)
+{
+  return Closure(1.0, base_color, clamp(metallic, 0.0, 1.0), clamp(roughness, 0.0, 1.0),
+                 clamp(specular, 0.0, 1.0), n, vec3(0.0), 0.0);
+}
+
+Closure closure_scale(Closure c, float w)
+{
+  return Closure(c.weight * w, c.base_color * w, c.metallic * w, c.roughness * w, c.specular * w,
+                 c.normal * w, c.emission * w, c.transparency * w);
+}
+
+Closure closure_add(Closure a, Closure b)
+{
+  return Closure(a.weight + b.weight, a.base_color + b.base_color, a.metallic + b.metallic,
+                 a.roughness + b.roughness, a.specular + b.specular, a.normal + b.normal,
+                 a.emission + b.emission, a.transparency + b.transparency);
+}
+
+/* Mix Shader: (1 - fac) a + fac b, the factor clamped to [0, 1] as Cycles' svm_node_mix_closure */
+Closure closure_mix(float fac, Closure a, Closure b)
+{
+  float t = clamp(fac, 0.0, 1.0);
+  return closure_add(closure_scale(a, 1.0 - t), closure_scale(b, t));
+}
+
+/* The Principled BSDF's inputs the shading models read: the dielectric F0 from IOR and Specular
+ * IOR Level as the constant path reads them (addon/blender/extract.py: F0(IOR) x 2 x level, at
+ * most 1), Alpha as a mix with Transparent (Cycles' principled alpha), emission under it too. */
+Closure closure_principled(vec4 base_color, float metallic, float roughness, float ior, float level,
+                           float alpha, vec4 emission_color, float emission_strength, vec3 n)
+{
+  float r = (max(ior, 1.0) - 1.0) / (max(ior, 1.0) + 1.0);
+  Closure c = closure_bsdf(base_color.rgb, metallic, roughness, min(r * r * 2.0 * max(level, 0.0), 1.0), n);
+  c.emission = emission_color.rgb * emission_strength;
+  float a = clamp(alpha, 0.0, 1.0);
+  c = closure_scale(c, a);
+  c.transparency = 1.0 - a;
+  return c;
+}
+
+/* Diffuse BSDF: no specular lobe (F0 0) */
+Closure closure_diffuse(vec4 color, vec3 n)
+{
+  return closure_bsdf(color.rgb, 0.0, 1.0, 0.0, n);
+}
+
+/* Glossy BSDF (and the Metallic BSDF's colour): a metal of that colour */
+Closure closure_glossy(vec4 color, float roughness, vec3 n)
+{
+  return closure_bsdf(color.rgb, 1.0, roughness, 0.0, n);
+}
+
+Closure closure_emission(vec4 color, float strength)
+{
+  Closure c = closure_none();
+  c.emission = color.rgb * strength;
+  return c;
+}
+
+Closure closure_transparent(vec4 color)
+{
+  Closure c = closure_none();
+  c.transparency = dot(clamp(color.rgb, 0.0, 1.0), vec3(1.0 / 3.0));
+  return c;
+}
