@@ -31,7 +31,8 @@ def _texture(rows: np.ndarray, w: int, h: int) -> gpu.types.GPUTexture:
 
 
 def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] | None = None,
-             extra: tuple[str, ...] = (), terms=None, source: str = "", samplers: dict | None = None) -> np.ndarray:
+             extra: tuple[str, ...] = (), terms=None, source: str = "",
+             samplers: dict | None = None) -> np.ndarray:
     """(N, 4) float32: ``result`` of ``body`` for each row of the inputs; ``source`` is GLSL
     placed after the ``extra`` files, before main(). ``samplers``: more ``sampler2D`` the code
     reads, by name: a GPU texture, or an ``ImageData`` uploaded as the engine uploads it

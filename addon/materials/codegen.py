@@ -317,8 +317,8 @@ def _luminance(w: _Writer, color: str) -> str:
 
 #: The Image Texture node's settings, as glsl/node_texture_image.glsl names them (Smart is
 #: Cycles' cubic filter).
-IMAGE_INTERPOLATIONS = {"Closest": "TEX_IMAGE_CLOSEST", "Linear": "TEX_IMAGE_LINEAR", "Cubic": "TEX_IMAGE_CUBIC",
-                        "Smart": "TEX_IMAGE_CUBIC"}
+IMAGE_INTERPOLATIONS = {"Closest": "TEX_IMAGE_CLOSEST", "Linear": "TEX_IMAGE_LINEAR",
+                        "Cubic": "TEX_IMAGE_CUBIC", "Smart": "TEX_IMAGE_CUBIC"}
 IMAGE_EXTENSIONS = {e: f"TEX_IMAGE_{e}" for e in ("REPEAT", "EXTEND", "CLIP", "MIRROR")}
 IMAGE_PROJECTIONS = ("FLAT", "BOX", "SPHERE", "TUBE")
 #: The colour space whose 8-bit images the engine uploads as SRGB8 (decoded by the sampler), as
@@ -376,8 +376,8 @@ def _image_texture(w: _Writer, node: FlatNode) -> dict | None:
         sample = w.once("vec4", f"node_tex_image_box({image}, {co}, {normal}, {blend}, {interpolation}, "
                                 f"{extension}, {texels}, {unassociate}, {decode})")
         return {"Color": f"vec4({sample}.rgb, 1.0)", "Alpha": f"{sample}.a"}
-    filtered = w.once("vec4", f"node_tex_image_{projection.lower()}({image}, {co}, {interpolation}, {extension}, "
-                              f"{texels})")
+    filtered = w.once("vec4", f"node_tex_image_{projection.lower()}({image}, {co}, {interpolation}, "
+                              f"{extension}, {texels})")
     color = w.once("vec4", f"tex_image_output({filtered}, {unassociate}, {decode})")
     return {"Color": f"vec4({color}.rgb, 1.0)", "Alpha": f"{color}.a"}
 
