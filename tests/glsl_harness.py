@@ -16,7 +16,7 @@ import gpu
 import numpy as np
 from gpu_harness import run_on_gpu
 
-from addon.frame import gpu_library
+from addon.frame import gpu_library, gpu_scene
 from addon.plan import programs
 
 LIBRARY = programs.FRAGMENT_LIBRARY + programs.PBR_LIBRARY + ("tonemap.glsl",)
@@ -31,9 +31,12 @@ def _texture(rows: np.ndarray, w: int, h: int) -> gpu.types.GPUTexture:
 
 
 def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] | None = None,
-             extra: tuple[str, ...] = (), terms=None, source: str = "") -> np.ndarray:
+             extra: tuple[str, ...] = (), terms=None, source: str = "",
+             samplers: dict | None = None) -> np.ndarray:
     """(N, 4) float32: ``result`` of ``body`` for each row of the inputs; ``source`` is GLSL
-    placed after the ``extra`` files, before main()."""
+    placed after the ``extra`` files, before main(). ``samplers``: more ``sampler2D`` the code
+    reads, by name: a GPU texture, or an ``ImageData`` uploaded as the engine uploads it
+    (addon/frame/gpu_scene.image_texture)."""
     arrays = {name: np.asarray(a, np.float32).reshape(-1, 4) for name, a in inputs.items()}
     n = len(next(iter(arrays.values())))
     w = min(n, WIDTH)
@@ -64,12 +67,17 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
         for name in arrays:
             info.sampler(slot, "FLOAT_2D", f"in_{name}")
             slot += 1
+        for name in samplers or {}:
+            info.sampler(slot, "FLOAT_2D", name)
+            slot += 1
         info.vertex_in(0, "VEC2", "pos")
         info.fragment_out(0, "VEC4", "frag_color")
         info.vertex_source(programs.read_glsl("post.vert.glsl"))
         info.fragment_source(fragment)
         shader = gpu.shader.create_from_info(info)
         textures = {name: _texture(a, w, h) for name, a in arrays.items()}
+        bound = {name: t if isinstance(t, gpu.types.GPUTexture) else gpu_scene.image_texture(t)
+                 for name, t in (samplers or {}).items()}
         fmt = gpu.types.GPUVertFormat()
         fmt.attr_add(id="pos", comp_type="F32", len=2, fetch_mode="FLOAT")
         vbo = gpu.types.GPUVertBuf(fmt, 3)
@@ -89,6 +97,8 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
                     shader.uniform_sampler("ltc_table", gpu_library.ltc_table(terms))
                 for name, texture in textures.items():
                     shader.uniform_sampler(f"in_{name}", texture)
+                for name, texture in bound.items():
+                    shader.uniform_sampler(name, texture)
                 batch.draw(shader)
                 out = fb.read_color(0, 0, w, h, 4, 0, "FLOAT")
         finally:

@@ -68,7 +68,29 @@ def _group_key(tree) -> str:
     return tree.name_full
 
 
-def read_node(node) -> N.Node:
+def _image_props(node, images: dict | None) -> dict:
+    """An Image Texture node's image as the compiler needs it: its key (``extract.image_key``, the
+    key of its pixels in ``Snapshot.images``; None without an image), and what decides how Cycles
+    reads its texels: alpha mode, colour space (and whether it is data), float or bytes, source
+    (``TILED``: a UDIM image, with its tile numbers). The image goes into ``images`` by key."""
+    from .extract import image_key  # lazily: extract pulls in the planner and the scene reader
+
+    image = getattr(node, "image", None)
+    if image is None:
+        return {"image": None}
+    key = image_key(image)
+    if images is not None:
+        images[key] = image
+    settings = image.colorspace_settings
+    tiled = image.source == "TILED"
+    return {"image": key, "image_alpha_mode": image.alpha_mode, "image_colorspace": settings.name,
+            "image_is_data": bool(settings.is_data), "image_is_float": bool(image.is_float),
+            "image_source": image.source,
+            "image_tiles": tuple(sorted(tile.number for tile in image.tiles)) if tiled else ()}
+
+
+def read_node(node, images: dict | None = None) -> N.Node:
+    """One node as plain data; an Image Texture's image goes into ``images`` (key -> image)."""
     inputs = {s.identifier: N.Socket(s.identifier, s.type, _default(s)) for s in node.inputs
               if _available(s) and s.identifier != "__extend__"}
     outputs = {s.identifier: s.type for s in node.outputs if _available(s) and s.identifier != "__extend__"}
@@ -76,7 +98,10 @@ def read_node(node) -> N.Node:
         if node.mute else ()
     tree = getattr(node, "node_tree", None) if node.bl_idname == N.GROUP else None
     values = {s.identifier: _default(s) for s in node.outputs} if node.bl_idname in _VALUE_NODES else {}
-    return N.Node(name=node.name, kind=node.bl_idname, inputs=inputs, outputs=outputs, props=_props(node),
+    props = _props(node)
+    if node.bl_idname == "ShaderNodeTexImage":
+        props.update(_image_props(node, images))
+    return N.Node(name=node.name, kind=node.bl_idname, inputs=inputs, outputs=outputs, props=props,
                   muted=bool(node.mute), passes=passes, group=_group_key(tree) if tree is not None else None,
                   active_output=bool(getattr(node, "is_active_output", False)),
                   values=values)
@@ -86,9 +111,10 @@ def _groups_in(tree) -> list:
     return [node.node_tree for node in tree.nodes if node.bl_idname == N.GROUP and node.node_tree is not None]
 
 
-def read_tree(tree, output=None) -> N.Graph:
-    """One tree as plain data; ``output``: the name of its output node in use (None for a group)."""
-    nodes = {node.name: read_node(node) for node in tree.nodes}
+def read_tree(tree, output=None, images: dict | None = None) -> N.Graph:
+    """One tree as plain data; ``output``: the name of its output node in use (None for a group);
+    the images its Image Texture nodes read go into ``images`` (key -> ``bpy.types.Image``)."""
+    nodes = {node.name: read_node(node, images) for node in tree.nodes}
     links = []
     for link in tree.links:
         if link.is_muted or not link.is_valid or link.from_node is None or link.to_node is None:
@@ -100,14 +126,17 @@ def read_tree(tree, output=None) -> N.Graph:
     return N.Graph(nodes, tuple(links), output)
 
 
-def read_material(material, target: str = TARGET) -> tuple[N.Graph, dict[str, N.Graph]] | None:
+def read_material(material, target: str = TARGET,
+                  images: dict | None = None) -> tuple[N.Graph, dict[str, N.Graph]] | None:
     """A material's tree and its node groups' trees (by ``_group_key``), nested ones too; None for
-    a material without a node tree."""
+    a material without a node tree. The images its Image Texture nodes read (in groups too) are
+    added to ``images`` (``extract.image_key`` -> ``bpy.types.Image``), as
+    ``extract.material_params`` adds its maps'."""
     tree = getattr(material, "node_tree", None)
     if tree is None:
         return None
     output = tree.get_output_node(target)
-    graph = read_tree(tree, output.name if output is not None else None)
+    graph = read_tree(tree, output.name if output is not None else None, images)
     graph = N.Graph(graph.nodes, graph.links, graph.output, luma(), mute_converts=bpy.app.version < (5, 0, 0))
     groups: dict[str, N.Graph] = {}
     pending = _groups_in(tree)
@@ -116,6 +145,6 @@ def read_material(material, target: str = TARGET) -> tuple[N.Graph, dict[str, N.
         key = _group_key(group)
         if key in groups:
             continue
-        groups[key] = read_tree(group)
+        groups[key] = read_tree(group, images=images)
         pending += _groups_in(group)
     return graph, groups

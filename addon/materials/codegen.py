@@ -35,7 +35,7 @@ GLSL_TYPES = {"VALUE": "float", "INT": "float", "BOOLEAN": "float", "VECTOR": "v
               "SHADER": "Closure"}
 #: The library files a compiled graph reads, in order.
 LIBRARY = ("node_inputs.glsl", "node_convert.glsl", "node_color.glsl", "node_math.glsl", "node_mix.glsl",
-           "node_converter.glsl", "node_vector_math.glsl", "node_closure.glsl")
+           "node_converter.glsl", "node_vector_math.glsl", "node_texture_image.glsl", "node_closure.glsl")
 
 #: The Math node's operations, each its library function (glsl/node_math.glsl).
 MATH_OPERATIONS = (
@@ -368,6 +368,73 @@ CLOSURES = {
 }
 
 
+#: The Image Texture node's settings, as glsl/node_texture_image.glsl names them (Smart is
+#: Cycles' cubic filter).
+IMAGE_INTERPOLATIONS = {"Closest": "TEX_IMAGE_CLOSEST", "Linear": "TEX_IMAGE_LINEAR",
+                        "Cubic": "TEX_IMAGE_CUBIC", "Smart": "TEX_IMAGE_CUBIC"}
+IMAGE_EXTENSIONS = {e: f"TEX_IMAGE_{e}" for e in ("REPEAT", "EXTEND", "CLIP", "MIRROR")}
+IMAGE_PROJECTIONS = ("FLAT", "BOX", "SPHERE", "TUBE")
+#: The colour space whose 8-bit images the engine uploads as SRGB8 (decoded by the sampler), as
+#: addon/blender/extract.py's _read_image decides; other 8-bit images are UNORM8, their bytes.
+SRGB_SPACE = "sRGB"
+
+
+def image_texels(props: dict) -> str:
+    """How the node's sampler holds its image and how Cycles stores it
+    (glsl/node_texture_image.glsl's TEX_IMAGE_TEXELS_*), from the image's settings the reader
+    read: float images as they are; 8-bit ones as bytes (sRGB ones as the engine's SRGB8 storage,
+    extract._read_image), alpha premultiplied in bytes as Cycles' image loader does unless the
+    image is data, channel packed or has its alpha ignored."""
+    if props.get("image_is_float"):
+        return "TEX_IMAGE_TEXELS_FLOAT"
+    srgb = props.get("image_colorspace") == SRGB_SPACE
+    associate = _associates_alpha(props)
+    return f"TEX_IMAGE_TEXELS_{'SRGB' if srgb else 'BYTES'}{'_ASSOCIATE' if associate else ''}"
+
+
+def _associates_alpha(props: dict) -> bool:
+    """Cycles' rule for an image's alpha (ImageMetaData::finalize, ImageTextureNode::compile): the
+    colour is premultiplied (and divided again where the Alpha output is read) unless the image is
+    data (Non-Color) or its alpha is channel packed or ignored."""
+    return not (props.get("image_is_data") or props.get("image_alpha_mode") in ("CHANNEL_PACKED", "NONE"))
+
+
+def _image_texture(w: _Writer, node: FlatNode) -> dict | None:
+    """The Image Texture node (glsl/node_texture_image.glsl): its image filtered as Cycles does
+    at the Vector (the UV map's where nothing is linked), by projection, interpolation and
+    extension. The Color output is divided by alpha only where the node's Alpha is read (Cycles'
+    NODE_IMAGE_ALPHA_UNASSOCIATE); an 8-bit sRGB image is decoded after filtering. Without an
+    image: Cycles' missing-texture magenta. UDIM (tiled) images are not drawn yet (missing)."""
+    props = node.props
+    if props.get("image") is None:
+        return {"Color": "node_tex_image_missing()", "Alpha": "node_tex_image_missing().a"}
+    interpolation = IMAGE_INTERPOLATIONS.get(props.get("interpolation"))
+    extension = IMAGE_EXTENSIONS.get(props.get("extension"))
+    projection = props.get("projection", "FLAT")
+    if interpolation is None or extension is None or projection not in IMAGE_PROJECTIONS:
+        return None
+    if props.get("image_source") == "TILED":
+        return None
+    spec = node.inputs.get("Vector")
+    co = w.arg(node, "Vector") if spec is not None and isinstance(spec.source, Ref) else "g.uv"
+    image = w.image(props["image"])
+    texels = image_texels(props)
+    alpha_read = any(isinstance(i.source, Ref) and i.source.node == node.name and i.source.socket == "Alpha"
+                     for other in w.flat.nodes.values() for i in other.inputs.values())
+    unassociate = "true" if alpha_read and _associates_alpha(props) else "false"
+    decode = "true" if texels.startswith("TEX_IMAGE_TEXELS_SRGB") else "false"
+    if projection == "BOX":
+        normal = "(vec4(g.n, 0.0) * g.object_to_world).xyz"  # object_inverse_normal_transform: M^T n
+        blend = w.constant(props.get("projection_blend", 0.0), "VALUE")
+        sample = w.once("vec4", f"node_tex_image_box({image}, {co}, {normal}, {blend}, {interpolation}, "
+                                f"{extension}, {texels}, {unassociate}, {decode})")
+        return {"Color": f"vec4({sample}.rgb, 1.0)", "Alpha": f"{sample}.a"}
+    filtered = w.once("vec4", f"node_tex_image_{projection.lower()}({image}, {co}, {interpolation}, "
+                              f"{extension}, {texels})")
+    color = w.once("vec4", f"tex_image_output({filtered}, {unassociate}, {decode})")
+    return {"Color": f"vec4({color}.rgb, 1.0)", "Alpha": f"{color}.a"}
+
+
 EMITTERS = {
     "ShaderNodeValue": _value,
     "ShaderNodeRGB": _value,
@@ -392,6 +459,7 @@ EMITTERS = {
                                                   ("Hue", "Saturation", "Value", "Fac", "Color"), "Color"),
     "ShaderNodeSeparateXYZ": _separate_xyz,
     "ShaderNodeCombineXYZ": _combine_xyz,
+    "ShaderNodeTexImage": _image_texture,
     CONVERT: _convert,
     **CLOSURES,
 }
