@@ -211,7 +211,12 @@ def test_alpha_from_the_base_color_image(tmp_path):
     coverage = np.repeat(np.linspace(0.0, 1.0, TEXELS)[None, :], TEXELS, axis=0)  # along u
     got = scenes.render(_alpha_scene(image_alpha=coverage), tmp_path / "alpha_map.exr")[..., :3]
     a = _per_texel(_stored(coverage)[..., None])[..., 0][..., None]
-    front = srgb_decode(_stored(np.array([0.1, 0.2, 0.9])))  # the image stores sRGB bytes
+    # the image stores sRGB bytes; Cycles premultiplies them by alpha in whole bytes (rounded down,
+    # its image loader) and divides again where the node's Alpha is read
+    alpha_bytes = _per_texel(np.floor(coverage * 255.0 + 0.5)[..., None])
+    color_bytes = np.floor(np.array([0.1, 0.2, 0.9]) * 255.0 + 0.5)
+    premultiplied = np.floor(color_bytes * alpha_bytes / 255.0)
+    front = srgb_decode(np.where(alpha_bytes > 0.0, premultiplied / np.maximum(alpha_bytes, 1.0), 0.0))
     want = a * front + (1.0 - a) * np.array([0.8, 0.1, 0.1])
     np.testing.assert_allclose(got, want, atol=3e-3)
 

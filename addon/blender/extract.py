@@ -215,8 +215,8 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
     elif kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"):
         base, metal = _rgb(_input(node, "Color", base)), 1.0
         rough = float(_input(node, "Roughness", rough))
-    graph = _material_graph(material, warnings, bool(maps.get("base_color_map") or maps.get("metallic_map")
-                                                     or maps.get("roughness_map") or maps.get("normal_map")))
+    graph = _material_graph(material, images, warnings, bool(
+        maps.get("base_color_map") or maps.get("metallic_map") or maps.get("roughness_map") or maps.get("normal_map")))
     if graph is not None:  # the compiled graph reads every texture, per fragment
         for key in S.MaterialParams.MAPS:
             maps.pop(key, None)
@@ -272,12 +272,14 @@ GRAPH_KEEP = {"base_color": "use_base_color", "metalness": "use_metalness", "rou
               "ambient_color": "use_ambient_color"}
 
 
-def _material_graph(material, warnings: list[str] | None, mapped: bool) -> surface.MaterialGraph | None:
+def _material_graph(material, images: dict | None, warnings: list[str] | None,
+                    mapped: bool) -> surface.MaterialGraph | None:
     """The material's node graph compiled (``surface.compile_material``), None where its surface is
-    one closure with nothing linked into it. The nodes it could not compile are said in
-    ``warnings``; where the constant path reads image maps the graph could not (``mapped``), that
-    path draws it."""
-    read = nodes.read_material(material)
+    one closure with nothing linked into it; the images it samples go into ``images``. The nodes
+    it could not compile are said in ``warnings``; where the constant path reads image maps the
+    graph could not (``mapped``), that path draws it."""
+    found: dict = {}
+    read = nodes.read_material(material, images=found)
     if read is None:
         return None
     graph = surface.compile_material(*read)
@@ -285,6 +287,8 @@ def _material_graph(material, warnings: list[str] | None, mapped: bool) -> surfa
         return None
     if graph.missing and mapped:
         return None
+    if images is not None:
+        images.update((key, found[key]) for key in graph.images)
     if graph.unread and warnings is not None:
         warnings.append(f"Material '{material.name}': its {', '.join(graph.unread)} not drawn (the shading "
                         f"models have no such input)")
@@ -1302,4 +1306,9 @@ def _material_with_images(snap: S.Snapshot, material) -> S.MaterialParams:
             snap.images[ref[0]] = data
     if "base_color_map" in dropped:
         dropped["alpha_from_base_map"] = False
+    for key in params.graph.images if params.graph is not None else ():
+        if key not in snap.images:
+            data = IMAGES.get(key, found[key], snap.warnings)
+            if data is not None:  # else the graph samples Blender's missing-image magenta
+                snap.images[key] = data
     return dataclasses.replace(params, **dropped) if dropped else params
