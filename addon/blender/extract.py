@@ -215,8 +215,8 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
     elif kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"):
         base, metal = _rgb(_input(node, "Color", base)), 1.0
         rough = float(_input(node, "Roughness", rough))
-    graph = _material_graph(material, images, warnings, bool(
-        maps.get("base_color_map") or maps.get("metallic_map") or maps.get("roughness_map") or maps.get("normal_map")))
+    mapped = any(maps.get(name) for name in S.MaterialParams.MAPS)
+    graph = _material_graph(material, images, warnings, mapped)
     if graph is not None:  # the compiled graph reads every texture, per fragment
         for key in S.MaterialParams.MAPS:
             maps.pop(key, None)
