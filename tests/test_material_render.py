@@ -14,7 +14,6 @@ import numpy as np
 import pytest
 import scenes
 from test_cycles import _cycles
-from test_viewport import session_with_handler  # noqa: F401 (a fixture)
 
 SIZE = 64
 
@@ -233,34 +232,3 @@ def test_emission_per_fragment(tmp_path):
     _, _, rel = _against_cycles(scene, tmp_path)
     _within(rel, 1.3e-4, 9.7e-4, "emission mixed and added")
 
-
-# --- what an edit costs ---------------------------------------------------------------------------
-
-def test_value_edit_compiles_nothing_and_one_structure_shares_a_program(session_with_handler):
-    """A graph's constants live in a uniform block: editing a node's value in the viewport uploads
-    that material's block and compiles nothing; a second material of the same structure (other
-    values) draws with the same program."""
-    from addon.frame import gpu_library
-    from test_viewport import _draw, _uploads
-
-    session, a, b, _ = session_with_handler
-    first = _swept_principled("First")
-    a.data.materials.append(first)
-    bpy.context.view_layer.update()
-    _uploads(session)
-    compiles = gpu_library.LIBRARY.compiles
-    mix = next(n for n in first.node_tree.nodes if n.bl_idname == "ShaderNodeMix")
-    before = _draw(session)[0]
-    _socket(mix.inputs, "A_Color").default_value = (0.1, 0.9, 0.1, 1.0)
-    bpy.context.view_layer.update()
-    assert _uploads(session) == {"graph constants": 1}
-    after = _draw(session)[0]
-    assert np.abs(after - before).max() > 0.05, "the edit did not reach the image"
-    second = first.copy()
-    _socket(next(n for n in second.node_tree.nodes if n.bl_idname == "ShaderNodeMix").inputs,
-            "B_Color").default_value = (0.9, 0.9, 0.1, 1.0)
-    b.data.materials.append(second)
-    bpy.context.view_layer.update()
-    uploads = _uploads(session)
-    assert uploads.get("graph constants") == 1 and uploads.get("materials") == 1, uploads
-    assert gpu_library.LIBRARY.compiles == compiles, "a value edit or a material of the same structure compiled"
