@@ -28,6 +28,8 @@ struct GraphInputs {
   /* the attributes the graph reads (codegen's Compiled.attributes: named UV maps, colour
    * attributes, generic attributes), in its order; vec4, a UV map's (u, v, 0, 1) */
   vec4 attributes[GRAPH_ATTRIBUTES];
+  float clip_start;     /* the camera's clip start (Light Path > Ray Length: a camera ray starts
+                         * on the near clip plane) */
 };
 
 /* Cycles' fresnel_dielectric_cos (kernel/closure/bsdf_util.h): 1 where no light refracts */
@@ -68,3 +70,109 @@ float node_layer_weight_facing(float blend, vec3 n, GraphInputs g)
   }
   return 1.0 - f;
 }
+
+/* --- the input nodes (Texture Coordinate, Geometry, Tangent, Object Info, Camera Data, Light Path,
+ * Vector Transform, attributes), each as Cycles' SVM evaluates it for a camera ray's hit
+ * (kernel/svm/tex_coord.h, geometry.h, camera.h, light_path.h, vector_transform.h, attribute.h) */
+
+/* Cycles' camera space looks down +Z (kernel_data.cam.worldtocamera), Blender's view down -Z */
+mat4 graph_world_to_camera(GraphInputs g)
+{
+  return mat4(1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, -1.0, 0.0, 0.0, 0.0, 0.0, 1.0) *
+         g.world_to_view;
+}
+
+/* Cycles' object_inverse_normal_transform: a world normal in object space (M^T n), unit */
+vec3 graph_normal_to_object(vec3 n, GraphInputs g)
+{
+  return normalize(transpose(mat3(g.object_to_world)) * n);
+}
+
+/* Cycles' object_normal_transform: an object-space normal in world space (M^-T n), unit */
+vec3 graph_normal_to_world(vec3 n, GraphInputs g)
+{
+  return normalize(transpose(mat3(g.world_to_object)) * n);
+}
+
+/* Texture Coordinate > Normal: the shading normal in object space (NODE_TEXCO_NORMAL) */
+vec3 node_texcoord_normal(GraphInputs g) { return graph_normal_to_object(g.n, g); }
+
+/* Texture Coordinate > Object with its Object set: the position in that object's space (its
+ * world-to-object matrix m, read when the graph is compiled) */
+vec3 node_texcoord_object_from(mat4 m, GraphInputs g) { return (m * vec4(g.position, 1.0)).xyz; }
+
+/* Texture Coordinate > Camera: the position in camera space, +Z ahead (svm_texco_camera) */
+vec3 node_texcoord_camera(GraphInputs g) { return (graph_world_to_camera(g) * vec4(g.position, 1.0)).xyz; }
+
+/* Texture Coordinate > Window: the position in the view, 0..1, z 0 (camera_world_to_ndc) */
+vec3 node_texcoord_window(GraphInputs g) { return vec3(g.window, 0.0); }
+
+/* Texture Coordinate > Reflection: the view direction mirrored about the normal, world space */
+vec3 node_texcoord_reflection(GraphInputs g) { return 2.0 * dot(g.n, g.i) * g.n - g.i; }
+
+/* The Tangent node's and Geometry > Tangent's last step (svm_node_tangent, primitive_tangent): an
+ * object-space direction through the normal transform, made perpendicular to the shading normal */
+vec3 graph_tangent_finish(vec3 t, GraphInputs g)
+{
+  vec3 w = transpose(mat3(g.world_to_object)) * t;
+  return cross(g.n, normalize(cross(w, g.n)));
+}
+
+/* Tangent node, Radial about X, Y or Z of the Generated coordinates (Geometry > Tangent: Z) */
+vec3 node_tangent_radial_x(GraphInputs g)
+{
+  return graph_tangent_finish(vec3(0.0, -(g.generated.z - 0.5), g.generated.y - 0.5), g);
+}
+vec3 node_tangent_radial_y(GraphInputs g)
+{
+  return graph_tangent_finish(vec3(-(g.generated.z - 0.5), 0.0, g.generated.x - 0.5), g);
+}
+vec3 node_tangent_radial_z(GraphInputs g)
+{
+  return graph_tangent_finish(vec3(-(g.generated.y - 0.5), g.generated.x - 0.5, 0.0), g);
+}
+
+/* Tangent node, UV Map: the map's tangent t (world space, unit; xyz 0 where the mesh has none,
+ * which Cycles outputs as 0) taken back to object space, as Cycles holds it, then finished */
+vec3 node_tangent_uv(vec4 t, GraphInputs g)
+{
+  if (all(equal(t.xyz, vec3(0.0)))) {
+    return vec3(0.0); /* guards: no tangent (Cycles' attribute not found) */
+  }
+  return graph_tangent_finish(mat3(g.world_to_object) * t.xyz, g);
+}
+
+/* Camera Data (svm_node_camera): the position in camera space (+Z ahead), normalised; its depth
+ * along the view axis; its distance from the camera */
+vec3 node_camera_view_vector(GraphInputs g) { return normalize(node_texcoord_camera(g)); }
+float node_camera_view_z_depth(GraphInputs g) { return node_texcoord_camera(g).z; }
+float node_camera_view_distance(GraphInputs g) { return length(node_texcoord_camera(g)); }
+
+/* Light Path > Ray Length for a camera ray (sd->ray_length): how far the camera ray travelled to
+ * the fragment, along -i; Cycles starts it on the near clip plane (camera_sample_perspective,
+ * _orthographic), so it is the depth past the clip start over the cosine of the ray to the axis */
+float node_light_path_ray_length(GraphInputs g)
+{
+  vec3 ahead = -g.view_to_world[2].xyz; /* the camera's view axis in world space */
+  float depth = dot(g.position - g.view_to_world[3].xyz, ahead);
+  return (depth - g.clip_start) / max(dot(-g.i, ahead), 1e-8); /* guards: a ray across the axis */
+}
+
+/* Vector Transform (svm_node_vector_transform): m maps the source space to the target space
+ * (graph_space_*); a point moves, a vector turns, a normal goes through the inverse transpose
+ * (Cycles' transform_direction_transposed of the inverse) and is normalised */
+vec3 vector_transform_point(vec3 v, mat4 m) { return (m * vec4(v, 1.0)).xyz; }
+vec3 vector_transform_vector(vec3 v, mat4 m) { return mat3(m) * v; }
+vec3 vector_transform_normal(vec3 v, mat4 m) { return normalize(transpose(inverse(mat3(m))) * v); }
+
+mat4 graph_space_world_to_object(GraphInputs g) { return g.world_to_object; }
+mat4 graph_space_world_to_camera(GraphInputs g) { return graph_world_to_camera(g); }
+mat4 graph_space_object_to_world(GraphInputs g) { return g.object_to_world; }
+mat4 graph_space_object_to_camera(GraphInputs g) { return graph_world_to_camera(g) * g.object_to_world; }
+mat4 graph_space_camera_to_world(GraphInputs g) { return inverse(graph_world_to_camera(g)); }
+mat4 graph_space_camera_to_object(GraphInputs g) { return g.world_to_object * inverse(graph_world_to_camera(g)); }
+mat4 graph_space_identity(GraphInputs g) { return mat4(1.0); }
+
+/* Attribute > Fac (svm_node_attr's NODE_ATTR_OUTPUT_FLOAT): a float's value, a vector's or a
+ * colour's average */
+float node_attribute_fac(vec4 a) { return (a.x + a.y + a.z) / 3.0; }

@@ -54,6 +54,9 @@ def _props(node) -> dict:
         if prop.type in ("INT", "FLOAT") and getattr(prop, "is_array", False):
             value = tuple(value)
         out[name] = value
+    target = getattr(node, "object", None) if node.bl_idname == "ShaderNodeTexCoord" else None
+    if target is not None:  # Texture Coordinate > Object in another object's space: its matrix, read now
+        out["object_matrix"] = tuple(tuple(float(v) for v in row) for row in target.matrix_world.inverted())
     return out
 
 

@@ -24,6 +24,7 @@ instead (Blender's fallback for what a renderer cannot evaluate); ``Compiled.mis
 from __future__ import annotations
 
 import hashlib
+import re
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -35,7 +36,8 @@ GLSL_TYPES = {"VALUE": "float", "INT": "float", "BOOLEAN": "float", "VECTOR": "v
               "SHADER": "Closure"}
 #: The library files a compiled graph reads, in order.
 LIBRARY = ("node_inputs.glsl", "node_convert.glsl", "node_color.glsl", "node_math.glsl", "node_mix.glsl",
-           "node_converter.glsl", "node_vector_math.glsl", "node_texture_image.glsl", "node_closure.glsl")
+           "node_converter.glsl", "node_vector_math.glsl", "node_texture_image.glsl", "node_normal.glsl",
+           "node_closure.glsl")
 
 #: The Math node's operations, each its library function (glsl/node_math.glsl).
 MATH_OPERATIONS = (
@@ -84,8 +86,11 @@ class Compiled:
 
 
 #: What ``g.attributes[k]`` holds: a UV map's (u, v, 0, 1), a colour attribute's RGBA (linear), a
-#: generic attribute's value (Attribute node: a float as (x, x, x, 1), a vector (x, y, z, 1)).
-ATTRIBUTE_KINDS = ("UV", "COLOR", "GENERIC")
+#: generic attribute's value (Attribute node: a float as (x, x, x, 1), a vector (x, y, z, 1)), a
+#: named UV map's tangent (as ``GraphInputs.tangent``: world-space unit tangent, the bitangent's sign).
+ATTRIBUTE_KINDS = ("UV", "COLOR", "GENERIC", "TANGENT")
+#: The GraphInputs a graph reads, as a word in its source (renamed in a Bump's offset branches).
+_G = re.compile(r"\bg\b")
 
 
 class _Writer:
@@ -99,6 +104,14 @@ class _Writer:
         self.images: list[str] = []
         self.attributes: list[tuple[str, str]] = []
         self.shared: dict[str, str] = {}  # an expression computed once -> its variable
+        self.count = 0  # variables declared
+        #: the GraphInputs the expressions being written read: ``g``, or in a Bump's branch the
+        #: fragment moved to a neighbour (``_height_at``)
+        self.g = "g"
+
+    def bind(self, expr: str) -> str:
+        """``expr`` reading this branch's GraphInputs."""
+        return expr if self.g == "g" else _G.sub(self.g, expr)
 
     def image(self, key: str) -> str:
         """The sampler of image ``key`` (one per image, however many nodes read it)."""
@@ -116,6 +129,7 @@ class _Writer:
     def once(self, type_: str, expr: str) -> str:
         """A variable holding ``expr`` (of GLSL ``type_``), declared the first time it is asked
         for: the same image at the same coordinate sampled once for every node reading it."""
+        expr = self.bind(expr)
         var = self.shared.get(expr)
         if var is None:
             var = self.shared[expr] = f"s{len(self.shared)}"
@@ -152,12 +166,11 @@ class _Writer:
 
     def define(self, node: FlatNode, outputs: dict[str, str]) -> None:
         """Declare ``node``'s outputs (socket -> GLSL expression), each once."""
-        index = len(self.values)
         for socket, expr in outputs.items():
             type_ = node.outputs.get(socket, "VALUE")
-            var = f"n{index}_{''.join(c if c.isalnum() else '_' for c in socket)}"
-            index += 1
-            self.lines.append(f"  {GLSL_TYPES.get(type_, 'float')} {var} = {expr};")
+            var = f"n{self.count}_{''.join(c if c.isalnum() else '_' for c in socket)}"
+            self.count += 1
+            self.lines.append(f"  {GLSL_TYPES.get(type_, 'float')} {var} = {self.bind(expr)};")
             self.values[(node.name, socket)] = var
 
 
@@ -171,8 +184,170 @@ def _value(w: _Writer, node: FlatNode) -> dict:
     return {s: w.constant(node.values.get(s, _zero(t)), t) for s, t in node.outputs.items()}
 
 
+def _mat4(w: _Writer, rows) -> str:
+    """A 4 x 4 matrix (rows, as mathutils gives them) as a GLSL mat4 of four constants (columns)."""
+    columns = [tuple(float(rows[r][c]) for r in range(4)) for c in range(4)]
+    return f"mat4({', '.join(w.constant(c, 'RGBA') for c in columns)})"
+
+
 def _texcoord(w: _Writer, node: FlatNode) -> dict | None:
-    return {"UV": "g.uv"} if "UV" in node.outputs else None
+    """Texture Coordinate (Cycles' svm_node_tex_coord): Generated and Object from GraphInputs, the
+    Object output in another object's space where its Object is set (that object's matrix, read
+    with the graph: a constant), Normal in object space, Camera, Window, Reflection. From
+    Instancer: unsupported (the engine draws no instances with an instancer's coordinates)."""
+    if node.props.get("from_instancer"):
+        return None
+    matrix = node.props.get("object_matrix")
+    known = {"Generated": "g.generated", "Normal": "node_texcoord_normal(g)", "UV": "g.uv",
+             "Object": f"node_texcoord_object_from({_mat4(w, matrix)}, g)" if matrix else "g.object",
+             "Camera": "node_texcoord_camera(g)", "Window": "node_texcoord_window(g)",
+             "Reflection": "node_texcoord_reflection(g)"}
+    return {s: e for s, e in known.items() if s in node.outputs}
+
+
+def _uv_map(w: _Writer, node: FlatNode) -> dict | None:
+    """UV Map: the active map (g.uv) or a named one (an attribute); From Instancer unsupported."""
+    if node.props.get("from_instancer"):
+        return None
+    name = node.props.get("uv_map", "")
+    return {"UV": f"{w.attribute('UV', name)}.xyz" if name else "g.uv"}
+
+
+def _tangent_of(w: _Writer, name: str) -> str:
+    """A UV map's tangent: the active map's ``g.tangent``, a named map's an attribute."""
+    return w.attribute("TANGENT", name) if name else "g.tangent"
+
+
+def _tangent(w: _Writer, node: FlatNode) -> dict | None:
+    """Tangent (Cycles' svm_node_tangent): a UV map's, or radial about an axis of Generated."""
+    if node.props.get("direction_type") == "UV_MAP":
+        return {"Tangent": f"node_tangent_uv({_tangent_of(w, node.props.get('uv_map', ''))}, g)"}
+    axis = node.props.get("axis", "Z")
+    if axis not in ("X", "Y", "Z"):
+        return None
+    return {"Tangent": f"node_tangent_radial_{axis.lower()}(g)"}
+
+
+def _object_info(w: _Writer, node: FlatNode) -> dict:
+    known = {"Location": "g.object_to_world[3].xyz", "Color": "vec4(g.object_color.rgb, 1.0)",
+             "Alpha": "g.object_color.a", "Object Index": "g.object_info.x",
+             "Material Index": "g.object_info.y", "Random": "g.object_info.z"}
+    return {s: e for s, e in known.items() if s in node.outputs}
+
+
+def _camera_data(w: _Writer, node: FlatNode) -> dict:
+    known = {"View Vector": "node_camera_view_vector(g)", "View Z Depth": "node_camera_view_z_depth(g)",
+             "View Distance": "node_camera_view_distance(g)"}
+    return {s: e for s, e in known.items() if s in node.outputs}
+
+
+def _light_path(w: _Writer, node: FlatNode) -> dict:
+    """Light Path for what a rasteriser draws, a camera ray's hit (Cycles' svm_node_light_path on
+    its camera rays): Is Camera Ray 1, every other kind and every depth 0, Ray Length the
+    distance the camera ray travelled."""
+    known = {"Is Camera Ray": "1.0", "Ray Length": "node_light_path_ray_length(g)"}
+    return {s: known.get(s, "0.0") for s in node.outputs}
+
+
+_SPACES = ("WORLD", "OBJECT", "CAMERA")
+
+
+def _vector_transform(w: _Writer, node: FlatNode) -> dict | None:
+    """Vector Transform (Cycles' svm_node_vector_transform): a point, vector or normal from one of
+    world, object and camera space to another (a space to itself: unchanged, as Cycles does)."""
+    kind = node.props.get("vector_type", "VECTOR")
+    src, dst = node.props.get("convert_from", "WORLD"), node.props.get("convert_to", "OBJECT")
+    if kind not in ("POINT", "VECTOR", "NORMAL") or src not in _SPACES or dst not in _SPACES:
+        return None
+    v = w.arg(node, "Vector")
+    if src == dst:
+        return {"Vector": v}
+    return {"Vector": f"vector_transform_{kind.lower()}({v}, graph_space_{src.lower()}_to_{dst.lower()}(g))"}
+
+
+def _attribute(w: _Writer, node: FlatNode) -> dict | None:
+    """Attribute, of the geometry (by name: a generic attribute, colour attribute or UV map);
+    the object's, instancer's and view layer's attributes are not read (missing)."""
+    if node.props.get("attribute_type", "GEOMETRY") != "GEOMETRY":
+        return None
+    a = w.attribute("GENERIC", node.props.get("attribute_name", ""))
+    known = {"Color": f"vec4({a}.rgb, 1.0)", "Vector": f"{a}.xyz", "Fac": f"node_attribute_fac({a})",
+             "Alpha": f"{a}.a"}
+    return {s: e for s, e in known.items() if s in node.outputs}
+
+
+def _color_attribute(w: _Writer, node: FlatNode) -> dict:
+    """Color Attribute: a colour attribute by name (the mesh's default one where none is named)."""
+    a = w.attribute("COLOR", node.props.get("layer_name", ""))
+    return {"Color": f"vec4({a}.rgb, 1.0)", "Alpha": f"{a}.a"}
+
+
+_NORMAL_MAP_SPACES = ("TANGENT", "OBJECT", "WORLD", "BLENDER_OBJECT", "BLENDER_WORLD")
+
+
+def _normal_map(w: _Writer, node: FlatNode) -> dict | None:
+    """Normal Map (Cycles' svm_node_normal_map): tangent space with the active or a named UV map's
+    tangent, object or world space, and Blender's object and world spaces (y, z flipped)."""
+    space = node.props.get("space", "TANGENT")
+    if space not in _NORMAL_MAP_SPACES:
+        return None
+    strength, color = w.arg(node, "Strength"), w.arg(node, "Color")
+    if space == "TANGENT":
+        t = _tangent_of(w, node.props.get("uv_map", ""))
+        return {"Normal": f"node_normal_map_tangent({strength}, {color}, {t}, g)"}
+    return {"Normal": f"node_normal_map_{space.lower()}({strength}, {color}, g)"}
+
+
+#: The Bump node's Filter Width where Blender's Bump has none (before 4.3): Cycles' offset then.
+BUMP_FILTER_WIDTH = 0.1
+
+
+def _upstream(flat: FlatGraph, name: str) -> list[str]:
+    """The flat nodes ``name`` reads, itself included, in the flat graph's order."""
+    seen, pending = set(), [name]
+    while pending:
+        current = pending.pop()
+        if current in seen or current not in flat.nodes:
+            continue
+        seen.add(current)
+        pending += [i.source.node for i in flat.nodes[current].inputs.values() if isinstance(i.source, Ref)]
+    return [n for n in flat.nodes if n in seen]
+
+
+def _height_at(w: _Writer, node: FlatNode, axis: str, filter_width: str) -> str:
+    """The Bump's Height at the fragment moved along the screen's ``axis`` by ``filter_width``
+    times its derivatives (EEVEE's dF_branch; Cycles' bump offsets of its inputs): every node the
+    Height reads written again, reading the moved fragment's GraphInputs."""
+    spec = node.inputs["Height"]
+    if not isinstance(spec.source, Ref) or (spec.source.node, spec.source.socket) not in w.values:
+        return w.arg(node, "Height")  # a constant height (or one that did not compile): no slope
+    moved = w.once("GraphInputs", f"graph_inputs_d{axis}(g, {filter_width})")
+    upstream = _upstream(w.flat, spec.source.node)
+    saved = w.values, w.g
+    w.values = {k: v for k, v in w.values.items() if k[0] not in upstream}
+    w.g = moved
+    try:
+        for name in upstream:
+            other = w.flat.nodes[name]
+            emit = EMITTERS.get(other.kind)
+            outputs = emit(w, other) if emit is not None else None
+            if outputs is not None:  # what did not compile was named missing the first time
+                w.define(other, outputs)
+        return w.arg(node, "Height")
+    finally:
+        w.values, w.g = saved
+
+
+def _bump(w: _Writer, node: FlatNode) -> dict:
+    """Bump (Cycles' svm_node_set_bump, EEVEE's node_bump): the Height here and at the fragment
+    moved by Filter Width times its screen-space derivatives along x and y."""
+    fw = w.arg(node, "Filter Width") if "Filter Width" in node.inputs \
+        else w.constant(BUMP_FILTER_WIDTH, "VALUE")
+    h = w.arg(node, "Height")
+    hx, hy = _height_at(w, node, "x", fw), _height_at(w, node, "y", fw)
+    fn = "node_bump_inverted" if node.props.get("invert") else "node_bump"
+    args = (w.arg(node, "Strength"), w.arg(node, "Distance"), fw, h, hx, hy, _normal_input(w, node))
+    return {"Normal": f"{fn}({', '.join(args)}, g)"}
 
 
 def _normal_input(w: _Writer, node: FlatNode) -> str:
@@ -183,10 +358,13 @@ def _normal_input(w: _Writer, node: FlatNode) -> str:
 
 
 def _geometry(w: _Writer, node: FlatNode) -> dict:
-    """The Geometry node's outputs that a rasterised fragment has (Position, Normal, True Normal
-    as the shading normal, Incoming, Backfacing); the rest are left to their readers' values."""
-    known = {"Position": "g.position", "Normal": "g.n", "Incoming": "g.i",
-             "Backfacing": "(g.backfacing ? 1.0 : 0.0)"}
+    """The Geometry node's outputs that a rasterised fragment has (Position, Normal, Tangent:
+    radial about Generated's Z as Cycles' primitive_tangent, True Normal, Incoming, Backfacing).
+    Parametric (a triangle's barycentrics in Cycles' vertex order), Pointiness (Cycles computes it
+    per vertex from the mesh's curvature) and Random Per Island (a hash of the face's island) are
+    not in GraphInputs: their readers keep their own values (EEVEE gives 0.5 and 0 constants)."""
+    known = {"Position": "g.position", "Normal": "g.n", "Tangent": "node_tangent_radial_z(g)",
+             "True Normal": "g.ng", "Incoming": "g.i", "Backfacing": "(g.backfacing ? 1.0 : 0.0)"}
     return {s: e for s, e in known.items() if s in node.outputs}
 
 
@@ -442,7 +620,16 @@ EMITTERS = {
     "ShaderNodeNewGeometry": _geometry,
     "ShaderNodeFresnel": lambda w, n: {"Fac": f"node_fresnel({w.arg(n, 'IOR')}, {_normal_input(w, n)}, g)"},
     "ShaderNodeLayerWeight": _layer_weight,
-    "ShaderNodeUVMap": _texcoord,
+    "ShaderNodeUVMap": _uv_map,
+    "ShaderNodeTangent": _tangent,
+    "ShaderNodeObjectInfo": _object_info,
+    "ShaderNodeCameraData": _camera_data,
+    "ShaderNodeLightPath": _light_path,
+    "ShaderNodeVectorTransform": _vector_transform,
+    "ShaderNodeAttribute": _attribute,
+    "ShaderNodeVertexColor": _color_attribute,
+    "ShaderNodeNormalMap": _normal_map,
+    "ShaderNodeBump": _bump,
     "ShaderNodeMath": _math,
     "ShaderNodeMix": _mix,
     "ShaderNodeVectorMath": _vector_math,
