@@ -12,6 +12,16 @@ float graph_shininess(float roughness)
   return clamp(2.0 / (a * a) - 2.0, 1.0, 1e4);
 }
 
+/* A mesh's tangent attribute (object space, w the bitangent's sign) in world space, as the vertex
+ * stage turns the active UV map's (a mirror reverses the bitangent) */
+vec4 graph_tangent_to_world(vec4 t)
+{
+  ObjectData object = objects.object[object_index];
+  vec3 w = mat3(object.model) * t.xyz;
+  float len2 = dot(w, w);
+  return vec4(len2 > 1e-20 ? w * inversesqrt(len2) : vec3(0.0), t.w * object.normal_matrix[3][3]);
+}
+
 /* The graph's inputs at this fragment: n the interpolated normal facing the viewer, v towards
  * the viewer. The optional fields are filled where the graph reads them (SL_GRAPH_<FIELD>). */
 GraphInputs graph_inputs(vec3 n, vec3 v, bool backfacing)
@@ -47,11 +57,16 @@ GraphInputs graph_inputs(vec3 n, vec3 v, bool backfacing)
   g.view_to_world = inverse(frame.view);
 #endif
 #ifdef SL_GRAPH_WINDOW
+  /* the view's 0..1; the viewport's render region and supersampling keep it: the frame's size is
+   * the target's */
   g.window = gl_FragCoord.xy / frame.viewport.xy;
 #endif
 #if defined(SL_GRAPH_OBJECT_COLOR) || defined(SL_GRAPH_OBJECT_INFO)
   g.object_color = graph_object_color;
   g.object_info = graph_object_info;
+#endif
+#ifdef SL_GRAPH_CLIP_START
+  g.clip_start = frame.viewport.z;
 #endif
 #ifdef SL_PASS_ATTRIBUTES
   SL_GRAPH_ATTRIBUTE_READS

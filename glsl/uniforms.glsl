@@ -13,7 +13,7 @@ struct FrameData {
                           * them by group): [0] those with a shadow map, [1] those without, each
                           * x point, y spot, z sun, w area lights */
   mat4 view;             /* the camera's view matrix (world -> camera space) */
-  vec4 viewport;         /* xy: the target's size in pixels */
+  vec4 viewport;         /* xy: the target's size in pixels; z: the camera's clip start */
 };
 
 struct LightData {

@@ -14,7 +14,7 @@ from collections import Counter, OrderedDict
 import bpy
 import numpy as np
 
-from ..materials import surface
+from ..materials import objects, surface
 from ..plan import auto_terms, light_tiles, programs, shadows
 from ..scene import snapshot as S
 from ..scene.matrices import invert
@@ -655,9 +655,13 @@ def mesh_geometry(key: str, mesh: bpy.types.Mesh, tangents: bool = False,
     return geometry
 
 
-def object_random(random_id: int) -> float:
-    """Object Info's Random of an instance: its depsgraph ``random_id`` as a float in [0, 1)."""
-    return (int(random_id) & 0xFFFFFFFF) / 4294967296.0
+def instance_random(inst) -> float:
+    """Object Info's Random: an object's from its name, as Cycles computes it
+    (``materials.objects.object_random``); an instance's from its depsgraph ``random_id``, scaled
+    as Cycles scales it (random_id / 0xFFFFFFFF)."""
+    if not inst.is_instance:
+        return objects.object_random(inst.object.original.name)
+    return float(np.float32(int(inst.random_id) & 0xFFFFFFFF) * (np.float32(1.0) / np.float32(0xFFFFFFFF)))
 
 
 def _corner_values(mesh, attribute, values: np.ndarray, width: int) -> np.ndarray | None:
@@ -686,6 +690,18 @@ def read_attribute(mesh, kind: str, name: str) -> np.ndarray | None:
     1), a colour attribute's linear RGBA, a generic one's value (x, x, x, 1) or vector (x, y, z,
     1) -- or None where the mesh has none of that name."""
     n = len(mesh.loops)
+    if kind == "TANGENT":  # a named UV map's tangents (object space, w the bitangent's sign)
+        if name not in mesh.uv_layers:
+            return None
+        try:
+            mesh.calc_tangents(uvmap=name)
+        except RuntimeError:  # n-gons
+            return None
+        t = np.empty(n * 3, np.float32)
+        mesh.loops.foreach_get("tangent", t)
+        sign = np.empty(n, np.float32)
+        mesh.loops.foreach_get("bitangent_sign", sign)
+        return np.ascontiguousarray(np.column_stack([t.reshape(-1, 3), sign]), np.float32)
     if kind == "UV":
         layer = mesh.uv_layers.get(name) if name else (mesh.uv_layers.active or None)
         if layer is None:
@@ -1258,7 +1274,7 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
                                      casts_shadow=bool(getattr(obj, "visible_shadow", True)),
                                      texspace=(tuple(data.texspace_location), tuple(data.texspace_size)),
                                      color=tuple(float(c) for c in obj.color), pass_index=int(obj.pass_index),
-                                     random=object_random(inst.random_id)))
+                                     random=instance_random(inst)))
     # before the shadow maps: they fit to the reaches; the scene's box only where a reach needs it
     def box():
         return shadows.scene_bounds(snap, {key: geometry.bounds for key, geometry in snap.geometries.items()})

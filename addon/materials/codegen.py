@@ -26,10 +26,21 @@ from __future__ import annotations
 import hashlib
 import re
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 
 from .graph import CONVERT, Const, FlatGraph, FlatNode, Ref
+
+
+def glsl_dir() -> Path:
+    """``glsl/`` beside the package when installed as an extension, else at the repository root."""
+    here = Path(__file__).resolve().parents[1]  # the package: addon/ in the source tree
+    for candidate in (here / "glsl", here.parent / "glsl"):
+        if (candidate / "brdf.glsl").is_file():
+            return candidate
+    raise FileNotFoundError(f"Shading Lab's GLSL sources are missing (looked beside {here})")
+
 
 #: GLSL type of each socket type.
 GLSL_TYPES = {"VALUE": "float", "INT": "float", "BOOLEAN": "float", "VECTOR": "vec3", "RGBA": "vec4",

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import re
 from dataclasses import dataclass
+from functools import lru_cache
 
 import numpy as np
 
@@ -24,7 +25,7 @@ FUNCTION = "material_graph"
 #: GraphInputs fields a program fills only where its graph reads them (each a define,
 #: ``SL_GRAPH_<FIELD>``): the rest cost nothing to fill.
 OPTIONAL_INPUTS = ("tangent", "object", "generated", "object_to_world", "world_to_object", "world_to_view",
-                   "view_to_world", "window", "object_color", "object_info", "ng")
+                   "view_to_world", "window", "object_color", "object_info", "ng", "clip_start")
 #: The most images one material samples (texture units left beside the programs' own).
 MAX_IMAGES = 10
 #: The most attributes one material reads (vertex inputs left beside the mesh's own four).
@@ -42,6 +43,7 @@ class GraphProgram:
     images: int
     attributes: int
     uses: frozenset[str]
+    attribute_kinds: tuple[str, ...] = ()
 
     def __eq__(self, other) -> bool:
         return isinstance(other, GraphProgram) and other.key == self.key
@@ -103,6 +105,40 @@ def _transparent(flat: FlatGraph) -> bool:
     return False
 
 
+_FUNCTION = re.compile(r"^[A-Za-z_]\w*\s+(\w+)\s*\(", re.M)
+_CALL = re.compile(r"\b(\w+)\s*\(")
+
+
+@lru_cache(maxsize=1)
+def _library_functions() -> dict[str, str]:
+    """The node library's functions (codegen.LIBRARY): name -> body (overloads joined)."""
+    glsl = codegen.glsl_dir()
+    bodies: dict[str, str] = {}
+    for name in codegen.LIBRARY:
+        text = (glsl / name).read_text()
+        starts = list(_FUNCTION.finditer(text))
+        for i, m in enumerate(starts):
+            end = starts[i + 1].start() if i + 1 < len(starts) else len(text)
+            bodies[m.group(1)] = bodies.get(m.group(1), "") + text[m.start():end]
+    return bodies
+
+
+def graph_inputs_read(source: str) -> frozenset[str]:
+    """The optional GraphInputs fields a graph's function reads: in its source, or in the library
+    functions it calls (at any depth)."""
+    library = _library_functions()
+    seen, pending, texts = set(), [source], []
+    while pending:
+        text = pending.pop()
+        texts.append(text)
+        for name in _CALL.findall(text):
+            if name in library and name not in seen:
+                seen.add(name)
+                pending.append(library[name])
+    joined = "\n".join(texts)
+    return frozenset(field for field in OPTIONAL_INPUTS if re.search(rf"\bg\.{field}\b", joined))
+
+
 def _node_count(flat: FlatGraph) -> int:
     """The artist's nodes of the flat graph (not its conversions or outputs)."""
     return sum(1 for n in flat.nodes.values() if n.kind not in ("Convert", *codegen.SINKS))
@@ -116,9 +152,11 @@ def compile_material(graph: Graph, groups: dict[str, Graph]) -> MaterialGraph | 
         return None
     output, _ = _surface(flat)
     compiled = codegen.compile_graph(flat, {"surface": (output.name, "Surface")}, FUNCTION)
-    uses = frozenset(field for field in OPTIONAL_INPUTS if re.search(rf"\bg\.{field}\b", compiled.source))
-    program = GraphProgram(compiled.key, compiled.source, len(compiled.constants), len(compiled.images),
-                           len(compiled.attributes), uses)
+    uses = graph_inputs_read(compiled.source)
+    kinds = tuple(kind for kind, _ in compiled.attributes)  # a tangent is turned to world space
+    program = GraphProgram(f"{compiled.key}{''.join(k[0] for k in kinds)}", compiled.source,
+                           len(compiled.constants), len(compiled.images), len(compiled.attributes), uses,
+                           kinds)
     return MaterialGraph(program, compiled.constants, compiled.images, compiled.attributes, compiled.missing,
                          _node_count(flat), _transparent(flat),
                          _unread(flat))

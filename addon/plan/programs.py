@@ -8,11 +8,11 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass, replace
 from functools import lru_cache
-from pathlib import Path
 
 import numpy as np
 
 from ..materials import codegen
+from ..materials.codegen import glsl_dir
 from ..materials.surface import GraphProgram
 from ..reference.multiscatter import MS_SIZE, S_SIZE
 from ..scene.matrices import invert
@@ -61,15 +61,6 @@ PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "principled.glsl", "ltc.gl
 #: How the world lights a program: "" not at all (a black world), "UNIFORM" a constant radiance,
 #: "MAP" environment images (glsl/ibl.glsl).
 ENVIRONMENTS = ("", "UNIFORM", "MAP")
-
-
-def glsl_dir() -> Path:
-    """``glsl/`` beside the package when installed as an extension, else at the repository root."""
-    here = Path(__file__).resolve().parents[1]  # the package: addon/ in the source tree
-    for candidate in (here / "glsl", here.parent / "glsl"):
-        if (candidate / "brdf.glsl").is_file():
-            return candidate
-    raise FileNotFoundError(f"Shading Lab's GLSL sources are missing (looked beside {here})")
 
 
 @lru_cache(maxsize=None)
@@ -363,8 +354,10 @@ class Features:
             if g.attributes:
                 out.append(("SL_PASS_ATTRIBUTES", " ".join(f"graph_attribute{k} = attr{k};"
                                                            for k in range(g.attributes))))
-                out.append(("SL_GRAPH_ATTRIBUTE_READS", " ".join(f"g.attributes[{k}] = graph_attribute{k};"
-                                                                 for k in range(g.attributes))))
+                reads = [f"graph_tangent_to_world(graph_attribute{k})" if kind == "TANGENT"
+                         else f"graph_attribute{k}" for k, kind in enumerate(g.attribute_kinds)]
+                out.append(("SL_GRAPH_ATTRIBUTE_READS", " ".join(f"g.attributes[{k}] = {read};"
+                                                                 for k, read in enumerate(reads))))
         for name in sorted(self.maps):  # BASE_COLOR, or BASE_COLOR_CLOSEST for nearest filtering
             base = name.removesuffix("_CLOSEST")
             out.append((f"SL_HAS_{base}_MAP", "1"))
@@ -653,7 +646,7 @@ def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None,
         *np.reshape(group_ends if group_ends is not None else [len(snapshot.lights)] * len(LIGHT_GROUP_ORDER),
                     (2, 4)),
         _mat(cam.view),
-        [*(size or (snapshot.width, snapshot.height)), 0.0, 0.0],
+        [*(size or (snapshot.width, snapshot.height)), cam.clip_start, 0.0],
     ]
     return np.concatenate([np.asarray(r, np.float32) for r in rows]).tobytes()
 

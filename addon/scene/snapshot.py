@@ -408,6 +408,7 @@ class Camera:
     is_perspective: bool
     position: tuple[float, float, float]
     forward: tuple[float, float, float]
+    clip_start: float = 0.0  # the near clip distance (a camera ray starts on that plane)
 
     @classmethod
     def from_matrices(cls, view, projection, is_perspective: bool) -> Camera:
@@ -416,8 +417,16 @@ class Camera:
         world = invert(view)
         axis = world[:3, 2]
         forward = -axis / max(np.linalg.norm(axis), 1e-30)
+        p = np.asarray(projection, np.float64)
+        # the near plane from the projection (OpenGL's: perspective P22 = -(f + n)/(f - n),
+        # P23 = -2 f n/(f - n); orthographic P22 = -2/(f - n), P23 = -(f + n)/(f - n))
+        if is_perspective:
+            near = p[2, 3] / (p[2, 2] - 1.0) if p[2, 2] != 1.0 else 0.0
+        else:
+            near = (p[2, 3] + 1.0) / p[2, 2] if p[2, 2] != 0.0 else 0.0
         return cls(view.astype(np.float32), np.asarray(projection, np.float32), bool(is_perspective),
-                   tuple(float(x) for x in world[:3, 3]), tuple(float(x) for x in forward))
+                   tuple(float(x) for x in world[:3, 3]), tuple(float(x) for x in forward),
+                   float(near) if np.isfinite(near) else 0.0)
 
     @property
     def view_projection(self) -> np.ndarray:
