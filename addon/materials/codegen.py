@@ -98,7 +98,6 @@ class _Writer:
         self.images: list[str] = []
         self.attributes: list[tuple[str, str]] = []
         self.shared: dict[str, str] = {}  # an expression computed once -> its variable
-        self.tables = False  # whether the graph reads a table (glsl/node_ramp.glsl's graph_table)
 
     def image(self, key: str) -> str:
         """The sampler of image ``key`` (one per image, however many nodes read it)."""
@@ -141,7 +140,6 @@ class _Writer:
         for row in rows:
             values = tuple(float(x) for x in row)
             self.constants.append(values + (0.0,) * (4 - len(values)))
-        self.tables = True
         return base
 
     def arg(self, node: FlatNode, socket: str) -> str:
@@ -501,8 +499,9 @@ def compile_graph(flat: FlatGraph, targets: dict[str, tuple[str, str]], name: st
         types[target] = GLSL_TYPES.get(node.inputs[socket].type, "float")
         assigns.append(f"  {target} = {w.arg(node, socket)};")
     params = ", ".join(["GraphInputs g", *(f"out {t} {n}" for n, t in types.items())])
-    # the tables' reader the library declares (glsl/node_ramp.glsl): one graph per program
-    prelude = ["vec4 graph_table(int i) { return GRAPH_CONST(i); }", ""] if w.tables else []
+    # the tables' reader the library declares (glsl/node_ramp.glsl; the linker wants it defined
+    # whether or not the graph reads a table): one compiled graph per program
+    prelude = ["vec4 graph_table(int i) { return GRAPH_CONST(i); }", ""]
     source = "\n".join([*prelude, f"void {name}({params})", "{", *w.lines, *assigns, "}", ""])
     constants = np.array(w.constants or [(0.0, 0.0, 0.0, 0.0)], np.float32).reshape(-1, 4)
     return Compiled(name, source, constants, types, w.missing, tuple(w.images), tuple(w.attributes))
