@@ -10,6 +10,11 @@ Constants are not in the source: every constant a node reads (an unlinked socket
 node) is a slot of ``Compiled.constants`` read through ``GRAPH_CONST(i)`` (a vec4), which the
 program defines (a uniform block in the engine, an array in the tests). Two graphs of one
 structure compile to the same source and share one program; editing a value compiles nothing.
+Tables are constants too: a Color Ramp's or a curve's baked entries (``_Writer.table``) are
+consecutive slots the library reads through ``graph_table(i)`` (glsl/node_ramp.glsl), which every
+compiled source defines ahead of its function as ``GRAPH_CONST(i)``: the program defines
+``GRAPH_CONST`` before the source, and holds one compiled graph. A table is 257 slots (65 for a
+Float Curve): a ramp costs 4 KiB of constants.
 
 Images and attributes are not in the source either: an Image Texture node's image is sampler
 ``graph_image_<k>`` (``Compiled.images[k]``: the image's key in ``Snapshot.images``), a named UV
