@@ -12,6 +12,7 @@ renderer, an ``EEVEE`` or ``CYCLES`` one is preferred by its renderer).
 from __future__ import annotations
 
 import bpy
+import numpy as np
 
 from ..materials import convert
 from ..scene import nodes as N
@@ -22,8 +23,9 @@ TARGET = "EEVEE"
 
 #: Properties every node has, which choose nothing it computes.
 _NODE_PROPS = {prop.identifier for prop in bpy.types.ShaderNode.bl_rna.properties} | {"rna_type"}
-#: Nodes whose outputs hold the value they give (the output socket's own value).
-_VALUE_NODES = ("ShaderNodeValue", "ShaderNodeRGB")
+#: Nodes whose outputs hold the value they give (the output socket's own value; the Normal node's
+#: direction is its Normal output's value).
+_VALUE_NODES = ("ShaderNodeValue", "ShaderNodeRGB", "ShaderNodeNormal")
 #: Property kinds the compiler reads (pointers such as an Image Texture's image are read apart).
 _VALUE_PROPS = {"ENUM", "BOOLEAN", "INT", "FLOAT", "STRING"}
 
@@ -58,6 +60,60 @@ def _props(node) -> dict:
     if target is not None:  # Texture Coordinate > Object in another object's space: its matrix, read now
         out["object_matrix"] = tuple(tuple(float(v) for v in row) for row in target.matrix_world.inverted())
     return out
+
+
+def _ramp(node) -> dict:
+    """A Color Ramp as Cycles bakes it (intern/cycles/blender/util.h colorramp_to_array): the ramp
+    Blender evaluates (BKE_colorband_evaluate: every interpolation and colour mode) at i / SIZE,
+    i = 0 .. SIZE; interpolated between entries unless the ramp is Constant."""
+    ramp = node.color_ramp
+    size = N.RAMP_TABLE_SIZE
+    table = tuple(tuple(float(c) for c in ramp.evaluate(i / size)) for i in range(size + 1))
+    return {"table": table, "interpolate": ramp.interpolation != "CONSTANT"}
+
+
+def _curves(node, count: int, compose: bool) -> dict:
+    """Curves as Cycles bakes them (util.h curvemapping_color_to_array, curvemapping_float_to_array):
+    each of the first ``count`` curves at SIZE + 1 positions spanning the x range of all their
+    points (min .. max, evaluated in float as Cycles does), the C curve first where ``compose``
+    (RGB Curves: R(C(x)) ...); one row per position, a float curve's value in x. BKE_curvemap_evaluateF
+    extends each curve past its points as the curve says (Extend)."""
+    mapping = node.mapping
+    mapping.update()  # what Cycles calls first (BKE_curvemapping_changed_all), then the tables
+    mapping.initialize()
+    curves = list(mapping.curves)[:count + (1 if compose else 0)]
+    lo = min(c.points[0].location[0] for c in curves)
+    hi = max(c.points[-1].location[0] for c in curves)
+    size = N.RAMP_TABLE_SIZE
+    i = np.arange(size + 1, dtype=np.float32)
+    xs = np.float32(lo) + i / np.float32(size) * (np.float32(hi) - np.float32(lo))
+    table = []
+    for x in xs.tolist():
+        if compose:
+            x_c = mapping.evaluate(curves[3], x)
+            row = [mapping.evaluate(c, x_c) for c in curves[:3]]
+        else:
+            row = [mapping.evaluate(c, x) for c in curves[:count]]
+        table.append(tuple(float(v) for v in row))
+    return {"table": tuple(table), "range": (float(lo), float(hi)),
+            "extrapolate": mapping.extend == "EXTRAPOLATED"}
+
+
+#: Nodes whose data the compiler reads beyond their properties: ramps and curves, baked as Cycles
+#: bakes them (their tables are constants of the compiled graph), and the colour matrices of
+#: the Blender that reads them.
+_BAKED = {
+    "ShaderNodeValToRGB": _ramp,
+    "ShaderNodeRGBCurve": lambda node: _curves(node, 3, True),
+    "ShaderNodeVectorCurve": lambda node: _curves(node, 3, False),
+    "ShaderNodeFloatCurve": lambda node: _curves(node, 1, False),
+    "ShaderNodeWavelength": lambda node: {"xyz_to_rgb": xyz_to_rgb()},
+}
+
+
+def xyz_to_rgb() -> tuple[tuple[float, float, float], ...]:
+    """CIE XYZ to scene linear (Rec. 709) as this Blender's Cycles holds it (its xyz_to_rgb)."""
+    return convert.XYZ_TO_RGB if bpy.app.version >= (5, 0, 0) else convert.XYZ_TO_RGB_4
 
 
 def luma() -> tuple[float, float, float]:
@@ -104,6 +160,9 @@ def read_node(node, images: dict | None = None) -> N.Node:
     props = _props(node)
     if node.bl_idname == "ShaderNodeTexImage":
         props.update(_image_props(node, images))
+    baked = _BAKED.get(node.bl_idname)
+    if baked is not None:
+        props.update(baked(node))
     return N.Node(name=node.name, kind=node.bl_idname, inputs=inputs, outputs=outputs, props=props,
                   muted=bool(node.mute), passes=passes, group=_group_key(tree) if tree is not None else None,
                   active_output=bool(getattr(node, "is_active_output", False)),

@@ -10,6 +10,11 @@ Constants are not in the source: every constant a node reads (an unlinked socket
 node) is a slot of ``Compiled.constants`` read through ``GRAPH_CONST(i)`` (a vec4), which the
 program defines (a uniform block in the engine, an array in the tests). Two graphs of one
 structure compile to the same source and share one program; editing a value compiles nothing.
+Tables are constants too: a Color Ramp's or a curve's baked entries (``_Writer.table``) are
+consecutive slots the library reads through ``graph_table(i)`` (glsl/node_ramp.glsl), which every
+compiled source defines ahead of its function as ``GRAPH_CONST(i)``: the program defines
+``GRAPH_CONST`` before the source, and holds one compiled graph. A table is 257 slots (65 for a
+Float Curve): a ramp costs 4 KiB of constants.
 
 Images and attributes are not in the source either: an Image Texture node's image is sampler
 ``graph_image_<k>`` (``Compiled.images[k]``: the image's key in ``Snapshot.images``), a named UV
@@ -48,7 +53,7 @@ GLSL_TYPES = {"VALUE": "float", "INT": "float", "BOOLEAN": "float", "VECTOR": "v
 #: The library files a compiled graph reads, in order.
 LIBRARY = ("node_inputs.glsl", "node_convert.glsl", "node_color.glsl", "node_math.glsl", "node_mix.glsl",
            "node_converter.glsl", "node_vector_math.glsl", "node_texture_image.glsl", "node_normal.glsl",
-           "node_closure.glsl")
+           "node_ramp.glsl", "node_vector.glsl", "node_closure.glsl")
 
 #: The Math node's operations, each its library function (glsl/node_math.glsl).
 MATH_OPERATIONS = (
@@ -159,6 +164,16 @@ class _Writer:
         self.constants.append(v)
         read = f"GRAPH_CONST({len(self.constants) - 1})"
         return {"RGBA": read, "VECTOR": read + ".xyz"}.get(type_, read + ".x")
+
+    def table(self, rows) -> int:
+        """The slot of the first of ``rows`` (each up to 4 floats, one vec4 constant each) in the
+        constants: a baked ramp or curve, which the library reads through ``graph_table(slot + k)``
+        (the slot is where the table is, the same for any values of a graph's structure)."""
+        base = len(self.constants)
+        for row in rows:
+            values = tuple(float(x) for x in row)
+            self.constants.append(values + (0.0,) * (4 - len(values)))
+        return base
 
     def arg(self, node: FlatNode, socket: str) -> str:
         """The GLSL expression of ``node``'s input ``socket``."""
@@ -506,6 +521,117 @@ def _luminance(w: _Writer, color: str) -> str:
     one Blender, one set)."""
     return f"convert_rgba_to_value({color}, vec3({', '.join(repr(c) for c in w.flat.luma)}))"
 
+# --- ramps, curves, vectors (glsl/node_ramp.glsl, node_vector.glsl, node_converter.glsl) ----------
+
+def _ramp(w: _Writer, node: FlatNode) -> dict | None:
+    """Color Ramp: the table the reader baked (every interpolation and colour mode), looked up
+    as Cycles' svm_node_rgb_ramp; Constant picks an entry, the others blend two."""
+    table = node.props.get("table")
+    if table is None:
+        return None
+    fn = "node_ramp_linear" if node.props.get("interpolate", True) else "node_ramp_constant"
+    color = w.once("vec4", f"{fn}({w.table(table)}, {w.arg(node, 'Fac')})")
+    return {"Color": color, "Alpha": f"{color}.a"}
+
+
+def _curves(w: _Writer, node: FlatNode) -> dict | None:
+    """RGB Curves, Vector Curves, Float Curve: the reader's table over the curves' x range, as
+    Cycles' svm_node_curves / svm_node_curve, extrapolated past the range where the curve's
+    Extend says so; the input blended with the result by the factor."""
+    table, bounds = node.props.get("table"), node.props.get("range")
+    if table is None or bounds is None:
+        return None
+    suffix = "_extrapolated" if node.props.get("extrapolate") else ""
+    lo, hi = (w.constant(b, "VALUE") for b in bounds)
+    if node.kind == "ShaderNodeFloatCurve":
+        values = [row[0] for row in table]
+        base = w.table([values[i:i + 4] for i in range(0, len(values), 4)])  # four to a vec4
+        args = f"{base}, {lo}, {hi}, {w.arg(node, 'Factor')}, {w.arg(node, 'Value')}"
+        return {"Value": f"node_float_curve{suffix}({args})"}
+    args = f"{w.table(table)}, {lo}, {hi}, {w.arg(node, 'Fac')}"
+    if node.kind == "ShaderNodeRGBCurve":
+        return {"Color": f"node_rgb_curves{suffix}({args}, {w.arg(node, 'Color')})"}
+    return {"Vector": f"node_vector_curves{suffix}({args}, {w.arg(node, 'Vector')})"}
+
+
+def _mapping(w: _Writer, node: FlatNode) -> dict | None:
+    """Mapping (Cycles' svm_mapping): Point and Texture with a Location, Vector and Normal without."""
+    kind = node.props.get("vector_type", "POINT")
+    if kind not in ("POINT", "TEXTURE", "VECTOR", "NORMAL"):
+        return None
+    names = ("Vector", "Location", "Rotation", "Scale") if kind in ("POINT", "TEXTURE") else \
+        ("Vector", "Rotation", "Scale")
+    return _call(f"node_mapping_{kind.lower()}", w, node, names, "Vector")
+
+
+_ROTATE_FUNCTIONS = {"AXIS_ANGLE": ("node_vector_rotate_axis_angle", ("Vector", "Center", "Axis")),
+                     "X_AXIS": ("node_vector_rotate_x", ("Vector", "Center")),
+                     "Y_AXIS": ("node_vector_rotate_y", ("Vector", "Center")),
+                     "Z_AXIS": ("node_vector_rotate_z", ("Vector", "Center"))}
+
+
+def _vector_rotate(w: _Writer, node: FlatNode) -> dict | None:
+    """Vector Rotate (Cycles' svm_node_vector_rotate): about an axis (Invert: the angle negated)
+    or by an Euler rotation (Invert: its inverse), around Center."""
+    kind, invert = node.props.get("rotation_type"), bool(node.props.get("invert"))
+    if kind == "EULER_XYZ":
+        fn = "node_vector_rotate_euler_inverse" if invert else "node_vector_rotate_euler"
+        return _call(fn, w, node, ("Vector", "Center", "Rotation"), "Vector")
+    if kind not in _ROTATE_FUNCTIONS:
+        return None
+    fn, names = _ROTATE_FUNCTIONS[kind]
+    angle = w.arg(node, "Angle")
+    args = [w.arg(node, s) for s in names] + [f"-{angle}" if invert else angle]
+    return {"Vector": f"{fn}({', '.join(args)})"}
+
+
+def _normal(w: _Writer, node: FlatNode) -> dict:
+    """The Normal node (Cycles' svm_node_normal): its direction (a constant) made unit, and its
+    cosine to the input."""
+    direction = w.constant(node.values.get("Normal", (0.0, 0.0, 1.0)), "VECTOR")
+    return {"Normal": f"node_normal_direction({direction})",
+            "Dot": f"node_normal_dot({direction}, {w.arg(node, 'Normal')})"}
+
+
+def _wavelength(w: _Writer, node: FlatNode) -> dict | None:
+    rows = node.props.get("xyz_to_rgb")
+    if rows is None:
+        return None
+    args = ", ".join([w.arg(node, "Wavelength"), *(w.constant(row, "VECTOR") for row in rows)])
+    return {"Color": f"node_wavelength({args})"}
+
+
+def _mix_rgb(w: _Writer, node: FlatNode) -> dict | None:
+    """The legacy Mix node (ShaderNodeMixRGB) as Cycles' svm_node_mix: the factor clamped to
+    [0, 1] (svm_mix_clamped_factor), the blend mode's function of glsl/node_mix.glsl, the result
+    clamped where Clamp is on; Use Alpha is not read (Cycles does not); Color1's alpha kept."""
+    fn = _MIX_FUNCTIONS.get(node.props.get("blend_type"))
+    if fn is None:
+        return None
+    a = w.arg(node, "Color1")
+    rgb = f"{fn}(clamp({w.arg(node, 'Fac')}, 0.0, 1.0), {a}.rgb, {w.arg(node, 'Color2')}.rgb)"
+    if node.props.get("use_clamp"):
+        rgb = f"clamp({rgb}, 0.0, 1.0)"
+    return {"Color": f"vec4({rgb}, {a}.a)"}
+
+
+def _separate(space: str, inputs: str, outputs: tuple[str, str, str]):
+    """The legacy Separate RGB / HSV (Blender 4): the colour's channels, or its HSV (Cycles'
+    svm_node_separate_hsv)."""
+    def emit(w: _Writer, node: FlatNode) -> dict:
+        color = f"{w.arg(node, inputs)}.rgb"
+        value = color if space == "RGB" else w.once("vec3", f"color_rgb_to_hsv({color})")
+        return {name: f"{value}.{c}" for name, c in zip(outputs, "xyz") if name in node.outputs}
+    return emit
+
+
+def _combine(space: str, inputs: tuple[str, str, str], output: str):
+    """The legacy Combine RGB / HSV (Blender 4): a colour of the three (Cycles' svm_node_combine_hsv)."""
+    def emit(w: _Writer, node: FlatNode) -> dict:
+        rgb = f"vec3({', '.join(w.arg(node, s) for s in inputs)})"
+        return {output: f"vec4({rgb if space == 'RGB' else f'color_hsv_to_rgb({rgb})'}, 1.0)"}
+    return emit
+
 
 #: The Principled BSDF's inputs the models read, in glsl/node_closure.glsl's closure_principled order.
 PRINCIPLED_INPUTS = ("Base Color", "Metallic", "Roughness", "IOR", "Specular IOR Level", "Alpha",
@@ -658,6 +784,20 @@ EMITTERS = {
     "ShaderNodeSeparateXYZ": _separate_xyz,
     "ShaderNodeCombineXYZ": _combine_xyz,
     "ShaderNodeTexImage": _image_texture,
+    "ShaderNodeValToRGB": _ramp,
+    "ShaderNodeRGBCurve": _curves,
+    "ShaderNodeVectorCurve": _curves,
+    "ShaderNodeFloatCurve": _curves,
+    "ShaderNodeBlackbody": lambda w, n: _call("node_blackbody", w, n, ("Temperature",), "Color"),
+    "ShaderNodeWavelength": _wavelength,
+    "ShaderNodeMapping": _mapping,
+    "ShaderNodeVectorRotate": _vector_rotate,
+    "ShaderNodeNormal": _normal,
+    "ShaderNodeMixRGB": _mix_rgb,
+    "ShaderNodeSeparateRGB": _separate("RGB", "Image", ("R", "G", "B")),
+    "ShaderNodeCombineRGB": _combine("RGB", ("R", "G", "B"), "Image"),
+    "ShaderNodeSeparateHSV": _separate("HSV", "Color", ("H", "S", "V")),
+    "ShaderNodeCombineHSV": _combine("HSV", ("H", "S", "V"), "Color"),
     CONVERT: _convert,
     **CLOSURES,
 }
@@ -686,6 +826,9 @@ def compile_graph(flat: FlatGraph, targets: dict[str, tuple[str, str]], name: st
         types[target] = GLSL_TYPES.get(node.inputs[socket].type, "float")
         assigns.append(f"  {target} = {w.arg(node, socket)};")
     params = ", ".join(["GraphInputs g", *(f"out {t} {n}" for n, t in types.items())])
-    source = "\n".join([f"void {name}({params})", "{", *w.lines, *assigns, "}", ""])
+    # the tables' reader the library declares (glsl/node_ramp.glsl; the linker wants it defined
+    # whether or not the graph reads a table): one compiled graph per program
+    prelude = ["vec4 graph_table(int i) { return GRAPH_CONST(i); }", ""]
+    source = "\n".join([*prelude, f"void {name}({params})", "{", *w.lines, *assigns, "}", ""])
     constants = np.array(w.constants or [(0.0, 0.0, 0.0, 0.0)], np.float32).reshape(-1, 4)
     return Compiled(name, source, constants, types, w.missing, tuple(w.images), tuple(w.attributes))

@@ -21,6 +21,10 @@ GROUP_OUTPUT = "NodeGroupOutput"
 REROUTE = "NodeReroute"
 MATERIAL_OUTPUT = "ShaderNodeOutputMaterial"
 
+#: Ramps and curves are read as Cycles bakes them (its RAMP_TABLE_SIZE): a table of
+#: RAMP_TABLE_SIZE + 1 entries at i / RAMP_TABLE_SIZE of their range (``Node.props["table"]``).
+RAMP_TABLE_SIZE = 256
+
 
 @dataclass(frozen=True)
 class Socket:
