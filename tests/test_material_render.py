@@ -232,3 +232,41 @@ def test_emission_per_fragment(tmp_path):
     _, _, rel = _against_cycles(scene, tmp_path)
     _within(rel, 1.3e-4, 9.7e-4, "emission mixed and added")
 
+
+
+def _vertex_coloured():
+    """glTF's vertex colours as the importer wires them: a Color Attribute multiplied into the base
+    colour (a Mix node), the mesh's byte colours per corner and a float point attribute by name into
+    Roughness through an Attribute node."""
+    mat, tree, out = _tree("Vertex coloured")
+    bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
+    tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    colour = tree.nodes.new("ShaderNodeVertexColor")  # the default colour attribute
+    mix = tree.nodes.new("ShaderNodeMix")
+    mix.data_type, mix.blend_type = "RGBA", "MULTIPLY"
+    _socket(mix.inputs, "Factor_Float").default_value = 1.0
+    _socket(mix.inputs, "A_Color").default_value = (0.9, 0.8, 0.7, 1.0)
+    tree.links.new(colour.outputs["Color"], _socket(mix.inputs, "B_Color"))
+    tree.links.new(_socket(mix.outputs, "Result_Color"), bsdf.inputs["Base Color"])
+    attribute = tree.nodes.new("ShaderNodeAttribute")
+    attribute.attribute_name = "rough"
+    tree.links.new(attribute.outputs["Fac"], bsdf.inputs["Roughness"])
+    return mat
+
+
+def test_attributes_per_corner_and_point(tmp_path):
+    scene, sphere = _scene(_vertex_coloured)
+    mesh = sphere.data
+    rng = np.random.default_rng(5)
+    # byte colours per corner, continuous over the surface (each vertex's colour at its corners:
+    # colours jumping between a face's corners make a pixel on a shared edge take either face's)
+    colours = mesh.color_attributes.new("Col", "BYTE_COLOR", "CORNER")
+    corner_verts = np.empty(len(mesh.loops), np.int32)
+    mesh.loops.foreach_get("vertex_index", corner_verts)
+    per_vertex = rng.uniform(0.0, 1.0, (len(mesh.vertices), 4)).astype(np.float32)
+    colours.data.foreach_set("color", per_vertex[corner_verts].ravel())
+    mesh.color_attributes.render_color_index = mesh.color_attributes.active_color_index = 0
+    rough = mesh.attributes.new("rough", "FLOAT", "POINT")
+    rough.data.foreach_set("value", rng.uniform(0.1, 0.9, len(mesh.vertices)).astype(np.float32))
+    _, _, rel = _against_cycles(scene, tmp_path)
+    _within(rel, 8.2e-4, 5.9e-3, "colour attribute and attribute")

@@ -630,7 +630,10 @@ class SceneResources:
                       "graph_object_info": (float(item.pass_index), float(material.pass_index), item.random,
                                             0.0)}
             for name in pushed:
-                shader.uniform_float(name, values[name])
+                try:
+                    shader.uniform_float(name, values[name])
+                except ValueError:  # the compiler removed it: an output that no input reads
+                    pass
 
     def _bind_object(self, shader, draw: Draw, block: int) -> int:
         """Bind ``draw``'s object: its block of objects (unless ``block``, the one bound, holds it)
