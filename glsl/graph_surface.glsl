@@ -12,14 +12,13 @@ float graph_shininess(float roughness)
   return clamp(2.0 / (a * a) - 2.0, 1.0, 1e4);
 }
 
-/* A mesh's tangent attribute (object space, w the bitangent's sign) in world space, as the vertex
- * stage turns the active UV map's (a mirror reverses the bitangent) */
+/* A mesh's tangent attribute (object space, w the bitangent's sign) in world space, its sign as
+ * the mesh has it (GraphInputs.tangent's) */
 vec4 graph_tangent_to_world(vec4 t)
 {
-  ObjectData object = objects.object[object_index];
-  vec3 w = mat3(object.model) * t.xyz;
+  vec3 w = mat3(objects.object[object_index].model) * t.xyz;
   float len2 = dot(w, w);
-  return vec4(len2 > 1e-20 ? w * inversesqrt(len2) : vec3(0.0), t.w * object.normal_matrix[3][3]);
+  return vec4(len2 > 1e-20 ? w * inversesqrt(len2) : vec3(0.0), t.w);
 }
 
 /* The graph's inputs at this fragment: n the interpolated normal facing the viewer, v towards
@@ -40,8 +39,10 @@ GraphInputs graph_inputs(vec3 n, vec3 v, bool backfacing)
   ObjectData object = objects.object[object_index];
   g.tangent = vec4(0.0);
 #ifdef SL_GRAPH_TANGENT
+  /* the bitangent's sign as the mesh has it (Cycles'): the vertex stage's carries the mirror's too */
   float t2 = dot(world_tangent.xyz, world_tangent.xyz);
-  g.tangent = vec4(t2 > 1e-20 ? world_tangent.xyz * inversesqrt(t2) : vec3(0.0), world_tangent.w);
+  g.tangent = vec4(t2 > 1e-20 ? world_tangent.xyz * inversesqrt(t2) : vec3(0.0),
+                   world_tangent.w * object.normal_matrix[3][3]);
 #endif
 #if defined(SL_GRAPH_OBJECT) || defined(SL_GRAPH_GENERATED)
   g.object = object_position;

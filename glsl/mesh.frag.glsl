@@ -186,8 +186,6 @@ MaterialData load_material(int row)
   m.ior_n = texelFetch(material_table, ivec2(6, row), 0);
   m.ior_k = texelFetch(material_table, ivec2(7, row), 0);
   m.emission = texelFetch(material_table, ivec2(8, row), 0);
-  m.uv_x = texelFetch(material_table, ivec2(9, row), 0);
-  m.uv_y = texelFetch(material_table, ivec2(10, row), 0);
   return m;
 }
 #endif
@@ -214,17 +212,16 @@ void main()
   MaterialData m = load_material(int(g_position.w));
   Surface s = make_surface(p, n, view_direction(p), m);
 #else
-  /* textures and screen derivatives first: they need every fragment of the quad alive */
-  vec2 uv = map_uv(material, world_uv);
-  vec3 n = apply_normal_map(shading_normal(world_position), uv, world_tangent,
-                            material.fresnel.w);
+  /* screen derivatives and textures (the node graph's) first: they need every fragment of the
+   * quad alive */
+  vec3 n = shading_normal(world_position);
 #ifdef SL_SHADOWS
   /* the flat face's normal, for shadow lookups (the receiver's plane) */
   vec3 ng = face_normal(world_position, n);
 #else
   vec3 ng = n; /* no shadow lookups */
 #endif
-  MaterialData m = apply_material_maps(material, uv);
+  MaterialData m = material;
   bool outward = facing_outward();
   vec3 v = view_direction(world_position);
 #ifdef SL_GRAPH

@@ -13,7 +13,8 @@ struct GraphInputs {
   vec3 ng;              /* unit true normal, the flat face's (Cycles' sd->Ng, facing the viewer) */
   vec3 i;               /* unit direction towards the viewer (Cycles' sd->wi) */
   bool backfacing;      /* the fragment is a back face */
-  vec4 tangent;         /* xyz: unit tangent of the active UV map (0: none); w: the bitangent's sign */
+  vec4 tangent;         /* xyz: unit tangent of the active UV map (0: none); w: the bitangent's sign
+                         * as the mesh has it (object space: a mirrored object's is not flipped) */
   vec3 object;          /* the position in object space */
   vec3 generated;       /* Generated coordinates: the object-space position in the object's
                          * original bounds, 0..1 (Blender's texture space) */

@@ -59,15 +59,11 @@ struct MaterialData {
   vec4 specular_color;   /* rgb: Blinn-Phong/Phong specular colour */
   vec4 ambient_color;    /* rgb: Blinn-Phong/Phong ambient colour */
   vec4 params;           /* x: perceptual roughness r; y: metalness; z: shininess; w: dielectric F0 */
-  vec4 fresnel;          /* x: F90 (< 0: automatic); y: eq. 1.13's p; z: 1 if ior_n/ior_k are set;
-                          * w: normal-map strength */
+  vec4 fresnel;          /* x: F90 (< 0: automatic); y: eq. 1.13's p; z: 1 if ior_n/ior_k are set */
   vec4 ior_n;            /* rgb: conductor IOR, real part */
   vec4 ior_k;            /* rgb: conductor IOR, imaginary part (extinction) */
   vec4 emission;         /* rgb: emitted radiance (Principled Emission Color x Strength);
                           * w: alpha (coverage, 1 opaque) */
-  vec4 uv_x;             /* the maps' UVs: u' = dot(uv_x.xy, uv) + uv_x.z (a Mapping node); w: the
-                          * extension, 0 repeat, 1 extend, 2 clip, 3 mirror */
-  vec4 uv_y;             /* v' = dot(uv_y.xy, uv) + uv_y.z */
 };
 
 /* The world's light, precomputed (glsl/ibl.glsl, addon/reference/environment.py): nine SH coefficients

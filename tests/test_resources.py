@@ -107,7 +107,7 @@ def test_1000_renders_free_every_gpu_object_they_make_and_keep_memory_flat(tmp_p
     monkeypatch.setattr(engine, "Renderer", _TrackedRenderer)
     # every other render shades deferred (its G-buffer and material table made and freed too)
     monkeypatch.setattr(passes, "deferred_pays", lambda features, *_counts:
-                        deferred[0] and not features.peel and not features.maps)
+                        deferred[0] and not features.peel and features.graph is None)
     deferred = [False]
     gbuffers = []
     monkeypatch.setattr(passes, "GBuffer", lambda *args: gbuffers.append(1) or original_gbuffer(*args))

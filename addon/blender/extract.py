@@ -57,117 +57,13 @@ def _input(node, name, default):
     return default if socket is None else socket.default_value
 
 
-def _image_map(node, name, images: dict | None, through_normal_map: bool = False):
-    """(image key, nearest filtering) of an Image Texture node linked straight into ``name`` (or,
-    for normals, through a tangent-space Normal Map node), with the Normal Map's strength; the
-    image itself goes into ``images`` under its key."""
-    socket = node.inputs.get(name)
-    if socket is None or not socket.is_linked:
-        return None, 1.0
-    source = socket.links[0].from_node
-    strength = 1.0
-    if through_normal_map:
-        if source.bl_idname != "ShaderNodeNormalMap" or source.space != "TANGENT":
-            return None, 1.0
-        strength = float(source.inputs["Strength"].default_value)
-        color = source.inputs.get("Color")
-        if color is None or not color.is_linked:
-            return None, 1.0
-        source = color.links[0].from_node
-    if source.bl_idname != "ShaderNodeTexImage" or source.image is None:
-        return None, 1.0
-    key = image_key(source.image)
-    if images is not None:
-        images[key] = source.image
-    return (key, source.interpolation == "Closest"), strength
-
-
-IDENTITY_UV = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0)
-
-
-def _uv_mapping(texture_node) -> tuple[tuple[float, ...], str, str]:
-    """(uv transform, extension, what is not read) of an Image Texture node: its Vector from the
-    UV map directly or through a Mapping node (Point or Texture; its Z rotation, X/Y location and
-    scale act on the UVs), its Extension."""
-    extension = getattr(texture_node, "extension", "REPEAT")
-    vector = texture_node.inputs.get("Vector")
-    if vector is None or not vector.is_linked:
-        return IDENTITY_UV, extension, ""
-    mapping = vector.links[0].from_node
-    if mapping.bl_idname in ("ShaderNodeUVMap", "ShaderNodeTexCoord"):
-        return IDENTITY_UV, extension, ""
-    if mapping.bl_idname != "ShaderNodeMapping" or mapping.vector_type not in ("POINT", "TEXTURE"):
-        return IDENTITY_UV, extension, f"its {mapping.name} node on the texture's Vector"
-    loc = tuple(mapping.inputs["Location"].default_value)
-    rot = tuple(mapping.inputs["Rotation"].default_value)
-    scale = tuple(mapping.inputs["Scale"].default_value)
-    linked = [s.name for s in mapping.inputs if s.is_linked and s.name != "Vector"]
-    unread = f"the Mapping node's linked {', '.join(linked)}" if linked else ""
-    if abs(rot[0]) > 1e-6 or abs(rot[1]) > 1e-6:
-        unread = "the Mapping node's X/Y rotation"
-    c, s = math.cos(rot[2]), math.sin(rot[2])
-    if mapping.vector_type == "POINT":  # uv' = Rz (scale * uv) + location
-        m = np.array([[c * scale[0], -s * scale[1], loc[0]], [s * scale[0], c * scale[1], loc[1]]])
-    else:  # TEXTURE, the inverse: uv' = (Rz^-1 (uv - location)) / scale
-        inv = np.array([[c, s], [-s, c]]) / np.array([[scale[0]], [scale[1]]])
-        m = np.hstack([inv, -inv @ np.array(loc[:2])[:, None]])
-    return tuple(float(x) for x in m.ravel()), extension, unread
-
-
-#: The surface shaders read, and the Principled BSDF inputs whose images are read.
-READ_SHADERS = ("ShaderNodeBsdfPrincipled", "ShaderNodeEmission", "ShaderNodeBsdfDiffuse",
-                "ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic")
-READ_PRINCIPLED_MAPS = ("Base Color", "Metallic", "Roughness", "Normal")
-
-
-def _texture_nodes(node) -> list:
-    """The Image Texture nodes a Principled BSDF reads (straight, or through its Normal Map)."""
-    found = []
-    for name in READ_PRINCIPLED_MAPS:
-        socket = node.inputs.get(name)
-        if socket is None or not socket.is_linked:
-            continue
-        source = socket.links[0].from_node
-        if source.bl_idname == "ShaderNodeNormalMap":
-            color = source.inputs.get("Color")
-            source = color.links[0].from_node if color is not None and color.is_linked else None
-        if source is not None and source.bl_idname == "ShaderNodeTexImage" and source.image is not None:
-            found.append(source)
-    return found
-
-
-def _unread_parts(material, node) -> list[str]:
-    """What of ``material``'s surface Shading Lab does not read (for ``Snapshot.warnings``)."""
-    if node is None:
-        return []
-    if node.bl_idname not in READ_SHADERS:
-        return [f"Material '{material.name}': its surface shader ({node.name}) is not read; it is drawn "
-                f"with its viewport display values"]
-    if node.bl_idname != "ShaderNodeBsdfPrincipled":
-        return []
-    unread = []
-    for socket in node.inputs:
-        if not socket.is_linked or not socket.enabled:
-            continue
-        source = socket.links[0].from_node
-        image_like = source.bl_idname in ("ShaderNodeTexImage", "ShaderNodeNormalMap")
-        if socket.name in READ_PRINCIPLED_MAPS and image_like:
-            continue
-        if socket.name == "Alpha" and source.bl_idname == "ShaderNodeTexImage":
-            continue
-        unread.append(socket.name)
-    if not unread:
-        return []
-    return [f"Material '{material.name}': {', '.join(unread)} driven by nodes Shading Lab does not read; "
-            f"their own values are used"]
-
-
 def material_params(material: bpy.types.Material | None, images: dict | None = None,
                     warnings: list[str] | None = None) -> S.MaterialParams:
     """Explicit Shading Lab values where the user set them, else the surface shader's values
-    (Principled, Diffuse or Glossy BSDF), else the material's viewport display values. Images the
-    material samples are added to ``images`` (key -> ``bpy.types.Image``); what of the shader is
-    not read is said in ``warnings``."""
+    (Principled, Diffuse or Glossy BSDF), else the material's viewport display values; a surface
+    with nodes linked into it is compiled (``MaterialParams.graph``: its values per fragment). Images
+    the graph samples are added to ``images`` (key -> ``bpy.types.Image``); what of it is not
+    compiled is said in ``warnings``."""
     if material is None:
         return S.DEFAULT_MATERIAL
     maps: dict = {}
@@ -177,7 +73,6 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
     f0 = S.DEFAULT_F0
     node = _linked_surface_node(material)
     kind = node.bl_idname if node is not None else ""
-    unread = _unread_parts(material, node)
     if kind == "ShaderNodeBsdfPrincipled":
         base = _rgb(_input(node, "Base Color", base))
         metal = float(_input(node, "Metallic", metal))
@@ -185,27 +80,8 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
         level = float(_input(node, "Specular IOR Level", 0.5))
         f0 = min(S.f0_from_ior(float(_input(node, "IOR", 1.5))) * 2.0 * level, 1.0)
         maps["alpha"] = float(_input(node, "Alpha", 1.0))
-        alpha_socket = node.inputs.get("Alpha")
-        if alpha_socket is not None and alpha_socket.is_linked:
-            source = alpha_socket.links[0]
-            base_ref = _image_map(node, "Base Color", None)[0]
-            if (source.from_node.bl_idname == "ShaderNodeTexImage" and source.from_socket.name == "Alpha"
-                    and base_ref is not None and source.from_node.image is not None
-                    and image_key(source.from_node.image) == base_ref[0]):
-                maps["alpha_from_base_map"] = True
         strength = float(_input(node, "Emission Strength", 0.0))
         maps["emission"] = tuple(c * strength for c in _rgb(_input(node, "Emission Color", (0, 0, 0))))
-        maps.update({"base_color_map": _image_map(node, "Base Color", images)[0],
-                     "metallic_map": _image_map(node, "Metallic", images)[0],
-                     "roughness_map": _image_map(node, "Roughness", images)[0]})
-        maps["normal_map"], maps["normal_strength"] = _image_map(node, "Normal", images,
-                                                                 through_normal_map=True)
-        mappings = {_uv_mapping(n) for n in _texture_nodes(node)}
-        if mappings:
-            maps["uv_transform"], maps["extension"], unread = sorted(mappings)[0]
-            if warnings is not None and (len(mappings) > 1 or unread):
-                what = unread or "different mappings or extensions on its textures (the first is used)"
-                warnings.append(f"Material '{material.name}': {what} not read")
     elif kind == "ShaderNodeEmission":  # a pure emitter: no reflection
         base, metal, f0 = (0.0, 0.0, 0.0), 0.0, 0.0
         strength = float(_input(node, "Strength", 1.0))
@@ -215,24 +91,15 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
     elif kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"):
         base, metal = _rgb(_input(node, "Color", base)), 1.0
         rough = float(_input(node, "Roughness", rough))
-    mapped = any(maps.get(name) for name in S.MaterialParams.MAPS)
-    graph = _material_graph(material, images, warnings, mapped)
-    if graph is not None:  # the compiled graph reads every texture, per fragment
-        for key in S.MaterialParams.MAPS:
-            maps.pop(key, None)
-        maps.update(graph=graph, alpha_from_base_map=False)
+    graph = _material_graph(material, images, warnings)
+    if graph is not None:  # its closures' inputs, per fragment
+        maps["graph"] = graph
     props = getattr(material, "shading_lab", None)
     if props is not None:  # explicit values win over the shader's, textures included
         base = _rgb(props.base_color) if props.use_base_color else base
         metal = float(props.metalness) if props.use_metalness else metal
         rough = float(props.roughness) if props.use_roughness else rough
         f0 = float(props.f0) if props.use_f0 else f0
-        for flag, key in (("use_base_color", "base_color_map"), ("use_metalness", "metallic_map"),
-                          ("use_roughness", "roughness_map")):
-            if getattr(props, flag):
-                maps.pop(key, None)
-    if warnings is not None and graph is None:
-        warnings.extend(unread)
     metal = min(max(metal, 0.0), 1.0)
     rough = min(max(rough, 0.0), 1.0)
     # Blinn-Phong/Phong fallbacks from the physically based values: a metal's colour goes to its
@@ -272,20 +139,17 @@ GRAPH_KEEP = {"base_color": "use_base_color", "metalness": "use_metalness", "rou
               "ambient_color": "use_ambient_color"}
 
 
-def _material_graph(material, images: dict | None, warnings: list[str] | None,
-                    mapped: bool) -> surface.MaterialGraph | None:
+def _material_graph(material, images: dict | None,
+                    warnings: list[str] | None) -> surface.MaterialGraph | None:
     """The material's node graph compiled (``surface.compile_material``), None where its surface is
     one closure with nothing linked into it; the images it samples go into ``images``. The nodes
-    it could not compile are said in ``warnings``; where the constant path reads image maps the
-    graph could not (``mapped``), that path draws it."""
+    it could not compile are said in ``warnings``."""
     found: dict = {}
     read = nodes.read_material(material, images=found)
     if read is None:
         return None
     graph = surface.compile_material(*read)
     if graph is None:
-        return None
-    if graph.missing and mapped:
         return None
     if images is not None:
         images.update((key, found[key]) for key in graph.images)
@@ -1247,8 +1111,7 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
         if key not in snap.geometries:
             geometry = reusable.get(key)
             graphs = [snap.materials[m].graph for m in slots if snap.materials[m].graph is not None]
-            tangents = any(snap.materials[m].normal_map is not None for m in slots) or any(
-                "tangent" in g.program.uses for g in graphs)
+            tangents = any("tangent" in g.program.uses for g in graphs)
             wanted = {a for g in graphs for a in g.attributes}
             if geometry is None or _is_dirty(obj, dirty) or (tangents and geometry.tangents is None) or \
                     not wanted <= geometry.attributes.keys():
@@ -1306,25 +1169,14 @@ def choose_terms(snap: S.Snapshot, previous: dict | None = None, camera: S.Camer
 
 
 def _material_with_images(snap: S.Snapshot, material) -> S.MaterialParams:
-    """``material_params``, with the pixels of the images it samples added to ``snap.images``;
-    a map whose image has no pixels is dropped (and said in ``snap.warnings``)."""
+    """``material_params``, with the pixels of the images its graph samples added to
+    ``snap.images`` (an image without pixels is said in ``snap.warnings`` and drawn as Blender
+    draws a missing image)."""
     found: dict = {}
     params = material_params(material, found, snap.warnings)
-    dropped = {}
-    for name in S.MaterialParams.MAPS:
-        ref = getattr(params, name)
-        if ref is None or ref[0] in snap.images:
-            continue
-        data = IMAGES.get(ref[0], found[ref[0]], snap.warnings)
-        if data is None:
-            dropped[name] = None
-        else:
-            snap.images[ref[0]] = data
-    if "base_color_map" in dropped:
-        dropped["alpha_from_base_map"] = False
     for key in params.graph.images if params.graph is not None else ():
         if key not in snap.images:
             data = IMAGES.get(key, found[key], snap.warnings)
-            if data is not None:  # else the graph samples Blender's missing-image magenta
+            if data is not None:
                 snap.images[key] = data
-    return dataclasses.replace(params, **dropped) if dropped else params
+    return params

@@ -330,8 +330,6 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     info.typedef_source(typedefs)
     samplers = {0: "ms_table" if features.uses_albedo_table else None,
                 1: "s_table" if features.uses_s_table else None}
-    for slot, name in enumerate(("base_color", "metallic", "roughness", "normal"), start=2):
-        samplers[slot] = name + "_map" if features.has_map(name.upper()) else None
     if features.peel:
         samplers.update({6: "opaque_depth", 7: "peel_depth"})
     samplers[8] = "env_atlas" if features.environment == "MAP" else None  # irradiance, levels

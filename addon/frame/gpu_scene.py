@@ -517,8 +517,7 @@ class SceneResources:
                 if material.graph is not None and material.graph.attributes:
                     batch = self._attribute_batch(item.geometry, slot, parts, material.graph.attributes)
                 draw = Draw(order, order // block_size, order % block_size, key, batch)
-                if material.alpha < 1.0 or features[key].alpha_from_base_map or (
-                        material.graph is not None and material.graph.transparent):
+                if material.alpha < 1.0 or (material.graph is not None and material.graph.transparent):
                     blended.setdefault(replace(features[key], peel=True, occlusion=False), []).append(draw)
                 else:
                     opaque.setdefault(features[key], []).append(draw)
@@ -595,7 +594,6 @@ class SceneResources:
         draw's: callers restore it)."""
         shader = self._bind_program(features, lobes, bind)
         materials = self.snapshot.materials
-        samplers = [(name.removesuffix("_CLOSEST").lower() + "_map") for name in features.maps]
         pushed = gpu_library.graph_push_constants(features.graph) if features.graph is not None else ()
         block = -1
         mode = None
@@ -605,9 +603,6 @@ class SceneResources:
             mode = _cull(culling, draw, mode)
             block = self._bind_object(shader, draw, block)
             shader.uniform_block("material", self._materials[draw.material].ubo)
-            for sampler in samplers:
-                image_key = getattr(materials[draw.material], sampler)[0]
-                gpu_library.bind_sampler(shader, sampler, self._textures[image_key][1])
             if features.graph is not None:
                 self._bind_graph(shader, draw, materials[draw.material].graph, pushed)
             draw.batch.draw(shader)

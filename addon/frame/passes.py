@@ -735,7 +735,7 @@ def deferred_pays(features: programs.Features, triangles: int, pixels: int,
     (65 px) 274 -> 288, world at 640 x 360 (48 px) 84 -> 86 (those stay forward). Shading all
     surfaces deferred lost 4-16 % on the presets of one or two lights without penumbrae (fresnel,
     hdr, long_tail: the G-buffer's writes). ``lights``: as ``costly_shading``'s."""
-    if not (DEFERRED and not features.peel and not features.maps and pixels <= DEFERRED_PIXELS
+    if not (DEFERRED and not features.peel and features.graph is None and pixels <= DEFERRED_PIXELS
             and costly_shading(features, lights)):
         return False
     heaviest = heaviest_shading(features, lights)

@@ -69,6 +69,9 @@ class MaterialGraph:
     transparent: bool
     #: closures' inputs linked to nodes that the models do not read ("Coat Weight (Principled BSDF)")
     unread: list[str] = ()
+    #: the Principled BSDF's inputs an image gives as it is (``textured``), for the Auto term set's
+    #: prediction, which samples their texels
+    textured: dict = None
 
     @property
     def compiled_share(self) -> float:
@@ -159,7 +162,36 @@ def compile_material(graph: Graph, groups: dict[str, Graph]) -> MaterialGraph | 
                            kinds)
     return MaterialGraph(program, compiled.constants, compiled.images, compiled.attributes, compiled.missing,
                          _node_count(flat), _transparent(flat),
-                         _unread(flat))
+                         _unread(flat), _textured(flat))
+
+
+#: MaterialParams' field of each Principled BSDF input ``textured`` reads.
+TEXTURED_INPUTS = {"Base Color": "base_color", "Metallic": "metalness", "Roughness": "roughness"}
+
+
+def _textured(flat: FlatGraph) -> dict:
+    """{MaterialParams field: (image key, channel)} of the one Principled BSDF's Base Color,
+    Metallic and Roughness that an Image Texture gives unchanged: its Color (channel None: the
+    colour; "luma": a float input reading it, the flat graph's weights), or one channel (0-2) of it
+    through a Separate Color in RGB mode (a glTF ORM texture)."""
+    principled = [n for n in flat.nodes.values() if n.kind == "ShaderNodeBsdfPrincipled"]
+    if len(principled) != 1:
+        return {}
+    out = {}
+    for socket, field in TEXTURED_INPUTS.items():
+        spec = principled[0].inputs.get(socket)
+        if spec is None or isinstance(spec.source, Const):
+            continue
+        node, channel = flat.nodes[spec.source.node], None
+        if node.kind == "Convert" and node.props.get("from") == "RGBA":
+            node, channel = flat.nodes.get(getattr(node.inputs["Value"].source, "node", "")), "luma"
+        elif node is not None and node.kind == "ShaderNodeSeparateColor" and node.props.get("mode") == "RGB":
+            channel = ("Red", "Green", "Blue").index(spec.source.socket)
+            source = node.inputs["Color"].source
+            node = flat.nodes.get(source.node) if not isinstance(source, Const) else None
+        if node is not None and node.kind == "ShaderNodeTexImage" and node.props.get("image"):
+            out[field] = (node.props["image"], channel)
+    return out
 
 
 #: What of each closure the shading models read (the rest is drawn as nothing: Principled BSDF's

@@ -38,6 +38,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..materials.convert import LUMA
 from ..reference import environment, shading
 from ..reference.brdf import half_vector
 from ..scene.snapshot import (
@@ -469,14 +470,19 @@ def material_samples(snapshot: Snapshot, key: str, count: int = SAMPLES, camera=
     pick = np.concatenate([pick, highlights])
     material = snapshot.materials[key]
     changes = {}
-    for name, field, channel in (("base_color_map", "base_color", slice(0, 3)),
-                                 ("metallic_map", "metalness", 0), ("roughness_map", "roughness", 0)):
-        ref = getattr(material, name)
-        image = snapshot.images.get(ref[0]) if ref is not None else None
-        if image is not None:
-            values = _texels(image, len(pick), rng)[:, channel]  # a texel for every point
-            changes[field] = np.clip(values, 0.0, None if field == "base_color" else 1.0)
-            changes[name] = None
+    textured = material.graph.textured if material.graph is not None else {}
+    for field, (image_key, channel) in sorted(textured.items()):
+        image = snapshot.images.get(image_key)
+        if image is None or field in material.graph_keep:
+            continue
+        texels = _texels(image, len(pick), rng)  # a texel for every point
+        if channel is None:
+            values = texels[:, :3]
+        elif channel == "luma":
+            values = texels[:, :3] @ np.array(LUMA)
+        else:
+            values = texels[:, channel]
+        changes[field] = np.clip(values, 0.0, None if field == "base_color" else 1.0)
     if changes:
         material = replace(material, **changes)
     return Samples(p[pick], n[pick], v[pick], material, share)
@@ -701,8 +707,8 @@ def _prediction_key(snapshot: Snapshot, key: str, items, camera, world: bytes | 
     """Everything a material's prediction depends on: its parameters and images, the geometry
     drawn with it and where, the view, the lights, the world, the candidates."""
     material = snapshot.materials[key]
-    images = tuple(id(snapshot.images.get(getattr(material, name)[0])) for name in MaterialParams.MAPS
-                   if getattr(material, name) is not None)
+    images = tuple(id(snapshot.images.get(ref[0])) for _, ref in
+                   sorted(material.graph.textured.items() if material.graph is not None else ()))
     geometry = tuple(sorted((item.geometry.rsplit(":", 1)[0],
                              _geometry_fingerprint(snapshot.geometries.get(item.geometry)),
                              np.asarray(item.matrix, np.float32).tobytes())
@@ -880,7 +886,7 @@ def _program_keys(snapshot: Snapshot) -> Callable[[str, str | None], tuple]:
                 if name.endswith(SPLIT_SUM):
                     material = replace(material, environment_samples=0)
             f = programs.Features.from_snapshot(snapshot, material=material, shadow_layers=0)
-            keys[key, name] = (f.model, f.terms, f.maps, f.alpha_from_base_map, f.env_samples)
+            keys[key, name] = (f.model, f.terms, f.graph, f.env_samples)
         return keys[key, name]
 
     return key_of

@@ -55,8 +55,7 @@ MODEL_FILES = {
     "PHONG": "model_phong.glsl",
     "PBR": "model_pbr.glsl",
 }
-FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "textures.glsl",
-                    "environment.glsl", "ibl.glsl")
+FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "environment.glsl", "ibl.glsl")
 PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "principled.glsl", "ltc.glsl")
 #: How the world lights a program: "" not at all (a black world), "UNIFORM" a constant radiance,
 #: "MAP" environment images (glsl/ibl.glsl).
@@ -86,8 +85,6 @@ class Features:
     light_kinds: frozenset[str] = frozenset()
     terms: Terms = Terms()
     half_target: bool = False  # drawing into RGBA16F: cap radiance at 65504
-    maps: frozenset[str] = frozenset()  # image textures sampled: BASE_COLOR[_CLOSEST], NORMAL, ...
-    alpha_from_base_map: bool = False  # coverage from the base colour image's alpha
     peel: bool = False  # a depth-peeling pass over the partly transparent surfaces
     environment: str = ""  # the world's light: one of ENVIRONMENTS (the physically based model)
     env_diffuse: str = "MAP"  # its irradiance: "MAP" (exactly convolved) or "SH9"
@@ -129,9 +126,6 @@ class Features:
     graph: GraphProgram | None = None
     graph_keep: frozenset[str] = frozenset()
 
-    def has_map(self, name: str) -> bool:
-        return name in self.maps or name + "_CLOSEST" in self.maps
-
     def __post_init__(self):
         if self.model not in MODELS:
             raise ValueError(f"unknown shading model {self.model!r}; expected one of {MODELS}")
@@ -153,7 +147,7 @@ class Features:
             object.__setattr__(self, "sphere_lights", False)  # shaded by their irradiance alone
         if self.peel or not self.environment:  # a transparent surface lies in front of what the
             object.__setattr__(self, "occlusion", False)  # occlusion pass saw
-        if self.peel or self.maps or self.graph is not None:
+        if self.peel or self.graph is not None:
             object.__setattr__(self, "deferred", False)
         if self.graph is None:
             object.__setattr__(self, "graph_keep", frozenset())
@@ -187,7 +181,7 @@ class Features:
     @classmethod
     def from_snapshot(cls, snapshot: Snapshot, model: str | None = None,
                       material: MaterialParams | None = None, half_target: bool = False,
-                      with_maps: bool = True, shadow_layers: int | None = None,
+                      shadow_layers: int | None = None,
                       first_layer: tuple[int, ...] | None = None,
                       light_culling: bool | None = None) -> Features:
         """The scene's features, for ``model`` or for ``material`` (its model and term overrides).
@@ -196,10 +190,6 @@ class Features:
         whether light culling pays, as the caller found it (else ``uses_light_tiles`` without
         the scene's bounds)."""
         terms = snapshot.settings.terms
-        maps = frozenset()
-        if material is not None and with_maps:
-            maps = frozenset(name[:-4].upper() + ("_CLOSEST" if getattr(material, name)[1] else "")
-                             for name in MaterialParams.MAPS if getattr(material, name))
         if shadow_layers is None:
             first_layer, shadow_layers = shadows.assign(snapshot)[:2]
         elif first_layer is None:
@@ -227,11 +217,7 @@ class Features:
             area_ellipse=any(light.kind == "AREA" and light.ellipse for light in snapshot.lights),
             terms=terms,
             half_target=half_target,
-            maps=maps,
-            alpha_from_base_map=bool(material is not None and material.alpha_from_base_map
-                                     and material.base_color_map is not None and with_maps),
-            graph=material.graph.program if material is not None and material.graph is not None and with_maps
-            else None,
+            graph=material.graph.program if material is not None and material.graph is not None else None,
             graph_keep=material.graph_keep if material is not None else frozenset(),
             environment=environment_kind(snapshot.world),
             env_diffuse=snapshot.settings.environment_diffuse,
@@ -312,8 +298,6 @@ class Features:
             out.append(("SL_BLINN_PHONG_NORMALIZED", "1"))
         if self.half_target:
             out.append(("SL_HALF_TARGET", "1"))
-        if self.alpha_from_base_map:
-            out.append(("SL_ALPHA_FROM_BASE_MAP", "1"))
         if self.peel:
             out.append(("SL_PEEL", "1"))
         if self.deferred:
@@ -358,11 +342,6 @@ class Features:
                          else f"graph_attribute{k}" for k, kind in enumerate(g.attribute_kinds)]
                 out.append(("SL_GRAPH_ATTRIBUTE_READS", " ".join(f"g.attributes[{k}] = {read};"
                                                                  for k, read in enumerate(reads))))
-        for name in sorted(self.maps):  # BASE_COLOR, or BASE_COLOR_CLOSEST for nearest filtering
-            base = name.removesuffix("_CLOSEST")
-            out.append((f"SL_HAS_{base}_MAP", "1"))
-            if base != name:
-                out.append((f"SL_{base}_MAP_CLOSEST", "1"))
         return tuple(sorted(out))
 
 
@@ -828,10 +807,6 @@ def shadow_source(orthographic: bool = False) -> ProgramSource:
                          + ((("SL_SHADOW_ORTHOGRAPHIC", "1"),) if orthographic else ()))
 
 
-#: The Image Texture node's extensions, in the order glsl/textures.glsl numbers them.
-EXTENSIONS = ("REPEAT", "EXTEND", "CLIP", "MIRROR")
-
-
 def pack_material(m: MaterialParams) -> bytes:
     complex_ior = m.ior_n is not None and m.ior_k is not None
     rows = [
@@ -840,12 +815,10 @@ def pack_material(m: MaterialParams) -> bytes:
         [*m.specular_color, 1.0],
         [*m.ambient_color, 1.0],
         [m.roughness, m.metalness, max(m.shininess, 1e-4), m.f0],
-        [m.f90, max(m.fresnel_p, 1e-3), 1.0 if complex_ior else 0.0, m.normal_strength],
+        [m.f90, max(m.fresnel_p, 1e-3), 1.0 if complex_ior else 0.0, 0.0],
         [*(m.ior_n if complex_ior else (1.0, 1.0, 1.0)), 0.0],
         [*(m.ior_k if complex_ior else (0.0, 0.0, 0.0)), 0.0],
         [*m.emission, min(max(m.alpha, 0.0), 1.0)],
-        [*m.uv_transform[:3], float(EXTENSIONS.index(m.extension)) if m.extension in EXTENSIONS else 0.0],
-        [*m.uv_transform[3:], 0.0],
     ]
     return np.asarray(rows, np.float32).tobytes()
 

@@ -126,8 +126,6 @@ def roughness_from_shininess(shininess: float) -> float:
 class MaterialParams:
     """Resolved shading inputs of one material (explicit values or the Principled fallback)."""
 
-    MAPS = ("base_color_map", "metallic_map", "roughness_map", "normal_map")
-
     name: str = "Default"
     base_color: tuple[float, float, float] = (0.8, 0.8, 0.8)
     diffuse_color: tuple[float, float, float] = (0.8, 0.8, 0.8)  # Blinn-Phong/Phong c_surface_diff
@@ -139,22 +137,11 @@ class MaterialParams:
     f0: float = DEFAULT_F0
     emission: tuple[float, float, float] = (0.0, 0.0, 0.0)  # emitted radiance, W/(m^2 sr)
     alpha: float = 1.0  # coverage: Principled Alpha (1 opaque); drawn blended, sorted, when < 1
-    alpha_from_base_map: bool = False  # the base colour image's alpha multiplies it
     model: str = ""  # a shading model for this material only; "" follows the scene
     f90: float = -1.0  # Schlick's grazing reflectance; < 0: saturate(50 F0)
     fresnel_p: float = 0.2  # eq. 1.13's p; 1/5 is Schlick's fifth power
     ior_n: tuple[float, float, float] | None = None  # conductor complex IOR n + ik (exact Fresnel)
     ior_k: tuple[float, float, float] | None = None
-    # image textures plugged into the Principled BSDF: (key in Snapshot.images, nearest filtering)
-    base_color_map: tuple[str, bool] | None = None
-    metallic_map: tuple[str, bool] | None = None
-    roughness_map: tuple[str, bool] | None = None
-    normal_map: tuple[str, bool] | None = None
-    normal_strength: float = 1.0
-    # how the maps read their UVs: the Image Texture node's Vector (a Mapping node on the UV map:
-    # uv' = (a u + b v + c, d u + e v + f)) and Extension (REPEAT, EXTEND, CLIP, MIRROR)
-    uv_transform: tuple[float, float, float, float, float, float] = (1.0, 0.0, 0.0, 0.0, 1.0, 0.0)
-    extension: str = "REPEAT"
     fresnel: str = ""  # per-material term choices; "" follows the scene
     ndf: str = ""
     visibility: str = ""
