@@ -1,14 +1,6 @@
 /* One light loop for every model: the model file bound at compile time supplies shade_direct,
  * shade_ambient and shade_finish. */
 
-vec3 view_direction(vec3 p)
-{
-  if (frame.camera_position.w > 0.5) {
-    return normalize(frame.camera_position.xyz - p);
-  }
-  return -frame.camera_forward.xyz; /* orthographic: parallel view rays */
-}
-
 /* Texel t of light i (glsl/uniforms.glsl): from the lights' uniform block where they fit (a
  * block's load costs less than a texel fetch on a software rasteriser), else their texture. */
 #ifdef SL_LIGHT_BLOCK

@@ -120,6 +120,8 @@ def saved_float_image(name: str, pixels: np.ndarray, folder: Path) -> bpy.types.
 def render(scene, path: Path) -> np.ndarray:
     """Render to a 32-bit OpenEXR and read it back: (height, width, 4) float32, top row first."""
     settings = scene.render.image_settings
+    if hasattr(settings, "media_type"):  # Blender 5.0: a multilayer save before leaves it so
+        settings.media_type = "IMAGE"
     settings.file_format = "OPEN_EXR"
     settings.color_depth = "32"
     settings.exr_codec = "ZIP"

@@ -34,6 +34,12 @@ LIGHT_PASSES = {
 }
 
 
+def aov_passes(view_layer) -> list[tuple[str, str]]:
+    """The view layer's AOVs: (name, "COLOR" or "VALUE"), each name once."""
+    aovs = getattr(view_layer, "aovs", None) or ()
+    return list({aov.name: (aov.name, aov.type) for aov in aovs if aov.name}.values())
+
+
 def light_passes(view_layer) -> list[str]:
     return [name for name, (toggle, _) in LIGHT_PASSES.items() if getattr(view_layer, toggle, False)]
 
@@ -363,6 +369,9 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         lobe_passes = light_passes(depsgraph.view_layer) if extra_passes else []
         for name in ([RADIANCE_PASS] if raw else []) + lobe_passes:
             self.add_pass(name, 4, "RGBA", layer=depsgraph.view_layer.name)
+        for name, kind in snap.aovs:
+            self.add_pass(name, 1 if kind == "VALUE" else 4, "X" if kind == "VALUE" else "RGBA",
+                          layer=depsgraph.view_layer.name)
         drawn_frame = self._draw(snap, views, comparison, [combined] + ([raw] if raw else []), lobe_passes,
                                  self._adapter(depsgraph, snap))
         if drawn_frame is None or self.test_break():
@@ -380,10 +389,11 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
         result = self.begin_result(0, 0, w, h, layer=depsgraph.view_layer.name)
         try:
             passes = result.layers[0].passes
+            values = {name for name, kind in snap.aovs if kind == "VALUE"}
             for name, image in images.items():
                 pass_name = "Combined" if name == combined else RADIANCE_PASS if name == raw else name
-                region = np.ascontiguousarray(image[y0:y0 + h, x0:x0 + w])
-                passes[pass_name].rect.foreach_set(region.reshape(-1))
+                region = image[y0:y0 + h, x0:x0 + w, :1] if name in values else image[y0:y0 + h, x0:x0 + w]
+                passes[pass_name].rect.foreach_set(np.ascontiguousarray(region).reshape(-1))
         finally:
             self.end_result(result)
         # Blender holds its copy now: the next render reads into these buffers
@@ -431,7 +441,7 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
             else:
                 settings = extract.final_render_settings(scene)
                 extract.remember_settings(scene)  # the scene being rendered is the artist's
-            snap = extract.snapshot(depsgraph, width, height, settings=settings)
+            snap = extract.snapshot(depsgraph, width, height, settings=settings, aovs=not self.is_preview)
         except extract.ExtractError as exc:
             self._fail(str(exc))
             return None
@@ -462,6 +472,8 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
                             background=(0.0, 0.0, 0.0, 0.0), lobes=LIGHT_PASSES[name][1])
                 images[name] = renderer.render_views(snap, [lobe], [lobe.output("radiance")],
                                                      should_stop=self.test_break)[lobe.output("radiance")]
+            if not self.test_break():
+                images.update(renderer.render_aovs(snap))
             return images, exposures
         except ShaderCompileError as exc:
             self._fail(str(exc))
@@ -505,6 +517,11 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
             self.register_pass(scene, renderlayer, RADIANCE_PASS, 4, "RGBA", "COLOR")
         for name in light_passes(renderlayer):
             self.register_pass(scene, renderlayer, name, 4, "RGBA", "COLOR")
+        for name, kind in aov_passes(renderlayer):  # as Cycles registers them
+            if kind == "VALUE":
+                self.register_pass(scene, renderlayer, name, 1, "X", "VALUE")
+            else:
+                self.register_pass(scene, renderlayer, name, 4, "RGBA", "COLOR")
 
     def _fail(self, message: str) -> None:
         self.report({"ERROR"}, message)

@@ -91,9 +91,11 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
     elif kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"):
         base, metal = _rgb(_input(node, "Color", base)), 1.0
         rough = float(_input(node, "Roughness", rough))
-    graph = _material_graph(material, images, warnings)
+    graph, aovs = _material_graph(material, images, warnings)
     if graph is not None:  # its closures' inputs, per fragment
         maps["graph"] = graph
+    if aovs:
+        maps["aovs"] = tuple(sorted(aovs.items()))
     props = getattr(material, "shading_lab", None)
     if props is not None:  # explicit values win over the shader's, textures included
         base = _rgb(props.base_color) if props.use_base_color else base
@@ -139,27 +141,28 @@ GRAPH_KEEP = {"base_color": "use_base_color", "metalness": "use_metalness", "rou
               "ambient_color": "use_ambient_color"}
 
 
-def _material_graph(material, images: dict | None,
-                    warnings: list[str] | None) -> surface.MaterialGraph | None:
-    """The material's node graph compiled (``surface.compile_material``), None where its surface is
-    one closure with nothing linked into it; the images it samples go into ``images``. The nodes
-    it could not compile are said in ``warnings``."""
+def _material_graph(material, images: dict | None, warnings: list[str] | None) -> tuple:
+    """(the material's node graph compiled, ``surface.compile_material``: None where its surface is
+    one closure with nothing linked into it; its AOV Outputs compiled, by name); the images they
+    sample go into ``images``. The nodes the surface could not compile are said in ``warnings``."""
     found: dict = {}
     read = nodes.read_material(material, images=found)
     if read is None:
-        return None
+        return None, {}
     graph = surface.compile_material(*read)
+    aovs = surface.compile_aovs(*read)
+    for compiled in ([graph] if graph is not None else []) + list(aovs.values()):
+        if images is not None:
+            images.update((key, found[key]) for key in compiled.images)
     if graph is None:
-        return None
-    if images is not None:
-        images.update((key, found[key]) for key in graph.images)
+        return None, aovs
     if graph.unread and warnings is not None:
         warnings.append(f"Material '{material.name}': its {', '.join(graph.unread)} not drawn (the shading "
                         f"models have no such input)")
     if graph.missing and warnings is not None:
         warnings.append(f"Material '{material.name}': {len(graph.missing)} of {graph.nodes} nodes not "
                         f"compiled ({', '.join(graph.missing)}); what they feed takes its socket's own value")
-    return graph
+    return graph, aovs
 
 
 def _material_extras(props) -> dict:
@@ -1052,7 +1055,8 @@ def _is_dirty(obj, dirty: set[str] | None) -> bool:
 def snapshot(depsgraph, width: int | None = None, height: int | None = None,
              camera: S.Camera | None = None, settings: S.Settings | None = None,
              previous: S.Snapshot | None = None, dirty: set[str] | None = None,
-             auto_camera: S.Camera | None = None, auto_choice: bool = True) -> S.Snapshot:
+             auto_camera: S.Camera | None = None, auto_choice: bool = True,
+             aovs: bool = False) -> S.Snapshot:
     """Everything the renderer draws, read from the evaluated scene.
 
     ``camera`` may be given (the viewport passes its own); otherwise the scene camera is used
@@ -1082,6 +1086,10 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
     snap.world_color = S.World.constant(snap.world.camera)
     snap.lights.extend(snap.world.suns)
     snap.materials[""] = S.DEFAULT_MATERIAL
+    if aovs:  # a final render writes the view layer's AOVs (each name once, as Blender keeps them)
+        snap.aovs = list({aov.name: (aov.name, aov.type) for aov in depsgraph.view_layer.aovs
+                          if aov.name and getattr(aov, "is_valid", True)}.values())
+    aov_names = {name for name, _ in snap.aovs}
     reusable = previous.geometries if previous is not None else {}
     skipped_empty: set[str] = set()
     skipped_kinds: Counter = Counter()
@@ -1111,6 +1119,8 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
         if key not in snap.geometries:
             geometry = reusable.get(key)
             graphs = [snap.materials[m].graph for m in slots if snap.materials[m].graph is not None]
+            if aov_names:  # the AOV Outputs' graphs the frame draws
+                graphs += [g for m in slots for name, g in snap.materials[m].aovs if name in aov_names]
             tangents = any("tangent" in g.program.uses for g in graphs)
             wanted = {a for g in graphs for a in g.attributes}
             if geometry is None or _is_dirty(obj, dirty) or (tangents and geometry.tangents is None) or \
@@ -1174,7 +1184,8 @@ def _material_with_images(snap: S.Snapshot, material) -> S.MaterialParams:
     draws a missing image)."""
     found: dict = {}
     params = material_params(material, found, snap.warnings)
-    for key in params.graph.images if params.graph is not None else ():
+    graphs = ([params.graph] if params.graph is not None else []) + [g for _, g in params.aovs]
+    for key in {key for g in graphs for key in g.images}:
         if key not in snap.images:
             data = IMAGES.get(key, found[key], snap.warnings)
             if data is not None:

@@ -489,6 +489,23 @@ def shading_program(features: programs.Features) -> gpu.types.GPUShader:
                            lambda info: _declare_shading(info, src.typedefs, features))
 
 
+def aov_program(graph, value: bool) -> gpu.types.GPUShader:
+    """The program writing an AOV from a material's compiled AOV Output (``programs.aov_source``)."""
+    def declare(info):
+        info.typedef_source(programs.read_glsl("uniforms.glsl"))
+        info.uniform_buf(0, "FrameData", "frame")
+        info.uniform_buf(3, "ObjectBlock", "objects")
+        info.uniform_buf(len(_BLOCKS) + 4, "GraphBlock", "graph")
+        for k in range(graph.images):
+            info.sampler(GRAPH_IMAGE_SLOT + k, "FLOAT_2D", f"graph_image_{k}")
+        info.push_constant("INT", "object_index")
+        for name in graph_push_constants(graph):
+            info.push_constant("VEC4", name)
+        _declare_mesh_stage(info, "shading_lab_aov_iface", graph)
+
+    return LIBRARY.program(("aov", graph.key, value), "AOV", programs.aov_source(graph, value), declare)
+
+
 def _declare_full_screen(*samplers: str, floats: tuple[str, ...] = ()):
     def declare(info) -> None:
         info.vertex_in(0, "VEC2", "pos")

@@ -182,6 +182,7 @@ class SceneResources:
         self._batches: dict[str, list[tuple[int, gpu.types.GPUBatch]]] = {}
         self._materials: dict[str, _Block] = {}
         self._graphs: dict[str, _Block] = {}  # node graphs' constants, per material
+        self._aov_blocks: dict[tuple[str, str], _Block] = {}  # AOV Outputs' constants, per (material, AOV)
         # batches with a node graph's attributes: (geometry, slot, attributes) -> (the geometry
         # they were made from, batch, its attribute buffer)
         self._attribute_batches: dict[tuple, tuple] = {}
@@ -247,6 +248,14 @@ class SceneResources:
             del self._materials[key]
         for key in set(self._graphs) - {k for k, m in snapshot.materials.items() if m.graph is not None}:
             del self._graphs[key]
+        wanted = {(key, name) for key, m in snapshot.materials.items() for name, _ in m.aovs
+                  if any(name == aov for aov, _ in snapshot.aovs)}
+        for key in set(self._aov_blocks) - wanted:
+            del self._aov_blocks[key]
+        for key, name in wanted:
+            graph = dict(snapshot.materials[key].aovs)[name]
+            block = self._aov_blocks.setdefault((key, name), _Block())
+            self.uploads["graph constants"] += block.put(np.asarray(graph.constants, np.float32).tobytes())
         for key, material in snapshot.materials.items():
             block = self._materials.setdefault(key, _Block())
             self.uploads["materials"] += block.put(programs.pack_material(material))
@@ -604,13 +613,14 @@ class SceneResources:
             block = self._bind_object(shader, draw, block)
             shader.uniform_block("material", self._materials[draw.material].ubo)
             if features.graph is not None:
-                self._bind_graph(shader, draw, materials[draw.material].graph, pushed)
+                self._bind_graph(shader, draw, materials[draw.material].graph, pushed,
+                                 self._graphs[draw.material])
             draw.batch.draw(shader)
         return True
 
-    def _bind_graph(self, shader, draw: Draw, graph, pushed: tuple[str, ...]) -> None:
-        """A node graph's constants and images, and what it reads of the draw's object."""
-        shader.uniform_block("graph", self._graphs[draw.material].ubo)
+    def _bind_graph(self, shader, draw: Draw, graph, pushed: tuple[str, ...], block: _Block) -> None:
+        """A node graph's constants (``block``) and images, and what it reads of the draw's object."""
+        shader.uniform_block("graph", block.ubo)
         for k, image in enumerate(graph.images):
             held = self._textures.get(image)
             gpu_library.bind_sampler(shader, f"graph_image_{k}",
@@ -629,6 +639,39 @@ class SceneResources:
                     shader.uniform_float(name, values[name])
                 except ValueError:  # the compiler removed it: an output that no input reads
                     pass
+
+    def draw_aov(self, name: str, value: bool) -> None:
+        """Every item into the bound target (depth-tested: the nearest surface's) with the program
+        of its material's AOV Output ``name`` (``gpu_library.aov_program``), or zeros where its
+        material has none."""
+        snapshot = self.snapshot
+        zero = None
+        groups: dict = {}
+        for order, item in enumerate(snapshot.items):
+            for slot, batch, parts in self._batches.get(item.geometry, ()):
+                key = item.materials[slot] if slot < len(item.materials) else item.materials[-1]
+                graph = dict(snapshot.materials[key].aovs).get(name)
+                if graph is not None and graph.attributes:
+                    batch = self._attribute_batch(item.geometry, slot, parts, graph.attributes)
+                draw = Draw(order, order // programs.OBJECT_BLOCK, order % programs.OBJECT_BLOCK, key, batch)
+                program = graph.program if graph is not None else programs.ZERO_AOV
+                groups.setdefault(program, []).append((draw, graph))
+        for program, draws in groups.items():
+            shader = gpu_library.aov_program(program, value)
+            shader.bind()
+            shader.uniform_block("frame", self._frame.ubo)
+            pushed = gpu_library.graph_push_constants(program)
+            block = -1
+            for draw, graph in draws:
+                block = self._bind_object(shader, draw, block)
+                if graph is None:
+                    if zero is None:
+                        zero = _Block()
+                        zero.put(bytes(16))
+                    shader.uniform_block("graph", zero.ubo)
+                else:
+                    self._bind_graph(shader, draw, graph, pushed, self._aov_blocks[(draw.material, name)])
+                draw.batch.draw(shader)
 
     def _bind_object(self, shader, draw: Draw, block: int) -> int:
         """Bind ``draw``'s object: its block of objects (unless ``block``, the one bound, holds it)
@@ -699,6 +742,7 @@ class SceneResources:
         self._digests.clear()
         self._materials.clear()
         self._graphs.clear()
+        self._aov_blocks.clear()
         self._attribute_batches.clear()
         self._objects.clear()
         self._textures.clear()

@@ -16,6 +16,7 @@ from __future__ import annotations
 from collections.abc import Callable
 from dataclasses import replace
 
+import gpu
 import numpy as np
 
 from ..plan import programs
@@ -23,7 +24,17 @@ from ..scene.snapshot import Snapshot
 from . import gpu_library
 from .gpu_environment import EnvironmentPass
 from .gpu_scene import SceneResources
-from .passes import VIEW_PASSES, ComparePass, Comparison, Frame, Pass, ShadowPass, View, full_screen_batch
+from .passes import (
+    VIEW_PASSES,
+    ComparePass,
+    Comparison,
+    Frame,
+    Pass,
+    ShadowPass,
+    Target,
+    View,
+    full_screen_batch,
+)
 
 
 def frame_views(snapshot: Snapshot, background: Callable[[str | None], tuple], samples: int = 1,
@@ -131,6 +142,33 @@ class Renderer:
         self.sync(snapshot)
         frame = self.run(views, comparison, should_stop=should_stop, adapt=adapt)
         return {name: frame.outputs[name].read() for name in outputs}
+
+    def render_aovs(self, snapshot: Snapshot) -> dict[str, np.ndarray]:
+        """Each of the snapshot's AOVs after a frame of it (``render_views``): the value the
+        nearest surface's material writes from its AOV Output (zeros where it has none, and
+        where no surface is), one sample per pixel centre; (height, width, 4) float32, bottom
+        row first: a Color AOV's RGB (alpha 1 on surfaces), a Value AOV's value in x."""
+        if not snapshot.aovs:
+            return {}
+        self.scene.put_frame(None, snapshot.width, snapshot.height)
+        target = Target(snapshot.width, snapshot.height, "RGBA32F", depth=True)
+        out = {}
+        try:
+            for name, kind in snapshot.aovs:
+                with target.bind():
+                    target.clear((0.0, 0.0, 0.0, 0.0), depth=1.0)
+                    gpu.state.depth_test_set("LESS_EQUAL")
+                    gpu.state.depth_mask_set(True)
+                    try:
+                        self.scene.draw_aov(name, kind == "VALUE")
+                    finally:
+                        gpu.state.depth_test_set("NONE")
+                        gpu.state.depth_mask_set(False)
+                out[name] = np.array(target.read())  # a copy: the read buffer is the next one's
+        finally:
+            gpu_library.LIBRARY.keep_textures(target.owned())
+            target.free()
+        return out
 
     def render(self, snapshot: Snapshot, background: tuple[float, float, float, float] = (0, 0, 0, 1),
                should_stop: Callable[[], bool] | None = None, samples: int = 1,

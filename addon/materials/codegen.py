@@ -328,7 +328,7 @@ def _normal_map(w: _Writer, node: FlatNode) -> dict | None:
 BUMP_FILTER_WIDTH = 0.1
 
 
-def _upstream(flat: FlatGraph, name: str) -> list[str]:
+def upstream(flat: FlatGraph, name: str) -> list[str]:
     """The flat nodes ``name`` reads, itself included, in the flat graph's order."""
     seen, pending = set(), [name]
     while pending:
@@ -348,12 +348,12 @@ def _height_at(w: _Writer, node: FlatNode, axis: str, filter_width: str) -> str:
     if not isinstance(spec.source, Ref) or (spec.source.node, spec.source.socket) not in w.values:
         return w.arg(node, "Height")  # a constant height (or one that did not compile): no slope
     moved = w.once("GraphInputs", f"graph_inputs_d{axis}(g, {filter_width})")
-    upstream = _upstream(w.flat, spec.source.node)
+    above = upstream(w.flat, spec.source.node)
     saved = w.values, w.g
-    w.values = {k: v for k, v in w.values.items() if k[0] not in upstream}
+    w.values = {k: v for k, v in w.values.items() if k[0] not in above}
     w.g = moved
     try:
-        for name in upstream:
+        for name in above:
             other = w.flat.nodes[name]
             emit = EMITTERS.get(other.kind)
             outputs = emit(w, other) if emit is not None else None

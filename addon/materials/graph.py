@@ -206,15 +206,16 @@ class _Flattener:
 AOV_OUTPUT = "ShaderNodeOutputAOV"
 
 
-def flatten(graph: Graph, groups: dict[str, Graph] | None = None) -> FlatGraph:
-    """``graph`` flattened from its output node and its AOV Outputs (module docstring); ``groups``
-    holds the trees its group nodes name, nested ones too."""
+def flatten(graph: Graph, groups: dict[str, Graph] | None = None, aovs: bool = True,
+            output: bool = True) -> FlatGraph:
+    """``graph`` flattened from its output node (``output``) and its AOV Outputs (``aovs``) (module
+    docstring); ``groups`` holds the trees its group nodes name, nested ones too."""
     flattener = _Flattener(graph, groups or {})
-    output = graph.nodes.get(graph.output) if graph.output is not None else None
-    if output is not None:
-        flattener.add(_Scope(graph), output)
-        flattener.flat.output = output.name
+    node = graph.nodes.get(graph.output) if graph.output is not None and output else None
+    if node is not None:
+        flattener.add(_Scope(graph), node)
+        flattener.flat.output = node.name
     for node in graph.nodes.values():
-        if node.kind == AOV_OUTPUT and not node.muted:
+        if aovs and node.kind == AOV_OUTPUT and not node.muted:
             flattener.add(_Scope(graph), node)
     return flattener.flat

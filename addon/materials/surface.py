@@ -73,6 +73,16 @@ class MaterialGraph:
     #: prediction, which samples their texels
     textured: dict = None
 
+    def _identity(self) -> tuple:
+        constants = np.asarray(self.constants, np.float32).tobytes()
+        return self.program.key, constants, self.images, self.attributes
+
+    def __eq__(self, other) -> bool:  # equal graphs, read anew, are equal (the Auto term set's caches)
+        return isinstance(other, MaterialGraph) and other._identity() == self._identity()
+
+    def __hash__(self) -> int:
+        return hash(self._identity())
+
     @property
     def compiled_share(self) -> float:
         """The share of the graph's nodes that compiled."""
@@ -147,22 +157,45 @@ def _node_count(flat: FlatGraph) -> int:
     return sum(1 for n in flat.nodes.values() if n.kind not in ("Convert", *codegen.SINKS))
 
 
-def compile_material(graph: Graph, groups: dict[str, Graph]) -> MaterialGraph | None:
-    """The material's compiled surface, or None where the constant path draws it (no output, or
-    one closure with nothing linked into it)."""
-    flat = flatten(graph, groups)
-    if _plain(flat):
-        return None
-    output, _ = _surface(flat)
-    compiled = codegen.compile_graph(flat, {"surface": (output.name, "Surface")}, FUNCTION)
+def _compiled(flat: FlatGraph, targets: dict, function: str) -> MaterialGraph:
+    compiled = codegen.compile_graph(flat, targets, function)
     uses = graph_inputs_read(compiled.source)
     kinds = tuple(kind for kind, _ in compiled.attributes)  # a tangent is turned to world space
     program = GraphProgram(f"{compiled.key}{''.join(k[0] for k in kinds)}", compiled.source,
                            len(compiled.constants), len(compiled.images), len(compiled.attributes), uses,
                            kinds)
     return MaterialGraph(program, compiled.constants, compiled.images, compiled.attributes, compiled.missing,
-                         _node_count(flat), _transparent(flat),
-                         _unread(flat), _textured(flat))
+                         _node_count(flat), _transparent(flat), _unread(flat), _textured(flat))
+
+
+def compile_material(graph: Graph, groups: dict[str, Graph]) -> MaterialGraph | None:
+    """The material's compiled surface, or None where the constant path draws it (no output, or
+    one closure with nothing linked into it)."""
+    flat = flatten(graph, groups, aovs=False)
+    if _plain(flat):
+        return None
+    output, _ = _surface(flat)
+    return _compiled(flat, {"surface": (output.name, "Surface")}, FUNCTION)
+
+
+#: The function a material's AOV Output compiles to: ``material_aov(g, out vec4 color, out float
+#: value)``, its Color and Value inputs (the view layer's AOV says which one is written).
+AOV_FUNCTION = "material_aov"
+
+
+def compile_aovs(graph: Graph, groups: dict[str, Graph]) -> dict[str, MaterialGraph]:
+    """Each AOV Output's inputs compiled, by its AOV name (the first node of a name, as Cycles
+    takes one); an AOV Output of no name writes nothing."""
+    flat = flatten(graph, groups, output=False)
+    out = {}
+    for node in flat.nodes.values():
+        name = node.props.get("aov_name", "") if node.kind == "ShaderNodeOutputAOV" else ""
+        if name and name not in out:
+            above = set(codegen.upstream(flat, node.name))
+            only = FlatGraph({k: v for k, v in flat.nodes.items() if k in above}, None, flat.cut, flat.luma)
+            out[name] = _compiled(only, {"color": (node.name, "Color"), "value": (node.name, "Value")},
+                                  AOV_FUNCTION)
+    return out
 
 
 #: MaterialParams' field of each Principled BSDF input ``textured`` reads.

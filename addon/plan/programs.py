@@ -330,19 +330,44 @@ class Features:
             if ("SL_MS_SIZE", str(MS_SIZE)) not in out:
                 out.append(("SL_MS_SIZE", str(MS_SIZE)))
         if self.graph is not None:
-            g = self.graph
-            out += [("SL_GRAPH", g.key), ("SL_GRAPH_CONSTANTS", str(g.constants)),
-                    ("GRAPH_ATTRIBUTES", str(max(g.attributes, 1)))]
-            out += [("SL_GRAPH_" + field.upper(), "1") for field in sorted(g.uses)]
+            out += graph_defines(self.graph)
             out += [("SL_KEEP_" + name.upper(), "1") for name in sorted(self.graph_keep)]
-            if g.attributes:
-                out.append(("SL_PASS_ATTRIBUTES", " ".join(f"graph_attribute{k} = attr{k};"
-                                                           for k in range(g.attributes))))
-                reads = [f"graph_tangent_to_world(graph_attribute{k})" if kind == "TANGENT"
-                         else f"graph_attribute{k}" for k, kind in enumerate(g.attribute_kinds)]
-                out.append(("SL_GRAPH_ATTRIBUTE_READS", " ".join(f"g.attributes[{k}] = {read};"
-                                                                 for k, read in enumerate(reads))))
         return tuple(sorted(out))
+
+
+def graph_defines(g: GraphProgram) -> list[tuple[str, str]]:
+    """What a program holding compiled graph ``g`` defines: its key, its constants' count, the
+    optional GraphInputs fields it reads, and how its attributes reach the fragment stage."""
+    out = [("SL_GRAPH", g.key), ("SL_GRAPH_CONSTANTS", str(g.constants)),
+           ("GRAPH_ATTRIBUTES", str(max(g.attributes, 1)))]
+    out += [("SL_GRAPH_" + field.upper(), "1") for field in sorted(g.uses)]
+    if g.attributes:
+        passes = " ".join(f"graph_attribute{k} = attr{k};" for k in range(g.attributes))
+        out.append(("SL_PASS_ATTRIBUTES", passes))
+        reads = [f"graph_tangent_to_world(graph_attribute{k})" if kind == "TANGENT" else f"graph_attribute{k}"
+                 for k, kind in enumerate(g.attribute_kinds)]
+        out.append(("SL_GRAPH_ATTRIBUTE_READS", " ".join(f"g.attributes[{k}] = {read};"
+                                                         for k, read in enumerate(reads))))
+    return out
+
+
+#: The AOV program of a material without that AOV: zeros (Cycles writes nothing there).
+ZERO_AOV = GraphProgram("zero-aov", "void material_aov(GraphInputs g, out vec4 color, out float value)\n"
+                        "{\n  color = vec4(0.0);\n  value = 0.0;\n}\n", 1, 0, 0, frozenset())
+
+
+@lru_cache(maxsize=64)
+def aov_source(graph: GraphProgram, value: bool) -> ProgramSource:
+    """The program writing a material's AOV Output (glsl/aov.frag.glsl): its compiled graph
+    (``materials.surface.compile_aovs``), a Value AOV's value or a Color AOV's colour."""
+    fragment = [read_glsl(name) for name in ("common.glsl", "facing.glsl", "view.glsl", *codegen.LIBRARY)]
+    fragment += ["#define GRAPH_CONST(i) graph.constants[i]", graph.source, read_glsl("graph_surface.glsl"),
+                 read_glsl("aov.frag.glsl")]
+    defines = graph_defines(graph) + [("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)), ("SL_MAX_LIGHTS", "1")]
+    if value:
+        defines.append(("SL_AOV_VALUE", "1"))
+    return ProgramSource(typedefs=read_glsl("uniforms.glsl"), vertex=read_glsl("mesh.vert.glsl"),
+                         fragment="\n".join(fragment), defines=tuple(sorted(defines)))
 
 
 def environment_kind(world: World) -> str:
@@ -366,6 +391,7 @@ def program_source(features: Features) -> ProgramSource:
     if features.model == "PBR":
         fragment += [read_glsl(name) for name in PBR_LIBRARY]
     fragment.append(read_glsl(MODEL_FILES[features.model]))
+    fragment.append(read_glsl("view.glsl"))
     fragment.append(read_glsl("light_shading.glsl"))  # after the model: it calls shade_direct
     if not features.deferred:  # reads the object block and the mesh's varyings
         fragment.append(read_glsl("facing.glsl"))

@@ -156,6 +156,8 @@ class MaterialParams:
     #: "ambient_color"); None: the values above are the material
     graph: object | None = None
     graph_keep: frozenset[str] = frozenset()
+    #: the material's AOV Outputs compiled, by AOV name (``materials.surface.compile_aovs``)
+    aovs: tuple[tuple[str, object], ...] = ()
     pass_index: int = 0  # the material's pass index (Object Info's Material Index)
 
 
@@ -472,6 +474,8 @@ class Snapshot:
     warnings: list[str] = field(default_factory=list)
     fresh: set[str] = field(default_factory=set)  # geometry keys read anew (not reused)
     term_choices: dict = field(default_factory=dict)  # material key -> auto_terms.Choice (Auto)
+    #: the view layer's AOVs a final render writes: (name, "COLOR" or "VALUE")
+    aovs: list[tuple[str, str]] = field(default_factory=list)
 
     @property
     def triangle_count(self) -> int:
