@@ -75,6 +75,34 @@ GraphInputs graph_inputs(vec3 n, vec3 v, bool backfacing)
   return g;
 }
 
+#ifdef SL_GRAPH_BENT_NORMAL
+/* A light's (diffuse, specular) weights where the graph bent the normal (a Normal Map, a Bump):
+ * Cycles' bump_shadowing_term (kernel/closure/bsdf.h), Conty Estevez, Lecocq and Stein 2019, "A
+ * Microfacet-Based Shadowing Function to Solve the Bump Terminator Problem". Light from the other
+ * side of the smooth normal ns than the bent n sees is rejected (both lobes); the diffuse lobe is
+ * shadowed by Smith's GGX G1 at the light's angle to ns, with alpha^2 = tan^2(d) / 8 from the bend
+ * d (Cycles' bump map correction, on by default). */
+vec2 bump_terminator(vec3 ns, vec3 n, vec3 l)
+{
+  float cos_nsl = dot(ns, l);
+  float cos_nsn = dot(ns, n);
+  if (cos_nsl * cos_nsn * dot(n, l) < 0.0) {
+    return vec2(0.0);
+  }
+  float cos_i = abs(cos_nsl);
+  float cos_d = abs(cos_nsn);
+  if (cos_d >= 1.0 || cos_i >= 1.0) {
+    return vec2(1.0);
+  }
+  if (cos_i < 1e-6) {
+    return vec2(0.0, 1.0); /* grazing the smooth surface: Cycles' diffuse gets nothing */
+  }
+  float alpha2 = clamp(0.125 * (1.0 / (cos_d * cos_d) - 1.0), 0.0, 1.0);
+  float tan2_i = 1.0 / (cos_i * cos_i) - 1.0;
+  return vec2(2.0 / (1.0 + sqrt(1.0 + alpha2 * tan2_i)), 1.0);
+}
+#endif
+
 /* The Surface closure as the models read it: its BSDFs' mean inputs replace the material's values
  * (but those the Material panel sets, SL_KEEP_*), the empirical models' colours and exponent follow
  * them as addon/blender/extract.py's material_params derives them, n becomes the BSDFs' normal,

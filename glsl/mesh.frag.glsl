@@ -104,6 +104,10 @@ vec3 light_share(Surface s, vec3 ng, LightData light, bool shadowed)
   }
   vec3 l;
   vec3 E = light_irradiance(light, s.p, l);
+#ifdef SL_GRAPH_BENT_NORMAL
+  /* a normal the node graph bent: Cycles' rules for light from behind the surface (graph_surface.glsl) */
+  factors.xy *= bump_terminator(s.smooth_n, s.n, l);
+#endif
   float visibility = 1.0;
 #ifdef SL_SHADOWS
   if (shadowed && dot(s.n, l) > 0.0 && max(E.r, max(E.g, E.b)) > 0.0) {
@@ -219,6 +223,7 @@ void main()
 #ifdef SL_GRAPH
   /* the material's node graph: its closures' inputs at this fragment */
   n = outward ? n : -n;
+  vec3 smooth_n = n;
   Closure closure;
   material_graph(graph_inputs(n, v, !outward), closure);
   float closure_scale;
@@ -240,6 +245,9 @@ void main()
   }
 #endif
   Surface s = make_surface(world_position, outward ? n : -n, v, m);
+#  ifdef SL_GRAPH_BENT_NORMAL
+  s.smooth_n = smooth_n;
+#  endif
 #endif
   /* ambient: neither a diffuse nor a specular lobe (weight z, off in lobe passes) */
   vec3 c = shade_ambient(s, frame.ambient.rgb) * lobes.z;

@@ -63,6 +63,9 @@ struct Surface {
 #ifdef SL_LTC
   LtcFrame ltc;
 #endif
+#ifdef SL_GRAPH_BENT_NORMAL
+  vec3 smooth_n;      /* the interpolated normal before a node graph bent it (Cycles' sd->N) */
+#endif
 };
 
 /* Unit half vector of eq. 1.6; l + v = 0 only when the light is exactly behind the viewer's

@@ -152,6 +152,13 @@ def graph_inputs_read(source: str) -> frozenset[str]:
     return frozenset(field for field in OPTIONAL_INPUTS if re.search(rf"\bg\.{field}\b", joined))
 
 
+def _bent(flat: FlatGraph) -> bool:
+    """Whether some closure's Normal is linked (a Normal Map, a Bump, any node): the shading
+    models then apply Cycles' rules for a bent normal (glsl/graph_surface.glsl's bump_terminator)."""
+    return any(node.kind in codegen.CLOSURES and "Normal" in node.inputs
+               and not isinstance(node.inputs["Normal"].source, Const) for node in flat.nodes.values())
+
+
 def _node_count(flat: FlatGraph) -> int:
     """The artist's nodes of the flat graph (not its conversions or outputs)."""
     return sum(1 for n in flat.nodes.values() if n.kind not in ("Convert", *codegen.SINKS))
@@ -160,6 +167,8 @@ def _node_count(flat: FlatGraph) -> int:
 def _compiled(flat: FlatGraph, targets: dict, function: str) -> MaterialGraph:
     compiled = codegen.compile_graph(flat, targets, function)
     uses = graph_inputs_read(compiled.source)
+    if _bent(flat):
+        uses |= {"bent_normal"}
     kinds = tuple(kind for kind, _ in compiled.attributes)  # a tangent is turned to world space
     program = GraphProgram(f"{compiled.key}{''.join(k[0] for k in kinds)}", compiled.source,
                            len(compiled.constants), len(compiled.images), len(compiled.attributes), uses,
