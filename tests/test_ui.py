@@ -88,6 +88,36 @@ def test_material_panel_says_where_each_value_comes_from():
     assert "model" in layout.props()
 
 
+def test_material_panel_reports_the_node_graph_per_node():
+    """After a render reads it: the share of the graph's nodes compiled, each node not compiled,
+    the Principled inputs not drawn, a linked Displacement, the AOV Outputs; before: says so."""
+    from addon.blender import extract
+
+    scene = scenes.reset(size=8)
+    scenes.ortho_camera(scene)
+    mat = bpy.data.materials.new("Reported")
+    tree = scenes.node_tree(mat)
+    bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    tree.links.new(tree.nodes.new("ShaderNodeWireframe").outputs["Fac"], bsdf.inputs["Roughness"])
+    ramp = tree.nodes.new("ShaderNodeValToRGB")
+    tree.links.new(ramp.outputs["Color"], bsdf.inputs["Base Color"])
+    tree.links.new(tree.nodes.new("ShaderNodeValue").outputs[0], bsdf.inputs["Coat Weight"])
+    tree.links.new(tree.nodes.new("ShaderNodeDisplacement").outputs[0], out.inputs["Displacement"])
+    aov = tree.nodes.new("ShaderNodeOutputAOV")
+    aov.aov_name = "mask"
+    scenes.plane(scene, material=mat)
+    extract.GRAPH_REPORTS.pop(mat.name_full, None)
+    before = _draw(ui.SHADINGLAB_PT_material, SimpleNamespace(material=mat)).labels()
+    assert "Node graph: not read yet (render, or draw the viewport)" in before
+    extract.snapshot(bpy.context.evaluated_depsgraph_get())
+    labels = _draw(ui.SHADINGLAB_PT_material, SimpleNamespace(material=mat)).labels()
+    assert "Node graph: 3 of 4 nodes compiled (75%)" in labels, labels  # Principled, Ramp, Value
+    assert "Wireframe (ShaderNodeWireframe): not compiled, what it feeds takes its socket's value" in labels
+    assert "Coat Weight (Principled BSDF): not drawn (the models have no such input)" in labels
+    assert "Displacement: not drawn" in labels and "AOV Outputs: mask" in labels
+
+
 def test_blenders_panels_open_to_the_engine():
     for name in ("DATA_PT_context_light", "DATA_PT_lens", "DATA_PT_camera", "WORLD_PT_context_world",
                  "RENDER_PT_format", "RENDER_PT_color_management"):

@@ -141,6 +141,25 @@ GRAPH_KEEP = {"base_color": "use_base_color", "metalness": "use_metalness", "rou
               "ambient_color": "use_ambient_color"}
 
 
+@dataclasses.dataclass(frozen=True)
+class GraphReport:
+    """What the last read of a material made of its node graph, for the Material panel: whether
+    it was compiled (else its surface is one shader read as values), how many of its nodes, which
+    did not compile and what the models do not read (``MaterialGraph.missing`` / ``unread``),
+    whether its Displacement is linked (never drawn), and its AOV Outputs."""
+
+    compiled: bool
+    nodes: int = 0
+    missing: tuple[str, ...] = ()
+    unread: tuple[str, ...] = ()
+    displacement: bool = False
+    aovs: tuple[str, ...] = ()
+
+
+#: The last GraphReport of each material (by its full name), as a render or the viewport read it.
+GRAPH_REPORTS: dict[str, GraphReport] = {}
+
+
 def _material_graph(material, images: dict | None, warnings: list[str] | None) -> tuple:
     """(the material's node graph compiled, ``surface.compile_material``: None where its surface is
     one closure with nothing linked into it; its AOV Outputs compiled, by name); the images they
@@ -151,6 +170,13 @@ def _material_graph(material, images: dict | None, warnings: list[str] | None) -
         return None, {}
     graph = surface.compile_material(*read)
     aovs = surface.compile_aovs(*read)
+    displacement = surface.displacement_linked(read[0])
+    GRAPH_REPORTS[material.name_full] = GraphReport(
+        graph is not None, graph.nodes if graph is not None else 0, tuple(graph.missing) if graph else (),
+        tuple(graph.unread) if graph else (), displacement, tuple(sorted(aovs)))
+    if displacement and warnings is not None:
+        warnings.append(f"Material '{material.name}': its Displacement is not drawn (the surface is drawn "
+                        f"as it is, without displacement or bump from the output)")
     for compiled in ([graph] if graph is not None else []) + list(aovs.values()):
         if images is not None:
             images.update((key, found[key]) for key in compiled.images)

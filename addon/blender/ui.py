@@ -264,6 +264,7 @@ class SHADINGLAB_PT_material(ShadingLabPanel, bpy.types.Panel):
         if props.world_specular == "SAMPLED":
             row.prop(props, "world_samples", text="Samples")
         _auto_choice(layout, context)
+        _graph_report(layout, context.material)
         layout.label(text="Unticked values come from the surface shader (Principled BSDF)")
         col = layout.column()
         col.label(text="Physically based")
@@ -281,6 +282,32 @@ class SHADINGLAB_PT_material(ShadingLabPanel, bpy.types.Panel):
         _material_row(col, props, "use_shininess", "shininess", "from roughness")
         _material_row(col, props, "use_specular_color", "specular_color", "white")
         _material_row(col, props, "use_ambient_color", "ambient_color", "base colour")
+
+
+def _graph_report(layout, material) -> None:
+    """What the last render or viewport frame compiled of the material's node graph, per node."""
+    from .extract import GRAPH_REPORTS
+
+    report = GRAPH_REPORTS.get(material.name_full)
+    box = layout.box()
+    if report is None:
+        box.label(text="Node graph: not read yet (render, or draw the viewport)", icon="NODETREE")
+        return
+    if not report.compiled:
+        box.label(text="Surface: one shader, nothing linked into it: read as values", icon="NODETREE")
+    else:
+        compiled = report.nodes - len(report.missing)
+        share = compiled / report.nodes if report.nodes else 1.0
+        box.label(text=f"Node graph: {compiled} of {report.nodes} nodes compiled ({share:.0%})",
+                  icon="CHECKMARK" if not report.missing else "ERROR")
+        for node in report.missing:
+            box.label(text=f"{node}: not compiled, what it feeds takes its socket's value", icon="DOT")
+        for socket in report.unread:
+            box.label(text=f"{socket}: not drawn (the models have no such input)", icon="DOT")
+    if report.displacement:
+        box.label(text="Displacement: not drawn", icon="INFO")
+    if report.aovs:
+        box.label(text=f"AOV Outputs: {', '.join(report.aovs)}", icon="RENDERLAYERS")
 
 
 def _auto_choice(layout, context) -> None:

@@ -159,6 +159,12 @@ def _bent(flat: FlatGraph) -> bool:
                and not isinstance(node.inputs["Normal"].source, Const) for node in flat.nodes.values())
 
 
+def displacement_linked(graph: Graph) -> bool:
+    """Whether something is linked into the output's Displacement (not drawn)."""
+    return graph.output is not None and any(link.to_node == graph.output and link.to_socket == "Displacement"
+                                            for link in graph.links)
+
+
 def _node_count(flat: FlatGraph) -> int:
     """The artist's nodes of the flat graph (not its conversions or outputs)."""
     return sum(1 for n in flat.nodes.values() if n.kind not in ("Convert", *codegen.SINKS))
@@ -183,7 +189,10 @@ def compile_material(graph: Graph, groups: dict[str, Graph]) -> MaterialGraph | 
     flat = flatten(graph, groups, aovs=False)
     if _plain(flat):
         return None
-    output, _ = _surface(flat)
+    output, surface = _surface(flat)
+    # what the Surface reads: the output's Volume and Displacement are not drawn
+    above = set(codegen.upstream(flat, surface.source.node)) | {output.name}
+    flat = FlatGraph({k: v for k, v in flat.nodes.items() if k in above}, flat.output, flat.cut, flat.luma)
     return _compiled(flat, {"surface": (output.name, "Surface")}, FUNCTION)
 
 
