@@ -452,3 +452,35 @@ def test_value_edit_compiles_nothing_and_one_structure_shares_a_program(session_
     uploads = _uploads(session)
     assert uploads.get("graph constants") == 1 and uploads.get("materials") == 1, uploads
     assert gpu_library.LIBRARY.compiles == compiles, "an edit or a second material of one structure compiled"
+
+
+def test_only_edited_materials_are_read_again(session_with_handler, monkeypatch):
+    """A viewport update reads (and compiles) again only the materials it names: a transform edit
+    none, a node value edit that material's graph, a node group edit every one."""
+    from test_material_render import _socket, _swept_principled
+
+    from addon.materials import surface
+
+    session, a, b, _ = session_with_handler
+    first, second = _swept_principled("First"), _swept_principled("Second")
+    group = bpy.data.node_groups.new("Shared", "ShaderNodeTree")
+    math_node = group.nodes.new("ShaderNodeMath")
+    second.node_tree.nodes.new("ShaderNodeGroup").node_tree = group
+    a.data.materials.append(first)
+    b.data.materials.append(second)
+    bpy.context.view_layer.update()
+    read = []
+    original = surface.compile_material
+    monkeypatch.setattr(surface, "compile_material", lambda *args: read.append(1) or original(*args))
+    a.location.x += 0.1
+    bpy.context.view_layer.update()
+    assert read == [], "a transform edit read a material again"
+    mix = next(n for n in first.node_tree.nodes if n.bl_idname == "ShaderNodeMix")
+    _socket(mix.inputs, "A_Color").default_value = (0.2, 0.9, 0.1, 1.0)
+    bpy.context.view_layer.update()
+    assert len(read) == 1, f"{len(read)} materials read again for one material's edit"
+    assert session.snapshot.materials["First"].graph is not session.snapshot.materials["Second"].graph
+    read.clear()
+    math_node.inputs[1].default_value = 0.25
+    bpy.context.view_layer.update()
+    assert len(read) == 2, f"{len(read)} of 2 materials read again after a node group's edit"

@@ -1069,6 +1069,20 @@ def geometry_updates(depsgraph) -> set[str]:
     return dirty
 
 
+def material_updates(depsgraph) -> set[str] | None:
+    """Full names of the materials this depsgraph update changed (their values, their node trees);
+    None where something every material may read changed (a node group, an image): read them all."""
+    names: set[str] = set()
+    for update in depsgraph.updates:
+        idb = update.id
+        if isinstance(idb, bpy.types.Material):
+            names.add(idb.original.name_full)
+        elif isinstance(idb, bpy.types.Image) or (isinstance(idb, bpy.types.NodeTree)
+                                                   and not idb.is_embedded_data):
+            return None  # (a material's own tree comes with the material)
+    return names
+
+
 def _is_dirty(obj, dirty: set[str] | None) -> bool:
     if dirty is None:
         return True
@@ -1082,13 +1096,15 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
              camera: S.Camera | None = None, settings: S.Settings | None = None,
              previous: S.Snapshot | None = None, dirty: set[str] | None = None,
              auto_camera: S.Camera | None = None, auto_choice: bool = True,
-             aovs: bool = False) -> S.Snapshot:
+             aovs: bool = False, materials_dirty: set[str] | None = None) -> S.Snapshot:
     """Everything the renderer draws, read from the evaluated scene.
 
     ``camera`` may be given (the viewport passes its own); otherwise the scene camera is used
     and its absence raises ``ExtractError``. With ``previous`` and ``dirty`` (from
     ``geometry_updates``), geometry of objects not named in ``dirty`` is reused from
-    ``previous`` instead of read again; ``Snapshot.fresh`` lists the geometry keys read anew.
+    ``previous`` instead of read again; ``Snapshot.fresh`` lists the geometry keys read anew; with
+    ``previous`` and ``materials_dirty`` (from ``material_updates``: not None), the materials it
+    does not name are taken from ``previous`` (their node graphs are not read nor compiled again).
     Lights, materials, matrices and the world are cheap and always read. With the Auto term set,
     materials get their terms chosen as seen from ``auto_camera`` (else ``camera``), unless
     ``auto_choice`` is off (a viewport that has drawn no view yet chooses at its first draw).
@@ -1140,7 +1156,19 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
             mat = slot.material
             mkey = mat.name_full if mat is not None else ""
             if mkey not in snap.materials:
-                snap.materials[mkey] = _material_with_images(snap, mat)
+                kept = previous.materials.get(mkey) if previous is not None and materials_dirty is not None \
+                    and mkey not in materials_dirty else None
+                if kept is not None:  # unchanged since the last snapshot: not read (nor compiled) again
+                    snap.materials[mkey] = kept
+                    snap.warnings.extend(previous.material_warnings.get(mkey, ()))
+                    snap.material_warnings[mkey] = previous.material_warnings.get(mkey, [])
+                    graphs = ([kept.graph] if kept.graph is not None else []) + [g for _, g in kept.aovs]
+                    snap.images.update((key, previous.images[key]) for g in graphs for key in g.images
+                                       if key in previous.images)
+                else:
+                    said = len(snap.warnings)
+                    snap.materials[mkey] = _material_with_images(snap, mat)
+                    snap.material_warnings[mkey] = snap.warnings[said:]
             slots.append(mkey)
         if key not in snap.geometries:
             geometry = reusable.get(key)

@@ -1,13 +1,14 @@
 """Interactive viewport: incremental scene updates and drawing through the shared renderer.
 
-``ViewportSession.update`` runs on every depsgraph change: it re-reads lights, materials and
-matrices (cheap) but only the geometry of objects whose geometry changed, so a transform-only
-edit uploads no geometry. ``draw`` renders with the region's own view and projection matrices
-into a float target (and through the engine's tone mapper when one is chosen) and returns the
-texture for the engine to show through Blender's display transform. A frame that fails (a
-program that does not compile after an edit, say) leaves the last good image to show, and the
-failure in ``error`` for the engine to draw over it. Automatic exposure adapts from draw to
-draw by the time between them (``adapting`` asks the engine for another redraw until it settles).
+``ViewportSession.update`` runs on every depsgraph change: it re-reads lights and matrices (cheap)
+but only the geometry of objects whose geometry changed, so a transform-only edit uploads no
+geometry, and only the materials an update names (their node graphs read and compiled again).
+``draw`` renders with the region's own view and projection matrices into a float target (and
+through the engine's tone mapper when one is chosen) and returns the texture for the engine to show
+through Blender's display transform. A frame that fails (a program that does not compile after an
+edit, say) leaves the last good image to show, and the failure in ``error`` for the engine to draw
+over it. Automatic exposure adapts from draw to draw by the time between them (``adapting`` asks
+the engine for another redraw until it settles).
 """
 
 from __future__ import annotations
@@ -52,10 +53,11 @@ class ViewportSession:
     def update(self, depsgraph) -> None:
         start = time.perf_counter()
         dirty = None if self.snapshot is None else extract.geometry_updates(depsgraph)
+        materials = None if self.snapshot is None else extract.material_updates(depsgraph)
         extract.IMAGES.forget(extract.image_updates(depsgraph))
         self.snapshot = extract.snapshot(depsgraph, 1, 1, camera=_NO_CAMERA, previous=self.snapshot,
                                          dirty=dirty, auto_camera=self._view,
-                                         auto_choice=self._view is not None)
+                                         auto_choice=self._view is not None, materials_dirty=materials)
         self._unchosen = self._view is None and self.snapshot.settings.auto_error_bound is not None
         self.pending |= self.snapshot.fresh
         self.last_update_ms = 1e3 * (time.perf_counter() - start)

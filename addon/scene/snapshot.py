@@ -474,6 +474,8 @@ class Snapshot:
     warnings: list[str] = field(default_factory=list)
     fresh: set[str] = field(default_factory=set)  # geometry keys read anew (not reused)
     term_choices: dict = field(default_factory=dict)  # material key -> auto_terms.Choice (Auto)
+    #: what ``warnings`` says of each material (a material taken from the last snapshot says it again)
+    material_warnings: dict[str, list[str]] = field(default_factory=dict)
     #: the view layer's AOVs a final render writes: (name, "COLOR" or "VALUE")
     aovs: list[tuple[str, str]] = field(default_factory=list)
 
