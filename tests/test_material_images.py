@@ -14,10 +14,16 @@ import bpy
 import numpy as np
 import OpenEXR
 import pytest
-import scenes
 from glsl_harness import evaluate
-from test_cycles import _cycles
-from test_material_nodes import FRAGMENT_AOVS, SIZE, _aov, _compare, _node, _plane_scene
+from test_material_nodes import (
+    FRAGMENT_AOVS,
+    SIZE,
+    _aov,
+    _compare,
+    _node,
+    _plane_scene,
+    cycles_aovs_and_graph,
+)
 
 from addon.blender import extract
 from addon.blender import nodes as reader
@@ -125,22 +131,8 @@ def _evaluate(compiled: codegen.Compiled, fragment: dict, samplers: dict, object
 def _against_cycles(scene, mat, obj, tmp) -> dict:
     """Every AOV but the fragment's: (ours, Cycles') on covered pixels, with the images the
     material reads read by the engine's reader."""
-    _cycles(scene, tmp / "cycles.exr", samples=1)
-    path = scenes.save_result(scene, tmp / "aovs.exr", "MULTILAYER")
-    with OpenEXR.File(str(path)) as f:
-        cycles = {name: np.asarray(ch.pixels, np.float64)
-                  for part in f.parts for name, ch in part.channels.items()}
     images: dict = {}
-    g, groups = reader.read_material(mat, "ALL", images)
-    flat = graph.flatten(g, groups)
-    aovs = scene.view_layers[0].aovs
-    targets = {}
-    for node in flat.nodes.values():
-        name = node.props.get("aov_name")
-        if node.kind == "ShaderNodeOutputAOV" and name not in FRAGMENT_AOVS:
-            targets[f"r_{name}"] = (node.name, "Color" if aovs[name].type == "COLOR" else "Value")
-    compiled = codegen.compile_graph(flat, targets)
-    assert not compiled.missing, compiled.missing
+    cycles, compiled = cycles_aovs_and_graph(scene, mat, tmp, images)
     warnings: list[str] = []
     samplers = {f"graph_image_{k}": extract._read_image(key, images[key], warnings)
                 for k, key in enumerate(compiled.images)}

@@ -21,19 +21,16 @@ from __future__ import annotations
 
 import bpy
 import numpy as np
-import OpenEXR
 import pytest
 import scenes
 from bpy_extras.object_utils import world_to_camera_view
 from glsl_harness import WIDTH, evaluate
 from mathutils import Vector
 from mathutils.bvhtree import BVHTree
-from test_cycles import _cycles
-from test_material_nodes import FRAGMENT_AOVS, SIZE, _affine, _aov, _combine, _compare
+from test_material_nodes import FRAGMENT_AOVS, SIZE, _affine, _aov, _combine, _compare, cycles_aovs_and_graph
 from test_material_nodes import _node as _new
 
-from addon.blender import nodes as reader
-from addon.materials import codegen, graph
+from addon.materials import codegen
 from addon.materials.objects import object_random
 
 #: The rows the harness fills GraphInputs from (each a (N, 4) table, one row per pixel).
@@ -375,22 +372,7 @@ def _evaluate_inputs(compiled: codegen.Compiled, rows: dict, uniforms: dict) -> 
 def _against_cycles(scene, obj, cam, mat, tmp) -> tuple[dict, np.ndarray, codegen.Compiled]:
     """Every AOV but the fragment's: (ours, Cycles') by name over all pixels, the covered pixels,
     and the compiled graph."""
-    _cycles(scene, tmp / "cycles.exr", samples=1)
-    path = scenes.save_result(scene, tmp / "aovs.exr", "MULTILAYER")
-    with OpenEXR.File(str(path)) as f:
-        cycles = {
-            name: np.asarray(ch.pixels, np.float64) for part in f.parts for name, ch in part.channels.items()
-        }
-    g, groups = reader.read_material(mat, "ALL")
-    flat = graph.flatten(g, groups)
-    aovs = scene.view_layers[0].aovs
-    targets = {}
-    for node in flat.nodes.values():
-        name = node.props.get("aov_name")
-        if node.kind == "ShaderNodeOutputAOV" and name not in FRAGMENT_AOVS:
-            targets[f"r_{name}"] = (node.name, "Color" if aovs[name].type == "COLOR" else "Value")
-    compiled = codegen.compile_graph(flat, targets)
-    assert not compiled.missing, compiled.missing
+    cycles, compiled = cycles_aovs_and_graph(scene, mat, tmp)
     rows, uniforms, covered = _fragment(obj, cam, scene, cycles, compiled.attributes)
     ours = _evaluate_inputs(compiled, rows, uniforms)
     out = {}

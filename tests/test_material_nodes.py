@@ -107,14 +107,17 @@ def _evaluate(compiled: codegen.Compiled, fragment: dict[str, np.ndarray]) -> di
     return {n: v.astype(np.float64) for n, v in out.items()}
 
 
-def _against_cycles(scene, mat, tmp) -> dict[str, tuple[np.ndarray, np.ndarray]]:
-    """Every AOV but the UV's: (ours, Cycles') by AOV name, (N, 1) or (N, 3)."""
+def cycles_aovs_and_graph(scene, mat, tmp, images: dict | None = None) -> tuple[dict, codegen.Compiled]:
+    """Cycles' render of ``scene`` (1 sample, pixel centres): every channel of its AOVs by EXR
+    name, float64; and ``mat``'s graph compiled with one target per AOV Output but the
+    fragment's (``r_<name>``: its Color or Value as the view layer's AOV says), whole (no node
+    missing). ``images``: where the reader puts the images the graph samples."""
     _cycles(scene, tmp / "cycles.exr", samples=1)
     path = scenes.save_result(scene, tmp / "aovs.exr", "MULTILAYER")
     with OpenEXR.File(str(path)) as f:
         cycles = {name: np.asarray(ch.pixels, np.float64)
                   for part in f.parts for name, ch in part.channels.items()}
-    g, groups = reader.read_material(mat, "ALL")
+    g, groups = reader.read_material(mat, "ALL", images)
     flat = graph.flatten(g, groups)
     aovs = scene.view_layers[0].aovs
     targets = {}
@@ -124,6 +127,12 @@ def _against_cycles(scene, mat, tmp) -> dict[str, tuple[np.ndarray, np.ndarray]]
             targets[f"r_{name}"] = (node.name, "Color" if aovs[name].type == "COLOR" else "Value")
     compiled = codegen.compile_graph(flat, targets)
     assert not compiled.missing, compiled.missing
+    return cycles, compiled
+
+
+def _against_cycles(scene, mat, tmp) -> dict[str, tuple[np.ndarray, np.ndarray]]:
+    """Every AOV but the UV's: (ours, Cycles') by AOV name, (N, 1) or (N, 3)."""
+    cycles, compiled = cycles_aovs_and_graph(scene, mat, tmp)
     fragment = {}
     for name in FRAGMENT_AOVS:
         rows = cycles[f"ViewLayer.{name}"].reshape(SIZE * SIZE, -1)[:, :3]
