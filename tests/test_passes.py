@@ -282,7 +282,7 @@ def test_light_culling_counts_the_lights_a_pixel_evaluates():
 
 def test_deferred_shading_is_chosen_by_the_shading_cost_and_the_triangles_size():
     """passes.deferred_pays: costly programs on triangles of 32 px or less on average, the
-    heaviest (area lights, 5+ lights) up to 64 px; never a cheap program, an image-mapped or
+    heaviest (area lights, 5+ lights) up to 64 px; never a cheap program, a node graph's or a
     peeled surface, or a view beyond DEFERRED_PIXELS."""
     from addon.frame import passes
     from addon.plan import programs
@@ -297,7 +297,7 @@ def test_deferred_shading_is_chosen_by_the_shading_cost_and_the_triangles_size()
              (penumbrae, pixels // 32, True), (penumbrae, pixels // 32 - 1, False),
              (area, pixels // 64, True), (area, pixels // 64 - 1, False), (many, pixels // 64, True),
              (many, pixels // 64 - 1, False),
-             (replace(area, maps=frozenset({"BASE_COLOR"})), 10 ** 6, False),
+             (replace(area, graph=programs.ZERO_AOV), 10 ** 6, False),  # a node graph: forward
              (replace(area, peel=True), 10 ** 6, False)]
     for features, triangles, expected in cases:
         assert passes.deferred_pays(features, triangles, pixels) == expected, (features, triangles)
