@@ -944,10 +944,11 @@ def test_closed_casters_drawn_by_their_lit_faces_cast_the_same_shadows(tmp_path,
     """Closed casters drawn into the maps by their faces towards the light alone (the rest culled)
     give, bit for bit, the image drawn with every face: spheres and a torus facing out, a mirrored
     torus and an inside-out sphere (their faces turn), under a point light (cube maps), a spot and
-    a sun, each with a size; the ground (open) and a cube with a partly transparent face (the rest
-    of it open) drawn whole; a second point light inside a closed sphere (a bulb), which sees its
-    inside: drawn whole for it, the bulb keeps its light in. And the camera's passes culling the
-    faces these closed surfaces turn from it (passes.CULL_CLOSED_SURFACES) give the same image."""
+    a sun, each with a size; the ground (open) and a cube with a partly transparent face (drawn by
+    its coverage: the cube open) drawn whole; a second point light inside a closed sphere (a
+    bulb), which sees its inside: drawn whole for it, the bulb keeps its light in. And the
+    camera's passes culling the faces these closed surfaces turn from it
+    (passes.CULL_CLOSED_SURFACES) give the same image."""
     from addon.frame import gpu_scene, passes
 
     scene = scenes.reset(size=64)
@@ -998,9 +999,9 @@ def test_closed_casters_drawn_by_their_lit_faces_cast_the_same_shadows(tmp_path,
     culled = scenes.render(scene, tmp_path / "culled.exr")
     monkeypatch.setattr(passes, "CULL_CLOSED_CASTERS", False)
     whole = scenes.render(scene, tmp_path / "whole.exr")
-    # the ground and the cube (its other face is not drawn): open; the inside-out sphere and the
-    # mirrored torus: turned
-    assert facings == [[-1, -1, 0, 0, 1, 1, 1]], facings
+    # the ground and the cube (its partly transparent face drawn by its coverage, all faces): open;
+    # the inside-out sphere and the mirrored torus: turned
+    assert facings == [[-1, -1, 0, 0, 0, 1, 1, 1]], facings
     shadowed = float(np.mean(whole[..., :3].sum(-1) < 0.5 * np.median(whole[..., :3].sum(-1))))
     assert shadowed > 0.03, f"only {shadowed:.1%} of the pixels in shadow"
     assert np.array_equal(culled, whole), float(np.abs(culled - whole).max())

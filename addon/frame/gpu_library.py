@@ -452,6 +452,50 @@ def shadow_program(orthographic: bool = False) -> gpu.types.GPUShader:
     return LIBRARY.program(("shadow", orthographic), "shadow map", src, declare)
 
 
+#: The node graph's frame fields (the view's matrices, its window): read from the frame block.
+_FRAME_FIELDS = frozenset({"world_to_view", "view_to_world", "window", "clip_start"})
+
+
+def shadow_frame_fields() -> frozenset[str]:
+    """The optional GraphInputs fields for which a coverage program reads the frame block."""
+    return _FRAME_FIELDS
+
+
+def shadow_coverage_program(graph, orthographic: bool, dither: bool) -> gpu.types.GPUShader:
+    """A shadow map's layer for casters whose coverage is tested (``programs.shadow_coverage_source``):
+    one per compiled graph's structure (``graph``, a ``GraphProgram``; None: the material's Alpha,
+    a push constant), layer kind and rule."""
+    src = programs.shadow_coverage_source(graph, orthographic, dither)
+
+    def declare(info):
+        info.typedef_source(src.typedefs)
+        info.uniform_buf(3, "ObjectBlock", "objects")
+        info.push_constant("MAT4", "shadow_view_projection")
+        if not orthographic:
+            info.push_constant("VEC4", "light_origin")
+        info.push_constant("INT", "object_index")
+        if graph is None:
+            info.push_constant("FLOAT", "shadow_alpha")
+            info.vertex_in(0, "VEC3", "pos")
+            iface = gpu.types.GPUStageInterfaceInfo("shading_lab_shadow_alpha_iface")
+            iface.smooth("VEC3", "world_position")
+            info.vertex_out(iface)
+        else:
+            if graph.uses & _FRAME_FIELDS:  # the frame's view when the maps are drawn
+                info.uniform_buf(0, "FrameData", "frame")
+            info.uniform_buf(len(_BLOCKS) + 4, "GraphBlock", "graph")
+            for k in range(graph.images):
+                info.sampler(GRAPH_IMAGE_SLOT + k, "FLOAT_2D", f"graph_image_{k}")
+            for name in graph_push_constants(graph):
+                info.push_constant("VEC4", name)
+            _declare_mesh_stage(info, "shading_lab_shadow_graph_iface", graph)
+        if not orthographic:
+            _depth_write(info)
+
+    key = ("shadow coverage", graph.key if graph is not None else None, orthographic, dither)
+    return LIBRARY.program(key, "shadow map", src, declare)
+
+
 def occlusion_depths_program() -> gpu.types.GPUShader:
     def declare(info):
         info.typedef_source(programs.read_glsl("chain_data.glsl"))

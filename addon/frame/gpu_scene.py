@@ -211,6 +211,8 @@ class SceneResources:
         self.shadow_plan: shadows.ShadowPlan | None = None
         self.caster_key: bytes = b""  # what the shadow maps saw: casters' geometry and matrices
         self.shadow_maps = None  # the 2D-array depth texture (passes.ShadowPass)
+        self._coverage_key = None  # (snapshot, casters, coverage_key's) of the last snapshot asked
+        self._coverage_frame = None  # (snapshot, the scene camera's frame block): draw_coverage's
         # the lights in the order the programs loop over them, by group, and where each group
         # ends (programs.light_order)
         self.lights: list = []
@@ -370,10 +372,11 @@ class SceneResources:
     def caster_facing(self, casters: list[Draw]) -> np.ndarray:
         """Per caster draw: +1 where its item is a closed surface facing out as drawn (the mesh's
         ``winding`` times the sign of its matrix's determinant: a mirror turns its faces), -1
-        facing in, 0 where some face of the item is not among ``casters`` (a partly transparent
-        slot casts nothing: the rest is open) or its mesh is open."""
+        facing in, 0 where some face of the item is not among ``casters`` or is partly covering
+        (``covering``: the rest is seen through it) or its mesh is open."""
         items, geometries = self.snapshot.items, self.snapshot.geometries
-        drawn = Counter(draw.order for draw in casters)
+        # a partly covering slot (drawn by its coverage) leaves holes: the item is open
+        drawn = Counter(draw.order for draw in casters if not self.covering(draw))
         out = self.handedness(casters)
         for i, draw in enumerate(casters):
             item = items[draw.order]
@@ -400,11 +403,73 @@ class SceneResources:
         beyond = (spheres[:, :3] @ plane[:3] + plane[3]) / length > spheres[:, 3] * 1.001 + 1e-6
         return np.where(beyond, facing, 0).astype(np.int8)
 
-    def shadow_casters(self) -> list[Draw]:
-        """The opaque draws of the items that cast shadows (partly transparent surfaces cast none)."""
+    def shadow_casters(self, covering: bool = True) -> list[Draw]:
+        """The draws of the items that cast shadows: the opaque ones, then (``covering``) the
+        partly covering ones (``covering``), which the shadow pass draws by their coverage
+        (``draw_coverage``); without, partly covering surfaces cast nothing."""
         items = self.snapshot.items
-        return [draw for _features, draws in self.draw_lists(None, False).opaque for draw in draws
+        lists = self.draw_lists(None, False)
+        groups = (lists.opaque, lists.blended) if covering else (lists.opaque,)
+        return [draw for group in groups for _features, draws in group for draw in draws
                 if items[draw.order].casts_shadow]
+
+    def covering(self, draw: Draw) -> bool:
+        """Whether ``draw``'s surface can cover less than all of a texel (drawn blended): its
+        material's Alpha under 1, or its compiled graph's coverage (``MaterialGraph.transparent``)."""
+        material = self.snapshot.materials[draw.material]
+        return material.alpha < 1.0 or (material.graph is not None and material.graph.transparent)
+
+    def coverage_key(self, casters: list[Draw]) -> bytes:
+        """What the partly covering ``casters``' coverage depends on beyond their geometry and
+        matrices: each one's graph (structure, constants, images and their pixels' revisions,
+        attributes) or Alpha, and what a graph reads of its object (texture space, colour, Object
+        Info). Equal keys: equal coverage, the maps kept. Worked out once per snapshot."""
+        held = self._coverage_key
+        if held is not None and held[0] is self.snapshot and held[1] == len(casters):
+            return held[2]
+        snapshot = self.snapshot
+        h = hashlib.blake2b(digest_size=16)
+        for draw in casters:
+            if not self.covering(draw):
+                continue
+            material, item = snapshot.materials[draw.material], snapshot.items[draw.order]
+            graph = material.graph
+            h.update(repr((draw.order, draw.material, material.alpha)).encode())
+            if graph is not None:
+                h.update(graph.program.key.encode())
+                h.update(np.ascontiguousarray(graph.constants, np.float32).tobytes())
+                revisions = [(key, snapshot.images[key].revision if key in snapshot.images else -1)
+                             for key in graph.images]
+                h.update(repr((revisions, graph.attributes, item.texspace, item.color, item.pass_index,
+                               material.pass_index, item.random)).encode())
+        key = h.digest()
+        self._coverage_key = (snapshot, len(casters), key)
+        return key
+
+    def draw_coverage(self, draws: list[Draw], shader, graph) -> None:
+        """Draw partly covering casters (``covering``) of one coverage program
+        (``gpu_library.shadow_coverage_program``: ``graph`` their compiled graphs' structure, None
+        their materials' Alpha) into the bound shadow layer, ``shader`` bound with its layer's
+        uniforms: per draw its object and its graph's constants and images, or its Alpha. A graph
+        reading the view (Window, Camera) reads the scene camera's (as Cycles' shadow rays do)."""
+        materials = self.snapshot.materials
+        if graph is not None and graph.uses & gpu_library.shadow_frame_fields():
+            held = self._coverage_frame
+            if held is None or held[0] is not self.snapshot:
+                block = _Block()
+                block.put(programs.pack_frame(self.snapshot, None, None, self.light_group_ends))
+                held = self._coverage_frame = (self.snapshot, block)
+            shader.uniform_block("frame", held[1].ubo)
+        pushed = gpu_library.graph_push_constants(graph) if graph is not None else ()
+        block = -1
+        for draw in draws:
+            block = self._bind_object(shader, draw, block)
+            material = materials[draw.material]
+            if graph is None:
+                shader.uniform_float("shadow_alpha", min(max(float(material.alpha), 0.0), 1.0))
+            else:
+                self._bind_graph(shader, draw, material.graph, pushed, self._graphs[draw.material])
+            draw.batch.draw(shader)
 
     def caster_spheres(self, draws: list[Draw]) -> np.ndarray:
         """(n, 4) world-space bounding spheres of ``draws``' items (``shadows.bounding_spheres``)."""
@@ -762,6 +827,7 @@ class SceneResources:
         self._bounds.clear()
         self.shadow_plan = None
         self.shadow_maps = None
+        self._coverage_key = self._coverage_frame = None
         self.environment = None
         self.snapshot = None
 

@@ -277,6 +277,11 @@ VIEW_CULLED_CASTERS = True
 #: Leave out of a sun's coarser cascades the casters its finer ones hold for every lookup that
 #: could read them (``shadows.finer_cascades_hold``: the same image; tests turn it off to compare).
 CASCADE_CULLED_CASTERS = True
+#: How a partly covering caster (``SceneResources.covering``: a material's Alpha under 1, a node
+#: graph's coverage) shadows (glsl/shadow_coverage.glsl): "DITHER" a share of its map's texels per
+#: coverage (4 x 4 ordered dither, which the receivers' filter averages towards Cycles' partial
+#: shadow), "THRESHOLD" where its coverage is 1/2 or more, None not at all (tests compare them).
+PARTIAL_COVERAGE = "DITHER"
 #: The faces culled for a caster's facing (``SceneResources.caster_facing``): open, out, in.
 CULLING = {0: "NONE", 1: "BACK", -1: "FRONT"}
 #: Cull the faces of closed surfaces that a view sees wholly from outside where they turn away
@@ -311,9 +316,11 @@ class ShadowPass(Pass):
     the scene's bounds) or a caster (its matrix or geometry) changed, or when a view looks where a
     layer lacks a caster (drawn then with the casters it held as well: a camera orbiting a still
     scene re-renders a layer at most until it holds every caster that reaches it); a material
-    edit re-renders nothing unless it changes which surfaces cast (a slot made partly
-    transparent casts nothing). With Persistent Data (``Settings.persistent_data``, final renders) a
-    final render that takes the last one's texture keeps its maps where they hold the same content
+    edit re-renders nothing unless it changes how surfaces cast (a slot made partly transparent
+    casts by its coverage, ``PARTIAL_COVERAGE``: an edit of a partly covering caster's graph or
+    Alpha draws the maps again, ``SceneResources.coverage_key``). With Persistent Data
+    (``Settings.persistent_data``, final renders) a final render that takes the last one's
+    texture keeps its maps where they hold the same content
     (``SceneResources.shadow_content_key``) and every caster its views need: re-rendering a still
     scene, or one where only materials change, draws no map. Sets ``SceneResources.shadow_maps``;
     nothing when no light casts. ``views``: the frame's views (None: every caster that reaches a
@@ -339,6 +346,8 @@ class ShadowPass(Pass):
         self.held: np.ndarray | None = None
         self._held_casters: tuple | None = None  # held's columns: (item, material) per caster
         self._casters = None  # ((key, the casters), the casters' spheres, which reach each layer)
+        #: the coverage programs the maps were drawn with, (graph key or None, orthographic)
+        self.coverage_programs: set = set()
 
     def _reach(self, frame: Frame, key) -> tuple[list, np.ndarray, np.ndarray, tuple]:
         """The casters, their spheres and which of them reach each layer (shadows.layer_casters,
@@ -347,7 +356,7 @@ class ShadowPass(Pass):
         ``key`` and casters (a viewport redrawing a still scene does not again); last, the casters
         by item and material (what ``held``'s columns are)."""
         scene = frame.scene
-        casters = scene.shadow_casters()
+        casters = scene.shadow_casters(covering=PARTIAL_COVERAGE is not None)
         which = (key, tuple((draw.order, draw.material) for draw in casters))
         if self._casters is None or self._casters[0] != which:
             spheres = scene.caster_spheres(casters)
@@ -368,7 +377,10 @@ class ShadowPass(Pass):
             return True
         # the lights' extents decide which flat casters a layer leaves out (shadowless_casters)
         extents = tuple(shadows.light_extent(light) for light in frame.snapshot.lights)
-        key = (plan.key(), scene.caster_key, extents)
+        # partly covering casters: their coverage (graphs' constants, images, Alphas) and the rule
+        coverage = (PARTIAL_COVERAGE, scene.coverage_key(scene.shadow_casters())
+                    if PARTIAL_COVERAGE is not None else b"")
+        key = (plan.key(), scene.caster_key, extents, coverage)
         shape = (plan.size, plan.layers)
         if self.texture is None or self._shape != shape:
             self.free()
@@ -392,7 +404,8 @@ class ShadowPass(Pass):
         same = key == self.key
         content = self.content if same else None
         if not same and frame.snapshot.settings.persistent_data:
-            content = scene.shadow_content_key(casters, (SKIP_SHADOWLESS, CULL_CLOSED_CASTERS, extents))
+            drawing = (SKIP_SHADOWLESS, CULL_CLOSED_CASTERS, extents, coverage)
+            content = scene.shadow_content_key(casters, drawing)
             same = content == self.content  # the maps the last final render of this content drew
         held = self.held if same and self.held is not None and self._held_casters == which else None
         if held is not None:
@@ -412,6 +425,7 @@ class ShadowPass(Pass):
         self.drawn_casters = int(want[redraw].sum())
         self.cleared = 0
         facing = scene.caster_facing(casters) if CULL_CLOSED_CASTERS else np.zeros(len(casters), np.int8)
+        covers = [scene.covering(draw) for draw in casters]
         for layer, framebuffer in enumerate(self.framebuffers):
             if not redraw[layer]:
                 continue
@@ -455,9 +469,15 @@ class ShadowPass(Pass):
                     # culled (counter-clockwise faces the light; mirrored or inward-facing ones
                     # wind the other way)
                     drawn = np.flatnonzero(want[layer]).tolist()  # (indices: no per-element numpy)
+                    covering = [i for i in drawn if covers[i]]
+                    if covering:
+                        drawn = [i for i in drawn if not covers[i]]
                     facing_drawn = layer_facing[drawn].tolist()
                     scene.draw_positions([casters[i] for i in drawn], shader, frame_block=False,
                                          culling=[CULLING[f] for f in facing_drawn])
+                    if covering:
+                        self._draw_covering(scene, [casters[i] for i in covering], orthographic,
+                                            plan.matrices[layer], light_origin)
                 finally:
                     gpu.state.depth_test_set("NONE")
                     gpu.state.depth_mask_set(False)
@@ -467,6 +487,25 @@ class ShadowPass(Pass):
         self.held, self._held_casters = held, which
         self.content = content
         return True
+
+    def _draw_covering(self, scene, draws: list, orthographic: bool, matrix, light_origin) -> None:
+        """Partly covering casters into the bound layer by their coverage (every face: one seen
+        through another's holes), a program per compiled graph's structure
+        (``gpu_library.shadow_coverage_program``, compiled where a layer holds such a caster;
+        counted in ``coverage_programs``)."""
+        gpu.state.face_culling_set("NONE")
+        groups: dict = {}
+        for draw in draws:
+            graph = scene.snapshot.materials[draw.material].graph
+            groups.setdefault(graph.program if graph is not None else None, []).append(draw)
+        for graph, group in groups.items():
+            shader = gpu_library.shadow_coverage_program(graph, orthographic, PARTIAL_COVERAGE == "DITHER")
+            self.coverage_programs.add((graph.key if graph is not None else None, orthographic))
+            shader.bind()
+            shader.uniform_float("shadow_view_projection", matrix.T.ravel().tolist())
+            if not orthographic:
+                shader.uniform_float("light_origin", light_origin)
+            scene.draw_coverage(group, shader, graph)
 
     def free(self) -> None:
         """Hand the maps' texture to the library for the next renderer of its shape (a final

@@ -833,6 +833,29 @@ def shadow_source(orthographic: bool = False) -> ProgramSource:
                          + ((("SL_SHADOW_ORTHOGRAPHIC", "1"),) if orthographic else ()))
 
 
+@lru_cache(maxsize=64)
+def shadow_coverage_source(graph: GraphProgram | None, orthographic: bool, dither: bool) -> ProgramSource:
+    """A shadow map's layer for casters whose coverage is tested (glsl/shadow_coverage.glsl): the
+    fragments a partly covering surface lets the light through discarded, its coverage the
+    compiled ``graph``'s (evaluated at the fragment as the shading programs do: graph_inputs) or,
+    without one, the material's Alpha; ``dither``: a share of the texels per coverage, else a
+    threshold of 1/2."""
+    fragment = []
+    defines = [("SL_MAX_LIGHTS", "1"), ("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)), ("SL_SHADOW_COVERAGE", "1")]
+    if graph is not None:  # (facing.glsl reads the mesh's varyings: a graph's program hands them on)
+        fragment += [read_glsl(name) for name in ("common.glsl", "facing.glsl", *codegen.LIBRARY)]
+        fragment += ["#define GRAPH_CONST(i) graph.constants[i]", graph.source,
+                     read_glsl("graph_surface.glsl")]
+        defines += graph_defines(graph) + [("SL_SHADOW_GRAPH", "1")]
+    fragment += [read_glsl("shadow_coverage.glsl"), read_glsl("shadow.frag.glsl")]
+    if orthographic:
+        defines.append(("SL_SHADOW_ORTHOGRAPHIC", "1"))
+    if dither:
+        defines.append(("SL_SHADOW_DITHER", "1"))
+    return ProgramSource(typedefs=read_glsl("uniforms.glsl"), vertex=read_glsl("shadow.vert.glsl"),
+                         fragment="\n".join(fragment), defines=tuple(sorted(defines)))
+
+
 def pack_material(m: MaterialParams) -> bytes:
     complex_ior = m.ior_n is not None and m.ior_k is not None
     rows = [
