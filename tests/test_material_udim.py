@@ -195,3 +195,27 @@ def test_more_images_than_fit_fall_back_and_are_said(tmp_path):
     assert len([m for m in graph.missing if "ShaderNodeTexImage" in m]) == 2, graph.missing
     assert graph.notes and all(f"more than {surface.MAX_IMAGES} images" in n for n in graph.notes), \
         graph.notes
+
+
+def test_packed_tiles_are_read_as_their_files(tmp_path):
+    """A packed UDIM image's tiles read from its packed files (the files on disk gone) give the
+    pixels the files gave; each tile is cached under its own key, and forgetting the image
+    forgets its tiles."""
+    image = _tiled(tmp_path, "packed", {1001: (5, 4), 1002: (3, 2)}, 4)
+    key = extract.image_key(image)
+    warnings: list[str] = []
+    files = {t: extract.IMAGES.get(codegen.tile_key(key, t), image, warnings) for t in (1001, 1002)}
+    assert not warnings and files[1001].size == (5, 4) and files[1002].size == (3, 2)
+    image.pack()
+    for t in (1001, 1002):
+        (tmp_path / f"packed.{t}.png").unlink()
+    extract.IMAGES.forget({key})
+    packed = {t: extract.IMAGES.get(codegen.tile_key(key, t), image, warnings) for t in (1001, 1002)}
+    assert not warnings, warnings
+    for t in (1001, 1002):
+        assert packed[t] is not files[t] and np.array_equal(packed[t].pixels, files[t].pixels)
+        assert packed[t].storage == files[t].storage == "SRGB8"
+    assert extract.IMAGES.get(codegen.tile_key(key, 1001), image, warnings) is packed[1001]  # cached
+    assert extract.IMAGES.get(codegen.tile_key(key, 1003), image, warnings) is None
+    assert "no UDIM tile 1003" in warnings[-1]
+    assert not [i.name for i in bpy.data.images if " tile " in i.name]  # the temporary images went
