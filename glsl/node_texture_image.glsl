@@ -78,14 +78,9 @@ int tex_image_wrap(int x, int n, int extension)
   return x;
 }
 
-/* Texel p (already wrapped) as Cycles stores it; outside the image (only Clip reaches there):
- * transparent black, as read_clip gives */
-vec4 tex_image_texel(sampler2D image, ivec2 p, ivec2 size, int texels)
+/* A fetched texel as Cycles stores it (the texel reads, TEX_IMAGE_TEXELS_*) */
+vec4 tex_image_decode(vec4 t, int texels)
 {
-  if (p.x < 0 || p.y < 0 || p.x >= size.x || p.y >= size.y) {
-    return vec4(0.0);
-  }
-  vec4 t = texelFetch(image, p, 0);
   if (texels == TEX_IMAGE_TEXELS_FLOAT) {
     return t;
   }
@@ -101,6 +96,25 @@ vec4 tex_image_texel(sampler2D image, ivec2 p, ivec2 size, int texels)
   return bytes * (1.0 / 255.0);
 }
 
+/* Texel p (already wrapped) as Cycles stores it; outside the image (only Clip reaches there):
+ * transparent black, as read_clip gives. One per sampler kind: an image, or one layer (a UDIM
+ * tile) of an array. */
+vec4 tex_image_texel(sampler2D image, ivec2 p, ivec2 size, int texels)
+{
+  if (p.x < 0 || p.y < 0 || p.x >= size.x || p.y >= size.y) {
+    return vec4(0.0);
+  }
+  return tex_image_decode(texelFetch(image, p, 0), texels);
+}
+
+vec4 tex_image_texel(sampler2DArray image, int layer, ivec2 p, ivec2 size, int texels)
+{
+  if (p.x < 0 || p.y < 0 || p.x >= size.x || p.y >= size.y) {
+    return vec4(0.0);
+  }
+  return tex_image_decode(texelFetch(image, ivec3(p, layer), 0), texels);
+}
+
 /* Cycles' SET_CUBIC_SPLINE_WEIGHTS: the uniform cubic B-spline's four weights at t */
 vec4 tex_image_cubic_weights(float t)
 {
@@ -108,72 +122,121 @@ vec4 tex_image_cubic_weights(float t)
               ((-0.5 * t + 0.5) * t + 0.5) * t + (1.0 / 6.0), (1.0 / 6.0) * t * t * t);
 }
 
-/* interp_closest: the texel uv lies in */
-vec4 tex_image_closest(sampler2D image, vec2 uv, int extension, int texels)
+/* The filters' texel addresses and weights, whatever holds the texels (one image, or a UDIM
+ * tile's layer of an array): the sampler-specific functions below only fetch and sum. */
+
+/* interp_closest: the texel uv lies in; false where Clip leaves it outside (transparent black) */
+bool tex_image_closest_at(vec2 uv, ivec2 size, int extension, out ivec2 p)
 {
-  ivec2 size = textureSize(image, 0);
   ivec2 i;
   tex_image_frac(uv.x * float(size.x), i.x);
   tex_image_frac(uv.y * float(size.y), i.y);
-  if (extension == TEX_IMAGE_CLIP && (i.x < 0 || i.x >= size.x || i.y < 0 || i.y >= size.y)) {
+  p = ivec2(tex_image_wrap(i.x, size.x, extension), tex_image_wrap(i.y, size.y, extension));
+  return !(extension == TEX_IMAGE_CLIP && (i.x < 0 || i.x >= size.x || i.y < 0 || i.y >= size.y));
+}
+
+/* interp_linear: the four texels around uv (texel centres at half-integers: x0, x1, y0, y1 in
+ * xy) and the fractions t; false where Clip has no texel of the four inside */
+bool tex_image_linear_at(vec2 uv, ivec2 size, int extension, out ivec4 xy, out vec2 t)
+{
+  ivec2 i;
+  t.x = tex_image_frac(uv.x * float(size.x) - 0.5, i.x);
+  t.y = tex_image_frac(uv.y * float(size.y) - 0.5, i.y);
+  xy = ivec4(tex_image_wrap(i.x, size.x, extension), tex_image_wrap(i.x + 1, size.x, extension),
+             tex_image_wrap(i.y, size.y, extension), tex_image_wrap(i.y + 1, size.y, extension));
+  return !(extension == TEX_IMAGE_CLIP && (i.x < -1 || i.x >= size.x || i.y < -1 || i.y >= size.y));
+}
+
+/* interp_linear's sum of the four texels, weighted as Cycles writes it */
+vec4 tex_image_bilinear(vec4 a, vec4 b, vec4 c, vec4 d, vec2 t)
+{
+  return (1.0 - t.y) * (1.0 - t.x) * a + (1.0 - t.y) * t.x * b + t.y * (1.0 - t.x) * c + t.y * t.x * d;
+}
+
+/* interp_cubic: the 4 x 4 texels around uv (columns xs, rows ys, wrapped) and their cubic
+ * B-spline weights u, v (Cubic and Smart); false where Clip has no texel of the sixteen inside */
+bool tex_image_cubic_at(vec2 uv, ivec2 size, int extension, out ivec4 xs, out ivec4 ys, out vec4 u, out vec4 v)
+{
+  ivec2 i;
+  float tx = tex_image_frac(uv.x * float(size.x) - 0.5, i.x);
+  float ty = tex_image_frac(uv.y * float(size.y) - 0.5, i.y);
+  u = tex_image_cubic_weights(tx);
+  v = tex_image_cubic_weights(ty);
+  for (int k = 0; k < 4; k++) {
+    xs[k] = tex_image_wrap(i.x - 1 + k, size.x, extension);
+    ys[k] = tex_image_wrap(i.y - 1 + k, size.y, extension);
+  }
+  return !(extension == TEX_IMAGE_CLIP && (i.x < -2 || i.x > size.x || i.y < -2 || i.y > size.y));
+}
+
+/* kernel_tex_image_interp: the image filtered at uv by the node's Interpolation */
+vec4 tex_image_filter(sampler2D image, vec2 uv, int interpolation, int extension, int texels)
+{
+  ivec2 size = textureSize(image, 0);
+  if (interpolation == TEX_IMAGE_CLOSEST) {
+    ivec2 p;
+    return tex_image_closest_at(uv, size, extension, p) ? tex_image_texel(image, p, size, texels) : vec4(0.0);
+  }
+  if (interpolation == TEX_IMAGE_LINEAR) {
+    ivec4 xy;
+    vec2 t;
+    if (!tex_image_linear_at(uv, size, extension, xy, t)) {
+      return vec4(0.0);
+    }
+    return tex_image_bilinear(tex_image_texel(image, xy.xz, size, texels), tex_image_texel(image, xy.yz, size, texels),
+                              tex_image_texel(image, xy.xw, size, texels), tex_image_texel(image, xy.yw, size, texels),
+                              t);
+  }
+  ivec4 xs, ys;
+  vec4 u, v;
+  if (!tex_image_cubic_at(uv, size, extension, xs, ys, u, v)) {
     return vec4(0.0);
   }
-  i = ivec2(tex_image_wrap(i.x, size.x, extension), tex_image_wrap(i.y, size.y, extension));
-  return tex_image_texel(image, i, size, texels);
-}
-
-/* interp_linear: the four texels around uv (texel centres at half-integers), weighted as Cycles
- * writes the sum */
-vec4 tex_image_linear(sampler2D image, vec2 uv, int extension, int texels)
-{
-  ivec2 size = textureSize(image, 0);
-  ivec2 i;
-  float tx = tex_image_frac(uv.x * float(size.x) - 0.5, i.x);
-  float ty = tex_image_frac(uv.y * float(size.y) - 0.5, i.y);
-  if (extension == TEX_IMAGE_CLIP && (i.x < -1 || i.x >= size.x || i.y < -1 || i.y >= size.y)) {
-    return vec4(0.0); /* no texel of the four inside */
-  }
-  int x0 = tex_image_wrap(i.x, size.x, extension), x1 = tex_image_wrap(i.x + 1, size.x, extension);
-  int y0 = tex_image_wrap(i.y, size.y, extension), y1 = tex_image_wrap(i.y + 1, size.y, extension);
-  return (1.0 - ty) * (1.0 - tx) * tex_image_texel(image, ivec2(x0, y0), size, texels) +
-         (1.0 - ty) * tx * tex_image_texel(image, ivec2(x1, y0), size, texels) +
-         ty * (1.0 - tx) * tex_image_texel(image, ivec2(x0, y1), size, texels) +
-         ty * tx * tex_image_texel(image, ivec2(x1, y1), size, texels);
-}
-
-/* interp_cubic: the 4 x 4 texels around uv under the cubic B-spline (Cubic and Smart) */
-vec4 tex_image_cubic(sampler2D image, vec2 uv, int extension, int texels)
-{
-  ivec2 size = textureSize(image, 0);
-  ivec2 i;
-  float tx = tex_image_frac(uv.x * float(size.x) - 0.5, i.x);
-  float ty = tex_image_frac(uv.y * float(size.y) - 0.5, i.y);
-  if (extension == TEX_IMAGE_CLIP && (i.x < -2 || i.x > size.x || i.y < -2 || i.y > size.y)) {
-    return vec4(0.0); /* no texel of the sixteen inside */
-  }
-  vec4 u = tex_image_cubic_weights(tx), v = tex_image_cubic_weights(ty);
   vec4 sum = vec4(0.0);
   for (int row = 0; row < 4; row++) {
-    int y = tex_image_wrap(i.y - 1 + row, size.y, extension);
     vec4 line = vec4(0.0);
     for (int col = 0; col < 4; col++) {
-      line += u[col] * tex_image_texel(image, ivec2(tex_image_wrap(i.x - 1 + col, size.x, extension), y), size, texels);
+      line += u[col] * tex_image_texel(image, ivec2(xs[col], ys[row]), size, texels);
     }
     sum += v[row] * line;
   }
   return sum;
 }
 
-/* kernel_tex_image_interp: the image filtered at uv by the node's Interpolation */
-vec4 tex_image_filter(sampler2D image, vec2 uv, int interpolation, int extension, int texels)
+/* The same filters over one layer of an array (a UDIM tile: every layer is one size) */
+vec4 tex_image_filter(sampler2DArray image, int layer, vec2 uv, int interpolation, int extension, int texels)
 {
+  ivec2 size = textureSize(image, 0).xy;
   if (interpolation == TEX_IMAGE_CLOSEST) {
-    return tex_image_closest(image, uv, extension, texels);
+    ivec2 p;
+    return tex_image_closest_at(uv, size, extension, p) ? tex_image_texel(image, layer, p, size, texels) :
+                                                          vec4(0.0);
   }
   if (interpolation == TEX_IMAGE_LINEAR) {
-    return tex_image_linear(image, uv, extension, texels);
+    ivec4 xy;
+    vec2 t;
+    if (!tex_image_linear_at(uv, size, extension, xy, t)) {
+      return vec4(0.0);
+    }
+    return tex_image_bilinear(tex_image_texel(image, layer, xy.xz, size, texels),
+                              tex_image_texel(image, layer, xy.yz, size, texels),
+                              tex_image_texel(image, layer, xy.xw, size, texels),
+                              tex_image_texel(image, layer, xy.yw, size, texels), t);
   }
-  return tex_image_cubic(image, uv, extension, texels);
+  ivec4 xs, ys;
+  vec4 u, v;
+  if (!tex_image_cubic_at(uv, size, extension, xs, ys, u, v)) {
+    return vec4(0.0);
+  }
+  vec4 sum = vec4(0.0);
+  for (int row = 0; row < 4; row++) {
+    vec4 line = vec4(0.0);
+    for (int col = 0; col < 4; col++) {
+      line += u[col] * tex_image_texel(image, layer, ivec2(xs[col], ys[row]), size, texels);
+    }
+    sum += v[row] * line;
+  }
+  return sum;
 }
 
 /* svm_image_texture after the filtering: the colour divided by alpha where the node's Alpha is
@@ -293,4 +356,44 @@ vec4 node_tex_image_box(sampler2D image, vec3 co, vec3 n, float blend, int inter
                                      decode);
   }
   return f;
+}
+
+/* the tables' reader (the compiled source defines it: glsl/node_ramp.glsl) */
+vec4 graph_table(int i);
+
+/* UDIM (tiled) images: svm_node_tex_image's tile lookup (intern/cycles/kernel/svm/image.h). The
+ * tile's column and row are uv truncated toward zero (C's (int) cast: u in (-1, 0) is still
+ * column 0, and the tile's own Extension then reads it); a tile is found only where
+ * 0 <= column < 10 and row >= 0, as number 1001 + 10 row + column among the image's tiles: a
+ * table of tile numbers, four to a row, at graph_table(table) .. graph_table(table + rows - 1)
+ * (0 after the last: no tile has that number). Gives (uv relative to the tile, the tile's index
+ * in the table); index -1 where no tile holds uv (Cycles then gives TEX_IMAGE_MISSING). */
+vec3 tex_image_tile(vec2 uv, int table, int rows)
+{
+  int tx = int(uv.x), ty = int(uv.y);
+  if (tx >= 0 && ty >= 0 && tx < 10) {
+    float tile = float(1001 + 10 * ty + tx);
+    for (int r = 0; r < rows; r++) {
+      vec4 numbers = graph_table(table + r);
+      for (int c = 0; c < 4; c++) {
+        if (numbers[c] == tile) {
+          return vec3(uv.x - float(tx), uv.y - float(ty), float(4 * r + c));
+        }
+      }
+    }
+  }
+  return vec3(uv, -1.0);
+}
+
+/* A UDIM image's sample at uv (Flat, Sphere or Tube projected): the tile's layer of the array
+ * (layers in the table's order, one size) filtered at uv relative to the tile; outside every
+ * tile Cycles' missing colour */
+vec4 node_tex_image_tiled(sampler2DArray image, vec2 uv, int table, int rows, int interpolation, int extension,
+                          int texels)
+{
+  vec3 t = tex_image_tile(uv, table, rows);
+  if (t.z < 0.0) {
+    return node_tex_image_missing();
+  }
+  return tex_image_filter(image, int(t.z), t.xy, interpolation, extension, texels);
 }

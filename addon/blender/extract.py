@@ -8,13 +8,15 @@ import copy
 import dataclasses
 import itertools
 import math
+import os
+import tempfile
 import threading
 from collections import Counter, OrderedDict
 
 import bpy
 import numpy as np
 
-from ..materials import objects, surface
+from ..materials import codegen, objects, surface
 from ..plan import auto_terms, light_tiles, programs, shadows
 from ..scene import snapshot as S
 from ..scene.matrices import invert
@@ -178,8 +180,11 @@ def _material_graph(material, images: dict | None, warnings: list[str] | None) -
         warnings.append(f"Material '{material.name}': its Displacement is not drawn (the surface is drawn "
                         f"as it is, without displacement or bump from the output)")
     for compiled in ([graph] if graph is not None else []) + list(aovs.values()):
-        if images is not None:
-            images.update((key, found[key]) for key in compiled.images)
+        if images is not None:  # a UDIM tile's key (codegen.tile_key) names its image's
+            images.update((key, found.get(key) or found[key.rsplit("#", 1)[0]])
+                          for entry in compiled.images for key in codegen.sampler_keys(entry))
+        if compiled.notes and warnings is not None:
+            warnings.append(f"Material '{material.name}': {'; '.join(compiled.notes)}")
     if graph is None:
         return None, aovs
     if graph.unread and warnings is not None:
@@ -246,13 +251,17 @@ class _ImageCache:
         self.reads = 0  # images read from Blender since start (tests count them)
 
     def get(self, key: str, image: bpy.types.Image, warnings: list[str]) -> S.ImageData | None:
+        """Image ``key``'s pixels, or a UDIM tile's (``codegen.tile_key``: ``image``'s tile)."""
         fingerprint = _fingerprint(image)
         with self._lock:
             entry = self._entries.pop(key, None)
             if entry is not None and entry[0] == fingerprint and not image.is_dirty:
                 self._entries[key] = entry  # most recently used last
                 return entry[1]
-        data = _read_image(key, image, warnings)
+        if image.source == "TILED" and key != image_key(image):
+            data = _read_tile(key, image, int(key.rsplit("#", 1)[1]), warnings)
+        else:
+            data = _read_image(key, image, warnings)
         self.reads += 1
         if data is not None:
             with self._lock:
@@ -265,9 +274,11 @@ class _ImageCache:
         return sum(data.pixels.nbytes for _, data in self._entries.values())
 
     def forget(self, keys) -> None:
+        """Drop images ``keys``, and their UDIM tiles (``codegen.tile_key``)."""
+        keys = set(keys)
         with self._lock:
-            for key in keys:
-                self._entries.pop(key, None)
+            for key in [k for k in self._entries if k in keys or k.rsplit("#", 1)[0] in keys]:
+                del self._entries[key]
 
     def clear(self) -> None:
         with self._lock:
@@ -316,6 +327,67 @@ def _read_image(key: str, image: bpy.types.Image, warnings: list[str]) -> S.Imag
     saved = not image.is_dirty and (image.source in {"FILE", "SEQUENCE", "MOVIE", "TILED"}
                                     or image.packed_file is not None)
     return S.ImageData(key, pixels, storage, next(_REVISIONS), saved)
+
+
+def _tile_path(image: bpy.types.Image, number: int) -> str | None:
+    """The file of a UDIM image's tile: its path with ``<UDIM>`` as the tile's number or
+    ``<UVTILE>`` as ``u<column>_v<row>`` (both counted from 1), as Blender and Cycles name tile
+    files; relative paths resolved against the blend file (and the image's library)."""
+    path = image.filepath_raw
+    column, row = (number - 1001) % 10 + 1, (number - 1001) // 10 + 1
+    if "<UDIM>" in path:
+        path = path.replace("<UDIM>", str(number))
+    elif "<UVTILE>" in path:
+        path = path.replace("<UVTILE>", f"u{column}_v{row}")
+    else:
+        return None
+    return bpy.path.abspath(path, library=image.library)
+
+
+def _read_tile(key: str, image: bpy.types.Image, number: int, warnings: list[str]) -> S.ImageData | None:
+    """The pixels of a UDIM image's tile ``number`` (``image.pixels`` holds its first tile alone):
+    its packed file, else its file on disk, loaded as a temporary image with the image's colour
+    space, alpha mode and precision and read as any image (``_read_image``); a generated image's
+    first tile from the image itself. None, with a warning, where it has none (the tile is then
+    drawn as Blender draws a missing image)."""
+    numbers = [tile.number for tile in image.tiles]
+    if number not in numbers:
+        warnings.append(f"Image '{image.name_full}' has no UDIM tile {number}: it is drawn as a missing "
+                        f"image")
+        return None
+    if image.is_dirty:
+        warnings.append(f"Image '{image.name_full}': its UDIM tiles are read from their files; unsaved edits "
+                        f"are not drawn")
+    packed = next((p for p in image.packed_files if p.tile_number == number), None)
+    if packed is None and image.packed_file is None and number == numbers[0] and not image.filepath_raw:
+        return _read_image(key, image, warnings)  # a generated image: its first tile is its pixels
+    path, temporary = (None, None) if packed is not None else (_tile_path(image, number), None)
+    try:
+        if packed is not None:  # written out to be loaded
+            suffix = os.path.splitext(packed.filepath)[1] or ".png"
+            with tempfile.NamedTemporaryFile(suffix=suffix, delete=False) as f:
+                f.write(packed.packed_file.data)
+            path = temporary = f.name
+        if path is None or not os.path.isfile(path):
+            warnings.append(f"Image '{image.name_full}': UDIM tile {number} has no file ("
+                            f"{path or 'no <UDIM> or <UVTILE> in its path'}): it is drawn as a missing image")
+            return None
+        tile = bpy.data.images.load(path, check_existing=False)
+        try:
+            tile.name = f"{image.name} tile {number}"
+            tile.colorspace_settings.name = image.colorspace_settings.name
+            tile.alpha_mode = image.alpha_mode
+            tile.use_half_precision = image.use_half_precision
+            return _read_image(key, tile, warnings)
+        finally:
+            bpy.data.images.remove(tile)
+    except (RuntimeError, OSError) as error:  # an unreadable file, or bpy.data not writable here
+        warnings.append(f"Image '{image.name_full}': UDIM tile {number} could not be read ({error}): it is "
+                        f"drawn as a missing image")
+        return None
+    finally:
+        if temporary is not None:
+            os.unlink(temporary)
 
 
 def image_updates(depsgraph) -> set[str]:
@@ -1239,9 +1311,22 @@ def _material_with_images(snap: S.Snapshot, material) -> S.MaterialParams:
     found: dict = {}
     params = material_params(material, found, snap.warnings)
     graphs = ([params.graph] if params.graph is not None else []) + [g for _, g in params.aovs]
-    for key in {key for g in graphs for key in g.images}:
+    keys = {key for g in graphs for entry in g.images for key in codegen.sampler_keys(entry)}
+    for key in sorted(keys):
         if key not in snap.images:
             data = IMAGES.get(key, found[key], snap.warnings)
             if data is not None:
                 snap.images[key] = data
+
+    def kind(tile: S.ImageData) -> tuple:  # what one 2D array holds alike (half floats with floats)
+        return tile.size, "FLOAT" if tile.storage == "HALF" else tile.storage
+
+    for entry in {entry for g in graphs for entry in g.images if isinstance(entry, tuple)}:
+        tiles = {key: snap.images[key] for key in entry if key in snap.images}  # a UDIM image's 2D array
+        first = next(iter(tiles.values()), None)
+        odd = [key.rsplit("#", 1)[1] for key, tile in tiles.items() if kind(tile) != kind(first)]
+        if odd:  # gpu_scene.array_texture draws them as missing
+            snap.warnings.append(f"Image '{found[entry[0]].name_full}': UDIM tiles {', '.join(odd)} are not "
+                                 f"of the first tile's size ({first.size[0]} x {first.size[1]}) and kind of "
+                                 f"pixels: they are drawn as missing images")
     return params

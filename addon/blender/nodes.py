@@ -131,7 +131,7 @@ def _image_props(node, images: dict | None) -> dict:
     """An Image Texture node's image as the compiler needs it: its key (``extract.image_key``, the
     key of its pixels in ``Snapshot.images``; None without an image), and what decides how Cycles
     reads its texels: alpha mode, colour space (and whether it is data), float or bytes, source
-    (``TILED``: a UDIM image, with its tile numbers). The image goes into ``images`` by key."""
+    (``TILED``: a UDIM image, with its tile numbers and sizes). The image goes into ``images`` by key."""
     from .extract import image_key  # lazily: extract pulls in the planner and the scene reader
 
     image = getattr(node, "image", None)
@@ -145,7 +145,10 @@ def _image_props(node, images: dict | None) -> dict:
     return {"image": key, "image_alpha_mode": image.alpha_mode, "image_colorspace": settings.name,
             "image_is_data": bool(settings.is_data), "image_is_float": bool(image.is_float),
             "image_source": image.source,
-            "image_tiles": tuple(sorted(tile.number for tile in image.tiles)) if tiled else ()}
+            "image_tiles": tuple(sorted(tile.number for tile in image.tiles)) if tiled else (),
+            # each tile's size (Blender loads the tile to say it; 0 x 0: a tile without pixels)
+            "image_tile_sizes": tuple(tuple(t.size) for t in sorted(image.tiles, key=lambda t: t.number))
+            if tiled else ()}
 
 
 def read_node(node, images: dict | None = None) -> N.Node:

@@ -326,6 +326,13 @@ _VARYINGS = (("VEC3", "world_position"), ("VEC3", "world_normal"), ("VEC2", "wor
              ("VEC4", "world_tangent"))
 
 
+def _declare_graph_images(info, graph) -> None:
+    """A node graph's samplers (``graph_image_<k>``): a 2D array where it holds a UDIM image's tiles."""
+    for k in range(graph.images):
+        kind = "FLOAT_2D_ARRAY" if k in graph.arrays else "FLOAT_2D"
+        info.sampler(GRAPH_IMAGE_SLOT + k, kind, f"graph_image_{k}")
+
+
 def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     info.typedef_source(typedefs)
     samplers = {0: "ms_table" if features.uses_albedo_table else None,
@@ -360,8 +367,7 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
         info.uniform_buf(len(_BLOCKS) + 1, "ChainData", "chain")
     if features.graph is not None:  # the material's node graph: its constants, images, the object's data
         info.uniform_buf(len(_BLOCKS) + 4, "GraphBlock", "graph")
-        for k in range(features.graph.images):
-            info.sampler(GRAPH_IMAGE_SLOT + k, "FLOAT_2D", f"graph_image_{k}")
+        _declare_graph_images(info, features.graph)
         for name in graph_push_constants(features.graph):
             info.push_constant("VEC4", name)
     if features.deferred:  # a full-screen pass over the G-buffer (glsl/gbuffer.frag.glsl)
@@ -540,8 +546,7 @@ def aov_program(graph, value: bool) -> gpu.types.GPUShader:
         info.uniform_buf(0, "FrameData", "frame")
         info.uniform_buf(3, "ObjectBlock", "objects")
         info.uniform_buf(len(_BLOCKS) + 4, "GraphBlock", "graph")
-        for k in range(graph.images):
-            info.sampler(GRAPH_IMAGE_SLOT + k, "FLOAT_2D", f"graph_image_{k}")
+        _declare_graph_images(info, graph)
         info.push_constant("INT", "object_index")
         for name in graph_push_constants(graph):
             info.push_constant("VEC4", name)
@@ -756,3 +761,12 @@ MISSING_IMAGE = (1.0, 0.0, 1.0, 1.0)
 def missing_texture() -> gpu.types.GPUTexture:
     """A 1 x 1 texture of ``MISSING_IMAGE`` (built once)."""
     return LIBRARY.table(("missing image",), lambda: rgba32f_texture(np.array([[MISSING_IMAGE]], np.float32)))
+
+
+def missing_array_texture() -> gpu.types.GPUTexture:
+    """A 1 x 1 x 1 2D array of ``MISSING_IMAGE``: a UDIM image of no readable tile (built once)."""
+    def build():
+        data = gpu.types.Buffer("FLOAT", 4, np.array(MISSING_IMAGE, np.float32))
+        return gpu.types.GPUTexture((1, 1), layers=1, format="RGBA32F", data=data)
+
+    return LIBRARY.table(("missing image array",), build)

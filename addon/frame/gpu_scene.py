@@ -97,6 +97,43 @@ def image_texture(image: ImageData) -> gpu.types.GPUTexture:
     return gpu.types.GPUTexture((w, h), format=TEXTURE_FORMATS[image.storage], data=data)
 
 
+#: The storage a UDIM image's array keeps when its tiles' differ: half floats beside floats are floats.
+_WIDER = {"HALF": "FLOAT"}
+
+
+def array_texture(tiles: tuple[ImageData | None, ...]) -> gpu.types.GPUTexture:
+    """The GPU 2D array of a UDIM image's tiles, a layer each in order (bottom row first): the
+    first readable tile's size and storage (a HALF tile beside FLOAT ones stored as FLOAT); a tile
+    without pixels, or of another size or kind of storage, is a layer of
+    ``gpu_library.MISSING_IMAGE`` (``extract`` says so)."""
+    first = next((t for t in tiles if t is not None), None)
+    if first is None:
+        return gpu_library.missing_array_texture()
+    storages = {t.storage for t in tiles if t is not None and t.size == first.size}
+    storage = "FLOAT" if storages == {"HALF", "FLOAT"} else first.storage
+    w, h = first.size
+    missing = np.array(gpu_library.MISSING_IMAGE, np.float32)
+    values = np.empty((len(tiles), h, w, 4), np.float32)
+    for layer, tile in enumerate(tiles):
+        if tile is None or tile.size != first.size or _WIDER.get(tile.storage, tile.storage) != \
+                _WIDER.get(storage, storage):
+            values[layer] = missing
+        else:
+            values[layer] = tile.pixels
+            if tile.pixels.dtype == np.uint8:
+                values[layer] /= 255.0  # the upload turns v back into the byte round(255 v)
+    data = gpu.types.Buffer("FLOAT", values.size, values.ravel())
+    return gpu.types.GPUTexture((w, h), layers=len(tiles), format=TEXTURE_FORMATS[storage], data=data)
+
+
+def _graph_samplers(snapshot: Snapshot) -> set:
+    """Every sampler the materials' node graphs bind (surfaces' and AOV Outputs'): image keys, and
+    tuples of keys (a UDIM image's 2D array)."""
+    graphs = [g for m in snapshot.materials.values() for g in [m.graph, *(a for _, a in m.aovs)]
+              if g is not None]
+    return {entry for g in graphs for entry in g.images}
+
+
 @dataclass(slots=True)
 class Draw:
     """One batch of one draw item: the item's order (cancellation is polled every 64 items), its
@@ -201,6 +238,8 @@ class SceneResources:
         self._world_lighting = _Block()
         self.environment = None  # the world's precomputed light (gpu_environment.EnvironmentPass)
         self._textures: dict[str, tuple[ImageData, gpu.types.GPUTexture]] = {}
+        # UDIM images' tiles as 2D arrays: tile keys -> (the tiles' ImageData, the texture)
+        self._arrays: dict[tuple[str, ...], tuple[tuple, gpu.types.GPUTexture]] = {}
         self._draw_lists: dict[tuple[str, bool, bool], DrawLists] = {}
         # programs and tables drawn with, held for this scene's lifetime (see gpu_library)
         self._programs: dict[programs.Features, gpu.types.GPUShader] = {}
@@ -308,13 +347,27 @@ class SceneResources:
             self._world_lighting = _Block()
         for key in set(self._textures) - set(snapshot.images):
             del self._textures[key]
+        samplers = _graph_samplers(snapshot)
+        arrays = {entry for entry in samplers if isinstance(entry, tuple)}
+        layers_only = {key for entry in arrays for key in entry} - samplers  # uploaded in arrays alone
         for key, image in snapshot.images.items():
+            if key in layers_only:
+                self._textures.pop(key, None)
+                continue
             held = self._textures.get(key)
             if held is None or held[0] is not image:
                 texture, uploaded = gpu_library.LIBRARY.image_texture(image, image_texture)
                 self._textures[key] = (image, texture)
                 if uploaded:
                     self.uploads["textures"] += 1
+        for keys in set(self._arrays) - arrays:
+            del self._arrays[keys]
+        for keys in arrays:  # a UDIM image's tiles: one 2D array, made again when a tile is read again
+            tiles = tuple(snapshot.images.get(key) for key in keys)
+            held = self._arrays.get(keys)
+            if held is None or any(a is not b for a, b in zip(held[0], tiles)):
+                self._arrays[keys] = (tiles, array_texture(tiles))
+                self.uploads["textures"] += 1
 
     def _sync_shadows(self, snapshot: Snapshot) -> None:
         plan = self.shadow_plan = shadows.plan(snapshot, self._bounds)
@@ -687,9 +740,13 @@ class SceneResources:
         """A node graph's constants (``block``) and images, and what it reads of the draw's object."""
         shader.uniform_block("graph", block.ubo)
         for k, image in enumerate(graph.images):
-            held = self._textures.get(image)
-            gpu_library.bind_sampler(shader, f"graph_image_{k}",
-                                     held[1] if held is not None else gpu_library.missing_texture())
+            if isinstance(image, tuple):  # a UDIM image's tiles
+                held = self._arrays.get(image)
+                texture = held[1] if held is not None else gpu_library.missing_array_texture()
+            else:
+                held = self._textures.get(image)
+                texture = held[1] if held is not None else gpu_library.missing_texture()
+            gpu_library.bind_sampler(shader, f"graph_image_{k}", texture)
         if pushed:
             item = self.snapshot.items[draw.order]
             material = self.snapshot.materials[draw.material]
@@ -811,6 +868,7 @@ class SceneResources:
         self._attribute_batches.clear()
         self._objects.clear()
         self._textures.clear()
+        self._arrays.clear()
         self._draw_lists.clear()
         self._programs.clear()
         self._lights = _RowTexture()

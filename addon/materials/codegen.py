@@ -47,6 +47,12 @@ def glsl_dir() -> Path:
     raise FileNotFoundError(f"Shading Lab's GLSL sources are missing (looked beside {here})")
 
 
+#: The most samplers one material's graph binds (texture units left beside the programs' own:
+#: addon/frame/gpu_library.GRAPH_IMAGE_SLOT on); a node needing more does not compile (``notes``).
+MAX_IMAGES = 10
+#: The most tiles of a UDIM image drawn (an array's layers: 256 is OpenGL's least
+#: GL_MAX_ARRAY_TEXTURE_LAYERS); an image of more does not compile (``notes``).
+MAX_TILES = 256
 #: GLSL type of each socket type.
 GLSL_TYPES = {"VALUE": "float", "INT": "float", "BOOLEAN": "float", "VECTOR": "vec3", "RGBA": "vec4",
               "SHADER": "Closure"}
@@ -90,11 +96,19 @@ class Compiled:
     constants: np.ndarray
     targets: dict[str, str]
     missing: list[str] = field(default_factory=list)
-    #: the images the graph samples (``graph_image_<k>``), by key in ``Snapshot.images``
-    images: tuple[str, ...] = ()
+    #: the images the graph samples (``graph_image_<k>``), by key in ``Snapshot.images``; a tuple
+    #: of keys is a 2D-array sampler, a layer per key (a UDIM image's tiles, ``tile_key``)
+    images: tuple[str | tuple[str, ...], ...] = ()
     #: the attributes the graph reads (``g.attributes[k]``): (kind, name), kind one of
     #: ``ATTRIBUTE_KINDS``; an empty name is the mesh's default of that kind
     attributes: tuple[tuple[str, str], ...] = ()
+    #: why nodes did not compile where a limit says it (``MAX_IMAGES``, ``MAX_TILES``)
+    notes: tuple[str, ...] = ()
+
+    @property
+    def arrays(self) -> tuple[int, ...]:
+        """The samplers that are 2D arrays (``graph_image_<k>``: sampler2DArray)."""
+        return tuple(k for k, image in enumerate(self.images) if isinstance(image, tuple))
 
     @property
     def key(self) -> str:
@@ -110,14 +124,16 @@ _G = re.compile(r"\bg\b")
 
 
 class _Writer:
-    def __init__(self, flat: FlatGraph):
+    def __init__(self, flat: FlatGraph, whole: FlatGraph | None = None):
         self.flat = flat
+        self.whole = whole if whole is not None else flat  # what the nodes' outputs feed
         self.lines: list[str] = []
         self.constants: list[tuple[float, float, float, float]] = []
         self.values: dict[tuple[str, str], str] = {}  # (node, output) -> GLSL variable
         self.skipped: set[str] = set()
         self.missing: list[str] = []
-        self.images: list[str] = []
+        self.images: list[str | tuple[str, ...]] = []
+        self.notes: list[str] = []  # why nodes did not compile, where a limit says it
         self.attributes: list[tuple[str, str]] = []
         self.shared: dict[str, str] = {}  # an expression computed once -> its variable
         self.count = 0  # variables declared
@@ -129,11 +145,19 @@ class _Writer:
         """``expr`` reading this branch's GraphInputs."""
         return expr if self.g == "g" else _G.sub(self.g, expr)
 
-    def image(self, key: str) -> str:
-        """The sampler of image ``key`` (one per image, however many nodes read it)."""
+    def image(self, key: str | tuple[str, ...]) -> str | None:
+        """The sampler of image ``key`` (one per image, however many nodes read it); a tuple of
+        keys is one 2D-array sampler, a layer per key (a UDIM image's tiles). None where the
+        material would need more than ``MAX_IMAGES`` samplers (said in ``notes``)."""
         if key not in self.images:
+            if len(self.images) >= MAX_IMAGES:
+                return None
             self.images.append(key)
         return f"graph_image_{self.images.index(key)}"
+
+    def over_limit(self, node: FlatNode, needed: int) -> None:
+        self.notes.append(f"{node.name.rsplit('/', 1)[-1]}: more than {MAX_IMAGES} images in one material "
+                          f"({needed} over); not drawn")
 
     def attribute(self, kind: str, name: str) -> str:
         """``g.attributes[k]`` of the attribute (kind, name), one slot per attribute."""
@@ -714,12 +738,64 @@ def _associates_alpha(props: dict) -> bool:
     return not (props.get("image_is_data") or props.get("image_alpha_mode") in ("CHANNEL_PACKED", "NONE"))
 
 
+def sampler_keys(entry: str | tuple[str, ...]) -> tuple[str, ...]:
+    """The image keys of one of ``Compiled.images``: a key, or a 2D array's (a UDIM image's tiles)."""
+    return entry if isinstance(entry, tuple) else (entry,)
+
+
+def tile_key(key: str, tile: int) -> str:
+    """The key of a UDIM image's tile ``tile`` in ``Snapshot.images`` (image ``key``'s)."""
+    return f"{key}#{tile}"
+
+
+def _tiled(w: _Writer, node: FlatNode, co: str, args: str) -> str | None:
+    """A UDIM image's Flat, Sphere or Tube sample (filtered, before tex_image_output), as Cycles'
+    svm_node_tex_image finds the tile at the projected uv: one 2D-array sampler of the tiles where
+    every tile has one size (the tiles Blender has no pixels for are layers drawn as missing),
+    else a sampler per tile; the tile numbers are a table of constants. None where the limits
+    (``MAX_TILES``, ``MAX_IMAGES``) do not let it compile."""
+    props = node.props
+    tiles = tuple(props.get("image_tiles") or ())
+    if not tiles:
+        return None
+    if len(tiles) > MAX_TILES:
+        w.notes.append(f"{node.name.rsplit('/', 1)[-1]}: {len(tiles)} UDIM tiles, more than {MAX_TILES}; "
+                       f"not drawn")
+        return None
+    rows = 1 << max(0, (len(tiles) + 3) // 4 - 1).bit_length()  # a power of two: a tile more seldom
+    # changes the source
+    padded = list(tiles) + [0] * (4 * rows - len(tiles))
+    table = w.table([padded[i:i + 4] for i in range(0, len(padded), 4)])
+    projection = props.get("projection", "FLAT")
+    uv = {"FLAT": f"{co}.xy", "SPHERE": f"tex_image_map_to_sphere(tex_image_remap_square({co}))",
+          "TUBE": f"tex_image_map_to_tube(tex_image_remap_square({co}))"}[projection]
+    keys = tuple(tile_key(props["image"], t) for t in tiles)
+    sizes = {tuple(s) for s in props.get("image_tile_sizes") or () if tuple(s) != (0, 0)}
+    if len(sizes) <= 1:
+        image = w.image(keys)
+        if image is None:
+            w.over_limit(node, 1)
+            return None
+        return w.once("vec4", f"node_tex_image_tiled({image}, {uv}, {table}, {rows}, {args})")
+    new = [key for key in keys if key not in w.images]  # tiles of different sizes: a sampler each
+    if len(w.images) + len(new) > MAX_IMAGES:
+        w.over_limit(node, len(w.images) + len(new) - MAX_IMAGES)
+        return None
+    images = [w.image(key) for key in keys]
+    tile = w.once("vec3", f"tex_image_tile({uv}, {table}, {rows})")
+    sample = "node_tex_image_missing()"
+    for k in reversed(range(len(images))):  # the tile's index as a float: exact
+        sample = f"({tile}.z == {k}.0 ? tex_image_filter({images[k]}, {tile}.xy, {args}) : {sample})"
+    return w.once("vec4", sample)
+
+
 def _image_texture(w: _Writer, node: FlatNode) -> dict | None:
     """The Image Texture node (glsl/node_texture_image.glsl): its image filtered as Cycles does
     at the Vector (the UV map's where nothing is linked), by projection, interpolation and
     extension. The Color output is divided by alpha only where the node's Alpha is read (Cycles'
     NODE_IMAGE_ALPHA_UNASSOCIATE); an 8-bit sRGB image is decoded after filtering. Without an
-    image: Cycles' missing-texture magenta. UDIM (tiled) images are not drawn yet (missing)."""
+    image: Cycles' missing-texture magenta. A UDIM (tiled) image: the tile at the coordinate
+    (``_tiled``); Box projects onto tile 1001 alone, as Cycles (ImageTextureNode::cull_tiles)."""
     props = node.props
     if props.get("image") is None:
         return {"Color": "node_tex_image_missing()", "Alpha": "node_tex_image_missing().a"}
@@ -728,24 +804,35 @@ def _image_texture(w: _Writer, node: FlatNode) -> dict | None:
     projection = props.get("projection", "FLAT")
     if interpolation is None or extension is None or projection not in IMAGE_PROJECTIONS:
         return None
-    if props.get("image_source") == "TILED":
-        return None
+    tiled = props.get("image_source") == "TILED"
     spec = node.inputs.get("Vector")
     co = w.arg(node, "Vector") if spec is not None and isinstance(spec.source, Ref) else "g.uv"
-    image = w.image(props["image"])
     texels = image_texels(props)
     alpha_read = any(isinstance(i.source, Ref) and i.source.node == node.name and i.source.socket == "Alpha"
-                     for other in w.flat.nodes.values() for i in other.inputs.values())
+                     for other in w.whole.nodes.values() for i in other.inputs.values())
     unassociate = "true" if alpha_read and _associates_alpha(props) else "false"
     decode = "true" if texels.startswith("TEX_IMAGE_TEXELS_SRGB") else "false"
     if projection == "BOX":
+        image = w.image(tile_key(props["image"], 1001) if tiled else props["image"])
+        if image is None:
+            w.over_limit(node, 1)
+            return None
         normal = "(vec4(g.n, 0.0) * g.object_to_world).xyz"  # object_inverse_normal_transform: M^T n
         blend = w.constant(props.get("projection_blend", 0.0), "VALUE")
         sample = w.once("vec4", f"node_tex_image_box({image}, {co}, {normal}, {blend}, {interpolation}, "
                                 f"{extension}, {texels}, {unassociate}, {decode})")
         return {"Color": f"vec4({sample}.rgb, 1.0)", "Alpha": f"{sample}.a"}
-    filtered = w.once("vec4", f"node_tex_image_{projection.lower()}({image}, {co}, {interpolation}, "
-                              f"{extension}, {texels})")
+    if tiled:
+        filtered = _tiled(w, node, co, f"{interpolation}, {extension}, {texels}")
+        if filtered is None:
+            return None
+    else:
+        image = w.image(props["image"])
+        if image is None:
+            w.over_limit(node, 1)
+            return None
+        filtered = w.once("vec4", f"node_tex_image_{projection.lower()}({image}, {co}, {interpolation}, "
+                                  f"{extension}, {texels})")
     color = w.once("vec4", f"tex_image_output({filtered}, {unassociate}, {decode})")
     return {"Color": f"vec4({color}.rgb, 1.0)", "Alpha": f"{color}.a"}
 
@@ -805,10 +892,14 @@ EMITTERS = {
 SINKS = ("ShaderNodeOutputAOV", "ShaderNodeOutputMaterial")
 
 
-def compile_graph(flat: FlatGraph, targets: dict[str, tuple[str, str]], name: str = "graph") -> Compiled:
+def compile_graph(flat: FlatGraph, targets: dict[str, tuple[str, str]], name: str = "graph",
+                  whole: FlatGraph | None = None) -> Compiled:
     """The GLSL function ``name`` computing each target (a name -> (flat node, input socket)):
-    ``void name(GraphInputs g, out T target ...)`` in the order ``targets`` lists them."""
-    w = _Writer(flat)
+    ``void name(GraphInputs g, out T target ...)`` in the order ``targets`` lists them. ``whole``:
+    the material's whole flat graph where ``flat`` is part of it (what a node's outputs feed
+    there decides, as Cycles compiles the surface and the AOV Outputs as one graph: an Image
+    Texture's Alpha read anywhere unassociates its Color)."""
+    w = _Writer(flat, whole)
     for node in flat.nodes.values():
         if node.kind in SINKS:
             continue  # outputs: what reads their inputs is the caller's
@@ -831,4 +922,5 @@ def compile_graph(flat: FlatGraph, targets: dict[str, tuple[str, str]], name: st
     prelude = ["vec4 graph_table(int i) { return GRAPH_CONST(i); }", ""]
     source = "\n".join([*prelude, f"void {name}({params})", "{", *w.lines, *assigns, "}", ""])
     constants = np.array(w.constants or [(0.0, 0.0, 0.0, 0.0)], np.float32).reshape(-1, 4)
-    return Compiled(name, source, constants, types, w.missing, tuple(w.images), tuple(w.attributes))
+    return Compiled(name, source, constants, types, w.missing, tuple(w.images), tuple(w.attributes),
+                    tuple(w.notes))

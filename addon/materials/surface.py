@@ -26,8 +26,9 @@ FUNCTION = "material_graph"
 #: ``SL_GRAPH_<FIELD>``): the rest cost nothing to fill.
 OPTIONAL_INPUTS = ("tangent", "object", "generated", "object_to_world", "world_to_object", "world_to_view",
                    "view_to_world", "window", "object_color", "object_info", "ng", "clip_start")
-#: The most images one material samples (texture units left beside the programs' own).
-MAX_IMAGES = 10
+#: The most samplers one material binds (texture units left beside the programs' own; a UDIM
+#: image's tiles of one size are one); a node needing more is not compiled, said in ``notes``.
+MAX_IMAGES = codegen.MAX_IMAGES
 #: The most attributes one material reads (vertex inputs left beside the mesh's own four).
 MAX_ATTRIBUTES = 8
 
@@ -44,6 +45,8 @@ class GraphProgram:
     attributes: int
     uses: frozenset[str]
     attribute_kinds: tuple[str, ...] = ()
+    #: the samplers that are 2D arrays (a UDIM image's tiles: FLOAT_2D_ARRAY), by index
+    arrays: tuple[int, ...] = ()
 
     def __eq__(self, other) -> bool:
         return isinstance(other, GraphProgram) and other.key == self.key
@@ -55,7 +58,8 @@ class GraphProgram:
 @dataclass(eq=False)
 class MaterialGraph:
     """One material's compiled graph: its structure's program, its own constants ((n, 4)
-    float32, the program's ``GRAPH_CONST``), the images it samples (keys in ``Snapshot.images``)
+    float32, the program's ``GRAPH_CONST``), the images it samples (keys in ``Snapshot.images``;
+    a tuple of keys: one 2D-array sampler, a UDIM image's tiles)
     and the attributes it reads ((kind, name), ``codegen.ATTRIBUTE_KINDS``); the nodes that did not
     compile (``"name (kind)"``: their readers took their socket values) of ``nodes`` reached;
     whether its surface can be partly transparent (drawn blended)."""
@@ -72,6 +76,8 @@ class MaterialGraph:
     #: the Principled BSDF's inputs an image gives as it is (``textured``), for the Auto term set's
     #: prediction, which samples their texels
     textured: dict = None
+    #: why nodes of ``missing`` did not compile where a limit says it (images, UDIM tiles)
+    notes: tuple[str, ...] = ()
 
     def _identity(self) -> tuple:
         constants = np.asarray(self.constants, np.float32).tobytes()
@@ -170,17 +176,18 @@ def _node_count(flat: FlatGraph) -> int:
     return sum(1 for n in flat.nodes.values() if n.kind not in ("Convert", *codegen.SINKS))
 
 
-def _compiled(flat: FlatGraph, targets: dict, function: str) -> MaterialGraph:
-    compiled = codegen.compile_graph(flat, targets, function)
+def _compiled(flat: FlatGraph, targets: dict, function: str, whole: FlatGraph) -> MaterialGraph:
+    compiled = codegen.compile_graph(flat, targets, function, whole)
     uses = graph_inputs_read(compiled.source)
     if _bent(flat):
         uses |= {"bent_normal"}
     kinds = tuple(kind for kind, _ in compiled.attributes)  # a tangent is turned to world space
     program = GraphProgram(f"{compiled.key}{''.join(k[0] for k in kinds)}", compiled.source,
                            len(compiled.constants), len(compiled.images), len(compiled.attributes), uses,
-                           kinds)
+                           kinds, compiled.arrays)
     return MaterialGraph(program, compiled.constants, compiled.images, compiled.attributes, compiled.missing,
-                         _node_count(flat), _transparent(flat), _unread(flat), _textured(flat))
+                         _node_count(flat), _transparent(flat), _unread(flat), _textured(flat),
+                         compiled.notes)
 
 
 def compile_material(graph: Graph, groups: dict[str, Graph]) -> MaterialGraph | None:
@@ -193,7 +200,7 @@ def compile_material(graph: Graph, groups: dict[str, Graph]) -> MaterialGraph | 
     # what the Surface reads: the output's Volume and Displacement are not drawn
     above = set(codegen.upstream(flat, surface.source.node)) | {output.name}
     flat = FlatGraph({k: v for k, v in flat.nodes.items() if k in above}, flat.output, flat.cut, flat.luma)
-    return _compiled(flat, {"surface": (output.name, "Surface")}, FUNCTION)
+    return _compiled(flat, {"surface": (output.name, "Surface")}, FUNCTION, flatten(graph, groups))
 
 
 #: The function a material's AOV Output compiles to: ``material_aov(g, out vec4 color, out float
@@ -205,14 +212,16 @@ def compile_aovs(graph: Graph, groups: dict[str, Graph]) -> dict[str, MaterialGr
     """Each AOV Output's inputs compiled, by its AOV name (the first node of a name, as Cycles
     takes one); an AOV Output of no name writes nothing."""
     flat = flatten(graph, groups, output=False)
+    whole = None
     out = {}
     for node in flat.nodes.values():
         name = node.props.get("aov_name", "") if node.kind == "ShaderNodeOutputAOV" else ""
         if name and name not in out:
             above = set(codegen.upstream(flat, node.name))
             only = FlatGraph({k: v for k, v in flat.nodes.items() if k in above}, None, flat.cut, flat.luma)
+            whole = whole or flatten(graph, groups)
             out[name] = _compiled(only, {"color": (node.name, "Color"), "value": (node.name, "Value")},
-                                  AOV_FUNCTION)
+                                  AOV_FUNCTION, whole)
     return out
 
 
