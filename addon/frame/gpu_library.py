@@ -490,8 +490,7 @@ def shadow_coverage_program(graph, orthographic: bool, dither: bool) -> gpu.type
             if graph.uses & _FRAME_FIELDS:  # the frame's view when the maps are drawn
                 info.uniform_buf(0, "FrameData", "frame")
             info.uniform_buf(len(_BLOCKS) + 4, "GraphBlock", "graph")
-            for k in range(graph.images):
-                info.sampler(GRAPH_IMAGE_SLOT + k, "FLOAT_2D", f"graph_image_{k}")
+            _declare_graph_images(info, graph)
             for name in graph_push_constants(graph):
                 info.push_constant("VEC4", name)
             _declare_mesh_stage(info, "shading_lab_shadow_graph_iface", graph)
