@@ -66,6 +66,12 @@ GraphInputs graph_inputs(vec3 n, vec3 v, bool backfacing)
   g.object_color = graph_object_color;
   g.object_info = graph_object_info;
 #endif
+#ifdef SL_GRAPH_UNIFORM_ATTRIBUTES
+  g.uniform_attributes[0] = graph_uniform_attribute0;
+#  if SL_GRAPH_UNIFORM_ATTRIBUTE_COUNT > 1
+  g.uniform_attributes[1] = graph_uniform_attribute1;
+#  endif
+#endif
 #ifdef SL_GRAPH_CLIP_START
   g.clip_start = frame.viewport.z;
 #endif

@@ -29,6 +29,10 @@ struct GraphInputs {
   /* the attributes the graph reads (codegen's Compiled.attributes: named UV maps, colour
    * attributes, generic attributes), in its order; vec4, a UV map's (u, v, 0, 1) */
   vec4 attributes[GRAPH_ATTRIBUTES];
+  /* the object's, its instancer's or the view layer's attributes the graph reads (codegen's
+   * Compiled.uniform_attributes: an Attribute node of type Object, Instancer or View Layer), the
+   * same over the whole object: RGBA, a float as (x, x, x, 1) */
+  vec4 uniform_attributes[2];
   float clip_start;     /* the camera's clip start (Light Path > Ray Length: a camera ray starts
                          * on the near clip plane) */
 };

@@ -45,6 +45,12 @@ AOVS = {
     "random": ("ShaderNodeObjectInfo", "Random", "VALUE"),
     "colour_attribute": ("ShaderNodeVertexColor", "Color", "COLOR"),
     "attribute": ("ShaderNodeAttribute", "Fac", "VALUE"),
+    "object_property": (("OBJECT", "tint"), "Color", "COLOR"),
+    "object_rna_path": (("OBJECT", "location"), "Vector", "COLOR"),
+    "data_property": (("OBJECT", "wear"), "Fac", "VALUE"),
+    "instancer": (("INSTANCER", "tint"), "Color", "COLOR"),
+    "view_layer_property": (("VIEW_LAYER", "gain"), "Fac", "VALUE"),
+    "scene_property": (("VIEW_LAYER", "haze"), "Color", "COLOR"),
 }
 
 
@@ -73,9 +79,17 @@ def _scene():
     mat.pass_index = 7
     tree = scenes.node_tree(mat)
     made = {}
+    # the object's, its data's, the view layer's and the scene's properties an Attribute reads
+    sphere["tint"] = (0.3, 0.6, 0.9)
+    mesh["wear"] = 0.35
+    scene.view_layers[0]["gain"] = 1.75
+    scene["haze"] = (0.2, 0.4, 0.1, 1.0)
     for name, (kind, output, aov_type) in AOVS.items():
         node = made.get(kind)
-        if node is None:
+        if node is None and isinstance(kind, tuple):  # an Attribute of another type than Geometry
+            node = made[kind] = tree.nodes.new("ShaderNodeAttribute")
+            node.attribute_type, node.attribute_name = kind
+        elif node is None:
             node = made[kind] = tree.nodes.new(kind)
             if kind == "ShaderNodeAttribute":
                 node.attribute_name = "weight"

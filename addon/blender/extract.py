@@ -620,6 +620,49 @@ def mesh_geometry(key: str, mesh: bpy.types.Mesh, tangents: bool = False,
     return geometry
 
 
+def _rgba_property(idb, name: str):
+    """Property ``name`` of ``idb`` as an Attribute node reads it (Blender's
+    BKE_object_dupli_find_rgba_attribute, learnt from): an RNA path, else a custom property; a
+    number as (x, x, x, 1), 2 to 4 numbers as (x, y, z, w) with z 0 and w 1 where missing; None
+    where it has none."""
+    if idb is None or not name:
+        return None
+    try:
+        value = idb.path_resolve(name)
+    except (ValueError, TypeError):
+        try:
+            value = idb.get(name)
+        except (TypeError, AttributeError):
+            return None
+    if isinstance(value, (bool, int, float)):
+        v = float(value)
+        return (v, v, v, 1.0)
+    try:
+        values = [float(x) for x in value]
+    except (TypeError, ValueError):
+        return None
+    if not 2 <= len(values) <= 4:
+        return None
+    return tuple(values + [0.0, 1.0][len(values) - 2:] if len(values) < 4 else values)
+
+
+def uniform_attribute(kind: str, name: str, inst, view_layer, scene) -> tuple[float, ...]:
+    """An Attribute node's value of type OBJECT (the object, then its data), INSTANCER (the
+    instance's instancer, else the object) or VIEW_LAYER (the view layer, then the scene, then its
+    world); zeros where none has it (as Cycles)."""
+    obj = inst.object
+    if kind == "VIEW_LAYER":
+        places = (view_layer, scene, scene.world if scene is not None else None)
+    else:
+        owner = inst.parent if kind == "INSTANCER" and inst.is_instance and inst.parent is not None else obj
+        places = (owner.original, getattr(owner.original, "data", None))
+    for place in places:
+        value = _rgba_property(place, name)
+        if value is not None:
+            return value
+    return (0.0, 0.0, 0.0, 0.0)
+
+
 def instance_random(inst) -> float:
     """Object Info's Random: an object's from its name, as Cycles computes it
     (``materials.objects.object_random``); an instance's from its depsgraph ``random_id``, scaled
@@ -1269,11 +1312,15 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
                                          f"triangulate its n-gons or add a UV map)")
             snap.geometries[key] = geometry
         data = obj.data
+        graphs = [g for m in slots for g in (snap.materials[m].graph, *(g for _, g in snap.materials[m].aovs))
+                  if g is not None]
+        wanted = {a for g in graphs for a in g.uniform_attributes}
+        attributes = {a: uniform_attribute(*a, inst, depsgraph.view_layer, depsgraph.scene) for a in wanted}
         snap.items.append(S.DrawItem(key, _matrix(inst.matrix_world), slots or [""],
                                      casts_shadow=bool(getattr(obj, "visible_shadow", True)),
                                      texspace=(tuple(data.texspace_location), tuple(data.texspace_size)),
                                      color=tuple(float(c) for c in obj.color), pass_index=int(obj.pass_index),
-                                     random=instance_random(inst)))
+                                     random=instance_random(inst), attributes=attributes))
     # before the shadow maps: they fit to the reaches; the scene's box only where a reach needs it
     def box():
         return shadows.scene_bounds(snap, {key: geometry.bounds for key, geometry in snap.geometries.items()})

@@ -310,12 +310,14 @@ _BLOCKS = (("FrameData", "frame"), None, ("MaterialData", "material"),  # 1: was
 _PUSH_CONSTANTS = (("INT", "object_index"), ("VEC4", "lobes"))
 def graph_push_constants(graph) -> tuple[str, ...]:
     """The per-draw vec4s a node graph's program reads (its object's texture space, colour and
-    Object Info), beside ``_PUSH_CONSTANTS``: 20 bytes of 128."""
+    Object Info, its object, instancer and view-layer attributes), beside ``_PUSH_CONSTANTS``' 20
+    bytes: at most 20 + 6 x 16 = 116 of 128."""
     names = ()
     if graph.uses & {"object", "generated"}:
         names += ("graph_texspace", "graph_texspace_size")
     if graph.uses & {"object_color", "object_info"}:
         names += ("graph_object_color", "graph_object_info")
+    names += tuple(f"graph_uniform_attribute{k}" for k in range(graph.uniform_attributes))
     return names
 
 

@@ -756,6 +756,8 @@ class SceneResources:
                       "graph_object_color": item.color,
                       "graph_object_info": (float(item.pass_index), float(material.pass_index), item.random,
                                             0.0)}
+            for k, attribute in enumerate(getattr(graph, "uniform_attributes", ())):
+                values[f"graph_uniform_attribute{k}"] = item.attributes.get(attribute, (0.0, 0.0, 0.0, 0.0))
             for name in pushed:
                 try:
                     shader.uniform_float(name, values[name])

@@ -102,6 +102,9 @@ class Compiled:
     #: the attributes the graph reads (``g.attributes[k]``): (kind, name), kind one of
     #: ``ATTRIBUTE_KINDS``; an empty name is the mesh's default of that kind
     attributes: tuple[tuple[str, str], ...] = ()
+    #: the object's, instancer's and view layer's attributes it reads (``g.uniform_attributes[k]``):
+    #: (kind: OBJECT, INSTANCER or VIEW_LAYER, name)
+    uniform_attributes: tuple[tuple[str, str], ...] = ()
     #: why nodes did not compile where a limit says it (``MAX_IMAGES``, ``MAX_TILES``)
     notes: tuple[str, ...] = ()
 
@@ -135,6 +138,7 @@ class _Writer:
         self.images: list[str | tuple[str, ...]] = []
         self.notes: list[str] = []  # why nodes did not compile, where a limit says it
         self.attributes: list[tuple[str, str]] = []
+        self.uniform_attributes: list[tuple[str, str]] = []
         self.shared: dict[str, str] = {}  # an expression computed once -> its variable
         self.count = 0  # variables declared
         #: the GraphInputs the expressions being written read: ``g``, or in a Bump's branch the
@@ -165,6 +169,15 @@ class _Writer:
         if (kind, name) not in self.attributes:
             self.attributes.append((kind, name))
         return f"g.attributes[{self.attributes.index((kind, name))}]"
+
+    def uniform_attribute(self, kind: str, name: str) -> str | None:
+        """``g.uniform_attributes[k]`` of an Attribute node's object, instancer or view-layer
+        attribute (kind, name); None beyond ``MAX_UNIFORM_ATTRIBUTES`` of them."""
+        if (kind, name) not in self.uniform_attributes:
+            if len(self.uniform_attributes) >= MAX_UNIFORM_ATTRIBUTES:
+                return None
+            self.uniform_attributes.append((kind, name))
+        return f"g.uniform_attributes[{self.uniform_attributes.index((kind, name))}]"
 
     def once(self, type_: str, expr: str) -> str:
         """A variable holding ``expr`` (of GLSL ``type_``), declared the first time it is asked
@@ -315,12 +328,23 @@ def _vector_transform(w: _Writer, node: FlatNode) -> dict | None:
     return {"Vector": f"vector_transform_{kind.lower()}({v}, graph_space_{src.lower()}_to_{dst.lower()}(g))"}
 
 
+#: Attribute nodes of other types than Geometry a graph reads at most (each a per-draw vec4).
+MAX_UNIFORM_ATTRIBUTES = 2
+
+
 def _attribute(w: _Writer, node: FlatNode) -> dict | None:
-    """Attribute, of the geometry (by name: a generic attribute, colour attribute or UV map);
-    the object's, instancer's and view layer's attributes are not read (missing)."""
-    if node.props.get("attribute_type", "GEOMETRY") != "GEOMETRY":
+    """Attribute: of the geometry (by name: a generic attribute, colour attribute or UV map), or
+    the object's, its instancer's or the view layer's (a property by name, the same over the
+    object: ``g.uniform_attributes``, the engine resolves it as Cycles' lookup_instance_property)."""
+    kind = node.props.get("attribute_type", "GEOMETRY")
+    if kind == "GEOMETRY":
+        a = w.attribute("GENERIC", node.props.get("attribute_name", ""))
+    elif kind in ("OBJECT", "INSTANCER", "VIEW_LAYER"):
+        a = w.uniform_attribute(kind, node.props.get("attribute_name", ""))
+        if a is None:
+            return None
+    else:
         return None
-    a = w.attribute("GENERIC", node.props.get("attribute_name", ""))
     known = {"Color": f"vec4({a}.rgb, 1.0)", "Vector": f"{a}.xyz", "Fac": f"node_attribute_fac({a})",
              "Alpha": f"{a}.a"}
     return {s: e for s, e in known.items() if s in node.outputs}
@@ -923,4 +947,4 @@ def compile_graph(flat: FlatGraph, targets: dict[str, tuple[str, str]], name: st
     source = "\n".join([*prelude, f"void {name}({params})", "{", *w.lines, *assigns, "}", ""])
     constants = np.array(w.constants or [(0.0, 0.0, 0.0, 0.0)], np.float32).reshape(-1, 4)
     return Compiled(name, source, constants, types, w.missing, tuple(w.images), tuple(w.attributes),
-                    tuple(w.notes))
+                    notes=tuple(w.notes), uniform_attributes=tuple(w.uniform_attributes))

@@ -25,7 +25,8 @@ FUNCTION = "material_graph"
 #: GraphInputs fields a program fills only where its graph reads them (each a define,
 #: ``SL_GRAPH_<FIELD>``): the rest cost nothing to fill.
 OPTIONAL_INPUTS = ("tangent", "object", "generated", "object_to_world", "world_to_object", "world_to_view",
-                   "view_to_world", "window", "object_color", "object_info", "ng", "clip_start")
+                   "view_to_world", "window", "object_color", "object_info", "ng", "clip_start",
+                   "uniform_attributes")
 #: The most samplers one material binds (texture units left beside the programs' own; a UDIM
 #: image's tiles of one size are one); a node needing more is not compiled, said in ``notes``.
 MAX_IMAGES = codegen.MAX_IMAGES
@@ -47,6 +48,8 @@ class GraphProgram:
     attribute_kinds: tuple[str, ...] = ()
     #: the samplers that are 2D arrays (a UDIM image's tiles: FLOAT_2D_ARRAY), by index
     arrays: tuple[int, ...] = ()
+    #: how many object, instancer or view-layer attributes it reads (per-draw vec4s)
+    uniform_attributes: int = 0
 
     def __eq__(self, other) -> bool:
         return isinstance(other, GraphProgram) and other.key == self.key
@@ -78,6 +81,8 @@ class MaterialGraph:
     textured: dict = None
     #: why nodes of ``missing`` did not compile where a limit says it (images, UDIM tiles)
     notes: tuple[str, ...] = ()
+    #: the object's, instancer's and view layer's attributes it reads, (kind, name) by slot
+    uniform_attributes: tuple[tuple[str, str], ...] = ()
 
     def _identity(self) -> tuple:
         constants = np.asarray(self.constants, np.float32).tobytes()
@@ -184,10 +189,10 @@ def _compiled(flat: FlatGraph, targets: dict, function: str, whole: FlatGraph) -
     kinds = tuple(kind for kind, _ in compiled.attributes)  # a tangent is turned to world space
     program = GraphProgram(f"{compiled.key}{''.join(k[0] for k in kinds)}", compiled.source,
                            len(compiled.constants), len(compiled.images), len(compiled.attributes), uses,
-                           kinds, compiled.arrays)
+                           kinds, compiled.arrays, len(compiled.uniform_attributes))
     return MaterialGraph(program, compiled.constants, compiled.images, compiled.attributes, compiled.missing,
                          _node_count(flat), _transparent(flat), _unread(flat), _textured(flat),
-                         compiled.notes)
+                         compiled.notes, compiled.uniform_attributes)
 
 
 def compile_material(graph: Graph, groups: dict[str, Graph]) -> MaterialGraph | None:

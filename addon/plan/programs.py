@@ -341,6 +341,8 @@ def graph_defines(g: GraphProgram) -> list[tuple[str, str]]:
     out = [("SL_GRAPH", g.key), ("SL_GRAPH_CONSTANTS", str(g.constants)),
            ("GRAPH_ATTRIBUTES", str(max(g.attributes, 1)))]
     out += [("SL_GRAPH_" + field.upper(), "1") for field in sorted(g.uses)]
+    if g.uniform_attributes:
+        out.append(("SL_GRAPH_UNIFORM_ATTRIBUTE_COUNT", str(g.uniform_attributes)))
     if g.attributes:
         passes = " ".join(f"graph_attribute{k} = attr{k};" for k in range(g.attributes))
         out.append(("SL_PASS_ATTRIBUTES", passes))

@@ -314,6 +314,9 @@ class DrawItem:
     color: tuple[float, float, float, float] = (1.0, 1.0, 1.0, 1.0)
     pass_index: int = 0
     random: float = 0.0
+    #: the object's, its instancer's and the view layer's attributes its materials' graphs read:
+    #: (kind, name) -> RGBA (Cycles' lookup_instance_property: a float as (x, x, x, 1))
+    attributes: dict = field(default_factory=dict)
 
     @property
     def normal_matrix(self) -> np.ndarray:
