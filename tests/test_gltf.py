@@ -464,16 +464,21 @@ def _bound(values, measured, what):
     assert q <= 3.0 * measured[1], f"{what}: 99th percentile {q:.4%} (measured {measured[1]:.4%})"
 
 
-@pytest.mark.parametrize("case", CASES)
-def test_against_cycles(case, rendered):
-    r = rendered[case]
-    print(f"{case}: frame mean {r['rel'].mean():.4%} p99 {np.quantile(r['rel'], 0.99):.4%}, "
+def _check(r, measured, what):
+    """A case's render against Cycles within 3x what was measured: the frame's and the upward
+    surface's mean and 99th percentile, FLIP."""
+    print(f"{what}: frame mean {r['rel'].mean():.4%} p99 {np.quantile(r['rel'], 0.99):.4%}, "
           f"surface facing up mean {r['up'].mean():.4%} p99 {np.quantile(r['up'], 0.99):.4%} "
           f"({r['up'].size} px), FLIP {r['flip']:.4f}")
-    frame, up, flip = MEASURED[case]
-    _bound(r["rel"], frame, f"{case}, the frame")
-    _bound(r["up"], up, f"{case}, the surface facing up")
-    assert r["flip"] <= 3.0 * flip, f"{case}: FLIP {r['flip']:.4f} (measured {flip:.4f})"
+    frame, up, flip = measured
+    _bound(r["rel"], frame, f"{what}, the frame")
+    _bound(r["up"], up, f"{what}, the surface facing up")
+    assert r["flip"] <= 3.0 * flip, f"{what}: FLIP {r['flip']:.4f} (measured {flip:.4f})"
+
+
+@pytest.mark.parametrize("case", CASES)
+def test_against_cycles(case, rendered):
+    _check(rendered[case], MEASURED[case], case)
 
 
 #: The cases again with the world off (lights and shadows on): the materials, without the world's
@@ -491,28 +496,22 @@ LIGHTS_ONLY = {
 }
 
 
+LIGHTS_ONLY_CASES = list(LIGHTS_ONLY)
+
+
 @pytest.fixture(scope="module")
 def rendered_lights_only(tmp_path_factory):
     results = {}
-    for case in ("orm", "texture_transform", "vertex_colours", "normal_mapped", "node_wrangler",
-                 "nested_groups"):
+    for case in LIGHTS_ONLY_CASES:
         folder = tmp_path_factory.mktemp(case + "_lights")
         scene, obj = _scene(case, folder, world=False)
         results[case] = _compare(scene, obj, folder, SAMPLES)
     return results
 
 
-@pytest.mark.parametrize("case", ["orm", "texture_transform", "vertex_colours", "normal_mapped",
-                                  "node_wrangler", "nested_groups"])
+@pytest.mark.parametrize("case", LIGHTS_ONLY_CASES)
 def test_against_cycles_lights_only(case, rendered_lights_only):
-    r = rendered_lights_only[case]
-    print(f"{case} (lights only): frame mean {r['rel'].mean():.4%} p99 {np.quantile(r['rel'], 0.99):.4%}, "
-          f"surface facing up mean {r['up'].mean():.4%} p99 {np.quantile(r['up'], 0.99):.4%} "
-          f"({r['up'].size} px), FLIP {r['flip']:.4f}")
-    frame, up, flip = LIGHTS_ONLY[case]
-    _bound(r["rel"], frame, f"{case} (lights only), the frame")
-    _bound(r["up"], up, f"{case} (lights only), the surface facing up")
-    assert r["flip"] <= 3.0 * flip, f"{case} (lights only): FLIP {r['flip']:.4f} (measured {flip:.4f})"
+    _check(rendered_lights_only[case], LIGHTS_ONLY[case], f"{case} (lights only)")
 
 
 def test_nothing_left_uncompiled(rendered):

@@ -335,6 +335,11 @@ class Features:
         return tuple(sorted(out))
 
 
+def mesh_vertex() -> str:
+    """The mesh programs' vertex stage: glsl/mesh.vert.glsl after the varyings it writes."""
+    return read_glsl("mesh_varyings.glsl") + "\n" + read_glsl("mesh.vert.glsl")
+
+
 def graph_defines(g: GraphProgram) -> list[tuple[str, str]]:
     """What a program holding compiled graph ``g`` defines: its key, its constants' count, the
     optional GraphInputs fields it reads, and how its attributes reach the fragment stage."""
@@ -368,7 +373,7 @@ def aov_source(graph: GraphProgram, value: bool) -> ProgramSource:
     defines = graph_defines(graph) + [("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)), ("SL_MAX_LIGHTS", "1")]
     if value:
         defines.append(("SL_AOV_VALUE", "1"))
-    return ProgramSource(typedefs=read_glsl("uniforms.glsl"), vertex=read_glsl("mesh.vert.glsl"),
+    return ProgramSource(typedefs=read_glsl("uniforms.glsl"), vertex=mesh_vertex(),
                          fragment="\n".join(fragment), defines=tuple(sorted(defines)))
 
 
@@ -406,7 +411,7 @@ def program_source(features: Features) -> ProgramSource:
     return ProgramSource(
         typedefs=read_glsl("uniforms.glsl") + "\n" + read_glsl("chain_data.glsl"),
         vertex=(read_glsl("deferred_depth.glsl") + "\n" + read_glsl("deferred.vert.glsl")
-                if features.deferred else read_glsl("mesh.vert.glsl")),
+                if features.deferred else mesh_vertex()),
         fragment="\n".join(fragment),
         defines=tuple(sorted(features.defines() + (("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)),))),
     )
@@ -534,7 +539,7 @@ def prepass_source(back_faces: bool = False, depth_only: bool = False) -> Progra
     input)."""
     return ProgramSource(
         typedefs=read_glsl("uniforms.glsl") + "\n" + read_glsl("chain_data.glsl"),
-        vertex=read_glsl("mesh.vert.glsl"),
+        vertex=mesh_vertex(),
         fragment=read_glsl("facing.glsl") + "\n" + read_glsl("prepass.frag.glsl"),
         defines=(("SL_MAX_LIGHTS", "1"), ("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)))
         + ((("SL_BACK_FACES", "1"),) if back_faces else ())
@@ -547,7 +552,7 @@ def gbuffer_source() -> ProgramSource:
     """The G-buffer of the opaque surfaces shaded deferred (glsl/gbuffer.frag.glsl)."""
     return ProgramSource(
         typedefs=read_glsl("uniforms.glsl") + "\n" + read_glsl("chain_data.glsl"),
-        vertex=read_glsl("mesh.vert.glsl"),
+        vertex=mesh_vertex(),
         fragment=read_glsl("facing.glsl") + "\n" + read_glsl("gbuffer.frag.glsl"),
         defines=(("SL_MAX_LIGHTS", "1"), ("SL_OBJECT_BLOCK", str(OBJECT_BLOCK))),
     )
@@ -854,7 +859,10 @@ def shadow_coverage_source(graph: GraphProgram | None, orthographic: bool, dithe
         defines.append(("SL_SHADOW_ORTHOGRAPHIC", "1"))
     if dither:
         defines.append(("SL_SHADOW_DITHER", "1"))
-    return ProgramSource(typedefs=read_glsl("uniforms.glsl"), vertex=read_glsl("shadow.vert.glsl"),
+    vertex = read_glsl("shadow.vert.glsl")
+    if graph is not None:  # it hands on what the graph reads of the mesh
+        vertex = read_glsl("mesh_varyings.glsl") + "\n" + vertex
+    return ProgramSource(typedefs=read_glsl("uniforms.glsl"), vertex=vertex,
                          fragment="\n".join(fragment), defines=tuple(sorted(defines)))
 
 
