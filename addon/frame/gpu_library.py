@@ -444,20 +444,31 @@ def shadow_program(orthographic: bool = False) -> gpu.types.GPUShader:
     src = programs.shadow_source(orthographic)
 
     def declare(info):
-        info.typedef_source(src.typedefs)
-        info.uniform_buf(3, "ObjectBlock", "objects")
-        info.push_constant("MAT4", "shadow_view_projection")
-        if not orthographic:
-            info.push_constant("VEC4", "light_origin")
-        info.push_constant("INT", "object_index")
-        info.vertex_in(0, "VEC3", "pos")
-        iface = gpu.types.GPUStageInterfaceInfo("shading_lab_shadow_iface")
-        iface.smooth("VEC3", "world_position")
-        info.vertex_out(iface)
+        _declare_shadow_layer(info, src, orthographic)
+        _declare_position_only(info, "shading_lab_shadow_iface")
         if not orthographic:
             _depth_write(info)
 
     return LIBRARY.program(("shadow", orthographic), "shadow map", src, declare)
+
+
+def _declare_shadow_layer(info, src, orthographic: bool) -> None:
+    """What every shadow-map program reads: the objects' block, the layer's projection (and a
+    perspective layer's light position), the draw's object."""
+    info.typedef_source(src.typedefs)
+    info.uniform_buf(3, "ObjectBlock", "objects")
+    info.push_constant("MAT4", "shadow_view_projection")
+    if not orthographic:
+        info.push_constant("VEC4", "light_origin")
+    info.push_constant("INT", "object_index")
+
+
+def _declare_position_only(info, interface: str) -> None:
+    """A vertex stage that reads the position alone and hands on the world position."""
+    info.vertex_in(0, "VEC3", "pos")
+    iface = gpu.types.GPUStageInterfaceInfo(interface)
+    iface.smooth("VEC3", "world_position")
+    info.vertex_out(iface)
 
 
 #: The node graph's frame fields (the view's matrices, its window): read from the frame block.
@@ -476,18 +487,10 @@ def shadow_coverage_program(graph, orthographic: bool, dither: bool) -> gpu.type
     src = programs.shadow_coverage_source(graph, orthographic, dither)
 
     def declare(info):
-        info.typedef_source(src.typedefs)
-        info.uniform_buf(3, "ObjectBlock", "objects")
-        info.push_constant("MAT4", "shadow_view_projection")
-        if not orthographic:
-            info.push_constant("VEC4", "light_origin")
-        info.push_constant("INT", "object_index")
+        _declare_shadow_layer(info, src, orthographic)
         if graph is None:
             info.push_constant("FLOAT", "shadow_alpha")
-            info.vertex_in(0, "VEC3", "pos")
-            iface = gpu.types.GPUStageInterfaceInfo("shading_lab_shadow_alpha_iface")
-            iface.smooth("VEC3", "world_position")
-            info.vertex_out(iface)
+            _declare_position_only(info, "shading_lab_shadow_alpha_iface")
         else:
             if graph.uses & _FRAME_FIELDS:  # the frame's view when the maps are drawn
                 info.uniform_buf(0, "FrameData", "frame")

@@ -475,11 +475,17 @@ def _mix(w: _Writer, node: FlatNode) -> dict | None:
     fn = _MIX_FUNCTIONS.get(node.props.get("blend_type"))
     if kind != "RGBA" or fn is None:
         return None
-    a = w.arg(node, "A_Color")
-    rgb = f"{fn}({fac}, {a}.rgb, {w.arg(node, 'B_Color')}.rgb)"
-    if node.props.get("clamp_result"):
+    return {"Result_Color": _blend(fn, fac, w.arg(node, "A_Color"), w.arg(node, "B_Color"),
+                                   node.props.get("clamp_result"))}
+
+
+def _blend(fn: str, fac: str, a: str, b: str, clamp_result) -> str:
+    """Colour ``a`` blended with ``b`` by the blend mode's function ``fn`` at factor ``fac``, the
+    result clamped to [0, 1] where asked; ``a``'s alpha kept (the Mix node's and Mix RGB's)."""
+    rgb = f"{fn}({fac}, {a}.rgb, {b}.rgb)"
+    if clamp_result:
         rgb = f"clamp({rgb}, 0.0, 1.0)"
-    return {"Result_Color": f"vec4({rgb}, {a}.a)"}
+    return f"vec4({rgb}, {a}.a)"
 
 
 def _call(fn: str, w: _Writer, node: FlatNode, inputs: tuple[str, ...], output: str) -> dict:
@@ -657,10 +663,8 @@ def _mix_rgb(w: _Writer, node: FlatNode) -> dict | None:
     if fn is None:
         return None
     a = w.arg(node, "Color1")
-    rgb = f"{fn}(clamp({w.arg(node, 'Fac')}, 0.0, 1.0), {a}.rgb, {w.arg(node, 'Color2')}.rgb)"
-    if node.props.get("use_clamp"):
-        rgb = f"clamp({rgb}, 0.0, 1.0)"
-    return {"Color": f"vec4({rgb}, {a}.a)"}
+    fac = f"clamp({w.arg(node, 'Fac')}, 0.0, 1.0)"
+    return {"Color": _blend(fn, fac, a, w.arg(node, "Color2"), node.props.get("use_clamp"))}
 
 
 def _separate(space: str, inputs: str, outputs: tuple[str, str, str]):

@@ -216,6 +216,8 @@ AOV_FUNCTION = "material_aov"
 def compile_aovs(graph: Graph, groups: dict[str, Graph]) -> dict[str, MaterialGraph]:
     """Each AOV Output's inputs compiled, by its AOV name (the first node of a name, as Cycles
     takes one); an AOV Output of no name writes nothing."""
+    if not any(node.kind == "ShaderNodeOutputAOV" and not node.muted for node in graph.nodes.values()):
+        return {}  # (flatten takes AOV Outputs from the material's own tree only): nothing to flatten
     flat = flatten(graph, groups, output=False)
     whole = None
     out = {}
