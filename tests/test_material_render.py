@@ -3,6 +3,9 @@ against Cycles with the same graph (direct light, the Principled term set), and 
 
 Each graph drives the Principled BSDF's inputs per fragment from the surface's UV (a sphere, so
 that every input sweeps its range under a sun and a point light); Cycles renders the same scene.
+The lights cast no shadow here (a convex sphere shadows nothing but the backdrop): what is measured
+is the materials; tests/test_shadows.py and tests/test_alpha_shadows.py compare shadows, and
+tests/test_gltf.py whole files with shadows and the world on.
 """
 
 from __future__ import annotations
