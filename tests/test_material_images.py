@@ -119,7 +119,7 @@ def _evaluate(compiled: codegen.Compiled, fragment: dict, samplers: dict, object
     inputs = {name: np.tile(a, (len(names), 1)) for name, a in fragment.items()}
     selector = np.repeat(np.arange(len(names), dtype=np.float32), rows)
     inputs["sel"] = np.stack([selector, *([np.zeros_like(selector)] * 3)], axis=1)
-    values = evaluate(f"{call} int k = int(sel.x + 0.5); {select}", inputs, extra=codegen.LIBRARY,
+    values = evaluate(f"{call} int k = int(sel.x + 0.5); {select}", inputs, extra=codegen.library(source),
                       source=source, samplers=samplers)
     out = {}
     for i, n in enumerate(names):

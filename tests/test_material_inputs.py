@@ -361,7 +361,11 @@ def _evaluate_inputs(compiled: codegen.Compiled, rows: dict, uniforms: dict) -> 
             result = f"vec4(vec3({chunk[0]}.xyz), 0.0)"
         values = _from_quads(
             evaluate(
-                f"{call} result = {result};", inputs, defines=defines, extra=codegen.LIBRARY, source=source
+                f"{call} result = {result};",
+                inputs,
+                defines=defines,
+                extra=codegen.library(source),
+                source=source,
             )
         )
         for i, n in enumerate(chunk):

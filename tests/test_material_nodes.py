@@ -101,7 +101,8 @@ def _evaluate(compiled: codegen.Compiled, fragment: dict[str, np.ndarray]) -> di
             result = f"vec4({', '.join(chunk + ['0.0'] * (4 - len(chunk)))})"
         else:
             result = f"vec4(vec3({chunk[0]}.xyz), 0.0)"
-        values = evaluate(f"{call} result = {result};", fragment, extra=codegen.LIBRARY, source=source)
+        values = evaluate(f"{call} result = {result};", fragment, extra=codegen.library(source),
+                          source=source)
         for i, n in enumerate(chunk):
             out[n] = values[:, i:i + 1] if len(chunk) > 1 or compiled.targets[n] == "float" else values[:, :3]
     return {n: v.astype(np.float64) for n, v in out.items()}

@@ -46,6 +46,17 @@ def _default(socket):
         return None
 
 
+def _identity_mapping(mapping) -> bool:
+    """Whether a texture node's own Texture Mapping (Blender's TexMapping, which Cycles applies
+    before the texture) leaves the coordinate unchanged (or the node has none)."""
+    if mapping is None:
+        return True
+    return (tuple(mapping.translation) == (0.0, 0.0, 0.0) and tuple(mapping.rotation) == (0.0, 0.0, 0.0)
+            and tuple(mapping.scale) == (1.0, 1.0, 1.0) and not mapping.use_min and not mapping.use_max
+            and (mapping.mapping_x, mapping.mapping_y, mapping.mapping_z) == ("X", "Y", "Z")
+            and mapping.mapping == "FLAT")
+
+
 def _props(node) -> dict:
     out = {}
     for prop in node.bl_rna.properties:
@@ -56,6 +67,8 @@ def _props(node) -> dict:
         if prop.type in ("INT", "FLOAT") and getattr(prop, "is_array", False):
             value = tuple(value)
         out[name] = value
+    if not _identity_mapping(getattr(node, "texture_mapping", None)):
+        out["texture_mapping"] = True  # a texture node's own mapping (its sidebar): not compiled
     target = getattr(node, "object", None) if node.bl_idname == "ShaderNodeTexCoord" else None
     if target is not None:  # Texture Coordinate > Object in another object's space: its matrix, read now
         out["object_matrix"] = tuple(tuple(float(v) for v in row) for row in target.matrix_world.inverted())

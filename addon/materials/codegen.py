@@ -31,10 +31,12 @@ from __future__ import annotations
 import hashlib
 import re
 from dataclasses import dataclass, field
+from functools import lru_cache
 from pathlib import Path
 
 import numpy as np
 
+from . import textures
 from .graph import CONVERT, Const, FlatGraph, FlatNode, Ref
 
 
@@ -60,6 +62,34 @@ GLSL_TYPES = {"VALUE": "float", "INT": "float", "BOOLEAN": "float", "VECTOR": "v
 LIBRARY = ("node_inputs.glsl", "node_convert.glsl", "node_color.glsl", "node_math.glsl", "node_mix.glsl",
            "node_converter.glsl", "node_vector_math.glsl", "node_texture_image.glsl", "node_normal.glsl",
            "node_ramp.glsl", "node_vector.glsl", "node_closure.glsl")
+#: Library files compiled into a program only where its graph calls one of their functions (the
+#: procedural textures: only what the scene requires), each after the files it calls.
+OPTIONAL_LIBRARY = ("node_hash.glsl", "node_tex_white_noise.glsl")
+_DEFINED = re.compile(r"^[A-Za-z_]\w*\s+(\w+)\s*\(", re.M)
+_CALLED = re.compile(r"\b(\w+)\s*\(")
+
+
+@lru_cache(maxsize=None)
+def _optional_file(name: str) -> tuple[frozenset[str], frozenset[str]]:
+    """The functions ``name`` (of OPTIONAL_LIBRARY) defines and the names it calls."""
+    text = (glsl_dir() / name).read_text()
+    return frozenset(_DEFINED.findall(text)), frozenset(_CALLED.findall(text))
+
+
+def library(source: str) -> tuple[str, ...]:
+    """The library files a compiled graph's ``source`` needs, in order: ``LIBRARY``, then each
+    file of ``OPTIONAL_LIBRARY`` whose functions the source calls, or another needed file calls."""
+    calls, needed = set(_CALLED.findall(source)), set()
+    changed = True
+    while changed:
+        changed = False
+        for name in OPTIONAL_LIBRARY:
+            defined, called = _optional_file(name)
+            if name not in needed and defined & calls:
+                needed.add(name)
+                calls |= called
+                changed = True
+    return LIBRARY + tuple(name for name in OPTIONAL_LIBRARY if name in needed)
 
 #: The Math node's operations, each its library function (glsl/node_math.glsl).
 MATH_OPERATIONS = (
@@ -825,6 +855,8 @@ def _image_texture(w: _Writer, node: FlatNode) -> dict | None:
     image: Cycles' missing-texture magenta. A UDIM (tiled) image: the tile at the coordinate
     (``_tiled``); Box projects onto tile 1001 alone, as Cycles (ImageTextureNode::cull_tiles)."""
     props = node.props
+    if props.get("texture_mapping"):
+        return None  # the node's own Texture Mapping (its sidebar) is not compiled
     if props.get("image") is None:
         return {"Color": "node_tex_image_missing()", "Alpha": "node_tex_image_missing().a"}
     interpolation = IMAGE_INTERPOLATIONS.get(props.get("interpolation"))
@@ -914,6 +946,7 @@ EMITTERS = {
     "ShaderNodeSeparateHSV": _separate("HSV", "Color", ("H", "S", "V")),
     "ShaderNodeCombineHSV": _combine("HSV", ("H", "S", "V"), "Color"),
     CONVERT: _convert,
+    **textures.EMITTERS,
     **CLOSURES,
 }
 #: Nodes that compute nothing themselves: the outputs whose inputs are the targets.

@@ -135,10 +135,11 @@ _CALL = re.compile(r"\b(\w+)\s*\(")
 
 @lru_cache(maxsize=1)
 def _library_functions() -> dict[str, str]:
-    """The node library's functions (codegen.LIBRARY): name -> body (overloads joined)."""
+    """The node library's functions (codegen.LIBRARY and OPTIONAL_LIBRARY): name -> body (overloads
+    joined)."""
     glsl = codegen.glsl_dir()
     bodies: dict[str, str] = {}
-    for name in codegen.LIBRARY:
+    for name in codegen.LIBRARY + codegen.OPTIONAL_LIBRARY:
         text = (glsl / name).read_text()
         starts = list(_FUNCTION.finditer(text))
         for i, m in enumerate(starts):

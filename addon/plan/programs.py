@@ -367,7 +367,8 @@ ZERO_AOV = GraphProgram("zero-aov", "void material_aov(GraphInputs g, out vec4 c
 def aov_source(graph: GraphProgram, value: bool) -> ProgramSource:
     """The program writing a material's AOV Output (glsl/aov.frag.glsl): its compiled graph
     (``materials.surface.compile_aovs``), a Value AOV's value or a Color AOV's colour."""
-    fragment = [read_glsl(name) for name in ("common.glsl", "facing.glsl", "view.glsl", *codegen.LIBRARY)]
+    fragment = [read_glsl(name) for name in ("common.glsl", "facing.glsl", "view.glsl",
+                                             *codegen.library(graph.source))]
     fragment += ["#define GRAPH_CONST(i) graph.constants[i]", graph.source, read_glsl("graph_surface.glsl"),
                  read_glsl("aov.frag.glsl")]
     defines = graph_defines(graph) + [("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)), ("SL_MAX_LIGHTS", "1")]
@@ -404,7 +405,7 @@ def program_source(features: Features) -> ProgramSource:
         fragment.append(read_glsl("facing.glsl"))
     fragment.append(read_glsl("shadows.glsl"))  # reads the shadow block (SL_SHADOWS)
     if features.graph is not None:  # the node library, then the graph's function
-        fragment += [read_glsl(name) for name in codegen.LIBRARY]
+        fragment += [read_glsl(name) for name in codegen.library(features.graph.source)]
         fragment += ["#define GRAPH_CONST(i) graph.constants[i]", features.graph.source,
                      read_glsl("graph_surface.glsl")]
     fragment.append(read_glsl("mesh.frag.glsl"))
@@ -850,7 +851,8 @@ def shadow_coverage_source(graph: GraphProgram | None, orthographic: bool, dithe
     fragment = []
     defines = [("SL_MAX_LIGHTS", "1"), ("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)), ("SL_SHADOW_COVERAGE", "1")]
     if graph is not None:  # (facing.glsl reads the mesh's varyings: a graph's program hands them on)
-        fragment += [read_glsl(name) for name in ("common.glsl", "facing.glsl", *codegen.LIBRARY)]
+        library = codegen.library(graph.source)
+        fragment += [read_glsl(name) for name in ("common.glsl", "facing.glsl", *library)]
         fragment += ["#define GRAPH_CONST(i) graph.constants[i]", graph.source,
                      read_glsl("graph_surface.glsl")]
         defines += graph_defines(graph) + [("SL_SHADOW_GRAPH", "1")]

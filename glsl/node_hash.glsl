@@ -1,0 +1,107 @@
+/* The integer hashes Cycles' procedural textures are built on (Cycles' util/hash.h): Bob
+ * Jenkins' lookup3 final mix of one to four 32-bit keys, a float hashed by its bits, the result
+ * mapped to [0, 1]. Bit for bit what Cycles computes (unsigned arithmetic wraps in GLSL as in C);
+ * the numpy twin is addon/reference/hashing.py. Compiled into a program only where its graph
+ * uses a procedural texture (codegen.OPTIONAL_LIBRARY). */
+
+uint hash_rot(uint x, int k) { return (x << k) | (x >> (32 - k)); }
+
+/* lookup3's mix(a, b, c): the three words of state stirred before the fourth key */
+void hash_mix(inout uint a, inout uint b, inout uint c)
+{
+  a -= c; a ^= hash_rot(c, 4); c += b;
+  b -= a; b ^= hash_rot(a, 6); a += c;
+  c -= b; c ^= hash_rot(b, 8); b += a;
+  a -= c; a ^= hash_rot(c, 16); c += b;
+  b -= a; b ^= hash_rot(a, 19); a += c;
+  c -= b; c ^= hash_rot(b, 4); b += a;
+}
+
+/* lookup3's final(a, b, c): c is the hash */
+uint hash_final(uint a, uint b, uint c)
+{
+  c ^= b; c -= hash_rot(b, 14);
+  a ^= c; a -= hash_rot(c, 11);
+  b ^= a; b -= hash_rot(a, 25);
+  c ^= b; c -= hash_rot(b, 16);
+  a ^= c; a -= hash_rot(c, 4);
+  b ^= a; b -= hash_rot(a, 14);
+  c ^= b; c -= hash_rot(b, 24);
+  return c;
+}
+
+/* the state's seed for n keys: 0xdeadbeef + (n << 2) + 13 */
+uint hash_uint(uint kx)
+{
+  uint s = 0xdeadbeefu + (1u << 2) + 13u;
+  return hash_final(s + kx, s, s);
+}
+
+uint hash_uint2(uint kx, uint ky)
+{
+  uint s = 0xdeadbeefu + (2u << 2) + 13u;
+  return hash_final(s + kx, s + ky, s);
+}
+
+uint hash_uint3(uint kx, uint ky, uint kz)
+{
+  uint s = 0xdeadbeefu + (3u << 2) + 13u;
+  return hash_final(s + kx, s + ky, s + kz);
+}
+
+uint hash_uint4(uint kx, uint ky, uint kz, uint kw)
+{
+  uint s = 0xdeadbeefu + (4u << 2) + 13u;
+  uint a = s + kx, b = s + ky, c = s + kz;
+  hash_mix(a, b, c);
+  return hash_final(a + kw, b, c);
+}
+
+/* [0, 2^32 - 1] -> [0, 1]: Cycles' uint_to_float_incl, whose 1 / (float)0xFFFFFFFF is 2^-32 in
+ * single precision (0xFFFFFFFF rounds to 2^32); the conversion rounds as C's does */
+float hash_uint_to_unit(uint n) { return float(n) * (1.0 / 4294967296.0); }
+
+float hash_float_to_float(float k) { return hash_uint_to_unit(hash_uint(floatBitsToUint(k))); }
+float hash_vec2_to_float(vec2 k) { return hash_uint_to_unit(hash_uint2(floatBitsToUint(k.x), floatBitsToUint(k.y))); }
+
+float hash_vec3_to_float(vec3 k)
+{
+  uvec3 u = floatBitsToUint(k);
+  return hash_uint_to_unit(hash_uint3(u.x, u.y, u.z));
+}
+
+float hash_vec4_to_float(vec4 k)
+{
+  uvec4 u = floatBitsToUint(k);
+  return hash_uint_to_unit(hash_uint4(u.x, u.y, u.z, u.w));
+}
+
+/* vectors of hashes: the key with 1, 2 appended (or its components rotated) per component, as
+ * Cycles' hash_float*_to_float* */
+vec2 hash_vec2_to_vec2(vec2 k) { return vec2(hash_vec2_to_float(k), hash_vec3_to_float(vec3(k, 1.0))); }
+
+vec3 hash_vec3_to_vec3(vec3 k)
+{
+  return vec3(hash_vec3_to_float(k), hash_vec4_to_float(vec4(k, 1.0)), hash_vec4_to_float(vec4(k, 2.0)));
+}
+
+vec4 hash_vec4_to_vec4(vec4 k)
+{
+  return vec4(hash_vec4_to_float(k), hash_vec4_to_float(k.wxyz), hash_vec4_to_float(k.zwxy),
+              hash_vec4_to_float(k.yzwx));
+}
+
+vec3 hash_float_to_vec3(float k)
+{
+  return vec3(hash_float_to_float(k), hash_vec2_to_float(vec2(k, 1.0)), hash_vec2_to_float(vec2(k, 2.0)));
+}
+
+vec3 hash_vec2_to_vec3(vec2 k)
+{
+  return vec3(hash_vec2_to_float(k), hash_vec3_to_float(vec3(k, 1.0)), hash_vec3_to_float(vec3(k, 2.0)));
+}
+
+vec3 hash_vec4_to_vec3(vec4 k)
+{
+  return vec3(hash_vec4_to_float(k), hash_vec4_to_float(k.zxwy), hash_vec4_to_float(k.wzyx));
+}
