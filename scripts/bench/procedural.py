@@ -1,0 +1,180 @@
+"""Procedural textures: what each compiled procedural costs per pixel against an Image Texture
+read, and the Noise Texture by Detail.
+
+A plane fills the frame under a sun (the Principled term set, shadows off); its Base Color comes
+from one texture node at the plane's Object coordinates times 8 (the procedurals at their
+defaults but for what the table names), from an Image Texture of a 1024 x 1024 image (Linear), or
+is a constant. Every configuration is rendered round-robin in one process after a warm-up (draw +
+read-back ms, medians); a texture's cost per pixel is its frame time over the constant's, divided
+by the pixels, and its ratio the cost over the Image Texture's. Only the procedurals the compiler
+has (``codegen.EMITTERS``) are listed.
+"""
+
+from __future__ import annotations
+
+import math
+
+from .harness import page, scenes, standard, timing
+
+PAGE = "procedural.md"
+QUICK = dict(resolution="160x90", frames=1)
+
+#: label -> (node kind, {property or input: value}, output): a procedural at one setting.
+PROCEDURALS = {
+    "White Noise 3D": ("ShaderNodeTexWhiteNoise", {}, "Color"),
+    "White Noise 4D": ("ShaderNodeTexWhiteNoise", {"noise_dimensions": "4D"}, "Color"),
+    "Noise 3D, Detail 2": ("ShaderNodeTexNoise", {}, "Color"),
+    "Noise 4D, Detail 2": ("ShaderNodeTexNoise", {"noise_dimensions": "4D"}, "Color"),
+    "Noise 3D Ridged Multifractal": ("ShaderNodeTexNoise", {"noise_type": "RIDGED_MULTIFRACTAL"}, "Color"),
+    "Voronoi 3D F1": ("ShaderNodeTexVoronoi", {}, "Color"),
+    "Voronoi 3D Smooth F1": ("ShaderNodeTexVoronoi", {"feature": "SMOOTH_F1"}, "Color"),
+    "Voronoi 3D Distance to Edge": ("ShaderNodeTexVoronoi", {"feature": "DISTANCE_TO_EDGE"}, "Distance"),
+    "Voronoi 4D F1": ("ShaderNodeTexVoronoi", {"voronoi_dimensions": "4D"}, "Color"),
+    "Wave bands": ("ShaderNodeTexWave", {}, "Color"),
+    "Gradient linear": ("ShaderNodeTexGradient", {}, "Color"),
+    "Checker": ("ShaderNodeTexChecker", {}, "Color"),
+    "Magic, depth 2": ("ShaderNodeTexMagic", {}, "Color"),
+    "Brick": ("ShaderNodeTexBrick", {}, "Color"),
+    "Gabor 2D": ("ShaderNodeTexGabor", {}, "Value"),
+    "Gabor 3D": ("ShaderNodeTexGabor", {"gabor_type": "3D"}, "Value"),
+}
+#: The Noise Texture's Detail settings timed (3D fBM).
+DETAILS = (0.0, 1.0, 2.0, 4.0, 8.0, 15.0)
+
+
+def options(parser) -> None:
+    standard(parser, resolution="1280x720", frames=5)
+
+
+def _material(name: str):
+    import bpy
+
+    mat = bpy.data.materials.new(name)
+    tree = mat.node_tree
+    if tree is None:
+        mat.use_nodes = True
+        tree = mat.node_tree
+    bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+    bsdf.inputs["Base Color"].default_value = (0.6, 0.5, 0.4, 1.0)
+    bsdf.inputs["Roughness"].default_value = 0.5
+    return mat, tree, bsdf
+
+
+def _textured(name: str, kind: str, settings: dict, output: str):
+    """Base Color from node ``kind`` (``settings``: its properties and input values) at the
+    Object coordinates times 8."""
+    mat, tree, bsdf = _material(name)
+    coord = tree.nodes.new("ShaderNodeTexCoord")
+    scale = tree.nodes.new("ShaderNodeVectorMath")
+    scale.operation = "SCALE"
+    scale.inputs["Scale"].default_value = 8.0
+    tree.links.new(coord.outputs["Object"], scale.inputs[0])
+    node = tree.nodes.new(kind)
+    for key, value in settings.items():
+        if key in node.inputs:
+            node.inputs[key].default_value = value
+        else:
+            setattr(node, key, value)
+    tree.links.new(scale.outputs["Vector"], node.inputs["Vector"])
+    tree.links.new(node.outputs[output], bsdf.inputs["Base Color"])
+    return mat
+
+
+def _image_material(folder):
+    import bpy
+    import numpy as np
+
+    side = 1024
+    image = bpy.data.images.new("Bench1024", side, side, float_buffer=False)
+    rng = np.random.default_rng(7)
+    image.pixels.foreach_set(rng.uniform(0.0, 1.0, side * side * 4).astype(np.float32))
+    image.filepath_raw = str(folder / "bench1024.png")
+    image.file_format = "PNG"
+    image.save()
+    mat, tree, bsdf = _material("Image")
+    tex = tree.nodes.new("ShaderNodeTexImage")
+    tex.image, tex.interpolation = image, "Linear"
+    coord = tree.nodes.new("ShaderNodeTexCoord")
+    tree.links.new(coord.outputs["UV"], tex.inputs["Vector"])
+    tree.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
+    return mat
+
+
+def _scene(args):
+    import bpy
+
+    scene = scenes.empty(args.resolution)
+    scene.shading_lab.model = "PBR"
+    scene.shading_lab.term_set = "PRINCIPLED"
+    width, height = args.resolution
+    scenes.camera(scene, (0.0, 0.0, 5.0), ortho=2.0)
+    scenes.black_world(scene)
+    scenes.light(scene, "Sun", "SUN", rotation=(math.radians(20.0), math.radians(-15.0), 0.0), energy=3.0,
+                 angle=0.0, use_shadow=False)
+    bpy.ops.mesh.primitive_plane_add(size=2.0)
+    plane = bpy.context.active_object
+    plane.scale = (1.0, height / width, 1.0) if width >= height else (width / height, 1.0, 1.0)
+    return scene, plane
+
+
+def _compiled(kind: str) -> bool:
+    from addon.materials import codegen
+
+    return kind in codegen.EMITTERS
+
+
+def _timed(args, ctx, plane, materials: dict) -> dict:
+    def apply(config):
+        plane.data.materials.clear()
+        plane.data.materials.append(materials[config])
+
+    return timing.median_ms(list(materials), apply, args.frames, ctx.progress, "procedural")
+
+
+def _cost(args, ctx, folder) -> list[str]:
+    scene, plane = _scene(args)
+    pixels = args.resolution[0] * args.resolution[1]
+    materials = {"constant": _material("Constant")[0], "Image Texture": _image_material(folder)}
+    materials.update({label: _textured(label, *spec) for label, spec in PROCEDURALS.items()
+                      if _compiled(spec[0])})
+    med = _timed(args, ctx, plane, materials)
+    image = med["Image Texture"] - med["constant"]
+    rows = []
+    for label, ms in med.items():
+        extra = ms - med["constant"]
+        rows.append([label, f"{ms:.1f}", f"{1e6 * extra / pixels:.1f}",
+                     "" if label == "constant" else f"{extra / image:.2f}x" if image > 0 else "n/a"])
+    missing = [label for label, spec in PROCEDURALS.items() if not _compiled(spec[0])]
+    return ["### Cost per pixel against an Image Texture read", "",
+            f"{page.res(args.resolution)}, a plane filling the frame, one sun, the Principled term set; "
+            f"{args.frames} frames per configuration after a warm-up, round-robin; draw + read-back ms, "
+            "medians. *ns per pixel*: the frame time over the constant material's, per pixel; *vs image*: "
+            "that over the Image Texture's.", "",
+            *page.table(["Base Color from", "ms", "ns per pixel", "vs image"], rows), "",
+            *([f"Not compiled yet, so not timed: {', '.join(missing)}.", ""] if missing else [])]
+
+
+def _details(args, ctx) -> list[str]:
+    if not _compiled("ShaderNodeTexNoise"):
+        return []
+    scene, plane = _scene(args)
+    pixels = args.resolution[0] * args.resolution[1]
+    materials = {"constant": _material("Constant")[0]}
+    materials.update({f"Detail {d:g}": _textured(f"Detail{d:g}", "ShaderNodeTexNoise", {"Detail": d}, "Fac")
+                      for d in DETAILS})
+    med = _timed(args, ctx, plane, materials)
+    rows = [[label, f"{ms:.1f}", f"{1e6 * (ms - med['constant']) / pixels:.1f}"] for label, ms in med.items()]
+    return ["### The Noise Texture by Detail", "",
+            "3D fBM into Base Color (its Fac), the scene above.", "",
+            *page.table(["Noise", "ms", "ns per pixel"], rows), ""]
+
+
+def run(ctx) -> None:
+    import tempfile
+    from pathlib import Path
+
+    folder = Path(tempfile.mkdtemp(prefix="procedural-"))
+    lines = _cost(ctx.args, ctx, folder) + _details(ctx.args, ctx)
+    ctx.page("Procedural textures", [
+        "What the compiled procedural textures (addon/materials/textures.py) cost per pixel, against an "
+        "Image Texture read.", "", *lines])
