@@ -132,6 +132,35 @@ vec2 bump_terminator(vec3 ns, vec3 n, vec3 l)
   return vec2(2.0 / (1.0 + sqrt(1.0 + alpha2 * tan2_i)), 1.0);
 }
 #  endif
+
+/* Cycles' ensure_valid_specular_reflection (kernel/closure/bsdf_util.h; the same in Blender 4.2 to
+ * 5), which its glossy closures and the Principled BSDF's specular lobes apply to their normal
+ * (maybe_ensure_valid_specular_reflection, with bump map correction), not its diffuse lobe: n
+ * turned towards the true normal ng (facing the viewer), in their common plane, just enough that
+ * the view's mirror direction about it leaves the surface min(0.9 ng.i, 0.01) above it. The unit
+ * normal's height z over the surface solves 4 a z^4 - 2 b z^2 + c = 0 (a = (i.x)^2 + (i.ng)^2,
+ * b = 2 (a + (i.ng) t), c = ((i.ng) + t)^2 for the threshold t), the root of the side i.x has. */
+vec3 valid_specular_normal(vec3 ng, vec3 i, vec3 n)
+{
+  float iz = dot(i, ng);
+  float threshold = min(0.9 * iz, 0.01);
+  if (dot(ng, 2.0 * dot(n, i) * n - i) >= threshold) {
+    return n;
+  }
+  vec3 x = n - dot(n, ng) * ng;
+  float len = length(x);
+  x = len > 0.0 ? x / len : n; /* guards: n along ng (Cycles' safe_normalize_fallback) */
+  float ix = dot(i, x);
+  float a = ix * ix + iz * iz;
+  if (a <= 0.0) {
+    return n; /* guards: a view along no direction of the plane (i = 0): nothing to mirror */
+  }
+  float b = 2.0 * (a + iz * threshold);
+  float c = (threshold + iz) * (threshold + iz);
+  float root = sqrt(max(b * b - 4.0 * a * c, 0.0)); /* guards: Cycles' safe_sqrtf (rounding below 0) */
+  float z2 = 0.25 * (ix < 0.0 ? b + root : b - root) / a;
+  return sqrt(max(1.0 - z2, 0.0)) * x + sqrt(max(z2, 0.0)) * ng; /* guards: safe_sqrtf as Cycles */
+}
 #endif
 
 /* The Surface closure as the models read it: its BSDFs' mean inputs replace the material's values
