@@ -86,6 +86,14 @@ int listed_index(ivec2 listed, int k, int end)
   return k < listed.y ? listed_light(listed, k) : end;
 }
 
+#ifdef SL_GRAPH_BENT_NORMAL
+/* Where the node graph bent the normal: the specular lobe's shading point, at Cycles' valid
+ * specular normal (graph_surface.glsl's valid_specular_normal), which main sets; bent_split where
+ * that normal differs from the surface's (the lobes are then shaded apart). */
+Surface bent_specular;
+bool bent_split;
+#endif
+
 /* A light's share of the radiance leaving s. shadowed: look its shadow up (where the light
  * has a shadow map; ng is the flat face's normal for it), a constant at each call, so a loop
  * over lights without shadows holds no lookup. */
@@ -104,15 +112,25 @@ vec3 light_share(Surface s, vec3 ng, LightData light, bool shadowed)
   }
   vec3 l;
   vec3 E = light_irradiance(light, s.p, l);
+  bool lit = dot(s.n, l) > 0.0;
 #ifdef SL_GRAPH_BENT_NORMAL
-  /* a normal the node graph bent: Cycles' rules for light from behind the surface (graph_surface.glsl) */
-  factors.xy *= bump_terminator(s.smooth_n, s.n, l);
+  /* a normal the node graph bent: Cycles' rules for light from behind the surface, the specular
+   * lobe's at its own normal (graph_surface.glsl) */
+  factors.x *= bump_terminator(s.smooth_n, s.n, l).x;
+  factors.y *= bump_terminator(s.smooth_n, bent_specular.n, l).y;
+  lit = lit || dot(bent_specular.n, l) > 0.0;
 #endif
   float visibility = 1.0;
 #ifdef SL_SHADOWS
-  if (shadowed && dot(s.n, l) > 0.0 && max(E.r, max(E.g, E.b)) > 0.0) {
+  if (shadowed && lit && max(E.r, max(E.g, E.b)) > 0.0) {
     visibility = light_visibility(light, s.p, ng);
     E *= visibility;
+  }
+#endif
+#ifdef SL_GRAPH_BENT_NORMAL
+  if (bent_split) {
+    return shade_light(s, light, l, E, visibility, factors * vec4(1.0, 0.0, 1.0, 1.0)) +
+           shade_light(bent_specular, light, l, E, visibility, factors * vec4(0.0, 1.0, 1.0, 1.0));
   }
 #endif
   return shade_light(s, light, l, E, visibility, factors);
@@ -229,6 +247,10 @@ void main()
   float closure_scale;
   m = apply_closure(m, closure, n, closure_scale);
   outward = true; /* n faces the viewer already */
+#  ifdef SL_GRAPH_BENT_NORMAL
+  vec3 true_n = face_normal(world_position, smooth_n);
+  vec3 specular_n = valid_specular_normal(dot(true_n, v) < 0.0 ? -true_n : true_n, v, n);
+#  endif
 #else
   const float closure_scale = 1.0;
 #endif
@@ -247,11 +269,26 @@ void main()
   Surface s = make_surface(world_position, outward ? n : -n, v, m);
 #  ifdef SL_GRAPH_BENT_NORMAL
   s.smooth_n = smooth_n;
+  bent_specular = make_surface(world_position, specular_n, v, m);
+  bent_specular.smooth_n = smooth_n;
+  bent_split = specular_n != n;
+#    ifdef SL_LAYERS
+  /* the diffuse base lies under the specular layer at that layer's normal (Cycles takes the
+   * dielectric layer's albedo, that the diffuse is weighted by, at its valid normal) */
+  s.layers = bent_specular.layers;
+#    endif
 #  endif
 #endif
   /* ambient: neither a diffuse nor a specular lobe (weight z, off in lobe passes) */
   vec3 c = shade_ambient(s, frame.ambient.rgb) * lobes.z;
   /* the world is a light: its diffuse and specular parts go to the lobes' passes */
+#ifdef SL_GRAPH_BENT_NORMAL
+  if (bent_split) {
+    c += shade_environment(s, lobes.xy * vec2(1.0, 0.0)) +
+         shade_environment(bent_specular, lobes.xy * vec2(0.0, 1.0));
+  }
+  else
+#endif
   c += shade_environment(s, lobes.xy);
 #ifdef SL_LIGHT_SEQUENCE
   SL_LIGHT_SEQUENCE

@@ -1,49 +1,97 @@
 /* The nodes that bend the shading normal: Normal Map and Bump, as Cycles evaluates them
- * (kernel/svm/tex_coord.h svm_node_normal_map, kernel/svm/displace.h svm_node_set_bump) with
- * EEVEE's way of reaching a neighbouring fragment (gpu_shader_material_bump.glsl, the codegen's
- * dF_branch): the Height subgraph is evaluated again at the fragment moved by its screen-space
- * derivatives (graph_inputs_dx / _dy, which codegen calls), scaled by the Filter Width. */
+ * (kernel/svm/tex_coord.h svm_node_normal_map, kernel/svm/displace.h svm_node_set_bump). A Bump's
+ * Height subgraph is evaluated again at the fragment moved along Cycles' own position
+ * differentials (graph_inputs_dx / _dy, which codegen calls), scaled by the Filter Width: what
+ * varies over the surface is moved by the combination of its screen-space derivatives that moves
+ * the position there (EEVEE's dF_branch moves it along the screen's axes instead; a curved Height
+ * then differs from Cycles' by its curvature over the step). */
 
-/* The fragment moved along the screen's x (y) by filter_width pixels: what varies across the
- * surface (position, texture coordinates, attributes) moves by its derivative; the normals,
- * the view and the tangent stay (Cycles offsets only position- and attribute-derived inputs). */
-GraphInputs graph_inputs_dx(GraphInputs g, float filter_width)
+/* The camera ray's footprint at the fragment along one screen axis, as Cycles carries it to the
+ * surface (differential_transfer_compact, kernel/util/differential.h: the ray's dP + t dD, its
+ * spread dD the change of its unit direction to the next pixel's, kernel/camera/camera.h): dp, di
+ * the position's and the view direction's screen derivatives along that axis, i towards the
+ * viewer. Rays from one point (perspective): the distance t to it (from dp = t' d' - t d) times
+ * their spread; parallel rays (orthographic, di = 0): the pixel's width across them. */
+float graph_ray_footprint(vec3 dp, vec3 di, vec3 i)
 {
+  vec3 d = -i;
+  vec3 d_next = -(i + di);
+  vec3 c = cross(d, d_next);
+  float c2 = dot(c, c);
+  if (c2 > 0.0) {
+    float t = -dot(cross(dp, d_next), c) / c2;
+    return t * length(d_next - d);
+  }
+  return length(dp - dot(dp, i) * i);
+}
+
+/* Cycles' position differentials at a shading point (differential_from_compact, kernel/util/
+ * differential.h): two directions across the true normal (make_orthonormals, util/math.h: the
+ * first (1, 1, 1) x ng) scaled by the camera ray's compact footprint there (the mean of its two
+ * axes', differential_make_compact). */
+void graph_position_differentials(GraphInputs g, out vec3 dx, out vec3 dy)
+{
+  vec3 ng = g.ng;
+  vec3 a = (ng.x != ng.y || ng.x != ng.z) ? vec3(ng.z - ng.y, ng.x - ng.z, ng.y - ng.x)
+                                          : vec3(ng.z - ng.y, ng.x + ng.z, -ng.y - ng.x);
+  a = normalize(a);
+  vec3 b = cross(ng, a);
+  float width = 0.5 * (graph_ray_footprint(dFdx(g.position), dFdx(g.i), g.i) +
+                       graph_ray_footprint(dFdy(g.position), dFdy(g.i), g.i));
+  dx = width * a;
+  dy = width * b;
+}
+
+/* The fragment moved by d (a step in the face's plane): the position by d, what varies across the
+ * surface (texture coordinates, attributes) by its screen derivatives' combination s.x dFdx +
+ * s.y dFdy whose position's is d; the normals, the view and the tangent stay (Cycles offsets only
+ * position- and attribute-derived inputs). */
+GraphInputs graph_inputs_moved(GraphInputs g, vec3 d)
+{
+  vec3 px = dFdx(g.position);
+  vec3 py = dFdy(g.position);
+  float det = dot(cross(px, py), g.ng);
   GraphInputs o = g;
-  o.uv += dFdx(g.uv) * filter_width;
-  o.position += dFdx(g.position) * filter_width;
-  o.object += dFdx(g.object) * filter_width;
-  o.generated += dFdx(g.generated) * filter_width;
-  o.window += dFdx(g.window) * filter_width;
+  if (det == 0.0) {
+    return o; /* guards: no surface here (zero derivatives): nothing moves, the Bump bends nothing */
+  }
+  vec2 s = vec2(dot(cross(d, py), g.ng), dot(cross(px, d), g.ng)) / det;
+  o.uv += dFdx(g.uv) * s.x + dFdy(g.uv) * s.y;
+  o.position += d;
+  o.object += dFdx(g.object) * s.x + dFdy(g.object) * s.y;
+  o.generated += dFdx(g.generated) * s.x + dFdy(g.generated) * s.y;
+  o.window += dFdx(g.window) * s.x + dFdy(g.window) * s.y;
   for (int k = 0; k < GRAPH_ATTRIBUTES; k++) {
-    o.attributes[k] += dFdx(g.attributes[k]) * filter_width;
+    o.attributes[k] += dFdx(g.attributes[k]) * s.x + dFdy(g.attributes[k]) * s.y;
   }
   return o;
+}
+
+/* The fragment moved along Cycles' first (second) position differential times filter_width
+ * (svm_node_bump_P_dx / _dy, kernel/svm/attribute.h) */
+GraphInputs graph_inputs_dx(GraphInputs g, float filter_width)
+{
+  vec3 dx, dy;
+  graph_position_differentials(g, dx, dy);
+  return graph_inputs_moved(g, dx * filter_width);
 }
 
 GraphInputs graph_inputs_dy(GraphInputs g, float filter_width)
 {
-  GraphInputs o = g;
-  o.uv += dFdy(g.uv) * filter_width;
-  o.position += dFdy(g.position) * filter_width;
-  o.object += dFdy(g.object) * filter_width;
-  o.generated += dFdy(g.generated) * filter_width;
-  o.window += dFdy(g.window) * filter_width;
-  for (int k = 0; k < GRAPH_ATTRIBUTES; k++) {
-    o.attributes[k] += dFdy(g.attributes[k]) * filter_width;
-  }
-  return o;
+  vec3 dx, dy;
+  graph_position_differentials(g, dx, dy);
+  return graph_inputs_moved(g, dy * filter_width);
 }
 
 /* Bump (svm_node_set_bump): the surface gradient of the height, from its values h here and hx,
- * hy at the fragment moved by filter_width x its position's derivatives (Mikkelsen's "Bump
+ * hy at the fragment moved by filter_width x the position differentials (Mikkelsen's "Bump
  * Mapping Unparametrized Surfaces on the GPU"), bends n; Distance scales the height; Strength
  * blends with n. */
 vec3 node_bump(float strength, float dist, float filter_width, float h, float hx, float hy, vec3 n,
                GraphInputs g)
 {
-  vec3 dpdx = dFdx(g.position);
-  vec3 dpdy = dFdy(g.position);
+  vec3 dpdx, dpdy;
+  graph_position_differentials(g, dpdx, dpdy);
   vec3 rx = cross(dpdy, n);
   vec3 ry = cross(n, dpdx);
   float det = dot(dpdx, rx);

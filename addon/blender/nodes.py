@@ -215,7 +215,8 @@ def read_material(material, target: str = TARGET,
         return None
     output = tree.get_output_node(target)
     graph = read_tree(tree, output.name if output is not None else None, images)
-    graph = N.Graph(graph.nodes, graph.links, graph.output, luma(), mute_converts=bpy.app.version < (5, 0, 0))
+    graph = N.Graph(graph.nodes, graph.links, graph.output, luma(), mute_converts=bpy.app.version < (5, 0, 0),
+                    version=tuple(bpy.app.version[:2]))
     groups: dict[str, N.Graph] = {}
     pending = _groups_in(tree)
     while pending:

@@ -402,8 +402,10 @@ def _normal_map(w: _Writer, node: FlatNode) -> dict | None:
     return {"Normal": f"node_normal_map_{space.lower()}({strength}, {color}, g)"}
 
 
-#: The Bump node's Filter Width where Blender's Bump has none (before 4.3): Cycles' offset then.
-BUMP_FILTER_WIDTH = 0.1
+#: The Bump node's Filter Width where Blender's Bump has none (before 4.3): Cycles then stepped a
+#: whole ray differential (svm_node_bump_P_dx without a width) and bent by the whole determinant,
+#: which is the later rule at width 1 (Blender's versioning sets an older file's Filter Width to 1).
+BUMP_FILTER_WIDTH = 1.0
 
 
 def upstream(flat: FlatGraph, name: str) -> list[str]:
@@ -419,9 +421,9 @@ def upstream(flat: FlatGraph, name: str) -> list[str]:
 
 
 def _height_at(w: _Writer, node: FlatNode, axis: str, filter_width: str) -> str:
-    """The Bump's Height at the fragment moved along the screen's ``axis`` by ``filter_width``
-    times its derivatives (EEVEE's dF_branch; Cycles' bump offsets of its inputs): every node the
-    Height reads written again, reading the moved fragment's GraphInputs."""
+    """The Bump's Height at the fragment moved along Cycles' position differential ``axis`` (its
+    bump offsets of the inputs) by ``filter_width`` (glsl/node_normal.glsl's graph_inputs_dx / _dy):
+    every node the Height reads written again, reading the moved fragment's GraphInputs."""
     spec = node.inputs["Height"]
     if not isinstance(spec.source, Ref) or (spec.source.node, spec.source.socket) not in w.values:
         return w.arg(node, "Height")  # a constant height (or one that did not compile): no slope
@@ -443,8 +445,8 @@ def _height_at(w: _Writer, node: FlatNode, axis: str, filter_width: str) -> str:
 
 
 def _bump(w: _Writer, node: FlatNode) -> dict:
-    """Bump (Cycles' svm_node_set_bump, EEVEE's node_bump): the Height here and at the fragment
-    moved by Filter Width times its screen-space derivatives along x and y."""
+    """Bump (Cycles' svm_node_set_bump): the Height here and at the fragment moved by Filter Width
+    times Cycles' two position differentials."""
     fw = w.arg(node, "Filter Width") if "Filter Width" in node.inputs \
         else w.constant(BUMP_FILTER_WIDTH, "VALUE")
     h = w.arg(node, "Height")

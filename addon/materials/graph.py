@@ -89,6 +89,7 @@ class FlatGraph:
     output: str | None = None
     cut: list[str] = field(default_factory=list)
     luma: tuple[float, float, float] = convert.LUMA  # a colour's weights read as a float
+    version: tuple[int, int] = (5, 0)  # the Blender that read the graph (Graph.version)
 
 
 @dataclass(frozen=True)
@@ -106,7 +107,8 @@ class _Scope:
 class _Flattener:
     def __init__(self, graph: Graph, groups: dict[str, Graph]):
         self.groups = groups
-        self.flat = FlatGraph(luma=tuple(graph.luma) if graph.luma is not None else convert.LUMA)
+        self.flat = FlatGraph(luma=tuple(graph.luma) if graph.luma is not None else convert.LUMA,
+                              version=tuple(graph.version))
         self.links: dict[int, dict[tuple[str, str], Link]] = {}
         self.visiting: set[str] = set()
         self.mute_converts = graph.mute_converts

@@ -50,6 +50,8 @@ class GraphProgram:
     arrays: tuple[int, ...] = ()
     #: how many object, instancer or view-layer attributes it reads (per-draw vec4s)
     uniform_attributes: int = 0
+    #: where a closure's normal is bent: Cycles' rule for the light it takes (``bump_shadowing``)
+    bump_shadowing: str = ""
 
     def __eq__(self, other) -> bool:
         return isinstance(other, GraphProgram) and other.key == self.key
@@ -164,6 +166,22 @@ def graph_inputs_read(source: str) -> frozenset[str]:
     return frozenset(field for field in OPTIONAL_INPUTS if re.search(rf"\bg\.{field}\b", joined))
 
 
+#: Cycles' rules for the light a bent normal takes (kernel/closure/bsdf.h bump_shadowing_term), by
+#: the Blender that reads the graph (from its Cycles kernels: 4.2's and 4.5's differ, 4.5's and 5.0's
+#: agree for the closures drawn; 4.3 and 4.4, not measured, are taken as 4.5): Chiang, Li and Burley
+#: 2019 ("Taming the Shadow Terminator": the diffuse lobe smoothed by -g^3 + g^2 + g), or Conty
+#: Estevez, Lecocq and Stein 2019 (the diffuse lobe shadowed by a GGX G1); light from behind the
+#: smooth surface is rejected by both.
+BUMP_SHADOWING = ("CHIANG_2019", "CONTY_2019")
+#: The first Blender (major, minor) of each rule but the first
+_BUMP_SHADOWING_FROM = ((4, 3),)
+
+
+def bump_shadowing(version: tuple[int, int]) -> str:
+    """Cycles' rule for a bent normal's light in Blender ``version`` (``BUMP_SHADOWING``)."""
+    return BUMP_SHADOWING[sum(tuple(version) >= start for start in _BUMP_SHADOWING_FROM)]
+
+
 def _bent(flat: FlatGraph) -> bool:
     """Whether some closure's Normal is linked (a Normal Map, a Bump, any node): the shading
     models then apply Cycles' rules for a bent normal (glsl/graph_surface.glsl's bump_terminator)."""
@@ -185,12 +203,15 @@ def _node_count(flat: FlatGraph) -> int:
 def _compiled(flat: FlatGraph, targets: dict, function: str, whole: FlatGraph) -> MaterialGraph:
     compiled = codegen.compile_graph(flat, targets, function, whole)
     uses = graph_inputs_read(compiled.source)
+    rule = ""
     if _bent(flat):
         uses |= {"bent_normal"}
+        rule = bump_shadowing(flat.version)
     kinds = tuple(kind for kind, _ in compiled.attributes)  # a tangent is turned to world space
-    program = GraphProgram(f"{compiled.key}{''.join(k[0] for k in kinds)}", compiled.source,
+    key = f"{compiled.key}{''.join(k[0] for k in kinds)}{BUMP_SHADOWING.index(rule) if rule else ''}"
+    program = GraphProgram(key, compiled.source,
                            len(compiled.constants), len(compiled.images), len(compiled.attributes), uses,
-                           kinds, compiled.arrays, len(compiled.uniform_attributes))
+                           kinds, compiled.arrays, len(compiled.uniform_attributes), rule)
     return MaterialGraph(program, compiled.constants, compiled.images, compiled.attributes, compiled.missing,
                          _node_count(flat), _transparent(flat), _unread(flat), _textured(flat),
                          compiled.notes, compiled.uniform_attributes)
@@ -205,7 +226,8 @@ def compile_material(graph: Graph, groups: dict[str, Graph]) -> MaterialGraph | 
     output, surface = _surface(flat)
     # what the Surface reads: the output's Volume and Displacement are not drawn
     above = set(codegen.upstream(flat, surface.source.node)) | {output.name}
-    flat = FlatGraph({k: v for k, v in flat.nodes.items() if k in above}, flat.output, flat.cut, flat.luma)
+    flat = FlatGraph({k: v for k, v in flat.nodes.items() if k in above}, flat.output, flat.cut, flat.luma,
+                     flat.version)
     return _compiled(flat, {"surface": (output.name, "Surface")}, FUNCTION, flatten(graph, groups))
 
 
@@ -226,7 +248,8 @@ def compile_aovs(graph: Graph, groups: dict[str, Graph]) -> dict[str, MaterialGr
         name = node.props.get("aov_name", "") if node.kind == "ShaderNodeOutputAOV" else ""
         if name and name not in out:
             above = set(codegen.upstream(flat, node.name))
-            only = FlatGraph({k: v for k, v in flat.nodes.items() if k in above}, None, flat.cut, flat.luma)
+            only = FlatGraph({k: v for k, v in flat.nodes.items() if k in above}, None, flat.cut, flat.luma,
+                             flat.version)
             whole = whole or flatten(graph, groups)
             out[name] = _compiled(only, {"color": (node.name, "Color"), "value": (node.name, "Value")},
                                   AOV_FUNCTION, whole)

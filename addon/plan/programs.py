@@ -348,6 +348,8 @@ def graph_defines(g: GraphProgram) -> list[tuple[str, str]]:
     out += [("SL_GRAPH_" + field.upper(), "1") for field in sorted(g.uses)]
     if g.uniform_attributes:
         out.append(("SL_GRAPH_UNIFORM_ATTRIBUTE_COUNT", str(g.uniform_attributes)))
+    if g.bump_shadowing:
+        out.append(("SL_BUMP_SHADOWING_" + g.bump_shadowing, "1"))
     if g.attributes:
         passes = " ".join(f"graph_attribute{k} = attr{k};" for k in range(g.attributes))
         out.append(("SL_PASS_ATTRIBUTES", passes))

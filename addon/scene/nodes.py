@@ -77,3 +77,6 @@ class Graph:
     output: str | None = None
     luma: tuple[float, float, float] | None = None  # colour -> float weights (None: convert.LUMA)
     mute_converts: bool = False  # a muted node's input converted to its output's type (Blender 4)
+    #: the Blender that read it (major, minor): where Cycles' rules changed between versions (a bent
+    #: normal's light, ``materials.surface.bump_shadowing``), its Cycles' rule is followed
+    version: tuple[int, int] = (5, 0)
