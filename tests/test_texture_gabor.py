@@ -181,7 +181,6 @@ def test_only_graphs_with_gabor_compile_its_library():
     assert needed == codegen.LIBRARY + ("node_hash.glsl", "node_tex_gabor.glsl")
 
 
-
 def test_engine_draws_gabor_as_cycles(tmp_path):
     """The engine's program holds the Gabor library where a material's graph calls it: both types
     with the Vector unlinked (the object's Generated coordinates, which differ from Cycles' by
