@@ -91,6 +91,11 @@ vec4 hash_vec4_to_vec4(vec4 k)
               hash_vec4_to_float(k.yzwx));
 }
 
+/* two hashes of a 3 or 4 component key, the second of its components rotated, as Cycles'
+ * hash_float3_to_float2 (zxy) and hash_float4_to_float2 (zxwy) */
+vec2 hash_vec3_to_vec2(vec3 k) { return vec2(hash_vec3_to_float(k), hash_vec3_to_float(k.zxy)); }
+vec2 hash_vec4_to_vec2(vec4 k) { return vec2(hash_vec4_to_float(k), hash_vec4_to_float(k.zxwy)); }
+
 vec3 hash_float_to_vec3(float k)
 {
   return vec3(hash_float_to_float(k), hash_vec2_to_float(vec2(k, 1.0)), hash_vec2_to_float(vec2(k, 2.0)));

@@ -41,6 +41,25 @@ def _white_noise(w, node: FlatNode) -> dict | None:
             "Color": f"node_white_noise_color_{dims}({args})"}
 
 
+# --- Gabor ---------------------------------------------------------------------------------------
+
+#: The Gabor Texture's types, each its GLSL function, and the orientation socket each reads.
+GABOR_TYPES = {"2D": ("node_tex_gabor_2d", "Orientation 2D"), "3D": ("node_tex_gabor_3d", "Orientation 3D")}
+
+
+def _gabor(w, node: FlatNode) -> dict | None:
+    """Gabor Texture (Cycles' svm_node_tex_gabor): the phasor summed once, its three outputs."""
+    kind = GABOR_TYPES.get(node.props.get("gabor_type", "2D"))
+    co = vector(w, node)
+    if kind is None or co is None or kind[1] not in node.inputs:
+        return None
+    fn, orientation = kind
+    args = ", ".join([co] + [w.arg(node, s) for s in ("Scale", "Frequency", "Anisotropy", orientation)])
+    result = w.once("vec3", f"{fn}({args})")
+    return {"Value": f"{result}.x", "Phase": f"{result}.y", "Intensity": f"{result}.z"}
+
+
 EMITTERS = {
     "ShaderNodeTexWhiteNoise": _white_noise,
+    "ShaderNodeTexGabor": _gabor,
 }

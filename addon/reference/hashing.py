@@ -75,6 +75,14 @@ def hash_float3(k: np.ndarray) -> np.ndarray:
     return np.stack([hash_float(key) for key in keys], -1)
 
 
+def hash_float2(k: np.ndarray) -> np.ndarray:
+    """Cycles' hash_float3_to_float2 and hash_float4_to_float2 of keys (..., 3) or (..., 4): the
+    key's hash and that of its components rotated (zxy; zxwy), (..., 2)."""
+    k = np.asarray(k, dtype=np.float32)
+    rotated = k[..., [2, 0, 1]] if k.shape[-1] == 3 else k[..., [2, 0, 3, 1]]
+    return np.stack([hash_float(k), hash_float(rotated)], -1)
+
+
 def white_noise(dimensions: int, co: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The White Noise Texture's (Value, Color) at coordinates ``co`` (..., 3) and ``w`` (...)."""
     co, w = np.asarray(co, np.float32), np.asarray(w, np.float32)
