@@ -283,13 +283,21 @@ void main()
   vec3 c = shade_ambient(s, frame.ambient.rgb) * lobes.z;
   /* the world is a light: its diffuse and specular parts go to the lobes' passes */
 #ifdef SL_GRAPH_BENT_NORMAL
+  /* Cycles rejects the world's light from below the smooth surface as any light's (its bump map
+   * correction): of the bent normal's cosine-weighted hemisphere, a uniform world's light comes
+   * from the share above the smooth surface, (1 + cos) / 2 of the angle between the two normals
+   * (a tilted plane's sky view factor) */
+  vec2 world_lobes = lobes.xy * vec2(0.5 + 0.5 * dot(s.n, smooth_n), 1.0);
   if (bent_split) {
-    c += shade_environment(s, lobes.xy * vec2(1.0, 0.0)) +
-         shade_environment(bent_specular, lobes.xy * vec2(0.0, 1.0));
+    c += shade_environment(s, world_lobes * vec2(1.0, 0.0)) +
+         shade_environment(bent_specular, world_lobes * vec2(0.0, 1.0));
   }
-  else
-#endif
+  else {
+    c += shade_environment(s, world_lobes);
+  }
+#else
   c += shade_environment(s, lobes.xy);
+#endif
 #ifdef SL_LIGHT_SEQUENCE
   SL_LIGHT_SEQUENCE
 #else
