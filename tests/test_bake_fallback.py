@@ -360,6 +360,61 @@ def test_the_viewport_shows_the_socket_value_until_the_timer_baked_and_says_so()
         session.free()
 
 
+def _emitting_noise_scene(size: int = 17):
+    """A plane whose Emission colour is a Noise Texture with its own mapping (baked), its Scale
+    animated from 2 at frame 1 to 4 at frame 2; black world, no light: a pixel is the emission."""
+    scene = scenes.reset(size=size)
+    scenes.ortho_camera(scene)
+    bpy.ops.mesh.primitive_plane_add(size=2.0)
+    plane = bpy.context.active_object
+    mat = bpy.data.materials.new("Emitting")
+    tree = scenes.node_tree(mat)
+    tree.nodes.clear()
+    emission = tree.nodes.new("ShaderNodeEmission")
+    tree.links.new(emission.outputs[0], tree.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
+    noise = tree.nodes.new("ShaderNodeTexNoise")
+    noise.inputs["Detail"].default_value = 1.0
+    noise.texture_mapping.rotation[2] = 0.4
+    tree.links.new(noise.outputs["Color"], emission.inputs["Color"])
+    for frame, scale in ((1, 2.0), (2, 4.0)):
+        noise.inputs["Scale"].default_value = scale
+        noise.inputs["Scale"].keyframe_insert("default_value", frame=frame)
+    plane.data.materials.append(mat)
+    scene.shading_lab.bake_resolution = 128
+    scene.frame_set(1)
+    return scene
+
+
+def test_a_batch_render_bakes_before_it_draws_each_frame_with_progress(tmp_path):
+    """scripts/render.py in a process of its own renders two frames of an animated baked subgraph:
+    it prints each bake before the frame is drawn, and each frame equals Cycles' emission of that
+    frame's noise (the bake of the frame's animated values)."""
+    import subprocess
+    import sys
+
+    scene = _emitting_noise_scene()
+    blend = tmp_path / "baked.blend"
+    bpy.ops.wm.save_as_mainfile(filepath=str(blend))
+    out = tmp_path / "out"
+    proc = subprocess.run([sys.executable, str(scenes.Path(__file__).parent.parent / "scripts" / "render.py"),
+                           str(blend), "--model", "pbr", "--frames", "1-2", "--out", str(out)],
+                          capture_output=True, text=True, timeout=300, stdin=subprocess.DEVNULL)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    said = proc.stdout + proc.stderr
+    baking = "Shading Lab: Baking 1/1: Emitting > Noise Texture > Color (128 x 128)"
+    assert said.count(baking) == 2, said[-3000:]
+    assert said.count("Shading Lab: baked 1 fallback(s) in") == 2, said[-3000:]
+    for frame, measured in ((1, 3.0e-4), (2, 1.13e-3)):  # (Scale 4: a larger second derivative)
+        scene.frame_set(frame)
+        ours = scenes.read_exr(out / f"baked_pbr_{frame:04d}.exr")[..., :3]
+        cycles = _cycles(scene, tmp_path / f"cycles_{frame}.exr", samples=1)[..., :3]
+        scene.render.engine = engine.ENGINE_ID
+        err = float(np.abs(ours - cycles).max())
+        print(f"\nframe {frame}: the batch render's bake {err:.2e} from Cycles (range {np.ptp(cycles):.3f})")
+        assert np.ptp(cycles) > 0.3, f"frame {frame}: the noise varies ({np.ptp(cycles)})"
+        assert err < 3 * measured, f"frame {frame}: {err:.2e} from Cycles (measured {measured:.2e})"
+
+
 # --- the pure parts: targets, variants, the measurement ---------------------------------------------
 
 def test_only_outputs_that_compiled_nodes_read_are_bake_targets():

@@ -192,7 +192,7 @@ def can_bake_here() -> str:
 
 # --- baking ------------------------------------------------------------------------------------
 
-def _expose(tree, path: str, socket: str, made: list):
+def _expose(tree, path: str, socket: str, made: list, depsgraph=None):
     """The output socket ``socket`` of the node at flat path ``path`` (``materials.graph``'s names:
     group nodes' names, then the node's) as a socket of ``tree``: a node inside a group is passed
     out through a copy of the group's tree (in ``made``, removed after) with one more output."""
@@ -206,10 +206,13 @@ def _expose(tree, path: str, socket: str, made: list):
                   and path.startswith(n.name + "/")), None)
     if group is None:
         raise RuntimeError(f"no node '{path}' in '{tree.name}'")
-    inner = group.node_tree.copy()
+    original = group.node_tree
+    inner = original.copy()
     made.append(inner)
+    if depsgraph is not None:
+        _freeze(inner, original.evaluated_get(depsgraph))
     group.node_tree = inner
-    source = _expose(inner, path[len(group.name) + 1:], socket, made)
+    source = _expose(inner, path[len(group.name) + 1:], socket, made, depsgraph)
     item = inner.interface.new_socket(_TEMPORARY, in_out="OUTPUT", socket_type="NodeSocketColor")
     outputs = [n for n in inner.nodes if n.bl_idname == "NodeGroupOutput"]
     output = next((n for n in outputs if n.is_active_output), outputs[0] if outputs else None)
@@ -219,15 +222,37 @@ def _expose(tree, path: str, socket: str, made: list):
     return next(s for s in group.outputs if s.identifier == item.identifier)
 
 
-def _emitting(material, target: baking.BakeTarget, made: list):
-    """A copy of ``material`` (in ``made``) whose only output emits ``target``'s value (a float as
-    grey, a vector's XYZ as RGB, as Blender converts them into a colour), with an active Image
-    Texture node for the bake to write into."""
+def _freeze(tree, evaluated) -> None:
+    """``tree`` (a copy) holding the values ``evaluated`` (its original as the render evaluated
+    it: this frame's animated values) has, its animation dropped: the bake then reads what the
+    render reads (a bake does not evaluate a copy's animation reliably: measured, a second copy
+    baked in one scene kept the original's unanimated value)."""
+    if evaluated is None:
+        return
+    tree.animation_data_clear()
+    for node in tree.nodes:
+        source = evaluated.nodes.get(node.name)
+        if source is None:
+            continue
+        for sockets, sources in ((node.inputs, source.inputs), (node.outputs, source.outputs)):
+            for socket, value in zip(sockets, sources):
+                if socket.identifier == value.identifier and hasattr(socket, "default_value"):
+                    try:
+                        socket.default_value = value.default_value
+                    except (AttributeError, TypeError, ValueError):  # read-only or a pointer: left
+                        pass
+
+
+def _emitting(material, target: baking.BakeTarget, depsgraph, made: list):
+    """A copy of ``material`` (in ``made``) with this frame's values, whose only output emits
+    ``target``'s value (a float as grey, a vector's XYZ as RGB, as Blender converts them into a
+    colour), with an active Image Texture node for the bake to write into."""
     copy = material.copy()
     made.append(copy)
     copy.name = _TEMPORARY
     tree = copy.node_tree
-    source = _expose(tree, target.node, target.socket, made)
+    _freeze(tree, getattr(material.evaluated_get(depsgraph), "node_tree", None))
+    source = _expose(tree, target.node, target.socket, made, depsgraph)
     for node in [n for n in tree.nodes if n.bl_idname in ("ShaderNodeOutputMaterial", "ShaderNodeOutputAOV")]:
         tree.nodes.remove(node)
     output = tree.nodes.new("ShaderNodeOutputMaterial")
@@ -292,8 +317,8 @@ def bake(request: Request, depsgraph, progress=None) -> list[str]:
     """Bake ``request``'s targets that the cache lacks, on the main thread; ``progress(label)``
     is told before each. The messages of the targets that could not be baked (their readers keep
     their socket values)."""
-    obj = bpy.data.objects.get(request.object)
-    material = bpy.data.materials.get(request.material)
+    obj = _named(bpy.data.objects, request.object)
+    material = _named(bpy.data.materials, request.material)
     if obj is None or material is None or material.node_tree is None:
         return [f"Material '{request.material}' on '{request.object}': not baked (the object or material "
                 f"is gone)"]
@@ -312,7 +337,9 @@ def bake(request: Request, depsgraph, progress=None) -> list[str]:
         cycles.samples = 1  # the first sample shades the texel's centre (init_from_bake.h)
         cycles.use_denoising = False
         cycles.use_adaptive_sampling = False
-        scene.frame_set(int(request.frame), subframe=request.frame - int(request.frame))
+        # the frame the render draws (set, not frame_set: no frame-change handlers run for it)
+        scene.frame_current = int(request.frame)
+        scene.frame_subframe = request.frame - int(request.frame)
         mesh = _object_mesh(obj, material, depsgraph, made)
         temp = bpy.data.objects.new(_TEMPORARY, mesh)
         made.append(temp)
@@ -344,7 +371,7 @@ def bake(request: Request, depsgraph, progress=None) -> list[str]:
                 progress(label)
             start = time.perf_counter()
             try:
-                copy, texture = _emitting(material, target, made)
+                copy, texture = _emitting(material, target, depsgraph, made)
                 mesh.materials.clear()
                 mesh.materials.append(copy)
                 texture.image = main
@@ -373,6 +400,15 @@ def bake(request: Request, depsgraph, progress=None) -> list[str]:
         for block in reversed(made):
             _remove(block)
     return problems
+
+
+def _named(collection, full_name: str):
+    """The datablock of ``collection`` whose full name (with its library's, for linked data) is
+    ``full_name``, or None."""
+    found = collection.get(full_name)
+    if found is not None and found.name_full == full_name:
+        return found
+    return next((block for block in collection if block.name_full == full_name), None)
 
 
 def _remove(block) -> None:

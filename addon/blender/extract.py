@@ -195,8 +195,8 @@ def _material_graph(material, images: dict | None, warnings: list[str] | None) -
         kinds = {m.rsplit(" (", 1)[0]: m for g in [graph, *aovs.values()] if g is not None for m in g.missing}
         named = ", ".join(kinds.get(n, n) for n in baked)
         of = f" of {graph.nodes}" if graph is not None else ""
-        warnings.append(f"Material '{material.name}': {len(baked)}{of} nodes not compiled ({named}): baked by "
-                        f"Cycles on each object's UV map")
+        warnings.append(f"Material '{material.name}': {len(baked)}{of} nodes not compiled ({named}): baked "
+                        f"by Cycles on each object's UV map")
     if graph is None:
         return None, aovs
     if graph.unread and warnings is not None:
