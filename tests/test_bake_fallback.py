@@ -329,31 +329,40 @@ def test_a_node_inside_a_group_is_baked_through_the_group(tmp_path):
     assert err < 3.2e-3, f"the grouped noise's bake: {err:.2e} from Cycles (measured 1.05e-3)"
 
 
-def test_the_viewport_shows_the_socket_value_until_the_timer_baked_and_says_so():
+def test_the_viewport_shows_the_socket_value_until_the_timer_baked_and_says_so(tmp_path):
     """The viewport never bakes in its update or draw: it queues the bake (``bake.schedule``;
     in background mode no timer runs, ``run_pending`` is the timer's callback) and says it is
-    baking; the draw after the bake takes it."""
+    baking, drawing the socket's value (the Emission's white); the draw after the bake takes it
+    and shows the noise, as the final render of the same frame does."""
+    from test_viewport import _draw
+
     bake.forget()
-    scene, mat, tree, _u, _v = _plane_scene()
-    scene.shading_lab.bake_resolution = 64
-    _noise_material(scene, tree)
+    scene = _emitting_noise_scene(size=16)
+    mat = bpy.data.materials["Emitting"]
+    plane = next(o for o in scene.objects if o.type == "MESH")
     session = ViewportSession()
     made = bake.CACHE.bakes
     try:
         session.update(bpy.context.evaluated_depsgraph_get())
         assert bake.CACHE.bakes == made
-        assert session.snapshot.bake_requests and "Baking 2 node output(s)" in session.notice, session.notice
-        plane = next(o for o in scene.objects if o.type == "MESH")
+        assert session.snapshot.bake_requests and "Baking 1 node output(s)" in session.notice, session.notice
         item = session.snapshot.items[0]
         assert item.materials == [mat.name_full], "socket values meanwhile: the material as it is"
+        before, _ = _draw(session)
+        np.testing.assert_allclose(before[..., :3], 1.0, atol=1e-6)  # the Emission's own white
         bake.run_pending()
-        assert bake.CACHE.bakes == made + 2
-        assert session.take_bakes()
+        assert bake.CACHE.bakes == made + 1
+        after, _ = _draw(session)  # takes the bake
         assert session.notice == "" and not session.snapshot.bake_requests
         assert item.materials[0] != mat.name_full
         variant = session.snapshot.materials[item.materials[0]]
-        assert set(variant.graph.baked) == {"Noise Texture"} if variant.graph is not None else True
+        assert variant.graph.baked == ("Noise Texture",) and not variant.graph.missing
         assert all(b is not None for _, b in bake.status(plane.name_full, mat.name_full))
+        final = scenes.render(scene, tmp_path / "final.exr")[::-1]  # (the EXR's top row first)
+        err = float(np.abs(after[..., :3] - final[..., :3]).max())
+        print(f"\nviewport with the bake vs the final render: {err:.2e}")
+        # the viewport's half-float target (measured 4.9e-4: one step of a half float under 1, 2^-11)
+        assert np.ptp(after[..., :3]) > 0.3 and err < 7e-4, f"viewport {err:.2e} from the final render"
         session.update(bpy.context.evaluated_depsgraph_get())  # an update after: the cache, at once
         assert not session.snapshot.bake_requests and session.notice == ""
     finally:

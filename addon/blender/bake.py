@@ -313,10 +313,23 @@ def _pixels(image, resolution: int) -> np.ndarray:
     return out.reshape(resolution, resolution, 4)
 
 
+#: Keys whose bake failed (the viewport does not try them again; a render does).
+FAILED: set[str] = set()
+
+
 def bake(request: Request, depsgraph, progress=None) -> list[str]:
     """Bake ``request``'s targets that the cache lacks, on the main thread; ``progress(label)``
     is told before each. The messages of the targets that could not be baked (their readers keep
     their socket values)."""
+    try:
+        return _bake(request, depsgraph, progress)
+    except Exception as exc:  # the scene, object or mesh made for the bake failed: said, never fatal
+        FAILED.update(request.keys)
+        return [f"Material '{request.material}' on '{request.object}': not baked ({type(exc).__name__}: "
+                f"{exc}); what it feeds takes its socket's value"]
+
+
+def _bake(request: Request, depsgraph, progress=None) -> list[str]:
     obj = _named(bpy.data.objects, request.object)
     material = _named(bpy.data.materials, request.material)
     if obj is None or material is None or material.node_tree is None:
@@ -380,9 +393,10 @@ def bake(request: Request, depsgraph, progress=None) -> list[str]:
                 texture.image = check
                 _bake_image(scene, temp, _TEMPORARY, 0)  # no margin: alpha marks the covered texels
                 corners = _pixels(check, r)
-            except (RuntimeError, TypeError, KeyError) as exc:
+            except Exception as exc:  # a node tree or mesh we did not foresee: said, never fatal
+                FAILED.add(cache_key)
                 problems.append(f"Material '{material.name}' on '{obj.name}': {target.label} not baked "
-                                f"({exc}); what it feeds takes its socket's value")
+                                f"({type(exc).__name__}: {exc}); what it feeds takes its socket's value")
                 continue
             seconds = time.perf_counter() - start
             channels = 1 if target.type in ("VALUE", "INT", "BOOLEAN") else 3
@@ -461,7 +475,7 @@ LAST_PROBLEMS: list[str] = []
 def schedule(requests) -> bool:
     """Queue the viewport's requests for ``run_pending``, started by a timer on the main thread
     (never inside a draw callback or a depsgraph update); False where no timer runs (background)."""
-    fresh = [r for r in requests if r.missing()]
+    fresh = [r for r in requests if any(k not in FAILED for _, k in r.missing())]
     if not fresh:
         return False
     with _QUEUE_LOCK:
@@ -482,8 +496,11 @@ def run_pending() -> None:
         _QUEUE.clear()
     if not requests:
         return None
-    depsgraph = bpy.context.evaluated_depsgraph_get()
-    LAST_PROBLEMS[:] = bake_all(requests, depsgraph)
+    try:
+        depsgraph = bpy.context.evaluated_depsgraph_get()
+        LAST_PROBLEMS[:] = bake_all(requests, depsgraph)
+    except Exception as exc:  # no view layer in this context, say: the viewport says it
+        LAST_PROBLEMS[:] = [f"Fallbacks not baked ({type(exc).__name__}: {exc})"]
     GENERATION[0] += 1
     wm = getattr(bpy.context, "window_manager", None)
     for window in getattr(wm, "windows", ()):
@@ -514,5 +531,6 @@ def forget() -> None:
     REQUESTS.clear()
     UNBAKEABLE.clear()
     LAST_PROBLEMS.clear()
+    FAILED.clear()
     with _QUEUE_LOCK:
         _QUEUE.clear()

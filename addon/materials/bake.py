@@ -22,6 +22,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .codegen import upstream
 from .graph import FlatGraph, Ref
 
 #: Socket types a bake holds (a colour's RGB, a vector's XYZ, a float in R); shaders are not baked.
@@ -67,21 +68,6 @@ class BakeTarget:
     def label(self) -> str:
         """The node as the artist names it, with its output: "Noise Texture > Color"."""
         return f"{self.node.rsplit('/', 1)[-1]} > {self.socket}"
-
-
-def upstream(flat: FlatGraph, name: str, stop: frozenset[str] = frozenset()) -> list[str]:
-    """The flat nodes ``name`` reads, itself included, in the flat graph's order; the inputs of
-    the nodes in ``stop`` are not followed (their outputs come from a bake)."""
-    seen, pending = set(), [name]
-    while pending:
-        current = pending.pop()
-        if current in seen or current not in flat.nodes:
-            continue
-        seen.add(current)
-        if current in stop:
-            continue
-        pending += [i.source.node for i in flat.nodes[current].inputs.values() if isinstance(i.source, Ref)]
-    return [n for n in flat.nodes if n in seen]
 
 
 def _reads(flat: FlatGraph, names: list[str]) -> dict[str, set[str]]:

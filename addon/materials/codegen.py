@@ -424,15 +424,18 @@ def _normal_map(w: _Writer, node: FlatNode) -> dict | None:
 BUMP_FILTER_WIDTH = 0.1
 
 
-def upstream(flat: FlatGraph, name: str) -> list[str]:
-    """The flat nodes ``name`` reads, itself included, in the flat graph's order."""
+def upstream(flat: FlatGraph, name: str, stop: frozenset[str] = frozenset()) -> list[str]:
+    """The flat nodes ``name`` reads, itself included, in the flat graph's order; the inputs of
+    the nodes in ``stop`` are not followed (their outputs come from bakes: ``materials.bake``)."""
     seen, pending = set(), [name]
     while pending:
         current = pending.pop()
         if current in seen or current not in flat.nodes:
             continue
         seen.add(current)
-        pending += [i.source.node for i in flat.nodes[current].inputs.values() if isinstance(i.source, Ref)]
+        if current not in stop:
+            inputs = flat.nodes[current].inputs.values()
+            pending += [i.source.node for i in inputs if isinstance(i.source, Ref)]
     return [n for n in flat.nodes if n in seen]
 
 
