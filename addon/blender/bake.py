@@ -350,6 +350,7 @@ def _bake(request: Request, depsgraph, progress=None) -> list[str]:
         cycles.samples = 1  # the first sample shades the texel's centre (init_from_bake.h)
         cycles.use_denoising = False
         cycles.use_adaptive_sampling = False
+        cycles.shading_system = _has_script(material.node_tree)  # Script nodes run on OSL alone
         # the frame the render draws (set, not frame_set: no frame-change handlers run for it)
         scene.frame_current = int(request.frame)
         scene.frame_subframe = request.frame - int(request.frame)
@@ -414,6 +415,17 @@ def _bake(request: Request, depsgraph, progress=None) -> list[str]:
         for block in reversed(made):
             _remove(block)
     return problems
+
+
+def _has_script(tree, seen=None) -> bool:
+    """Whether a node tree (or a group in it, at any depth) holds a Script node."""
+    seen = set() if seen is None else seen
+    if tree is None or tree.name_full in seen:
+        return False
+    seen.add(tree.name_full)
+    return any(node.bl_idname == "ShaderNodeScript"
+               or (node.bl_idname == "ShaderNodeGroup" and _has_script(node.node_tree, seen))
+               for node in tree.nodes)
 
 
 def _named(collection, full_name: str):
