@@ -147,8 +147,10 @@ def test_the_material_panel_reports_each_bake_with_its_resolution_and_measured_e
         print(f"{label}: {baked.seconds:.2f} s, {e.text()}, {e.points} corners")
         assert e.points > 0.9 * RESOLUTION ** 2, (label, e)
         assert np.isfinite(e.max) and e.mean <= e.p99 <= e.max, (label, e)
-    # the ramp of sin(6u) has second derivatives of ~36: bilinear error ~ f'' h^2 / 8 = 1.7e-5 at 1/512
-    assert status["Color Ramp > Color"].error.p99 < 1e-4, status["Color Ramp > Color"].error
+    # the ramp's 99th percentile: 1.4e-5 measured, as its pixels against Cycles (1.65e-5; the
+    # largest lies on the plane's border, where the margin repeats the edge texel: 4.7e-3)
+    ramp = status["Color Ramp > Color"].error
+    assert ramp.p99 < 4.5e-5 and ramp.max > 10 * ramp.p99, ramp
     report = extract.GRAPH_REPORTS[noise_scene["mat"].name_full]
     assert "Noise Texture" in report.baked, report
     assert any("baked by Cycles" in w for w in noise_scene["warnings"]), noise_scene["warnings"]
@@ -253,18 +255,27 @@ def test_a_render_off_the_main_thread_bakes_nothing_and_says_why(noise_scene, tm
 def test_repeated_renders_free_every_gpu_object_and_the_cache_keeps_its_budget(noise_scene, tmp_path,
                                                                               monkeypatch):
     """20 renders of the baked scene make GPU objects and free every one (the baked image's
-    texture was uploaded once, before); with a budget of two 64 x 64 bakes, edits of the subgraph
-    keep at most two bakes, and the textures of the dropped ones go with them (the library of
-    uploads lets a texture go once its pixels are gone)."""
+    texture was uploaded once, before) and keep the process's memory flat (measured +0.00 MB);
+    with a budget of two 64 x 64 bakes, edits of the subgraph keep at most two bakes, and the
+    textures of the dropped ones go with them (the library of uploads lets a texture go once its
+    pixels are gone)."""
+    from test_resources import _rss_mb
+
     scene, noise = noise_scene["scene"], noise_scene["noise"]
     _render_ours(scene, tmp_path)
+    bpy.ops.render.render()
+    rss = _rss_mb()
     census = Census()
     with census.active():
         for _ in range(20):
             bpy.ops.render.render()
             alive = census.settle()
             assert not alive, f"a render left alive {dict(alive)}"
+    grown = _rss_mb() - rss
+    print(f"\n20 renders with two 512 x 512 bakes: RSS {grown:+.2f} MB, GPU objects made {dict(census.made)}")
     assert census.made["GPUTexture"] >= 20 and census.made["GPUTexture"] < 20 * 8, dict(census.made)
+    # a bake's pixels are 4 MiB: one copied per render would grow 80 MB
+    assert grown < 4.0, f"RSS grew {grown:.2f} MB over 20 renders"
     monkeypatch.setattr(bake.CACHE, "budget", 2 * 64 * 64 * 16)
     scene.shading_lab.bake_resolution = 64
     from addon.frame import gpu_library
@@ -279,6 +290,20 @@ def test_repeated_renders_free_every_gpu_object_and_the_cache_keeps_its_budget(n
         assert len(held) <= 2, f"{len(held)} textures of 64 x 64 bakes held with two bakes kept"
     finally:
         noise.inputs["Scale"].default_value = 3.0
+        scene.shading_lab.bake_resolution = RESOLUTION
+
+
+def test_the_bake_fallbacks_operator_bakes_and_renders_here(noise_scene):
+    """Render properties > Bake Fallbacks and Render: the render runs on this thread, bakes what
+    the scene lacks (here: a resolution not baked yet) and draws with it."""
+    scene = noise_scene["scene"]
+    scene.shading_lab.bake_resolution = 48
+    try:
+        before = bake.CACHE.bakes
+        assert bpy.ops.shading_lab.bake_fallbacks() == {"FINISHED"}
+        assert bake.CACHE.bakes == before + 2
+        assert bpy.ops.shading_lab.bake_fallbacks() == {"FINISHED"} and bake.CACHE.bakes == before + 2
+    finally:
         scene.shading_lab.bake_resolution = RESOLUTION
 
 
@@ -386,6 +411,7 @@ def test_the_viewport_shows_the_socket_value_until_the_timer_baked_and_says_so(t
         item = session.snapshot.items[0]
         assert item.materials == [mat.name_full], "socket values meanwhile: the material as it is"
         before, _ = _draw(session)
+        assert bake.CACHE.bakes == made, "the draw baked"
         np.testing.assert_allclose(before[..., :3], 1.0, atol=1e-6)  # the Emission's own white
         bake.run_pending()
         assert bake.CACHE.bakes == made + 1
