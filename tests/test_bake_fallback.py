@@ -329,6 +329,32 @@ def test_an_object_without_a_uv_map_takes_the_socket_value_and_says_why(tmp_path
     assert bake.UNBAKEABLE[(plane.name_full, mat.name_full)] == "it has no UV map"
 
 
+def test_overlapping_uv_islands_are_said(tmp_path):
+    """Two quads side by side, each on the whole UV square (a mirrored or repeated layout): the
+    bake holds one of them, and says so (half their area: the bake covered 4096 texels of 8192)."""
+    scene = scenes.reset(size=9)
+    scenes.ortho_camera(scene)
+    mat = bpy.data.materials.new("Overlapping")
+    tree = scenes.node_tree(mat)
+    tree.nodes.clear()
+    surface_node = tree.nodes.new("ShaderNodeBsdfDiffuse")
+    tree.links.new(surface_node.outputs[0], tree.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
+    _noise_material(scene, tree)
+    scene.shading_lab.bake_resolution = 64
+    mesh = bpy.data.meshes.new("Twice")
+    mesh.from_pydata([(-1, -0.5, 0), (0, -0.5, 0), (0, 0.5, 0), (-1, 0.5, 0), (1, -0.5, 0), (1, 0.5, 0)], [],
+                     [(0, 1, 2, 3), (1, 4, 5, 2)])
+    uv = mesh.uv_layers.new(name="UVMap")
+    uv.uv.foreach_set("vector", [0, 0, 1, 0, 1, 1, 0, 1, 0, 0, 1, 0, 1, 1, 0, 1])
+    mesh.materials.append(mat)
+    obj = bpy.data.objects.new("Twice", mesh)
+    scene.collection.objects.link(obj)
+    _render_ours(scene, tmp_path)
+    said = [w for w in engine.last_warnings if "overlap" in w]
+    assert said and "about 50% of their area" in said[0], engine.last_warnings
+    assert all(b is not None and "overlap" in b.note for _, b in bake.status(obj.name_full, mat.name_full))
+
+
 def test_a_node_inside_a_group_is_baked_through_the_group(tmp_path):
     """A not-compiled node inside a node group: its output reaches the bake through a copy of the
     group's tree (removed after); the AOV follows Cycles'. Measured 1.05e-3 at 128 x 128."""

@@ -60,13 +60,14 @@ _TEMPORARY = "Shading Lab bake"
 class Baked:
     """One bake: its pixels (``image``: float RGBA, bottom row first, its key the cache's), its
     resolution, its measured error (``materials.bake.BakeError``), the seconds it took (both
-    bakes), and what it stands for (``label``: "Material > Node > Output")."""
+    bakes), what it stands for (``label``: "Material > Node > Output") and a ``note``."""
 
     image: S.ImageData
     resolution: int
     error: baking.BakeError
     seconds: float
     label: str
+    note: str = ""  # what the bake gets wrong that its measure cannot see (overlapping UV islands)
 
 
 class _Cache:
@@ -170,8 +171,9 @@ def uv_problem(geometry: S.MeshGeometry) -> str:
 
 
 def uv_notes(geometry: S.MeshGeometry) -> list[str]:
-    """What a bake on the mesh's UV map gets wrong: UVs outside 0..1 (a bake covers the unit
-    square; the Extend border repeats its edge) and islands that overlap (a texel holds one of them)."""
+    """What a bake on the mesh's UV map gets wrong that it can tell before baking: UVs outside
+    0..1 (a bake covers the unit square; the Extend border repeats its edge). Overlapping islands
+    are found while baking (``_overlap``)."""
     uvs = geometry.uvs
     notes = []
     if uvs is not None and len(uvs) and (float(uvs.min()) < -1e-4 or float(uvs.max()) > 1.0 + 1e-4):
@@ -307,6 +309,32 @@ def _bake_image(scene, obj, uv: str, margin: int) -> None:
         raise RuntimeError("Cycles' bake did not finish")
 
 
+def _uv_area(mesh, uvs: np.ndarray) -> float:
+    """The summed area of the mesh's triangles on its UV map (``uvs``: per corner, flat)."""
+    mesh.calc_loop_triangles()
+    corners = np.empty(len(mesh.loop_triangles) * 3, np.int32)
+    mesh.loop_triangles.foreach_get("loops", corners)
+    t = uvs.reshape(-1, 2)[corners].reshape(-1, 3, 2).astype(np.float64)
+    e1, e2 = t[:, 1] - t[:, 0], t[:, 2] - t[:, 0]
+    return float(0.5 * np.abs(e1[:, 0] * e2[:, 1] - e1[:, 1] * e2[:, 0]).sum())
+
+
+#: Overlap is said where the UV triangles' summed area exceeds the texels the bake covered by
+#: this share (islands' edges make the two differ by about their perimeter in texels; at 64 x 64
+#: and up that is under a tenth for islands of a few texels' width).
+OVERLAP = 1.2
+
+
+def _overlap(area: float, covered: int, resolution: int) -> str:
+    """Why a bake holds one of several UV islands that overlap ("" where they do not): their
+    summed area (of UVs inside 0..1: those outside are said before baking) against the texel
+    centres the bake covered."""
+    if resolution < 64 or not covered or area * resolution ** 2 <= OVERLAP * covered:
+        return ""
+    share = 1.0 - covered / (area * resolution ** 2)
+    return f"its UV islands overlap (about {share:.0%} of their area): a texel holds one of them"
+
+
 def _pixels(image, resolution: int) -> np.ndarray:
     out = np.empty(resolution * resolution * 4, np.float32)
     image.pixels.foreach_get(out)
@@ -365,6 +393,8 @@ def _bake(request: Request, depsgraph, progress=None) -> list[str]:
             return [f"Material '{material.name}' on '{obj.name}': not baked (no UV map '{request.uv}')"]
         uvs = np.empty(len(layer.uv) * 2, np.float32)
         layer.uv.foreach_get("vector", uvs)
+        inside = float(uvs.min(initial=0.0)) >= -1e-4 and float(uvs.max(initial=0.0)) <= 1.0 + 1e-4
+        area = _uv_area(mesh, uvs) if inside else 0.0
         # the check bake lays the texels out on a map of its own, half a texel over (its texel
         # centres: the bake's corners), leaving the maps the nodes read as they are
         # (by name: adding a layer moves the others, and their Python objects go stale)
@@ -405,7 +435,11 @@ def _bake(request: Request, depsgraph, progress=None) -> list[str]:
                                              corners[..., 3] > 0.5)
             texels[..., 3] = 1.0
             data = S.ImageData(cache_key, texels, "FLOAT", next(_REVISIONS))
-            CACHE.put(cache_key, Baked(data, r, error, seconds, label))
+            note = _overlap(area, error.points, r)
+            CACHE.put(cache_key, Baked(data, r, error, seconds, label, note))
+            if note:
+                problems.append(f"Material '{material.name}' on '{obj.name}': {target.label} baked, but "
+                                f"{note}")
             if error.points == 0:
                 problems.append(f"Material '{material.name}' on '{obj.name}': {target.label}'s bake covers "
                                 f"no texel centre of its UV map (islands too small for {r} x {r})")

@@ -349,6 +349,8 @@ def _bake_report(box, material, obj) -> None:
         box.label(text=f"{target.label}: baked {r} x {r} in {baked.seconds:.2f} s", icon="TEXTURE")
         seen = " (as seen along the normal)" if target.view else ""
         box.label(text=f"    error between texels {e.text()}{seen}")
+        if baked.note:
+            box.label(text=f"    {baked.note}", icon="ERROR")
     box.operator("shading_lab.bake_fallbacks", icon="RENDER_STILL")
 
 
