@@ -355,6 +355,42 @@ def test_overlapping_uv_islands_are_said(tmp_path):
     assert all(b is not None and "overlap" in b.note for _, b in bake.status(obj.name_full, mat.name_full))
 
 
+def test_an_image_or_attribute_inside_the_subgraph_bakes_again_when_its_content_changes(tmp_path):
+    """An Image Texture and a Color Attribute feed the not-compiled noise: repainting the image
+    (its pixels, not its settings) or the attribute bakes again; reading them again unchanged
+    (an image is read at every render while it has unsaved edits) bakes nothing."""
+    scene, mat, tree, _u, _v = _plane_scene()
+    scene.shading_lab.bake_resolution = 32
+    image = bpy.data.images.new("Painted", 4, 4, float_buffer=True)
+    image.pixels.foreach_set(np.full(64, 0.25, np.float32))
+    texture = tree.nodes.new("ShaderNodeTexImage")
+    texture.image = image
+    colors = tree.nodes.new("ShaderNodeVertexColor")
+    plane = next(o for o in scene.objects if o.type == "MESH")
+    layer = plane.data.color_attributes.new("Col", "FLOAT_COLOR", "CORNER")
+    layer.data.foreach_set("color", np.full(16, 0.5, np.float32))
+    add = tree.nodes.new("ShaderNodeVectorMath")
+    tree.links.new(texture.outputs["Color"], add.inputs[0])
+    tree.links.new(colors.outputs["Color"], add.inputs[1])
+    noise = tree.nodes.new("ShaderNodeTexNoise")
+    noise.texture_mapping.rotation[2] = 0.3
+    tree.links.new(add.outputs[0], noise.inputs["Vector"])
+    _aov(scene, tree, "fed", noise.outputs["Fac"])
+    _render_ours(scene, tmp_path)
+    before = bake.CACHE.bakes
+    assert image.is_dirty  # (read again at every render)
+    _render_ours(scene, tmp_path)
+    assert bake.CACHE.bakes == before, "the same image and attribute read again baked"
+    image.pixels.foreach_set(np.full(64, 0.75, np.float32))
+    image.update()
+    _render_ours(scene, tmp_path)
+    assert bake.CACHE.bakes == before + 1, "a repainted image"
+    layer.data.foreach_set("color", np.full(16, 0.9, np.float32))
+    plane.data.update()
+    _render_ours(scene, tmp_path)
+    assert bake.CACHE.bakes == before + 2, "a repainted attribute"
+
+
 def test_a_node_inside_a_group_is_baked_through_the_group(tmp_path):
     """A not-compiled node inside a node group: its output reaches the bake through a copy of the
     group's tree (removed after); the AOV follows Cycles'. Measured 1.05e-3 at 128 x 128."""

@@ -131,11 +131,31 @@ class Request:
         return [(t, k) for t, k in zip(self.targets, self.keys) if CACHE.get(k) is None]
 
 
-def key(target: baking.BakeTarget, mesh: str, resolution: int, placement: str) -> str:
-    """A bake's cache key: its subgraph's content, the mesh, the resolution and, where the
-    subgraph reads it, the object's placement."""
-    h = hashlib.sha1(f"{target.content}|{mesh}|{resolution}|{placement if target.placed else ''}".encode())
+def key(target: baking.BakeTarget, mesh: str, resolution: int, placement: str, inputs: str = "") -> str:
+    """A bake's cache key: its subgraph's content, the mesh, the resolution, where the subgraph
+    reads it the object's placement, and ``inputs``: what the images and attributes it reads hold
+    (``inputs_digest``)."""
+    h = hashlib.sha1(f"{target.content}|{mesh}|{resolution}|{placement if target.placed else ''}|"
+                     f"{inputs}".encode())
     return f"bake:{h.hexdigest()[:24]}"
+
+
+def inputs_digest(target: baking.BakeTarget, geometry: S.MeshGeometry, images: dict) -> str:
+    """What the images and mesh attributes a subgraph reads hold: each image's pixels (hashed
+    once per read: an image read again unchanged, as a painted one is at every update, bakes
+    nothing again) and each attribute's values as the mesh holds them (where the compiled graph
+    has them read)."""
+    if not target.images and not target.attributes:
+        return ""
+    h = hashlib.sha1()
+    for name in target.images:
+        h.update(f"{name}:{_image_digest(images.get(name))}".encode())
+    for attribute in target.attributes:
+        values = geometry.attributes.get(attribute)
+        h.update(repr(attribute).encode())
+        if values is not None:
+            h.update(np.ascontiguousarray(values).tobytes())
+    return h.hexdigest()[:16]
 
 
 _MESH_DIGESTS: dict[int, tuple] = {}
@@ -158,6 +178,22 @@ def mesh_digest(geometry: S.MeshGeometry, texspace) -> str:
         _MESH_DIGESTS.clear()
     _MESH_DIGESTS[id(geometry)] = (geometry, texspace, digest)
     return digest
+
+
+_IMAGE_DIGESTS: OrderedDict[tuple[str, int], str] = OrderedDict()
+
+
+def _image_digest(data: S.ImageData | None) -> str:
+    """An image's pixels hashed, once per read (by its key and revision)."""
+    if data is None:
+        return "-"
+    found = _IMAGE_DIGESTS.get((data.key, data.revision))
+    if found is None:
+        found = hashlib.sha1(np.ascontiguousarray(data.pixels).tobytes()).hexdigest()[:16]
+        _IMAGE_DIGESTS[(data.key, data.revision)] = found
+        while len(_IMAGE_DIGESTS) > 64:  # one entry per image read: a few
+            del _IMAGE_DIGESTS[next(iter(_IMAGE_DIGESTS))]
+    return found
 
 
 def uv_problem(geometry: S.MeshGeometry) -> str:

@@ -1411,7 +1411,8 @@ def _fallback_slots(snap: S.Snapshot, inst, slots: list[str], key: str, depsgrap
         mesh = bake.mesh_digest(geometry, texspace)
         uv = obj.data.uv_layers.active.name
         scene = depsgraph.scene
-        keys = tuple(bake.key(t, mesh, resolution, placement) for t in targets)
+        keys = tuple(bake.key(t, mesh, resolution, placement, bake.inputs_digest(t, geometry, snap.images))
+                     for t in targets)
         request = bake.Request(owner, mkey, tuple(targets), keys, uv, resolution, matrix,
                                scene.frame_current + scene.frame_subframe, len(snap.items), k)
         bake.REQUESTS[(owner, mkey)] = request

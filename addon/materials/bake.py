@@ -63,6 +63,10 @@ class BakeTarget:
     nodes: tuple[str, ...]
     placed: bool = False
     view: bool = False
+    #: the images (keys in ``Snapshot.images``) and mesh attributes ((kind, name)) it reads: their
+    #: contents are part of what a bake is kept by (the Blender layer adds them)
+    images: tuple[str, ...] = ()
+    attributes: tuple[tuple[str, str], ...] = ()
 
     @property
     def label(self) -> str:
@@ -116,7 +120,23 @@ def target(flat: FlatGraph, node: str, socket: str, missing: set[str], emitted: 
             placed = True  # (a kind the compiler does not know may read anything)
     nodes = tuple(n for n in names if n in missing)
     out_type = flat.nodes[node].outputs.get(socket, "VALUE")
-    return BakeTarget(node, socket, out_type, _digest(flat, names, node, socket), nodes, placed or view, view)
+    images = tuple(dict.fromkeys(flat.nodes[n].props["image"] for n in names
+                                 if flat.nodes[n].props.get("image")))
+    attributes = tuple(dict.fromkeys(a for n in names for a in _attributes(flat.nodes[n])))
+    return BakeTarget(node, socket, out_type, _digest(flat, names, node, socket), nodes, placed or view, view,
+                      images, attributes)
+
+
+def _attributes(node) -> list[tuple[str, str]]:
+    """The mesh attributes a node reads, as ``codegen.ATTRIBUTE_KINDS`` names them."""
+    props = node.props
+    if node.kind == "ShaderNodeVertexColor":
+        return [("COLOR", props.get("layer_name", ""))]
+    if node.kind == "ShaderNodeAttribute" and props.get("attribute_type", "GEOMETRY") == "GEOMETRY":
+        return [("GENERIC", props.get("attribute_name", ""))]
+    if node.kind == "ShaderNodeUVMap" and props.get("uv_map"):
+        return [("UV", props["uv_map"])]
+    return []
 
 
 def prune(flat: FlatGraph, sink: str, baked: frozenset[str]) -> FlatGraph:
