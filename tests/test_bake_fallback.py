@@ -307,17 +307,23 @@ def test_the_bake_fallbacks_operator_bakes_and_renders_here(noise_scene):
         scene.shading_lab.bake_resolution = RESOLUTION
 
 
-def test_an_object_without_a_uv_map_takes_the_socket_value_and_says_why(tmp_path):
-    """A mesh without a UV map: its noise is not baked; the Math node reads its socket's 0.25
-    (x 2 = 0.5 everywhere) and the warnings name the object and the reason."""
+def _diffuse_noise_scene(name: str):
+    """A 9 x 9 px scene with a material of a Diffuse surface and the noise AOVs (no object yet)."""
     scene = scenes.reset(size=9)
     scenes.ortho_camera(scene)
-    mat = bpy.data.materials.new("NoUV")
+    mat = bpy.data.materials.new(name)
     tree = scenes.node_tree(mat)
     tree.nodes.clear()
     surface_node = tree.nodes.new("ShaderNodeBsdfDiffuse")
     tree.links.new(surface_node.outputs[0], tree.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
     _noise_material(scene, tree)
+    return scene, mat
+
+
+def test_an_object_without_a_uv_map_takes_the_socket_value_and_says_why(tmp_path):
+    """A mesh without a UV map: its noise is not baked; the Math node reads its socket's 0.25
+    (x 2 = 0.5 everywhere) and the warnings name the object and the reason."""
+    scene, mat = _diffuse_noise_scene("NoUV")
     plane = scenes.plane(scene, material=mat)  # from_pydata: no UV map
     assert not plane.data.uv_layers
     before = bake.CACHE.bakes
@@ -332,14 +338,7 @@ def test_an_object_without_a_uv_map_takes_the_socket_value_and_says_why(tmp_path
 def test_overlapping_uv_islands_are_said(tmp_path):
     """Two quads side by side, each on the whole UV square (a mirrored or repeated layout): the
     bake holds one of them, and says so (half their area: the bake covered 4096 texels of 8192)."""
-    scene = scenes.reset(size=9)
-    scenes.ortho_camera(scene)
-    mat = bpy.data.materials.new("Overlapping")
-    tree = scenes.node_tree(mat)
-    tree.nodes.clear()
-    surface_node = tree.nodes.new("ShaderNodeBsdfDiffuse")
-    tree.links.new(surface_node.outputs[0], tree.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
-    _noise_material(scene, tree)
+    scene, mat = _diffuse_noise_scene("Overlapping")
     scene.shading_lab.bake_resolution = 64
     mesh = bpy.data.meshes.new("Twice")
     mesh.from_pydata([(-1, -0.5, 0), (0, -0.5, 0), (0, 0.5, 0), (-1, 0.5, 0), (1, -0.5, 0), (1, 0.5, 0)], [],
