@@ -122,3 +122,4 @@ def _unregister():
     gpu_library.LIBRARY.clear()
     extract.IMAGES.clear()
     extract.GEOMETRY_MEMO.clear()
+    extract.bake.forget()

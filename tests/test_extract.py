@@ -484,9 +484,11 @@ def test_what_is_not_read_is_said_once():
     scene.collection.objects.link(bpy.data.objects.new("Smoke", bpy.data.volumes.new("Smoke")))
     snap = extract.snapshot(bpy.context.evaluated_depsgraph_get())
     said = "\n".join(snap.warnings)
-    assert len(snap.warnings) == 4, snap.warnings
+    assert len(snap.warnings) == 5, snap.warnings
     assert "Material 'Tooned': 1 of 1 nodes not compiled (Toon BSDF (ShaderNodeBsdfToon))" in said
-    assert "Material 'Ramped': 1 of 3 nodes not compiled (Wireframe (ShaderNodeWireframe))" in said
+    assert "Material 'Ramped': 1 of 3 nodes not compiled (Wireframe (ShaderNodeWireframe)): baked" in said
+    # (the plane has no UV map to bake on: its object says so)
+    assert "material 'Ramped': Wireframe > Fac not compiled and not baked (it has no UV map)" in said
     assert "Material 'Ramped': its Coat Weight (Principled BSDF) not drawn" in said
     assert "Not drawn (Shading Lab draws meshes): 2 hair curves object(s), 1 volume(s)" in said
 

@@ -89,8 +89,9 @@ def test_material_panel_says_where_each_value_comes_from():
 
 
 def test_material_panel_reports_the_node_graph_per_node():
-    """After a render reads it: the share of the graph's nodes compiled, each node not compiled,
-    the Principled inputs not drawn, a linked Displacement, the AOV Outputs; before: says so."""
+    """After a render reads it: the share of the graph's nodes compiled, each node not compiled
+    (baked, or why not on the active object), the Principled inputs not drawn, a linked
+    Displacement, the AOV Outputs; before: says so."""
     from addon.blender import extract
 
     scene = scenes.reset(size=8)
@@ -112,8 +113,11 @@ def test_material_panel_reports_the_node_graph_per_node():
     assert "Node graph: not read yet (render, or draw the viewport)" in before
     extract.snapshot(bpy.context.evaluated_depsgraph_get())
     labels = _draw(ui.SHADINGLAB_PT_material, SimpleNamespace(material=mat)).labels()
-    assert "Node graph: 3 of 4 nodes compiled (75%)" in labels, labels  # Principled, Ramp, Value
-    assert "Wireframe (ShaderNodeWireframe): not compiled, what it feeds takes its socket's value" in labels
+    assert "Node graph: 3 of 4 nodes compiled (75%), 1 baked" in labels, labels  # Principled, Ramp, Value
+    assert "Wireframe (ShaderNodeWireframe): baked by Cycles (not compiled)" in labels
+    plane = next(o for o in scene.objects if o.type == "MESH")  # no UV map: its bake cannot be made
+    labels = _draw(ui.SHADINGLAB_PT_material, SimpleNamespace(material=mat, object=plane)).labels()
+    assert ("Not baked on 'Plane': it has no UV map; what they feed takes its socket's value") in labels
     assert "Coat Weight (Principled BSDF): not drawn (the models have no such input)" in labels
     assert "Displacement: not drawn" in labels and "AOV Outputs: mask" in labels
 

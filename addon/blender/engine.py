@@ -20,7 +20,7 @@ from ..frame.passes import View
 from ..frame.renderer import Renderer, frame_views
 from ..plan import auto_terms
 from ..scene import exposure
-from . import extract
+from . import bake, extract
 
 ENGINE_ID = "SHADING_LAB"
 RADIANCE_PASS = "Radiance"  # raw HDR radiance when the engine's own tone mapper fills Combined
@@ -230,9 +230,13 @@ def viewport_border(context, scene) -> tuple[int, int, int, int] | None:
     return x0, y0, max(x1 - x0, 0), max(y1 - y0, 0)
 
 
-def draw_error(message: str, width: int, height: int) -> None:
+#: The colour of what the viewport says that is not an error (bakes in progress).
+NOTICE_COLOR = (0.9, 0.85, 0.5, 1.0)
+
+
+def draw_error(message: str, width: int, height: int, color=(1.0, 0.35, 0.3, 1.0)) -> None:
     """``message`` in the region's top left, wrapped to its width (as Blender's engines show
-    theirs), over whatever image is there."""
+    theirs), over whatever image is there, in ``color`` (an error's red by default)."""
     import blf
 
     prefs = bpy.context.preferences
@@ -248,7 +252,7 @@ def draw_error(message: str, width: int, height: int) -> None:
             lines[-1] = line
     blf.enable(font, blf.SHADOW)
     blf.shadow(font, 3, 0.0, 0.0, 0.0, 1.0)
-    blf.color(font, 1.0, 0.35, 0.3, 1.0)
+    blf.color(font, *color)
     y = height - 3.0 * size
     for line in lines[:8]:
         blf.position(font, margin, y, 0.0)
@@ -329,6 +333,8 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
                 gpu.state.scissor_test_set(False)
         if session.error:
             draw_error(session.error, region.width, region.height)
+        elif session.notice:  # what is being baked shows its socket's value meanwhile
+            draw_error(session.notice, region.width, region.height, color=NOTICE_COLOR)
         if session.adapting:  # automatic exposure still approaching its target
             self.tag_redraw()
 
@@ -442,6 +448,8 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
                 settings = extract.final_render_settings(scene)
                 extract.remember_settings(scene)  # the scene being rendered is the artist's
             snap = extract.snapshot(depsgraph, width, height, settings=settings, aovs=not self.is_preview)
+            if snap.bake_requests:
+                self._bake_fallbacks(depsgraph, snap)
         except extract.ExtractError as exc:
             self._fail(str(exc))
             return None
@@ -454,6 +462,39 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
             with _TIMINGS_LOCK:
                 last_warnings[:] = snap.warnings
         return snap
+
+    def _bake_fallbacks(self, depsgraph, snap) -> None:
+        """Bake what the snapshot's materials need that the compiler cannot compile (``bake``), before
+        anything is drawn, where this render runs on the main thread (batch renders, scripts);
+        else say why their readers take their socket values. Progress in the stats line, the
+        progress bar and, in background mode, on the console."""
+        count = bake.count_missing(snap.bake_requests)
+        why = bake.can_bake_here()
+        if why or self.is_preview:
+            if not self.is_preview:
+                snap.warnings.append(f"{count} fallback bake(s) not made ({why}): what they stand for takes "
+                                     f"its socket's value")
+            return
+        done = [0]
+        resolution = snap.bake_requests[0].resolution
+
+        def progress(label: str) -> None:
+            done[0] += 1
+            text = f"Baking {done[0]}/{count}: {label} ({resolution} x {resolution})"
+            self.update_stats("", f"Shading Lab | {text}")
+            self.update_progress(0.2 * (done[0] - 1) / max(count, 1))
+            if bpy.app.background:
+                print(f"Shading Lab: {text}", flush=True)
+
+        start = time.perf_counter()
+        snap.warnings.extend(bake.bake_all(snap.bake_requests, depsgraph, progress, self.test_break))
+        extract.apply_bakes(snap)
+        if bpy.app.background and done[0]:
+            seconds = time.perf_counter() - start
+            print(f"Shading Lab: baked {done[0]} fallback(s) in {seconds:.2f} s", flush=True)
+        if snap.bake_requests:
+            snap.warnings.append(f"{bake.count_missing(snap.bake_requests)} fallback bake(s) not made: what "
+                                 f"they stand for takes its socket's value")
 
     def _draw(self, snap, views, comparison, outputs: list[str], lobe_passes: list[str], adapt=None):
         """The frame's ``outputs`` and each light pass (the same frame with one lobe's weights,

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import copy
 import dataclasses
+import hashlib
 import itertools
 import math
 import os
@@ -20,7 +21,7 @@ from ..materials import codegen, objects, surface
 from ..plan import auto_terms, light_tiles, programs, shadows
 from ..scene import snapshot as S
 from ..scene.matrices import invert
-from . import nodes
+from . import bake, nodes
 
 LIGHT_KIND = {"POINT": "POINT", "SPOT": "SPOT", "SUN": "SUN", "AREA": "AREA"}
 
@@ -148,7 +149,8 @@ class GraphReport:
     """What the last read of a material made of its node graph, for the Material panel: whether
     it was compiled (else its surface is one shader read as values), how many of its nodes, which
     did not compile and what the models do not read (``MaterialGraph.missing`` / ``unread``),
-    whether its Displacement is linked (never drawn), and its AOV Outputs."""
+    whether its Displacement is linked (never drawn), its AOV Outputs, and which of the nodes
+    that did not compile are baked (``bake``: per object, ``bake.status``)."""
 
     compiled: bool
     nodes: int = 0
@@ -156,6 +158,8 @@ class GraphReport:
     unread: tuple[str, ...] = ()
     displacement: bool = False
     aovs: tuple[str, ...] = ()
+    #: of ``missing``, the nodes Cycles bakes for the objects using the material (flat names)
+    baked: tuple[str, ...] = ()
 
 
 #: The last GraphReport of each material (by its full name), as a render or the viewport read it.
@@ -175,7 +179,8 @@ def _material_graph(material, images: dict | None, warnings: list[str] | None) -
     displacement = surface.displacement_linked(read[0])
     GRAPH_REPORTS[material.name_full] = GraphReport(
         graph is not None, graph.nodes if graph is not None else 0, tuple(graph.missing) if graph else (),
-        tuple(graph.unread) if graph else (), displacement, tuple(sorted(aovs)))
+        tuple(graph.unread) if graph else (), displacement, tuple(sorted(aovs)),
+        tuple(_baked_nodes(graph, aovs)))
     if displacement and warnings is not None:
         warnings.append(f"Material '{material.name}': its Displacement is not drawn (the surface is drawn "
                         f"as it is, without displacement or bump from the output)")
@@ -185,15 +190,29 @@ def _material_graph(material, images: dict | None, warnings: list[str] | None) -
                           for entry in compiled.images for key in codegen.sampler_keys(entry))
         if compiled.notes and warnings is not None:
             warnings.append(f"Material '{material.name}': {'; '.join(compiled.notes)}")
+    baked = _baked_nodes(graph, aovs)
+    if baked and warnings is not None:
+        kinds = {m.rsplit(" (", 1)[0]: m for g in [graph, *aovs.values()] if g is not None for m in g.missing}
+        named = ", ".join(kinds.get(n, n) for n in baked)
+        of = f" of {graph.nodes}" if graph is not None else ""
+        warnings.append(f"Material '{material.name}': {len(baked)}{of} nodes not compiled ({named}): baked "
+                        f"by Cycles on each object's UV map")
     if graph is None:
         return None, aovs
     if graph.unread and warnings is not None:
         warnings.append(f"Material '{material.name}': its {', '.join(graph.unread)} not drawn (the shading "
                         f"models have no such input)")
-    if graph.missing and warnings is not None:
-        warnings.append(f"Material '{material.name}': {len(graph.missing)} of {graph.nodes} nodes not "
-                        f"compiled ({', '.join(graph.missing)}); what they feed takes its socket's own value")
+    fallen = [m for m in graph.missing if m.rsplit(" (", 1)[0] not in baked]
+    if fallen and warnings is not None:
+        warnings.append(f"Material '{material.name}': {len(fallen)} of {graph.nodes} nodes not "
+                        f"compiled ({', '.join(fallen)}); what they feed takes its socket's own value")
     return graph, aovs
+
+
+def _baked_nodes(graph, aovs: dict) -> list[str]:
+    """The not-compiled nodes of a material's graphs that its bakes stand in for (flat names)."""
+    graphs = ([graph] if graph is not None else []) + list(aovs.values())
+    return list(dict.fromkeys(n for g in graphs for t in g.bakes for n in t.nodes))
 
 
 def _material_extras(props) -> dict:
@@ -1312,6 +1331,7 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
                                          f"triangulate its n-gons or add a UV map)")
             snap.geometries[key] = geometry
         data = obj.data
+        slots = _fallback_slots(snap, inst, slots, key, depsgraph)
         graphs = [g for m in slots for g in (snap.materials[m].graph, *(g for _, g in snap.materials[m].aovs))
                   if g is not None]
         wanted = {a for g in graphs for a in g.uniform_attributes}
@@ -1342,6 +1362,101 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
     if snap.settings.auto_error_bound is not None and auto_choice:
         choose_terms(snap, previous.term_choices if previous is not None else None, auto_camera)
     return snap
+
+
+# --- the baked fallback (addon/blender/bake.py) -------------------------------------------------
+
+def _graphs(params: S.MaterialParams) -> list:
+    return ([params.graph] if params.graph is not None else []) + [g for _, g in params.aovs]
+
+
+def bake_resolution(scene) -> int:
+    """The resolution of the scene's fallback bakes (Render properties > Shading Lab > Bake)."""
+    props = getattr(scene, "shading_lab", None)
+    return int(getattr(props, "bake_resolution", bake.RESOLUTION))
+
+
+def _fallback_slots(snap: S.Snapshot, inst, slots: list[str], key: str, depsgraph) -> list[str]:
+    """The object's material slots, each with its fallback bakes where the cache holds them all
+    (a material of its own: ``_with_bakes``); a slot still waiting for bakes keeps its material
+    (the socket values) and its request goes into ``snap.bake_requests``. An object whose mesh
+    cannot hold a bake (no UV map) keeps the socket values, and the warnings say why."""
+    geometry = snap.geometries[key]
+    obj = inst.object
+    owner = obj.original.name_full if obj.original is not None else obj.name_full
+    out = []
+    for k, mkey in enumerate(slots):
+        params = snap.materials[mkey]
+        targets = list({(t.node, t.socket): t for g in _graphs(params) for t in g.bakes}.values())
+        if not targets:
+            out.append(mkey)
+            continue
+        labels = ", ".join(t.label for t in targets)
+        problem = bake.uv_problem(geometry)
+        if problem:
+            bake.UNBAKEABLE[(owner, mkey)] = problem
+            bake.REQUESTS.pop((owner, mkey), None)
+            snap.warnings.append(f"Object '{obj.name}', material '{params.name}': {labels} not compiled and "
+                                 f"not baked ({problem}): what they feed takes its socket's value")
+            out.append(mkey)
+            continue
+        bake.UNBAKEABLE.pop((owner, mkey), None)
+        for note in bake.uv_notes(geometry):
+            snap.warnings.append(f"Object '{obj.name}', material '{params.name}': {labels} baked, but {note}")
+        texspace = (tuple(obj.data.texspace_location), tuple(obj.data.texspace_size)) \
+            if hasattr(obj.data, "texspace_location") else ()
+        resolution = bake_resolution(depsgraph.scene)
+        matrix = tuple(tuple(float(v) for v in row) for row in inst.matrix_world)
+        placement = repr((matrix, owner, tuple(obj.color), obj.pass_index))
+        mesh = bake.mesh_digest(geometry, texspace)
+        uv = obj.data.uv_layers.active.name
+        scene = depsgraph.scene
+        keys = tuple(bake.key(t, mesh, resolution, placement, bake.inputs_digest(t, geometry, snap.images))
+                     for t in targets)
+        request = bake.Request(owner, mkey, tuple(targets), keys, uv, resolution, matrix,
+                               scene.frame_current + scene.frame_subframe, len(snap.items), k)
+        bake.REQUESTS[(owner, mkey)] = request
+        variant = _with_bakes(snap, request)
+        if variant is None:
+            snap.bake_requests.append(request)
+        out.append(variant or mkey)
+    return out
+
+
+def _with_bakes(snap: S.Snapshot, request) -> str | None:
+    """The key of ``request``'s material with its bakes sampled (added to ``snap.materials``, the
+    baked pixels to ``snap.images``); None while a bake is missing from the cache."""
+    found = [bake.CACHE.get(k) for k in request.keys]
+    if any(b is None for b in found):
+        return None
+    baked = {(t.node, t.socket): k for t, k in zip(request.targets, request.keys)}
+    variant = f"{request.material}\x1f{hashlib.sha1(repr(sorted(baked.items())).encode()).hexdigest()[:16]}"
+    if variant not in snap.materials:
+        params = snap.materials[request.material]
+        graph = surface.with_bakes(params.graph, baked) if params.graph is not None else None
+        aovs = tuple((name, surface.with_bakes(g, baked)) for name, g in params.aovs)
+        snap.materials[variant] = dataclasses.replace(params, graph=graph, aovs=aovs)
+        snap.material_warnings[variant] = snap.material_warnings.get(request.material, [])
+        if request.material in snap.term_choices:
+            snap.term_choices[variant] = snap.term_choices[request.material]
+    for b in found:
+        snap.images[b.image.key] = b.image
+    return variant
+
+
+def apply_bakes(snap: S.Snapshot) -> int:
+    """Give the draw items whose bakes have since been made their materials with the bakes
+    (``snap.bake_requests`` keeps the rest); how many slots changed."""
+    changed, waiting = 0, []
+    for request in snap.bake_requests:
+        variant = _with_bakes(snap, request)
+        if variant is None:
+            waiting.append(request)
+            continue
+        snap.items[request.item].materials[request.slot] = variant
+        changed += 1
+    snap.bake_requests[:] = waiting
+    return changed
 
 
 def choose_terms(snap: S.Snapshot, previous: dict | None = None, camera: S.Camera | None = None) -> None:

@@ -172,6 +172,32 @@ class SHADINGLAB_OT_bake_world(bpy.types.Operator):
         return {"FINISHED"}
 
 
+class SHADINGLAB_OT_bake_fallbacks(bpy.types.Operator):
+    """Bake with Cycles what Shading Lab does not compile in the scene's materials, then render the
+    frame here. A render started with F12 runs beside the interface and cannot bake: it draws with
+    these bakes. The bakes are kept in memory: nothing is added to the file"""
+
+    bl_idname = "shading_lab.bake_fallbacks"
+    bl_label = "Bake Fallbacks and Render"
+    bl_options = {"REGISTER"}
+
+    @classmethod
+    def poll(cls, context):
+        from .engine import ENGINE_ID
+
+        return getattr(context.scene.render, "engine", "") == ENGINE_ID
+
+    def execute(self, context):
+        from . import bake
+
+        before = bake.CACHE.bakes
+        # not invoked: the render runs on this thread, where render() bakes before it draws
+        bpy.ops.render.render()
+        made = bake.CACHE.bakes - before
+        self.report({"INFO"}, f"Baked {made} fallback(s) ({len(bake.CACHE)} kept in memory) and rendered")
+        return {"FINISHED"}
+
+
 class SHADINGLAB_OT_clear_world_cache(bpy.types.Operator):
     """Delete the world lighting Shading Lab keeps on disk between sessions (each world's maps are
     computed again the next time it is rendered)"""
@@ -234,5 +260,5 @@ class SHADINGLAB_OT_verify_auto_terms(bpy.types.Operator):
 
 
 classes = (SHADINGLAB_OT_apply_material_preset, SHADINGLAB_OT_principled_to_explicit,
-           SHADINGLAB_OT_convert_roughness, SHADINGLAB_OT_bake_world, SHADINGLAB_OT_clear_world_cache,
-           SHADINGLAB_OT_verify_auto_terms)
+           SHADINGLAB_OT_bake_fallbacks, SHADINGLAB_OT_convert_roughness, SHADINGLAB_OT_bake_world,
+           SHADINGLAB_OT_clear_world_cache, SHADINGLAB_OT_verify_auto_terms)

@@ -244,6 +244,10 @@ class ShadingLabSceneSettings(bpy.types.PropertyGroup):
     world_samples: IntProperty(
         name="World Samples", default=64, min=1, max=1024, update=_redraw,
         description="Samples of the world per pixel for sampled world specular")
+    bake_resolution: IntProperty(
+        name="Bake Resolution", default=512, min=16, max=8192, soft_max=4096, update=_redraw,
+        description="Texels along each side of the images Cycles bakes for the nodes Shading Lab does not "
+                    "compile (on the object's UV map; kept in memory, never saved into the file)")
 
 
 def _override(name: str, description: str):
@@ -344,9 +348,11 @@ def _forget_changed_images(_scene, depsgraph):
 
 @persistent
 def _forget_all_images(*_args):
-    """Main-thread handler: a file load starts with no cached pixels, nor meshes' geometry."""
+    """Main-thread handler: a file load starts with no cached pixels, nor meshes' geometry, nor
+    fallback bakes."""
     extract.IMAGES.clear()
     extract.GEOMETRY_MEMO.clear()
+    extract.bake.forget()
 
 
 def _handlers():

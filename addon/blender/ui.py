@@ -132,6 +132,9 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
         col.prop(props, "light_culling", text="Culling")
         layout.prop(props, "samples")
         layout.prop(props, "transparency_layers")
+        col = layout.column(heading="Fallback Bakes")
+        col.prop(props, "bake_resolution", text="Resolution")
+        col.operator("shading_lab.bake_fallbacks", icon="RENDER_STILL")
         # Blender's own setting (Cycles shows it under Performance): final renders keep the shadow
         # maps the last one drew where the lights and casters are the same
         layout.prop(context.scene.render, "use_persistent_data", text="Persistent Data")
@@ -264,7 +267,7 @@ class SHADINGLAB_PT_material(ShadingLabPanel, bpy.types.Panel):
         if props.world_specular == "SAMPLED":
             row.prop(props, "world_samples", text="Samples")
         _auto_choice(layout, context)
-        _graph_report(layout, context.material)
+        _graph_report(layout, context.material, getattr(context, "object", None))
         layout.label(text="Unticked values come from the surface shader (Principled BSDF)")
         col = layout.column()
         col.label(text="Physically based")
@@ -284,8 +287,9 @@ class SHADINGLAB_PT_material(ShadingLabPanel, bpy.types.Panel):
         _material_row(col, props, "use_ambient_color", "ambient_color", "base colour")
 
 
-def _graph_report(layout, material) -> None:
-    """What the last render or viewport frame compiled of the material's node graph, per node."""
+def _graph_report(layout, material, obj=None) -> None:
+    """What the last render or viewport frame compiled of the material's node graph, per node:
+    compiled, baked (on ``obj``: each bake's resolution and measured error) or not read."""
     from .extract import GRAPH_REPORTS
 
     report = GRAPH_REPORTS.get(material.name_full)
@@ -298,16 +302,56 @@ def _graph_report(layout, material) -> None:
     else:
         compiled = report.nodes - len(report.missing)
         share = compiled / report.nodes if report.nodes else 1.0
-        box.label(text=f"Node graph: {compiled} of {report.nodes} nodes compiled ({share:.0%})",
-                  icon="CHECKMARK" if not report.missing else "ERROR")
+        baked = set(report.baked)
+        box.label(text=f"Node graph: {compiled} of {report.nodes} nodes compiled ({share:.0%})"
+                       + (f", {len(baked)} baked" if baked else ""),
+                  icon="CHECKMARK" if not report.missing else "INFO" if len(baked) == len(report.missing)
+                  else "ERROR")
         for node in report.missing:
-            box.label(text=f"{node}: not compiled, what it feeds takes its socket's value", icon="DOT")
+            if node.rsplit(" (", 1)[0] in baked:
+                box.label(text=f"{node}: baked by Cycles (not compiled)", icon="TEXTURE")
+            else:
+                box.label(text=f"{node}: not read (not compiled; what it feeds takes its socket's value)",
+                          icon="DOT")
+        if baked:
+            _bake_report(box, material, obj)
         for socket in report.unread:
             box.label(text=f"{socket}: not drawn (the models have no such input)", icon="DOT")
     if report.displacement:
         box.label(text="Displacement: not drawn", icon="INFO")
     if report.aovs:
         box.label(text=f"AOV Outputs: {', '.join(report.aovs)}", icon="RENDERLAYERS")
+
+
+def _bake_report(box, material, obj) -> None:
+    """Each bake of ``material`` on ``obj`` as the last render or viewport frame asked for it:
+    baked (its resolution, seconds and measured error), waiting, or why it cannot be."""
+    from . import bake
+
+    owner = obj.name_full if obj is not None else ""
+    why = bake.UNBAKEABLE.get((owner, material.name_full))
+    if why:
+        box.label(text=f"Not baked on '{obj.name}': {why}; what they feed takes its socket's value",
+                  icon="ERROR")
+        return
+    found = bake.status(owner, material.name_full)
+    if not found:
+        box.label(text="Bakes are per object: select an object using it (render, or draw the viewport)",
+                  icon="DOT")
+        return
+    for target, baked in found:
+        if baked is None:
+            box.label(text=f"{target.label}: baked by Cycles, not yet: its socket's value meanwhile",
+                      icon="TIME")
+            continue
+        e = baked.error
+        r = baked.resolution
+        box.label(text=f"{target.label}: baked {r} x {r} in {baked.seconds:.2f} s", icon="TEXTURE")
+        seen = " (as seen along the normal)" if target.view else ""
+        box.label(text=f"    error between texels {e.text()}{seen}")
+        if baked.note:
+            box.label(text=f"    {baked.note}", icon="ERROR")
+    box.operator("shading_lab.bake_fallbacks", icon="RENDER_STILL")
 
 
 def _auto_choice(layout, context) -> None:

@@ -9,6 +9,11 @@ through Blender's display transform. A frame that fails (a program that does not
 edit, say) leaves the last good image to show, and the failure in ``error`` for the engine to draw
 over it. Automatic exposure adapts from draw to draw by the time between them (``adapting`` asks
 the engine for another redraw until it settles).
+
+Nodes the compiler cannot compile are baked by Cycles (``bake``), never inside an update or a
+draw: the update queues them for a timer on the main thread (``bake.schedule``) and the frame
+shows their socket values meanwhile, saying so (``notice``); once the timer has baked them, the
+next draw takes the bakes (``extract.apply_bakes``).
 """
 
 from __future__ import annotations
@@ -22,7 +27,7 @@ from ..frame.gpu_library import ShaderCompileError
 from ..frame.renderer import Renderer, frame_views
 from ..scene import exposure
 from ..scene import snapshot as S
-from . import extract
+from . import bake, extract
 
 _NO_CAMERA = S.Camera(np.eye(4, dtype=np.float32), np.eye(4, dtype=np.float32), True, (0.0, 0.0, 0.0),
                       (0.0, 0.0, -1.0))
@@ -49,6 +54,8 @@ class ViewportSession:
         # edits, not on view changes); before the first draw there is none
         self._view: S.Camera | None = None
         self._unchosen = False
+        self.notice = ""  # what the frame shows in place of what is being baked ("" when nothing)
+        self._bakes_seen = bake.GENERATION[0]
 
     def update(self, depsgraph) -> None:
         start = time.perf_counter()
@@ -60,12 +67,33 @@ class ViewportSession:
                                          auto_choice=self._view is not None, materials_dirty=materials)
         self._unchosen = self._view is None and self.snapshot.settings.auto_error_bound is not None
         self.pending |= self.snapshot.fresh
+        if self.snapshot.bake_requests:
+            bake.schedule(self.snapshot.bake_requests)
+        self._say_bakes()
         self.last_update_ms = 1e3 * (time.perf_counter() - start)
+
+    def _say_bakes(self) -> None:
+        waiting = bake.count_missing(self.snapshot.bake_requests)
+        self.notice = (f"Baking {waiting} node output(s) Shading Lab does not compile: they show their "
+                       f"socket's value until baked" if waiting else "")
+        if bake.LAST_PROBLEMS:
+            self.notice = "; ".join([self.notice] * bool(self.notice) + bake.LAST_PROBLEMS[:2])
+
+    def take_bakes(self) -> bool:
+        """Give the snapshot the bakes the timer made since the last draw (``bake.run_pending``);
+        whether any slot changed."""
+        if self.snapshot is None or self._bakes_seen == bake.GENERATION[0]:
+            return False
+        self._bakes_seen = bake.GENERATION[0]
+        changed = extract.apply_bakes(self.snapshot)
+        self._say_bakes()
+        return bool(changed)
 
     def draw(self, width: int, height: int, view_matrix, window_matrix, is_perspective: bool,
              background=(0.0, 0.0, 0.0, 1.0)) -> gpu.types.GPUTexture | None:
         """Render the last snapshot as the region sees it; returns the texture to display: this
         frame's or, when it fails (``error`` says why), the last good frame's (None if none)."""
+        self.take_bakes()
         snap = self.snapshot
         snap.camera = S.Camera.from_matrices(np.array(view_matrix), np.array(window_matrix), is_perspective)
         snap.width, snap.height = width, height

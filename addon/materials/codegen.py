@@ -23,7 +23,11 @@ name); the program binds the images and fills the attributes (the mesh's, by nam
 by several nodes at one coordinate is sampled once (the expression is shared).
 
 A node no emitter knows compiles to nothing: every input linked to it reads its own socket value
-instead (Blender's fallback for what a renderer cannot evaluate); ``Compiled.missing`` names it.
+instead (Blender's fallback for what a renderer cannot evaluate); ``Compiled.missing`` names it,
+and ``Compiled.bake_targets`` names its outputs that compiled nodes read. Where Cycles baked such
+an output into an image on the object's UV map (``compile_graph``'s ``baked``: (node, output) ->
+the image's key in ``Snapshot.images``; ``materials.bake``), the output is that image sampled at
+the UV (Linear, Extend) instead.
 """
 
 from __future__ import annotations
@@ -66,6 +70,9 @@ LIBRARY = ("node_inputs.glsl", "node_convert.glsl", "node_color.glsl", "node_mat
 #: procedural textures: only what the scene requires), each after the files it calls.
 OPTIONAL_LIBRARY = ("node_hash.glsl", "node_tex_white_noise.glsl",
                     "node_tex_gabor.glsl")
+#: Node kinds drawn from a bake even where an emitter compiles them (empty: none). Tests and the
+#: benchmark set it to compare a node's bake with its compiled code and with Cycles.
+FORCE_BAKE: frozenset[str] = frozenset()
 _DEFINED = re.compile(r"^[A-Za-z_]\w*\s+(\w+)\s*\(", re.M)
 _CALLED = re.compile(r"\b(\w+)\s*\(")
 
@@ -138,6 +145,13 @@ class Compiled:
     uniform_attributes: tuple[tuple[str, str], ...] = ()
     #: why nodes did not compile where a limit says it (``MAX_IMAGES``, ``MAX_TILES``)
     notes: tuple[str, ...] = ()
+    #: outputs of nodes that did not compile which compiled nodes read (what a bake could stand
+    #: in for): (flat node, output socket)
+    bake_targets: tuple[tuple[str, str], ...] = ()
+    #: the nodes whose outputs are sampled from bakes (``compile_graph``'s ``baked``)
+    baked: tuple[str, ...] = ()
+    #: the flat names of the nodes that did not compile (``missing`` says "name (kind)")
+    missing_nodes: tuple[str, ...] = ()
 
     @property
     def arrays(self) -> tuple[int, ...]:
@@ -166,6 +180,10 @@ class _Writer:
         self.values: dict[tuple[str, str], str] = {}  # (node, output) -> GLSL variable
         self.skipped: set[str] = set()
         self.missing: list[str] = []
+        self.missing_nodes: list[str] = []  # the flat names of ``missing``
+        self.silent: list[str] = []  # of those, the ones that compiled to nothing (readers fall back)
+        self.baked: dict[tuple[str, str], str] = {}  # (node, output) -> a bake's image key
+        self.from_bakes: list[str] = []  # nodes whose outputs are sampled from bakes
         self.images: list[str | tuple[str, ...]] = []
         self.notes: list[str] = []  # why nodes did not compile, where a limit says it
         self.attributes: list[tuple[str, str]] = []
@@ -409,15 +427,18 @@ def _normal_map(w: _Writer, node: FlatNode) -> dict | None:
 BUMP_FILTER_WIDTH = 1.0
 
 
-def upstream(flat: FlatGraph, name: str) -> list[str]:
-    """The flat nodes ``name`` reads, itself included, in the flat graph's order."""
+def upstream(flat: FlatGraph, name: str, stop: frozenset[str] = frozenset()) -> list[str]:
+    """The flat nodes ``name`` reads, itself included, in the flat graph's order; the inputs of
+    the nodes in ``stop`` are not followed (their outputs come from bakes: ``materials.bake``)."""
     seen, pending = set(), [name]
     while pending:
         current = pending.pop()
         if current in seen or current not in flat.nodes:
             continue
         seen.add(current)
-        pending += [i.source.node for i in flat.nodes[current].inputs.values() if isinstance(i.source, Ref)]
+        if current not in stop:
+            inputs = flat.nodes[current].inputs.values()
+            pending += [i.source.node for i in inputs if isinstance(i.source, Ref)]
     return [n for n in flat.nodes if n in seen]
 
 
@@ -436,8 +457,7 @@ def _height_at(w: _Writer, node: FlatNode, axis: str, filter_width: str) -> str:
     try:
         for name in above:
             other = w.flat.nodes[name]
-            emit = EMITTERS.get(other.kind)
-            outputs = emit(w, other) if emit is not None else None
+            outputs = _emit(w, other)
             if outputs is not None:  # what did not compile was named missing the first time
                 w.define(other, outputs)
         return w.arg(node, "Height")
@@ -956,22 +976,61 @@ EMITTERS = {
 SINKS = ("ShaderNodeOutputAOV", "ShaderNodeOutputMaterial")
 
 
+#: The socket types a bake holds, and how a baked texel (its RGB; a float in R) is read as each.
+_BAKED_READS = {"VALUE": "{t}.r", "INT": "{t}.r", "BOOLEAN": "{t}.r", "VECTOR": "{t}.rgb",
+                "RGBA": "vec4({t}.rgb, 1.0)"}
+
+
+def _baked(w: _Writer, node: FlatNode) -> dict | None:
+    """The outputs of ``node`` that Cycles baked (``w.baked``: (node, output) -> image key): the
+    bake sampled at the UV map's coordinate as an Image Texture of a float image (Linear,
+    Extend: glsl/node_texture_image.glsl), a float from its red channel, a vector or colour from
+    its RGB (Cycles' colours have no alpha). None where none of its outputs was baked."""
+    outputs = {}
+    for socket, type_ in node.outputs.items():
+        key = w.baked.get((node.name, socket))
+        read = _BAKED_READS.get(type_)
+        if key is None or read is None:
+            continue
+        image = w.image(key)
+        if image is None:
+            w.over_limit(node, 1)
+            continue
+        texel = w.once("vec4", f"node_tex_image_flat({image}, g.uv, TEX_IMAGE_LINEAR, TEX_IMAGE_EXTEND, "
+                               f"TEX_IMAGE_TEXELS_FLOAT)")
+        outputs[socket] = read.format(t=texel)
+    return outputs or None
+
+
+def _emit(w: _Writer, node: FlatNode) -> dict | None:
+    """A node's outputs as GLSL: its emitter's, else its bakes' (``_baked``); None where neither."""
+    emit = None if node.kind in FORCE_BAKE else EMITTERS.get(node.kind)
+    outputs = emit(w, node) if emit is not None else None
+    return outputs if outputs is not None or not w.baked else _baked(w, node)
+
+
 def compile_graph(flat: FlatGraph, targets: dict[str, tuple[str, str]], name: str = "graph",
-                  whole: FlatGraph | None = None) -> Compiled:
+                  whole: FlatGraph | None = None,
+                  baked: dict[tuple[str, str], str] | None = None) -> Compiled:
     """The GLSL function ``name`` computing each target (a name -> (flat node, input socket)):
     ``void name(GraphInputs g, out T target ...)`` in the order ``targets`` lists them. ``whole``:
     the material's whole flat graph where ``flat`` is part of it (what a node's outputs feed
     there decides, as Cycles compiles the surface and the AOV Outputs as one graph: an Image
-    Texture's Alpha read anywhere unassociates its Color)."""
+    Texture's Alpha read anywhere unassociates its Color). ``baked``: the outputs of nodes that
+    did not compile which Cycles baked, (flat node, output) -> the image's key."""
     w = _Writer(flat, whole)
+    w.baked = dict(baked or {})
     for node in flat.nodes.values():
         if node.kind in SINKS:
             continue  # outputs: what reads their inputs is the caller's
-        emit = EMITTERS.get(node.kind)
-        outputs = emit(w, node) if emit is not None else None
+        outputs = _emit(w, node)
+        if outputs is not None and (node.kind in FORCE_BAKE or EMITTERS.get(node.kind) is None):
+            w.from_bakes.append(node.name)
         if outputs is None:
             w.missing.append(f"{node.name} ({node.kind})")
+            w.missing_nodes.append(node.name)
             if "SHADER" not in node.outputs.values():
+                w.silent.append(node.name)
                 continue
             outputs = _unknown_closure(w, node)
         w.define(node, outputs)
@@ -987,4 +1046,28 @@ def compile_graph(flat: FlatGraph, targets: dict[str, tuple[str, str]], name: st
     source = "\n".join([*prelude, f"void {name}({params})", "{", *w.lines, *assigns, "}", ""])
     constants = np.array(w.constants or [(0.0, 0.0, 0.0, 0.0)], np.float32).reshape(-1, 4)
     return Compiled(name, source, constants, types, w.missing, tuple(w.images), tuple(w.attributes),
-                    notes=tuple(w.notes), uniform_attributes=tuple(w.uniform_attributes))
+                    notes=tuple(w.notes), uniform_attributes=tuple(w.uniform_attributes),
+                    bake_targets=_bake_targets(w, targets), baked=tuple(w.from_bakes),
+                    missing_nodes=tuple(w.missing_nodes))
+
+
+def _bake_targets(w: _Writer, targets: dict[str, tuple[str, str]]) -> tuple[tuple[str, str], ...]:
+    """The outputs of nodes that did not compile (``w.silent``) read by a target, or by a node that
+    compiled and reaches one without passing through a node that did not (a compiled node that
+    only feeds those is part of their bake): what a bake could stand in for, in the flat graph's
+    order."""
+    silent, found = set(w.silent), set()
+    pending = [w.flat.nodes[n].inputs[s] for n, s in targets.values()]
+    seen: set[str] = set()
+    while pending:
+        source = pending.pop().source
+        if not isinstance(source, Ref) or source.node not in w.flat.nodes:
+            continue
+        if source.node in silent:
+            if source.type in _BAKED_READS:
+                found.add((source.node, source.socket))
+        elif source.node not in seen:
+            seen.add(source.node)
+            pending += w.flat.nodes[source.node].inputs.values()
+    order = list(w.flat.nodes)
+    return tuple(sorted(found, key=lambda t: (order.index(t[0]), t[1])))

@@ -6,18 +6,23 @@ that structure binds (its constants, images and attributes).
 ``material_graph(GraphInputs g, out Closure surface)`` (glsl/node_closure.glsl). A material whose
 surface is one closure node with nothing linked into it returns None: the constant path draws it
 as before, at no extra cost.
+
+Outputs of nodes that do not compile, read by nodes that do, are ``MaterialGraph.bakes``
+(``materials.bake``); ``with_bakes(graph, baked)`` compiles the graph again with those Cycles
+baked sampled from their images (one object's: a bake lies on its mesh's UV map).
 """
 
 from __future__ import annotations
 
 import re
+from collections import OrderedDict
 from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 
 from ..scene.nodes import MATERIAL_OUTPUT, Graph
-from . import codegen
+from . import bake, codegen
 from .graph import Const, FlatGraph, flatten
 
 #: The function every compiled material defines.
@@ -85,6 +90,13 @@ class MaterialGraph:
     notes: tuple[str, ...] = ()
     #: the object's, instancer's and view layer's attributes it reads, (kind, name) by slot
     uniform_attributes: tuple[tuple[str, str], ...] = ()
+    #: outputs of nodes that did not compile which a bake could stand in for (``bake.BakeTarget``)
+    bakes: tuple = ()
+    #: the nodes drawn from bakes: those the bakes stand in for and what only they read
+    baked: tuple[str, ...] = ()
+    #: what it was compiled from, to compile it again with bakes (``with_bakes``): the graph,
+    #: its groups, and the AOV's name for an AOV Output's graph (None: the surface)
+    read: tuple | None = None
 
     def _identity(self) -> tuple:
         constants = np.asarray(self.constants, np.float32).tobytes()
@@ -200,8 +212,14 @@ def _node_count(flat: FlatGraph) -> int:
     return sum(1 for n in flat.nodes.values() if n.kind not in ("Convert", *codegen.SINKS))
 
 
-def _compiled(flat: FlatGraph, targets: dict, function: str, whole: FlatGraph) -> MaterialGraph:
-    compiled = codegen.compile_graph(flat, targets, function, whole)
+def _compiled(flat: FlatGraph, targets: dict, function: str, whole: FlatGraph,
+              baked: dict | None = None) -> MaterialGraph:
+    full = flat
+    nodes = _node_count(flat)
+    if baked:  # what only the bakes read Cycles computed into them
+        sink = next(iter(targets.values()))[0]
+        flat = bake.prune(flat, sink, frozenset(node for node, _ in baked))
+    compiled = codegen.compile_graph(flat, targets, function, whole, baked)
     uses = graph_inputs_read(compiled.source)
     rule = ""
     if _bent(flat):
@@ -212,14 +230,22 @@ def _compiled(flat: FlatGraph, targets: dict, function: str, whole: FlatGraph) -
     program = GraphProgram(key, compiled.source,
                            len(compiled.constants), len(compiled.images), len(compiled.attributes), uses,
                            kinds, compiled.arrays, len(compiled.uniform_attributes), rule)
+    missing = set(compiled.missing_nodes)
+    emitted = frozenset(codegen.EMITTERS) - codegen.FORCE_BAKE
+    bakes = tuple(bake.target(full, node, socket, missing, emitted) for node, socket in compiled.bake_targets)
+    drawn_baked = set(compiled.baked) | (set(full.nodes) - set(flat.nodes))
+    baked_names = tuple(n for n in full.nodes if n in drawn_baked and full.nodes[n].kind not in
+                        ("Convert", *codegen.SINKS))
     return MaterialGraph(program, compiled.constants, compiled.images, compiled.attributes, compiled.missing,
-                         _node_count(flat), _transparent(flat), _unread(flat), _textured(flat),
-                         compiled.notes, compiled.uniform_attributes)
+                         nodes, _transparent(flat), _unread(flat), _textured(flat),
+                         compiled.notes, compiled.uniform_attributes, bakes, baked_names)
 
 
-def compile_material(graph: Graph, groups: dict[str, Graph]) -> MaterialGraph | None:
+def compile_material(graph: Graph, groups: dict[str, Graph],
+                     baked: dict | None = None) -> MaterialGraph | None:
     """The material's compiled surface, or None where the constant path draws it (no output, or
-    one closure with nothing linked into it)."""
+    one closure with nothing linked into it); ``baked``: the outputs Cycles baked, (flat node,
+    output) -> image key (``with_bakes``)."""
     flat = flatten(graph, groups, aovs=False)
     if _plain(flat):
         return None
@@ -228,7 +254,9 @@ def compile_material(graph: Graph, groups: dict[str, Graph]) -> MaterialGraph | 
     above = set(codegen.upstream(flat, surface.source.node)) | {output.name}
     flat = FlatGraph({k: v for k, v in flat.nodes.items() if k in above}, flat.output, flat.cut, flat.luma,
                      flat.version)
-    return _compiled(flat, {"surface": (output.name, "Surface")}, FUNCTION, flatten(graph, groups))
+    compiled = _compiled(flat, {"surface": (output.name, "Surface")}, FUNCTION, flatten(graph, groups), baked)
+    compiled.read = (graph, groups, None)
+    return compiled
 
 
 #: The function a material's AOV Output compiles to: ``material_aov(g, out vec4 color, out float
@@ -236,9 +264,10 @@ def compile_material(graph: Graph, groups: dict[str, Graph]) -> MaterialGraph | 
 AOV_FUNCTION = "material_aov"
 
 
-def compile_aovs(graph: Graph, groups: dict[str, Graph]) -> dict[str, MaterialGraph]:
+def compile_aovs(graph: Graph, groups: dict[str, Graph],
+                 baked: dict | None = None) -> dict[str, MaterialGraph]:
     """Each AOV Output's inputs compiled, by its AOV name (the first node of a name, as Cycles
-    takes one); an AOV Output of no name writes nothing."""
+    takes one); an AOV Output of no name writes nothing. ``baked`` as ``compile_material``'s."""
     if not any(node.kind == "ShaderNodeOutputAOV" and not node.muted for node in graph.nodes.values()):
         return {}  # (flatten takes AOV Outputs from the material's own tree only): nothing to flatten
     flat = flatten(graph, groups, output=False)
@@ -252,8 +281,34 @@ def compile_aovs(graph: Graph, groups: dict[str, Graph]) -> dict[str, MaterialGr
                              flat.version)
             whole = whole or flatten(graph, groups)
             out[name] = _compiled(only, {"color": (node.name, "Color"), "value": (node.name, "Value")},
-                                  AOV_FUNCTION, whole)
+                                  AOV_FUNCTION, whole, baked)
+            out[name].read = (graph, groups, name)
     return out
+
+
+#: Graphs compiled again with bakes, by what they were compiled from and the bakes' keys: a
+#: viewport update or a render reads them from here (``with_bakes``), at most ``_VARIANTS_KEPT``.
+_VARIANTS: OrderedDict = OrderedDict()
+_VARIANTS_KEPT = 64
+
+
+def with_bakes(graph: MaterialGraph, baked: dict[tuple[str, str], str]) -> MaterialGraph:
+    """``graph`` compiled again with the outputs of ``baked`` ((flat node, output) -> image key)
+    sampled from their bakes; ``graph`` itself where none of its bakes is in ``baked``."""
+    mine = {(t.node, t.socket) for t in graph.bakes}
+    baked = {k: v for k, v in baked.items() if k in mine}
+    if not baked or graph.read is None:
+        return graph
+    key = (graph._identity(), graph.read[2], tuple(sorted(baked.items())))
+    found = _VARIANTS.pop(key, None)
+    if found is None:
+        source, groups, aov = graph.read
+        found = compile_material(source, groups, baked) if aov is None else \
+            compile_aovs(source, groups, baked)[aov]
+    _VARIANTS[key] = found  # most recently used last
+    while len(_VARIANTS) > _VARIANTS_KEPT:
+        del _VARIANTS[next(iter(_VARIANTS))]
+    return found
 
 
 #: MaterialParams' field of each Principled BSDF input ``textured`` reads.

@@ -481,6 +481,9 @@ class Snapshot:
     material_warnings: dict[str, list[str]] = field(default_factory=dict)
     #: the view layer's AOVs a final render writes: (name, "COLOR" or "VALUE")
     aovs: list[tuple[str, str]] = field(default_factory=list)
+    #: fallback bakes the draw items wait for (``blender.bake.Request``): their slots draw the
+    #: socket values until the bakes are made
+    bake_requests: list = field(default_factory=list)
 
     @property
     def triangle_count(self) -> int:
