@@ -99,7 +99,7 @@ def test_material_panel_reports_the_node_graph_per_node():
     tree = scenes.node_tree(mat)
     bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
     out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
-    tree.links.new(tree.nodes.new("ShaderNodeWireframe").outputs["Fac"], bsdf.inputs["Roughness"])
+    tree.links.new(tree.nodes.new("ShaderNodeParticleInfo").outputs["Random"], bsdf.inputs["Roughness"])
     ramp = tree.nodes.new("ShaderNodeValToRGB")
     tree.links.new(ramp.outputs["Color"], bsdf.inputs["Base Color"])
     tree.links.new(tree.nodes.new("ShaderNodeValue").outputs[0], bsdf.inputs["Coat Weight"])
@@ -113,7 +113,8 @@ def test_material_panel_reports_the_node_graph_per_node():
     extract.snapshot(bpy.context.evaluated_depsgraph_get())
     labels = _draw(ui.SHADINGLAB_PT_material, SimpleNamespace(material=mat)).labels()
     assert "Node graph: 3 of 4 nodes compiled (75%)" in labels, labels  # Principled, Ramp, Value
-    assert "Wireframe (ShaderNodeWireframe): not compiled, what it feeds takes its socket's value" in labels
+    said = "Particle Info (ShaderNodeParticleInfo): not compiled, what it feeds takes its socket's value"
+    assert said in labels
     assert "Coat Weight (Principled BSDF): not drawn (the models have no such input)" in labels
     assert "Displacement: not drawn" in labels and "AOV Outputs: mask" in labels
 
