@@ -285,10 +285,11 @@ def _holdout_scene(film_transparent: bool):
     """A red emitting plane over the top half of the view, the world (0.2, 0.3, 0.4) below; each
     case's square (0.5 wide: 8 pixels, its edges on pixel edges) over each."""
     scene = scenes.reset(size=HOLDOUT_SIZE)
-    background = next(n for n in scene.world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
-    background.inputs["Color"].default_value = (0.2, 0.3, 0.4, 1.0)
-    background.inputs["Strength"].default_value = 1.0
     scene.world.color = (0.2, 0.3, 0.4)
+    if scene.world.node_tree is not None:  # Blender 5's worlds are node-based (4.x: the colour)
+        background = next(n for n in scene.world.node_tree.nodes if n.bl_idname == "ShaderNodeBackground")
+        background.inputs["Color"].default_value = (0.2, 0.3, 0.4, 1.0)
+        background.inputs["Strength"].default_value = 1.0
     scene.render.film_transparent = film_transparent
     scenes.ortho_camera(scene)
     back = bpy.data.materials.new("Red")
@@ -349,3 +350,34 @@ def test_holdout_matches_cycles(holdout_renders, film):
     expected = (0.6, 0.0)[film]
     assert np.abs(theirs[r, c, 3] - expected).max() < 1e-6
     assert np.abs(ours[r, c, 3] - (1.0, 0.4)[film]).max() < 1e-6
+
+
+def test_wireframe_mask_casts_its_wires(tmp_path):
+    """An icosphere cut to its wires (Wireframe mixing a Diffuse BSDF with a Transparent one) under a
+    shadowing sun, over a ground: the wires drawn and their shadow cast through the shadow map's
+    coverage program (which reads the triangle texture too), against Cycles."""
+    scene = scenes.reset(size=48)
+    scenes.ortho_camera(scene, scale=3.0)
+    sun = scenes.light(scene, "SUN", energy=3.0, rotation=(0.6, 0.0, 0.3))
+    sun.data.use_shadow = True
+    scenes.plane(scene, size=3.0, location=(0.0, 0.0, -1.0), material=bpy.data.materials.new("Ground"))
+    bpy.ops.mesh.primitive_ico_sphere_add(subdivisions=1, radius=0.9)
+    mat = bpy.data.materials.new("Wires")
+    tree = scenes.node_tree(mat)
+    tree.nodes.clear()
+    wire = tree.nodes.new("ShaderNodeWireframe")
+    wire.inputs["Size"].default_value = 0.1
+    mix = tree.nodes.new("ShaderNodeMixShader")
+    tree.links.new(wire.outputs["Fac"], mix.inputs["Fac"])
+    tree.links.new(tree.nodes.new("ShaderNodeBsdfTransparent").outputs[0], mix.inputs[1])
+    tree.links.new(tree.nodes.new("ShaderNodeBsdfDiffuse").outputs[0], mix.inputs[2])
+    tree.links.new(mix.outputs[0], tree.nodes.new("ShaderNodeOutputMaterial").inputs["Surface"])
+    bpy.context.active_object.data.materials.append(mat)
+    ours = scenes.render(scene, tmp_path / "ours.exr")[..., :3].astype(np.float64)
+    theirs = _cycles(scene, tmp_path / "cycles.exr", samples=1)[..., :3].astype(np.float64)
+    apart = np.abs(ours - theirs).mean(-1) > 0.05
+    shadowed = theirs.mean(-1) < 0.5 * np.median(theirs.mean(-1))
+    print(f"{apart.sum()} of {apart.size} px apart by more than 0.05; {shadowed.sum()} px shadowed or wire")
+    assert shadowed.sum() > 250  # the wires and their shadow
+    # measured 29 (pixels on a wire's or its shadow's edge: the shadow map's texels)
+    assert apart.sum() <= 87, f"{apart.sum()} px apart (measured 29)"
