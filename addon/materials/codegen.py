@@ -455,17 +455,16 @@ def _geometry(w: _Writer, node: FlatNode) -> dict:
     Generated's Z as Cycles' primitive_tangent), True Normal, Incoming, Backfacing from the
     fragment; Parametric from its triangle (``g.triangle``); Pointiness and Random Per Island as
     the attributes Cycles makes of the mesh (``POINTINESS``, ``RANDOM_PER_ISLAND``: the engine
-    computes them per corner where a graph reads them, addon/materials/mesh_attributes.py). Each
-    is asked for only where the graph reads it: extra data only where needed."""
+    computes them per corner where a graph reads them, addon/materials/mesh_attributes.py). Only
+    the outputs the graph reads are written: what they need of the mesh is drawn only where needed."""
     read = _read_outputs(w.flat, node)
+    read = [s for s in node.outputs if s in read]  # in the node's order: one source per structure
     known = {"Position": "g.position", "Normal": "g.n", "Tangent": "node_tangent_radial_z(g)",
              "True Normal": "g.ng", "Incoming": "g.i", "Backfacing": "(g.backfacing ? 1.0 : 0.0)",
              "Parametric": "node_geometry_parametric(g)"}
-    out = {s: e for s, e in known.items() if s in node.outputs and (s in read or s != "Parametric")}
-    for socket, kind in (("Pointiness", "POINTINESS"), ("Random Per Island", "RANDOM_PER_ISLAND")):
-        if socket in node.outputs and socket in read:
-            out[socket] = f"{w.attribute(kind, '')}.x"
-    return out
+    attributes = {"Pointiness": "POINTINESS", "Random Per Island": "RANDOM_PER_ISLAND"}
+    return {s: known[s] if s in known else f"{w.attribute(attributes[s], '')}.x" for s in read
+            if s in known or s in attributes}
 
 
 def _read_outputs(flat: FlatGraph, node: FlatNode) -> set[str]:
