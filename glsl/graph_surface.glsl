@@ -21,6 +21,29 @@ vec4 graph_tangent_to_world(vec4 t)
   return vec4(len2 > 1e-20 ? w * inversesqrt(len2) : vec3(0.0), t.w);
 }
 
+#ifdef SL_GRAPH_RAY_FOOTPRINT
+/* The width of the scene camera's ray footprint at p, as Cycles carries it to a camera ray's hit
+ * (sd->dP: camera_sample_perspective's spread dD = (|dD.dx| + |dD.dy|) / 2, the change of the unit
+ * direction to the next pixel right and down, times the distance from the camera,
+ * differential_transfer_compact; camera_sample_orthographic's: a pixel's size, the same
+ * everywhere). A pixel of the target drawn (a supersampled render's sub-pixel). */
+float graph_ray_footprint(vec3 p)
+{
+  mat4 projection = frame.view_proj * inverse(frame.view);
+  /* a pixel's step on the plane one unit ahead of a perspective camera, anywhere for an orthographic one */
+  vec2 step = 2.0 / (frame.viewport.xy * vec2(projection[0][0], projection[1][1]));
+  if (frame.camera_position.w < 0.5) {
+    return 0.5 * (step.x + step.y);
+  }
+  vec3 c = (frame.view * vec4(p, 1.0)).xyz;
+  vec3 d = c / -c.z; /* on the plane one unit ahead (the camera looks down -z) */
+  vec3 unit = normalize(d);
+  float dx = length(normalize(d + vec3(step.x, 0.0, 0.0)) - unit);
+  float dy = length(normalize(d - vec3(0.0, step.y, 0.0)) - unit); /* raster rows run down */
+  return length(c) * 0.5 * (dx + dy);
+}
+#endif
+
 /* The graph's inputs at this fragment: n the interpolated normal facing the viewer, v towards
  * the viewer. The optional fields are filled where the graph reads them (SL_GRAPH_<FIELD>). */
 GraphInputs graph_inputs(vec3 n, vec3 v, bool backfacing)
@@ -78,8 +101,21 @@ GraphInputs graph_inputs(vec3 n, vec3 v, bool backfacing)
 #ifdef SL_PASS_ATTRIBUTES
   SL_GRAPH_ATTRIBUTE_READS
 #endif
+#ifdef SL_GRAPH_TRIANGLE
+  /* the fragment's triangle: gl_PrimitiveID, its index in the draw's range of the mesh, finds its
+   * corners (object space) in graph_triangles, SL_GRAPH_TRIANGLE_ROW triangles a row */
+  int t = gl_PrimitiveID;
+  ivec2 at = ivec2(3 * (t % SL_GRAPH_TRIANGLE_ROW), t / SL_GRAPH_TRIANGLE_ROW);
+  for (int k = 0; k < 3; k++) {
+    g.triangle[k] = (object.model * vec4(texelFetch(graph_triangles, at + ivec2(k, 0), 0).xyz, 1.0)).xyz;
+  }
+#endif
+#ifdef SL_GRAPH_RAY_FOOTPRINT
+  g.ray_footprint = graph_ray_footprint(world_position);
+#endif
   return g;
 }
+
 
 #ifdef SL_GRAPH_BENT_NORMAL
 /* A light's (diffuse, specular) weights where the graph bent the normal (a Normal Map, a Bump) to n

@@ -347,5 +347,13 @@ void main()
   c += m.emission.rgb * lobes.z;
   /* alpha: coverage, blended over what is behind (L = a L_surface + (1 - a) L_behind, as Cycles'
    * transparency); the renderer peels partly transparent surfaces and composites them in depth order */
-  frag_color = vec4(write_target(lobes.w > 0.5 ? shade_finish(c) : c), m.emission.w);
+  float alpha = m.emission.w;
+#ifdef SL_GRAPH
+#  ifndef SL_PEEL
+  /* a Holdout's share of an opaque surface is left transparent (Cycles' holdout: colour and alpha
+   * reduced by its weight, what is behind hidden); a partly transparent one keeps its coverage */
+  alpha = clamp(alpha - closure.holdout, 0.0, 1.0);
+#  endif
+#endif
+  frag_color = vec4(write_target(lobes.w > 0.5 ? shade_finish(c) : c), alpha);
 }

@@ -16,31 +16,33 @@ struct Closure {
   vec3 normal;
   vec3 emission;       /* emitted radiance, W/(m^2 sr) */
   float transparency;  /* the Transparent BSDFs' weight (their colour's mean: the coverage is grey) */
+  float holdout;       /* the Holdout closures' weight: the share of the pixel left transparent in the
+                        * render's alpha, hiding what is behind (Cycles' holdout) */
 };
 
 Closure closure_none()
 {
-  return Closure(0.0, vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), 0.0);
+  return Closure(0.0, vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), 0.0, 0.0);
 }
 
 /* A BSDF of weight 1 with these inputs. */
 Closure closure_bsdf(vec3 base_color, float metallic, float roughness, float specular, vec3 n)
 {
   return Closure(1.0, base_color, clamp(metallic, 0.0, 1.0), clamp(roughness, 0.0, 1.0),
-                 clamp(specular, 0.0, 1.0), n, vec3(0.0), 0.0);
+                 clamp(specular, 0.0, 1.0), n, vec3(0.0), 0.0, 0.0);
 }
 
 Closure closure_scale(Closure c, float w)
 {
   return Closure(c.weight * w, c.base_color * w, c.metallic * w, c.roughness * w, c.specular * w,
-                 c.normal * w, c.emission * w, c.transparency * w);
+                 c.normal * w, c.emission * w, c.transparency * w, c.holdout * w);
 }
 
 Closure closure_add(Closure a, Closure b)
 {
   return Closure(a.weight + b.weight, a.base_color + b.base_color, a.metallic + b.metallic,
                  a.roughness + b.roughness, a.specular + b.specular, a.normal + b.normal,
-                 a.emission + b.emission, a.transparency + b.transparency);
+                 a.emission + b.emission, a.transparency + b.transparency, a.holdout + b.holdout);
 }
 
 /* Mix Shader: (1 - fac) a + fac b, the factor clamped to [0, 1] as Cycles' svm_node_mix_closure */
@@ -88,5 +90,15 @@ Closure closure_transparent(vec4 color)
 {
   Closure c = closure_none();
   c.transparency = dot(clamp(color.rgb, 0.0, 1.0), vec3(1.0 / 3.0));
+  return c;
+}
+
+/* Holdout (Cycles' svm_node_closure_holdout, integrate_surface_holdout): no light, its weight left
+ * transparent in the render's alpha whatever the film says (Render > Film > Transparent only makes
+ * the world transparent too) */
+Closure closure_holdout()
+{
+  Closure c = closure_none();
+  c.holdout = 1.0;
   return c;
 }

@@ -35,6 +35,9 @@ struct GraphInputs {
   vec4 uniform_attributes[2];
   float clip_start;     /* the camera's clip start (Light Path > Ray Length: a camera ray starts
                          * on the near clip plane) */
+  vec3 triangle[3];     /* the fragment's triangle's corners, in the mesh's (Cycles') order */
+  float ray_footprint;  /* how wide the camera ray's footprint is at the fragment (Cycles' sd->dP:
+                         * the distance times the ray's spread per pixel; orthographic: a pixel) */
 };
 
 /* Cycles' fresnel_dielectric_cos (kernel/closure/bsdf_util.h): 1 where no light refracts */
@@ -181,3 +184,57 @@ mat4 graph_space_identity(GraphInputs g) { return mat4(1.0); }
 /* Attribute > Fac (svm_node_attr's NODE_ATTR_OUTPUT_FLOAT): a float's value, a vector's or a
  * colour's average */
 float node_attribute_fac(vec4 a) { return (a.x + a.y + a.z) / 3.0; }
+
+/* Geometry > Parametric (svm_node_geometry's NODE_GEOM_uv): Cycles' hit (u, v) on the triangle,
+ * P = (1 - u - v) p0 + u p1 + v p2, given as (1 - u - v, u, 0); the rasteriser's fragment taken
+ * back to (u, v) on its triangle by least squares (exact on the triangle's plane) */
+vec3 node_geometry_parametric(GraphInputs g)
+{
+  vec3 e1 = g.triangle[1] - g.triangle[0];
+  vec3 e2 = g.triangle[2] - g.triangle[0];
+  vec3 d = g.position - g.triangle[0];
+  float a = dot(e1, e1), b = dot(e1, e2), c = dot(e2, e2);
+  float det = a * c - b * b;
+  if (det <= 0.0) {
+    return vec3(0.0); /* guards: a triangle of no area (no fragment should come from it) */
+  }
+  float u = (c * dot(d, e1) - b * dot(d, e2)) / det;
+  float v = (a * dot(d, e2) - b * dot(d, e1)) / det;
+  return vec3(1.0 - u - v, u, 0.0);
+}
+
+/* Wireframe (Cycles' wireframe, kernel/svm/wireframe.h, from Open Shading Language): 1 where the
+ * fragment is within width / 2 of one of its triangle's edges (the neighbour face draws the other
+ * half), the squared distance to the edge's line |edge x (p - corner)|^2 / |edge|^2 compared */
+float wireframe_within(float half_width, GraphInputs g)
+{
+  float w2 = half_width * half_width;
+  for (int i = 0; i < 3; i++) {
+    vec3 edge = g.triangle[i] - g.triangle[i == 0 ? 2 : i - 1];
+    vec3 crs = cross(edge, g.position - g.triangle[i]);
+    if (dot(crs, crs) < dot(edge, edge) * w2) {
+      return 1.0;
+    }
+  }
+  return 0.0;
+}
+
+/* Wireframe, Size in world units */
+float node_wireframe(float size, GraphInputs g) { return wireframe_within(0.5 * size, g); }
+
+/* Wireframe with Use Pixel Size: Size in the pixel's width at the fragment, as Cycles measures it
+ * (svm_node_wireframe): its ray footprint sd->dP laid along two orthonormal directions of the face
+ * (differential_from_compact: make_orthonormals of the true normal), each projected onto the plane
+ * facing the incoming direction, their lengths averaged */
+float node_wireframe_pixel(float size, GraphInputs g)
+{
+  vec3 ng = normalize(cross(g.triangle[1] - g.triangle[0], g.triangle[2] - g.triangle[0]));
+  /* make_orthonormals (util/math_float3.h): (1, 1, 1) x N, or (-1, 1, 1) x N along (1, 1, 1) */
+  vec3 a = (ng.x != ng.y || ng.x != ng.z) ? vec3(ng.z - ng.y, ng.x - ng.z, ng.y - ng.x) :
+                                            vec3(ng.z - ng.y, ng.x + ng.z, -ng.y - ng.x);
+  a = normalize(a);
+  vec3 b = cross(ng, a);
+  float wx = g.ray_footprint * length(a - dot(a, g.i) * g.i);
+  float wy = g.ray_footprint * length(b - dot(b, g.i) * g.i);
+  return wireframe_within(0.5 * size * 0.5 * (wx + wy), g);
+}

@@ -474,8 +474,8 @@ def test_what_is_not_read_is_said_once():
     ramp = bpy.data.materials.new("Ramped")
     tree = scenes.node_tree(ramp)
     bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
-    # a Wireframe node (a triangle's edges: a rasteriser's barycentrics, not compiled)
-    tree.links.new(tree.nodes.new("ShaderNodeWireframe").outputs["Fac"], bsdf.inputs["Base Color"])
+    # a Particle Info node (a particle's data: not compiled)
+    tree.links.new(tree.nodes.new("ShaderNodeParticleInfo").outputs["Random"], bsdf.inputs["Base Color"])
     tree.links.new(tree.nodes.new("ShaderNodeValue").outputs[0], bsdf.inputs["Coat Weight"])
     for i, mat in enumerate((mix, mix, ramp)):
         scenes.plane(scene, size=0.5, location=(i, 0.0, 0.0), material=mat)
@@ -486,9 +486,10 @@ def test_what_is_not_read_is_said_once():
     said = "\n".join(snap.warnings)
     assert len(snap.warnings) == 5, snap.warnings
     assert "Material 'Tooned': 1 of 1 nodes not compiled (Toon BSDF (ShaderNodeBsdfToon))" in said
-    assert "Material 'Ramped': 1 of 3 nodes not compiled (Wireframe (ShaderNodeWireframe)): baked" in said
+    assert ("Material 'Ramped': 1 of 3 nodes not compiled (Particle Info (ShaderNodeParticleInfo)): "
+            "baked") in said
     # (the plane has no UV map to bake on: its object says so)
-    assert "material 'Ramped': Wireframe > Fac not compiled and not baked (it has no UV map)" in said
+    assert "material 'Ramped': Particle Info > Random not compiled and not baked (it has no UV map)" in said
     assert "Material 'Ramped': its Coat Weight (Principled BSDF) not drawn" in said
     assert "Not drawn (Shading Lab draws meshes): 2 hair curves object(s), 1 volume(s)" in said
 

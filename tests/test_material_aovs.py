@@ -104,33 +104,40 @@ def _scene():
     return scene
 
 
-def _aovs(path):
+def read_aovs(path, kinds: dict[str, str], size: int) -> dict[str, np.ndarray]:
+    """The AOVs ``kinds`` names (name -> its type, VALUE or COLOR) of a multilayer EXR: (size,
+    size, 1) values, (size, size, 3) colours."""
     with OpenEXR.File(str(path)) as f:
         channels = {name: np.asarray(ch.pixels, np.float64) for part in f.parts
                     for name, ch in part.channels.items()}
     out = {}
-    for name, (_, _, aov_type) in AOVS.items():
+    for name, aov_type in kinds.items():
         value = channels.get(f"ViewLayer.{name}.X", channels.get(f"ViewLayer.{name}"))
-        out[name] = value.reshape(SIZE, SIZE, -1)[..., :1 if aov_type == "VALUE" else 3]
+        out[name] = value.reshape(size, size, -1)[..., :1 if aov_type == "VALUE" else 3]
     return out
 
 
-@pytest.fixture(scope="module")
-def rendered(tmp_path_factory):
-    tmp = tmp_path_factory.mktemp("aovs")
-    scene = _scene()
+def engine_and_cycles_aovs(scene, tmp, kinds: dict[str, str], size: int):
+    """``scene``'s AOVs (``read_aovs``) rendered by the engine and by Cycles (1 sample, pixel
+    centres), and the pixels both renderers' surfaces cover away from their silhouettes (an edge
+    pixel's centre may fall on the surface in one renderer's triangles and off in the other's),
+    by the AOV ``position`` (the Geometry node's Position)."""
     scenes.render(scene, tmp / "ours_beauty.exr")
-    ours = _aovs(scenes.save_result(scene, tmp / "ours.exr", "MULTILAYER"))
+    ours = read_aovs(scenes.save_result(scene, tmp / "ours.exr", "MULTILAYER"), kinds, size)
     _cycles(scene, tmp / "cycles_beauty.exr", samples=1)
-    theirs = _aovs(scenes.save_result(scene, tmp / "cycles.exr", "MULTILAYER"))
-    # pixels both renderers' surface covers, away from its silhouette (an edge pixel's centre may
-    # fall on the sphere in one renderer's triangles and off in the other's)
+    theirs = read_aovs(scenes.save_result(scene, tmp / "cycles.exr", "MULTILAYER"), kinds, size)
     covered = (np.abs(ours["position"]).sum(-1) > 0) & (np.abs(theirs["position"]).sum(-1) > 0)
     inner = covered.copy()
     for axis in (0, 1):
         for shift in (-1, 1):
             inner &= np.roll(covered, shift, axis)
     return ours, theirs, inner
+
+
+@pytest.fixture(scope="module")
+def rendered(tmp_path_factory):
+    kinds = {name: aov_type for name, (_, _, aov_type) in AOVS.items()}
+    return engine_and_cycles_aovs(_scene(), tmp_path_factory.mktemp("aovs"), kinds, SIZE)
 
 
 #: The largest difference over the AOV's range measured with bpy 5.0.1 (2026-12-06); bounds 3x, plus

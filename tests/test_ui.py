@@ -100,7 +100,7 @@ def test_material_panel_reports_the_node_graph_per_node():
     tree = scenes.node_tree(mat)
     bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
     out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
-    tree.links.new(tree.nodes.new("ShaderNodeWireframe").outputs["Fac"], bsdf.inputs["Roughness"])
+    tree.links.new(tree.nodes.new("ShaderNodeParticleInfo").outputs["Random"], bsdf.inputs["Roughness"])
     ramp = tree.nodes.new("ShaderNodeValToRGB")
     tree.links.new(ramp.outputs["Color"], bsdf.inputs["Base Color"])
     tree.links.new(tree.nodes.new("ShaderNodeValue").outputs[0], bsdf.inputs["Coat Weight"])
@@ -114,7 +114,7 @@ def test_material_panel_reports_the_node_graph_per_node():
     extract.snapshot(bpy.context.evaluated_depsgraph_get())
     labels = _draw(ui.SHADINGLAB_PT_material, SimpleNamespace(material=mat)).labels()
     assert "Node graph: 3 of 4 nodes compiled (75%), 1 baked" in labels, labels  # Principled, Ramp, Value
-    assert "Wireframe (ShaderNodeWireframe): baked by Cycles (not compiled)" in labels
+    assert "Particle Info (ShaderNodeParticleInfo): baked by Cycles (not compiled)" in labels
     plane = next(o for o in scene.objects if o.type == "MESH")  # no UV map: its bake cannot be made
     labels = _draw(ui.SHADINGLAB_PT_material, SimpleNamespace(material=mat, object=plane)).labels()
     assert ("Not baked on 'Plane': it has no UV map; what they feed takes its socket's value") in labels

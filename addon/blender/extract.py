@@ -17,7 +17,7 @@ from collections import Counter, OrderedDict
 import bpy
 import numpy as np
 
-from ..materials import codegen, objects, surface
+from ..materials import codegen, mesh_attributes, objects, surface
 from ..plan import auto_terms, light_tiles, programs, shadows
 from ..scene import snapshot as S
 from ..scene.matrices import invert
@@ -668,8 +668,16 @@ def _rgba_property(idb, name: str):
 def uniform_attribute(kind: str, name: str, inst, view_layer, scene) -> tuple[float, ...]:
     """An Attribute node's value of type OBJECT (the object, then its data), INSTANCER (the
     instance's instancer, else the object) or VIEW_LAYER (the view layer, then the scene, then its
-    world); zeros where none has it (as Cycles)."""
+    world); zeros where none has it (as Cycles). INSTANCER_GENERATED and INSTANCER_UV: an
+    instance's coordinates on its instancer (a particle system's, a face's or a vertex's), as Cycles'
+    object dupli_generated (orco / 2 - 1/2) and dupli_uv; zeros for an object that is no instance."""
     obj = inst.object
+    if kind in ("INSTANCER_GENERATED", "INSTANCER_UV"):
+        if not inst.is_instance:
+            return (0.0, 0.0, 0.0, 0.0)
+        if kind == "INSTANCER_UV":
+            return (float(inst.uv[0]), float(inst.uv[1]), 0.0, 0.0)
+        return (*(float(np.float32(0.5) * np.float32(c) - np.float32(0.5)) for c in inst.orco), 0.0)
     if kind == "VIEW_LAYER":
         places = (view_layer, scene, scene.world if scene is not None else None)
     else:
@@ -717,6 +725,11 @@ def read_attribute(mesh, kind: str, name: str) -> np.ndarray | None:
     1), a colour attribute's linear RGBA, a generic one's value (x, x, x, 1) or vector (x, y, z,
     1) -- or None where the mesh has none of that name."""
     n = len(mesh.loops)
+    if kind in ("POINTINESS", "RANDOM_PER_ISLAND"):
+        values = _geometry_attribute(mesh, kind)
+        out = np.ones((n, 4), np.float32)
+        out[:, :3] = values[:, None]
+        return out
     if kind == "TANGENT":  # a named UV map's tangents (object space, w the bitangent's sign)
         if name not in mesh.uv_layers:
             return None
@@ -765,6 +778,27 @@ def read_attribute(mesh, kind: str, name: str) -> np.ndarray | None:
     else:
         out[:, :width] = values
     return out
+
+
+def _geometry_attribute(mesh, kind: str) -> np.ndarray:
+    """The Geometry node's Pointiness or Random Per Island per corner (float32), as Cycles makes
+    them of the mesh (``materials.mesh_attributes``) from its positions, vertex normals, edges and
+    faces, read as whole arrays."""
+    corner_verts = _corner_verts(mesh)
+    _corner_edge, edge_verts = _edge_arrays(mesh)
+    n_verts = len(mesh.vertices)
+    if kind == "POINTINESS":
+        co = np.empty(n_verts * 3, np.float32)
+        mesh.vertices.foreach_get("co", co)
+        normals = np.empty(n_verts * 3, np.float32)
+        mesh.vertex_normals.foreach_get("vector", normals)
+        return mesh_attributes.pointiness(co, normals, edge_verts)[corner_verts]
+    sizes = np.empty(len(mesh.polygons), np.int32)
+    mesh.polygons.foreach_get("loop_total", sizes)
+    starts = np.empty(len(mesh.polygons), np.int32)
+    mesh.polygons.foreach_get("loop_start", starts)
+    per_face = mesh_attributes.random_per_island(edge_verts, n_verts, corner_verts[starts])
+    return np.repeat(per_face, sizes)
 
 
 def with_attributes(geometry: S.MeshGeometry, mesh, wanted, warnings: list[str]) -> S.MeshGeometry:
@@ -1281,6 +1315,8 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
         if obj.type != "MESH":
             if obj.type in UNDRAWN_KINDS:
                 skipped_kinds[obj.type] += 1
+            continue
+        if not inst.show_self:  # an instancer its instances hide (Show Instancer off), as Cycles skips it
             continue
         key = _geometry_key(obj)
         if key in skipped_empty:

@@ -328,11 +328,18 @@ _VARYINGS = (("VEC3", "world_position"), ("VEC3", "world_normal"), ("VEC2", "wor
              ("VEC4", "world_tangent"))
 
 
+#: The texture unit of the triangle texture of a graph reading the fragment's triangle (after its images').
+GRAPH_TRIANGLE_SLOT = GRAPH_IMAGE_SLOT + programs.codegen.MAX_IMAGES
+
+
 def _declare_graph_images(info, graph) -> None:
-    """A node graph's samplers (``graph_image_<k>``): a 2D array where it holds a UDIM image's tiles."""
+    """A node graph's samplers (``graph_image_<k>``): a 2D array where it holds a UDIM image's tiles;
+    and the mesh's triangles (``graph_triangles``) where it reads the fragment's triangle."""
     for k in range(graph.images):
         kind = "FLOAT_2D_ARRAY" if k in graph.arrays else "FLOAT_2D"
         info.sampler(GRAPH_IMAGE_SLOT + k, kind, f"graph_image_{k}")
+    if "triangle" in graph.uses:
+        info.sampler(GRAPH_TRIANGLE_SLOT, "FLOAT_2D", "graph_triangles")
 
 
 def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
@@ -397,9 +404,12 @@ def _declare_mesh_stage(info, interface: str, graph=None) -> None:
     for kind, name in _VARYINGS:
         iface.smooth(kind, name)
     if graph is not None:
+        kinds = graph.attribute_kinds
         for k in range(graph.attributes):
             info.vertex_in(len(_ATTRIBUTES) + k, "VEC4", f"attr{k}")
-            iface.smooth("VEC4", f"graph_attribute{k}")
+            # an island's value is its triangles' (Cycles' face attribute, safe to hash): not interpolated
+            flat = k < len(kinds) and kinds[k] == "RANDOM_PER_ISLAND"
+            (iface.flat if flat else iface.smooth)("VEC4", f"graph_attribute{k}")
         if graph.uses & {"object", "generated"}:
             iface.smooth("VEC3", "object_position")
     info.vertex_out(iface)
@@ -472,7 +482,7 @@ def _declare_position_only(info, interface: str) -> None:
 
 
 #: The node graph's frame fields (the view's matrices, its window): read from the frame block.
-_FRAME_FIELDS = frozenset({"world_to_view", "view_to_world", "window", "clip_start"})
+_FRAME_FIELDS = frozenset({"world_to_view", "view_to_world", "window", "clip_start", "ray_footprint"})
 
 
 def shadow_frame_fields() -> frozenset[str]:

@@ -87,6 +87,26 @@ def upload_geometry(geometry: MeshGeometry) -> list[tuple[int, gpu.types.GPUBatc
     return batches
 
 
+def triangle_texture(geometry: MeshGeometry, slot: int) -> gpu.types.GPUTexture:
+    """The corners (object space) of the triangles of ``geometry``'s material ``slot``, in the order
+    its batch draws them (``gl_PrimitiveID``), three RGBA32F texels a triangle,
+    ``programs.TRIANGLE_ROW`` triangles a row: what a graph reading the fragment's triangle
+    (Parametric, Wireframe) reads, 48 bytes a triangle. A zero texel where the range holds more rows
+    than a texture has (its triangles' Parametric and Wireframe read 0)."""
+    first, count = next(((a, n) for s, a, n in geometry.ranges if s == slot), (0, 0))
+    n = count // 3
+    row = programs.TRIANGLE_ROW
+    rows = -(-n // row)
+    if n == 0 or rows > gpu.capabilities.max_texture_size_get():
+        return gpu.types.GPUTexture((1, 1), format="RGBA32F", data=gpu.types.Buffer("FLOAT", 4, [0.0] * 4))
+    width = 3 * min(n, row)
+    values = np.zeros((rows * width, 4), np.float32)
+    corners = np.asarray(geometry.indices[first:first + count])
+    values[:count, :3] = np.take(np.asarray(geometry.positions, np.float32), corners, axis=0)
+    data = gpu.types.Buffer("FLOAT", values.size, values.ravel())
+    return gpu.types.GPUTexture((width, rows), format="RGBA32F", data=data)
+
+
 def image_texture(image: ImageData) -> gpu.types.GPUTexture:
     """The GPU copy of an image (bottom row first, as GPU textures are)."""
     h, w = image.pixels.shape[:2]
@@ -144,6 +164,7 @@ class Draw:
     index: int
     material: str
     batch: gpu.types.GPUBatch
+    slot: int = 0  # the item's material slot the batch draws (its range of the mesh's triangles)
 
 
 @dataclass
@@ -223,6 +244,9 @@ class SceneResources:
         # batches with a node graph's attributes: (geometry, slot, attributes) -> (the geometry
         # they were made from, batch, its attribute buffer)
         self._attribute_batches: dict[tuple, tuple] = {}
+        # the triangles of graphs reading the fragment's triangle: (geometry, slot) -> (the
+        # geometry they were made from, triangle_texture's)
+        self._triangles: dict[tuple[str, int], tuple] = {}
         # the materials again as rows of one texture, for programs shading deferred (a pixel's
         # material is the G-buffer's row), and each material's row
         self._material_table = _RowTexture()
@@ -282,9 +306,10 @@ class SceneResources:
                 self._geometry_version[key] += 1
                 self._digests.pop(key, None)
                 self.uploads["geometry"] += 1
-        for key, held in list(self._attribute_batches.items()):
-            if snapshot.geometries.get(key[0]) is not held[0]:  # a geometry read anew, or gone
-                del self._attribute_batches[key]
+        for held_by in (self._attribute_batches, self._triangles):
+            for key, held in list(held_by.items()):
+                if snapshot.geometries.get(key[0]) is not held[0]:  # a geometry read anew, or gone
+                    del held_by[key]
         for key in set(self._materials) - set(snapshot.materials):
             del self._materials[key]
         for key in set(self._graphs) - {k for k, m in snapshot.materials.items() if m.graph is not None}:
@@ -643,7 +668,7 @@ class SceneResources:
                 material = snapshot.materials[key]
                 if material.graph is not None and material.graph.attributes:
                     batch = self._attribute_batch(item.geometry, slot, parts, material.graph.attributes)
-                draw = Draw(order, order // block_size, order % block_size, key, batch)
+                draw = Draw(order, order // block_size, order % block_size, key, batch, slot)
                 if material.alpha < 1.0 or (material.graph is not None and material.graph.transparent):
                     blended.setdefault(replace(features[key], peel=True, occlusion=False), []).append(draw)
                 else:
@@ -670,6 +695,16 @@ class SceneResources:
         self.uploads["attributes"] += 1
         return batch
 
+    def _triangle_texture(self, draw: Draw) -> gpu.types.GPUTexture:
+        """``triangle_texture`` of ``draw``'s geometry and slot (made once per geometry upload)."""
+        key = (self.snapshot.items[draw.order].geometry, draw.slot)
+        geometry = self.snapshot.geometries[key[0]]
+        held = self._triangles.get(key)
+        if held is None or held[0] is not geometry:
+            held = self._triangles[key] = (geometry, triangle_texture(geometry, draw.slot))
+            self.uploads["triangles"] += 1
+        return held[1]
+
     def program(self, features: programs.Features) -> gpu.types.GPUShader:
         shader = self._programs.get(features)
         if shader is None:
@@ -688,7 +723,10 @@ class SceneResources:
             gpu_library.bind_sampler(shader, "light_data", self._lights.texture)
         if features.light_tiles:
             gpu_library.bind_sampler(shader, "light_tiles", self._light_tiles.texture)
-        shader.uniform_float("lobes", lobes)
+        try:
+            shader.uniform_float("lobes", lobes)
+        except ValueError:  # the compiler removed it: a surface giving no light (a Holdout)
+            pass
         if features.uses_albedo_table:
             gpu_library.bind_sampler(shader, "ms_table", gpu_library.albedo_table(features.terms))
         if features.uses_s_table:
@@ -747,6 +785,8 @@ class SceneResources:
                 held = self._textures.get(image)
                 texture = held[1] if held is not None else gpu_library.missing_texture()
             gpu_library.bind_sampler(shader, f"graph_image_{k}", texture)
+        if "triangle" in graph.program.uses:
+            gpu_library.bind_sampler(shader, "graph_triangles", self._triangle_texture(draw))
         if pushed:
             item = self.snapshot.items[draw.order]
             material = self.snapshot.materials[draw.material]
@@ -777,7 +817,8 @@ class SceneResources:
                 graph = dict(snapshot.materials[key].aovs).get(name)
                 if graph is not None and graph.attributes:
                     batch = self._attribute_batch(item.geometry, slot, parts, graph.attributes)
-                draw = Draw(order, order // programs.OBJECT_BLOCK, order % programs.OBJECT_BLOCK, key, batch)
+                block, index = divmod(order, programs.OBJECT_BLOCK)
+                draw = Draw(order, block, index, key, batch, slot)
                 program = graph.program if graph is not None else programs.ZERO_AOV
                 groups.setdefault(program, []).append((draw, graph))
         for program, draws in groups.items():
@@ -868,6 +909,7 @@ class SceneResources:
         self._graphs.clear()
         self._aov_blocks.clear()
         self._attribute_batches.clear()
+        self._triangles.clear()
         self._objects.clear()
         self._textures.clear()
         self._arrays.clear()

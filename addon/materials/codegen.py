@@ -141,7 +141,8 @@ class Compiled:
     #: ``ATTRIBUTE_KINDS``; an empty name is the mesh's default of that kind
     attributes: tuple[tuple[str, str], ...] = ()
     #: the object's, instancer's and view layer's attributes it reads (``g.uniform_attributes[k]``):
-    #: (kind: OBJECT, INSTANCER or VIEW_LAYER, name)
+    #: (kind: OBJECT, INSTANCER or VIEW_LAYER, name), and an instance's coordinates on its instancer
+    #: (INSTANCER_GENERATED, INSTANCER_UV: Texture Coordinate's and UV Map's From Instancer)
     uniform_attributes: tuple[tuple[str, str], ...] = ()
     #: why nodes did not compile where a limit says it (``MAX_IMAGES``, ``MAX_TILES``)
     notes: tuple[str, ...] = ()
@@ -165,8 +166,9 @@ class Compiled:
 
 #: What ``g.attributes[k]`` holds: a UV map's (u, v, 0, 1), a colour attribute's RGBA (linear), a
 #: generic attribute's value (Attribute node: a float as (x, x, x, 1), a vector (x, y, z, 1)), a
-#: named UV map's tangent (as ``GraphInputs.tangent``: world-space unit tangent, the bitangent's sign).
-ATTRIBUTE_KINDS = ("UV", "COLOR", "GENERIC", "TANGENT")
+#: named UV map's tangent (as ``GraphInputs.tangent``: world-space unit tangent, the bitangent's sign),
+#: the Geometry node's Pointiness and Random Per Island (x; a triangle's island the same at its corners).
+ATTRIBUTE_KINDS = ("UV", "COLOR", "GENERIC", "TANGENT", "POINTINESS", "RANDOM_PER_ISLAND")
 #: The GraphInputs a graph reads, as a word in its source (renamed in a Bump's offset branches).
 _G = re.compile(r"\bg\b")
 
@@ -302,15 +304,30 @@ def _mat4(w: _Writer, rows) -> str:
     return f"mat4({', '.join(w.constant(c, 'RGBA') for c in columns)})"
 
 
+def _from_instancer(w: _Writer, kind: str) -> str | None:
+    """An instance's coordinates on its instancer (``INSTANCER_GENERATED``, ``INSTANCER_UV``: Cycles'
+    object dupli_generated and dupli_uv, zeros for an object that is no instance), a per-draw vec4
+    as the object's attributes are (``g.uniform_attributes``); None beyond their limit."""
+    a = w.uniform_attribute(kind, "")
+    return f"{a}.xyz" if a is not None else None
+
+
 def _texcoord(w: _Writer, node: FlatNode) -> dict | None:
     """Texture Coordinate (Cycles' svm_node_tex_coord): Generated and Object from GraphInputs, the
     Object output in another object's space where its Object is set (that object's matrix, read
     with the graph: a constant), Normal in object space, Camera, Window, Reflection. From
-    Instancer: unsupported (the engine draws no instances with an instancer's coordinates)."""
+    Instancer: Generated and UV are the instancer's at the instance (``_from_instancer``)."""
+    generated, uv = "g.generated", "g.uv"
     if node.props.get("from_instancer"):
-        return None
+        read = _read_outputs(w.flat, node)
+        if "Generated" in read:
+            generated = _from_instancer(w, "INSTANCER_GENERATED")
+        if "UV" in read:
+            uv = _from_instancer(w, "INSTANCER_UV")
+        if generated is None or uv is None:
+            return None
     matrix = node.props.get("object_matrix")
-    known = {"Generated": "g.generated", "Normal": "node_texcoord_normal(g)", "UV": "g.uv",
+    known = {"Generated": generated, "Normal": "node_texcoord_normal(g)", "UV": uv,
              "Object": f"node_texcoord_object_from({_mat4(w, matrix)}, g)" if matrix else "g.object",
              "Camera": "node_texcoord_camera(g)", "Window": "node_texcoord_window(g)",
              "Reflection": "node_texcoord_reflection(g)"}
@@ -318,9 +335,11 @@ def _texcoord(w: _Writer, node: FlatNode) -> dict | None:
 
 
 def _uv_map(w: _Writer, node: FlatNode) -> dict | None:
-    """UV Map: the active map (g.uv) or a named one (an attribute); From Instancer unsupported."""
+    """UV Map: the active map (g.uv) or a named one (an attribute); From Instancer: the instancer's
+    UV at the instance, whichever map is named (Cycles' NODE_TEXCO_DUPLI_UV)."""
     if node.props.get("from_instancer"):
-        return None
+        uv = _from_instancer(w, "INSTANCER_UV")
+        return {"UV": uv} if uv is not None else None
     name = node.props.get("uv_map", "")
     return {"UV": f"{w.attribute('UV', name)}.xyz" if name else "g.uv"}
 
@@ -485,14 +504,33 @@ def _normal_input(w: _Writer, node: FlatNode) -> str:
 
 
 def _geometry(w: _Writer, node: FlatNode) -> dict:
-    """The Geometry node's outputs that a rasterised fragment has (Position, Normal, Tangent:
-    radial about Generated's Z as Cycles' primitive_tangent, True Normal, Incoming, Backfacing).
-    Parametric (a triangle's barycentrics in Cycles' vertex order), Pointiness (Cycles computes it
-    per vertex from the mesh's curvature) and Random Per Island (a hash of the face's island) are
-    not in GraphInputs: their readers keep their own values (EEVEE gives 0.5 and 0 constants)."""
+    """The Geometry node (Cycles' svm_node_geometry): Position, Normal, Tangent (radial about
+    Generated's Z as Cycles' primitive_tangent), True Normal, Incoming, Backfacing from the
+    fragment; Parametric from its triangle (``g.triangle``); Pointiness and Random Per Island as
+    the attributes Cycles makes of the mesh (``POINTINESS``, ``RANDOM_PER_ISLAND``: the engine
+    computes them per corner where a graph reads them, addon/materials/mesh_attributes.py). Only
+    the outputs the graph reads are written: what they need of the mesh is drawn only where needed."""
+    read = _read_outputs(w.flat, node)
+    read = [s for s in node.outputs if s in read]  # in the node's order: one source per structure
     known = {"Position": "g.position", "Normal": "g.n", "Tangent": "node_tangent_radial_z(g)",
-             "True Normal": "g.ng", "Incoming": "g.i", "Backfacing": "(g.backfacing ? 1.0 : 0.0)"}
-    return {s: e for s, e in known.items() if s in node.outputs}
+             "True Normal": "g.ng", "Incoming": "g.i", "Backfacing": "(g.backfacing ? 1.0 : 0.0)",
+             "Parametric": "node_geometry_parametric(g)"}
+    attributes = {"Pointiness": "POINTINESS", "Random Per Island": "RANDOM_PER_ISLAND"}
+    return {s: known[s] if s in known else f"{w.attribute(attributes[s], '')}.x" for s in read
+            if s in known or s in attributes}
+
+
+def _read_outputs(flat: FlatGraph, node: FlatNode) -> set[str]:
+    """The outputs of ``node`` that some node of ``flat`` reads."""
+    return {i.source.socket for other in flat.nodes.values() for i in other.inputs.values()
+            if isinstance(i.source, Ref) and i.source.node == node.name}
+
+
+def _wireframe(w: _Writer, node: FlatNode) -> dict:
+    """Wireframe (Cycles' svm_node_wireframe): 1 within Size / 2 of an edge of the fragment's
+    triangle, Size in world units or (Pixel Size) in the camera ray's width at the fragment."""
+    fn = "node_wireframe_pixel" if node.props.get("use_pixel_size") else "node_wireframe"
+    return {"Fac": f"{fn}({w.arg(node, 'Size')}, g)"}
 
 
 def _layer_weight(w: _Writer, node: FlatNode) -> dict:
@@ -783,6 +821,7 @@ CLOSURES = {
     "ShaderNodeBsdfMetallic": _glossy,
     "ShaderNodeEmission": lambda w, n: _call("closure_emission", w, n, ("Color", "Strength"), "Emission"),
     "ShaderNodeBsdfTransparent": lambda w, n: _call("closure_transparent", w, n, ("Color",), "BSDF"),
+    "ShaderNodeHoldout": lambda w, n: {"Holdout": "closure_holdout()"},
     "ShaderNodeMixShader": lambda w, n: _call("closure_mix", w, n, ("Fac", "Shader", "Shader_001"), "Shader"),
     "ShaderNodeAddShader": lambda w, n: _call("closure_add", w, n, ("Shader", "Shader_001"), "Shader"),
 }
@@ -891,8 +930,7 @@ def _image_texture(w: _Writer, node: FlatNode) -> dict | None:
     spec = node.inputs.get("Vector")
     co = w.arg(node, "Vector") if spec is not None and isinstance(spec.source, Ref) else "g.uv"
     texels = image_texels(props)
-    alpha_read = any(isinstance(i.source, Ref) and i.source.node == node.name and i.source.socket == "Alpha"
-                     for other in w.whole.nodes.values() for i in other.inputs.values())
+    alpha_read = "Alpha" in _read_outputs(w.whole, node)
     unassociate = "true" if alpha_read and _associates_alpha(props) else "false"
     decode = "true" if texels.startswith("TEX_IMAGE_TEXELS_SRGB") else "false"
     if projection == "BOX":
@@ -925,6 +963,7 @@ EMITTERS = {
     "ShaderNodeRGB": _value,
     "ShaderNodeTexCoord": _texcoord,
     "ShaderNodeNewGeometry": _geometry,
+    "ShaderNodeWireframe": _wireframe,
     "ShaderNodeFresnel": lambda w, n: {"Fac": f"node_fresnel({w.arg(n, 'IOR')}, {_normal_input(w, n)}, g)"},
     "ShaderNodeLayerWeight": _layer_weight,
     "ShaderNodeUVMap": _uv_map,

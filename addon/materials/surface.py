@@ -31,7 +31,7 @@ FUNCTION = "material_graph"
 #: ``SL_GRAPH_<FIELD>``): the rest cost nothing to fill.
 OPTIONAL_INPUTS = ("tangent", "object", "generated", "object_to_world", "world_to_object", "world_to_view",
                    "view_to_world", "window", "object_color", "object_info", "ng", "clip_start",
-                   "uniform_attributes")
+                   "uniform_attributes", "triangle", "ray_footprint")
 #: The most samplers one material binds (texture units left beside the programs' own; a UDIM
 #: image's tiles of one size are one); a node needing more is not compiled, said in ``notes``.
 MAX_IMAGES = codegen.MAX_IMAGES
@@ -127,7 +127,9 @@ def _plain(flat: FlatGraph) -> bool:
     if surface is None or isinstance(surface.source, Const):
         return True
     node = flat.nodes[surface.source.node]
-    return node.kind in codegen.CLOSURES and node.kind not in ("ShaderNodeMixShader", "ShaderNodeAddShader") \
+    # (a Holdout: the constant path has no alpha to cut)
+    return node.kind in codegen.CLOSURES and node.kind not in ("ShaderNodeMixShader", "ShaderNodeAddShader",
+                                                                "ShaderNodeHoldout") \
         and all(isinstance(i.source, Const) for i in node.inputs.values())
 
 

@@ -340,6 +340,11 @@ def mesh_vertex() -> str:
     return read_glsl("mesh_varyings.glsl") + "\n" + read_glsl("mesh.vert.glsl")
 
 
+#: Triangles per row of a mesh's triangle texture (``gpu_scene.triangle_texture``: three texels each,
+#: its corners), for graphs reading the fragment's triangle (Parametric, Wireframe).
+TRIANGLE_ROW = 1024
+
+
 def graph_defines(g: GraphProgram) -> list[tuple[str, str]]:
     """What a program holding compiled graph ``g`` defines: its key, its constants' count, the
     optional GraphInputs fields it reads, and how its attributes reach the fragment stage."""
@@ -350,6 +355,8 @@ def graph_defines(g: GraphProgram) -> list[tuple[str, str]]:
         out.append(("SL_GRAPH_UNIFORM_ATTRIBUTE_COUNT", str(g.uniform_attributes)))
     if g.bump_shadowing:
         out.append(("SL_BUMP_SHADOWING_" + g.bump_shadowing, "1"))
+    if "triangle" in g.uses:  # the fragment's triangle's corners, from the draw's triangle texture
+        out.append(("SL_GRAPH_TRIANGLE_ROW", str(TRIANGLE_ROW)))
     if g.attributes:
         passes = " ".join(f"graph_attribute{k} = attr{k};" for k in range(g.attributes))
         out.append(("SL_PASS_ATTRIBUTES", passes))
@@ -361,7 +368,8 @@ def graph_defines(g: GraphProgram) -> list[tuple[str, str]]:
 
 
 #: The AOV program of a material without that AOV: zeros (Cycles writes nothing there).
-ZERO_AOV = GraphProgram("zero-aov", "void material_aov(GraphInputs g, out vec4 color, out float value)\n"
+ZERO_AOV = GraphProgram("zero-aov", "vec4 graph_table(int i) { return GRAPH_CONST(i); }\n"  # (the library's)
+                        "void material_aov(GraphInputs g, out vec4 color, out float value)\n"
                         "{\n  color = vec4(0.0);\n  value = 0.0;\n}\n", 1, 0, 0, frozenset())
 
 
