@@ -65,6 +65,9 @@ LIBRARY = ("node_inputs.glsl", "node_convert.glsl", "node_color.glsl", "node_mat
 #: Library files compiled into a program only where its graph calls one of their functions (the
 #: procedural textures: only what the scene requires), each after the files it calls.
 OPTIONAL_LIBRARY = ("node_hash.glsl", "node_tex_white_noise.glsl")
+#: the pattern textures, after the float arithmetic they share (node_float.glsl)
+OPTIONAL_LIBRARY += ("node_float.glsl", "node_tex_gradient.glsl", "node_tex_checker.glsl",
+                     "node_tex_magic.glsl", "node_tex_brick.glsl", "node_tex_radial_tiling.glsl")
 _DEFINED = re.compile(r"^[A-Za-z_]\w*\s+(\w+)\s*\(", re.M)
 _CALLED = re.compile(r"\b(\w+)\s*\(")
 
@@ -224,8 +227,8 @@ class _Writer:
             return "closure_none()"
         if type_ == "RGBA":
             v = tuple(float(x) for x in value[:4])
-        elif type_ == "VECTOR":
-            v = (*(float(x) for x in value[:3]), 0.0)
+        elif type_ == "VECTOR":  # (a 2D vector socket, as Radial Tiling's, holds two)
+            v = (*(float(x) for x in value[:3]), *(0.0,) * (4 - len(value[:3])))
         else:
             v = (float(value), 0.0, 0.0, 0.0)
         self.constants.append(v)
