@@ -2,17 +2,25 @@
  * textures that must give Cycles' bits. Cycles' kernels are compiled with fast math and, on a
  * CPU with FMA (its AVX2 kernel), fuse a product into the sum that is its only use: a * b + c
  * rounded once. GLSL's fma() need not round once (Mesa's llvmpipe computes a * b, then + c), so
- * float_fma builds the fused result from float operations that round as written (`precise`:
- * not reordered, not fused). */
+ * float_fma builds the fused result from float operations that round as written (PRECISE). */
+
+/* GLSL's `precise` (4.00): a variable's operations rounded as written, none reordered or fused.
+ * Blender's Metal shading language has no such qualifier: there the compiler rounds as it will
+ * (differences of ulps from Cycles'). */
+#ifdef GPU_METAL
+#  define PRECISE
+#else
+#  define PRECISE precise
+#endif
 
 /* Dekker's split (Dekker 1971, "A floating-point technique for extending the available
  * precision"): a = hi + lo, each half of 12 bits or fewer, so that products of halves are exact.
  * (|a| < 2^115: 4097 a stays finite.) */
 void float_split(float a, out float hi, out float lo)
 {
-  precise float c = 4097.0 * a;
-  precise float h = c - (c - a);
-  precise float l = a - h;
+  PRECISE float c = 4097.0 * a;
+  PRECISE float h = c - (c - a);
+  PRECISE float l = a - h;
   hi = h;
   lo = l;
 }
@@ -25,18 +33,27 @@ float float_fma(float a, float b, float c)
   float ah, al, bh, bl;
   float_split(a, ah, al);
   float_split(b, bh, bl);
-  precise float p = a * b;
-  precise float e = ((ah * bh - p) + ah * bl + al * bh) + al * bl;
-  precise float s = p + c;
-  precise float v = s - p;
-  precise float t = (p - (s - v)) + (c - v);
-  precise float r = s + (t + e);
+  PRECISE float p = a * b;
+  PRECISE float e = ((ah * bh - p) + ah * bl + al * bh) + al * bl;
+  PRECISE float s = p + c;
+  PRECISE float v = s - p;
+  PRECISE float t = (p - (s - v)) + (c - v);
+  PRECISE float r = s + (t + e);
   return r;
 }
 
 vec3 float_fma(vec3 a, vec3 b, vec3 c)
 {
   return vec3(float_fma(a.x, b.x, c.x), float_fma(a.y, b.y, c.y), float_fma(a.z, b.z, c.z));
+}
+
+/* a * b + c, the product rounded before the sum: where Cycles' kernel does not fuse them (a GPU
+ * may, unasked) */
+vec3 float_mul_add(vec3 a, float b, float c)
+{
+  PRECISE vec3 p = a * b;
+  PRECISE vec3 r = p + c;
+  return r;
 }
 
 /* C's fmodf (the remainder of a / b with a's sign), exact as C's is, for |a / b| < 2^24: the
@@ -56,8 +73,8 @@ float float_fmod(float a, float b)
  * odd polynomial; the base angle added in two parts (float's pi / 4 and what it lacks). */
 float float_atan(float x)
 {
-  precise float t = abs(x);
-  precise float base_hi = 0.0, base_lo = 0.0;
+  PRECISE float t = abs(x);
+  PRECISE float base_hi = 0.0, base_lo = 0.0;
   if (t > 2.4142137) { /* tan(3 pi / 8) */
     base_hi = 1.5707964;
     base_lo = -4.3711388e-8;
@@ -68,10 +85,10 @@ float float_atan(float x)
     base_lo = -2.1855694e-8;
     t = (t - 1.0) / (t + 1.0);
   }
-  precise float z = t * t;
-  precise float p = (((0.0805374449538 * z - 0.138776856032) * z + 0.199777106478) * z - 0.333329491539) *
+  PRECISE float z = t * t;
+  PRECISE float p = (((0.0805374449538 * z - 0.138776856032) * z + 0.199777106478) * z - 0.333329491539) *
                     z * t;
-  precise float r = base_hi + ((base_lo + p) + t);
+  PRECISE float r = base_hi + ((base_lo + p) + t);
   return x < 0.0 ? -r : r;
 }
 
@@ -85,14 +102,14 @@ float float_atan2(float y, float x)
     return y_negative ? -zero_or_pi : zero_or_pi;
   }
   if (abs(y) > abs(x)) { /* +-pi / 2 - atan(x / y): the ratio below 1 */
-    precise float a = float_atan(x / y);
-    precise float r = 1.5707964 + (-4.3711388e-8 + (y_negative ? a : -a));
+    PRECISE float a = float_atan(x / y);
+    PRECISE float r = 1.5707964 + (-4.3711388e-8 + (y_negative ? a : -a));
     return y_negative ? -r : r;
   }
-  precise float a = float_atan(y / x);
+  PRECISE float a = float_atan(y / x);
   if (x > 0.0) {
     return a;
   }
-  precise float r = 3.1415927 + (-8.7422777e-8 + (y_negative ? -a : a));
+  PRECISE float r = 3.1415927 + (-8.7422777e-8 + (y_negative ? -a : a));
   return y_negative ? -r : r;
 }

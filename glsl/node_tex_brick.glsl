@@ -44,9 +44,9 @@ vec2 brick_pattern(vec3 p, float mortar_size, float mortar_smooth, float bias, f
     }
   }
   int brick = int(floor((p.x + offset) / brick_width));
-  /* the products rounded before the differences (`precise`: Cycles does not fuse them, measured) */
-  precise float x = (p.x + offset) - brick_width * float(brick);
-  precise float y = p.y - row_height * float(row);
+  /* the products rounded before the differences (PRECISE: Cycles does not fuse them, measured) */
+  PRECISE float x = (p.x + offset) - brick_width * float(brick);
+  PRECISE float y = p.y - row_height * float(row);
   float tint = clamp(brick_noise(uint((row << 16) + (brick & 0xFFFF))) + bias, 0.0, 1.0);
   float min_dist = min(min(x, y), min(brick_width - x, row_height - y));
   float mortar;

@@ -5,9 +5,9 @@
 float node_tex_checker(vec3 co, float scale)
 {
   /* Cycles' nudge off the cell borders ((p + 1e-6) x 0.999999, "precision issues on unit
-   * coordinates"), each operation rounded as written (`precise`: Cycles does not fuse co x
-   * scale into the sum, measured), so that a coordinate on a border falls in Cycles' cell */
-  precise vec3 p = (co * scale + 0.000001) * 0.999999;
+   * coordinates"), co x scale rounded before the sum (Cycles does not fuse them, measured): a
+   * coordinate on a border falls in Cycles' cell */
+  PRECISE vec3 p = float_mul_add(co, scale, 0.000001) * 0.999999;
   ivec3 i = abs(ivec3(floor(p)));
   bool xy = (i.x % 2) == (i.y % 2);
   return (int(xy) == i.z % 2) ? 1.0 : 0.0;

@@ -11,11 +11,11 @@ vec4 node_tex_magic(vec3 co, float scale, float distortion, float turbulence_dep
   float px = float_fmod(co.x, 6.2831855);
   float py = float_fmod(co.y, 6.2831855);
   float pz = float_fmod(co.z, 6.2831855);
-  /* every sum and product in Cycles' order (`precise`: a GPU may otherwise fold 5 x scale first,
+  /* every sum and product in Cycles' order (PRECISE: a GPU may otherwise fold 5 x scale first,
    * measured: a different last bit, which the waves turn into 1e-5) */
-  precise float x = sin((px + py + pz) * 5.0 * scale);
-  precise float y = cos((-px + py - pz) * 5.0 * scale);
-  precise float z = -cos((-px - py + pz) * 5.0 * scale);
+  PRECISE float x = sin((px + py + pz) * 5.0 * scale);
+  PRECISE float y = cos((-px + py - pz) * 5.0 * scale);
+  PRECISE float z = -cos((-px - py + pz) * 5.0 * scale);
   float d = distortion;
   if (depth > 0) {
     y = -cos(float_fma(-y, d, x * d) + z * d) * d; /* x d - y d: y d fused, as Cycles' kernel does */

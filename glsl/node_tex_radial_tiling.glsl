@@ -14,7 +14,7 @@
 /* the coordinate across a straight edge: l tan|bisector - angle|, negative before the bisector */
 float rt_straight(float l, float bisector, float angle)
 {
-  precise float r = l * tan(abs(bisector - angle));
+  PRECISE float r = l * tan(abs(bisector - angle));
   return angle < bisector ? -r : r;
 }
 
@@ -22,8 +22,8 @@ float rt_straight(float l, float bisector, float angle)
  * normalize_based_on_l_angle_bisector): l tan(angle) + spline (l / 2 + 1/2) + roundness bevel */
 float rt_normalizer(float l, float angle, float spline, float roundness, float bevel, bool fused_k)
 {
-  precise float t = float_fma(l, tan(angle), spline * (0.5 * l + 0.5));
-  precise float r = fused_k ? float_fma(roundness, bevel, t) : t + roundness * bevel;
+  PRECISE float t = float_fma(l, tan(angle), spline * (0.5 * l + 0.5));
+  PRECISE float r = fused_k ? float_fma(roundness, bevel, t) : t + roundness * bevel;
   return r;
 }
 
@@ -33,18 +33,18 @@ float rt_normalizer_coord(float l, float angle, float spline, float roundness, f
                           bool fused_k)
 {
   float inner = float_fma(0.5 * l, cos(angle), 0.5);
-  precise float t = first ? float_fma(l, sin(angle), spline * inner) :
+  PRECISE float t = first ? float_fma(l, sin(angle), spline * inner) :
                             float_fma(spline, inner, l * sin(angle));
-  precise float r = fused_k ? float_fma(roundness, bevel, t) : t + roundness * bevel;
+  PRECISE float r = fused_k ? float_fma(roundness, bevel, t) : t + roundness * bevel;
   return r;
 }
 
 /* what a rounded corner adds to l sin(angle): along its spline, then along its arc */
 float rt_rounded_terms(float l, float angle, float to_bevel, float spline)
 {
-  precise float c = l * cos(angle);
+  PRECISE float c = l * cos(angle);
   if (to_bevel < spline) {
-    precise float q = 0.5 * (1.0 - c) * (to_bevel * to_bevel) / spline;
+    PRECISE float q = 0.5 * (1.0 - c) * (to_bevel * to_bevel) / spline;
     return float_fma(c, to_bevel, q);
   }
   return float_fma(spline, float_fma(0.5 * l, cos(angle), -0.5), to_bevel);
@@ -58,12 +58,12 @@ vec2 rt_round(bool normalize, float k, float l_coord, float bisector, float segm
 {
   float to_bisector = bisector - bevel;
   float spline = (1.0 - k) * bevel;
-  precise float signed_angle = coord - float(coord > bisector) * segment;
-  precise float l_center = (1.0 - k) / cos(bisector);
-  precise float along = cos(signed_angle) * l_center;
-  precise float l = l_coord / (along + sqrt(float_fma(-l_center, l_center, float_fma(along, along, k * k))));
-  precise float to_bevel = bevel - abs(signed_angle);
-  precise float p = l_coord * sin(to_bisector) + rt_rounded_terms(l_coord, to_bisector, to_bevel, spline);
+  PRECISE float signed_angle = coord - float(coord > bisector) * segment;
+  PRECISE float l_center = (1.0 - k) / cos(bisector);
+  PRECISE float along = cos(signed_angle) * l_center;
+  PRECISE float l = l_coord / (along + sqrt(float_fma(-l_center, l_center, float_fma(along, along, k * k))));
+  PRECISE float to_bevel = bevel - abs(signed_angle);
+  PRECISE float p = l_coord * sin(to_bisector) + rt_rounded_terms(l_coord, to_bisector, to_bevel, spline);
   p = coord < bisector ? -p : p;
   if (normalize) {
     p /= rt_mix(rt_normalizer(l, to_bisector, spline, k, bevel, false),
@@ -77,12 +77,12 @@ vec2 rt_round(bool normalize, float k, float l_coord, float bisector, float segm
 vec3 rt_bevelled(bool normalize, float k, float l_coord, float bisector, float segment, float coord,
                  float bevel)
 {
-  precise float width = tan(bisector - bevel) + (1.0 - k) * bevel + k * bevel;
+  PRECISE float width = tan(bisector - bevel) + (1.0 - k) * bevel + k * bevel;
   if (coord >= segment - bevel || coord < bevel) {
     return vec3(rt_round(normalize, k, l_coord, bisector, segment, coord, bevel), width);
   }
-  precise float l = l_coord * cos(bisector - coord);
-  precise float p = rt_straight(l, bisector, coord);
+  PRECISE float l = l_coord * cos(bisector - coord);
+  PRECISE float p = rt_straight(l, bisector, coord);
   if (normalize) {
     p /= rt_normalizer(l, bisector - bevel, (1.0 - k) * bevel, k, bevel, false);
   }
@@ -94,22 +94,22 @@ vec4 rt_regular(bool normalize, float n, float k, float l_coord, float bisector,
                 float rotation)
 {
   if (k == 0.0) {
-    precise float l = l_coord * cos(bisector - coord);
-    precise float p = rt_straight(l, bisector, coord);
+    PRECISE float l = l_coord * cos(bisector - coord);
+    PRECISE float p = rt_straight(l, bisector, coord);
     if (normalize && n != 2.0) { /* (a 2-gon's edges are one line: tan(pi / 2) is infinite) */
       p /= l * tan(bisector);
     }
     return vec4(l, p, n != 2.0 ? tan(bisector) : 0.0, rotation);
   }
   if (k == 1.0) {
-    precise float p = abs(bisector - coord);
+    PRECISE float p = abs(bisector - coord);
     p = coord < bisector ? -p : p;
     if (normalize) {
       p /= bisector;
     }
     return vec4(l_coord, p, bisector, rotation);
   }
-  precise float bevel = bisector - float_atan((1.0 - k) * tan(bisector));
+  PRECISE float bevel = bisector - float_atan((1.0 - k) * tan(bisector));
   return vec4(rt_bevelled(normalize, k, l_coord, bisector, segment, coord, bevel), rotation);
 }
 
@@ -119,20 +119,20 @@ vec4 rt_irregular_straight(bool normalize, float n, float l_coord, float x_axis_
 {
   float last = float_fma(-floor(n), bisector, 3.1415927);
   if (x_axis_coord < 6.2831855 - 2.0 * last) {
-    precise float l = l_coord * cos(bisector - coord);
-    precise float p = rt_straight(l, bisector, coord);
+    PRECISE float l = l_coord * cos(bisector - coord);
+    PRECISE float p = rt_straight(l, bisector, coord);
     if (normalize) {
       p /= l * tan(bisector);
     }
     return vec4(l, p, tan(bisector), rotation);
   }
-  precise float ratio = cos(bisector) / cos(last);
-  precise float l = ratio * (l_coord * cos(last - coord));
-  precise float p = rt_straight(l, last, coord);
+  PRECISE float ratio = cos(bisector) / cos(last);
+  PRECISE float l = ratio * (l_coord * cos(last - coord));
+  PRECISE float p = rt_straight(l, last, coord);
   if (normalize) {
     p /= l * tan(last);
   }
-  precise float rotation_last = segment_id * segment + last;
+  PRECISE float rotation_last = segment_id * segment + last;
   return vec4(l, p, tan(last), rotation_last);
 }
 
@@ -142,19 +142,19 @@ vec4 rt_irregular_circular(bool normalize, float n, float k, vec2 co, float l_co
                            float bisector, float segment_id, float segment, float coord, float rotation)
 {
   const float two_pi = 6.2831855;
-  precise float bevel = bisector - float_atan((1.0 - k) * tan(bisector));
-  precise float last = 3.1415927 - floor(n) * bisector;
-  precise float last_segment = 2.0 * last;
-  precise float inner_bevel = last - float_atan((1.0 - k) * tan(last));
-  precise float radius = k * tan(last) / tan(0.5 * (bisector + last));
-  precise float c = cos(last - inner_bevel);
-  precise float center_x = float_fma(-radius, cos(last), cos(inner_bevel) / c);
-  precise float center_y = radius * sin(last) - sin(inner_bevel) / c;
-  precise float outer_x = float_fma(radius, cos(bisector), center_x);
-  precise float outer_bevel = float_atan((center_y + radius * sin(bisector)) / outer_x);
-  precise float outer_to_bisector = bisector - outer_bevel;
-  precise float effective = 1.0 - tan(bisector - outer_bevel) / tan(bisector);
-  precise float outer_spline = (1.0 - effective) * outer_bevel;
+  PRECISE float bevel = bisector - float_atan((1.0 - k) * tan(bisector));
+  PRECISE float last = 3.1415927 - floor(n) * bisector;
+  PRECISE float last_segment = 2.0 * last;
+  PRECISE float inner_bevel = last - float_atan((1.0 - k) * tan(last));
+  PRECISE float radius = k * tan(last) / tan(0.5 * (bisector + last));
+  PRECISE float c = cos(last - inner_bevel);
+  PRECISE float center_x = float_fma(-radius, cos(last), cos(inner_bevel) / c);
+  PRECISE float center_y = radius * sin(last) - sin(inner_bevel) / c;
+  PRECISE float outer_x = float_fma(radius, cos(bisector), center_x);
+  PRECISE float outer_bevel = float_atan((center_y + radius * sin(bisector)) / outer_x);
+  PRECISE float outer_to_bisector = bisector - outer_bevel;
+  PRECISE float effective = 1.0 - tan(bisector - outer_bevel) / tan(bisector);
+  PRECISE float outer_spline = (1.0 - effective) * outer_bevel;
 
   if (x_axis_coord >= outer_bevel && x_axis_coord < two_pi - last_segment - outer_bevel) {
     /* the whole segments: as a regular polygon's, but the straight parts beside the last segment
@@ -164,9 +164,9 @@ vec4 rt_irregular_circular(bool normalize, float n, float k, vec2 co, float l_co
     if (!straight) {
       return vec4(rt_bevelled(normalize, k, l_coord, bisector, segment, coord, bevel), rotation);
     }
-    precise float width = tan(bisector - bevel) + (1.0 - k) * bevel + k * bevel;
-    precise float l = l_coord * cos(bisector - coord);
-    precise float p = rt_straight(l, bisector, coord);
+    PRECISE float width = tan(bisector - bevel) + (1.0 - k) * bevel + k * bevel;
+    PRECISE float l = l_coord * cos(bisector - coord);
+    PRECISE float p = rt_straight(l, bisector, coord);
     if (normalize) {
       bool beside_last = x_axis_coord >= two_pi - last_segment - bisector || x_axis_coord < bisector;
       p /= beside_last ? rt_normalizer(l, outer_to_bisector, outer_spline, effective, outer_bevel, true) :
@@ -175,16 +175,16 @@ vec4 rt_irregular_circular(bool normalize, float n, float k, vec2 co, float l_co
     return vec4(l, p, width, rotation);
   }
 
-  precise float to_last = last - inner_bevel;
-  precise float ratio = cos(bisector) / cos(last);
-  precise float spline = (1.0 - k) * inner_bevel;
-  precise float width_last = tan(to_last) + ratio * (spline * ((0.5 / ratio) + 0.5) + k * inner_bevel);
-  precise float rotation_last = segment_id * segment + last;
+  PRECISE float to_last = last - inner_bevel;
+  PRECISE float ratio = cos(bisector) / cos(last);
+  PRECISE float spline = (1.0 - k) * inner_bevel;
+  PRECISE float width_last = tan(to_last) + ratio * (spline * ((0.5 / ratio) + 0.5) + k * inner_bevel);
+  PRECISE float rotation_last = segment_id * segment + last;
   if (x_axis_coord >= two_pi - last_segment + inner_bevel && x_axis_coord < two_pi - inner_bevel) {
     /* the last segment's straight part */
-    precise float l_last = l_coord * cos(last - coord);
-    precise float l = ratio * l_last;
-    precise float p = rt_straight(l, last, coord);
+    PRECISE float l_last = l_coord * cos(last - coord);
+    PRECISE float l = ratio * l_last;
+    PRECISE float p = rt_straight(l, last, coord);
     if (normalize) {
       p /= ratio * rt_normalizer(l_last, to_last, spline, k, inner_bevel, false);
     }
@@ -192,19 +192,19 @@ vec4 rt_irregular_circular(bool normalize, float n, float k, vec2 co, float l_co
   }
 
   /* the last segment's arcs, their angle mirrored about its bisector */
-  precise float mirrored = float_atan2(co.y, co.x);
+  PRECISE float mirrored = float_atan2(co.y, co.x);
   if (x_axis_coord >= two_pi - last_segment - outer_bevel && x_axis_coord < two_pi - last) {
     mirrored = -(mirrored + last_segment);
   }
-  precise float along = float_fma(sin(mirrored), center_y, cos(mirrored) * center_x);
-  precise float inside = float_fma(-center_x, center_x, float_fma(along, along, radius * radius)) -
+  PRECISE float along = float_fma(sin(mirrored), center_y, cos(mirrored) * center_x);
+  PRECISE float inside = float_fma(-center_x, center_x, float_fma(along, along, radius * radius)) -
                          center_y * center_y;
-  precise float l_arc_last = l_coord / (along + sqrt(inside));
-  precise float l = ratio * l_arc_last;
+  PRECISE float l_arc_last = l_coord / (along + sqrt(inside));
+  PRECISE float l = ratio * l_arc_last;
   if (mirrored < 0.0) {
     /* the inner arc, towards the last segment's bisector */
-    precise float to_bevel = inner_bevel - abs(mirrored);
-    precise float p = float_fma(ratio, rt_rounded_terms(l_coord, to_last, to_bevel, spline),
+    PRECISE float to_bevel = inner_bevel - abs(mirrored);
+    PRECISE float p = float_fma(ratio, rt_rounded_terms(l_coord, to_last, to_bevel, spline),
                                 ratio * l_coord * sin(to_last));
     p = coord < last ? -p : p;
     if (normalize) {
@@ -215,8 +215,8 @@ vec4 rt_irregular_circular(bool normalize, float n, float k, vec2 co, float l_co
     return vec4(l, p, width_last, rotation_last);
   }
   /* the outer arc, towards the whole segment beside it */
-  precise float to_outer = outer_bevel - abs(mirrored);
-  precise float p = l_coord * sin(outer_to_bisector) +
+  PRECISE float to_outer = outer_bevel - abs(mirrored);
+  PRECISE float p = l_coord * sin(outer_to_bisector) +
                     rt_rounded_terms(l_coord, outer_to_bisector, to_outer, outer_spline);
   p = coord < bisector ? -p : p;
   if (normalize) {
@@ -225,7 +225,7 @@ vec4 rt_irregular_circular(bool normalize, float n, float k, vec2 co, float l_co
                                     true),
                 to_outer / outer_bevel);
   }
-  precise float width_outer = float_fma(k, bevel, tan(bisector - bevel) + (1.0 - k) * bevel);
+  PRECISE float width_outer = float_fma(k, bevel, tan(bisector - bevel) + (1.0 - k) * bevel);
   return vec4(l, p, width_outer, rotation);
 }
 
@@ -236,13 +236,13 @@ vec4 radial_tiling(vec3 vector, float sides, float roundness, bool normalize)
   vec2 co = vector.xy;
   float n = max(sides, 2.0);
   float k = clamp(roundness, 0.0, 1.0);
-  precise float l_coord = sqrt(float_fma(co.y, co.y, co.x * co.x));
-  precise float x_axis_coord = float_atan2(co.y, co.x) + float(co.y < 0.0) * 6.2831855;
-  precise float bisector = 3.1415927 / n;
-  precise float segment = 2.0 * bisector;
-  precise float segment_id = floor(x_axis_coord / segment);
-  precise float coord = x_axis_coord - segment_id * segment;
-  precise float rotation = segment_id * segment + bisector;
+  PRECISE float l_coord = sqrt(float_fma(co.y, co.y, co.x * co.x));
+  PRECISE float x_axis_coord = float_atan2(co.y, co.x) + float(co.y < 0.0) * 6.2831855;
+  PRECISE float bisector = 3.1415927 / n;
+  PRECISE float segment = 2.0 * bisector;
+  PRECISE float segment_id = floor(x_axis_coord / segment);
+  PRECISE float coord = x_axis_coord - segment_id * segment;
+  PRECISE float rotation = segment_id * segment + bisector;
   vec4 v;
   if (n - floor(n) == 0.0) {
     v = rt_regular(normalize, n, k, l_coord, bisector, segment, coord, rotation);

@@ -128,8 +128,13 @@ GRADIENT_CASES = {f"{kind.lower()}_{label}": ("ShaderNodeTexGradient", {"gradien
 GRADIENT_MEASURED = {"radial_unit": (6.0e-8, 0), "radial_large": (6.0e-8, 0)}
 
 
+#: Cycles 4.5 and 5.0 divide by a constant, or by one divisor thrice, through its reciprocal;
+#: 4.2's divides (measured: an ulp apart). Our GLSL follows 5.0.
+RECIPROCAL = bpy.app.version >= (4, 5, 0)
+
+
 def _gradient_twin(co, props, inputs):
-    fac = patterns.gradient(props["gradient_type"], co)
+    fac = patterns.gradient(props["gradient_type"], co, RECIPROCAL)
     return np.repeat(fac[:, None], 3, 1), fac
 
 
@@ -174,7 +179,7 @@ MAGIC_MEASURED = {
 
 
 def _magic_twin(co, props, inputs):
-    return patterns.magic(co, inputs["Scale"], inputs["Distortion"], props["turbulence_depth"])
+    return patterns.magic(co, inputs["Scale"], inputs["Distortion"], props["turbulence_depth"], RECIPROCAL)
 
 
 _BRICK = {"Color1": (0.9, 0.5, 0.1, 1.0), "Color2": (0.1, 0.4, 0.8, 1.0), "Mortar": (0.3, 0.25, 0.2, 1.0)}

@@ -74,9 +74,10 @@ def saturate(x) -> np.ndarray:
 
 # --- Gradient ---------------------------------------------------------------------------------
 
-def gradient(kind: str, co) -> np.ndarray:
+def gradient(kind: str, co, reciprocal: bool = True) -> np.ndarray:
     """The Gradient Texture's Fac (Cycles' svm_gradient, saturated) of ``kind`` (Blender's
-    gradient_type: LINEAR ...) at co (..., 3)."""
+    gradient_type: LINEAR ...) at co (..., 3). ``reciprocal``: Radial divides by 2 pi through its
+    reciprocal (Cycles 4.5 and 5.0; 4.2's divides, measured)."""
     co = f32(co)
     x, y, z = co[..., 0], co[..., 1], co[..., 2]
     if kind == "LINEAR":
@@ -91,7 +92,8 @@ def gradient(kind: str, co) -> np.ndarray:
     elif kind == "DIAGONAL":
         f = (x + y) * F32(0.5)
     elif kind == "RADIAL":
-        f = fma(atan2f(y, x), F32(1.0) / TWO_PI, F32(0.5))  # / 2 pi through its reciprocal, fused
+        a = atan2f(y, x)
+        f = fma(a, F32(1.0) / TWO_PI, F32(0.5)) if reciprocal else a / TWO_PI + F32(0.5)  # fused
     elif kind in ("SPHERICAL", "QUADRATIC_SPHERE"):
         r = np.maximum(F32(0.999999) - np.sqrt(fma(z, z, fma(x, x, y * y))), F32(0.0))
         f = r if kind == "SPHERICAL" else r * r
@@ -113,8 +115,10 @@ def checker(co, scale) -> np.ndarray:
 
 # --- Magic ------------------------------------------------------------------------------------
 
-def magic(co, scale, distortion, depth: int) -> tuple[np.ndarray, np.ndarray]:
-    """The Magic Texture's (Color (..., 3), Fac) (Cycles' svm_magic, depth 0 .. 10)."""
+def magic(co, scale, distortion, depth: int, reciprocal: bool = True) -> tuple[np.ndarray, np.ndarray]:
+    """The Magic Texture's (Color (..., 3), Fac) (Cycles' svm_magic, depth 0 .. 10). ``reciprocal``:
+    the three divisions by 2 x distortion through one reciprocal (Cycles 4.5 and 5.0; 4.2's
+    divides, measured)."""
     co, scale, d = f32(co), f32(scale), f32(distortion)
     px, py, pz = (fmodf(co[..., i], TWO_PI) for i in range(3))
     x = sinf((px + py + pz) * F32(5.0) * scale)
@@ -142,8 +146,11 @@ def magic(co, scale, distortion, depth: int) -> tuple[np.ndarray, np.ndarray]:
     if depth > 9:
         y = -sinf(x - y + z) * d
     if d != 0.0:
-        inverse = F32(1.0) / (d * F32(2.0))  # three divisions: one reciprocal
-        x, y, z = x * inverse, y * inverse, z * inverse
+        if reciprocal:
+            inverse = F32(1.0) / (d * F32(2.0))
+            x, y, z = x * inverse, y * inverse, z * inverse
+        else:
+            x, y, z = x / (d * F32(2.0)), y / (d * F32(2.0)), z / (d * F32(2.0))
     color = np.stack([F32(0.5) - x, F32(0.5) - y, F32(0.5) - z], -1)
     return color, (color[..., 0] + color[..., 1] + color[..., 2]) * (F32(1.0) / F32(3.0))
 
