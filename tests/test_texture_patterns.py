@@ -25,6 +25,7 @@ import numpy as np
 import pytest
 import scenes
 from test_cycles import _cycles
+from test_material_converters import _compiled
 from test_material_images import _against_cycles
 from test_material_nodes import SIZE, _aov, _combine, _plane_scene
 from test_texture_white_noise import _channels
@@ -319,6 +320,32 @@ def test_pattern_library_compiled_where_called():
     """A graph calling Brick compiles its file and the float arithmetic it calls, before it."""
     needed = codegen.library("x = node_tex_brick(co, a, b, c, s, size, smooth, bias, w, h, o, of, q, qf);")
     assert needed == codegen.LIBRARY + ("node_float.glsl", "node_tex_brick.glsl")
+
+
+def test_settings_are_constants():
+    """A pattern's numbers (Brick's offset, squash and frequencies, Magic's Depth, Radial Tiling's
+    Sides) are constants of the compiled graph: editing them keeps the source (one program); a
+    type or Normalize chooses another function."""
+    scene, mat, tree, u, v = _plane_scene()
+    co = _combine(tree, u, v, 0.37)
+    nodes = {kind: tree.nodes.new(kind) for kind in ("ShaderNodeTexBrick", "ShaderNodeTexMagic",
+                                                     "ShaderNodeTexGradient")}
+    if HAS_RADIAL_TILING:
+        nodes["ShaderNodeRadialTiling"] = tree.nodes.new("ShaderNodeRadialTiling")
+    for k, node in enumerate(nodes.values()):
+        tree.links.new(co, node.inputs["Vector"])
+        _aov(scene, tree, f"out{k}", node.outputs[1])
+    before = _compiled(mat)
+    brick, magic = nodes["ShaderNodeTexBrick"], nodes["ShaderNodeTexMagic"]
+    brick.offset, brick.offset_frequency, brick.squash, brick.squash_frequency = 0.2, 3, 1.5, 4
+    magic.turbulence_depth = 7
+    if HAS_RADIAL_TILING:
+        nodes["ShaderNodeRadialTiling"].inputs["Sides"].default_value = 3.5
+    after = _compiled(mat)
+    assert after.source == before.source
+    assert np.abs(after.constants - before.constants).max() > 0.2
+    nodes["ShaderNodeTexGradient"].gradient_type = "RADIAL"
+    assert _compiled(mat).source != before.source
 
 
 # --- the engine -------------------------------------------------------------------------------

@@ -1,16 +1,17 @@
 """The numpy twin of the pattern textures: Gradient, Checker, Magic and Brick
 (``glsl/node_tex_gradient.glsl``, ``node_tex_checker.glsl``, ``node_tex_magic.glsl``,
-``node_tex_brick.glsl``) and Radial Tiling (``node_radial_tiling.glsl``). Vectorised over
+``node_tex_brick.glsl``) and Radial Tiling (``node_tex_radial_tiling.glsl``). Vectorised over
 coordinates (..., 3); float32 throughout, operation for operation as Cycles' CPU kernel computes
 them (intern/cycles/kernel/svm/gradient.h, checker.h, magic.h, brick.h, radial_tiling_shared.h).
 
 Cycles' CPU kernels are compiled with fast math and, on a CPU with FMA (its AVX2 kernel), the
-compiler fuses a product into the sum that is its only use (a * b + c rounded once) and divides
-by a constant, or by one divisor three times, through its reciprocal. Where it does, the twin
-says so (``fma``; measured against Cycles 5.0's renders, tests/test_texture_patterns.py): the
-same roundings give the same bits. Sines, cosines and arc tangents are C's (libm's sinf, cosf,
-atan2f ... through ctypes, as Cycles calls them); where no C library is found, numpy's in double
-precision, rounded (within an ulp of C's)."""
+compiler fuses some products into the sum that uses them (a * b + c rounded once) and divides by
+a constant, or by one divisor three times, through its reciprocal. Which ones is the compiler's
+choice: each ``fma`` here was found against Cycles 5.0's renders (tests/test_texture_patterns.py:
+undone, it fails a case; a few the cases cannot tell apart are written as their siblings), as
+were the products it does not fuse. The same roundings give the same bits. Sines, cosines and
+arc tangents are C's (the platform's libm: sinf, cosf, atan2f ... through ctypes, as Cycles calls
+them); where no C library is found, numpy's in double precision, rounded (within an ulp of C's)."""
 
 from __future__ import annotations
 
