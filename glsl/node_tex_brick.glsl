@@ -47,6 +47,7 @@ vec2 brick_pattern(vec3 p, float mortar_size, float mortar_smooth, float bias, f
   /* the products rounded before the differences (PRECISE: Cycles does not fuse them, measured) */
   PRECISE float x = (p.x + offset) - brick_width * float(brick);
   PRECISE float y = p.y - row_height * float(row);
+  /* the noise of (row, brick's low 16 bits), biased, kept in [0, 1] (Cycles' saturatef) */
   float tint = clamp(brick_noise(uint((row << 16) + (brick & 0xFFFF))) + bias, 0.0, 1.0);
   float min_dist = min(min(x, y), min(brick_width - x, row_height - y));
   float mortar;

@@ -6,14 +6,14 @@ float node_tex_gradient_linear(vec3 p) { return clamp(p.x, 0.0, 1.0); }
 
 float node_tex_gradient_quadratic(vec3 p)
 {
-  float r = max(p.x, 0.0);
+  float r = max(p.x, 0.0); /* (Cycles': 0, not x^2, left of 0) */
   return clamp(r * r, 0.0, 1.0);
 }
 
 /* 3t - 2tr, t = r^2 (3t fused into the difference) */
 float node_tex_gradient_easing(vec3 p)
 {
-  float r = clamp(p.x, 0.0, 1.0);
+  float r = clamp(p.x, 0.0, 1.0); /* (Cycles': the curve on [0, 1] only) */
   float t = r * r;
   return clamp(float_fma(3.0, t, -(2.0 * t * r)), 0.0, 1.0);
 }

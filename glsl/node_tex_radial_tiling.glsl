@@ -278,7 +278,7 @@ vec4 node_radial_tiling_normalized(vec3 vector, float sides, float roundness)
 }
 
 /* Segment ID: the segment's index counterclockwise from the x axis (calculate_out_segment_id),
- * atan2 / 2 pi through the reciprocal, fused */
+ * atan2 / 2 pi through the reciprocal, fused; Sides at least 2 as Cycles' */
 float node_radial_tiling_id(vec3 vector, float sides)
 {
   vec2 co = vector.xy;
