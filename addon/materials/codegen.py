@@ -68,8 +68,10 @@ LIBRARY = ("node_inputs.glsl", "node_convert.glsl", "node_color.glsl", "node_mat
            "node_ramp.glsl", "node_vector.glsl", "node_closure.glsl")
 #: Library files compiled into a program only where its graph calls one of their functions (the
 #: procedural textures: only what the scene requires), each after the files it calls.
-OPTIONAL_LIBRARY = ("node_hash.glsl", "node_tex_white_noise.glsl",
-                    "node_tex_gabor.glsl")
+OPTIONAL_LIBRARY = ("node_hash.glsl", "node_tex_white_noise.glsl", "node_tex_gabor.glsl")
+#: the pattern textures, after the float arithmetic they share (node_float.glsl)
+OPTIONAL_LIBRARY += ("node_float.glsl", "node_tex_gradient.glsl", "node_tex_checker.glsl",
+                     "node_tex_magic.glsl", "node_tex_brick.glsl", "node_tex_radial_tiling.glsl")
 #: Node kinds drawn from a bake even where an emitter compiles them (empty: none). Tests and the
 #: benchmark set it to compare a node's bake with its compiled code and with Cycles.
 FORCE_BAKE: frozenset[str] = frozenset()
@@ -245,8 +247,8 @@ class _Writer:
             return "closure_none()"
         if type_ == "RGBA":
             v = tuple(float(x) for x in value[:4])
-        elif type_ == "VECTOR":
-            v = (*(float(x) for x in value[:3]), 0.0)
+        elif type_ == "VECTOR":  # (a 2D vector socket, as Radial Tiling's, holds two)
+            v = (*(float(x) for x in value[:3]), *(0.0,) * (4 - len(value[:3])))
         else:
             v = (float(value), 0.0, 0.0, 0.0)
         self.constants.append(v)

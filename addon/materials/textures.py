@@ -59,7 +59,81 @@ def _gabor(w, node: FlatNode) -> dict | None:
     return {"Value": f"{result}.x", "Phase": f"{result}.y", "Intensity": f"{result}.z"}
 
 
+# --- Gradient, Checker, Magic, Brick, Radial Tiling (glsl/node_tex_gradient.glsl ...) ----------
+
+#: The Gradient Texture's types, each its GLSL function's suffix.
+GRADIENT_TYPES = {"LINEAR": "linear", "QUADRATIC": "quadratic", "EASING": "easing", "DIAGONAL": "diagonal",
+                  "SPHERICAL": "spherical", "QUADRATIC_SPHERE": "quadratic_sphere", "RADIAL": "radial"}
+
+
+def _setting(w, node: FlatNode, name: str, default: float) -> str:
+    """A node setting that is a number (Brick's frequencies, Magic's depth), as a constant."""
+    return w.constant(float(node.props.get(name, default)), "VALUE")
+
+
+def _gradient(w, node: FlatNode) -> dict | None:
+    """Gradient Texture (Cycles' svm_node_tex_gradient): the type chooses the function."""
+    kind = GRADIENT_TYPES.get(node.props.get("gradient_type", "LINEAR"))
+    co = vector(w, node)
+    if kind is None or co is None:
+        return None
+    fac = w.once("float", f"node_tex_gradient_{kind}({co})")
+    return {"Fac": fac, "Color": f"vec4(vec3({fac}), 1.0)"}
+
+
+def _checker(w, node: FlatNode) -> dict | None:
+    """Checker Texture (Cycles' svm_node_tex_checker)."""
+    co = vector(w, node)
+    if co is None:
+        return None
+    fac = w.once("float", f"node_tex_checker({co}, {w.arg(node, 'Scale')})")
+    colors = ", ".join(w.arg(node, s) for s in ("Color1", "Color2"))
+    return {"Fac": fac, "Color": f"node_tex_checker_color({fac}, {colors})"}
+
+
+def _magic(w, node: FlatNode) -> dict | None:
+    """Magic Texture (Cycles' svm_node_tex_magic): Depth a constant, as its other values."""
+    co = vector(w, node)
+    if co is None:
+        return None
+    depth = _setting(w, node, "turbulence_depth", 2)
+    args = ", ".join([co, w.arg(node, "Scale"), w.arg(node, "Distortion"), depth])
+    result = w.once("vec4", f"node_tex_magic({args})")
+    return {"Color": f"vec4({result}.rgb, 1.0)", "Fac": f"{result}.w"}
+
+
+#: The Brick Texture's inputs, in its GLSL function's order (after the coordinate).
+BRICK_INPUTS = ("Color1", "Color2", "Mortar", "Scale", "Mortar Size", "Mortar Smooth", "Bias", "Brick Width",
+                "Row Height")
+
+
+def _brick(w, node: FlatNode) -> dict | None:
+    """Brick Texture (Cycles' svm_node_tex_brick): its offset and squash settings constants."""
+    co = vector(w, node)
+    if co is None:
+        return None
+    settings = (("offset", 0.5), ("offset_frequency", 2), ("squash", 1.0), ("squash_frequency", 2))
+    args = [co, *(w.arg(node, s) for s in BRICK_INPUTS), *(_setting(w, node, *s) for s in settings)]
+    result = w.once("vec4", f"node_tex_brick({', '.join(args)})")
+    return {"Color": f"vec4({result}.rgb, 1.0)", "Fac": f"{result}.w"}
+
+
+def _radial_tiling(w, node: FlatNode) -> dict:
+    """Radial Tiling (Blender 5; Cycles' svm_node_radial_tiling): Normalize chooses the function.
+    Not a texture node: its Vector unlinked is the socket's value."""
+    co, sides, roundness = (w.arg(node, s) for s in ("Vector", "Sides", "Roundness"))
+    fn = "node_radial_tiling_normalized" if node.props.get("normalize") else "node_radial_tiling"
+    result = w.once("vec4", f"{fn}({co}, {sides}, {roundness})")
+    return {"Segment Coordinates": f"vec3({result}.xy, 0.0)", "Segment Width": f"{result}.z",
+            "Segment Rotation": f"{result}.w", "Segment ID": f"node_radial_tiling_id({co}, {sides})"}
+
+
 EMITTERS = {
     "ShaderNodeTexWhiteNoise": _white_noise,
     "ShaderNodeTexGabor": _gabor,
+    "ShaderNodeTexGradient": _gradient,
+    "ShaderNodeTexChecker": _checker,
+    "ShaderNodeTexMagic": _magic,
+    "ShaderNodeTexBrick": _brick,
+    "ShaderNodeRadialTiling": _radial_tiling,
 }
