@@ -198,7 +198,7 @@ def bump_shadowing(version: tuple[int, int]) -> str:
 
 def _bent(flat: FlatGraph) -> bool:
     """Whether some closure's Normal is linked (a Normal Map, a Bump, any node): the shading
-    models then apply Cycles' rules for a bent normal (glsl/graph_surface.glsl's bump_terminator)."""
+    models then apply Cycles' rules for a bent normal (glsl/bent_normal.glsl's bump_terminator)."""
     return any(node.kind in codegen.CLOSURES and "Normal" in node.inputs
                and not isinstance(node.inputs["Normal"].source, Const) for node in flat.nodes.values())
 
