@@ -3,7 +3,7 @@ AOVs of the same graph: Cycles takes Generated from the undeformed positions (at
 so a texture stays on a surface an armature or shape keys move.
 
 One orthographic render, one material on four objects: a capsule bent by an armature, a sphere
-squashed and sheared by a shape key, a cube twisted and then subdivided (a deformation before a
+squashed and sheared by a shape key, a cube twisted and then subdivided (a deformation beside a
 modifier that changes the number of vertices: not derivable, Generated follows the deformed
 surface, said), and an undeformed sphere (Generated from its positions, no attribute). AOVs:
 Generated, White Noise of Generated snapped to eighths (a procedural that shows whether a texture
@@ -23,7 +23,7 @@ import scenes
 from test_cycles import _cycles
 from test_material_nodes import _aov
 
-from addon.blender import bake, engine, extract
+from addon.blender import bake, engine, extract, orco
 from addon.materials import codegen, surface
 from addon.plan import programs
 
@@ -245,3 +245,40 @@ def test_only_deformed_meshes_read_an_orco(rendered):
         assert surface.ORCO not in at_rest.geometries[bent.geometry].attributes and bent.materials == ["Orco"]
     finally:
         pose.rotation_euler = rotation
+
+
+def test_geometry_nodes_instances_are_not_the_objects_own_mesh(rendered):
+    """A shape-keyed grid whose Geometry Nodes modifier instances a cube on its points: the grid's
+    own mesh has its orco, the cubes drawn in the grid's name (another mesh, 8 vertices) none and
+    no note, whatever the grid's deformation."""
+    keyed = _keyed_sphere(0.0)
+    keyed.location.z = -20.0  # out of the rendered scene's view: its AOVs are already read
+    bpy.ops.mesh.primitive_cube_add(size=0.2, location=(0.0, 0.0, -30.0))
+    cube = bpy.context.active_object
+    tree = bpy.data.node_groups.new("Instances", "GeometryNodeTree")
+    tree.interface.new_socket("Geometry", in_out="INPUT", socket_type="NodeSocketGeometry")
+    tree.interface.new_socket("Geometry", in_out="OUTPUT", socket_type="NodeSocketGeometry")
+    given, out = tree.nodes.new("NodeGroupInput"), tree.nodes.new("NodeGroupOutput")
+    on_points, info = tree.nodes.new("GeometryNodeInstanceOnPoints"), tree.nodes.new("GeometryNodeObjectInfo")
+    info.inputs["Object"].default_value = cube
+    join = tree.nodes.new("GeometryNodeJoinGeometry")
+    tree.links.new(given.outputs[0], on_points.inputs["Points"])
+    tree.links.new(info.outputs["Geometry"], on_points.inputs["Instance"])
+    tree.links.new(on_points.outputs[0], join.inputs[0])
+    tree.links.new(given.outputs[0], join.inputs[0])
+    tree.links.new(join.outputs[0], out.inputs[0])
+    keyed.modifiers.new("Instances", "NODES").node_group = tree
+    depsgraph = bpy.context.evaluated_depsgraph_get()
+    seen = {"own": 0, "instance": 0}
+    for inst in depsgraph.object_instances:
+        obj = inst.object
+        if obj.type != "MESH" or obj.original != keyed:
+            continue
+        positions, note = orco.undeformed_positions(obj, obj.data, depsgraph)
+        if inst.is_instance:
+            assert positions is None and note == "", note
+            seen["instance"] += 1
+        else:
+            assert positions is not None and len(positions) == len(obj.data.vertices)
+            seen["own"] += 1
+    assert seen == {"own": 1, "instance": len(keyed.data.vertices)}, seen

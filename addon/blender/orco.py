@@ -8,8 +8,8 @@ Python sees no CD_ORCO layer, so it is made again from what it does see. Blender
 (``BKE_mesh_orco_verts_get``: shape keys' basis, before any key or modifier) carried through the
 constructive modifiers alone, deforming ones left out; where the stack only deformed the mesh, or
 kept its vertices' number, that is the original mesh's positions, vertex for vertex. Where a
-deformation comes with modifiers that change the number of vertices (a Subdivision Surface after an
-Armature) it cannot be made without evaluating the stack again without its deformations, which
+deformation comes with modifiers that change the number of vertices (an Armature and a Subdivision
+Surface) it cannot be made without evaluating the stack again without its deformations, which
 would change the artist's file: Generated then follows the deformed surface, and a note says so.
 """
 
@@ -29,18 +29,21 @@ def undeformed_positions(obj, mesh, depsgraph) -> tuple[np.ndarray | None, str]:
     ``mesh``, ``obj``'s evaluated mesh) where a deformation moved its vertices and the stack kept
     their number; None where nothing deformed them (Generated from the positions as they are, as
     Blender keeps no orco then), or where they cannot be made (``note`` says why: a deformation
-    with modifiers that change the number of vertices). An object in Edit Mode takes its positions
-    as they are (its original mesh's are only written back when it leaves Edit Mode)."""
+    beside modifiers that change the number of vertices). An object in Edit Mode takes its positions
+    as they are (its original mesh's are only written back when it leaves Edit Mode), and so does
+    a mesh a Geometry Nodes modifier instances in the object's name (not the object's own)."""
     original = obj.original
     source = getattr(original, "data", None)
     if source is None or getattr(original, "mode", "OBJECT") == "EDIT":
         return None, ""
+    if obj.data is None or obj.data.as_pointer() != original.evaluated_get(depsgraph).data.as_pointer():
+        return None, ""  # another mesh drawn in the object's name (Geometry Nodes' instances): not its own
     settings = "RENDER" if getattr(depsgraph, "mode", "VIEWPORT") == "RENDER" else "PREVIEW"
     if not original.is_deform_modified(depsgraph.scene, settings):
         return None, ""  # constructive modifiers alone: the orco is the positions they made
     if len(source.vertices) != len(mesh.vertices):
         return None, (f"Object '{original.name}': its Generated coordinates follow the deformed surface "
-                      f"(its modifiers change its number of vertices after deforming it)")
+                      f"(it is deformed, and its modifiers change its number of vertices)")
     undeformed = _positions(source)
     if np.array_equal(undeformed, _positions(mesh)):
         return None, ""  # deformed by nothing (an armature at rest, keys at 0)
