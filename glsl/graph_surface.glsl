@@ -21,17 +21,29 @@ vec4 graph_tangent_to_world(vec4 t)
   return vec4(len2 > 1e-20 ? w * inversesqrt(len2) : vec3(0.0), t.w);
 }
 
+#if defined(SL_GRAPH_OBJECT) || defined(SL_GRAPH_GENERATED)
+/* Generated coordinates of an object-space position p: Blender's texture space, (p - location) /
+ * size / 2 + 1/2 (Cycles' mesh_texture_space). p is the fragment's own, or where a deformed mesh
+ * holds its undeformed positions (an ORCO attribute, materials/surface.py's with_orco) the
+ * undeformed one, as Cycles' attr_create_generated takes Blender's orco. */
+vec3 graph_generated(vec3 p)
+{
+  return (p - graph_texspace.xyz) / graph_texspace_size.xyz * 0.5 + 0.5;
+}
+#endif
+
 #ifdef SL_GRAPH_RAY_FOOTPRINT
 /* The width of the scene camera's ray footprint at p, as Cycles carries it to a camera ray's hit
  * (sd->dP: camera_sample_perspective's spread dD = (|dD.dx| + |dD.dy|) / 2, the change of the unit
  * direction to the next pixel right and down, times the distance from the camera,
  * differential_transfer_compact; camera_sample_orthographic's: a pixel's size, the same
- * everywhere). A pixel of the target drawn (a supersampled render's sub-pixel). */
+ * everywhere). A pixel of the image: a supersampled target's pixel is 1 / frame.viewport.w of one
+ * (Cycles' differentials span a whole pixel, however many samples it takes in it). */
 float graph_ray_footprint(vec3 p)
 {
   mat4 projection = frame.view_proj * inverse(frame.view);
   /* a pixel's step on the plane one unit ahead of a perspective camera, anywhere for an orthographic one */
-  vec2 step = 2.0 / (frame.viewport.xy * vec2(projection[0][0], projection[1][1]));
+  vec2 step = 2.0 * frame.viewport.w / (frame.viewport.xy * vec2(projection[0][0], projection[1][1]));
   if (frame.camera_position.w < 0.5) {
     return 0.5 * (step.x + step.y);
   }
@@ -69,8 +81,7 @@ GraphInputs graph_inputs(vec3 n, vec3 v, bool backfacing)
 #endif
 #if defined(SL_GRAPH_OBJECT) || defined(SL_GRAPH_GENERATED)
   g.object = object_position;
-  /* Blender's texture space: Generated = (object position - location) / size / 2 + 1/2 */
-  g.generated = (object_position - graph_texspace.xyz) / graph_texspace_size.xyz * 0.5 + 0.5;
+  g.generated = graph_generated(object_position); /* a deformed mesh's: SL_GRAPH_ATTRIBUTE_READS' */
 #endif
 #if defined(SL_GRAPH_OBJECT_TO_WORLD) || defined(SL_GRAPH_WORLD_TO_OBJECT)
   g.object_to_world = object.model;
@@ -113,91 +124,12 @@ GraphInputs graph_inputs(vec3 n, vec3 v, bool backfacing)
 #ifdef SL_GRAPH_RAY_FOOTPRINT
   g.ray_footprint = graph_ray_footprint(world_position);
 #endif
+#ifdef SL_GRAPH_SUBPIXELS
+  g.subpixels = frame.viewport.w;
+#endif
   return g;
 }
 
-
-#ifdef SL_GRAPH_BENT_NORMAL
-/* A light's (diffuse, specular) weights where the graph bent the normal (a Normal Map, a Bump) to n
- * from the smooth normal ns: Cycles' bump_shadowing_term (kernel/closure/bsdf.h) of the Blender
- * that read the graph (materials/surface.py's bump_shadowing: one SL_BUMP_SHADOWING_<RULE>), with
- * its bump map correction (on by default). */
-#  ifdef SL_BUMP_SHADOWING_CHIANG_2019
-/* Blender 4.2's: for the diffuse lobe, Chiang, Li and Burley 2019, "Taming the Shadow
- * Terminator": g = (ns.l) / ((n.l)(ns.n)), ns turned to n's side of l; light below the smooth
- * surface (g < 0) is rejected, g in [0, 1) smoothed to -g^3 + g^2 + g. The specular lobe rejects
- * light on the other side of ns than of n (its microfacet eval's hemisphere test, handed sd->N). */
-vec2 bump_terminator(vec3 ns, vec3 n, vec3 l)
-{
-  float cos_nl = dot(n, l);
-  float specular = dot(ns, l) * cos_nl < 0.0 ? 0.0 : 1.0;
-  vec3 s = cos_nl < 0.0 ? -ns : ns;
-  float den = cos_nl * dot(s, n);
-  float g = den != 0.0 ? dot(s, l) / den : 0.0; /* guards: Cycles' safe_divide (0 where n.l = 0) */
-  if (g >= 1.0) {
-    return vec2(1.0, specular);
-  }
-  if (g < 0.0) {
-    return vec2(0.0, specular);
-  }
-  return vec2(g * (1.0 + g - g * g), specular);
-}
-#  else
-/* Blender 4.5's and 5's: Conty Estevez, Lecocq and Stein 2019, "A Microfacet-Based Shadowing
- * Function to Solve the Bump Terminator Problem". Light from the other side of ns than n sees is
- * rejected (both lobes: Blender 5 tests it here, 4.5 in the diffuse lobe's and in the microfacet
- * eval's hemisphere test, handed sd->N); the diffuse lobe is shadowed by Smith's GGX G1 at the
- * light's angle to ns, with alpha^2 = tan^2(d) / 8 from the bend d. */
-vec2 bump_terminator(vec3 ns, vec3 n, vec3 l)
-{
-  float cos_nsl = dot(ns, l);
-  float cos_nsn = dot(ns, n);
-  if (cos_nsl * cos_nsn * dot(n, l) < 0.0) {
-    return vec2(0.0);
-  }
-  float cos_i = abs(cos_nsl);
-  float cos_d = abs(cos_nsn);
-  if (cos_d >= 1.0 || cos_i >= 1.0) {
-    return vec2(1.0);
-  }
-  if (cos_i < 1e-6) {
-    return vec2(0.0, 1.0); /* grazing the smooth surface: Cycles' diffuse gets nothing */
-  }
-  float alpha2 = clamp(0.125 * (1.0 / (cos_d * cos_d) - 1.0), 0.0, 1.0);
-  float tan2_i = 1.0 / (cos_i * cos_i) - 1.0;
-  return vec2(2.0 / (1.0 + sqrt(1.0 + alpha2 * tan2_i)), 1.0);
-}
-#  endif
-
-/* Cycles' ensure_valid_specular_reflection (kernel/closure/bsdf_util.h; the same in Blender 4.2 to
- * 5), which its glossy closures and the Principled BSDF's specular lobes apply to their normal
- * (maybe_ensure_valid_specular_reflection, with bump map correction), not its diffuse lobe: n
- * turned towards the true normal ng (facing the viewer), in their common plane, just enough that
- * the view's mirror direction about it leaves the surface min(0.9 ng.i, 0.01) above it. The unit
- * normal's height z over the surface solves 4 a z^4 - 2 b z^2 + c = 0 (a = (i.x)^2 + (i.ng)^2,
- * b = 2 (a + (i.ng) t), c = ((i.ng) + t)^2 for the threshold t), the root of the side i.x has. */
-vec3 valid_specular_normal(vec3 ng, vec3 i, vec3 n)
-{
-  float iz = dot(i, ng);
-  float threshold = min(0.9 * iz, 0.01);
-  if (dot(ng, 2.0 * dot(n, i) * n - i) >= threshold) {
-    return n;
-  }
-  vec3 x = n - dot(n, ng) * ng;
-  float len = length(x);
-  x = len > 0.0 ? x / len : n; /* guards: n along ng (Cycles' safe_normalize_fallback) */
-  float ix = dot(i, x);
-  float a = ix * ix + iz * iz;
-  if (a <= 0.0) {
-    return n; /* guards: a view along no direction of the plane (i = 0): nothing to mirror */
-  }
-  float b = 2.0 * (a + iz * threshold);
-  float c = (threshold + iz) * (threshold + iz);
-  float root = sqrt(max(b * b - 4.0 * a * c, 0.0)); /* guards: Cycles' safe_sqrtf (rounding below 0) */
-  float z2 = 0.25 * (ix < 0.0 ? b + root : b - root) / a;
-  return sqrt(max(1.0 - z2, 0.0)) * x + sqrt(max(z2, 0.0)) * ng; /* guards: safe_sqrtf as Cycles */
-}
-#endif
 
 /* The Surface closure as the models read it: its BSDFs' mean inputs replace the material's values
  * (but those the Material panel sets, SL_KEEP_*), the empirical models' colours and exponent follow

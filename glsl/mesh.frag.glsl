@@ -88,7 +88,7 @@ int listed_index(ivec2 listed, int k, int end)
 
 #ifdef SL_GRAPH_BENT_NORMAL
 /* Where the node graph bent the normal: the specular lobe's shading point, at Cycles' valid
- * specular normal (graph_surface.glsl's valid_specular_normal), which main sets; bent_split where
+ * specular normal (bent_normal.glsl's valid_specular_normal), which main sets; bent_split where
  * that normal differs from the surface's (the lobes are then shaded apart). */
 Surface bent_specular;
 bool bent_split;
@@ -115,7 +115,7 @@ vec3 light_share(Surface s, vec3 ng, LightData light, bool shadowed)
   bool lit = dot(s.n, l) > 0.0;
 #ifdef SL_GRAPH_BENT_NORMAL
   /* a normal the node graph bent: Cycles' rules for light from behind the surface, the specular
-   * lobe's at its own normal (graph_surface.glsl) */
+   * lobe's at its own normal (bent_normal.glsl) */
   factors.x *= bump_terminator(s.smooth_n, s.n, l).x;
   factors.y *= bump_terminator(s.smooth_n, bent_specular.n, l).y;
   lit = lit || dot(bent_specular.n, l) > 0.0;

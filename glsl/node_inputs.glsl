@@ -38,6 +38,8 @@ struct GraphInputs {
   vec3 triangle[3];     /* the fragment's triangle's corners, in the mesh's (Cycles') order */
   float ray_footprint;  /* how wide the camera ray's footprint is at the fragment (Cycles' sd->dP:
                          * the distance times the ray's spread per pixel; orthographic: a pixel) */
+  float subpixels;      /* the target's pixels per image pixel along an axis: n where Anti-Aliasing
+                         * draws n x n sub-pixels, else 1 (screen derivatives span 1 / n pixel) */
 };
 
 /* Cycles' fresnel_dielectric_cos (kernel/closure/bsdf_util.h): 1 where no light refracts */

@@ -28,7 +28,8 @@ float graph_ray_footprint(vec3 dp, vec3 di, vec3 i)
 /* Cycles' position differentials at a shading point (differential_from_compact, kernel/util/
  * differential.h): two directions across the true normal (make_orthonormals, util/math.h: the
  * first (1, 1, 1) x ng) scaled by the camera ray's compact footprint there (the mean of its two
- * axes', differential_make_compact). */
+ * axes', differential_make_compact), a whole pixel's: the screen derivatives span a sub-pixel of
+ * a supersampled target (g.subpixels of them a pixel). */
 void graph_position_differentials(GraphInputs g, out vec3 dx, out vec3 dy)
 {
   vec3 ng = g.ng;
@@ -36,8 +37,8 @@ void graph_position_differentials(GraphInputs g, out vec3 dx, out vec3 dy)
                                           : vec3(ng.z - ng.y, ng.x + ng.z, -ng.y - ng.x);
   a = normalize(a);
   vec3 b = cross(ng, a);
-  float width = 0.5 * (graph_ray_footprint(dFdx(g.position), dFdx(g.i), g.i) +
-                       graph_ray_footprint(dFdy(g.position), dFdy(g.i), g.i));
+  float width = 0.5 * g.subpixels * (graph_ray_footprint(dFdx(g.position), dFdx(g.i), g.i) +
+                                     graph_ray_footprint(dFdy(g.position), dFdy(g.i), g.i));
   dx = width * a;
   dy = width * b;
 }

@@ -13,7 +13,8 @@ struct FrameData {
                           * them by group): [0] those with a shadow map, [1] those without, each
                           * x point, y spot, z sun, w area lights */
   mat4 view;             /* the camera's view matrix (world -> camera space) */
-  vec4 viewport;         /* xy: the target's size in pixels; z: the camera's clip start */
+  vec4 viewport;         /* xy: the target's size in pixels; z: the camera's clip start; w: the target's
+                          * pixels per image pixel along an axis (supersampling's n, else 1) */
 };
 
 struct LightData {

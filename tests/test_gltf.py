@@ -442,7 +442,7 @@ def rendered(tmp_path_factory):
 #:   the mask measured (0.129, 2.70), (0.305, 3.33), FLIP 0.0791, the blend (0.060, 0.485),
 #:   (0.141, 0.559), 0.0521); what is left is the blend's dither and the world's;
 #: - the normal-mapped sphere: along the lights' terminators the engine was brighter by up to 22 %
-#:   until it took Cycles' rules for a bent normal (glsl/graph_surface.glsl's bump_terminator;
+#:   until it took Cycles' rules for a bent normal (glsl/bent_normal.glsl's bump_terminator;
 #:   tests/test_material_render.py measures them alone: 0.08 % mean); what is left is the world's:
 #:   with Cycles' valid specular normal the lights' share is right along the rim, the frame's 99th
 #:   percentile 25.3 % -> 30.6 % (the world's excess no longer offset by the lights' deficit); the

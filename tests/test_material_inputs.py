@@ -340,6 +340,7 @@ def _evaluate_inputs(compiled: codegen.Compiled, rows: dict, uniforms: dict) -> 
         "g.object_color = u_object_color;",
         "g.object_info = u_object_info;",
         "g.clip_start = u_clip_start.x;",
+        "g.subpixels = 1.0;",  # one target pixel per image pixel: the Bump's derivatives a pixel's
     ]
     fill += [f"g.attributes[{k}] = attr{k};" for k in range(n_attr)]
     names = list(compiled.targets)

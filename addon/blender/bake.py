@@ -43,6 +43,7 @@ import numpy as np
 
 from ..materials import bake as baking
 from ..scene import snapshot as S
+from . import orco
 
 #: The bake's resolution where the scene gives none (Render properties > Shading Lab > Bake).
 RESOLUTION = 512
@@ -307,12 +308,21 @@ def _emitting(material, target: baking.BakeTarget, depsgraph, made: list):
 
 def _object_mesh(obj, material, depsgraph, made: list):
     """A copy of the evaluated mesh (modifiers applied) with only the faces of ``material``'s
-    slots, every face on slot 0 (in ``made``), its texture space the object's."""
+    slots, every face on slot 0 (in ``made``), its texture space the object's; where a deformation
+    moved its vertices, its texture mesh (``Mesh.texture_mesh``, in ``made``) holds their undeformed
+    positions (``orco.undeformed_positions``), which ``_bake`` makes Cycles take for Generated."""
     import bmesh
 
     evaluated = obj.evaluated_get(depsgraph)
     mesh = bpy.data.meshes.new_from_object(evaluated, preserve_all_data_layers=True, depsgraph=depsgraph)
     made.append(mesh)
+    undeformed, _note = orco.undeformed_positions(evaluated, mesh, depsgraph)  # (the render said the note)
+    if undeformed is not None:
+        rest = bpy.data.meshes.new(_TEMPORARY)
+        made.append(rest)
+        rest.vertices.add(len(undeformed))
+        rest.vertices.foreach_set("co", undeformed.ravel())
+        mesh.texture_mesh = rest
     slots = {i for i, slot in enumerate(evaluated.material_slots)
              if slot.material is not None and slot.material.original == material}
     bm = bmesh.new()
@@ -421,6 +431,11 @@ def _bake(request: Request, depsgraph, progress=None) -> list[str]:
         mesh = _object_mesh(obj, material, depsgraph, made)
         temp = bpy.data.objects.new(_TEMPORARY, mesh)
         made.append(temp)
+        if mesh.texture_mesh is not None:
+            # Blender keeps an orco (the texture mesh's positions: BKE_mesh_orco_verts_get) only for
+            # a mesh its modifiers made (mesh_calc_modifiers): one that moves nothing (a twist of 0)
+            twist = temp.modifiers.new(_TEMPORARY, "SIMPLE_DEFORM")
+            twist.deform_method, twist.angle = "TWIST", 0.0
         temp.matrix_world = [list(row) for row in request.matrix]
         temp.color, temp.pass_index = tuple(obj.color), obj.pass_index
         scene.collection.objects.link(temp)

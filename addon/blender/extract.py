@@ -21,7 +21,7 @@ from ..materials import codegen, mesh_attributes, objects, surface
 from ..plan import auto_terms, light_tiles, programs, shadows
 from ..scene import snapshot as S
 from ..scene.matrices import invert
-from . import bake, nodes
+from . import bake, nodes, orco
 
 LIGHT_KIND = {"POINT": "POINT", "SPOT": "SPOT", "SUN": "SUN", "AREA": "AREA"}
 
@@ -816,6 +816,23 @@ def with_attributes(geometry: S.MeshGeometry, mesh, wanted, warnings: list[str])
     return geometry
 
 
+def with_orco(geometry: S.MeshGeometry, obj, mesh, depsgraph, warnings: list[str]) -> S.MeshGeometry:
+    """``geometry`` (a copy) with ``obj``'s undeformed positions per corner (``surface.ORCO``:
+    (x, y, z, 1)) where a deformation moved its vertices (``orco.undeformed_positions``), for the
+    graphs reading Generated; where they cannot be made, ``warnings`` says so."""
+    geometry = copy.copy(geometry)
+    geometry.attributes = dict(geometry.attributes)
+    geometry.orco_read = True
+    positions, note = orco.undeformed_positions(obj, mesh, depsgraph)
+    if note:
+        warnings.append(note)
+    if positions is not None:
+        values = np.ones((len(mesh.loops), 4), np.float32)
+        values[:, :3] = positions[_corner_verts(mesh)]
+        geometry.attributes[surface.ORCO] = values
+    return geometry
+
+
 def closed_winding(mesh, corner_verts: np.ndarray, corner_positions: np.ndarray,
                    tri_corners: np.ndarray, edges: tuple[np.ndarray, np.ndarray] | None = None) -> int:
     """``MeshGeometry.winding`` of ``mesh``: +1 (-1) where every edge that borders a face borders
@@ -1347,14 +1364,17 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
                 graphs += [g for m in slots for name, g in snap.materials[m].aovs if name in aov_names]
             tangents = any("tangent" in g.program.uses for g in graphs)
             wanted = {a for g in graphs for a in g.attributes}
+            generated = any("generated" in g.program.uses for g in graphs)
             if geometry is None or _is_dirty(obj, dirty) or (tangents and geometry.tangents is None) or \
-                    not wanted <= geometry.attributes.keys():
+                    not wanted <= geometry.attributes.keys() or (generated and not geometry.orco_read):
                 mesh = obj.to_mesh()
                 try:
                     geometry = (mesh_geometry(key, mesh, tangents, _memo_key(obj))
                                 if mesh is not None else None)
                     if geometry is not None and wanted:
                         geometry = with_attributes(geometry, mesh, wanted, snap.warnings)
+                    if geometry is not None and generated:
+                        geometry = with_orco(geometry, obj, mesh, depsgraph, snap.warnings)
                 finally:
                     obj.to_mesh_clear()
                 if geometry is None:
@@ -1368,6 +1388,8 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
             snap.geometries[key] = geometry
         data = obj.data
         slots = _fallback_slots(snap, inst, slots, key, depsgraph)
+        if surface.ORCO in snap.geometries[key].attributes:  # deformed: Generated from its orco
+            slots = [_with_orco(snap, m) for m in slots]
         graphs = [g for m in slots for g in (snap.materials[m].graph, *(g for _, g in snap.materials[m].aovs))
                   if g is not None]
         wanted = {a for g in graphs for a in g.uniform_attributes}
@@ -1480,6 +1502,24 @@ def _with_bakes(snap: S.Snapshot, request) -> str | None:
     return variant
 
 
+def _with_orco(snap: S.Snapshot, mkey: str) -> str:
+    """The key of material ``mkey`` as drawn on a deformed mesh (``surface.with_orco``: Generated
+    from its undeformed positions; added to ``snap.materials``); ``mkey`` where none of its graphs
+    reads Generated."""
+    params = snap.materials[mkey]
+    if not any("generated" in g.program.uses for g in _graphs(params)):
+        return mkey
+    variant = f"{mkey}\x1forco"
+    if variant not in snap.materials:
+        graph = surface.with_orco(params.graph) if params.graph is not None else None
+        aovs = tuple((name, surface.with_orco(g)) for name, g in params.aovs)
+        snap.materials[variant] = dataclasses.replace(params, graph=graph, aovs=aovs)
+        snap.material_warnings[variant] = snap.material_warnings.get(mkey, [])
+        if mkey in snap.term_choices:
+            snap.term_choices[variant] = snap.term_choices[mkey]
+    return variant
+
+
 def apply_bakes(snap: S.Snapshot) -> int:
     """Give the draw items whose bakes have since been made their materials with the bakes
     (``snap.bake_requests`` keeps the rest); how many slots changed."""
@@ -1489,7 +1529,10 @@ def apply_bakes(snap: S.Snapshot) -> int:
         if variant is None:
             waiting.append(request)
             continue
-        snap.items[request.item].materials[request.slot] = variant
+        item = snap.items[request.item]
+        if surface.ORCO in snap.geometries[item.geometry].attributes:  # deformed (snapshot's slots)
+            variant = _with_orco(snap, variant)
+        item.materials[request.slot] = variant
         changed += 1
     snap.bake_requests[:] = waiting
     return changed

@@ -482,7 +482,8 @@ def _declare_position_only(info, interface: str) -> None:
 
 
 #: The node graph's frame fields (the view's matrices, its window): read from the frame block.
-_FRAME_FIELDS = frozenset({"world_to_view", "view_to_world", "window", "clip_start", "ray_footprint"})
+_FRAME_FIELDS = frozenset({"world_to_view", "view_to_world", "window", "clip_start", "ray_footprint",
+                           "subpixels"})
 
 
 def shadow_frame_fields() -> frozenset[str]:

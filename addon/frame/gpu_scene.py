@@ -582,7 +582,8 @@ class SceneResources:
         tiles = self.tile_lists(view_projection, width, height, samples)
         self.uploads["frame"] += self._frame.put(programs.pack_frame(self.snapshot, view_projection, tiles,
                                                                      self.light_group_ends,
-                                                                     (width * samples, height * samples)))
+                                                                     (width * samples, height * samples),
+                                                                     samples))
 
     def _view_tiles(self, view_projection: np.ndarray | None, width: int, height: int,
                     samples: int) -> light_tiles.TileLists | None:

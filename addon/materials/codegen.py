@@ -478,7 +478,7 @@ def _height_at(w: _Writer, node: FlatNode, axis: str, filter_width: str) -> str:
     try:
         for name in above:
             other = w.flat.nodes[name]
-            outputs = _emit(w, other)
+            outputs, _ = _emit(w, other)
             if outputs is not None:  # what did not compile was named missing the first time
                 w.define(other, outputs)
         return w.arg(node, "Height")
@@ -1043,11 +1043,15 @@ def _baked(w: _Writer, node: FlatNode) -> dict | None:
     return outputs or None
 
 
-def _emit(w: _Writer, node: FlatNode) -> dict | None:
-    """A node's outputs as GLSL: its emitter's, else its bakes' (``_baked``); None where neither."""
+def _emit(w: _Writer, node: FlatNode) -> tuple[dict | None, bool]:
+    """A node's outputs as GLSL: its emitter's, else its bakes' (``_baked``); None where neither;
+    and whether they are its bakes'."""
     emit = None if node.kind in FORCE_BAKE else EMITTERS.get(node.kind)
     outputs = emit(w, node) if emit is not None else None
-    return outputs if outputs is not None or not w.baked else _baked(w, node)
+    if outputs is not None or not w.baked:
+        return outputs, False
+    outputs = _baked(w, node)
+    return outputs, outputs is not None
 
 
 def compile_graph(flat: FlatGraph, targets: dict[str, tuple[str, str]], name: str = "graph",
@@ -1064,8 +1068,8 @@ def compile_graph(flat: FlatGraph, targets: dict[str, tuple[str, str]], name: st
     for node in flat.nodes.values():
         if node.kind in SINKS:
             continue  # outputs: what reads their inputs is the caller's
-        outputs = _emit(w, node)
-        if outputs is not None and (node.kind in FORCE_BAKE or EMITTERS.get(node.kind) is None):
+        outputs, from_bakes = _emit(w, node)
+        if from_bakes:
             w.from_bakes.append(node.name)
         if outputs is None:
             w.missing.append(f"{node.name} ({node.kind})")

@@ -16,7 +16,7 @@ from __future__ import annotations
 
 import re
 from collections import OrderedDict
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from functools import lru_cache
 
 import numpy as np
@@ -31,7 +31,7 @@ FUNCTION = "material_graph"
 #: ``SL_GRAPH_<FIELD>``): the rest cost nothing to fill.
 OPTIONAL_INPUTS = ("tangent", "object", "generated", "object_to_world", "world_to_object", "world_to_view",
                    "view_to_world", "window", "object_color", "object_info", "ng", "clip_start",
-                   "uniform_attributes", "triangle", "ray_footprint")
+                   "uniform_attributes", "triangle", "ray_footprint", "subpixels")
 #: The most samplers one material binds (texture units left beside the programs' own; a UDIM
 #: image's tiles of one size are one); a node needing more is not compiled, said in ``notes``.
 MAX_IMAGES = codegen.MAX_IMAGES
@@ -198,7 +198,7 @@ def bump_shadowing(version: tuple[int, int]) -> str:
 
 def _bent(flat: FlatGraph) -> bool:
     """Whether some closure's Normal is linked (a Normal Map, a Bump, any node): the shading
-    models then apply Cycles' rules for a bent normal (glsl/graph_surface.glsl's bump_terminator)."""
+    models then apply Cycles' rules for a bent normal (glsl/bent_normal.glsl's bump_terminator)."""
     return any(node.kind in codegen.CLOSURES and "Normal" in node.inputs
                and not isinstance(node.inputs["Normal"].source, Const) for node in flat.nodes.values())
 
@@ -214,6 +214,13 @@ def _node_count(flat: FlatGraph) -> int:
     return sum(1 for n in flat.nodes.values() if n.kind not in ("Convert", *codegen.SINKS))
 
 
+def _program_key(digest: str, kinds: tuple[str, ...], rule: str) -> str:
+    """A graph program's key: its source's ``digest`` (``codegen.Compiled.key``), the kinds of the
+    attributes it reads (a tangent is turned to world space, an island's value is not interpolated,
+    an orco becomes Generated: ``programs.graph_defines``) and its bent normal's rule."""
+    return f"{digest}{''.join(k[0] for k in kinds)}{BUMP_SHADOWING.index(rule) if rule else ''}"
+
+
 def _compiled(flat: FlatGraph, targets: dict, function: str, whole: FlatGraph,
               baked: dict | None = None) -> MaterialGraph:
     full = flat
@@ -227,8 +234,8 @@ def _compiled(flat: FlatGraph, targets: dict, function: str, whole: FlatGraph,
     if _bent(flat):
         uses |= {"bent_normal"}
         rule = bump_shadowing(flat.version)
-    kinds = tuple(kind for kind, _ in compiled.attributes)  # a tangent is turned to world space
-    key = f"{compiled.key}{''.join(k[0] for k in kinds)}{BUMP_SHADOWING.index(rule) if rule else ''}"
+    kinds = tuple(kind for kind, _ in compiled.attributes)
+    key = _program_key(compiled.key, kinds, rule)
     program = GraphProgram(key, compiled.source,
                            len(compiled.constants), len(compiled.images), len(compiled.attributes), uses,
                            kinds, compiled.arrays, len(compiled.uniform_attributes), rule)
@@ -259,6 +266,28 @@ def compile_material(graph: Graph, groups: dict[str, Graph],
     compiled = _compiled(flat, {"surface": (output.name, "Surface")}, FUNCTION, flatten(graph, groups), baked)
     compiled.read = (graph, groups, None)
     return compiled
+
+
+#: The attribute of a deformed mesh's undeformed positions (Blender's orco: object space, (x, y, z,
+#: 1) per corner; ``scene.snapshot.MeshGeometry.attributes``), which a graph reading Generated
+#: takes on such a mesh (``with_orco``).
+ORCO = ("ORCO", "")
+
+
+def with_orco(graph: MaterialGraph) -> MaterialGraph:
+    """``graph`` as drawn on a deformed mesh (an armature, shape keys, a lattice, any deforming
+    modifier): where it reads Generated, its program takes the mesh's undeformed positions as one
+    more attribute (``ORCO``) and Generated from them, as Cycles' attr_create_generated
+    (intern/cycles/blender/mesh.cpp) takes Blender's orco layer, so that textures stay on the
+    deforming surface; ``graph`` itself where it reads no Generated. An undeformed mesh keeps
+    ``graph``: Generated from the fragment's position, no attribute."""
+    if "generated" not in graph.program.uses or ORCO in graph.attributes:
+        return graph
+    p = graph.program
+    kinds = p.attribute_kinds + (ORCO[0],)
+    program = replace(p, key=_program_key(p.key[:16], kinds, p.bump_shadowing),
+                     attributes=p.attributes + 1, attribute_kinds=kinds)
+    return replace(graph, program=program, attributes=graph.attributes + (ORCO,))
 
 
 #: The function a material's AOV Output compiles to: ``material_aov(g, out vec4 color, out float

@@ -362,7 +362,10 @@ def graph_defines(g: GraphProgram) -> list[tuple[str, str]]:
         out.append(("SL_PASS_ATTRIBUTES", passes))
         reads = [f"graph_tangent_to_world(graph_attribute{k})" if kind == "TANGENT" else f"graph_attribute{k}"
                  for k, kind in enumerate(g.attribute_kinds)]
-        out.append(("SL_GRAPH_ATTRIBUTE_READS", " ".join(f"g.attributes[{k}] = {read};"
+        # a deformed mesh's undeformed positions (surface.with_orco) give Generated
+        orco = [f" g.generated = graph_generated(graph_attribute{k}.xyz);" if kind == "ORCO" else ""
+                for k, kind in enumerate(g.attribute_kinds)]
+        out.append(("SL_GRAPH_ATTRIBUTE_READS", " ".join(f"g.attributes[{k}] = {read};{orco[k]}"
                                                          for k, read in enumerate(reads))))
     return out
 
@@ -417,7 +420,7 @@ def program_source(features: Features) -> ProgramSource:
     if features.graph is not None:  # the node library, then the graph's function
         fragment += [read_glsl(name) for name in codegen.library(features.graph.source)]
         fragment += ["#define GRAPH_CONST(i) graph.constants[i]", features.graph.source,
-                     read_glsl("graph_surface.glsl")]
+                     read_glsl("graph_surface.glsl"), read_glsl("bent_normal.glsl")]
     fragment.append(read_glsl("mesh.frag.glsl"))
     return ProgramSource(
         typedefs=read_glsl("uniforms.glsl") + "\n" + read_glsl("chain_data.glsl"),
@@ -652,10 +655,13 @@ ALL_LOBES = (1.0, 1.0, 1.0, 1.0)
 
 def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None,
                tiles: light_tiles.TileLists | None = None,
-               group_ends: tuple[int, ...] | None = None, size: tuple[int, int] | None = None) -> bytes:
+               group_ends: tuple[int, ...] | None = None, size: tuple[int, int] | None = None,
+               samples: int = 1) -> bytes:
     """The FrameData block; ``tiles``: the view's light tiles (light culling); ``group_ends``:
     where each group of ``light_order`` ends (default: each after the last light); ``size``: the
-    target's pixels (default: the snapshot's)."""
+    target's pixels (default: the snapshot's); ``samples``: the target's pixels per image pixel
+    along an axis (supersampling: screen-space sizes, a Wireframe's Pixel Size and a Bump's step,
+    are the image's pixels)."""
     cam = snapshot.camera
     vp = cam.view_projection if view_projection is None else view_projection
     ambient = snapshot.settings.ambient
@@ -669,7 +675,7 @@ def pack_frame(snapshot: Snapshot, view_projection: np.ndarray | None = None,
         *np.reshape(group_ends if group_ends is not None else [len(snapshot.lights)] * len(LIGHT_GROUP_ORDER),
                     (2, 4)),
         _mat(cam.view),
-        [*(size or (snapshot.width, snapshot.height)), cam.clip_start, 0.0],
+        [*(size or (snapshot.width, snapshot.height)), cam.clip_start, float(samples)],
     ]
     return np.concatenate([np.asarray(r, np.float32) for r in rows]).tobytes()
 

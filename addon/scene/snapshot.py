@@ -184,6 +184,9 @@ class MeshGeometry:
     #: the attributes its materials' graphs read, per corner row ((N, 4) float32), by (kind, name)
     #: (``materials.codegen.ATTRIBUTE_KINDS``; an empty name: the mesh's default of that kind)
     attributes: dict[tuple[str, str], np.ndarray] = field(default_factory=dict)
+    #: whether its undeformed positions were looked for (a material's graph reads Generated): they
+    #: are then ``attributes[materials.surface.ORCO]`` where a deformation moved its vertices
+    orco_read: bool = False
     #: +1: a closed surface facing out (every edge between two faces that run along it in opposite
     #: directions, positive volume), -1: closed facing in, 0: open or not known. Seen from outside,
     #: a closed surface's nearest face faces the viewer: shadow maps need draw only such faces.
