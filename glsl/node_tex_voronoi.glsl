@@ -5,7 +5,8 @@
  * point is a vec4 whose unused components stay 0 (1D in x), which every operation leaves 0, and
  * whose sums and dot products add in Cycles' order for float2 (x + y), float3 ((x + y) + z: SSE's
  * dpps) and float4 ((x + y) + (z + w)): (x + y) + (z + w) with zeros is each of them, bit for
- * bit. The loops run Cycles' order (w outermost, x innermost), an unused axis over one cell.
+ * bit. The cells are visited in Cycles' order (w outermost, x innermost), only along the point's
+ * axes.
  * The numpy twin is addon/reference/voronoi.py. */
 
 #define VORONOI_F1 0
@@ -165,40 +166,61 @@ vec4 voronoi_point(int dims, int cells, vec4 cellf, ivec4 cell, ivec4 offset, fl
   return vec4(offset) + voronoi_cell_hash(dims, cells, cellf, cell, offset) * randomness;
 }
 
-/* The reach of the loops along each axis: `r` cells each way where the point has the axis */
-ivec4 voronoi_reach(int dims, int r) { return ivec4(r, dims > 1 ? r : 0, dims > 2 ? r : 0, dims > 3 ? r : 0); }
+/* The cells within `r` of a point's along each of its axes, (2r + 1)^dims of them, one loop
+ * over them (n) in Cycles' order: x innermost, then y, z, w outermost */
+int voronoi_around(int dims, int r)
+{
+  int side = 2 * r + 1;
+  return dims == 1 ? side : dims == 2 ? side * side : dims == 3 ? side * side * side : side * side * side * side;
+}
 
-/* Cycles' voronoi_f1: the closest feature point (chosen by voronoi_distance_bound) */
+/* The n-th of them: its offset from the point's cell */
+ivec4 voronoi_offset(int dims, int r, int n)
+{
+  int side = 2 * r + 1;
+  ivec4 offset = ivec4(0);
+  for (int axis = 0; axis < dims; axis++) {
+    offset[axis] = n % side - r;
+    n /= side;
+  }
+  return offset;
+}
+
+/* The feature point closest to `local` (in cell `cell`) by the metric's voronoi_distance_bound:
+ * its cell's offset and its position relative to the cell (Cycles' voronoi_f1 and the first scan
+ * of voronoi_n_sphere_radius) */
+void voronoi_closest(int dims, int metric, int cells, VoronoiParams p, vec4 cellf, ivec4 cell, vec4 local,
+                     out ivec4 closest_offset, out vec4 closest)
+{
+  float min_distance = VORONOI_FLT_MAX;
+  closest_offset = ivec4(0);
+  closest = vec4(0.0);
+  for (int n = 0; n < voronoi_around(dims, 1); n++) {
+    ivec4 offset = voronoi_offset(dims, 1, n);
+    vec4 point = voronoi_point(dims, cells, cellf, cell, offset, p.randomness);
+    float d = voronoi_distance_bound(dims, metric, point - local, p);
+    if (d < min_distance) {
+      closest_offset = offset;
+      min_distance = d;
+      closest = point;
+    }
+  }
+}
+
+/* Cycles' voronoi_f1: the closest feature point */
 VoronoiOctave voronoi_f1(int dims, int metric, int cells, VoronoiParams p, vec4 coord)
 {
   vec4 cellf = floor(coord);
   vec4 local = coord - cellf;
   ivec4 cell = ivec4(cellf); /* a cell index past 2^31 wraps differently from Cycles' (either is garbage) */
-  float min_distance = VORONOI_FLT_MAX;
-  ivec4 target_offset = ivec4(0);
-  vec4 target_position = vec4(0.0);
-  ivec4 r = voronoi_reach(dims, 1);
-  for (int u = -r.w; u <= r.w; u++) {
-    for (int k = -r.z; k <= r.z; k++) {
-      for (int j = -r.y; j <= r.y; j++) {
-        for (int i = -r.x; i <= r.x; i++) {
-          ivec4 offset = ivec4(i, j, k, u);
-          vec4 point = voronoi_point(dims, cells, cellf, cell, offset, p.randomness);
-          float d = voronoi_distance_bound(dims, metric, point - local, p);
-          if (d < min_distance) {
-            target_offset = offset;
-            min_distance = d;
-            target_position = point;
-          }
-        }
-      }
-    }
-  }
-  return VoronoiOctave(voronoi_distance(dims, metric, target_position - local, p),
-                       voronoi_cell_color(dims, cells, cellf, cell, target_offset), target_position + cellf);
+  ivec4 offset;
+  vec4 point;
+  voronoi_closest(dims, metric, cells, p, cellf, cell, local, offset, point);
+  return VoronoiOctave(voronoi_distance(dims, metric, point - local, p),
+                       voronoi_cell_color(dims, cells, cellf, cell, offset), point + cellf);
 }
 
-/* Cycles' voronoi_smooth_f1: F1 blended over the 5^n cells around by a smooth minimum */
+/* Cycles' voronoi_smooth_f1: F1 blended over the 5^dims cells around by a smooth minimum */
 VoronoiOctave voronoi_smooth_f1(int dims, int metric, int cells, VoronoiParams p, vec4 coord)
 {
   vec4 cellf = floor(coord);
@@ -209,24 +231,17 @@ VoronoiOctave voronoi_smooth_f1(int dims, int metric, int cells, VoronoiParams p
   vec3 smooth_color = vec3(0.0);
   vec4 smooth_position = vec4(0.0);
   float h = -1.0;
-  ivec4 r = voronoi_reach(dims, 2);
-  for (int u = -r.w; u <= r.w; u++) {
-    for (int k = -r.z; k <= r.z; k++) {
-      for (int j = -r.y; j <= r.y; j++) {
-        for (int i = -r.x; i <= r.x; i++) {
-          ivec4 offset = ivec4(i, j, k, u);
-          vec4 point = voronoi_point(dims, cells, cellf, cell, offset, p.randomness);
-          float d = voronoi_distance(dims, metric, point - local, p);
-          h = h == -1.0 ? 1.0 :
-                          node_smoothstep(0.0, 1.0, 0.5 + 0.5 * (smooth_distance - d) / p.smoothness);
-          float correction = p.smoothness * h * (1.0 - h);
-          smooth_distance = voronoi_mix(smooth_distance, d, h) - correction;
-          correction /= 1.0 + 3.0 * p.smoothness;
-          smooth_color = voronoi_mix(smooth_color, voronoi_cell_color(dims, cells, cellf, cell, offset), h) - correction;
-          smooth_position = voronoi_mix(smooth_position, point, h) - correction * lanes;
-        }
-      }
-    }
+  for (int n = 0; n < voronoi_around(dims, 2); n++) {
+    ivec4 offset = voronoi_offset(dims, 2, n);
+    vec4 point = voronoi_point(dims, cells, cellf, cell, offset, p.randomness);
+    float d = voronoi_distance(dims, metric, point - local, p);
+    h = h == -1.0 ? 1.0 :
+                    node_smoothstep(0.0, 1.0, 0.5 + 0.5 * (smooth_distance - d) / p.smoothness);
+    float correction = p.smoothness * h * (1.0 - h);
+    smooth_distance = voronoi_mix(smooth_distance, d, h) - correction;
+    correction /= 1.0 + 3.0 * p.smoothness;
+    smooth_color = voronoi_mix(smooth_color, voronoi_cell_color(dims, cells, cellf, cell, offset), h) - correction;
+    smooth_position = voronoi_mix(smooth_position, point, h) - correction * lanes;
   }
   return VoronoiOctave(smooth_distance, smooth_color, cellf + smooth_position);
 }
@@ -243,29 +258,22 @@ VoronoiOctave voronoi_f2(int dims, int metric, int cells, VoronoiParams p, vec4 
   vec4 position_f1 = vec4(0.0);
   ivec4 offset_f2 = ivec4(0);
   vec4 position_f2 = vec4(0.0);
-  ivec4 r = voronoi_reach(dims, 1);
-  for (int u = -r.w; u <= r.w; u++) {
-    for (int k = -r.z; k <= r.z; k++) {
-      for (int j = -r.y; j <= r.y; j++) {
-        for (int i = -r.x; i <= r.x; i++) {
-          ivec4 offset = ivec4(i, j, k, u);
-          vec4 point = voronoi_point(dims, cells, cellf, cell, offset, p.randomness);
-          float d = voronoi_distance(dims, metric, point - local, p);
-          if (d < distance_f1) {
-            distance_f2 = distance_f1;
-            distance_f1 = d;
-            offset_f2 = offset_f1;
-            offset_f1 = offset;
-            position_f2 = position_f1;
-            position_f1 = point;
-          }
-          else if (d < distance_f2) {
-            distance_f2 = d;
-            offset_f2 = offset;
-            position_f2 = point;
-          }
-        }
-      }
+  for (int n = 0; n < voronoi_around(dims, 1); n++) {
+    ivec4 offset = voronoi_offset(dims, 1, n);
+    vec4 point = voronoi_point(dims, cells, cellf, cell, offset, p.randomness);
+    float d = voronoi_distance(dims, metric, point - local, p);
+    if (d < distance_f1) {
+      distance_f2 = distance_f1;
+      distance_f1 = d;
+      offset_f2 = offset_f1;
+      offset_f1 = offset;
+      position_f2 = position_f1;
+      position_f1 = point;
+    }
+    else if (d < distance_f2) {
+      distance_f2 = d;
+      offset_f2 = offset;
+      position_f2 = point;
     }
   }
   return VoronoiOctave(distance_f2, voronoi_cell_color(dims, cells, cellf, cell, offset_f2), position_f2 + cellf);
@@ -293,37 +301,24 @@ float voronoi_distance_to_edge(int dims, int cells, VoronoiParams p, vec4 coord)
   vec4 cellf = floor(coord);
   vec4 local = coord - cellf;
   ivec4 cell = ivec4(cellf);
-  ivec4 r = voronoi_reach(dims, 1);
   vec4 to_closest = vec4(0.0);
   float min_distance = VORONOI_FLT_MAX;
-  for (int u = -r.w; u <= r.w; u++) {
-    for (int k = -r.z; k <= r.z; k++) {
-      for (int j = -r.y; j <= r.y; j++) {
-        for (int i = -r.x; i <= r.x; i++) {
-          vec4 to_point = voronoi_point(dims, cells, cellf, cell, ivec4(i, j, k, u), p.randomness) - local;
-          float d = voronoi_sum(to_point * to_point);
-          if (d < min_distance) {
-            min_distance = d;
-            to_closest = to_point;
-          }
-        }
-      }
+  for (int n = 0; n < voronoi_around(dims, 1); n++) {
+    vec4 to_point = voronoi_point(dims, cells, cellf, cell, voronoi_offset(dims, 1, n), p.randomness) - local;
+    float d = voronoi_sum(to_point * to_point);
+    if (d < min_distance) {
+      min_distance = d;
+      to_closest = to_point;
     }
   }
   min_distance = VORONOI_FLT_MAX;
-  for (int u = -r.w; u <= r.w; u++) {
-    for (int k = -r.z; k <= r.z; k++) {
-      for (int j = -r.y; j <= r.y; j++) {
-        for (int i = -r.x; i <= r.x; i++) {
-          vec4 to_point = voronoi_point(dims, cells, cellf, cell, ivec4(i, j, k, u), p.randomness) - local;
-          vec4 perpendicular = to_point - to_closest;
-          /* Cycles' threshold: the closest point itself (and one within 1e-2 of it) has no bisector */
-          if (voronoi_sum(perpendicular * perpendicular) > 0.0001) {
-            vec4 mid = (to_closest + to_point) / 2.0;
-            min_distance = min(min_distance, voronoi_sum(mid * voronoi_normalize(perpendicular, dims)));
-          }
-        }
-      }
+  for (int n = 0; n < voronoi_around(dims, 1); n++) {
+    vec4 to_point = voronoi_point(dims, cells, cellf, cell, voronoi_offset(dims, 1, n), p.randomness) - local;
+    vec4 perpendicular = to_point - to_closest;
+    /* Cycles' threshold: the closest point itself (and one within 1e-2 of it) has no bisector */
+    if (voronoi_sum(perpendicular * perpendicular) > 0.0001) {
+      vec4 mid = (to_closest + to_point) / 2.0;
+      min_distance = min(min_distance, voronoi_sum(mid * voronoi_normalize(perpendicular, dims)));
     }
   }
   return min_distance;
@@ -337,44 +332,22 @@ float voronoi_n_sphere_radius(int dims, int cells, VoronoiParams p, vec4 coord)
   vec4 cellf = floor(coord);
   vec4 local = coord - cellf;
   ivec4 cell = ivec4(cellf);
-  ivec4 r = voronoi_reach(dims, 1);
-  vec4 closest = vec4(0.0);
-  ivec4 closest_offset = ivec4(0);
+  ivec4 closest_offset;
+  vec4 closest;
+  voronoi_closest(dims, metric, cells, p, cellf, cell, local, closest_offset, closest);
   float min_distance = VORONOI_FLT_MAX;
-  for (int u = -r.w; u <= r.w; u++) {
-    for (int k = -r.z; k <= r.z; k++) {
-      for (int j = -r.y; j <= r.y; j++) {
-        for (int i = -r.x; i <= r.x; i++) {
-          ivec4 offset = ivec4(i, j, k, u);
-          vec4 point = voronoi_point(dims, cells, cellf, cell, offset, p.randomness);
-          float d = voronoi_distance_bound(dims, metric, point - local, p);
-          if (d < min_distance) {
-            min_distance = d;
-            closest = point;
-            closest_offset = offset;
-          }
-        }
-      }
-    }
-  }
-  min_distance = VORONOI_FLT_MAX;
   vec4 closest_to_closest = vec4(0.0);
-  for (int u = -r.w; u <= r.w; u++) {
-    for (int k = -r.z; k <= r.z; k++) {
-      for (int j = -r.y; j <= r.y; j++) {
-        for (int i = -r.x; i <= r.x; i++) {
-          if (ivec4(i, j, k, u) == ivec4(0)) {
-            continue;
-          }
-          ivec4 offset = ivec4(i, j, k, u) + closest_offset;
-          vec4 point = voronoi_point(dims, cells, cellf, cell, offset, p.randomness);
-          float d = voronoi_distance_bound(dims, metric, closest - point, p);
-          if (d < min_distance) {
-            min_distance = d;
-            closest_to_closest = point;
-          }
-        }
-      }
+  for (int n = 0; n < voronoi_around(dims, 1); n++) {
+    ivec4 around = voronoi_offset(dims, 1, n);
+    if (around == ivec4(0)) {
+      continue;
+    }
+    ivec4 offset = around + closest_offset;
+    vec4 point = voronoi_point(dims, cells, cellf, cell, offset, p.randomness);
+    float d = voronoi_distance_bound(dims, metric, closest - point, p);
+    if (d < min_distance) {
+      min_distance = d;
+      closest_to_closest = point;
     }
   }
   return voronoi_distance(dims, metric, closest_to_closest - closest, p) / 2.0;

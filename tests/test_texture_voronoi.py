@@ -21,6 +21,7 @@ import scenes
 from glsl_harness import evaluate
 from test_cycles import _cycles
 from test_material_nodes import FRAGMENT_AOVS, SIZE, _aov, _combine, _plane_scene
+from test_texture_white_noise import _channels
 
 from addon.blender import nodes as reader
 from addon.materials import codegen, graph
@@ -261,25 +262,42 @@ def _jumping(case) -> tuple[str, ...]:
     return ("c", "p", "w") if cells else ()
 
 
-def _borderline(results, case) -> np.ndarray:
+def _twin(results, name) -> dict[str, np.ndarray]:
+    """The twin's outputs of case ``name`` at the coordinates Cycles evaluated (kept with the
+    results: three tests read them)."""
+    key = ("twin", name)
+    if key not in results:
+        case = _case_of(name)
+        results[key] = _twin_at(case, *_coordinates(results, case))
+    return results[key]
+
+
+def _borderline(results, name) -> np.ndarray:
     """Pixels at a cell border: where a nudge of the coordinate by one float step (either way,
     along any axis the dimension count reads) changes the twin's jumping outputs."""
+    key = ("border", name)
+    if key not in results:
+        case = _case_of(name)
+        results[key] = _jumps(case, *_coordinates(results, case), _twin(results, name),
+                              lambda x, toward: np.nextafter(x, np.float32(toward)))
+    return results[key]
+
+
+def _jumps(case, co, w, here, nudge) -> np.ndarray:
+    """Where ``nudge(x, -inf or +inf)`` of a coordinate changes ``here``'s jumping outputs by
+    more than the last bits of a value computed from another cell."""
     jumping = [s for s in _jumping(case) if s in _outputs(case)]
-    co, w = _coordinates(results, case)
     border = np.zeros(len(co), bool)
-    if not jumping:
-        return border
-    here = _twin_at(case, co, w)
     axes = {"1D": ("w",), "2D": (0, 1), "3D": (0, 1, 2), "4D": (0, 1, 2, "w")}[case["dims"]]
-    for axis in axes:
+    for axis in axes if jumping else ():
         for toward in (-np.inf, np.inf):
             c, x = co.copy(), w.copy()
             if axis == "w":
-                x = np.nextafter(x, np.float32(toward))
+                x = nudge(x, toward)
             else:
-                c[:, axis] = np.nextafter(c[:, axis], np.float32(toward))
+                c[:, axis] = nudge(c[:, axis], toward)
             there = _twin_at(case, c, x)
-            for s in jumping:  # a jump, not the last bits of a value computed from another cell
+            for s in jumping:
                 border |= (np.abs(there[s] - here[s]) > 1e-6 * np.maximum(np.abs(here[s]), 1.0)).any(axis=1)
     return border
 
@@ -289,7 +307,7 @@ def _differences(results, name, values=None) -> dict[str, tuple[float, int, int]
     the border pixels, and the border pixels whose difference exceeds that (where the two picked
     different cells); ``values``: the twin's outputs instead of the GLSL's."""
     case = _case_of(name)
-    border = _borderline(results, case)
+    border = _borderline(results, name)
     out = {}
     for s in _outputs(case):
         ours, cycles = results[f"{name}_{s}"]
@@ -436,8 +454,7 @@ def test_voronoi_matches_cycles(rendered, group_name, name):
 def test_voronoi_twin_matches_cycles(rendered, group_name, name):
     """The twin at the coordinates Cycles evaluated."""
     results = rendered(group_name)
-    case = _case_of(name)
-    twin = _twin_at(case, *_coordinates(results, case))
+    twin = _twin(results, name)
     measured = {s: m[1] for s, m in MEASURED.get(name, {}).items()}
     _check(name, _differences(results, name, twin), measured, "twin")
 
@@ -447,8 +464,7 @@ def test_voronoi_matches_twin(rendered, group_name, name):
     """GLSL and twin compute the same float operations: equal but where GLSL's pow rounds
     otherwise than C's (Minkowski)."""
     results = rendered(group_name)
-    case = _case_of(name)
-    twin = _twin_at(case, *_coordinates(results, case))
+    twin = _twin(results, name)
     for s, values in twin.items():
         worst = float(np.abs(results[f"{name}_{s}"][0] - values).max())
         measured = POW_MEASURED.get(name, {}).get(s, 0.0)
@@ -492,11 +508,6 @@ def test_only_graphs_with_voronoi_compile_its_library():
     assert needed == codegen.LIBRARY + ("node_hash.glsl", "node_tex_voronoi.glsl")
 
 
-def _channels(path):
-    with OpenEXR.File(str(path)) as f:
-        return {name: np.asarray(ch.pixels) for part in f.parts for name, ch in part.channels.items()}
-
-
 def test_engine_draws_voronoi_as_cycles(tmp_path):
     """The engine's program holds the Voronoi library where a material's graph calls it: a 3D F1
     Voronoi at Blender's defaults of the plane's Generated coordinates (its Vector unlinked) to
@@ -518,13 +529,8 @@ def test_engine_draws_voronoi_as_cycles(tmp_path):
     co = rows["ViewLayer.generated"][:, :3].astype(np.float32)
     w = np.zeros(len(co), np.float32)
     case = _case("3D", "F1")
-    here = _twin_at(case, co, w)["c"]
-    border = np.zeros(len(co), bool)
-    for axis in range(3):
-        for step in (-1e-5, 1e-5):
-            nudged = co.copy()
-            nudged[:, axis] += np.float32(step)
-            border |= (_twin_at(case, nudged, w)["c"] != here).any(axis=1)
+    steps = {-np.inf: np.float32(-1e-5), np.inf: np.float32(1e-5)}
+    border = _jumps(case, co, w, _twin_at(case, co, w), lambda x, toward: x + steps[toward])
     distance = np.abs(ours["ViewLayer.distance.X"] - theirs["ViewLayer.distance.X"]).reshape(-1)
     color_ours = ours["ViewLayer.color"].reshape(SIZE * SIZE, -1)[:, :3]
     differ = (color_ours != rows["ViewLayer.color"][:, :3]).any(axis=1)

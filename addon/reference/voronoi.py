@@ -131,21 +131,28 @@ def _pick(mask, new, old):
     return np.where(mask[:, None] if np.ndim(old) > 1 else mask, new, old)
 
 
-def f1(p: Params, coord: np.ndarray):
-    """Cycles' voronoi_f1: (distance, colour, position)."""
-    cellf, local, cell = _cells(coord)
-    n = len(coord)
+def _closest(p: Params, cellf, cell, local):
+    """The feature point closest to ``local`` by the metric's bound: its cell's offset and its
+    position relative to the cell (voronoi_f1's scan, voronoi_n_sphere_radius's first)."""
+    n = len(local)
     best = np.full(n, _FLT_MAX, F32)
-    target_offset = np.zeros((n, 4), np.int32)
-    target = np.zeros((n, 4), F32)
+    closest_offset = np.zeros((n, 4), np.int32)
+    closest = np.zeros((n, 4), F32)
     for offset in _offsets(p, 1):
         point = _point(cellf, cell, offset, p)
         d = distance_bound(point - local, p)
         closer = d < best
-        target_offset = _pick(closer, offset, target_offset)
+        closest_offset = _pick(closer, offset, closest_offset)
         best = np.where(closer, d, best)
-        target = _pick(closer, point, target)
-    return distance(target - local, p), cell_color(cellf, cell, target_offset, p), target + cellf
+        closest = _pick(closer, point, closest)
+    return closest_offset, closest
+
+
+def f1(p: Params, coord: np.ndarray):
+    """Cycles' voronoi_f1: (distance, colour, position)."""
+    cellf, local, cell = _cells(coord)
+    offset, point = _closest(p, cellf, cell, local)
+    return distance(point - local, p), cell_color(cellf, cell, offset, p), point + cellf
 
 
 def smooth_f1(p: Params, coord: np.ndarray):
@@ -232,23 +239,14 @@ def n_sphere_radius(p: Params, coord: np.ndarray) -> np.ndarray:
     p = replace(p, metric="MANHATTAN" if p.dims == 1 else "EUCLIDEAN")
     cellf, local, cell = _cells(coord)
     n = len(coord)
-    best = np.full(n, _FLT_MAX, F32)
-    closest = np.zeros((n, 4), F32)
-    closest_offset = np.zeros((n, 4), np.int32)
-    for offset in _offsets(p, 1):
-        point = _point(cellf, cell, offset, p)
-        d = distance_bound(point - local, p)
-        closer = d < best
-        best = np.where(closer, d, best)
-        closest = _pick(closer, point, closest)
-        closest_offset = _pick(closer, offset, closest_offset)
+    closest_offset, closest = _closest(p, cellf, cell, local)
     best = np.full(n, _FLT_MAX, F32)
     other = np.zeros((n, 4), F32)
     for offset in _offsets(p, 1):
         if not offset.any():
             continue
         around = offset + closest_offset
-        point = around.astype(F32) + cell_hash(cellf, cell, around, p) * p.randomness
+        point = _point(cellf, cell, around, p)
         d = distance_bound(closest - point, p)
         closer = d < best
         best = np.where(closer, d, best)
