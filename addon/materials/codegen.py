@@ -64,8 +64,8 @@ LIBRARY = ("node_inputs.glsl", "node_convert.glsl", "node_color.glsl", "node_mat
            "node_ramp.glsl", "node_vector.glsl", "node_closure.glsl")
 #: Library files compiled into a program only where its graph calls one of their functions (the
 #: procedural textures: only what the scene requires), each after the files it calls.
-OPTIONAL_LIBRARY = ("node_hash.glsl", "node_tex_white_noise.glsl",
-                    "node_tex_voronoi.glsl")
+OPTIONAL_LIBRARY = ("node_hash.glsl", "node_tex_white_noise.glsl")
+OPTIONAL_LIBRARY += ("node_tex_voronoi.glsl",)  # after node_hash.glsl, whose hashes it calls
 _DEFINED = re.compile(r"^[A-Za-z_]\w*\s+(\w+)\s*\(", re.M)
 _CALLED = re.compile(r"\b(\w+)\s*\(")
 

@@ -1,6 +1,5 @@
 """The numpy twin of ``glsl/node_hash.glsl``: Cycles' integer hashes (util/hash.h, Bob Jenkins'
-lookup3) of float keys by their bits, mapped to [0, 1], its PCG hashes of integer keys, and the
-White Noise Texture built on them
+lookup3) of float keys by their bits, mapped to [0, 1], and the White Noise Texture built on them
 (``glsl/node_tex_white_noise.glsl``). Vectorised: keys are float32 arrays (..., n); results
 float32, bit for bit what the GLSL computes. Pure numpy."""
 
@@ -89,6 +88,9 @@ def hash_float_n(k: np.ndarray) -> np.ndarray:
         keys = [k, np.concatenate([k, np.ones(k.shape[:-1] + (1,), np.float32)], -1)]
     return np.stack([hash_float(key) for key in keys], -1)
 
+
+# Cycles 5.0's hashes of integer keys (util/hash.h hash_pcg*d_i, PCG after Jarzynski and Olano,
+# "Hash Functions for GPU Rendering", JCGT 2020), which its Voronoi hashes cells by.
 
 #: PCG's multiplier and increment (Cycles' hash_pcg*d_i).
 _PCG_MUL, _PCG_ADD = np.int32(1664525), np.int32(1013904223)
