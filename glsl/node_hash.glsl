@@ -110,3 +110,53 @@ vec3 hash_vec4_to_vec3(vec4 k)
 {
   return vec3(hash_vec4_to_float(k), hash_vec4_to_float(k.zxwy), hash_vec4_to_float(k.wzyx));
 }
+
+/* Cycles 5.0's hashes of integer cells (util/hash.h hash_pcg*d_i, after Jarzynski and Olano,
+ * "Hash Functions for GPU Rendering", JCGT 2020, kept in signed integers): int multiplication
+ * and addition wrap as C's, >> shifts the sign in as C's does on signed ints; the result's 31
+ * bits mapped to [0, 1) by 2^-31 (Cycles' 1 / (float)0x7FFFFFFF, which rounds to 2^31). */
+ivec2 hash_pcg2d_i(ivec2 v)
+{
+  v = v * 1664525 + 1013904223;
+  v.x += v.y * 1664525;
+  v.y += v.x * 1664525;
+  v = v ^ (v >> 16);
+  v.x += v.y * 1664525;
+  v.y += v.x * 1664525;
+  return v & 0x7FFFFFFF;
+}
+
+ivec3 hash_pcg3d_i(ivec3 v)
+{
+  v = v * 1664525 + 1013904223;
+  v.x += v.y * v.z;
+  v.y += v.z * v.x;
+  v.z += v.x * v.y;
+  v = v ^ (v >> 16);
+  v.x += v.y * v.z;
+  v.y += v.z * v.x;
+  v.z += v.x * v.y;
+  return v & 0x7FFFFFFF;
+}
+
+ivec4 hash_pcg4d_i(ivec4 v)
+{
+  v = v * 1664525 + 1013904223;
+  v.x += v.y * v.w;
+  v.y += v.z * v.x;
+  v.z += v.x * v.y;
+  v.w += v.y * v.z;
+  v = v ^ (v >> 16);
+  v.x += v.y * v.w;
+  v.y += v.z * v.x;
+  v.z += v.x * v.y;
+  v.w += v.y * v.z;
+  return v & 0x7FFFFFFF;
+}
+
+vec2 hash_ivec2_to_vec2(ivec2 k) { return vec2(hash_pcg2d_i(k)) * (1.0 / 2147483648.0); }
+vec3 hash_ivec3_to_vec3(ivec3 k) { return vec3(hash_pcg3d_i(k)) * (1.0 / 2147483648.0); }
+vec4 hash_ivec4_to_vec4(ivec4 k) { return vec4(hash_pcg4d_i(k)) * (1.0 / 2147483648.0); }
+/* a 2D cell's colour: the 3D hash of (x, y, 0); a 4D cell's: the first three of its 4D hash */
+vec3 hash_ivec2_to_vec3(ivec2 k) { return hash_ivec3_to_vec3(ivec3(k, 0)); }
+vec3 hash_ivec4_to_vec3(ivec4 k) { return hash_ivec4_to_vec4(k).xyz; }

@@ -121,12 +121,19 @@ _BAKED = {
     "ShaderNodeVectorCurve": lambda node: _curves(node, 3, False),
     "ShaderNodeFloatCurve": lambda node: _curves(node, 1, False),
     "ShaderNodeWavelength": lambda node: {"xyz_to_rgb": xyz_to_rgb()},
+    "ShaderNodeTexVoronoi": lambda node: {"voronoi_cells": voronoi_cells()},
 }
 
 
 def xyz_to_rgb() -> tuple[tuple[float, float, float], ...]:
     """CIE XYZ to scene linear (Rec. 709) as this Blender's Cycles holds it (its xyz_to_rgb)."""
     return convert.XYZ_TO_RGB if bpy.app.version >= (5, 0, 0) else convert.XYZ_TO_RGB_4
+
+
+def voronoi_cells() -> str:
+    """How this Blender's Cycles hashes a Voronoi cell in 2D-4D: 5.0 its integer index (``INT``),
+    4.x its float coordinates (``FLOAT``)."""
+    return "INT" if bpy.app.version >= (5, 0, 0) else "FLOAT"
 
 
 def luma() -> tuple[float, float, float]:

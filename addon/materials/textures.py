@@ -128,6 +128,43 @@ def _radial_tiling(w, node: FlatNode) -> dict:
             "Segment Rotation": f"{result}.w", "Segment ID": f"node_radial_tiling_id({co}, {sides})"}
 
 
+# --- Voronoi ------------------------------------------------------------------------------------
+
+#: The Voronoi Texture's features, each its GLSL functions' name (glsl/node_tex_voronoi.glsl).
+VORONOI_FEATURES = {"F1": "f1", "F2": "f2", "SMOOTH_F1": "smooth_f1", "DISTANCE_TO_EDGE": "distance_to_edge",
+                    "N_SPHERE_RADIUS": "n_sphere_radius"}
+#: Its distance metrics, each a constant of the GLSL (Blender spells Chebychev so).
+VORONOI_METRICS = {m: f"VORONOI_{m}" for m in ("EUCLIDEAN", "MANHATTAN", "CHEBYCHEV", "MINKOWSKI")}
+#: How the Blender that read the file hashes a cell (the reader's ``voronoi_cells``): Cycles 5.0
+#: its integer index, 4.x its float coordinates; 5.0's where the reader does not say.
+VORONOI_CELLS = {"INT": "VORONOI_CELLS_INT", "FLOAT": "VORONOI_CELLS_FLOAT"}
+
+
+def _voronoi(w, node: FlatNode) -> dict | None:
+    """Voronoi Texture (Cycles' svm_node_tex_voronoi): one function per feature and dimension
+    count; the metric, the cells' hash and Normalize its constant arguments. Where the metric
+    changes nothing (1D; Distance to Edge and N-Sphere Radius are Euclidean) the source names
+    Euclidean whatever the setting: one program for every metric."""
+    props = node.props
+    dims = DIMENSIONS.get(props.get("voronoi_dimensions", "3D"))
+    feature = VORONOI_FEATURES.get(props.get("feature", "F1"))
+    metric = VORONOI_METRICS.get(props.get("distance", "EUCLIDEAN"))
+    cells = VORONOI_CELLS.get(props.get("voronoi_cells", "INT"))
+    co = vector(w, node)
+    if None in (dims, feature, metric, cells, co):
+        return None
+    if dims == "1d" or feature in ("distance_to_edge", "n_sphere_radius"):
+        metric = VORONOI_METRICS["EUCLIDEAN"]
+    fractal = ", ".join(scalar(w, node, s) for s in ("Scale", "Detail", "Roughness", "Lacunarity"))
+    shape = ", ".join(scalar(w, node, s) for s in ("Smoothness", "Exponent", "Randomness"))
+    normalize = "true" if props.get("normalize") else "false"
+    v = w.once("VoronoiTexture", f"node_tex_voronoi_{feature}_{dims}({co}, {scalar(w, node, 'W')}, "
+                                 f"vec4({fractal}), vec3({shape}), {metric}, {cells}, {normalize})")
+    fields = {"Distance": "distance", "Color": "color", "Position": "position", "W": "w", "Radius": "radius"}
+    # the outputs Blender shows for the feature and dimensions (the reader leaves hidden ones out)
+    return {socket: f"{v}.{field}" for socket, field in fields.items() if socket in node.outputs}
+
+
 EMITTERS = {
     "ShaderNodeTexWhiteNoise": _white_noise,
     "ShaderNodeTexGabor": _gabor,
@@ -136,4 +173,5 @@ EMITTERS = {
     "ShaderNodeTexMagic": _magic,
     "ShaderNodeTexBrick": _brick,
     "ShaderNodeRadialTiling": _radial_tiling,
+    "ShaderNodeTexVoronoi": _voronoi,
 }

@@ -83,6 +83,63 @@ def hash_float2(k: np.ndarray) -> np.ndarray:
     return np.stack([hash_float(k), hash_float(rotated)], -1)
 
 
+def hash_float_n(k: np.ndarray) -> np.ndarray:
+    """Cycles' hash_float2_to_float2, hash_float3_to_float3, hash_float4_to_float4 of keys
+    (..., n): n hashes, the key with 1 (and 2) appended, or the 4D key's components rotated."""
+    k = np.asarray(k, dtype=np.float32)
+    n = k.shape[-1]
+    if n == 3:
+        return hash_float3(k)
+    if n == 4:
+        keys = [k, k[..., [3, 0, 1, 2]], k[..., [2, 3, 0, 1]], k[..., [1, 2, 3, 0]]]  # wxyz, zwxy, yzwx
+    else:
+        keys = [k, np.concatenate([k, np.ones(k.shape[:-1] + (1,), np.float32)], -1)]
+    return np.stack([hash_float(key) for key in keys], -1)
+
+
+# Cycles 5.0's hashes of integer keys (util/hash.h hash_pcg*d_i, PCG after Jarzynski and Olano,
+# "Hash Functions for GPU Rendering", JCGT 2020), which its Voronoi hashes cells by.
+
+#: PCG's multiplier and increment (Cycles' hash_pcg*d_i).
+_PCG_MUL, _PCG_ADD = np.int32(1664525), np.int32(1013904223)
+
+
+def _pcg(v: list[np.ndarray]) -> list[np.ndarray]:
+    """Cycles' hash_pcg2d_i / 3d_i / 4d_i of int32 components (wrapping, arithmetic shift)."""
+    v = [x * _PCG_MUL + _PCG_ADD for x in v]
+    n = len(v)
+    # which components stir each one: 2D by the multiplier, 3D and 4D by products of two others
+    pairs = {3: ((1, 2), (2, 0), (0, 1)), 4: ((1, 3), (2, 0), (0, 1), (1, 2))}.get(n)
+    for half in range(2):
+        for i in range(n):
+            if n == 2:
+                v[i] = v[i] + v[1 - i] * _PCG_MUL
+            else:
+                a, b = pairs[i]
+                v[i] = v[i] + v[a] * v[b]
+        if half == 0:
+            v = [x ^ (x >> np.int32(16)) for x in v]
+    return [x & np.int32(0x7FFFFFFF) for x in v]
+
+
+def hash_int_n(k: np.ndarray) -> np.ndarray:
+    """Cycles' hash_int2_to_float2, hash_int3_to_float3, hash_int4_to_float4 of int keys (..., n):
+    (..., n) in [0, 1), the PCG hash's 31 bits times 2^-31."""
+    k = np.asarray(k, dtype=np.int32)
+    with np.errstate(over="ignore"):
+        h = _pcg([k[..., i] for i in range(k.shape[-1])])
+    return np.stack(h, -1).astype(np.float32) * np.float32(2.0**-31)
+
+
+def hash_int3(k: np.ndarray) -> np.ndarray:
+    """Cycles' hash_int2_to_float3 (the 3D hash of (x, y, 0)), hash_int3_to_float3 and
+    hash_int4_to_float3 (the first three of the 4D hash) of int keys (..., n): (..., 3)."""
+    k = np.asarray(k, dtype=np.int32)
+    if k.shape[-1] == 2:
+        k = np.concatenate([k, np.zeros(k.shape[:-1] + (1,), np.int32)], -1)
+    return hash_int_n(k)[..., :3]
+
+
 def white_noise(dimensions: int, co: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The White Noise Texture's (Value, Color) at coordinates ``co`` (..., 3) and ``w`` (...)."""
     co, w = np.asarray(co, np.float32), np.asarray(w, np.float32)
