@@ -20,8 +20,8 @@ import pytest
 import scenes
 from glsl_harness import evaluate
 from test_cycles import _cycles
-from test_material_nodes import FRAGMENT_AOVS, SIZE, _aov, _combine, _plane_scene
-from test_texture_white_noise import _channels
+from test_material_nodes import FRAGMENT_AOVS, SIZE, _aov, _plane_scene
+from test_texture_white_noise import _channels, coordinates
 
 from addon.blender import nodes as reader
 from addon.materials import codegen, graph
@@ -111,17 +111,7 @@ def _scene(cases):
     scene, mat, tree, u, v = _plane_scene()
     sockets = {}
     for label, (scale, w_scale) in COORDINATES.items():
-        co = tree.nodes.new("ShaderNodeVectorMath")
-        co.operation = "MULTIPLY"
-        tree.links.new(_combine(tree, u, v, 0.37), co.inputs[0])
-        co.inputs[1].default_value = scale
-        w = tree.nodes.new("ShaderNodeMath")
-        w.operation = "MULTIPLY"
-        tree.links.new(v, w.inputs[0])
-        w.inputs[1].default_value = w_scale
-        _aov(scene, tree, f"co_{label}", co.outputs["Vector"], "COLOR")
-        _aov(scene, tree, f"w_{label}", w.outputs["Value"])
-        sockets[label] = (co.outputs["Vector"], w.outputs["Value"])
+        sockets[label] = coordinates(scene, tree, (u, v), label, scale, w_scale, v)
     for name, case in cases.items():
         node = tree.nodes.new("ShaderNodeTexVoronoi")
         node.name = name

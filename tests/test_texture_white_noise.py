@@ -24,28 +24,36 @@ DIMENSIONS = ("1D", "2D", "3D", "4D")
 COORDINATES = {"unit": ((1.0, 1.0, 1.0), 1.0), "large": ((7919.0, -6007.3, 1.0e4), -9973.1)}
 
 
+def coordinates(scene, tree, uv, label, scale, w_scale, w_from):
+    """A texture's coordinates from the UV (u, v sockets) by single float products (the same bits
+    in Cycles and on the GPU): the vector (u, v, 0.37) times ``scale`` per axis, W ``w_from``
+    times ``w_scale``; both written to AOVs (``co_<label>``, ``w_<label>``) for the twins. The
+    vector and W sockets."""
+    co = tree.nodes.new("ShaderNodeVectorMath")
+    co.operation = "MULTIPLY"
+    tree.links.new(_combine(tree, *uv, 0.37), co.inputs[0])
+    co.inputs[1].default_value = scale
+    w = tree.nodes.new("ShaderNodeMath")
+    w.operation = "MULTIPLY"
+    tree.links.new(w_from, w.inputs[0])
+    w.inputs[1].default_value = w_scale
+    _aov(scene, tree, f"co_{label}", co.outputs["Vector"], "COLOR")
+    _aov(scene, tree, f"w_{label}", w.outputs["Value"])
+    return co.outputs["Vector"], w.outputs["Value"]
+
+
 @pytest.fixture(scope="module")
 def white_noise_results(tmp_path_factory):
     scene, mat, tree, u, v = _plane_scene()
     for label, (scale, w_scale) in COORDINATES.items():
-        unit = _combine(tree, u, v, 0.37)
-        co = tree.nodes.new("ShaderNodeVectorMath")
-        co.operation = "MULTIPLY"
-        tree.links.new(unit, co.inputs[0])
-        co.inputs[1].default_value = scale
-        w = tree.nodes.new("ShaderNodeMath")
-        w.operation = "MULTIPLY"
-        tree.links.new(u, w.inputs[0])
-        w.inputs[1].default_value = w_scale
-        _aov(scene, tree, f"co_{label}", co.outputs["Vector"], "COLOR")
-        _aov(scene, tree, f"w_{label}", w.outputs["Value"])
+        co, w = coordinates(scene, tree, (u, v), label, scale, w_scale, u)
         for dims in DIMENSIONS:
             node = tree.nodes.new("ShaderNodeTexWhiteNoise")
             node.noise_dimensions = dims
             if dims != "1D":  # (a socket the node hides cannot be found by name)
-                tree.links.new(co.outputs["Vector"], node.inputs["Vector"])
+                tree.links.new(co, node.inputs["Vector"])
             if dims in ("1D", "4D"):
-                tree.links.new(w.outputs["Value"], node.inputs["W"])
+                tree.links.new(w, node.inputs["W"])
             _aov(scene, tree, f"value_{dims}_{label}", node.outputs["Value"])
             _aov(scene, tree, f"color_{dims}_{label}", node.outputs["Color"], "COLOR")
     return _against_cycles(scene, mat, tmp_path_factory.mktemp("white_noise"))

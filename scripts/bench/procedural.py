@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import math
 
+from . import materials
 from .harness import page, scenes, standard, timing
 
 PAGE = "procedural.md"
@@ -47,17 +48,8 @@ def options(parser) -> None:
 
 
 def _material(name: str):
-    import bpy
-
-    mat = bpy.data.materials.new(name)
-    tree = mat.node_tree
-    if tree is None:
-        mat.use_nodes = True
-        tree = mat.node_tree
-    bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
-    bsdf.inputs["Base Color"].default_value = (0.6, 0.5, 0.4, 1.0)
-    bsdf.inputs["Roughness"].default_value = 0.5
-    return mat, tree, bsdf
+    """A Principled BSDF of a constant base colour (the materials benchmark's)."""
+    return materials._principled(name, (0.6, 0.5, 0.4), 0.5, 0.0)
 
 
 def _textured(name: str, kind: str, settings: dict, output: str):
