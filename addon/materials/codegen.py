@@ -65,6 +65,7 @@ LIBRARY = ("node_inputs.glsl", "node_convert.glsl", "node_color.glsl", "node_mat
 #: Library files compiled into a program only where its graph calls one of their functions (the
 #: procedural textures: only what the scene requires), each after the files it calls.
 OPTIONAL_LIBRARY = ("node_hash.glsl", "node_tex_white_noise.glsl")
+OPTIONAL_LIBRARY += ("node_tex_noise.glsl", "node_tex_wave.glsl")  # Noise; Wave (calls Noise's fBM)
 _DEFINED = re.compile(r"^[A-Za-z_]\w*\s+(\w+)\s*\(", re.M)
 _CALLED = re.compile(r"\b(\w+)\s*\(")
 
