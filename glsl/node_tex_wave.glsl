@@ -116,7 +116,7 @@ float node_tex_wave(vec3 co, float scale, float distortion, float detail, float 
   }
   n += phase;
   if (distortion != 0.0) {
-    float octaves = min(detail, WAVE_MAX_DETAIL);
+    float octaves = detail < WAVE_MAX_DETAIL ? detail : WAVE_MAX_DETAIL; /* (a NaN Detail too) */
     float fbm = noise_fractal(vec4(p * detail_scale, 0.0), 3, NOISE_FBM, octaves, detail_roughness, 2.0, 0.0, 0.0, true);
     n = fma(distortion, fma(fbm, 2.0, -1.0), n);
   }

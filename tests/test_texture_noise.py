@@ -164,11 +164,21 @@ MEASURED = {
     "clamped": (1.2e-07, 6e-08, 6e-08),
 }
 PAIRS = [(case, dims) for case in CASES for dims in DIMENSIONS]
+#: Blender 4.2's Cycles wraps 3D and 4D coordinates with C's fmodf (4.5 and 5.0: their SSE formula,
+#: which the compiled code follows): they part beyond |x| = 5e8, which the huge set's 16 octaves
+#: reach (measured 0.1); everything else is bit for bit 4.2's too.
+OLD_WRAP = bpy.app.version < (4, 5, 0)
+
+
+def _skip_old_wrap(case, dims, label):
+    if OLD_WRAP and case == "clamped" and label == "huge" and dims in ("3D", "4D"):
+        pytest.skip(f"Blender {bpy.app.version_string}'s Cycles wraps 3D/4D coordinates beyond 5e8 otherwise")
 
 
 @pytest.mark.parametrize("case,dims", PAIRS)
 def test_noise_matches_cycles(noise_results, case, dims):
     label, results = noise_results
+    _skip_old_wrap(case, dims, label)
     for output in ("fac", "color"):
         ours, cycles = results[f"{output}_{case}_{dims}"]
         worst = float(np.abs(ours - cycles).max())
@@ -183,6 +193,7 @@ def test_noise_matches_cycles(noise_results, case, dims):
 def test_noise_twin_matches_cycles(noise_results, case, dims):
     """The twin at the coordinates Cycles evaluated (its own AOVs of them): bit for bit."""
     label, results = noise_results
+    _skip_old_wrap(case, dims, label)
     co = results["co"][1].astype(np.float32)
     w = results["w"][1][:, 0].astype(np.float32)
     kind, values, normalize = CASES[case]
@@ -322,3 +333,28 @@ def test_engine_draws_noise_as_cycles(tmp_path):
     assert_engine_matches_cycles(tmp_path, "ShaderNodeTexNoise", {
         "noise": ({}, {}, "Fac", 8.6e-7),
         "ridged": (ridged, {"W": 0.3, "Distortion": 0.4}, "Color", 1.5e-5)}, spread=0.2)
+
+
+def test_extreme_inputs_end_and_stay_finite():
+    """Noise and Wave at coordinates to 3e38, Detail from -1e9 to 1e9, NaN and infinities, odd
+    Lacunarity and Scale (all read at run time, as the engine's uniforms): every loop ends (Noise's
+    Detail clamped to 15, Wave's to 64 octaves, the wrap's long division bounded), and where every
+    input and the scaled coordinate are finite so is the result."""
+    inf, nan = float("inf"), float("nan")
+    rows = []
+    for co in (0.37, -3.0e38, 3.0e38, 1.0e9, inf, nan):
+        for detail in (2.5, 1.0e9, -1.0e9, inf, nan):
+            for lacunarity, scale in ((2.0, 5.0), (-2.0, 1.0e5), (0.0, 0.0), (inf, 1.0), (1.7, nan)):
+                rows.append((co, detail, lacunarity, scale))
+    rows = np.array(rows, np.float32)
+    extra = codegen.library("node_noise_value(); node_tex_wave();")
+    body = ("vec4 p = node_noise_coordinates(vec3(a.x, 0.5, -a.x), a.x, a.w, 0.3, 4); result = vec4("
+            "node_noise_value(p, 4, NOISE_HETERO_TERRAIN, a.y, 0.5, a.z, 0.8, 1.0, 1.0), "
+            "node_noise_value(p, 4, NOISE_FBM, a.y, 0.5, a.z, 0.0, 1.0, 1.0), "
+            "node_tex_wave(vec3(a.x), a.w, 2.0, a.y, a.z, 0.5, 0.0, WAVE_RINGS, WAVE_SPHERICAL, WAVE_SIN), "
+            "0.0);")
+    values = evaluate(body, {"a": rows}, extra=extra, source="vec4 graph_table(int i) { return vec4(0.0); }")
+    with np.errstate(over="ignore", invalid="ignore"):  # (a coordinate x Scale beyond 3.4e38 is infinite)
+        finite = np.isfinite(rows).all(axis=1) & np.isfinite(rows[:, 0] * rows[:, 3])
+    bad = finite & ~np.isfinite(values[:, :3]).all(axis=1)
+    assert not bad.any(), np.concatenate([rows[bad], values[bad]], axis=1)[:12]

@@ -13,11 +13,13 @@ out (counted: none measured)."""
 
 from __future__ import annotations
 
+import bpy
 import numpy as np
 import pytest
 from test_material_nodes import SIZE, _aov, _plane_scene
 from test_texture_noise import COORDINATES, _coordinates, against_cycles_per_aov, assert_engine_matches_cycles
 
+from addon.materials import codegen
 from addon.reference import wave
 
 #: Cases: type, direction, profile, and the node's inputs beside Vector (Scale 1 but where named).
@@ -72,15 +74,34 @@ def _flipped(case, ours, cycles):
     return near & (np.abs(ours - cycles)[:, 0] > 0.5)
 
 
+#: Blender 4.2's Cycles divides the saw's and triangle's phase by 2 pi (4.5 and 5.0 multiply it by
+#: the reciprocal, as the compiled code does): a float step of the phase apart, measured against
+#: 4.2: 3.8e-6 on the small set, 3.9e-3 on the large (phases to 2e5); on the huge set (phases to
+#: 1e8, a float step of 8) the two renderers' saws are unrelated.
+OLD_PHASE = bpy.app.version < (4, 5, 0)
+
+
+def _old_phase(case, label) -> float | None:
+    """Blender 4.2's measured bound for a saw or triangle (None: none that tells anything)."""
+    profile = CASES[case][2]
+    if not OLD_PHASE or profile == "SIN":
+        return 0.0 if profile != "SIN" else None
+    if label == "huge":
+        pytest.skip(f"Blender {bpy.app.version_string}'s Cycles rounds a wave's phase otherwise: at phases "
+                    "to 1e8 the saws are unrelated")
+    return {"small": 3.8e-6, "large": 3.9e-3}[label]
+
+
 def _measured(case, label) -> float:
     """The GPU against Cycles 5.0 (llvmpipe), the largest difference: undistorted saws and
     triangles 0 (the same float operations); sines 6e-8 (wave_sin within 2 ulps of C's sinf);
     Scale 2.3 and distortion carry llvmpipe's fma() as two roundings (3.8e-6 to 1.5e-5 on the
     small set)."""
     kind, direction, profile, values = CASES[case]
+    old = _old_phase(case, label)
     if label == "small" and (values.get("Distortion") or values.get("Scale")):
         return 1.5e-5 if case == "phase" else 3.8e-6
-    return 6e-8 if profile == "SIN" else 0.0
+    return 6e-8 if profile == "SIN" else old
 
 
 @pytest.mark.parametrize("case", CASES)
@@ -109,8 +130,8 @@ def test_wave_twin_matches_cycles(wave_results, case):
     fac = wave.wave(co, kind=kind, direction=direction, profile=profile, **args)
     cycles = results[f"fac_{case}"][1][:, 0]
     worst = float(np.abs(fac - cycles).max())
-    bound = 6e-8 if profile == "SIN" else 0.0
-    assert worst <= bound, f"twin {case} {label}: largest difference {worst:.3g} (measured {bound:.3g})"
+    bound = 6e-8 if profile == "SIN" else _old_phase(case, label)
+    assert worst <= 3 * bound, f"twin {case} {label}: largest difference {worst:.3g} (measured {bound:.3g})"
 
 
 def test_engine_draws_wave_as_cycles(tmp_path):
@@ -123,3 +144,13 @@ def test_engine_draws_wave_as_cycles(tmp_path):
     assert_engine_matches_cycles(tmp_path, "ShaderNodeTexWave", {
         "bands": ({}, {}, "Fac", 7.6e-6),
         "rings": (rings, {"Distortion": 4.0, "Detail": 2.5}, "Fac", 1.5e-5)}, spread=0.9)
+
+
+def test_wave_compiles_the_noise_it_calls():
+    """codegen.library: a graph calling the Wave Texture alone compiles the hash and noise files it
+    calls, in order; one calling the Noise Texture not the wave's."""
+    wave_call = "x = node_tex_wave(co, 1.0, 0.0, 2.0, 1.0, 0.5, 0.0, WAVE_BANDS, WAVE_X, WAVE_SIN);"
+    noise_call = "x = node_noise_value(p, 3, NOISE_FBM, 2.0, 0.5, 2.0, 0.0, 1.0, 1.0);"
+    noise_files = ("node_hash.glsl", "node_tex_noise.glsl")
+    assert codegen.library(wave_call) == codegen.LIBRARY + noise_files + ("node_tex_wave.glsl",)
+    assert codegen.library(noise_call) == codegen.LIBRARY + noise_files

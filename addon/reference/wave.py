@@ -49,7 +49,7 @@ def wave(co, scale=5.0, kind="BANDS", direction="X", profile="SIN", distortion=0
     p = noise.fma(co, F32(scale), F32(1e-6)) * F32(0.999999)
     n = phase(p, kind, direction) + F32(phase_offset)
     if F32(distortion) != 0:
-        octaves = min(F32(detail), MAX_DETAIL)  # the GPU's loop bound, as node_tex_wave.glsl's
+        octaves = F32(detail) if F32(detail) < MAX_DETAIL else MAX_DETAIL  # the GPU's loop bound (NaN too)
         fbm = noise.fbm(p * F32(detail_scale), octaves, detail_roughness, 2.0, True)
         n = noise.fma(F32(distortion), noise.fma(fbm, F32(2), F32(-1)), n)
     if profile == "SIN":  # sinf correctly rounded (float64 rounded once): Cycles' differs by an ulp
