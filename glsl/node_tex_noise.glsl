@@ -5,8 +5,8 @@
  * Coordinates are a vec4 p of `dims` components (1D: p.x = W; 2D: x, y; 3D: x, y, z; 4D: x, y,
  * z, W), the others 0 and never read. fma() marks the products Cycles' CPU kernel (AVX2, built
  * with -ffast-math) fuses with a sum: with them the twin equals Cycles' output bit for bit. A
- * GPU whose fma() rounds twice (Mesa's llvmpipe lowers it to a product and a sum) differs there by
- * an ulp, measured in tests/test_texture_noise.py. Compiled into a program only where its graph
+ * GPU whose fma() rounds twice (Mesa's llvmpipe lowers it to a product and a sum) differs by float
+ * rounding (2.3e-6 at most undistorted), measured in tests/test_texture_noise.py. Compiled into a program only where its graph
  * uses a Noise or Wave Texture (codegen.OPTIONAL_LIBRARY); the lattice hashes are node_hash.glsl's. */
 
 /* the Noise Texture's types (Cycles' NodeNoiseType, our order) */
