@@ -308,7 +308,7 @@ def test_graphs_of_one_structure_share_their_source_and_differ_in_constants():
         tree.links.new(rgb.outputs[0], math.inputs[0])
         tree.links.new(math.outputs[0], bsdf.inputs["Roughness"])
         if unknown:
-            tex = tree.nodes.new("ShaderNodeTexWave")
+            tex = tree.nodes.new("ShaderNodeTexSky")
             tree.links.new(tex.outputs["Color"], bsdf.inputs["Base Color"])
         flat = _flat(mat)
         return codegen.compile_graph(flat, {"roughness": (bsdf.name, "Roughness"),
@@ -321,6 +321,6 @@ def test_graphs_of_one_structure_share_their_source_and_differ_in_constants():
     c = build("C", 0.25, (0.2, 0.4, 0.6, 1.0), operation="MULTIPLY")
     assert c.key != a.key
     d = build("D", 0.25, (0.2, 0.4, 0.6, 1.0), unknown=True)
-    assert d.missing == ["Wave Texture (ShaderNodeTexWave)"], d.missing
+    assert d.missing == ["Sky Texture (ShaderNodeTexSky)"], d.missing
     base = bpy.data.materials["D"].node_tree.nodes["Principled BSDF"].inputs["Base Color"].default_value
     assert any(np.allclose(row, tuple(base)) for row in d.constants), "Base Color falls back to its socket"

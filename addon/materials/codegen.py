@@ -73,6 +73,7 @@ OPTIONAL_LIBRARY = ("node_hash.glsl", "node_tex_white_noise.glsl", "node_tex_gab
 OPTIONAL_LIBRARY += ("node_float.glsl", "node_tex_gradient.glsl", "node_tex_checker.glsl",
                      "node_tex_magic.glsl", "node_tex_brick.glsl", "node_tex_radial_tiling.glsl")
 OPTIONAL_LIBRARY += ("node_tex_voronoi.glsl",)  # after node_hash.glsl, whose hashes it calls
+OPTIONAL_LIBRARY += ("node_tex_noise.glsl", "node_tex_wave.glsl")  # Noise; Wave (calls Noise's fBM)
 #: Node kinds drawn from a bake even where an emitter compiles them (empty: none). Tests and the
 #: benchmark set it to compare a node's bake with its compiled code and with Cycles.
 FORCE_BAKE: frozenset[str] = frozenset()
