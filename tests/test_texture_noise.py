@@ -19,12 +19,12 @@ from pathlib import Path
 
 import bpy
 import numpy as np
-import OpenEXR
 import pytest
 import scenes
 from glsl_harness import evaluate
 from test_cycles import _cycles
 from test_material_nodes import FRAGMENT_AOVS, SIZE, _aov, _combine, _plane_scene, cycles_aovs_and_graph
+from test_texture_white_noise import _channels, texture_node
 
 from addon.blender import nodes as reader
 from addon.materials import codegen, graph
@@ -293,11 +293,6 @@ def test_musgrave_types_from_a_blender_42_file(musgrave_results, name):
 
 # --- the engine ----------------------------------------------------------------------------------
 
-def _channels(path):
-    with OpenEXR.File(str(path)) as f:
-        return {name: np.asarray(ch.pixels) for part in f.parts for name, ch in part.channels.items()}
-
-
 def assert_engine_matches_cycles(tmp, kind: str, cases: dict, spread: float):
     """Nodes of ``kind`` on a plane, their Vector unlinked (the object's Generated coordinates),
     each case (AOV name -> (node properties, input values, output, the largest difference
@@ -305,11 +300,7 @@ def assert_engine_matches_cycles(tmp, kind: str, cases: dict, spread: float):
     was measured, its pixels spanning at least ``spread`` (the texture is not flat)."""
     scene, mat, tree, u, v = _plane_scene()
     for name, (props, values, output, _) in cases.items():
-        node = tree.nodes.new(kind)
-        for key, value in props.items():
-            setattr(node, key, value)
-        for socket, value in values.items():
-            node.inputs[socket].default_value = value
+        node = texture_node(tree, kind, props, values)
         _aov(scene, tree, name, node.outputs[output])
     scenes.render(scene, tmp / "ours_beauty.exr")
     ours = _channels(scenes.save_result(scene, tmp / "ours.exr", "MULTILAYER"))

@@ -28,7 +28,7 @@ from test_cycles import _cycles
 from test_material_converters import _compiled
 from test_material_images import _against_cycles
 from test_material_nodes import SIZE, _aov, _combine, _plane_scene
-from test_texture_white_noise import _channels
+from test_texture_white_noise import _channels, texture_node
 
 from addon.materials import codegen
 from addon.reference import patterns
@@ -71,11 +71,7 @@ def _render(cases: dict, outputs: tuple, tmp) -> dict:
     for label in {case[3] for case in cases.values()}:
         _aov(scene, tree, f"co_{label}", coordinates[label], "COLOR")
     for name, (kind, props, inputs, label) in cases.items():
-        node = tree.nodes.new(kind)
-        for key, value in props.items():
-            setattr(node, key, value)
-        for key, value in inputs.items():
-            node.inputs[key].default_value = value
+        node = texture_node(tree, kind, props, inputs)
         tree.links.new(coordinates[label], node.inputs["Vector"])
         for socket, aov_kind in outputs:
             _aov(scene, tree, f"{name}_{socket.split()[-1].lower()}", node.outputs[socket], aov_kind)

@@ -42,6 +42,16 @@ def coordinates(scene, tree, uv, label, scale, w_scale, w_from):
     return co.outputs["Vector"], w.outputs["Value"]
 
 
+def texture_node(tree, kind: str, props: dict, values: dict):
+    """A node of ``kind`` with its properties and its inputs' values set."""
+    node = tree.nodes.new(kind)
+    for key, value in props.items():
+        setattr(node, key, value)
+    for socket, value in values.items():
+        node.inputs[socket].default_value = value
+    return node
+
+
 @pytest.fixture(scope="module")
 def white_noise_results(tmp_path_factory):
     scene, mat, tree, u, v = _plane_scene()
