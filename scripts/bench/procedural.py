@@ -18,7 +18,7 @@ from . import materials
 from .harness import page, scenes, standard, timing
 
 PAGE = "procedural.md"
-QUICK = dict(resolution="160x90", frames=1)
+QUICK = dict(resolution="160x90", frames=1, bake_resolutions="64,128")
 
 #: label -> (node kind, {property or input: value}, output): a procedural at one setting.
 PROCEDURALS = {
@@ -41,10 +41,16 @@ PROCEDURALS = {
 }
 #: The Noise Texture's Detail settings timed (3D fBM).
 DETAILS = (0.0, 1.0, 2.0, 4.0, 8.0, 15.0)
+#: The baked fallback's resolutions measured (the Noise Texture forced through the bake).
+BAKE_RESOLUTIONS = (64, 128, 256, 512, 1024)
+#: The AOV images' side in the bake comparison (pixel centres).
+AOV_SIZE = 65
 
 
 def options(parser) -> None:
     standard(parser, resolution="1280x720", frames=5)
+    parser.add_argument("--bake-resolutions", default=",".join(map(str, BAKE_RESOLUTIONS)),
+                        help="the baked fallback's resolutions measured, comma-separated")
 
 
 def _material(name: str):
@@ -161,12 +167,96 @@ def _details(args, ctx) -> list[str]:
             *page.table(["Noise", "ms", "ns per pixel"], rows), ""]
 
 
+def _aov_values(scene, path):
+    """The AOV "noise" of the last render, saved to ``path``: (pixels,) float64."""
+    import bpy
+    import numpy as np
+    import OpenEXR
+
+    settings = scene.render.image_settings
+    if hasattr(settings, "media_type"):  # Blender 5.0 groups formats by media type
+        settings.media_type = "MULTI_LAYER_IMAGE"
+    settings.file_format, settings.color_depth = "OPEN_EXR_MULTILAYER", "32"
+    bpy.data.images["Render Result"].save_render(filepath=str(path), scene=scene)
+    with OpenEXR.File(str(path)) as f:
+        channels = {name: np.asarray(ch.pixels, np.float64) for part in f.parts
+                    for name, ch in part.channels.items()}
+    return channels["ViewLayer.noise.X"]
+
+
+def _bake(args, ctx, folder) -> list[str]:
+    """The Noise Texture's Fac (at the UV times 6, 3D fBM) into an AOV on a plane, drawn compiled
+    and forced through the baked fallback at each resolution, against Cycles' AOV of it (one
+    sample, pixel centres): the bake's time (``bake.CACHE``: both of its bakes) and the largest
+    and mean differences."""
+    import bpy
+    import numpy as np
+
+    from addon.blender import bake
+    from addon.materials import codegen
+
+    scene = scenes.empty((AOV_SIZE, AOV_SIZE))
+    scenes.camera(scene, (0.0, 0.0, 5.0), ortho=2.0)
+    scenes.black_world(scene)
+    bpy.ops.mesh.primitive_plane_add(size=2.0)
+    mat, tree, bsdf = _material("Baked")
+    bpy.context.active_object.data.materials.append(mat)
+    coord = tree.nodes.new("ShaderNodeTexCoord")
+    scale = tree.nodes.new("ShaderNodeVectorMath")
+    scale.operation = "SCALE"
+    scale.inputs["Scale"].default_value = 6.0
+    tree.links.new(coord.outputs["UV"], scale.inputs[0])
+    noise = tree.nodes.new("ShaderNodeTexNoise")
+    tree.links.new(scale.outputs["Vector"], noise.inputs["Vector"])
+    aov = scene.view_layers[0].aovs.add()
+    aov.name, aov.type = "noise", "VALUE"
+    out = tree.nodes.new("ShaderNodeOutputAOV")
+    out.aov_name = "noise"
+    tree.links.new(noise.outputs["Fac"], out.inputs["Value"])
+    c = scene.cycles
+    scene.render.engine = "CYCLES"
+    c.device, c.samples, c.use_adaptive_sampling, c.use_denoising = "CPU", 1, False, False
+    c.pixel_filter_type, c.filter_width, c.max_bounces = "GAUSSIAN", 0.01, 0
+    bpy.ops.render.render()
+    cycles = _aov_values(scene, folder / "cycles.exr")
+    scene.render.engine = "SHADING_LAB"
+
+    def ours(name):
+        bpy.ops.render.render()
+        return _aov_values(scene, folder / f"{name}.exr")
+
+    compiled = np.abs(ours("compiled") - cycles)
+    rows = [["compiled", "", f"{compiled.max():.1e}", f"{compiled.mean():.1e}"]]
+    previous = codegen.FORCE_BAKE
+    codegen.FORCE_BAKE = frozenset({"ShaderNodeTexNoise"})
+    try:
+        for resolution in (int(r) for r in args.bake_resolutions.split(",")):
+            scene.shading_lab.bake_resolution = resolution
+            bake.CACHE.clear()
+            diff = np.abs(ours(f"baked{resolution}") - cycles)
+            seconds = sum(b.seconds for b in bake.CACHE._entries.values())
+            rows.append([f"baked at {resolution}²", f"{seconds:.2f}", f"{diff.max():.1e}",
+                         f"{diff.mean():.1e}"])
+            ctx.progress.step(f"bake {resolution}")
+    finally:
+        codegen.FORCE_BAKE = previous
+        bake.CACHE.clear()
+    return ["### The baked fallback against the compiled node", "",
+            f"The Noise Texture's Fac (3D fBM, Detail 2, at the UV times 6) into an AOV on a plane "
+            f"filling a {AOV_SIZE}×{AOV_SIZE} view, compiled, and forced through the baked fallback (the "
+            "Noise node baked by Cycles on the UV map, sampled as an image), each against Cycles' AOV of "
+            "it (one sample at pixel centres). *Bake s*: the bake's time, its two Cycles bakes (the "
+            "value, and the one its measured error comes from).", "",
+            *page.table(["Noise drawn", "bake s", "largest difference", "mean difference"], rows), ""]
+
+
 def run(ctx) -> None:
     import tempfile
     from pathlib import Path
 
     folder = Path(tempfile.mkdtemp(prefix="procedural-"))
-    lines = _cost(ctx.args, ctx, folder) + _details(ctx.args, ctx)
+    lines = _cost(ctx.args, ctx, folder) + _details(ctx.args, ctx) + _bake(ctx.args, ctx, folder)
     ctx.page("Procedural textures", [
         "What the compiled procedural textures (addon/materials/textures.py) cost per pixel, against an "
-        "Image Texture read.", "", *lines])
+        "Image Texture read; what a baked subgraph costs and how far it is from the compiled node.", "",
+        *lines])
