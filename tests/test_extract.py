@@ -476,7 +476,7 @@ def test_what_is_not_read_is_said_once():
     bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
     # a Wireframe node (a triangle's edges: a rasteriser's barycentrics, not compiled)
     tree.links.new(tree.nodes.new("ShaderNodeWireframe").outputs["Fac"], bsdf.inputs["Base Color"])
-    tree.links.new(tree.nodes.new("ShaderNodeValue").outputs[0], bsdf.inputs["Coat Weight"])
+    tree.links.new(tree.nodes.new("ShaderNodeValue").outputs[0], bsdf.inputs["Transmission Weight"])
     for i, mat in enumerate((mix, mix, ramp)):
         scenes.plane(scene, size=0.5, location=(i, 0.0, 0.0), material=mat)
     for i in range(2):
@@ -487,7 +487,7 @@ def test_what_is_not_read_is_said_once():
     assert len(snap.warnings) == 4, snap.warnings
     assert "Material 'Tooned': 1 of 1 nodes not compiled (Toon BSDF (ShaderNodeBsdfToon))" in said
     assert "Material 'Ramped': 1 of 3 nodes not compiled (Wireframe (ShaderNodeWireframe))" in said
-    assert "Material 'Ramped': its Coat Weight (Principled BSDF) not drawn" in said
+    assert "Material 'Ramped': its Transmission Weight (Principled BSDF) not drawn" in said
     assert "Not drawn (Shading Lab draws meshes): 2 hair curves object(s), 1 volume(s)" in said
 
 

@@ -17,6 +17,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..scene.nodes import MATERIAL_OUTPUT, Graph
+from ..scene.snapshot import LOBES, lobes_of
 from . import codegen
 from .graph import Const, FlatGraph, flatten
 
@@ -83,6 +84,8 @@ class MaterialGraph:
     notes: tuple[str, ...] = ()
     #: the object's, instancer's and view layer's attributes it reads, (kind, name) by slot
     uniform_attributes: tuple[tuple[str, str], ...] = ()
+    #: the Principled BSDF's lobes beyond its base its closures can draw (``snapshot.LOBES``)
+    lobes: frozenset[str] = frozenset()
 
     def _identity(self) -> tuple:
         constants = np.asarray(self.constants, np.float32).tobytes()
@@ -192,7 +195,30 @@ def _compiled(flat: FlatGraph, targets: dict, function: str, whole: FlatGraph) -
                            kinds, compiled.arrays, len(compiled.uniform_attributes))
     return MaterialGraph(program, compiled.constants, compiled.images, compiled.attributes, compiled.missing,
                          _node_count(flat), _transparent(flat), _unread(flat), _textured(flat),
-                         compiled.notes, compiled.uniform_attributes)
+                         compiled.notes, compiled.uniform_attributes, _lobes(flat))
+
+
+def _lobes(flat: FlatGraph) -> frozenset[str]:
+    """The lobes (``snapshot.LOBES``) the graph's Principled BSDFs can draw: each whose inputs turn
+    it on (``snapshot.lobes_of``), a linked input taken as on (its value is per fragment)."""
+    out = set()
+    for node in flat.nodes.values():
+        if node.kind != "ShaderNodeBsdfPrincipled":
+            continue
+        values = {}
+        for socket in ("Specular Tint", "Coat Weight", "Sheen Weight", "Sheen Tint"):
+            spec = node.inputs.get(socket)
+            if spec is not None and not isinstance(spec.source, Const):
+                value = {"Specular Tint": (0.0,) * 3, "Coat Weight": 1.0, "Sheen Weight": 1.0,
+                         "Sheen Tint": (1.0,) * 3}[socket]  # linked: on
+            elif spec is not None and spec.source.value is not None:
+                value = spec.source.value
+            else:
+                value = codegen.PRINCIPLED_DEFAULTS[socket][0]
+            values[socket] = tuple(value)[:3] if isinstance(value, (tuple, list)) else float(value)
+        out |= lobes_of(values["Specular Tint"], values["Coat Weight"], values["Sheen Weight"],
+                        values["Sheen Tint"])
+    return frozenset(out)
 
 
 def compile_material(graph: Graph, groups: dict[str, Graph]) -> MaterialGraph | None:
@@ -261,9 +287,14 @@ def _textured(flat: FlatGraph) -> dict:
     return out
 
 
+#: The Principled BSDF's inputs of each lobe (``snapshot.LOBES``).
+LOBE_INPUTS = {"SPECULAR_TINT": ("Specular Tint",),
+               "COAT": ("Coat Weight", "Coat Roughness", "Coat IOR", "Coat Tint", "Coat Normal"),
+               "SHEEN": ("Sheen Weight", "Sheen Roughness", "Sheen Tint")}
 #: What of each closure the shading models read (the rest is drawn as nothing: Principled BSDF's
 #: coat, sheen, transmission ...).
-READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_INPUTS) | {"Normal"},
+READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_BASE_INPUTS) | {"Normal"}
+               | {socket for lobe in LOBES for socket in LOBE_INPUTS[lobe]},
                "ShaderNodeBsdfDiffuse": {"Color", "Normal"},
                "ShaderNodeBsdfGlossy": {"Color", "Roughness", "Normal"},
                "ShaderNodeBsdfMetallic": {"Base Color", "Roughness", "Normal"}}
