@@ -72,17 +72,19 @@ vec3 F_F82Tint(vec3 f0, vec3 b, float cos_i)
   return clamp(mix(f0, vec3(1.0), s5) - b * (cos_i * s5 * s), 0.0, 1.0);
 }
 
-/* A tinted dielectric's Fresnel (Cycles' generalized Schlick with a negative exponent,
- * bsdf_microfacet.h's microfacet_fresnel): from the tinted F0 to 1 as the exact Fresnel of eta
- * goes from its own F0 to 1; the exact Fresnel for a white tint. (eta's F0 is at most 0.99:
- * surface.glsl's eta from F0 clamps it there, so 1 - F0 never vanishes.) */
+#endif
+
+/* The Principled BSDF's dielectric Fresnel (Cycles' generalized Schlick with a negative exponent,
+ * bsdf_microfacet.h's microfacet_fresnel): from the (tinted) F0 to 1 as the exact Fresnel of eta
+ * goes from its own F0 to 1; for a white tint the exact Fresnel, but never below F0 (where an IOR
+ * in the hundreds dips towards Brewster's angle: 35 % below at grazing for F0 0.99). (eta's F0 is
+ * at most 0.99: surface.glsl's eta from F0 clamps it there, so 1 - F0 never vanishes.) */
 vec3 F_DielectricTinted(float eta, vec3 f0_tinted, float cos_i)
 {
   float ratio = (eta - 1.0) / (eta + 1.0);
   float f0 = ratio * ratio;
   return mix(f0_tinted, vec3(1.0), saturate((F_Dielectric(eta, cos_i) - f0) / (1.0 - f0)));
 }
-#endif
 
 /* What both lobes' compensation and the layering need, at the view direction (surface.glsl's
  * PrincipledLayers, made once per shading point by make_surface): the metal lobe's compensation
@@ -100,18 +102,18 @@ PrincipledLayers principled_layers_at(float NoV, float roughness, vec3 base_colo
   vec3 F0m = min(base_color, vec3(1.0));
   float ratio = (eta - 1.0) / (eta + 1.0);
   vec3 f0 = vec3(ratio * ratio);
+  /* the remap's average from the exact Fresnel's (F0 <= 0.99: F_DielectricTinted); Cycles takes it
+   * so for every tint (the exact average where it exceeds F0: all but IORs above ~200) */
+  float s_avg = saturate((principled_Fss(eta) - f0.x) / (1.0 - f0.x));
 #ifdef SL_SPECULAR_TINT
   p.metal_b = F82_tint_b(F0m, min(tint, vec3(1.0)));
   vec3 metal_Fss = mix(F0m, vec3(1.0), 1.0 / 21.0) - p.metal_b / 126.0;
-  /* F0 <= 0.99 (F_DielectricTinted): the remap's average from the exact Fresnel's */
-  float s_avg = saturate((principled_Fss(eta) - f0.x) / (1.0 - f0.x));
   f0 = clamp(f0 * tint, 0.0, 1.0);
-  p.dielectric_f0 = f0;
-  vec3 dielectric_Fss = mix(f0, vec3(1.0), s_avg);
 #else
   vec3 metal_Fss = F0m + (1.0 - F0m) / 21.0;
-  vec3 dielectric_Fss = vec3(principled_Fss(eta));
 #endif
+  p.dielectric_f0 = f0;
+  vec3 dielectric_Fss = mix(f0, vec3(1.0), s_avg);
   p.metal_M = principled_M(metal_Fss, E_mu, Eavg);
   p.dielectric_M = principled_M(dielectric_Fss, E_mu, Eavg);
   p.albedo = eta > 1.0 ? E_mu * p.dielectric_M * mix(f0, vec3(1.0), principled_S(roughness, NoV, sqrt(abs(ratio))))
@@ -196,11 +198,10 @@ vec3 principled_specular_tint(Surface s, float LoH)
   PrincipledLayers p = principled_layers(s);
 #ifdef SL_SPECULAR_TINT
   vec3 metal = p.metal_M * F_F82Tint(min(s.base_color, vec3(1.0)), p.metal_b, LoH);
-  vec3 dielectric = p.dielectric_M * F_DielectricTinted(s.eta, p.dielectric_f0, LoH);
 #else
   vec3 metal = p.metal_M * F_Schlick(min(s.base_color, vec3(1.0)), 1.0, LoH);
-  vec3 dielectric = p.dielectric_M * F_Dielectric(s.eta, LoH);
 #endif
+  vec3 dielectric = p.dielectric_M * F_DielectricTinted(s.eta, p.dielectric_f0, LoH);
   return s.metalness * metal + (1.0 - s.metalness) * dielectric;
 }
 

@@ -10,9 +10,9 @@ struct PrincipledLayers {
   vec3 dielectric_M;
   vec3 albedo;         /* the dielectric layer's albedo estimate (rgb) */
   float layer;         /* its largest channel: what the base below loses */
+  vec3 dielectric_f0;  /* the dielectric's F0 (times the tint: SL_SPECULAR_TINT) */
 #ifdef SL_SPECULAR_TINT
   vec3 metal_b;        /* F82-tint's b */
-  vec3 dielectric_f0;  /* the dielectric's F0 times the tint */
 #endif
 };
 PrincipledLayers principled_layers_at(float NoV, float roughness, vec3 base_color, float eta, vec3 tint);
