@@ -131,6 +131,20 @@ GraphInputs graph_inputs(vec3 n, vec3 v, bool backfacing)
 }
 
 
+/* The closures' lobes as the models read them (MaterialData's rows): their means over the BSDFs
+ * (`inv`: 1 / their weight), the coat's and sheen's inputs over the closures that have the lobe. */
+void apply_closure_lobes(inout MaterialData m, ClosureLobes l, float inv)
+{
+  m.specular_tint = vec4(l.specular_tint * inv, 0.0);
+  /* no coat or sheen: their inputs do not matter (the lobe is off at weight 0) */
+  float coat_inv = l.coat > 1e-8 ? 1.0 / l.coat : 0.0;
+  m.coat = vec4(l.coat * inv, l.coat_roughness * coat_inv, l.coat_ior * coat_inv, 0.0);
+  m.coat_tint = vec4(l.coat_tint * coat_inv, 0.0);
+  m.coat_normal = vec4(l.coat_normal * coat_inv, 0.0);
+  float sheen_inv = l.sheen_weight > 1e-8 ? 1.0 / l.sheen_weight : 0.0;
+  m.sheen = vec4(l.sheen * inv, l.sheen_roughness * sheen_inv);
+}
+
 /* The Surface closure as the models read it: its BSDFs' mean inputs replace the material's values
  * (but those the Material panel sets, SL_KEEP_*), the empirical models' colours and exponent follow
  * them as addon/blender/extract.py's material_params derives them, n becomes the BSDFs' normal,
@@ -172,6 +186,7 @@ MaterialData apply_closure(MaterialData m, Closure c, inout vec3 n, out float sc
   if (len2 > 1e-20) {
     n = c.normal * inversesqrt(len2);
   }
+  apply_closure_lobes(m, c.lobes, inv);
   return m;
 }
 #endif

@@ -84,7 +84,9 @@ vec3 shade_sphere_light(Surface s, LightData light, vec3 l, vec3 E, vec4 factors
 #  endif
 #endif
 
-vec3 shade_light(Surface s, LightData light, vec3 l, vec3 E, float visibility, vec4 factors)
+/* One light's radiance from the surface's lobes (the Principled BSDF's base, or a coat shaded as
+ * a surface of its own: coat_surface). */
+vec3 shade_light_surface(Surface s, LightData light, vec3 l, vec3 E, float visibility, vec4 factors)
 {
 #ifdef SL_LTC
 #  ifdef SL_HAS_AREA
@@ -130,4 +132,24 @@ vec3 shade_light(Surface s, LightData light, vec3 l, vec3 E, float visibility, v
 #  endif
 #endif
   return shade_direct(s, l, E, factors);
+}
+
+/* One light's radiance: the surface's, under the Principled BSDF's upper layers where the program
+ * draws them (the base times what the sheen and the coat leave it at the view; the coat's specular
+ * lobe by the light's own path, weighted; the sheen's cosine lobe at the light's direction, a
+ * diffuse lobe in Cycles' light passes). */
+vec3 shade_light(Surface s, LightData light, vec3 l, vec3 E, float visibility, vec4 factors)
+{
+  vec3 c = shade_light_surface(s, light, l, E, visibility, factors);
+#if defined(SL_COAT) || defined(SL_SHEEN)
+  c *= s.below;
+#endif
+#ifdef SL_COAT
+  c += s.coat.weight * shade_light_surface(coat_surface(s), light, l, E, visibility,
+                                           factors * vec4(0.0, 1.0, 1.0, 1.0));
+#endif
+#ifdef SL_SHEEN
+  c += sheen_direct(s, l) * E * factors.x;
+#endif
+  return c;
 }

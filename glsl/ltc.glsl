@@ -18,6 +18,19 @@
  * form factor of a spherical cap cut by the horizon (Snyder 1996), row j: its unclipped form
  * factor j / (M - 1), column i: its centre's height z = 2 i / (M - 1) - 1. */
 
+#if defined(SL_LTC) || defined(SL_SHEEN)
+/* D(w) = D_o(M^-1 w / |M^-1 w|) |det M^-1| / |M^-1 w|^3 of the LTC with entries m at a unit
+ * direction w of the shading frame (any scale of M^-1: D does not depend on it), D_o's cosine
+ * floored at `floor_cosine` (ltc_density_floor). (The sheen's lobe is such a cosine too.) */
+float ltc_density(vec4 m, vec3 w, float floor_cosine)
+{
+  vec3 y = vec3(m.x * w.x + m.y * w.z, w.y, m.z * w.x + m.w * w.z);
+  float len2 = max(dot(y, y), 1e-30);
+  float cosine = max(y.z * inversesqrt(len2), floor_cosine);
+  return cosine * abs(m.x * m.w - m.y * m.z) / (PI * len2 * sqrt(len2));
+}
+#endif
+
 #ifdef SL_LTC
 /* Bilinear lookups by texelFetch, as the twin's (the grid includes both ends). */
 vec4 ltc_texel_mix(ivec2 origin, vec2 x, int size)
@@ -52,16 +65,6 @@ float ltc_horizon_clip(float len, float one_plus_z)
   return ltc_texel_mix(ivec2(0, SL_LTC_SIZE), x, SL_LTC_SPHERE_SIZE).r;
 }
 
-/* D(w) = D_o(M^-1 w / |M^-1 w|) |det M^-1| / |M^-1 w|^3 of the LTC with entries m at a unit
- * direction w of the shading frame (any scale of M^-1: D does not depend on it), D_o's cosine
- * floored at `floor_cosine` (ltc_density_floor). */
-float ltc_density(vec4 m, vec3 w, float floor_cosine)
-{
-  vec3 y = vec3(m.x * w.x + m.y * w.z, w.y, m.z * w.x + m.w * w.z);
-  float len2 = max(dot(y, y), 1e-30);
-  float cosine = max(y.z * inversesqrt(len2), floor_cosine);
-  return cosine * abs(m.x * m.w - m.y * m.z) / (PI * len2 * sqrt(len2));
-}
 
 /* The cosine a light's density is floored at where its polygon, mapped by M^-1, is small: the
  * mean over it, I / |F| (the cap of the same vector form factor: z when wholly above the horizon,

@@ -200,6 +200,18 @@ MaterialData load_material(int row)
   m.ior_n = texelFetch(material_table, ivec2(6, row), 0);
   m.ior_k = texelFetch(material_table, ivec2(7, row), 0);
   m.emission = texelFetch(material_table, ivec2(8, row), 0);
+  /* the lobes' rows only where the program draws them (a fetch per row and pixel) */
+#ifdef SL_SPECULAR_TINT
+  m.specular_tint = texelFetch(material_table, ivec2(9, row), 0);
+#endif
+#ifdef SL_COAT
+  m.coat = texelFetch(material_table, ivec2(10, row), 0);
+  m.coat_tint = texelFetch(material_table, ivec2(11, row), 0);
+  m.coat_normal = vec4(0.0); /* the surface's (no node graph is shaded deferred) */
+#endif
+#ifdef SL_SHEEN
+  m.sheen = texelFetch(material_table, ivec2(12, row), 0);
+#endif
   return m;
 }
 #endif
@@ -344,7 +356,11 @@ void main()
 #ifndef SL_DEFERRED
   c *= closure_scale;
 #endif
+#if defined(SL_COAT) || defined(SL_SHEEN)
+  c += m.emission.rgb * s.below * lobes.z; /* under the sheen and the coat, as Cycles' */
+#else
   c += m.emission.rgb * lobes.z;
+#endif
   /* alpha: coverage, blended over what is behind (L = a L_surface + (1 - a) L_behind, as Cycles'
    * transparency); the renderer peels partly transparent surfaces and composites them in depth order */
   float alpha = m.emission.w;

@@ -66,18 +66,12 @@ vec3 env_sample_lobe(Surface s, sampler2D chain_map)
   vec3 tx = normalize(cross(up, s.n));
   vec3 ty = cross(s.n, tx);
   float a2 = s.alpha * s.alpha;
-#  ifdef SL_PRINCIPLED
-  PrincipledLayers p = principled_layers(s);
-  vec3 F0m = min(s.base_color, vec3(1.0));
-#  endif
   if (s.roughness <= MIN_PERCEPTUAL_ROUGHNESS) {
     /* at the roughness floor the lobe stands for a perfect mirror (roughness 0, as Cycles
      * renders it): GGX's long tails at alpha = 0.002 would still blur fine detail */
     vec3 r = reflect(-s.v, s.n);
 #  ifdef SL_PRINCIPLED
-    vec3 F = s.metalness * p.metal_M * F_Schlick(F0m, 1.0, s.NoV) +
-             (1.0 - s.metalness) * p.dielectric_M * F_Dielectric(s.eta, s.NoV);
-    return chain_level(chain_map, 0, equirect_uv(r)) * F;
+    return chain_level(chain_map, 0, equirect_uv(r)) * principled_specular_tint(s, s.NoV);
 #  else
     return chain_level(chain_map, 0, equirect_uv(r)) * pbr_fresnel(s, s.NoV);
 #  endif
@@ -107,8 +101,7 @@ vec3 env_sample_lobe(Surface s, sampler2D chain_map)
      * differ by under 1 % at 256 samples; 1 blurs what near-mirror lobes see */
     vec3 L = chain_lookup(chain_map, l, chain_lod(pdf, SL_ENV_SAMPLES, 0.0));
 #  ifdef SL_PRINCIPLED
-    vec3 F = s.metalness * p.metal_M * F_Schlick(F0m, 1.0, VoH) +
-             (1.0 - s.metalness) * p.dielectric_M * F_Dielectric(s.eta, VoH);
+    vec3 F = principled_specular_tint(s, VoH);
     float V = V_SmithGGXCorrelated(s.NoV, NoL, s.alpha);
 #  else
     vec3 F = pbr_fresnel(s, VoH);
@@ -139,7 +132,7 @@ vec3 env_sampled_specular(Surface s)
  * where the lobe's energy peaks, and the diffuse lobe lit by the irradiance, weighted by the
  * energy the specular lobe did not take (1 - F0 (E - B) - F90 B: Lambert's 1 - F over the
  * hemisphere; every diffuse variant is lit this way). */
-vec3 shade_environment(Surface s, vec2 weights)
+vec3 shade_environment_surface(Surface s, vec2 weights)
 {
   vec2 EB = env_split_sum(s.NoV, s.roughness);
   vec3 r = reflect(-s.v, s.n);
@@ -173,6 +166,25 @@ vec3 shade_environment(Surface s, vec2 weights)
 #    endif
   return diffuse * weights.x + specular * weights.y;
 #  endif
+}
+
+/* The world's light: the surface's, under the Principled BSDF's upper layers where the program draws
+ * them (as light_shading.glsl's shade_light: the base times what they leave it at the view, the
+ * coat's split sum of its own lobe, and the sheen's albedo times the irradiance around its normal:
+ * exact for a uniform world, a cosine-weighted mean of the world where the lobe is narrower). */
+vec3 shade_environment(Surface s, vec2 weights)
+{
+  vec3 c = shade_environment_surface(s, weights);
+#  if defined(SL_COAT) || defined(SL_SHEEN)
+  c *= s.below;
+#  endif
+#  ifdef SL_COAT
+  c += s.coat.weight * shade_environment_surface(coat_surface(s), weights * vec2(0.0, 1.0));
+#  endif
+#  ifdef SL_SHEEN
+  c += s.sheen.color * env_irradiance(env_bent_normal(s.sheen.n)) * (env_occlusion_diffuse() * INV_PI * weights.x);
+#  endif
+  return c;
 }
 #else
 vec3 shade_environment(Surface s, vec2 weights)

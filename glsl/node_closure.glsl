@@ -7,6 +7,47 @@
  * BSDFs of equal inputs; BSDFs of different inputs are shaded with their weighted mean inputs
  * (what a rasteriser with one lobe per fragment can do; the Material panel says so). */
 
+/* The Principled BSDF's lobes beyond its base (glsl/principled.glsl), each times its closure's
+ * weight as the inputs below; the coat's and the sheen's own inputs also times the lobe's weight, so
+ * that apply_closure takes their means over the closures that have the lobe. */
+struct ClosureLobes {
+  vec3 specular_tint;
+  float coat;            /* Coat Weight */
+  float coat_roughness;  /* each of the coat's inputs times the Coat Weight */
+  float coat_ior;
+  vec3 coat_tint;
+  vec3 coat_normal;
+  vec3 sheen;            /* Sheen Weight x Sheen Tint */
+  float sheen_weight;    /* its mean over the channels: what Sheen Roughness is weighted by */
+  float sheen_roughness; /* times that */
+};
+
+ClosureLobes lobes_none()
+{
+  return ClosureLobes(vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0.0);
+}
+
+/* A BSDF's own lobes of weight 1: a white Specular Tint, no coat, no sheen. */
+ClosureLobes lobes_base()
+{
+  ClosureLobes l = lobes_none();
+  l.specular_tint = vec3(1.0);
+  return l;
+}
+
+ClosureLobes lobes_scale(ClosureLobes l, float w)
+{
+  return ClosureLobes(l.specular_tint * w, l.coat * w, l.coat_roughness * w, l.coat_ior * w, l.coat_tint * w,
+                      l.coat_normal * w, l.sheen * w, l.sheen_weight * w, l.sheen_roughness * w);
+}
+
+ClosureLobes lobes_add(ClosureLobes a, ClosureLobes b)
+{
+  return ClosureLobes(a.specular_tint + b.specular_tint, a.coat + b.coat, a.coat_roughness + b.coat_roughness,
+                      a.coat_ior + b.coat_ior, a.coat_tint + b.coat_tint, a.coat_normal + b.coat_normal,
+                      a.sheen + b.sheen, a.sheen_weight + b.sheen_weight, a.sheen_roughness + b.sheen_roughness);
+}
+
 struct Closure {
   float weight;        /* the BSDFs' total weight */
   vec3 base_color;     /* the BSDFs' inputs, each times its weight */
@@ -18,31 +59,34 @@ struct Closure {
   float transparency;  /* the Transparent BSDFs' weight (their colour's mean: the coverage is grey) */
   float holdout;       /* the Holdout closures' weight: the share of the pixel left transparent in the
                         * render's alpha, hiding what is behind (Cycles' holdout) */
+  ClosureLobes lobes;
 };
 
 Closure closure_none()
 {
-  return Closure(0.0, vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), 0.0, 0.0);
+  return Closure(0.0, vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lobes_none());
 }
 
 /* A BSDF of weight 1 with these inputs. */
 Closure closure_bsdf(vec3 base_color, float metallic, float roughness, float specular, vec3 n)
 {
   return Closure(1.0, base_color, clamp(metallic, 0.0, 1.0), clamp(roughness, 0.0, 1.0),
-                 clamp(specular, 0.0, 1.0), n, vec3(0.0), 0.0, 0.0);
+                 clamp(specular, 0.0, 1.0), n, vec3(0.0), 0.0, 0.0, lobes_base());
 }
 
 Closure closure_scale(Closure c, float w)
 {
   return Closure(c.weight * w, c.base_color * w, c.metallic * w, c.roughness * w, c.specular * w,
-                 c.normal * w, c.emission * w, c.transparency * w, c.holdout * w);
+                 c.normal * w, c.emission * w, c.transparency * w, c.holdout * w,
+                 lobes_scale(c.lobes, w));
 }
 
 Closure closure_add(Closure a, Closure b)
 {
   return Closure(a.weight + b.weight, a.base_color + b.base_color, a.metallic + b.metallic,
                  a.roughness + b.roughness, a.specular + b.specular, a.normal + b.normal,
-                 a.emission + b.emission, a.transparency + b.transparency, a.holdout + b.holdout);
+                 a.emission + b.emission, a.transparency + b.transparency, a.holdout + b.holdout,
+                 lobes_add(a.lobes, b.lobes));
 }
 
 /* Mix Shader: (1 - fac) a + fac b, the factor clamped to [0, 1] as Cycles' svm_node_mix_closure */
@@ -54,12 +98,26 @@ Closure closure_mix(float fac, Closure a, Closure b)
 
 /* The Principled BSDF's inputs the shading models read: the dielectric F0 from IOR and Specular
  * IOR Level as the constant path reads them (addon/blender/extract.py: F0(IOR) x 2 x level, at
- * most 1), Alpha as a mix with Transparent (Cycles' principled alpha), emission under it too. */
+ * most 1), Alpha as a mix with Transparent (Cycles' principled alpha), emission under it too; its
+ * lobes' inputs clamped as Cycles' svm_node_closure_bsdf clamps them (weights and tints at least 0,
+ * roughnesses within [0, 1], the coat's IOR at least 1), the coat's normal the BSDF's where
+ * nothing is linked to it (codegen passes n then). */
 Closure closure_principled(vec4 base_color, float metallic, float roughness, float ior, float level,
-                           float alpha, vec4 emission_color, float emission_strength, vec3 n)
+                           float alpha, vec4 emission_color, float emission_strength, vec4 specular_tint,
+                           float coat, float coat_roughness, float coat_ior, vec4 coat_tint, float sheen,
+                           float sheen_roughness, vec4 sheen_tint, vec3 n, vec3 coat_n)
 {
   float r = (max(ior, 1.0) - 1.0) / (max(ior, 1.0) + 1.0);
   Closure c = closure_bsdf(base_color.rgb, metallic, roughness, min(r * r * 2.0 * max(level, 0.0), 1.0), n);
+  c.lobes.specular_tint = max(specular_tint.rgb, 0.0);
+  c.lobes.coat = max(coat, 0.0);
+  c.lobes.coat_roughness = c.lobes.coat * clamp(coat_roughness, 0.0, 1.0);
+  c.lobes.coat_ior = c.lobes.coat * max(coat_ior, 1.0);
+  c.lobes.coat_tint = c.lobes.coat * max(coat_tint.rgb, 0.0);
+  c.lobes.coat_normal = c.lobes.coat * coat_n;
+  c.lobes.sheen = max(sheen, 0.0) * max(sheen_tint.rgb, 0.0);
+  c.lobes.sheen_weight = dot(c.lobes.sheen, vec3(1.0 / 3.0));
+  c.lobes.sheen_roughness = c.lobes.sheen_weight * clamp(sheen_roughness, 0.0, 1.0);
   c.emission = emission_color.rgb * emission_strength;
   float a = clamp(alpha, 0.0, 1.0);
   c = closure_scale(c, a);

@@ -52,28 +52,138 @@ vec3 principled_M(vec3 Fss, float E, float Eavg)
   return 1.0 + Fms * (1.0 - E) / E;
 }
 
+#ifdef SL_SPECULAR_TINT
+/* F82-tint's b of a metal of reflectance f0 whose edge is tinted by `tint` (Kutz, Hasan & Edmondson
+ * 2021, "Novel aspects of the Adobe Standard Material"; Cycles' fresnel_f82tint_B,
+ * kernel/closure/bsdf_util.h): the Schlick curve times the tint at cos = 1/7 (about 82 degrees),
+ * solved for b in F = Schlick - b cos (1 - cos)^6; 0 for a white tint. */
+vec3 F82_tint_b(vec3 f0, vec3 tint)
+{
+  const float f = 6.0 / 7.0;
+  float f5 = pow5(f);
+  return mix(f0, vec3(1.0), f5) * (7.0 / (f5 * f)) * (1.0 - tint);
+}
+
+/* The F82-tint Fresnel (Cycles' fresnel_f82): Schlick less b cos (1 - cos)^6, within [0, 1]. */
+vec3 F_F82Tint(vec3 f0, vec3 b, float cos_i)
+{
+  float s = saturate(1.0 - cos_i);
+  float s5 = pow5(s);
+  return clamp(mix(f0, vec3(1.0), s5) - b * (cos_i * s5 * s), 0.0, 1.0);
+}
+
+#endif
+
+/* The Principled BSDF's dielectric Fresnel (Cycles' generalized Schlick with a negative exponent,
+ * bsdf_microfacet.h's microfacet_fresnel): from the (tinted) F0 to 1 as the exact Fresnel of eta
+ * goes from its own F0 to 1; for a white tint the exact Fresnel, but never below F0 (where an IOR
+ * in the hundreds dips towards Brewster's angle: 35 % below at grazing for F0 0.99). (eta's F0 is
+ * at most 0.99: surface.glsl's eta from F0 clamps it there, so 1 - F0 never vanishes.) */
+vec3 F_DielectricTinted(float eta, vec3 f0_tinted, float cos_i)
+{
+  float ratio = (eta - 1.0) / (eta + 1.0);
+  float f0 = ratio * ratio;
+  return mix(f0_tinted, vec3(1.0), saturate((F_Dielectric(eta, cos_i) - f0) / (1.0 - f0)));
+}
+
 /* What both lobes' compensation and the layering need, at the view direction (surface.glsl's
  * PrincipledLayers, made once per shading point by make_surface): the metal lobe's compensation
  * (for its F0 = base colour), the dielectric lobe's, and the dielectric layer's albedo estimate
- * E M mix(F0, 1, S) that the Lambert base sits under. */
-PrincipledLayers principled_layers_at(float NoV, float roughness, vec3 base_color, float eta)
+ * E M mix(F0, 1, S) that the Lambert base sits under, its largest channel as Cycles'
+ * closure_layering_weight takes it. `tint`: the Specular Tint (SL_SPECULAR_TINT; white else), as
+ * Cycles' Principled BSDF applies it (svm_node_closure_bsdf): the dielectric's F0 times it, the
+ * metal's F82 edge tint min(tint, 1); each lobe's average Fresnel Fss for its compensation as
+ * bsdf_microfacet_setup_fresnel_generalized_schlick and _f82_tint take it. */
+PrincipledLayers principled_layers_at(float NoV, float roughness, vec3 base_color, float eta, vec3 tint)
 {
   PrincipledLayers p;
   float E_mu = max(ms_albedo(NoV, roughness), 1e-3);
   float Eavg = principled_Eavg(roughness);
   vec3 F0m = min(base_color, vec3(1.0));
-  p.metal_M = principled_M(F0m + (1.0 - F0m) / 21.0, E_mu, Eavg);
-  p.dielectric_M = principled_M(vec3(principled_Fss(eta)), E_mu, Eavg).x;
   float ratio = (eta - 1.0) / (eta + 1.0);
-  p.layer = eta > 1.0 ? E_mu * p.dielectric_M *
-                            mix(ratio * ratio, 1.0, principled_S(roughness, NoV, sqrt(abs(ratio))))
-                      : 0.0;
+  vec3 f0 = vec3(ratio * ratio);
+  /* the remap's average from the exact Fresnel's (F0 <= 0.99: F_DielectricTinted); Cycles takes it
+   * so for every tint (the exact average where it exceeds F0: all but IORs above ~200) */
+  float s_avg = saturate((principled_Fss(eta) - f0.x) / (1.0 - f0.x));
+#ifdef SL_SPECULAR_TINT
+  p.metal_b = F82_tint_b(F0m, min(tint, vec3(1.0)));
+  vec3 metal_Fss = mix(F0m, vec3(1.0), 1.0 / 21.0) - p.metal_b / 126.0;
+  f0 = clamp(f0 * tint, 0.0, 1.0);
+#else
+  vec3 metal_Fss = F0m + (1.0 - F0m) / 21.0;
+#endif
+  p.dielectric_f0 = f0;
+  vec3 dielectric_Fss = mix(f0, vec3(1.0), s_avg);
+  p.metal_M = principled_M(metal_Fss, E_mu, Eavg);
+  p.dielectric_M = principled_M(dielectric_Fss, E_mu, Eavg);
+  p.albedo = eta > 1.0 ? E_mu * p.dielectric_M * mix(f0, vec3(1.0), principled_S(roughness, NoV, sqrt(abs(ratio))))
+                       : vec3(0.0);
+  p.layer = max(p.albedo.r, max(p.albedo.g, p.albedo.b));
   return p;
 }
 
 PrincipledLayers principled_layers(Surface s)
 {
   return s.layers;
+}
+#endif
+
+#ifdef SL_COAT
+/* The coat at the view (surface.glsl's CoatLayer), from MaterialData's coat (weight, roughness,
+ * IOR) and the coat's own normal (0: the surface's n), as Cycles' svm_node_closure_bsdf sets its
+ * coat up: a GGX dielectric of the coat's IOR (bsdf_microfacet_setup_fresnel_dielectric), its
+ * compensation from the exact Fresnel's average and its albedo estimate E M mix(F0, 1, S) those of
+ * principled_layers_at for a black dielectric. The roughness floored as the base's (a mirror coat:
+ * MIN_PERCEPTUAL_ROUGHNESS). */
+CoatLayer coat_at(vec3 n, vec3 v, vec4 coat, vec3 coat_normal)
+{
+  CoatLayer c;
+  c.weight = max(coat.x, 0.0);
+  float len2 = dot(coat_normal, coat_normal);
+  c.n = len2 > 1e-20 ? coat_normal * inversesqrt(len2) : n;
+  c.NoV = max(dot(c.n, v), MIN_COS);
+  c.roughness = max(saturate(coat.y), MIN_PERCEPTUAL_ROUGHNESS);
+  c.eta = max(coat.z, 1.0);
+  c.layers = principled_layers_at(c.NoV, c.roughness, vec3(0.0), c.eta, vec3(1.0));
+#  ifdef SL_LTC
+  c.ltc = ltc_frame_at(c.n, v, c.NoV, c.roughness);
+#  endif
+  return c;
+}
+
+/* What the coat leaves the layers below at the view (Cycles' svm_node_closure_bsdf): the base's
+ * weight times 1 - the coat's albedo (weight x its largest channel: closure_layering_weight), and
+ * the tint's absorption along the view's path refracted into the coat, Beer's law normalised to
+ * normal incidence (a coat of unit thickness): tint^(1 / cos theta_t), mixed in by the weight.
+ * As Cycles', along the view alone (not the light's path). */
+vec3 coat_transmittance(CoatLayer c, vec3 tint)
+{
+  float below = saturate(1.0 - c.weight * c.layers.layer);
+  float sin2_t = (1.0 - c.NoV * c.NoV) / (c.eta * c.eta);
+  /* eta >= 1: the refracted cosine is at least sqrt(1 - 1 / eta^2) > 0, or n.v (>= MIN_COS) at
+   * eta = 1; a coat of IOR 1 seen at grazing absorbs along a path up to 1e4 long */
+  float depth = inversesqrt(max(1.0 - sin2_t, MIN_COS * MIN_COS));
+  return below * mix(vec3(1.0), pow(tint, vec3(depth)), c.weight);
+}
+
+/* The coat as a Surface the lights' and the world's paths shade (light_shading.glsl's shade_light,
+ * model_pbr.glsl's shade_environment): a black dielectric of the coat's normal, roughness, IOR,
+ * compensation and LTC frame, so that every light kind's and the world's specular lobe serves it. */
+Surface coat_surface(Surface s)
+{
+  Surface c = s;
+  c.n = s.coat.n;
+  c.NoV = s.coat.NoV;
+  c.roughness = s.coat.roughness;
+  c.alpha = c.roughness * c.roughness;
+  c.base_color = vec3(0.0);
+  c.metalness = 0.0;
+  c.eta = s.coat.eta;
+  c.layers = s.coat.layers;
+#  ifdef SL_LTC
+  c.ltc = s.coat.ltc;
+#  endif
+  return c;
 }
 #endif
 
@@ -86,8 +196,12 @@ PrincipledLayers principled_layers(Surface s)
 vec3 principled_specular_tint(Surface s, float LoH)
 {
   PrincipledLayers p = principled_layers(s);
+#ifdef SL_SPECULAR_TINT
+  vec3 metal = p.metal_M * F_F82Tint(min(s.base_color, vec3(1.0)), p.metal_b, LoH);
+#else
   vec3 metal = p.metal_M * F_Schlick(min(s.base_color, vec3(1.0)), 1.0, LoH);
-  float dielectric = p.dielectric_M * F_Dielectric(s.eta, LoH);
+#endif
+  vec3 dielectric = p.dielectric_M * F_DielectricTinted(s.eta, p.dielectric_f0, LoH);
   return s.metalness * metal + (1.0 - s.metalness) * dielectric;
 }
 
@@ -117,10 +231,72 @@ vec3 principled_environment(Surface s, vec2 EB, vec3 radiance, vec3 irradiance, 
 #    else
   vec3 F0m = min(s.base_color, vec3(1.0));
   vec3 metal = p.metal_M * (F0m * (EB.x - EB.y) + EB.y);
-  vec3 specular = (s.metalness * metal + (1.0 - s.metalness) * p.layer) * radiance;
+#    ifdef SL_SPECULAR_TINT
+  /* F82-tint's edge term taken at the view, as the split sum takes nothing else (Cycles' own
+   * albedo estimate leaves it out: bsdf_microfacet_estimate_albedo) */
+  float c6 = pow5(1.0 - s.NoV) * (1.0 - s.NoV);
+  metal = max(metal - p.metal_M * p.metal_b * (s.NoV * c6 * EB.x), 0.0);
+#    endif
+  vec3 specular = (s.metalness * metal + (1.0 - s.metalness) * p.albedo) * radiance;
 #    endif
   vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) * irradiance * INV_PI;
   return diffuse * weights.x + specular * weights.y;
 }
 #  endif
+#endif
+
+#ifdef SL_SHEEN
+/* The sheen's LTC at (n.v, roughness) from sheen_table (RGBA32F, SL_SHEEN_SIZE square: texel (i, j)
+ * at n.v = i / (N - 1), roughness j / (N - 1), bilinear as Cycles' lookup_table_read_2D): a and b
+ * of M^-1 = [[a, 0, b], [0, a, 0], [0, 0, 1]] in the frame (tangent towards v, n x it, n), and the
+ * lobe's directional albedo (addon/reference/sheen.py fits them to Cycles' Sheen BSDF). */
+vec3 sheen_texel(ivec2 i)
+{
+  return texelFetch(sheen_table, i, 0).rgb;
+}
+
+vec3 sheen_lookup(float NoV, float roughness)
+{
+  float n = float(SL_SHEEN_SIZE - 1);
+  vec2 x = clamp(vec2(NoV, roughness), 0.0, 1.0) * n;
+  ivec2 i0 = ivec2(floor(x));
+  ivec2 i1 = min(i0 + 1, ivec2(SL_SHEEN_SIZE - 1));
+  vec2 f = x - vec2(i0);
+  vec3 a = mix(sheen_texel(i0), sheen_texel(ivec2(i1.x, i0.y)), f.x);
+  vec3 b = mix(sheen_texel(ivec2(i0.x, i1.y)), sheen_texel(i1), f.x);
+  return mix(a, b, f.y);
+}
+
+/* The sheen at the view (surface.glsl's SheenLobe), as Cycles' bsdf_sheen_setup: its roughness in
+ * [1e-3, 1], its LTC looked up at the view's cosine, the frame's tangent towards v; where the fit
+ * has no lobe (|a| or the albedo below 1e-5: smooth sheen seen from above) no sheen at all, neither
+ * reflecting nor attenuating what lies below. M^-1's entries as ltc.glsl's (scaled by 1 / a: the
+ * density does not depend on M^-1's scale). */
+SheenLobe sheen_at(vec3 n, vec3 v, float roughness, vec3 color)
+{
+  SheenLobe sh;
+  sh.n = n;
+  float NoV = dot(n, v);
+  vec3 fit = sheen_lookup(NoV, clamp(roughness, 1e-3, 1.0));
+  bool lobe = abs(fit.x) >= 1e-5 && fit.z >= 1e-5;
+  vec3 x_axis = v - n * NoV;
+  float x_len2 = dot(x_axis, x_axis);
+  vec3 other = abs(n.x) < 0.9 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
+  /* v along n: any tangent (the lobe is symmetric about n there) */
+  sh.ltc.x_axis = x_len2 > 1e-18 ? x_axis * inversesqrt(x_len2) : normalize(cross(other, n));
+  sh.ltc.y_axis = cross(n, sh.ltc.x_axis);
+  float a = lobe ? fit.x : 1.0;
+  sh.ltc.m = vec4(1.0, fit.y / a, 0.0, 1.0 / a);
+  sh.ltc.albedo = lobe ? fit.z : 0.0;
+  sh.color = color * sh.ltc.albedo;
+  return sh;
+}
+
+/* The sheen's f (n.l) towards l per unit irradiance: its colour times the LTC's density (Cycles'
+ * bsdf_sheen_eval), 0 below its normal's horizon. */
+vec3 sheen_direct(Surface s, vec3 l)
+{
+  vec3 local = vec3(dot(l, s.sheen.ltc.x_axis), dot(l, s.sheen.ltc.y_axis), dot(l, s.sheen.n));
+  return s.sheen.color * ltc_density(s.sheen.ltc.m, local, 0.0);
+}
 #endif

@@ -7,24 +7,64 @@
  * make_surface computes them once per shading point, not once per light. */
 struct PrincipledLayers {
   vec3 metal_M;
-  float dielectric_M;
-  float layer;
+  vec3 dielectric_M;
+  vec3 albedo;         /* the dielectric layer's albedo estimate (rgb) */
+  float layer;         /* its largest channel: what the base below loses */
+  vec3 dielectric_f0;  /* the dielectric's F0 (times the tint: SL_SPECULAR_TINT) */
+#ifdef SL_SPECULAR_TINT
+  vec3 metal_b;        /* F82-tint's b */
+#endif
 };
-PrincipledLayers principled_layers_at(float NoV, float roughness, vec3 base_color, float eta);
+PrincipledLayers principled_layers_at(float NoV, float roughness, vec3 base_color, float eta, vec3 tint);
 #endif
 
-#ifdef SL_LTC
+#if defined(SL_LTC) || defined(SL_SHEEN)
 /* What area lights' linearly transformed cosines need at the view direction (ltc.glsl): the
  * shading frame (x the tangent towards v, y = n x x), the LTC's M^-1 entries and the lobe's
  * albedo. They depend on the view only, so make_surface computes them once per shading point,
- * not once per area light. */
+ * not once per area light. (The sheen is such a cosine itself: SheenLobe.) */
 struct LtcFrame {
   vec3 x_axis;
   vec3 y_axis;
   vec4 m;
   float albedo;
 };
+#endif
+#ifdef SL_LTC
 LtcFrame ltc_frame_at(vec3 n, vec3 v, float NoV, float roughness);
+#endif
+
+#ifdef SL_COAT
+/* The Principled BSDF's coat at the view (principled.glsl's coat_at): a dielectric GGX layer of
+ * its own normal, roughness and IOR over the rest, its compensation and albedo estimate (its
+ * PrincipledLayers, of a black dielectric) and its LTC frame, made once per shading point; the
+ * lights and the world shade it as a Surface of its own (coat_surface). */
+struct CoatLayer {
+  float weight;
+  vec3 n;
+  float NoV;
+  float roughness;
+  float eta;
+  PrincipledLayers layers;
+#  ifdef SL_LTC
+  LtcFrame ltc;
+#  endif
+};
+CoatLayer coat_at(vec3 n, vec3 v, vec4 coat, vec3 coat_normal);
+vec3 coat_transmittance(CoatLayer c, vec3 tint);
+#endif
+
+#ifdef SL_SHEEN
+/* The Principled BSDF's sheen at the view (principled.glsl's sheen_at): Zeltner, Burley & Chiang
+ * 2022's microfiber sheen, a linearly transformed cosine of its own normal (its frame and M^-1 in
+ * ltc; ltc.albedo its directional albedo), times its colour. */
+struct SheenLobe {
+  vec3 color;          /* Sheen Weight x Sheen Tint x the lobe's albedo (0: no sheen) */
+  vec3 n;
+  LtcFrame ltc;
+};
+SheenLobe sheen_at(vec3 n, vec3 v, float roughness, vec3 color);
+float ltc_density(vec4 m, vec3 w, float floor_cosine);
 #endif
 
 #ifdef SL_MULTISCATTER
@@ -66,6 +106,18 @@ struct Surface {
 #ifdef SL_GRAPH_BENT_NORMAL
   vec3 smooth_n;      /* the interpolated normal before a node graph bent it (Cycles' sd->N) */
 #endif
+#ifdef SL_SPECULAR_TINT
+  vec3 specular_tint; /* the Principled BSDF's Specular Tint */
+#endif
+#ifdef SL_COAT
+  CoatLayer coat;
+#endif
+#ifdef SL_SHEEN
+  SheenLobe sheen;
+#endif
+#if defined(SL_COAT) || defined(SL_SHEEN)
+  vec3 below;         /* what the sheen and the coat above leave the base at the view (rgb) */
+#endif
 };
 
 /* Unit half vector of eq. 1.6; l + v = 0 only when the light is exactly behind the viewer's
@@ -103,8 +155,32 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
   s.has_complex_ior = m.fresnel.z > 0.5;
   s.ior_n = m.ior_n.rgb;
   s.ior_k = m.ior_k.rgb;
+#ifdef SL_SPECULAR_TINT
+  s.specular_tint = max(m.specular_tint.rgb, 0.0);
+  vec3 tint = s.specular_tint;
+#else
+  const vec3 tint = vec3(1.0);
+#endif
 #ifdef SL_LAYERS
-  s.layers = principled_layers_at(s.NoV, s.roughness, s.base_color, s.eta);
+  s.layers = principled_layers_at(s.NoV, s.roughness, s.base_color, s.eta, tint);
+#endif
+  /* the Principled BSDF's upper layers, each attenuating what lies below it at the view (Cycles'
+   * svm_node_closure_bsdf: the sheen over the coat over the rest) */
+#if defined(SL_COAT) || defined(SL_SHEEN)
+  s.below = vec3(1.0);
+#endif
+  vec3 sheen_n = n;
+#ifdef SL_COAT
+  s.coat = coat_at(n, v, m.coat, m.coat_normal.xyz);
+  s.below *= coat_transmittance(s.coat, max(m.coat_tint.rgb, 0.0));
+  /* the sheen lies on the coat: its normal leans to the coat's by the coat's weight (Cycles') */
+  vec3 leaning = mix(n, s.coat.n, saturate(s.coat.weight));
+  sheen_n = dot(leaning, leaning) > 1e-20 ? normalize(leaning) : n;
+#endif
+#ifdef SL_SHEEN
+  s.sheen = sheen_at(sheen_n, v, m.sheen.w, max(m.sheen.rgb, 0.0));
+  /* Cycles' closure_layering_weight of the sheen's albedo (colour x albedo): its largest channel */
+  s.below *= saturate(1.0 - max(s.sheen.color.r, max(s.sheen.color.g, s.sheen.color.b)));
 #endif
 #ifdef SL_MULTISCATTER
   s.ms_compensation = ms_compensation_at(s.NoV, s.roughness, s.f0);

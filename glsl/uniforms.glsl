@@ -65,6 +65,13 @@ struct MaterialData {
   vec4 ior_k;            /* rgb: conductor IOR, imaginary part (extinction) */
   vec4 emission;         /* rgb: emitted radiance (Principled Emission Color x Strength);
                           * w: alpha (coverage, 1 opaque) */
+  /* The Principled BSDF's lobes beyond its base (glsl/principled.glsl; read by the physically based
+   * model's Principled set where the program holds the lobe: SL_SPECULAR_TINT, SL_COAT, SL_SHEEN) */
+  vec4 specular_tint;    /* rgb: Specular Tint (the dielectric F0's tint, the metal's F82 edge tint) */
+  vec4 coat;             /* x: Coat Weight, y: Coat Roughness, z: Coat IOR */
+  vec4 coat_tint;        /* rgb: Coat Tint (the base's colour through the coat at normal incidence) */
+  vec4 sheen;            /* rgb: Sheen Weight x Sheen Tint; w: Sheen Roughness */
+  vec4 coat_normal;      /* xyz: the coat's normal where a node graph gives it one (0: the surface's) */
 };
 
 /* The world's light, precomputed (glsl/ibl.glsl, addon/reference/environment.py): nine SH coefficients

@@ -214,6 +214,8 @@ class Sweep:
         self.kind = np.array([LIGHTS[name].kind for name in lights])[self.index["light"]]
         self.twin_lights = [_f32(LIGHTS[name]) for name in lights]
         self._light_stage = {}
+        #: more MaterialParams fields for every row (tests/test_principled_lobes.py's lobes)
+        self.material_extra = {}
 
     def describe(self, rows) -> str:
         """The axis values of ``rows`` (the first few), for assertion messages."""
@@ -242,7 +244,7 @@ class Sweep:
         grey = np.repeat(m[:, 4:5], 3, axis=1)
         mat = S.MaterialParams(base_color=grey, diffuse_color=grey, specular_color=(1.0, 1.0, 1.0),
                                ambient_color=(0.0, 0.0, 0.0), roughness=m[:, 0], metalness=m[:, 1],
-                               f0=m[:, 2], shininess=m[:, 3], ior_n=IOR_N, ior_k=IOR_K)
+                               f0=m[:, 2], shininess=m[:, 3], ior_n=IOR_N, ior_k=IOR_K, **self.material_extra)
         p = self.p[rows] if p is None else p
         v = self.v[rows] if v is None else v
         n = np.broadcast_to(np.array([0.0, 0.0, 1.0]), (len(p), 3))

@@ -98,14 +98,32 @@ def test_gpu_matches_numpy_twin_with_sphere_lights(model, seed, tmp_path):
     _compare(model, seed + 100, tmp_path, sizes=True)
 
 
-def _compare(model, seed, tmp_path, sizes=False):
+#: The Principled BSDF's socket of each of MaterialParams' lobe fields (``_compare``'s ``lobes``).
+LOBE_SOCKETS = {"specular_tint": "Specular Tint", "coat_weight": "Coat Weight",
+                "coat_roughness": "Coat Roughness", "coat_ior": "Coat IOR", "coat_tint": "Coat Tint",
+                "sheen_weight": "Sheen Weight",
+                "sheen_roughness": "Sheen Roughness", "sheen_tint": "Sheen Tint"}
+
+
+def _compare(model, seed, tmp_path, sizes=False, lobes=None):
+    """``lobes``: the Principled BSDF's lobe inputs (MaterialParams' fields -> values) of the
+    material's surface, drawn by the Principled term set (else the scene's default terms)."""
     rng = np.random.default_rng(1000 * seed + len(model))
     tilt, mat, lights = _random_case(rng, sizes)
     scene = scenes.reset(size=SIZE)
     scene.shading_lab.model = model
     scene.shading_lab.ambient = 0.05
     scenes.ortho_camera(scene, scale=SCALE)
-    scenes.plane(scene, size=10.0, rotation=tilt, material=scenes.material(**mat))
+    material = scenes.material(**mat)
+    terms = S.Terms()
+    if lobes:
+        terms = S.Terms(principled=True)
+        scene.shading_lab.term_set = "PRINCIPLED"
+        bsdf = next(n for n in scenes.node_tree(material).nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+        for field, value in lobes.items():
+            rgba = (*value, 1.0) if isinstance(value, tuple) else value
+            bsdf.inputs[LOBE_SOCKETS[field]].default_value = rgba
+    scenes.plane(scene, size=10.0, rotation=tilt, material=material)
     for props in lights:
         props = dict(props)
         kind = props.pop("kind")
@@ -121,9 +139,9 @@ def _compare(model, seed, tmp_path, sizes=False):
     n = np.broadcast_to(normal if normal @ -direction > 0 else -normal, p.shape)  # back face flip
     # Blinn-Phong's diffuse colour falls back to base x (1 - metalness) (addon/blender/extract.py)
     diffuse = tuple(c * (1.0 - mat["metalness"]) for c in mat["base_color"])
-    surface = shading.Surface(p, n, v, S.MaterialParams(**mat, diffuse_color=diffuse))
+    surface = shading.Surface(p, n, v, S.MaterialParams(**mat, diffuse_color=diffuse, **(lobes or {})))
     twin_lights = _reaches([_twin_light(dict(props)) for props in lights], tilt)
-    want = shading.shade(model, surface, twin_lights, ambient=0.05)
+    want = shading.shade(model, surface, twin_lights, ambient=0.05, terms=terms)
 
     assert np.all(np.isfinite(got))
     scale = max(float(want.max()), 1e-3)

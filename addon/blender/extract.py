@@ -85,6 +85,7 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
         maps["alpha"] = float(_input(node, "Alpha", 1.0))
         strength = float(_input(node, "Emission Strength", 0.0))
         maps["emission"] = tuple(c * strength for c in _rgb(_input(node, "Emission Color", (0, 0, 0))))
+        maps.update(_principled_lobes(node))
     elif kind == "ShaderNodeEmission":  # a pure emitter: no reflection
         base, metal, f0 = (0.0, 0.0, 0.0), 0.0, 0.0
         strength = float(_input(node, "Strength", 1.0))
@@ -136,6 +137,24 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
         **{k: v for k, v in maps.items() if v is not None},
         **_material_extras(props),
     )
+
+
+def _principled_lobes(node) -> dict:
+    """The Principled BSDF's lobes beyond its base (MaterialParams' fields), clamped as Cycles'
+    svm_node_closure_bsdf clamps them: tints and weights at least 0, roughnesses within [0, 1], the
+    coat's IOR at least 1."""
+    def colour(name):
+        return tuple(max(c, 0.0) for c in _rgb(_input(node, name, (1.0, 1.0, 1.0))))
+
+    def unit(name, default):
+        return min(max(float(_input(node, name, default)), 0.0), 1.0)
+
+    return {"specular_tint": colour("Specular Tint"),
+            "coat_weight": max(float(_input(node, "Coat Weight", 0.0)), 0.0),
+            "coat_roughness": unit("Coat Roughness", 0.03),
+            "coat_ior": max(float(_input(node, "Coat IOR", 1.5)), 1.0), "coat_tint": colour("Coat Tint"),
+            "sheen_weight": max(float(_input(node, "Sheen Weight", 0.0)), 0.0),
+            "sheen_roughness": unit("Sheen Roughness", 0.5), "sheen_tint": colour("Sheen Tint")}
 
 
 #: The Material panel's explicit values a compiled graph leaves as they are: its input -> the flag.

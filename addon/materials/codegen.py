@@ -780,14 +780,30 @@ def _combine(space: str, inputs: tuple[str, str, str], output: str):
     return emit
 
 
-#: The Principled BSDF's inputs the models read, in glsl/node_closure.glsl's closure_principled order.
-PRINCIPLED_INPUTS = ("Base Color", "Metallic", "Roughness", "IOR", "Specular IOR Level", "Alpha",
-                     "Emission Color", "Emission Strength")
+#: The Principled BSDF's inputs the models read, in glsl/node_closure.glsl's closure_principled order
+#: (its normals, Normal and Coat Normal, after them).
+PRINCIPLED_BASE_INPUTS = ("Base Color", "Metallic", "Roughness", "IOR", "Specular IOR Level", "Alpha",
+                          "Emission Color", "Emission Strength")
+PRINCIPLED_INPUTS = PRINCIPLED_BASE_INPUTS + ("Specular Tint", "Coat Weight", "Coat Roughness", "Coat IOR",
+                                              "Coat Tint", "Sheen Weight", "Sheen Roughness", "Sheen Tint")
+
+#: The values of the Principled BSDF's lobe inputs a node read from an older file may lack (Blender's
+#: defaults: they add no lobe), with their socket types.
+PRINCIPLED_DEFAULTS = {"Specular Tint": ((1.0, 1.0, 1.0, 1.0), "RGBA"), "Coat Weight": (0.0, "VALUE"),
+                       "Coat Roughness": (0.03, "VALUE"), "Coat IOR": (1.5, "VALUE"),
+                       "Coat Tint": ((1.0, 1.0, 1.0, 1.0), "RGBA"), "Sheen Weight": (0.0, "VALUE"),
+                       "Sheen Roughness": (0.5, "VALUE"), "Sheen Tint": ((1.0, 1.0, 1.0, 1.0), "RGBA")}
 
 
 def _principled(w: _Writer, node: FlatNode) -> dict:
-    args = [w.arg(node, s) for s in PRINCIPLED_INPUTS]
-    return {"BSDF": f"closure_principled({', '.join(args)}, {_normal_input(w, node)})"}
+    """The Principled BSDF (closure_principled); its Coat Normal is its Normal where nothing is
+    linked to it, as Cycles' svm_node_closure_bsdf takes it."""
+    args = [w.arg(node, s) if s in node.inputs else w.constant(*PRINCIPLED_DEFAULTS[s])
+            for s in PRINCIPLED_INPUTS]
+    n = _normal_input(w, node)
+    coat = node.inputs.get("Coat Normal")
+    coat_n = w.arg(node, "Coat Normal") if coat is not None and isinstance(coat.source, Ref) else n
+    return {"BSDF": f"closure_principled({', '.join(args)}, {n}, {coat_n})"}
 
 
 def _closure_color(w: _Writer, node: FlatNode) -> str:

@@ -22,6 +22,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..scene.nodes import MATERIAL_OUTPUT, Graph
+from ..scene.snapshot import LOBES, lobes_of
 from . import bake, codegen
 from .graph import Const, FlatGraph, flatten
 
@@ -97,6 +98,8 @@ class MaterialGraph:
     #: what it was compiled from, to compile it again with bakes (``with_bakes``): the graph,
     #: its groups, and the AOV's name for an AOV Output's graph (None: the surface)
     read: tuple | None = None
+    #: the Principled BSDF's lobes beyond its base its closures can draw (``snapshot.LOBES``)
+    lobes: frozenset[str] = frozenset()
 
     def _identity(self) -> tuple:
         constants = np.asarray(self.constants, np.float32).tobytes()
@@ -247,7 +250,31 @@ def _compiled(flat: FlatGraph, targets: dict, function: str, whole: FlatGraph,
                         ("Convert", *codegen.SINKS))
     return MaterialGraph(program, compiled.constants, compiled.images, compiled.attributes, compiled.missing,
                          nodes, _transparent(flat), _unread(flat), _textured(flat),
-                         compiled.notes, compiled.uniform_attributes, bakes, baked_names)
+                         compiled.notes, compiled.uniform_attributes, bakes, baked_names,
+                         lobes=_lobes(flat))
+
+
+def _lobes(flat: FlatGraph) -> frozenset[str]:
+    """The lobes (``snapshot.LOBES``) the graph's Principled BSDFs can draw: each whose inputs turn
+    it on (``snapshot.lobes_of``), a linked input taken as on (its value is per fragment)."""
+    out = set()
+    for node in flat.nodes.values():
+        if node.kind != "ShaderNodeBsdfPrincipled":
+            continue
+        values = {}
+        for socket in ("Specular Tint", "Coat Weight", "Sheen Weight", "Sheen Tint"):
+            spec = node.inputs.get(socket)
+            if spec is not None and not isinstance(spec.source, Const):
+                value = {"Specular Tint": (0.0,) * 3, "Coat Weight": 1.0, "Sheen Weight": 1.0,
+                         "Sheen Tint": (1.0,) * 3}[socket]  # linked: on
+            elif spec is not None and spec.source.value is not None:
+                value = spec.source.value
+            else:
+                value = codegen.PRINCIPLED_DEFAULTS[socket][0]
+            values[socket] = tuple(value)[:3] if isinstance(value, (tuple, list)) else float(value)
+        out |= lobes_of(values["Specular Tint"], values["Coat Weight"], values["Sheen Weight"],
+                        values["Sheen Tint"])
+    return frozenset(out)
 
 
 def compile_material(graph: Graph, groups: dict[str, Graph],
@@ -371,9 +398,14 @@ def _textured(flat: FlatGraph) -> dict:
     return out
 
 
+#: The Principled BSDF's inputs of each lobe (``snapshot.LOBES``).
+LOBE_INPUTS = {"SPECULAR_TINT": ("Specular Tint",),
+               "COAT": ("Coat Weight", "Coat Roughness", "Coat IOR", "Coat Tint", "Coat Normal"),
+               "SHEEN": ("Sheen Weight", "Sheen Roughness", "Sheen Tint")}
 #: What of each closure the shading models read (the rest is drawn as nothing: Principled BSDF's
 #: coat, sheen, transmission ...).
-READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_INPUTS) | {"Normal"},
+READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_BASE_INPUTS) | {"Normal"}
+               | {socket for lobe in LOBES for socket in LOBE_INPUTS[lobe]},
                "ShaderNodeBsdfDiffuse": {"Color", "Normal"},
                "ShaderNodeBsdfGlossy": {"Color", "Roughness", "Normal"},
                "ShaderNodeBsdfMetallic": {"Base Color", "Roughness", "Normal"}}

@@ -18,6 +18,7 @@ from ..reference.multiscatter import MS_SIZE, S_SIZE
 from ..scene.matrices import invert
 from ..scene.snapshot import (
     LIGHT_KINDS,
+    LOBES,
     MAX_ENVIRONMENT_IMAGES,
     MODELS,
     MaterialParams,
@@ -125,6 +126,9 @@ class Features:
     #: keep (``MaterialParams.graph_keep``)
     graph: GraphProgram | None = None
     graph_keep: frozenset[str] = frozenset()
+    #: the Principled BSDF's lobes beyond its base the material draws (``snapshot.LOBES``: each a
+    #: define, SL_<LOBE>); the physically based model's Principled set alone draws them
+    lobes: frozenset[str] = frozenset()
 
     def __post_init__(self):
         if self.model not in MODELS:
@@ -177,6 +181,11 @@ class Features:
         else:
             canonical = Terms()
         object.__setattr__(self, "terms", canonical)
+        unknown = set(self.lobes) - set(LOBES)
+        if unknown:
+            raise ValueError(f"unknown lobes {sorted(unknown)}; expected some of {LOBES}")
+        if not (self.model == "PBR" and self.terms.principled):  # the other sets have none of them
+            object.__setattr__(self, "lobes", frozenset())
 
     @classmethod
     def from_snapshot(cls, snapshot: Snapshot, model: str | None = None,
@@ -219,6 +228,7 @@ class Features:
             half_target=half_target,
             graph=material.graph.program if material is not None and material.graph is not None else None,
             graph_keep=material.graph_keep if material is not None else frozenset(),
+            lobes=material.lobes if material is not None else frozenset(),
             environment=environment_kind(snapshot.world),
             env_diffuse=snapshot.settings.environment_diffuse,
             env_samples=env_samples,
@@ -272,6 +282,7 @@ class Features:
         if self.model == "PBR" and t.principled:
             out += [("SL_PRINCIPLED", "1"), ("SL_LAYERS", "1"), ("SL_MS_SIZE", str(MS_SIZE)),
                     ("SL_S_SIZE", str(S_SIZE))]
+            out += [("SL_" + lobe, "1") for lobe in sorted(self.lobes)]
         elif self.model == "PBR":
             out += [("SL_FRESNEL_" + t.fresnel, "1"), ("SL_NDF_" + t.ndf, "1"),
                     ("SL_VISIBILITY_" + t.visibility, "1"), ("SL_DIFFUSE_" + t.diffuse, "1")]
@@ -896,6 +907,11 @@ def pack_material(m: MaterialParams) -> bytes:
         [*(m.ior_n if complex_ior else (1.0, 1.0, 1.0)), 0.0],
         [*(m.ior_k if complex_ior else (0.0, 0.0, 0.0)), 0.0],
         [*m.emission, min(max(m.alpha, 0.0), 1.0)],
+        [*m.specular_tint, 0.0],
+        [m.coat_weight, m.coat_roughness, m.coat_ior, 0.0],
+        [*m.coat_tint, 0.0],
+        [*(m.sheen_weight * c for c in m.sheen_tint), m.sheen_roughness],
+        [0.0, 0.0, 0.0, 0.0],  # the coat's normal: the surface's (a node graph's own is per fragment)
     ]
     return np.asarray(rows, np.float32).tobytes()
 

@@ -11,13 +11,16 @@ numpy: no ``bpy``, no ``gpu``.
 from __future__ import annotations
 
 import copy
+import dataclasses
 import math
+from dataclasses import dataclass
 
 import numpy as np
 
-from ..scene.snapshot import Light, MaterialParams, Terms
+from ..scene.snapshot import LOBES, Light, MaterialParams, Terms
 from . import environment, ltc
 from . import multiscatter as M
+from . import sheen as sheen_table
 from .brdf import (
     D_GGX,
     INV_PI,
@@ -42,6 +45,7 @@ from .brdf import (
     half_vector,
     pbr_distribution,
     pbr_visibility,
+    pow5,
     saturate,
 )
 
@@ -360,6 +364,15 @@ class Surface:
         self.has_complex_ior = material.ior_n is not None and material.ior_k is not None
         self.ior_n = np.asarray(material.ior_n if self.has_complex_ior else (1.0, 1.0, 1.0), f64)
         self.ior_k = np.asarray(material.ior_k if self.has_complex_ior else (0.0, 0.0, 0.0), f64)
+        self.specular_tint = np.maximum(np.asarray(material.specular_tint, f64), 0.0)
+        # the Principled BSDF's upper layers (the Principled set's: upper_layers), clamped as Cycles
+        self.coat_weight = np.maximum(np.asarray(material.coat_weight, f64), 0.0)
+        self.coat_roughness = np.clip(np.asarray(material.coat_roughness, f64), 0.0, 1.0)
+        self.coat_ior = np.maximum(np.asarray(material.coat_ior, f64), 1.0)
+        self.coat_tint = np.maximum(np.asarray(material.coat_tint, f64), 0.0)
+        self.sheen = (np.maximum(np.asarray(material.sheen_weight, f64), 0.0)[..., None]
+                      * np.maximum(np.asarray(material.sheen_tint, f64), 0.0))
+        self.sheen_roughness = np.clip(np.asarray(material.sheen_roughness, f64), 0.0, 1.0)
 
 
 def blinn_phong_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
@@ -414,7 +427,7 @@ def pbr_diffuse(s: Surface, F, NoV, NoL, NoH, LoH, LoV, terms: Terms):
     if terms.diffuse == "GGX_HAMMON":
         return Fd_GGXHammon(rho, NoV, NoL, NoH, LoV, s.alpha)
     if terms.diffuse == "LAYERED":
-        return rho * _rgb_scalar(np.clip(1.0 - principled_layers(s, terms)[2], 0.0, 1.0) * INV_PI)
+        return rho * _rgb_scalar(np.clip(1.0 - principled_layers(s, terms).layer, 0.0, 1.0) * INV_PI)
     return (1.0 - F) * rho * Fd_Lambert()
 
 
@@ -427,32 +440,181 @@ def specular_energy_compensation(s: Surface, terms: Terms):
     return 1.0 + s.f0 * _rgb_scalar(1.0 / E - 1.0)
 
 
-def principled_layers(s: Surface, terms: Terms = PRINCIPLED_TERMS):
-    """principled.glsl's principled_layers_at: (metal_M (rgb), dielectric_M, layer) at the view,
-    the two lobes' multiple-scattering compensation and the dielectric layer's albedo estimate
-    E M mix(F0, 1, S) that the Lambert base sits under; E of the program's D and V (``terms``';
-    the Principled set: GGX with Smith), Eavg GGX's."""
-    rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
-    E_mu = np.maximum(M.interpolate(M.albedo_table(*terms.lobe), s.NoV, rough), 1e-3)
+@dataclass
+class PrincipledLayers:
+    """surface.glsl's PrincipledLayers: the metal and dielectric lobes' multiple-scattering
+    compensation (rgb), the dielectric layer's albedo estimate (rgb) and its largest channel, which
+    the base below loses; F82-tint's b and the tinted dielectric F0."""
+
+    metal_M: np.ndarray
+    dielectric_M: np.ndarray
+    albedo: np.ndarray
+    layer: np.ndarray
+    metal_b: np.ndarray
+    dielectric_f0: np.ndarray
+
+
+def F82_tint_b(f0, tint):
+    """principled.glsl's F82_tint_b (Cycles' fresnel_f82tint_B): F82-tint's b, the Schlick curve
+    times ``tint`` at cos = 1/7 solved for b in Schlick - b cos (1 - cos)^6."""
+    f = 6.0 / 7.0
+    f5 = pow5(f)
+    f0 = np.asarray(f0, np.float64)
+    return (f0 + (1.0 - f0) * f5) * (7.0 / (f5 * f)) * (1.0 - np.asarray(tint, np.float64))
+
+
+def F_F82Tint(f0, b, cos_i):
+    """principled.glsl's F_F82Tint (Cycles' fresnel_f82): Schlick less b cos (1 - cos)^6, in [0, 1]."""
+    cos_i = np.asarray(cos_i, np.float64)
+    s = saturate(1.0 - cos_i)
+    s5 = pow5(s)
+    f0 = np.asarray(f0, np.float64)
+    return np.clip(f0 + (1.0 - f0) * _rgb_scalar(s5) - np.asarray(b) * _rgb_scalar(cos_i * s5 * s), 0.0, 1.0)
+
+
+def F_DielectricTinted(eta, f0_tinted, cos_i):
+    """principled.glsl's F_DielectricTinted (Cycles' generalized Schlick with a negative exponent):
+    from the tinted F0 to 1 as the exact Fresnel of ``eta`` goes from its own F0 to 1."""
+    eta = np.asarray(eta, np.float64)
+    f0 = ((eta - 1.0) / (eta + 1.0)) ** 2
+    s = saturate((F_Dielectric(eta, cos_i) - f0) / (1.0 - f0))
+    f0_tinted = np.asarray(f0_tinted, np.float64)
+    return f0_tinted + (1.0 - f0_tinted) * _rgb_scalar(s)
+
+
+def principled_layers_at(NoV, roughness, base_color, eta, tint, lobe=("GGX", "SMITH_CORRELATED")):
+    """principled.glsl's principled_layers_at: the two lobes' compensation and the dielectric layer's
+    albedo estimate E M mix(F0 tint, 1, S) at the view (``PrincipledLayers``), each lobe's average
+    Fresnel as Cycles' Principled BSDF takes it with the Specular Tint ``tint``; E of the lobe
+    ``lobe`` (the Principled set's GGX with Smith; the LAYERED diffuse's program's), Eavg GGX's."""
+    rough = np.broadcast_to(roughness, np.shape(NoV))
+    E_mu = np.maximum(M.interpolate(M.albedo_table(*lobe), NoV, rough), 1e-3)
     e_avg = M.interpolate_1d(M.average_albedo(), rough)
-    F0m = np.minimum(s.base_color, 1.0)
-    metal_M = M.principled_compensation(F0m + (1.0 - F0m) / 21.0, _rgb_scalar(E_mu), _rgb_scalar(e_avg))
-    dielectric_M = M.principled_compensation(M.principled_fss(s.eta), E_mu, e_avg)
-    ratio = (s.eta - 1.0) / (s.eta + 1.0)
-    S = M.interpolate_s(M.principled_s_table(), rough, s.NoV,
-                        np.broadcast_to(np.sqrt(np.abs(ratio)), np.shape(s.NoV)))
-    layer = np.where(s.eta > 1.0, E_mu * dielectric_M * (ratio * ratio + S * (1.0 - ratio * ratio)), 0.0)
-    return metal_M, dielectric_M, layer
+    F0m = np.minimum(base_color, 1.0)
+    eta = np.asarray(eta, np.float64)
+    tint = np.asarray(tint, np.float64)
+    ratio = (eta - 1.0) / (eta + 1.0)
+    f0 = ratio * ratio
+    metal_b = F82_tint_b(F0m, np.minimum(tint, 1.0))
+    metal_Fss = F0m + (1.0 - F0m) / 21.0 - metal_b / 126.0
+    s_avg = saturate((M.principled_fss(eta) - f0) / (1.0 - f0))
+    f0_tinted = np.clip(_rgb_scalar(f0) * tint, 0.0, 1.0)
+    dielectric_Fss = f0_tinted + (1.0 - f0_tinted) * _rgb_scalar(s_avg)
+    metal_M = M.principled_compensation(metal_Fss, _rgb_scalar(E_mu), _rgb_scalar(e_avg))
+    dielectric_M = M.principled_compensation(dielectric_Fss, _rgb_scalar(E_mu), _rgb_scalar(e_avg))
+    z = np.broadcast_to(np.sqrt(np.abs(ratio)), np.shape(NoV))
+    S = _rgb_scalar(M.interpolate_s(M.principled_s_table(), rough, NoV, z))
+    albedo = np.where(_rgb_scalar(eta > 1.0),
+                      _rgb_scalar(E_mu) * dielectric_M * (f0_tinted + (1.0 - f0_tinted) * S), 0.0)
+    return PrincipledLayers(metal_M, dielectric_M, albedo, albedo.max(axis=-1), metal_b, f0_tinted)
+
+
+def principled_layers(s: Surface, terms: Terms = PRINCIPLED_TERMS) -> PrincipledLayers:
+    """``principled_layers_at`` of ``s`` (surface.glsl's make_surface): its Specular Tint in the
+    Principled set, white in the LAYERED diffuse's programs."""
+    tint = s.specular_tint if terms.principled else np.ones(3)
+    return principled_layers_at(s.NoV, s.roughness, s.base_color, s.eta, tint, terms.lobe)
 
 
 def principled_specular_tint(s: Surface, LoH):
-    """What multiplies D V in the Principled set's specular lobe (principled.glsl): its metal and
-    dielectric lobes' Fresnel and compensation, weighted by metalness."""
-    metal_M, dielectric_M, _ = principled_layers(s)
-    F0m = np.minimum(s.base_color, 1.0)
-    metal = metal_M * F_Schlick(F0m, np.ones(np.shape(LoH)), LoH)
-    dielectric = dielectric_M * F_Dielectric(s.eta, LoH)
-    return s.metal3 * metal + (1.0 - s.metal3) * _rgb_scalar(dielectric)
+    """What multiplies D V in the Principled set's specular lobe (principled.glsl): its metal
+    (F82-tint) and dielectric (tinted) lobes' Fresnel and compensation, weighted by metalness."""
+    p = principled_layers(s)
+    metal = p.metal_M * F_F82Tint(np.minimum(s.base_color, 1.0), p.metal_b, LoH)
+    dielectric = p.dielectric_M * F_DielectricTinted(s.eta, p.dielectric_f0, LoH)
+    return s.metal3 * metal + (1.0 - s.metal3) * dielectric
+
+
+@dataclass
+class UpperLayers:
+    """What the Principled BSDF's upper layers make of a surface at its view (surface.glsl's
+    make_surface): what they leave the base (rgb), the coat as a surface of its own (None: no coat)
+    and the sheen's lobe (None: no sheen)."""
+
+    below: np.ndarray
+    coat: Surface | None
+    sheen: SheenLobe | None
+
+
+@dataclass
+class SheenLobe:
+    """surface.glsl's SheenLobe: its colour (weight x tint x albedo), normal, frame and M^-1
+    entries as ltc.glsl's."""
+
+    color: np.ndarray
+    n: np.ndarray
+    x_axis: np.ndarray
+    y_axis: np.ndarray
+    m: np.ndarray
+
+
+def coat_surface(s: Surface) -> Surface:
+    """principled.glsl's coat_at and coat_surface: the coat as a black dielectric surface of its
+    own roughness (floored as the base's) and IOR, the surface's normal (a node graph's own coat
+    normal is the GPU's alone), without upper layers of its own."""
+    c = copy.copy(s)
+    c.roughness = np.maximum(s.coat_roughness, MIN_PERCEPTUAL_ROUGHNESS)
+    c.alpha = c.roughness * c.roughness
+    c.base_color = np.zeros(3)
+    c.metalness = np.zeros(np.shape(s.metalness))
+    c.metal3 = c.metalness[..., None]
+    c.eta = s.coat_ior
+    c.specular_tint = np.ones(3)
+    c.coat_weight = np.zeros(np.shape(s.coat_weight))
+    c.sheen = np.zeros(3)
+    return c
+
+
+def coat_transmittance(s: Surface, coat: Surface):
+    """principled.glsl's coat_transmittance: 1 - the coat's weighted albedo (its largest channel),
+    times the tint's absorption along the view's refracted path, mixed in by the weight."""
+    w = s.coat_weight
+    below = saturate(1.0 - w * principled_layers(coat).layer)
+    sin2_t = (1.0 - coat.NoV * coat.NoV) / (coat.eta * coat.eta)
+    depth = 1.0 / np.sqrt(np.maximum(1.0 - sin2_t, MIN_COS * MIN_COS))
+    transmitted = s.coat_tint ** _rgb_scalar(depth)
+    return _rgb_scalar(below) * (1.0 + _rgb_scalar(w) * (transmitted - 1.0))
+
+
+def upper_layers(s: Surface) -> UpperLayers | None:
+    """The Principled BSDF's upper layers at ``s``'s view (surface.glsl's make_surface with
+    SL_COAT, SL_SHEEN): None where it has neither (no weight above 0 anywhere)."""
+    coat = coat_surface(s) if "COAT" in LOBES and np.any(s.coat_weight > 1e-5) else None
+    has_sheen = "SHEEN" in LOBES and np.any(s.sheen > 1e-5)
+    if coat is None and not has_sheen:
+        return None
+    below = np.ones(np.shape(s.NoV) + (3,))
+    n = s.n
+    if coat is not None:
+        below = below * coat_transmittance(s, coat)
+    sheen = None
+    if has_sheen:
+        sheen = sheen_at(n, s.v, s.sheen_roughness, s.sheen)
+        below = below * _rgb_scalar(saturate(1.0 - sheen.color.max(axis=-1)))
+    return UpperLayers(below, coat, sheen)
+
+
+def sheen_at(n, v, roughness, color) -> SheenLobe:
+    """principled.glsl's sheen_at: the LTC (a, b) and albedo at (n.v, roughness in [1e-3, 1]) from
+    the sheen table (``sheen.lookup``), the frame's tangent towards v; no sheen where the fit has no
+    lobe (|a| or the albedo below 1e-5)."""
+    NoV = _dot(n, v)
+    fit = sheen_table.lookup(NoV, np.clip(np.broadcast_to(roughness, np.shape(NoV)), 1e-3, 1.0))
+    lobe = (np.abs(fit[..., 0]) >= 1e-5) & (fit[..., 2] >= 1e-5)
+    x_axis = v - n * NoV[..., None]
+    other = np.where((np.abs(n[..., :1]) < 0.9), [1.0, 0.0, 0.0], [0.0, 1.0, 0.0])
+    x_axis = np.where((_dot(x_axis, x_axis) > 1e-18)[..., None], x_axis, np.cross(other, n))
+    x_axis = _unit(x_axis)
+    a = np.where(lobe, fit[..., 0], 1.0)
+    m = np.stack([np.ones_like(a), fit[..., 1] / a, np.zeros_like(a), 1.0 / a], axis=-1)
+    albedo = np.where(lobe, fit[..., 2], 0.0)
+    return SheenLobe(np.asarray(color) * _rgb_scalar(albedo), np.asarray(n), x_axis, np.cross(n, x_axis), m)
+
+
+def sheen_direct(sheen: SheenLobe, l):
+    """principled.glsl's sheen_direct: the sheen's f (n.l) towards l per unit irradiance."""
+    local = np.stack([_dot(l, sheen.x_axis), _dot(l, sheen.y_axis), _dot(l, sheen.n)], axis=-1)
+    return sheen.color * _rgb_scalar(ltc.ltc_density(ltc.minv_from_entries(sheen.m), local))
 
 
 def pbr_specular_tint(s: Surface, LoH, terms: Terms):
@@ -485,7 +647,7 @@ def principled_direct(s: Surface, NoL, NoH, NxH2, LoH):
     D = D_GGX(NoH, NxH2, s.alpha)
     V = V_SmithGGXCorrelated(s.NoV, NoL, s.alpha)
     specular = principled_specular_tint(s, LoH) * _rgb_scalar(D * V)
-    layer = principled_layers(s)[2]
+    layer = principled_layers(s).layer
     diffuse = s.base_color * (1.0 - s.metal3) * _rgb_scalar(np.clip(1.0 - layer, 0.0, 1.0)) * INV_PI
     return diffuse, specular
 
@@ -526,7 +688,9 @@ def shade_uniform_environment(s: Surface, radiance, terms: Terms = DEFAULT_TERMS
     times the diffuse occlusion ``ao`` (split sum)."""
     L = np.asarray(radiance, np.float64) * _rgb_scalar(specular_ao)
     irradiance = np.pi * np.asarray(radiance, np.float64) * _rgb_scalar(ao)
-    return shade_environment(s, L, irradiance, terms, weights)
+    return _under_upper_layers(s, terms, weights,
+                               lambda surface, w: shade_environment(surface, L, irradiance, terms, w),
+                               lambda n: irradiance)
 
 
 def shade_environment(s: Surface, prefiltered, irradiance, terms: Terms = DEFAULT_TERMS, weights=(1.0, 1.0),
@@ -539,13 +703,16 @@ def shade_environment(s: Surface, prefiltered, irradiance, terms: Terms = DEFAUL
     E, B = env_split_sum(s, terms)
     base = s.base_color * (1.0 - s.metal3)
     if terms.principled:
-        metal_M, _, layer = principled_layers(s)
+        p = principled_layers(s)
         F0m = np.minimum(s.base_color, 1.0)
-        metal = metal_M * (F0m * _rgb_scalar(E - B) + _rgb_scalar(B))
-        specular = (s.metal3 * metal + (1.0 - s.metal3) * _rgb_scalar(layer)) * prefiltered
+        metal = p.metal_M * (F0m * _rgb_scalar(E - B) + _rgb_scalar(B))
+        # F82-tint's edge term at the view (principled.glsl's principled_environment)
+        c6 = pow5(1.0 - s.NoV) * (1.0 - s.NoV)
+        metal = np.maximum(metal - p.metal_M * p.metal_b * _rgb_scalar(s.NoV * c6 * E), 0.0)
+        specular = (s.metal3 * metal + (1.0 - s.metal3) * p.albedo) * prefiltered
         if sampled is not None:
             specular = np.broadcast_to(sampled, np.shape(specular))
-        diffuse = base * _rgb_scalar(np.clip(1.0 - layer, 0.0, 1.0)) * irradiance * INV_PI
+        diffuse = base * _rgb_scalar(np.clip(1.0 - p.layer, 0.0, 1.0)) * irradiance * INV_PI
         return diffuse * weights[0] + specular * weights[1]
     albedo = s.f0 * _rgb_scalar(E - B) + _rgb_scalar(s.f90 * B)
     specular = albedo * prefiltered if sampled is None else np.asarray(sampled, np.float64)
@@ -557,11 +724,28 @@ def shade_environment(s: Surface, prefiltered, irradiance, terms: Terms = DEFAUL
         specular = specular + Fms_Ems * irradiance * INV_PI
         albedo = albedo + Fms_Ems
     if terms.diffuse == "LAYERED":
-        weight = _rgb_scalar(np.clip(1.0 - principled_layers(s, terms)[2], 0.0, 1.0))
+        weight = _rgb_scalar(np.clip(1.0 - principled_layers(s, terms).layer, 0.0, 1.0))
     else:
         weight = np.clip(1.0 - albedo, 0.0, 1.0)
     diffuse = base * weight * irradiance * INV_PI
     return diffuse * weights[0] + specular * weights[1]
+
+
+def _under_upper_layers(s: Surface, terms: Terms, weights, surface_light, irradiance_at):
+    """model_pbr.glsl's shade_environment: ``surface_light(surface, weights)``, the world's light
+    from a surface's own lobes, and in the Principled set under its upper layers (``upper_layers``:
+    the base times what they leave it, the coat's own lobe, the sheen's albedo times
+    ``irradiance_at(its normal)`` / pi)."""
+    c = surface_light(s, weights)
+    upper = upper_layers(s) if terms.principled else None
+    if upper is None:
+        return c
+    c = c * upper.below
+    if upper.coat is not None:
+        c = c + _rgb_scalar(s.coat_weight) * surface_light(upper.coat, (0.0, weights[1]))
+    if upper.sheen is not None:
+        c = c + upper.sheen.color * irradiance_at(upper.sheen.n) * (INV_PI * weights[0])
+    return c
 
 
 def env_dominant_direction(n, r, alpha):
@@ -586,6 +770,23 @@ def shade_image_environment(s: Surface, maps: environment.WorldMaps, terms: Term
     on the points and the roughness alone) computed once; ``prefilter_samples``: the lobe samples
     of each prefiltered level (``environment.PREFILTER_SAMPLES`` if None)."""
     memo = {} if memo is None else memo
+
+    def irradiance_at(n):
+        if diffuse == "SH9":
+            return environment.sh9_irradiance(maps.sh, n) * _rgb_scalar(ao)
+        return environment.irradiance(maps.level(environment.IRRADIANCE_WIDTH), n) * _rgb_scalar(ao)
+
+    def surface_light(surface, w):  # the coat's own split sum or samples: a memo of its own
+        own = memo if surface is s else memo.setdefault(("coat",), {})
+        return _image_environment(surface, maps, terms, samples, diffuse, w, ao, specular_ao, own,
+                                  prefilter_samples)
+
+    return _under_upper_layers(s, terms, weights, surface_light, irradiance_at)
+
+
+def _image_environment(s: Surface, maps: environment.WorldMaps, terms: Terms, samples: int, diffuse: str,
+                       weights, ao, specular_ao, memo: dict, prefilter_samples: int | None):
+    """shade_image_environment of the surface's own lobes."""
     if ("irradiance", diffuse) not in memo:
         if diffuse == "SH9":
             memo["irradiance", diffuse] = environment.sh9_irradiance(maps.sh, s.n)
@@ -787,7 +988,26 @@ def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAU
                 visibility=1.0, ltc_jitter=None, memo: dict | None = None):
     """One light's reflected radiance (rgb, before the model's final clamp) from its irradiance
     ``E`` and direction ``l`` (``light_irradiance``, times ``visibility``, the light's shadow
-    factor): the body of mesh.frag.glsl's light loop. ``ltc_jitter``: for tests (ltc.ltc_integral)."""
+    factor): the body of mesh.frag.glsl's light loop (light_shading.glsl's shade_light): the
+    surface's, and in the Principled set the Principled BSDF's upper layers (``upper_layers``).
+    ``ltc_jitter``: for tests (ltc.ltc_integral)."""
+    c = shade_light_surface(model, s, light, E, l, terms, visibility, ltc_jitter, memo)
+    upper = upper_layers(s) if model == "PBR" and terms.principled else None
+    if upper is None:
+        return c
+    c = c * upper.below
+    if upper.coat is not None:  # its specular lobe by the light's own path (memo: the base's polygons)
+        coat_light = dataclasses.replace(light, diffuse_factor=0.0)
+        c = c + _rgb_scalar(s.coat_weight) * shade_light_surface(model, upper.coat, coat_light, E, l, terms,
+                                                                 visibility, ltc_jitter)
+    if upper.sheen is not None:
+        c = c + sheen_direct(upper.sheen, l) * E * light.diffuse_factor
+    return c
+
+
+def shade_light_surface(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAULT_TERMS,
+                        visibility=1.0, ltc_jitter=None, memo: dict | None = None):
+    """light_shading.glsl's shade_light_surface: one light's radiance from the surface's own lobes."""
     direct, _ = MODELS[model]
     area = light.kind == "AREA" and light.half_size[0] > 0.0
     if model == "PBR" and area:
@@ -825,7 +1045,8 @@ def shade(model: str, s: Surface, lights: list[Light], ambient: float = 0.0,
     a dict that keeps the area and sphere lights' lobe geometry between the calls."""
     ldr = MODELS[model][1]
     c = np.zeros(np.shape(s.p), np.float64)
-    c = c + s.emission
+    upper = upper_layers(s) if model == "PBR" and terms.principled else None
+    c = c + s.emission * (1.0 if upper is None else upper.below)  # under the sheen and the coat
     if ldr:
         c = c + s.ambient_color * ambient  # eq. 1.4
     for k, light in enumerate(lights):

@@ -159,6 +159,41 @@ class MaterialParams:
     #: the material's AOV Outputs compiled, by AOV name (``materials.surface.compile_aovs``)
     aovs: tuple[tuple[str, object], ...] = ()
     pass_index: int = 0  # the material's pass index (Object Info's Material Index)
+    #: the Principled BSDF's lobes beyond its base (glsl/principled.glsl), drawn by the physically
+    #: based model's Principled set, each only in the programs of materials that use it (``lobes``)
+    specular_tint: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    coat_weight: float = 0.0
+    coat_roughness: float = 0.03
+    coat_ior: float = 1.5
+    coat_tint: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    sheen_weight: float = 0.0
+    sheen_roughness: float = 0.5
+    sheen_tint: tuple[float, float, float] = (1.0, 1.0, 1.0)
+
+    @property
+    def lobes(self) -> frozenset[str]:
+        """The lobes of ``LOBES`` the material draws: its compiled graph's (``MaterialGraph.lobes``),
+        else those its values turn on (a tint other than white, a weight above 0)."""
+        if self.graph is not None:
+            return self.graph.lobes
+        return lobes_of(self.specular_tint, self.coat_weight, self.sheen_weight, self.sheen_tint)
+
+
+#: The Principled BSDF's lobes beyond its base the programs draw, as their defines name them
+#: (SL_<LOBE>); the sheen's inputs are read and carried, not drawn yet.
+LOBES = ("SPECULAR_TINT", "COAT")
+
+
+def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint) -> frozenset[str]:
+    """The lobes a Principled BSDF of these inputs draws: a Specular Tint other than white, a Coat
+    Weight above 0, a Sheen Weight and Tint above 0 (Cycles adds no lobe of weight 0: its
+    CLOSURE_WEIGHT_CUTOFF is 1e-5). Scalars here; per-point arrays (the twin's) are any of them."""
+    tint = np.asarray(specular_tint, np.float64)
+    sheen = np.asarray(sheen_weight, np.float64)[..., None] * np.asarray(sheen_tint, np.float64)
+    used = {"SPECULAR_TINT": bool(np.any(tint != 1.0)),
+            "COAT": bool(np.any(np.asarray(coat_weight, np.float64) > 1e-5)),
+            "SHEEN": bool(np.any(sheen > 1e-5))}
+    return frozenset(name for name in LOBES if used.get(name))
 
 
 #: Objects without a material render with this: Blender's default surface (grey 0.8,
