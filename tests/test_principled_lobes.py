@@ -519,3 +519,44 @@ def test_white_furnace_world_with_every_lobe(tmp_path):
 
 #: The sheen's inputs in the furnaces
 FURNACE_SHEEN = dict(sheen_weight=1.0, sheen_roughness=0.5)
+
+
+# --- the Auto term set ----------------------------------------------------------------------------
+
+def test_auto_draws_the_lobes_where_a_material_has_them():
+    """Auto predicts every candidate against the Principled set with its lobes (the twin draws them
+    there alone): at a loose bound a velvet and a coated paint take the Principled set, whose programs
+    draw their lobes; a plain dielectric beside them a cheaper set."""
+    from addon.blender import extract
+
+    def materials():
+        return [_principled("Velvet", base_color=(0.25, 0.01, 0.04, 1.0), roughness=0.9, sheen_weight=1.0,
+                            sheen_roughness=0.3),
+                _principled("Paint", base_color=(0.5, 0.02, 0.03, 1.0), metallic=0.7, roughness=0.45,
+                            coat_weight=1.0, coat_roughness=0.06),
+                _principled("Plain", base_color=(0.5, 0.5, 0.5, 1.0), roughness=0.6)]
+
+    scene, sphere = _scene(lambda: materials()[0])
+    for i, mat in enumerate(materials()[1:], start=1):  # two more spheres beside the first
+        copy = sphere.copy()
+        copy.data = sphere.data.copy()
+        copy.data.materials[0] = mat
+        copy.location.x += 0.6 * i
+        scene.collection.objects.link(copy)
+    scene.shading_lab.term_set = "AUTO"
+    scene.shading_lab.auto_error_bound = 4.0  # loose: what the lobes alone require stands out
+    # a large frame: the cheaper sets repay their programs there (Auto predicts no material too
+    # small for that)
+    snap = extract.snapshot(bpy.context.evaluated_depsgraph_get(), 1920, 1920)
+    choices = {key.split(".")[0]: c for key, c in snap.term_choices.items()}
+    for name, c in choices.items():
+        print(f"{name}: {c.name} (alone: {c.alone or c.name}), {dict(c.errors)}")
+    for name in ("Velvet", "Paint"):  # every cheaper set errs beyond the bound: the lobes
+        assert choices[name].name == "PRINCIPLED" and not choices[name].alone, choices[name]
+        cheaper = [e for n, e in choices[name].errors if n != "PRINCIPLED"]
+        assert min(cheaper) > 4.0, (name, choices[name].errors)
+        assert choices[name].limiting.startswith({"Velvet": "sheen", "Paint": "coat"}[name]), choices[name]
+    assert (choices["Plain"].alone or choices["Plain"].name) != "PRINCIPLED", choices["Plain"]
+    features = programs.Features.from_snapshot(snap, material=snap.materials[next(
+        k for k in snap.materials if k.startswith("Velvet"))])
+    assert features.lobes == {"SHEEN"} and ("SL_SHEEN", "1") in features.defines()
