@@ -4,6 +4,16 @@
  * file's shade_direct (and, for the physically based model, pbr_specular_tint). */
 
 #ifdef SL_LTC
+#  ifdef SL_SHEEN
+/* The sheen's light from the polygon shade_polygon_light shaded last (its radiance times the
+ * integral of the sheen's LTC over it: exact, the lobe being a linearly transformed cosine itself,
+ * Zeltner et al. 2022), for shade_light to add beside the surface's; x < 0: no polygon was shaded
+ * (a point, spot or sun, a light in its far field), the sheen is taken at the light's direction. */
+vec3 sheen_polygon_light;
+#  endif
+#endif
+
+#ifdef SL_LTC
 /* A light of radiance L (rgb, as it arrives: windowed and shadowed) over a polygon of unclipped
  * form factor `form_factor` whose irradiance-weighted direction is l, on the physically based
  * model: the diffuse lobe from the polygon's irradiance cut by the horizon (the sphere of the same
@@ -22,6 +32,10 @@ vec3 shade_polygon_light(Surface s, LightPolygon poly, vec3 L, float form_factor
     c = shade_direct(s, l, L * (PI * clipped / NoL), factors * vec4(1.0, 0.0, 1.0, 1.0));
   }
   float density;
+#  ifdef SL_SHEEN
+  sheen_polygon_light = s.sheen.color * L * (ltc_polygon_frame(s.sheen.ltc, s.sheen.n, poly, l, density) *
+                                             factors.x);
+#  endif
   float form_factor_lobe = ltc_polygon(s, poly, l, density);
   if (form_factor_lobe > 0.0) {
     float LoH = saturate(dot(l, half_vector(l, s.v, s.n)));
@@ -136,11 +150,23 @@ vec3 shade_light_surface(Surface s, LightData light, vec3 l, vec3 E, float visib
 
 /* One light's radiance: the surface's, under the Principled BSDF's upper layers where the program
  * draws them (the base times what the sheen and the coat leave it at the view; the coat's specular
- * lobe by the light's own path, weighted; the sheen's cosine lobe at the light's direction, a
- * diffuse lobe in Cycles' light passes). */
+ * lobe by the light's own path, weighted; the sheen's cosine lobe, a diffuse lobe in Cycles' light
+ * passes, at the light's direction, or over its polygon where the surface's path shaded one). */
 vec3 shade_light(Surface s, LightData light, vec3 l, vec3 E, float visibility, vec4 factors)
 {
+#ifdef SL_SHEEN
+#  ifdef SL_LTC
+  sheen_polygon_light = vec3(-1.0);
+#  endif
+#endif
   vec3 c = shade_light_surface(s, light, l, E, visibility, factors);
+#ifdef SL_SHEEN
+#  ifdef SL_LTC
+  vec3 sheen = sheen_polygon_light.x >= 0.0 ? sheen_polygon_light : sheen_direct(s, l) * E * factors.x;
+#  else
+  vec3 sheen = sheen_direct(s, l) * E * factors.x;
+#  endif
+#endif
 #if defined(SL_COAT) || defined(SL_SHEEN)
   c *= s.below;
 #endif
@@ -149,7 +175,7 @@ vec3 shade_light(Surface s, LightData light, vec3 l, vec3 E, float visibility, v
                                            factors * vec4(0.0, 1.0, 1.0, 1.0));
 #endif
 #ifdef SL_SHEEN
-  c += sheen_direct(s, l) * E * factors.x;
+  c += sheen;
 #endif
   return c;
 }

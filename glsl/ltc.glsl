@@ -100,19 +100,20 @@ LtcFrame ltc_frame_at(vec3 n, vec3 v, float NoV, float roughness)
   return f;
 }
 
-/* The integral of the surface's LTC over a light's polygon seen from s.p (an area light's, or a
- * sphere light's disc), and (out) the LTC's density towards l (the light's irradiance-weighted
- * direction, E_Area's). Corners as E_Area takes them (offsets from the light's centre, edges'
- * cross products from offsets: precise for small or far lights), each mapped by M^-1 first. */
-float ltc_polygon(Surface s, LightPolygon poly, vec3 l, out float density_l)
+/* The integral of an LTC (frame f about the normal n) over a light's polygon seen from the
+ * polygon's origin (an area light's, or a sphere light's disc), and (out) the LTC's density towards
+ * l (the light's irradiance-weighted direction, E_Area's). Corners as E_Area takes them (offsets
+ * from the light's centre, edges' cross products from offsets: precise for small or far lights),
+ * each mapped by M^-1 first. */
+float ltc_polygon_frame(LtcFrame f, vec3 n, LightPolygon poly, vec3 l, out float density_l)
 {
-  vec4 m = s.ltc.m;
-  vec3 x_axis = s.ltc.x_axis;
-  vec3 y_axis = s.ltc.y_axis;
+  vec4 m = f.m;
+  vec3 x_axis = f.x_axis;
+  vec3 y_axis = f.y_axis;
   /* M^-1 in the world: rows (m00 x + m02 n), y, (m20 x + m22 n) */
-  mat3 to_cosine = transpose(mat3(m.x * x_axis + m.y * s.n, y_axis, m.z * x_axis + m.w * s.n));
+  mat3 to_cosine = transpose(mat3(m.x * x_axis + m.y * n, y_axis, m.z * x_axis + m.w * n));
   vec3 F = polygon_form_factor(poly, to_cosine) * INV_PI;
-  vec3 l_local = vec3(dot(l, x_axis), dot(l, y_axis), dot(l, s.n));
+  vec3 l_local = vec3(dot(l, x_axis), dot(l, y_axis), dot(l, n));
   float len = length(F);
   if (len <= 0.0) {
     density_l = ltc_density(m, l_local, 0.0);
@@ -126,6 +127,12 @@ float ltc_polygon(Surface s, LightPolygon poly, vec3 l, out float density_l)
   float integral = ltc_horizon_clip(len, one_plus_z);
   density_l = ltc_density(m, l_local, ltc_density_floor(integral, len));
   return integral;
+}
+
+/* The surface's own LTC over the polygon (ltc_polygon_frame). */
+float ltc_polygon(Surface s, LightPolygon poly, vec3 l, out float density_l)
+{
+  return ltc_polygon_frame(s.ltc, s.n, poly, l, density_l);
 }
 
 /* The specular integral over the polygon, int_P f (n.l) (F = 1), from the LTC's integral I over

@@ -40,7 +40,7 @@ LtcFrame ltc_frame_at(vec3 n, vec3 v, float NoV, float roughness);
  * PrincipledLayers, of a black dielectric) and its LTC frame, made once per shading point; the
  * lights and the world shade it as a Surface of its own (coat_surface). */
 struct CoatLayer {
-  float weight;
+  float weight;        /* the coat's lobe weight: Coat Weight, times what the sheen above leaves it */
   vec3 n;
   float NoV;
   float roughness;
@@ -179,8 +179,13 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
 #endif
 #ifdef SL_SHEEN
   s.sheen = sheen_at(sheen_n, v, m.sheen.w, max(m.sheen.rgb, 0.0));
-  /* Cycles' closure_layering_weight of the sheen's albedo (colour x albedo): its largest channel */
-  s.below *= saturate(1.0 - max(s.sheen.color.r, max(s.sheen.color.g, s.sheen.color.b)));
+  /* Cycles' closure_layering_weight of the sheen's albedo (colour x albedo): its largest channel,
+   * what the sheen leaves the coat's lobe as well as the base */
+  float sheen_left = saturate(1.0 - max(s.sheen.color.r, max(s.sheen.color.g, s.sheen.color.b)));
+  s.below *= sheen_left;
+#  ifdef SL_COAT
+  s.coat.weight *= sheen_left;
+#  endif
 #endif
 #ifdef SL_MULTISCATTER
   s.ms_compensation = ms_compensation_at(s.NoV, s.roughness, s.f0);

@@ -64,6 +64,9 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
         if "SL_LTC" in defs:
             info.sampler(slot, "FLOAT_2D", "ltc_table")
             slot += 1
+        if "SL_SHEEN" in defs:
+            info.sampler(slot, "FLOAT_2D", "sheen_table")
+            slot += 1
         for name in arrays:
             info.sampler(slot, "FLOAT_2D", f"in_{name}")
             slot += 1
@@ -95,6 +98,8 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
                     shader.uniform_sampler("s_table", gpu_library.s_table())
                 if "SL_LTC" in defs:
                     shader.uniform_sampler("ltc_table", gpu_library.ltc_table(terms))
+                if "SL_SHEEN" in defs:
+                    shader.uniform_sampler("sheen_table", gpu_library.sheen_table())
                 for name, texture in textures.items():
                     shader.uniform_sampler(f"in_{name}", texture)
                 for name, texture in bound.items():

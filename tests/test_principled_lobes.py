@@ -31,19 +31,29 @@ from addon.scene import snapshot as S
 # --- Specular Tint ------------------------------------------------------------------------------
 
 
-def _tinted_graph(name="Tinted"):
-    """Specular Tint from orange to cyan across u, Roughness = v (from 0.05), Metallic = 1 where
-    u > 0.5 (a gold-ish base colour there): the dielectric's F0 tint and the metal's F82 edge tint."""
+def _graph(name):
+    """A material whose surface is a Principled BSDF (returned with the tree and the UV's u and v)."""
     mat, tree, out = _tree(name)
     bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
     tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
-    u, v = _uv(tree)
+    return mat, tree, bsdf, *_uv(tree)
+
+
+def _from(tree, value, low):
+    """``value`` (0..1) mapped to low..1 by a Map Range node."""
+    node = tree.nodes.new("ShaderNodeMapRange")
+    tree.links.new(value, node.inputs["Value"])
+    node.inputs["To Min"].default_value = low
+    return node.outputs["Result"]
+
+
+def _tinted_graph(name="Tinted"):
+    """Specular Tint from orange to cyan across u, Roughness = v (from 0.05), Metallic = 1 where
+    u > 0.5 (a gold-ish base colour there): the dielectric's F0 tint and the metal's F82 edge tint."""
+    mat, tree, bsdf, u, v = _graph(name)
     tint = _mix_colors(tree, u, (1.0, 0.45, 0.1, 1.0), (0.1, 0.6, 1.0, 1.0))
     tree.links.new(tint, bsdf.inputs["Specular Tint"])
-    rough = tree.nodes.new("ShaderNodeMapRange")
-    tree.links.new(v, rough.inputs["Value"])
-    rough.inputs["To Min"].default_value = 0.05
-    tree.links.new(rough.outputs["Result"], bsdf.inputs["Roughness"])
+    tree.links.new(_from(tree, v, 0.05), bsdf.inputs["Roughness"])
     metal = tree.nodes.new("ShaderNodeMath")
     metal.operation = "GREATER_THAN"
     tree.links.new(u, metal.inputs[0])
@@ -77,7 +87,7 @@ TINT_CASES = {
 
 
 #: (mean, 99th percentile) relative error of the lit pixels, measured with bpy 5.0.1
-TINT_MEASURED = {"graph": (3.3e-4, 2.12e-3), "dielectric": (5.3e-4, 2.55e-3), "metal": (3.33e-3, 1.24e-2)}
+TINT_MEASURED = {"graph": (3.15e-4, 1.79e-3), "dielectric": (5.11e-4, 2.31e-3), "metal": (3.33e-3, 1.24e-2)}
 
 
 @pytest.mark.parametrize("case", TINT_CASES)
@@ -93,17 +103,11 @@ def test_specular_tint_matches_cycles(case, tmp_path):
 def _coat_graph(name="CoatSwept"):
     """Coat Weight = u, Coat Roughness = v (from 0.02), Coat Tint from white to amber across v, over
     a red dielectric base of roughness 0.5."""
-    mat, tree, out = _tree(name)
-    bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
-    tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
-    u, v = _uv(tree)
+    mat, tree, bsdf, u, v = _graph(name)
     bsdf.inputs["Base Color"].default_value = (0.8, 0.1, 0.08, 1.0)
     bsdf.inputs["Roughness"].default_value = 0.5
     tree.links.new(u, bsdf.inputs["Coat Weight"])
-    rough = tree.nodes.new("ShaderNodeMapRange")
-    tree.links.new(v, rough.inputs["Value"])
-    rough.inputs["To Min"].default_value = 0.02
-    tree.links.new(rough.outputs["Result"], bsdf.inputs["Coat Roughness"])
+    tree.links.new(_from(tree, v, 0.02), bsdf.inputs["Coat Roughness"])
     tint = _mix_colors(tree, v, (1.0, 1.0, 1.0, 1.0), (0.9, 0.55, 0.15, 1.0))
     tree.links.new(tint, bsdf.inputs["Coat Tint"])
     return mat
@@ -111,9 +115,7 @@ def _coat_graph(name="CoatSwept"):
 
 def _coat_normal_graph(name="CoatNormal"):
     """A coat whose own normal a Normal Map tilts (the base's stays the surface's), coat IOR 2."""
-    mat, tree, out = _tree(name)
-    bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
-    tree.links.new(bsdf.outputs["BSDF"], out.inputs["Surface"])
+    mat, tree, bsdf, _, _ = _graph(name)
     bsdf.inputs["Base Color"].default_value = (0.1, 0.3, 0.8, 1.0)
     bsdf.inputs["Roughness"].default_value = 0.6
     bsdf.inputs["Coat Weight"].default_value = 1.0
@@ -141,8 +143,9 @@ COAT_CASES = {
     "coat-normal": (_coat_normal_graph, ("SUN", "POINT")),
 }
 #: (mean, 99th percentile) relative error of the lit pixels, measured with bpy 5.0.1
-COAT_MEASURED = {"graph": (2.3e-4, 2.38e-3), "car-paint": (2.34e-3, 1.37e-2), "tinted-ior": (2.2e-4, 1.22e-3),
-                 "metal": (1.05e-3, 3.11e-3), "area": (3.45e-3, 5.39e-2), "coat-normal": (2.7e-4, 2.68e-3)}
+COAT_MEASURED = {"graph": (2.16e-4, 2.15e-3), "car-paint": (2.34e-3, 1.37e-2),
+                 "tinted-ior": (2.13e-4, 1.14e-3), "metal": (1.05e-3, 3.11e-3), "area": (3.45e-3, 5.39e-2),
+                 "coat-normal": (2.56e-4, 2.27e-3)}
 
 
 @pytest.mark.parametrize("case", COAT_CASES)
@@ -150,6 +153,73 @@ def test_coat_matches_cycles(case, tmp_path):
     make, lights = COAT_CASES[case]
     _lobe_against_cycles(make, {"Coat Weight": 0.0}, COAT_MEASURED[case], f"coat, {case}", tmp_path,
                          lights=lights, eevee=case == "graph")
+
+
+# --- Sheen ---------------------------------------------------------------------------------------
+
+
+def _sheen_graph(name="SheenSwept"):
+    """Sheen Weight = u, Sheen Roughness = v, Sheen Tint from white to rose across v, over a dark
+    blue dielectric base of roughness 0.7."""
+    mat, tree, bsdf, u, v = _graph(name)
+    bsdf.inputs["Base Color"].default_value = (0.03, 0.05, 0.2, 1.0)
+    bsdf.inputs["Roughness"].default_value = 0.7
+    tree.links.new(u, bsdf.inputs["Sheen Weight"])
+    tree.links.new(v, bsdf.inputs["Sheen Roughness"])
+    tint = _mix_colors(tree, v, (1.0, 1.0, 1.0, 1.0), (1.0, 0.5, 0.6, 1.0))
+    tree.links.new(tint, bsdf.inputs["Sheen Tint"])
+    return mat
+
+
+#: name -> (material, lights): the sheen shows at grazing angles, so most cases are lit from behind
+SHEEN_CASES = {
+    "graph": (_sheen_graph, ("POINT", "BACK")),
+    "velvet": (lambda: _principled("Velvet", base_color=(0.25, 0.01, 0.04, 1.0), roughness=0.9,
+                                   sheen_weight=1.0, sheen_roughness=0.3, sheen_tint=(1.0, 0.55, 0.65, 1.0)),
+               ("POINT", "BACK")),
+    "rough": (lambda: _principled("Dusty", base_color=(0.05, 0.05, 0.05, 1.0), roughness=0.5,
+                                  sheen_weight=1.0, sheen_roughness=1.0), ("SUN", "BACK")),
+    "over-coat": (lambda: _principled("SheenOverCoat", base_color=(0.1, 0.4, 0.1, 1.0), roughness=0.6,
+                                      coat_weight=0.7, coat_roughness=0.2, sheen_weight=0.8,
+                                      sheen_roughness=0.5), ("SUN", "POINT")),
+    "area": (lambda: _principled("SheenArea", base_color=(0.05, 0.05, 0.05, 1.0), roughness=0.5,
+                                 sheen_weight=1.0, sheen_roughness=0.5), ("AREA",)),
+}
+#: (mean, 99th percentile) relative error of the lit pixels, measured with bpy 5.0.1
+SHEEN_MEASURED = {"graph": (5.85e-4, 6.58e-3), "velvet": (6.06e-4, 6.2e-3), "rough": (1.3e-4, 1.74e-3),
+                  "over-coat": (1.95e-4, 1.56e-3), "area": (1.08e-2, 1.9e-1)}
+
+
+@pytest.mark.parametrize("case", SHEEN_CASES)
+def test_sheen_matches_cycles(case, tmp_path):
+    make, lights = SHEEN_CASES[case]
+    _lobe_against_cycles(make, {"Sheen Weight": 0.0}, SHEEN_MEASURED[case], f"sheen, {case}", tmp_path,
+                         lights=lights, eevee=case == "graph")
+
+
+def test_sheen_table_reproduces_its_closed_form():
+    """The sheen's lobe integrates to its albedo over the hemisphere (an LTC's clamped cosine holds 1
+    there), and the twin's sheen_direct is that lobe: R a^2 z / (pi |M^-1 l|^4) for M^-1 =
+    [[a, 0, b], [0, a, 0], [0, 0, 1]]."""
+    from addon.reference import sheen
+
+    n = np.array([[0.0, 0.0, 1.0]])
+    for mu, rough in ((0.2, 0.3), (0.7, 0.6), (0.95, 1.0)):
+        v = np.array([[np.sqrt(1.0 - mu * mu), 0.0, mu]])
+        lobe = shading.sheen_at(n, v, rough, np.ones((1, 3)))
+        a, b, R = sheen.lookup(mu, rough)
+        # a cosine-weighted grid over the hemisphere: int f (n.l) dl = R
+        k = 400
+        u1, u2 = np.meshgrid((np.arange(k) + 0.5) / k, (np.arange(k) + 0.5) / k)
+        z = np.sqrt(u1.ravel())
+        s = np.sqrt(1.0 - z * z)
+        l = np.stack([s * np.cos(2 * np.pi * u2.ravel()), s * np.sin(2 * np.pi * u2.ravel()), z], -1)
+        f = shading.sheen_direct(lobe, l)[:, 0]
+        integral = float(np.mean(f / z) * np.pi)
+        x, y = l @ lobe.x_axis[0], l @ lobe.y_axis[0]
+        closed = R * a * a * z / (np.pi * ((a * x + b * z) ** 2 + (a * y) ** 2 + z * z) ** 2)
+        np.testing.assert_allclose(f, closed, rtol=1e-9, atol=1e-12)
+        assert integral == pytest.approx(R, rel=2e-2), (mu, rough, integral, R)
 
 
 # --- helpers ------------------------------------------------------------------------------------
@@ -175,6 +245,7 @@ def _lobe_against_cycles(make_material, off: dict, measured, what, tmp_path, eev
         scenes.light(scene, "AREA", energy=150.0, location=(0.9, 0.7, 1.2),
                      rotation=(math.radians(-30.0), math.radians(35.0), 0.0), size=0.6)
     samples = 256 if "AREA" in lights else 4  # an area light's samples converge slowly (Cycles')
+    scene.cycles.light_sampling_threshold = 0.0  # no light sample dropped at random where it is dim
     ours, ref, rel = _against_cycles(scene, tmp_path, samples=samples)
     lit = ref.max(-1) > 0.02 * ref.max()
     # per lit pixel, the largest channel's difference over the pixel's largest channel; under an
@@ -194,8 +265,23 @@ def _lobe_against_cycles(make_material, off: dict, measured, what, tmp_path, eev
         note += f"; EEVEE: mean {_eevee_error(scene, ref, tmp_path):.3%}"
     print(f"{what}{note}")
     ours_q = float(np.quantile(rel, 0.99))
-    assert q >= 5.0 * ours_q, f"{what}: the lobe's effect {q:.3%} against our error {ours_q:.3%} (99th pct)"
+    if CYCLES_42_COAT and "coat" in what:  # another coat than the one drawn: measured, not held to the effect
+        print(f"{what}: Blender 4.2's Cycles coat (uncompensated, its albedo the smooth Fresnel at n.v)")
+        measured = COAT_42.get(what, measured)
+    else:
+        assert q >= 5.0 * ours_q, f"{what}: the lobe's effect {q:.3%} against our error {ours_q:.3%} (p99)"
     _within(rel, *measured, what)
+
+
+#: Blender 4.2's Cycles draws the coat as 4.5 and 5.0 do not: no multiple-scattering compensation,
+#: and the base below it under the coat's Fresnel at n.v (bsdf_microfacet_setup_fresnel_dielectric,
+#: bsdf_microfacet_estimate_albedo), where the engine follows 4.5 / 5.0. Measured with bpy 4.2.23,
+#: (mean, 99th percentile) of the lit pixels' relative error.
+CYCLES_42_COAT = bpy.app.version < (4, 5, 0)
+COAT_42 = {"coat, graph": (2.21e-2, 2.11e-1), "coat, car-paint": (7.25e-3, 3.9e-2),
+           "coat, tinted-ior": (1.85e-3, 3.08e-2), "coat, metal": (1.15e-3, 3.03e-3),
+           "coat, area": (3.64e-3, 7.19e-2), "coat, coat-normal": (4.03e-4, 4.22e-3),
+           "sheen, over-coat": (9.36e-4, 1.71e-2)}
 
 
 EEVEE = "BLENDER_EEVEE" if bpy.app.version >= (5, 0, 0) else "BLENDER_EEVEE_NEXT"
@@ -240,6 +326,8 @@ def test_specular_tint_twin_closed_forms():
 
 #: Lobe inputs for the GPU-vs-twin comparisons, by name
 TWIN_LOBES = {"specular tint": dict(specular_tint=(0.9, 0.3, 0.05)),
+              "sheen": dict(sheen_weight=0.9, sheen_roughness=0.4, sheen_tint=(1.0, 0.6, 0.7),
+                            coat_weight=0.5),
               "coat": dict(coat_weight=0.8, coat_roughness=0.15, coat_ior=1.7, coat_tint=(0.9, 0.6, 0.3))}
 
 
@@ -269,6 +357,11 @@ LOBE_EXTREMES = {
                                   coat_tint=(0.0, 0.0, 0.0)),
     "coat-ior-1": dict(coat_weight=1.0, coat_roughness=0.0, coat_ior=1.0, coat_tint=(0.5, 0.5, 0.5)),
     "coat-weight-0": dict(coat_weight=0.0, coat_roughness=0.5, coat_tint=(0.2, 0.2, 0.2)),
+    "sheen-roughness-0": dict(sheen_weight=1.0, sheen_roughness=0.0),
+    "sheen-rough-over-coat": dict(sheen_weight=1.0, sheen_roughness=1.0, coat_weight=1.0,
+                                  coat_roughness=0.0),
+    "sheen-black-tint": dict(sheen_weight=1.0, sheen_roughness=0.5, sheen_tint=(0.0, 0.0, 0.0)),
+    "sheen-weight-10": dict(sheen_weight=10.0, sheen_roughness=0.5),
 }
 
 
@@ -312,10 +405,6 @@ def _remap_spread(sw, terms, rows, reference) -> np.ndarray:
     return spread
 
 
-#: The largest GPU-vs-twin disagreements measured over the lobes' sweeps (test_lobe_bounds_are_tight).
-LOBE_MEASURED = {"plain": 0.0, "ratio": 0.0, "sweeps": 0}
-
-
 @pytest.mark.parametrize("case", LOBE_EXTREMES)
 def test_lobes_at_their_extremes_stay_finite_and_match_the_twin(case):
     """Finite, non-negative on the GPU and in the twin, and every row agreeing to test_stability's
@@ -349,8 +438,6 @@ def test_lobes_at_their_extremes_stay_finite_and_match_the_twin(case):
     worst = float(np.max(ratio[~fails], initial=0.0))
     print(f"{case}: {sw.rows} rows, {plain:.3g} relative where the spread is negligible, {worst:.3g} x the "
           f"spread beyond {ST.REL_TOL:g}")
-    LOBE_MEASURED.update(plain=max(LOBE_MEASURED["plain"], plain), ratio=max(LOBE_MEASURED["ratio"], worst),
-                         sweeps=LOBE_MEASURED["sweeps"] + 1)
     bad = c.near[fails]
     bad = bad[np.argsort(-c.rel[bad])]
     assert not len(bad), (f"{case}: {len(bad)} rows disagree beyond the tolerance "
@@ -396,8 +483,9 @@ def test_white_furnace_with_every_lobe_is_at_most_one():
         upper = shading.upper_layers(views)
         total = (_lobe_albedo(specular, surface, lambda s, l: base(s, l, (0.0, 1.0)))
                  + _lobe_albedo(diffuse, surface, lambda s, l: base(s, l, (1.0, 0.0)))) * upper.below[:, 0]
-        total = total + _lobe_albedo(coat_samples, lambda v: shading.coat_surface(surface(v)),
-                                     lambda s, l: base(s, l, (0.0, 1.0)))
+        coat_albedo = _lobe_albedo(coat_samples, lambda v: shading.coat_surface(surface(v)),
+                                   lambda s, l: base(s, l, (0.0, 1.0)))
+        total = total + upper.coat_weight * coat_albedo
         if upper.sheen is not None:
             total = total + upper.sheen.color[:, 0]
         worst = max(worst, float(total.max()))
@@ -430,4 +518,45 @@ def test_white_furnace_world_with_every_lobe(tmp_path):
 
 
 #: The sheen's inputs in the furnaces
-FURNACE_SHEEN = {}
+FURNACE_SHEEN = dict(sheen_weight=1.0, sheen_roughness=0.5)
+
+
+# --- the Auto term set ----------------------------------------------------------------------------
+
+def test_auto_draws_the_lobes_where_a_material_has_them():
+    """Auto predicts every candidate against the Principled set with its lobes (the twin draws them
+    there alone): at a loose bound a velvet and a coated paint take the Principled set, whose programs
+    draw their lobes; a plain dielectric beside them a cheaper set."""
+    from addon.blender import extract
+
+    def materials():
+        return [_principled("Velvet", base_color=(0.25, 0.01, 0.04, 1.0), roughness=0.9, sheen_weight=1.0,
+                            sheen_roughness=0.3),
+                _principled("Paint", base_color=(0.5, 0.02, 0.03, 1.0), metallic=0.7, roughness=0.45,
+                            coat_weight=1.0, coat_roughness=0.06),
+                _principled("Plain", base_color=(0.5, 0.5, 0.5, 1.0), roughness=0.6)]
+
+    scene, sphere = _scene(lambda: materials()[0])
+    for i, mat in enumerate(materials()[1:], start=1):  # two more spheres beside the first
+        copy = sphere.copy()
+        copy.data = sphere.data.copy()
+        copy.data.materials[0] = mat
+        copy.location.x += 0.6 * i
+        scene.collection.objects.link(copy)
+    scene.shading_lab.term_set = "AUTO"
+    scene.shading_lab.auto_error_bound = 4.0  # loose: what the lobes alone require stands out
+    # a large frame: the cheaper sets repay their programs there (Auto predicts no material too
+    # small for that)
+    snap = extract.snapshot(bpy.context.evaluated_depsgraph_get(), 1920, 1920)
+    choices = {key.split(".")[0]: c for key, c in snap.term_choices.items()}
+    for name, c in choices.items():
+        print(f"{name}: {c.name} (alone: {c.alone or c.name}), {dict(c.errors)}")
+    for name in ("Velvet", "Paint"):  # every cheaper set errs beyond the bound: the lobes
+        assert choices[name].name == "PRINCIPLED" and not choices[name].alone, choices[name]
+        cheaper = [e for n, e in choices[name].errors if n != "PRINCIPLED"]
+        assert min(cheaper) > 4.0, (name, choices[name].errors)
+        assert choices[name].limiting.startswith({"Velvet": "sheen", "Paint": "coat"}[name]), choices[name]
+    assert (choices["Plain"].alone or choices["Plain"].name) != "PRINCIPLED", choices["Plain"]
+    features = programs.Features.from_snapshot(snap, material=snap.materials[next(
+        k for k in snap.materials if k.startswith("Velvet"))])
+    assert features.lobes == {"SHEEN"} and ("SL_SHEEN", "1") in features.defines()

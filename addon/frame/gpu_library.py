@@ -345,7 +345,8 @@ def _declare_graph_images(info, graph) -> None:
 def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     info.typedef_source(typedefs)
     samplers = {0: "ms_table" if features.uses_albedo_table else None,
-                1: "s_table" if features.uses_s_table else None}
+                1: "s_table" if features.uses_s_table else None,
+                2: "sheen_table" if features.uses_sheen_table else None}
     if features.peel:
         samplers.update({6: "opaque_depth", 7: "peel_depth"})
     samplers[8] = "env_atlas" if features.environment == "MAP" else None  # irradiance, levels
@@ -762,6 +763,17 @@ def s_table() -> gpu.types.GPUTexture:
         return r32f_texture(table.reshape(n * n, n))
 
     return LIBRARY.table(("S",), build)
+
+def sheen_table() -> gpu.types.GPUTexture:
+    """The Principled BSDF's sheen LTC table (addon/reference/sheen.py) as an RGBA32F texture: texel
+    (n.v index, roughness index) = (a, b, albedo, 0) (glsl/principled.glsl's sheen_lookup)."""
+    from ..reference import sheen
+
+    def build():
+        table = sheen.table()
+        return rgba32f_texture(np.concatenate([table, np.zeros(table.shape[:2] + (1,), np.float32)], axis=-1))
+
+    return LIBRARY.table(("SHEEN",), build)
 
 # Compiled programs outlive renders; free them before Blender tears its GPU module down, or it
 # reports them as leaked blocks at exit.

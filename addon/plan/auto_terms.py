@@ -42,6 +42,7 @@ from ..materials.convert import LUMA
 from ..reference import environment, shading
 from ..reference.brdf import half_vector
 from ..scene.snapshot import (
+    LOBES,
     ImageData,
     MaterialParams,
     Snapshot,
@@ -87,6 +88,9 @@ MISSING = {
     "LAYERED_EXACT_MULTISCATTER": ("Principled dielectric lobe",),
     "PRINCIPLED": (),
 }
+#: The Principled BSDF's lobes (``snapshot.LOBES``), which the Principled set alone draws, named for
+#: "why".
+LOBE_LABELS = {"SPECULAR_TINT": "specular tint", "COAT": "coat", "SHEEN": "sheen"}
 COSTS_FILE = Path(__file__).with_name("term_costs.json")
 #: Where a scene samples an image world's specular (World Specular: Sampled), the world joins the
 #: candidates: each term set with the split sum instead, named with this suffix, cheaper than
@@ -633,7 +637,8 @@ def limiting_term(name: str, material: MaterialParams, errors: dict[str, float],
     if name == "PRINCIPLED":
         others = [n for n in errors if n != "PRINCIPLED"]
         best = min(others, key=lambda n: errors[n]) if others else cheapest
-        needed = missing(best)
+        # the Principled BSDF's lobes the material has: only the Principled set draws them
+        needed = tuple(LOBE_LABELS[lobe] for lobe in LOBES if lobe in material.lobes) + missing(best)
     else:
         needed = tuple(t for t in missing(cheapest) if t not in missing(name))
     kind = "metal" if np.mean(material.metalness) > 0.5 else "dielectric"

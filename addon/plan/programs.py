@@ -15,6 +15,7 @@ from ..materials import codegen
 from ..materials.codegen import glsl_dir
 from ..materials.surface import GraphProgram
 from ..reference.multiscatter import MS_SIZE, S_SIZE
+from ..reference.sheen import SIZE as SHEEN_SIZE
 from ..scene.matrices import invert
 from ..scene.snapshot import (
     LIGHT_KINDS,
@@ -270,6 +271,11 @@ class Features:
         return self.environment != "" and self.model == "PBR"
 
     @property
+    def uses_sheen_table(self) -> bool:
+        """The program samples ``sheen_table`` (the Principled BSDF's sheen, addon/reference/sheen.py)."""
+        return "SHEEN" in self.lobes
+
+    @property
     def uses_s_table(self) -> bool:
         """The program samples ``s_table`` (the layering estimate: the Principled set, the LAYERED
         diffuse)."""
@@ -283,6 +289,8 @@ class Features:
             out += [("SL_PRINCIPLED", "1"), ("SL_LAYERS", "1"), ("SL_MS_SIZE", str(MS_SIZE)),
                     ("SL_S_SIZE", str(S_SIZE))]
             out += [("SL_" + lobe, "1") for lobe in sorted(self.lobes)]
+            if self.uses_sheen_table:
+                out.append(("SL_SHEEN_SIZE", str(SHEEN_SIZE)))
         elif self.model == "PBR":
             out += [("SL_FRESNEL_" + t.fresnel, "1"), ("SL_NDF_" + t.ndf, "1"),
                     ("SL_VISIBILITY_" + t.visibility, "1"), ("SL_DIFFUSE_" + t.diffuse, "1")]

@@ -534,6 +534,7 @@ class UpperLayers:
     below: np.ndarray
     coat: Surface | None
     sheen: SheenLobe | None
+    coat_weight: np.ndarray | float = 0.0  # the coat's lobe weight: Coat Weight x what the sheen leaves it
 
 
 @dataclass
@@ -588,10 +589,13 @@ def upper_layers(s: Surface) -> UpperLayers | None:
     if coat is not None:
         below = below * coat_transmittance(s, coat)
     sheen = None
+    coat_weight = s.coat_weight
     if has_sheen:
         sheen = sheen_at(n, s.v, s.sheen_roughness, s.sheen)
-        below = below * _rgb_scalar(saturate(1.0 - sheen.color.max(axis=-1)))
-    return UpperLayers(below, coat, sheen)
+        left = saturate(1.0 - sheen.color.max(axis=-1))  # the sheen's layering weight: coat and base
+        below = below * _rgb_scalar(left)
+        coat_weight = coat_weight * left
+    return UpperLayers(below, coat, sheen, coat_weight)
 
 
 def sheen_at(n, v, roughness, color) -> SheenLobe:
@@ -742,7 +746,7 @@ def _under_upper_layers(s: Surface, terms: Terms, weights, surface_light, irradi
         return c
     c = c * upper.below
     if upper.coat is not None:
-        c = c + _rgb_scalar(s.coat_weight) * surface_light(upper.coat, (0.0, weights[1]))
+        c = c + _rgb_scalar(upper.coat_weight) * surface_light(upper.coat, (0.0, weights[1]))
     if upper.sheen is not None:
         c = c + upper.sheen.color * irradiance_at(upper.sheen.n) * (INV_PI * weights[0])
     return c
@@ -899,16 +903,26 @@ def ltc_frame(s: Surface, terms: Terms):
 
 
 def shade_polygon_light(s: Surface, offsets, to_centre, L, form_factor, l, factors, terms: Terms,
-                        ltc_jitter=None, specular_scale=1.0, memo: dict | None = None, memo_key=None):
+                        ltc_jitter=None, specular_scale=1.0, memo: dict | None = None, memo_key=None,
+                        sheen: dict | None = None):
     """light_shading.glsl's shade_polygon_light: a light of radiance ``L`` (rgb, as it arrives)
     over the polygon of corners ``offsets`` about its centre at ``to_centre`` from the points, of
     unclipped form factor ``form_factor``, on the physically based model: the diffuse lobe from
     the horizon-clipped irradiance, the specular from the linearly transformed cosine's integral
     over the polygon (addon/reference/ltc.py). ``ltc_jitter``: ltc.ltc_integral's, for tests. ``memo``
     (with ``memo_key`` naming the polygon): where the same points are shaded with several term
-    sets, what depends on the points, the polygon and the distribution alone is computed once."""
+    sets, what depends on the points, the polygon and the distribution alone is computed once.
+    ``sheen`` (the Principled set's, ``upper_layers``): its ``"lobe"`` integrated over the polygon into
+    ``"value"`` where lit, NaN elsewhere (light_shading.glsl's sheen_polygon_light)."""
     L = np.asarray(L, np.float64)
     lit = (L.max(axis=-1) > 0.0) & (form_factor > 0.0)
+    if sheen is not None:
+        lobe = sheen["lobe"]
+        corners = np.asarray(to_centre)[..., None, :] + offsets
+        axes = (lobe.x_axis, lobe.y_axis, lobe.n)
+        local = np.stack([np.sum(corners * a[..., None, :], axis=-1) for a in axes], axis=-1)
+        integral = ltc.ltc_integral(lobe.m, local, jitter=ltc_jitter)
+        sheen["value"] = np.where(lit[..., None], lobe.color * L * (integral * factors[0])[..., None], np.nan)
     key = None if memo is None or memo_key is None or ltc_jitter is not None else (memo_key, terms.lobe[0])
     geometry = memo.get(key) if key is not None else None
     if geometry is None:
@@ -938,7 +952,7 @@ def shade_polygon_light(s: Surface, offsets, to_centre, L, form_factor, l, facto
 
 
 def shade_area_light(s: Surface, light: Light, E, l, visibility, terms: Terms, ltc_jitter=None,
-                     memo: dict | None = None):
+                     memo: dict | None = None, sheen: dict | None = None):
     """light_shading.glsl's shade_area_light: an area light's polygon of radiance I / A
     (shade_polygon_light); the point emitter in its far field."""
     factors = (light.diffuse_factor, light.specular_factor)
@@ -958,13 +972,15 @@ def shade_area_light(s: Surface, light: Light, E, l, visibility, terms: Terms, l
     form_factor = np.where(lit, E_max / (np.pi * np.where(lit, L_max, 1.0)), 0.0)
     polygon = None if light.spread_terms[1] > 0.0 else ("area", id(light))  # spread: its own frame
     out = shade_polygon_light(s, offsets, clipped, L, form_factor, l, factors, terms, ltc_jitter,
-                              specular_scale, memo, polygon)
+                              specular_scale, memo, polygon, sheen)
     far = area_far_field(light, _dot(to_centre, to_centre))
+    if sheen is not None:  # the far field: a point emitter, the sheen at its direction
+        sheen["value"] = np.where(far[..., None], np.nan, sheen["value"])
     return np.where(far[..., None], pbr_direct(s, l, E, factors, terms), out)
 
 
 def shade_sphere_light(s: Surface, light: Light, E, l, terms: Terms, ltc_jitter=None, k=None,
-                       memo: dict | None = None):
+                       memo: dict | None = None, sheen: dict | None = None):
     """light_shading.glsl's shade_sphere_light: radiance I / (pi r^2) over the sphere light's disc
     (sphere_offsets), L = E (d^2 [+ r^2]) / (pi r^2), form factor r^2 / (d^2 [+ r^2])."""
     to_centre = np.asarray(light.position, np.float64) - s.p
@@ -974,14 +990,20 @@ def shade_sphere_light(s: Surface, light: Light, E, l, terms: Terms, ltc_jitter=
     factors = (light.diffuse_factor, light.specular_factor)
     fine = np.ones(np.shape(s.NoV), bool) if k is None else np.asarray(k) > SPHERE_FINE_K
     out = 0.0
+    polygon_sheen = np.full(np.shape(s.NoV) + (3,), np.nan)
     for sides, use in ((AREA_ELLIPSE_SIDES, fine), (SPHERE_COARSE_SIDES, ~fine)):
         if np.any(use):
             c = shade_polygon_light(s, sphere_offsets(light, s.p, sides), to_centre, L,
                                     r2 / np.maximum(falloff, 1e-30), l, factors, terms, ltc_jitter,
-                                    memo=memo, memo_key=("sphere", id(light), sides))
+                                    memo=memo, memo_key=("sphere", id(light), sides), sheen=sheen)
             out = out + np.where(use[..., None], c, 0.0)
+            if sheen is not None:
+                polygon_sheen = np.where(use[..., None], sheen["value"], polygon_sheen)
     # at the centre: no direction to the light (E_Point's l = 0), no light
-    return np.where((_dot(to_centre, to_centre) > 0.0)[..., None], out, 0.0)
+    centre = (_dot(to_centre, to_centre) > 0.0)[..., None]
+    if sheen is not None:
+        sheen["value"] = np.where(centre, polygon_sheen, np.nan)
+    return np.where(centre, out, 0.0)
 
 
 def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAULT_TERMS,
@@ -991,27 +1013,31 @@ def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAU
     factor): the body of mesh.frag.glsl's light loop (light_shading.glsl's shade_light): the
     surface's, and in the Principled set the Principled BSDF's upper layers (``upper_layers``).
     ``ltc_jitter``: for tests (ltc.ltc_integral)."""
-    c = shade_light_surface(model, s, light, E, l, terms, visibility, ltc_jitter, memo)
     upper = upper_layers(s) if model == "PBR" and terms.principled else None
+    sheen = None if upper is None or upper.sheen is None else {"lobe": upper.sheen, "value": None}
+    c = shade_light_surface(model, s, light, E, l, terms, visibility, ltc_jitter, memo, sheen)
     if upper is None:
         return c
     c = c * upper.below
     if upper.coat is not None:  # its specular lobe by the light's own path (memo: the base's polygons)
         coat_light = dataclasses.replace(light, diffuse_factor=0.0)
-        c = c + _rgb_scalar(s.coat_weight) * shade_light_surface(model, upper.coat, coat_light, E, l, terms,
-                                                                 visibility, ltc_jitter)
-    if upper.sheen is not None:
-        c = c + sheen_direct(upper.sheen, l) * E * light.diffuse_factor
+        coat = shade_light_surface(model, upper.coat, coat_light, E, l, terms, visibility, ltc_jitter)
+        c = c + _rgb_scalar(upper.coat_weight) * coat
+    if upper.sheen is not None:  # over the polygon where one was shaded, else at the light's direction
+        at_l = sheen_direct(upper.sheen, l) * E * light.diffuse_factor
+        polygon = sheen["value"]
+        c = c + (at_l if polygon is None else np.where(np.isnan(polygon), at_l, polygon))
     return c
 
 
 def shade_light_surface(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAULT_TERMS,
-                        visibility=1.0, ltc_jitter=None, memo: dict | None = None):
-    """light_shading.glsl's shade_light_surface: one light's radiance from the surface's own lobes."""
+                        visibility=1.0, ltc_jitter=None, memo: dict | None = None, sheen: dict | None = None):
+    """light_shading.glsl's shade_light_surface: one light's radiance from the surface's own lobes;
+    ``sheen``: shade_polygon_light's, where a polygon is shaded."""
     direct, _ = MODELS[model]
     area = light.kind == "AREA" and light.half_size[0] > 0.0
     if model == "PBR" and area:
-        return shade_area_light(s, light, E, l, visibility, terms, ltc_jitter, memo)
+        return shade_area_light(s, light, E, l, visibility, terms, ltc_jitter, memo, sheen)
     if model == "PBR" and light.sphere_radius > 0.0:
         # by the LTC over its disc where it is large against the lobe, by its nearest point and the
         # lobe widened by it where small, blended between (light_shading.glsl's shade_light)
@@ -1021,7 +1047,9 @@ def shade_light_surface(model: str, s: Surface, light: Light, E, l, terms: Terms
         share = np.where(near, np.clip((k - SPHERE_LTC_FROM) / (SPHERE_LTC_FULL - SPHERE_LTC_FROM), 0.0, 1.0),
                          0.0)
         if np.any(share > 0.0):
-            polygon = shade_sphere_light(s, light, E, l, terms, ltc_jitter, k, memo)
+            polygon = shade_sphere_light(s, light, E, l, terms, ltc_jitter, k, memo, sheen)
+            if sheen is not None:  # only where the polygon is shaded (light_shading.glsl)
+                sheen["value"] = np.where((share > 0.0)[..., None], sheen["value"], np.nan)
         r_dir = 2.0 * _dot(s.n, s.v)[..., None] * s.n - s.v
         l_specular, alpha_wide, wide_weight, point_weight = sphere_light_specular(light, s.p, r_dir, s.alpha)
         wide = copy.copy(s)

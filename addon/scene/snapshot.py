@@ -180,8 +180,8 @@ class MaterialParams:
 
 
 #: The Principled BSDF's lobes beyond its base the programs draw, as their defines name them
-#: (SL_<LOBE>); the sheen's inputs are read and carried, not drawn yet.
-LOBES = ("SPECULAR_TINT", "COAT")
+#: (SL_<LOBE>).
+LOBES = ("SPECULAR_TINT", "COAT", "SHEEN")
 
 
 def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint) -> frozenset[str]:
