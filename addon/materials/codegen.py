@@ -77,21 +77,22 @@ OPTIONAL_LIBRARY += ("node_tex_noise.glsl", "node_tex_wave.glsl")  # Noise; Wave
 #: Node kinds drawn from a bake even where an emitter compiles them (empty: none). Tests and the
 #: benchmark set it to compare a node's bake with its compiled code and with Cycles.
 FORCE_BAKE: frozenset[str] = frozenset()
-_DEFINED = re.compile(r"^[A-Za-z_]\w*\s+(\w+)\s*\(", re.M)
-_CALLED = re.compile(r"\b(\w+)\s*\(")
+#: A GLSL function's definition at a line's start (its name), and any call (the name called).
+DEFINED = re.compile(r"^[A-Za-z_]\w*\s+(\w+)\s*\(", re.M)
+CALLED = re.compile(r"\b(\w+)\s*\(")
 
 
 @lru_cache(maxsize=None)
 def _optional_file(name: str) -> tuple[frozenset[str], frozenset[str]]:
     """The functions ``name`` (of OPTIONAL_LIBRARY) defines and the names it calls."""
     text = (glsl_dir() / name).read_text()
-    return frozenset(_DEFINED.findall(text)), frozenset(_CALLED.findall(text))
+    return frozenset(DEFINED.findall(text)), frozenset(CALLED.findall(text))
 
 
 def library(source: str) -> tuple[str, ...]:
     """The library files a compiled graph's ``source`` needs, in order: ``LIBRARY``, then each
     file of ``OPTIONAL_LIBRARY`` whose functions the source calls, or another needed file calls."""
-    calls, needed = set(_CALLED.findall(source)), set()
+    calls, needed = set(CALLED.findall(source)), set()
     changed = True
     while changed:
         changed = False

@@ -148,10 +148,6 @@ def _transparent(flat: FlatGraph) -> bool:
     return False
 
 
-_FUNCTION = re.compile(r"^[A-Za-z_]\w*\s+(\w+)\s*\(", re.M)
-_CALL = re.compile(r"\b(\w+)\s*\(")
-
-
 @lru_cache(maxsize=1)
 def _library_functions() -> dict[str, str]:
     """The node library's functions (codegen.LIBRARY and OPTIONAL_LIBRARY): name -> body (overloads
@@ -160,7 +156,7 @@ def _library_functions() -> dict[str, str]:
     bodies: dict[str, str] = {}
     for name in codegen.LIBRARY + codegen.OPTIONAL_LIBRARY:
         text = (glsl / name).read_text()
-        starts = list(_FUNCTION.finditer(text))
+        starts = list(codegen.DEFINED.finditer(text))
         for i, m in enumerate(starts):
             end = starts[i + 1].start() if i + 1 < len(starts) else len(text)
             bodies[m.group(1)] = bodies.get(m.group(1), "") + text[m.start():end]
@@ -175,7 +171,7 @@ def graph_inputs_read(source: str) -> frozenset[str]:
     while pending:
         text = pending.pop()
         texts.append(text)
-        for name in _CALL.findall(text):
+        for name in codegen.CALLED.findall(text):
             if name in library and name not in seen:
                 seen.add(name)
                 pending.append(library[name])
