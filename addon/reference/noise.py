@@ -28,7 +28,9 @@ TYPES = ("FBM", "MULTIFRACTAL", "HYBRID_MULTIFRACTAL", "RIDGED_MULTIFRACTAL", "H
 
 
 def fma(a, b, c) -> np.ndarray:
-    """a * b + c rounded once to float32 (a fused multiply-add)."""
+    """a * b + c rounded once to float32 (a fused multiply-add): the product of two floats is exact
+    in double precision, the sum rounded there and then to single (twice: differs from one
+    rounding where the double lands on a single-precision midpoint, about 1 case in 2^29)."""
     a, b, c = (np.asarray(x, F32).astype(np.float64) for x in (a, b, c))
     return (a * b + c).astype(F32)
 

@@ -20,6 +20,8 @@ import ctypes.util
 
 import numpy as np
 
+from .noise import fma
+
 F32 = np.float32
 #: Cycles' M_2PI_F and M_PI_F (util/math_base.h), in single precision.
 TWO_PI = F32(6.2831853071795864)
@@ -59,14 +61,6 @@ fmodf = _c("fmodf", 2, np.fmod)  # exact in either
 
 def f32(x) -> np.ndarray:
     return np.asarray(x, F32)
-
-
-def fma(a, b, c) -> np.ndarray:
-    """a * b + c rounded once: the product of two floats is exact in double precision, the sum
-    rounded there and then to single (twice: differs from one rounding where the double lands on
-    a single-precision midpoint, about 1 case in 2^29)."""
-    a, b, c = (f32(x).astype(np.float64) for x in (a, b, c))  # each in double (a scalar too)
-    return (a * b + c).astype(F32)
 
 
 def saturate(x) -> np.ndarray:
