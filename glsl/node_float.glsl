@@ -2,16 +2,7 @@
  * textures that must give Cycles' bits. Cycles' kernels are compiled with fast math and, on a
  * CPU with FMA (its AVX2 kernel), fuse a product into the sum that is its only use: a * b + c
  * rounded once. GLSL's fma() need not round once (Mesa's llvmpipe computes a * b, then + c), so
- * float_fma builds the fused result from float operations that round as written (PRECISE). */
-
-/* GLSL's `precise` (4.00): a variable's operations rounded as written, none reordered or fused.
- * Blender's Metal shading language has no such qualifier: there the compiler rounds as it will
- * (differences of ulps from Cycles'). */
-#ifdef GPU_METAL
-#  define PRECISE
-#else
-#  define PRECISE precise
-#endif
+ * float_fma builds the fused result from float operations that round as written (PRECISE, glsl/node_inputs.glsl). */
 
 /* Dekker's split (Dekker 1971, "A floating-point technique for extending the available
  * precision"): a = hi + lo, each half of 12 bits or fewer, so that products of halves are exact.

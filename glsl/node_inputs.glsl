@@ -2,6 +2,15 @@
  * program that calls it (glsl/mesh.frag.glsl's graph_inputs; the tests' harness from Cycles' own
  * AOVs of the same fragment). World space unless said. */
 
+/* PRECISE: GLSL's `precise` (4.00), a variable's operations rounded as written, none reordered
+ * or fused (the procedural textures' arithmetic, as Cycles rounds it). Blender's Metal shading
+ * language has no such qualifier: there the compiler rounds as it will (ulps from Cycles'). */
+#ifdef GPU_METAL
+#  define PRECISE
+#else
+#  define PRECISE precise
+#endif
+
 #ifndef GRAPH_ATTRIBUTES
 #  define GRAPH_ATTRIBUTES 1
 #endif

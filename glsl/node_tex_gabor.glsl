@@ -160,7 +160,7 @@ vec2 gabor_noise_3d(vec3 coordinates, float frequency, float isotropy, vec3 base
  * second moment 1/2 x the squared kernel's integral, 1/4 in 2D, 1/(4 sqrt 2) in 3D). */
 vec3 node_tex_gabor_2d(vec3 co, float scale, float frequency, float anisotropy, float orientation)
 {
-  precise vec3 scaled = co * scale;
+  PRECISE vec3 scaled = co * scale;
   float isotropy = 1.0 - clamp(anisotropy, 0.0, 1.0);
   vec2 phasor = gabor_noise_2d(scaled.xy, max(0.001, frequency), isotropy, orientation);
   return gabor_outputs(phasor, sqrt(float(GABOR_IMPULSES) * 0.5 * 0.25));
@@ -170,7 +170,7 @@ vec3 node_tex_gabor_2d(vec3 co, float scale, float frequency, float anisotropy, 
  * the x axis (guards: Cycles' 0 / 0, NaN, the whole texture NaN) */
 vec3 node_tex_gabor_3d(vec3 co, float scale, float frequency, float anisotropy, vec3 orientation)
 {
-  precise vec3 scaled = co * scale;
+  PRECISE vec3 scaled = co * scale;
   float isotropy = 1.0 - clamp(anisotropy, 0.0, 1.0);
   float len = length(orientation);
   vec3 direction = len > 0.0 ? orientation / len : vec3(1.0, 0.0, 0.0);

@@ -57,19 +57,19 @@ struct VoronoiTexture {
 /* Cycles' mix(a, b, t) = a + t (b - a) (GLSL's mix may round otherwise), unfused */
 float voronoi_mix(float a, float b, float t)
 {
-  precise float m = a + t * (b - a);
+  PRECISE float m = a + t * (b - a);
   return m;
 }
 
 vec3 voronoi_mix(vec3 a, vec3 b, float t)
 {
-  precise vec3 m = a + t * (b - a);
+  PRECISE vec3 m = a + t * (b - a);
   return m;
 }
 
 vec4 voronoi_mix(vec4 a, vec4 b, float t)
 {
-  precise vec4 m = a + t * (b - a);
+  PRECISE vec4 m = a + t * (b - a);
   return m;
 }
 
@@ -81,7 +81,7 @@ vec4 voronoi_lanes(int dims) { return vec4(1.0, dims > 1 ? 1.0 : 0.0, dims > 2 ?
  * reordered a 4D distance's terms, a last-bit difference in 135 of 1089 pixels) */
 float voronoi_sum(vec4 v)
 {
-  precise float sum = (v.x + v.y) + (v.z + v.w);
+  PRECISE float sum = (v.x + v.y) + (v.z + v.w);
   return sum;
 }
 
@@ -359,9 +359,9 @@ float voronoi_n_sphere_radius(int dims, int cells, VoronoiParams p, vec4 coord)
 VoronoiOctave voronoi_fractal(int dims, int feature, int metric, int cells, VoronoiParams p, vec4 coord)
 {
   float amplitude = 1.0;
-  precise float max_amplitude = 0.0; /* precise: the sums unfused, in Cycles' order */
+  PRECISE float max_amplitude = 0.0; /* precise: the sums unfused, in Cycles' order */
   float scale = 1.0;
-  precise VoronoiOctave result = VoronoiOctave(0.0, vec3(0.0), vec4(0.0));
+  PRECISE VoronoiOctave result = VoronoiOctave(0.0, vec3(0.0), vec4(0.0));
   bool zero_input = p.detail == 0.0 || p.roughness == 0.0;
   for (int i = 0; float(i) <= ceil(p.detail); ++i) {
     vec4 at = coord * scale;

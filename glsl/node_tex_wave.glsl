@@ -16,15 +16,9 @@
 #define WAVE_SAW 1
 #define WAVE_TRI 2
 
-/* The phase rounded as Cycles rounds it: a shader compiler may fold consecutive products by
- * literals into one (Mesa computes (x 0.999999) 20 as x 19.99998: another rounding, 8e-3 after
- * the sine at |x| = 1e4), which GLSL's precise forbids. Blender's Metal shaders have no such
- * qualifier: none there. */
-#if defined(GPU_METAL)
-#  define WAVE_PRECISE
-#else
-#  define WAVE_PRECISE precise
-#endif
+/* The phase rounded as Cycles rounds it (PRECISE): a shader compiler may fold consecutive
+ * products by literals into one (Mesa computes (x 0.999999) 20 as x 19.99998: another rounding,
+ * 8e-3 after the sine at |x| = 1e4). */
 
 /* A linked Detail beyond this many octaves is drawn with this many: Cycles loops on (64 octaves
  * of lacunarity 2 are far below a float's precision; a GPU's loop must end) */
@@ -104,8 +98,8 @@ float node_tex_wave(vec3 co, float scale, float distortion, float detail, float 
                     float phase, int type, int direction, int profile)
 {
   /* Cycles: "prevent precision issues on unit coordinates", its co x scale fused into the sum */
-  WAVE_PRECISE vec3 p = fma(co, vec3(scale), vec3(1.0e-6)) * 0.999999;
-  WAVE_PRECISE float n;
+  PRECISE vec3 p = fma(co, vec3(scale), vec3(1.0e-6)) * 0.999999;
+  PRECISE float n;
   if (type == WAVE_BANDS) {
     n = direction == WAVE_DIAGONAL ? ((p.x + p.y) + p.z) * 10.0 : p[direction] * 20.0;
   }
