@@ -229,3 +229,45 @@ def airy_spectral(lam_nm, cos_i, thickness, film_ior, eta3):
     rs = (r12s + r23s * phase) / (1.0 + r12s * r23s * phase)
     rp = (r12p + r23p * phase) / (1.0 + r12p * r23p * phase)
     return 0.5 * (np.abs(rs) ** 2 + np.abs(rp) ** 2)
+
+
+# --- the Principled set's film (principled.glsl's hooks, thin_film.glsl's thin_film_at) -----------
+
+@lru_cache(maxsize=1)
+def engine_table() -> np.ndarray:
+    """The table the engine samples (gpu_library.thin_film_table): Blender 5.0's scene linear Rec. 709."""
+    from ..materials.convert import XYZ_TO_RGB
+
+    return sensitivity_table(XYZ_TO_RGB)
+
+
+def film_of(material) -> np.ndarray:
+    """(..., 4): MaterialData's thin_film of a material (thickness at least 0, IOR at least 1e-5,
+    1 if over the metal too, the blend's thickness), as thin_film_at floors them."""
+    thickness = np.maximum(np.asarray(getattr(material, "thin_film_thickness", 0.0), np.float64), 0.0)
+    ior = np.maximum(np.asarray(getattr(material, "thin_film_ior", 1.33), np.float64), 1e-5)
+    metal = np.asarray(1.0 if getattr(material, "thin_film_metal", True) else 0.0, np.float64)
+    blend = np.asarray(getattr(material, "thin_film_blend", BLEND_NM), np.float64)
+    return np.stack(np.broadcast_arrays(thickness, ior, metal, blend), axis=-1)
+
+
+def has_film(film) -> np.ndarray:
+    """Where the film is on (thicker than Cycles' THINFILM_THICKNESS_CUTOFF)."""
+    return np.asarray(film)[..., 0] > THICKNESS_CUTOFF
+
+
+def dielectric(film, eta, f0_tinted, cos_i):
+    """``dielectric_fresnel`` for MaterialData's ``film`` (thin_film.glsl's F_ThinFilmTinted)."""
+    film = np.asarray(film, np.float64)
+    return dielectric_fresnel(cos_i, film[..., 0], film[..., 1], eta, f0_tinted, engine_table(), film[..., 3])
+
+
+def metal(film, f0, b, cos_i):
+    """``iridescence_metal`` for MaterialData's ``film`` (thin_film.glsl's F_ThinFilmMetal)."""
+    film = np.asarray(film, np.float64)
+    return iridescence_metal(cos_i, film[..., 0], film[..., 1], f0, b, engine_table(), film[..., 3])
+
+
+def on_metal(film) -> np.ndarray:
+    """thin_film.glsl's thin_film_on_metal: a film the running Blender puts over the metal too."""
+    return has_film(film) & (np.asarray(film)[..., 2] > 0.5)
