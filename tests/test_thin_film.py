@@ -126,8 +126,8 @@ def _twin_fresnel(metal: bool, cos, d, n2, blend=T.BLEND_NM):
 #: Largest difference from Cycles' mirror spheres (absolute, the Fresnel in [0, 1]), measured with
 #: bpy 5.0.1: the dielectric's and the metal's; Blender 4.2 / 4.5 (their Gaussian fit of the CIE
 #: functions' transform in XYZ, a 30 nm blend, the metal bare) measured separately.
-MIRROR_MEASURED = {False: 3.6e-6, True: 4.4e-6}
-MIRROR_MEASURED_4 = {False: 3.0e-2, True: 5e-6}
+MIRROR_MEASURED = {False: 3.1e-7, True: 6.8e-7}
+MIRROR_MEASURED_4 = {False: 2.6e-2, True: 1.7e-7}
 
 
 @pytest.mark.parametrize("metal", [False, True], ids=["dielectric", "metal"])
@@ -145,8 +145,8 @@ def test_twin_fresnel_matches_cycles_mirrors(mirrors, metal):
           f"(mean {err.mean():.3g}); the film changes the Fresnel by up to {effect:.3g}")
     measured = (MIRROR_MEASURED if CYCLES_5 else MIRROR_MEASURED_4)[metal]
     assert worst <= 3.0 * measured, f"{worst:.3g} (measured {measured:.3g})"
-    if CYCLES_5 or not metal:
-        assert effect >= 100.0 * measured, effect
+    if CYCLES_5 or not metal:  # (4.x's metal has no film)
+        assert effect >= (1000.0 if CYCLES_5 else 5.0) * measured, effect
 
 
 # --- the GPU against the twin -------------------------------------------------------------------------
@@ -220,7 +220,7 @@ def _spectral_reference(cos, d, n2, eta3):
 #: The twin (Belcour & Barla's summation as Cycles 5.0 tabulates it: three orders, the table's 117 nm
 #: steps of path difference interpolated linearly) against the exact film over wavelengths: largest
 #: difference of the reflectance (absolute), measured with a dielectric substrate of IOR 1.5.
-AIRY_MEASURED = 2.6e-2
+AIRY_MEASURED = 5.6e-4
 
 
 def test_twin_approximates_the_exact_film():
@@ -285,9 +285,17 @@ FILM_CASES = {
     "tinted": (lambda: _film("TintedFilm", 300.0, 1.6, specular_tint=(1.0, 0.5, 0.2, 1.0)), ("SUN", "POINT")),
 }
 #: (mean, 99th percentile) relative error of the lit pixels, measured with bpy 5.0.1
-FILM_MEASURED = {name: (1e-3, 1e-2) for name in FILM_CASES}
-#: Blender 4.2 / 4.5: Cycles' other sensitivity (a Gaussian fit in XYZ), measured with bpy 4.5.15
-FILM_MEASURED_4 = {name: (1e-1, 5e-1) for name in FILM_CASES}
+FILM_MEASURED = {"graph-dielectric": (8.9e-4, 2.82e-3), "graph-metal": (1.1e-3, 3.07e-3),
+                 "soap-150": (2.25e-4, 1.45e-3), "soap-300": (2.4e-3, 8.77e-3), "oil-600": (8.52e-4, 2.76e-3),
+                 "thick-1000": (1.92e-4, 1.22e-3), "metal-300": (1.03e-3, 3.0e-3),
+                 "metal-1000": (6.9e-4, 6.11e-3), "tinted": (5.46e-4, 2.38e-3)}
+#: Blender 4.2 / 4.5: Cycles' other sensitivity (a Gaussian fit in XYZ; the metal bare), measured with
+#: bpy 4.5.15
+FILM_MEASURED_4 = {"graph-dielectric": (5.76e-2, 1.08e-1), "graph-metal": (1.07e-3, 2.83e-3),
+                   "soap-150": (1.42e-2, 8.09e-2), "soap-300": (4.99e-2, 6.68e-2),
+                   "oil-600": (1.01e-1, 1.15e-1), "thick-1000": (1.2e-2, 9.73e-2),
+                   "metal-300": (1.07e-3, 2.83e-3),
+                   "metal-1000": (7.9e-4, 7.1e-3), "tinted": (3.53e-2, 5.84e-2)}
 
 
 @pytest.mark.parametrize("case", FILM_CASES)
@@ -347,8 +355,12 @@ def test_twin_thickness_0_is_no_film():
 @pytest.mark.parametrize("sizes", [False, True], ids=["points", "sphere-lights"])
 def test_gpu_matches_twin_in_programs(sizes, tmp_path):
     """test_twin's random planes and lights (every kind; point and spot lights with a radius), the
-    Principled set with a film: float32 agreement (test_principled_lobes' bound)."""
+    Principled set with a film: float32 agreement (test_principled_lobes' bound). Blender 5.0 only: the
+    twin's MaterialParams hold 5.0's film (over the metal, 1 nm blend), 4.x's reader its own."""
     from test_twin import _compare
+
+    if not CYCLES_5:
+        pytest.skip("the twin's material holds Blender 5.0's film; this Blender's reader 4.x's")
 
     lobes = dict(thin_film_thickness=420.0, thin_film_ior=1.7, specular_tint=(1.0, 0.8, 0.6))
     for seed in range(2):
