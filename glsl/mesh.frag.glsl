@@ -212,6 +212,9 @@ MaterialData load_material(int row)
 #ifdef SL_SHEEN
   m.sheen = texelFetch(material_table, ivec2(12, row), 0);
 #endif
+#ifdef SL_THIN_FILM
+  m.thin_film = texelFetch(material_table, ivec2(14, row), 0);
+#endif
   return m;
 }
 #endif

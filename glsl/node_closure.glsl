@@ -20,11 +20,13 @@ struct ClosureLobes {
   vec3 sheen;            /* Sheen Weight x Sheen Tint */
   float sheen_weight;    /* its mean over the channels: what Sheen Roughness is weighted by */
   float sheen_roughness; /* times that */
+  float thin_film;       /* Thin Film Thickness (nm) */
+  float thin_film_ior;   /* Thin Film IOR times the thickness */
 };
 
 ClosureLobes lobes_none()
 {
-  return ClosureLobes(vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0.0);
+  return ClosureLobes(vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0.0, 0.0, 0.0);
 }
 
 /* A BSDF's own lobes of weight 1: a white Specular Tint, no coat, no sheen. */
@@ -38,14 +40,16 @@ ClosureLobes lobes_base()
 ClosureLobes lobes_scale(ClosureLobes l, float w)
 {
   return ClosureLobes(l.specular_tint * w, l.coat * w, l.coat_roughness * w, l.coat_ior * w, l.coat_tint * w,
-                      l.coat_normal * w, l.sheen * w, l.sheen_weight * w, l.sheen_roughness * w);
+                      l.coat_normal * w, l.sheen * w, l.sheen_weight * w, l.sheen_roughness * w,
+                      l.thin_film * w, l.thin_film_ior * w);
 }
 
 ClosureLobes lobes_add(ClosureLobes a, ClosureLobes b)
 {
   return ClosureLobes(a.specular_tint + b.specular_tint, a.coat + b.coat, a.coat_roughness + b.coat_roughness,
                       a.coat_ior + b.coat_ior, a.coat_tint + b.coat_tint, a.coat_normal + b.coat_normal,
-                      a.sheen + b.sheen, a.sheen_weight + b.sheen_weight, a.sheen_roughness + b.sheen_roughness);
+                      a.sheen + b.sheen, a.sheen_weight + b.sheen_weight, a.sheen_roughness + b.sheen_roughness,
+                      a.thin_film + b.thin_film, a.thin_film_ior + b.thin_film_ior);
 }
 
 struct Closure {
@@ -100,12 +104,14 @@ Closure closure_mix(float fac, Closure a, Closure b)
  * IOR Level as the constant path reads them (addon/blender/extract.py: F0(IOR) x 2 x level, at
  * most 1), Alpha as a mix with Transparent (Cycles' principled alpha), emission under it too; its
  * lobes' inputs clamped as Cycles' svm_node_closure_bsdf clamps them (weights and tints at least 0,
- * roughnesses within [0, 1], the coat's IOR at least 1), the coat's normal the BSDF's where
+ * roughnesses within [0, 1], the coat's IOR at least 1, the film's thickness at least 0 and IOR at
+ * least 1e-5), the coat's normal the BSDF's where
  * nothing is linked to it (codegen passes n then). */
 Closure closure_principled(vec4 base_color, float metallic, float roughness, float ior, float level,
                            float alpha, vec4 emission_color, float emission_strength, vec4 specular_tint,
                            float coat, float coat_roughness, float coat_ior, vec4 coat_tint, float sheen,
-                           float sheen_roughness, vec4 sheen_tint, vec3 n, vec3 coat_n)
+                           float sheen_roughness, vec4 sheen_tint, float thin_film, float thin_film_ior, vec3 n,
+                           vec3 coat_n)
 {
   float r = (max(ior, 1.0) - 1.0) / (max(ior, 1.0) + 1.0);
   Closure c = closure_bsdf(base_color.rgb, metallic, roughness, min(r * r * 2.0 * max(level, 0.0), 1.0), n);
@@ -118,6 +124,8 @@ Closure closure_principled(vec4 base_color, float metallic, float roughness, flo
   c.lobes.sheen = max(sheen, 0.0) * max(sheen_tint.rgb, 0.0);
   c.lobes.sheen_weight = dot(c.lobes.sheen, vec3(1.0 / 3.0));
   c.lobes.sheen_roughness = c.lobes.sheen_weight * clamp(sheen_roughness, 0.0, 1.0);
+  c.lobes.thin_film = max(thin_film, 0.0);
+  c.lobes.thin_film_ior = c.lobes.thin_film * max(thin_film_ior, 1e-5);
   c.emission = emission_color.rgb * emission_strength;
   float a = clamp(alpha, 0.0, 1.0);
   c = closure_scale(c, a);

@@ -183,6 +183,9 @@ Surface coat_surface(Surface s)
 #  ifdef SL_LTC
   c.ltc = s.coat.ltc;
 #  endif
+#  ifdef SL_THIN_FILM
+  c.thin_film.x = 0.0; /* the film lies on the base, under the coat */
+#  endif
   return c;
 }
 #endif
@@ -202,6 +205,16 @@ vec3 principled_specular_tint(Surface s, float LoH)
   vec3 metal = p.metal_M * F_Schlick(min(s.base_color, vec3(1.0)), 1.0, LoH);
 #endif
   vec3 dielectric = p.dielectric_M * F_DielectricTinted(s.eta, p.dielectric_f0, LoH);
+#ifdef SL_THIN_FILM
+  /* the film's iridescent Fresnel in place of each lobe's own (thin_film.glsl), its compensation as
+   * without it (Cycles') */
+  if (s.thin_film.x > 0.1 && s.metalness < 1.0) {
+    dielectric = p.dielectric_M * F_ThinFilmTinted(s.thin_film, s.eta, p.dielectric_f0, LoH);
+  }
+  if (thin_film_on_metal(s) && s.metalness > 0.0) {
+    metal = p.metal_M * F_ThinFilmMetal(s.thin_film, s.film_metal_n, s.film_metal_k, s.film_metal_g, LoH);
+  }
+#endif
   return s.metalness * metal + (1.0 - s.metalness) * dielectric;
 }
 
@@ -236,6 +249,13 @@ vec3 principled_environment(Surface s, vec2 EB, vec3 radiance, vec3 irradiance, 
    * albedo estimate leaves it out: bsdf_microfacet_estimate_albedo) */
   float c6 = pow5(1.0 - s.NoV) * (1.0 - s.NoV);
   metal = max(metal - p.metal_M * p.metal_b * (s.NoV * c6 * EB.x), 0.0);
+#    endif
+#    ifdef SL_THIN_FILM
+  /* under the film the metal's Fresnel at the view times the lobe's albedo, as the dielectric's layer
+   * estimate takes it (thin_film_at; no split-sum table holds a film) */
+  if (thin_film_on_metal(s)) {
+    metal = p.metal_M * F_ThinFilmMetal(s.thin_film, s.film_metal_n, s.film_metal_k, s.film_metal_g, s.NoV) * EB.x;
+  }
 #    endif
   vec3 specular = (s.metalness * metal + (1.0 - s.metalness) * p.albedo) * radiance;
 #    endif

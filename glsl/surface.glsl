@@ -118,7 +118,17 @@ struct Surface {
 #if defined(SL_COAT) || defined(SL_SHEEN)
   vec3 below;         /* what the sheen and the coat above leave the base at the view (rgb) */
 #endif
+#ifdef SL_THIN_FILM
+  vec4 thin_film;     /* the Thin Film: thickness (nm; 0.1 or less: none), IOR, 1 if over the metal too,
+                       * the thickness (nm) below which its IOR blends to the air's (thin_film.glsl) */
+  vec3 film_metal_n;  /* the metal's IOR n + ik under it (thin_film_metal_ior) and its F82 value */
+  vec3 film_metal_k;
+  vec3 film_metal_g;
+#endif
 };
+#if defined(SL_THIN_FILM) && defined(SL_LAYERS)
+void thin_film_at(inout Surface s, vec4 film);
+#endif
 
 /* Unit half vector of eq. 1.6; l + v = 0 only when the light is exactly behind the viewer's
  * line of sight, where any unit vector serves: fall back to n. */
@@ -163,6 +173,9 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
 #endif
 #ifdef SL_LAYERS
   s.layers = principled_layers_at(s.NoV, s.roughness, s.base_color, s.eta, tint);
+#  ifdef SL_THIN_FILM
+  thin_film_at(s, m.thin_film);
+#  endif
 #endif
   /* the Principled BSDF's upper layers, each attenuating what lies below it at the view (Cycles'
    * svm_node_closure_bsdf: the sheen over the coat over the rest) */

@@ -72,6 +72,8 @@ struct MaterialData {
   vec4 coat_tint;        /* rgb: Coat Tint (the base's colour through the coat at normal incidence) */
   vec4 sheen;            /* rgb: Sheen Weight x Sheen Tint; w: Sheen Roughness */
   vec4 coat_normal;      /* xyz: the coat's normal where a node graph gives it one (0: the surface's) */
+  vec4 thin_film;        /* x: Thin Film Thickness (nm), y: Thin Film IOR, z: 1 if the film covers the
+                          * metal too, w: the thickness below which its IOR blends to 1 (SL_THIN_FILM) */
 };
 
 /* The world's light, precomputed (glsl/ibl.glsl, addon/reference/environment.py): nine SH coefficients

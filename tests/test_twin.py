@@ -102,7 +102,8 @@ def test_gpu_matches_numpy_twin_with_sphere_lights(model, seed, tmp_path):
 LOBE_SOCKETS = {"specular_tint": "Specular Tint", "coat_weight": "Coat Weight",
                 "coat_roughness": "Coat Roughness", "coat_ior": "Coat IOR", "coat_tint": "Coat Tint",
                 "sheen_weight": "Sheen Weight",
-                "sheen_roughness": "Sheen Roughness", "sheen_tint": "Sheen Tint"}
+                "sheen_roughness": "Sheen Roughness", "sheen_tint": "Sheen Tint",
+                "thin_film_thickness": "Thin Film Thickness", "thin_film_ior": "Thin Film IOR"}
 
 
 def _compare(model, seed, tmp_path, sizes=False, lobes=None):

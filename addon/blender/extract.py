@@ -69,7 +69,7 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
     compiled is said in ``warnings``."""
     if material is None:
         return S.DEFAULT_MATERIAL
-    maps: dict = {}
+    maps: dict = _thin_film_version()
     base = _rgb(material.diffuse_color)
     metal = float(material.metallic)
     rough = float(material.roughness)
@@ -154,7 +154,23 @@ def _principled_lobes(node) -> dict:
             "coat_roughness": unit("Coat Roughness", 0.03),
             "coat_ior": max(float(_input(node, "Coat IOR", 1.5)), 1.0), "coat_tint": colour("Coat Tint"),
             "sheen_weight": max(float(_input(node, "Sheen Weight", 0.0)), 0.0),
-            "sheen_roughness": unit("Sheen Roughness", 0.5), "sheen_tint": colour("Sheen Tint")}
+            "sheen_roughness": unit("Sheen Roughness", 0.5), "sheen_tint": colour("Sheen Tint"),
+            **_thin_film(node)}
+
+
+def _thin_film(node) -> dict:
+    """The Principled BSDF's Thin Film (Blender 4.2 and later; none before): its thickness (nm, at
+    least 0: 0.1 or less is no film, Cycles' THINFILM_THICKNESS_CUTOFF) and IOR (at least 1e-5, as
+    Cycles' svm_node_closure_bsdf floors it)."""
+    return {"thin_film_thickness": max(float(_input(node, "Thin Film Thickness", 0.0)), 0.0),
+            "thin_film_ior": max(float(_input(node, "Thin Film IOR", 1.33)), 1e-5)}
+
+
+def _thin_film_version() -> dict:
+    """What this Blender's Cycles does with a Thin Film where 5.0's differs: 4.2 and 4.5 put it over
+    the dielectric alone (the metal bare) and blend its IOR to the air's below 30 nm (5.0: 1 nm)."""
+    modern = bpy.app.version >= (5, 0, 0)
+    return {"thin_film_metal": modern, "thin_film_blend": 1.0 if modern else 30.0}
 
 
 #: The Material panel's explicit values a compiled graph leaves as they are: its input -> the flag.

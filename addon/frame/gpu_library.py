@@ -346,7 +346,8 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     info.typedef_source(typedefs)
     samplers = {0: "ms_table" if features.uses_albedo_table else None,
                 1: "s_table" if features.uses_s_table else None,
-                2: "sheen_table" if features.uses_sheen_table else None}
+                2: "sheen_table" if features.uses_sheen_table else None,
+                3: "thin_film_table" if features.uses_thin_film_table else None}
     if features.peel:
         samplers.update({6: "opaque_depth", 7: "peel_depth"})
     samplers[8] = "env_atlas" if features.environment == "MAP" else None  # irradiance, levels
@@ -774,6 +775,20 @@ def sheen_table() -> gpu.types.GPUTexture:
         return rgba32f_texture(np.concatenate([table, np.zeros(table.shape[:2] + (1,), np.float32)], axis=-1))
 
     return LIBRARY.table(("SHEEN",), build)
+
+
+def thin_film_table() -> gpu.types.GPUTexture:
+    """The Thin Film's sensitivity (addon/reference/thin_film.py's sensitivity_table in Blender 5.0's
+    scene linear Rec. 709, materials/convert.py's XYZ_TO_RGB) as a 512 x 2 RGBA32F texture: row 0 its
+    real part, row 1 its imaginary part (glsl/thin_film.glsl's thin_film_sensitivity)."""
+    from ..materials import convert
+    from ..reference import thin_film
+
+    def build():
+        table = thin_film.sensitivity_table(convert.XYZ_TO_RGB).transpose(1, 0, 2)
+        return rgba32f_texture(np.concatenate([table, np.zeros(table.shape[:2] + (1,), np.float32)], axis=-1))
+
+    return LIBRARY.table(("THIN_FILM",), build)
 
 # Compiled programs outlive renders; free them before Blender tears its GPU module down, or it
 # reports them as leaked blocks at exit.

@@ -786,14 +786,16 @@ def _combine(space: str, inputs: tuple[str, str, str], output: str):
 PRINCIPLED_BASE_INPUTS = ("Base Color", "Metallic", "Roughness", "IOR", "Specular IOR Level", "Alpha",
                           "Emission Color", "Emission Strength")
 PRINCIPLED_INPUTS = PRINCIPLED_BASE_INPUTS + ("Specular Tint", "Coat Weight", "Coat Roughness", "Coat IOR",
-                                              "Coat Tint", "Sheen Weight", "Sheen Roughness", "Sheen Tint")
+                                              "Coat Tint", "Sheen Weight", "Sheen Roughness", "Sheen Tint",
+                                              "Thin Film Thickness", "Thin Film IOR")
 
 #: The values of the Principled BSDF's lobe inputs a node read from an older file may lack (Blender's
 #: defaults: they add no lobe), with their socket types.
 PRINCIPLED_DEFAULTS = {"Specular Tint": ((1.0, 1.0, 1.0, 1.0), "RGBA"), "Coat Weight": (0.0, "VALUE"),
                        "Coat Roughness": (0.03, "VALUE"), "Coat IOR": (1.5, "VALUE"),
                        "Coat Tint": ((1.0, 1.0, 1.0, 1.0), "RGBA"), "Sheen Weight": (0.0, "VALUE"),
-                       "Sheen Roughness": (0.5, "VALUE"), "Sheen Tint": ((1.0, 1.0, 1.0, 1.0), "RGBA")}
+                       "Sheen Roughness": (0.5, "VALUE"), "Sheen Tint": ((1.0, 1.0, 1.0, 1.0), "RGBA"),
+                       "Thin Film Thickness": (0.0, "VALUE"), "Thin Film IOR": (1.33, "VALUE")}
 
 
 def _principled(w: _Writer, node: FlatNode) -> dict:

@@ -258,18 +258,18 @@ def _lobes(flat: FlatGraph) -> frozenset[str]:
         if node.kind != "ShaderNodeBsdfPrincipled":
             continue
         values = {}
-        for socket in ("Specular Tint", "Coat Weight", "Sheen Weight", "Sheen Tint"):
+        for socket in ("Specular Tint", "Coat Weight", "Sheen Weight", "Sheen Tint", "Thin Film Thickness"):
             spec = node.inputs.get(socket)
             if spec is not None and not isinstance(spec.source, Const):
                 value = {"Specular Tint": (0.0,) * 3, "Coat Weight": 1.0, "Sheen Weight": 1.0,
-                         "Sheen Tint": (1.0,) * 3}[socket]  # linked: on
+                         "Sheen Tint": (1.0,) * 3, "Thin Film Thickness": 1.0}[socket]  # linked: on
             elif spec is not None and spec.source.value is not None:
                 value = spec.source.value
             else:
                 value = codegen.PRINCIPLED_DEFAULTS[socket][0]
             values[socket] = tuple(value)[:3] if isinstance(value, (tuple, list)) else float(value)
         out |= lobes_of(values["Specular Tint"], values["Coat Weight"], values["Sheen Weight"],
-                        values["Sheen Tint"])
+                        values["Sheen Tint"], values["Thin Film Thickness"])
     return frozenset(out)
 
 
@@ -397,7 +397,8 @@ def _textured(flat: FlatGraph) -> dict:
 #: The Principled BSDF's inputs of each lobe (``snapshot.LOBES``).
 LOBE_INPUTS = {"SPECULAR_TINT": ("Specular Tint",),
                "COAT": ("Coat Weight", "Coat Roughness", "Coat IOR", "Coat Tint", "Coat Normal"),
-               "SHEEN": ("Sheen Weight", "Sheen Roughness", "Sheen Tint")}
+               "SHEEN": ("Sheen Weight", "Sheen Roughness", "Sheen Tint"),
+               "THIN_FILM": ("Thin Film Thickness", "Thin Film IOR")}
 #: What of each closure the shading models read (the rest is drawn as nothing: Principled BSDF's
 #: coat, sheen, transmission ...).
 READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_BASE_INPUTS) | {"Normal"}

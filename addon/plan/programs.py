@@ -58,7 +58,7 @@ MODEL_FILES = {
     "PBR": "model_pbr.glsl",
 }
 FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "environment.glsl", "ibl.glsl")
-PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "principled.glsl", "ltc.glsl")
+PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "thin_film.glsl", "principled.glsl", "ltc.glsl")
 #: How the world lights a program: "" not at all (a black world), "UNIFORM" a constant radiance,
 #: "MAP" environment images (glsl/ibl.glsl).
 ENVIRONMENTS = ("", "UNIFORM", "MAP")
@@ -274,6 +274,12 @@ class Features:
     def uses_sheen_table(self) -> bool:
         """The program samples ``sheen_table`` (the Principled BSDF's sheen, addon/reference/sheen.py)."""
         return "SHEEN" in self.lobes
+
+    @property
+    def uses_thin_film_table(self) -> bool:
+        """The program samples ``thin_film_table`` (the Principled BSDF's Thin Film,
+        addon/reference/thin_film.py)."""
+        return "THIN_FILM" in self.lobes
 
     @property
     def uses_s_table(self) -> bool:
@@ -920,6 +926,7 @@ def pack_material(m: MaterialParams) -> bytes:
         [*m.coat_tint, 0.0],
         [*(m.sheen_weight * c for c in m.sheen_tint), m.sheen_roughness],
         [0.0, 0.0, 0.0, 0.0],  # the coat's normal: the surface's (a node graph's own is per fragment)
+        [m.thin_film_thickness, m.thin_film_ior, 1.0 if m.thin_film_metal else 0.0, m.thin_film_blend],
     ]
     return np.asarray(rows, np.float32).tobytes()
 

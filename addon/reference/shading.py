@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene.snapshot import LOBES, Light, MaterialParams, Terms
-from . import environment, ltc
+from . import environment, ltc, thin_film
 from . import multiscatter as M
 from . import sheen as sheen_table
 from .brdf import (
@@ -373,6 +373,7 @@ class Surface:
         self.sheen = (np.maximum(np.asarray(material.sheen_weight, f64), 0.0)[..., None]
                       * np.maximum(np.asarray(material.sheen_tint, f64), 0.0))
         self.sheen_roughness = np.clip(np.asarray(material.sheen_roughness, f64), 0.0, 1.0)
+        self.thin_film = thin_film.film_of(material)  # MaterialData's thin_film (thin_film.film_of)
 
 
 def blinn_phong_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
@@ -513,7 +514,16 @@ def principled_layers(s: Surface, terms: Terms = PRINCIPLED_TERMS) -> Principled
     """``principled_layers_at`` of ``s`` (surface.glsl's make_surface): its Specular Tint in the
     Principled set, white in the LAYERED diffuse's programs."""
     tint = s.specular_tint if terms.principled else np.ones(3)
-    return principled_layers_at(s.NoV, s.roughness, s.base_color, s.eta, tint, terms.lobe)
+    p = principled_layers_at(s.NoV, s.roughness, s.base_color, s.eta, tint, terms.lobe)
+    if terms.principled and "THIN_FILM" in LOBES and np.any(thin_film.has_film(s.thin_film)):
+        # thin_film.glsl's thin_film_at: the layer's albedo E M F(n.v) under the film
+        film = thin_film.has_film(s.thin_film)
+        E_mu = np.maximum(M.interpolate(M.albedo_table(*terms.lobe), s.NoV,
+                                        np.broadcast_to(s.roughness, np.shape(s.NoV))), 1e-3)
+        F = thin_film.dielectric(s.thin_film, s.eta, p.dielectric_f0, s.NoV)
+        p.albedo = np.where(film[..., None], _rgb_scalar(E_mu) * p.dielectric_M * F, p.albedo)
+        p.layer = p.albedo.max(axis=-1)
+    return p
 
 
 def principled_specular_tint(s: Surface, LoH):
@@ -522,6 +532,13 @@ def principled_specular_tint(s: Surface, LoH):
     p = principled_layers(s)
     metal = p.metal_M * F_F82Tint(np.minimum(s.base_color, 1.0), p.metal_b, LoH)
     dielectric = p.dielectric_M * F_DielectricTinted(s.eta, p.dielectric_f0, LoH)
+    if "THIN_FILM" in LOBES and np.any(thin_film.has_film(s.thin_film)):  # principled.glsl's film
+        film = thin_film.has_film(s.thin_film)[..., None]
+        F = thin_film.dielectric(s.thin_film, s.eta, p.dielectric_f0, LoH)
+        dielectric = np.where(film, p.dielectric_M * F, dielectric)
+        F0m = np.broadcast_to(np.minimum(s.base_color, 1.0), np.shape(metal))
+        metal = np.where(thin_film.on_metal(s.thin_film)[..., None],
+                         p.metal_M * thin_film.metal(s.thin_film, F0m, p.metal_b, LoH), metal)
     return s.metal3 * metal + (1.0 - s.metal3) * dielectric
 
 
@@ -563,6 +580,7 @@ def coat_surface(s: Surface) -> Surface:
     c.specular_tint = np.ones(3)
     c.coat_weight = np.zeros(np.shape(s.coat_weight))
     c.sheen = np.zeros(3)
+    c.thin_film = s.thin_film * np.array([0.0, 1.0, 1.0, 1.0])  # the film lies on the base, under the coat
     return c
 
 
@@ -713,6 +731,10 @@ def shade_environment(s: Surface, prefiltered, irradiance, terms: Terms = DEFAUL
         # F82-tint's edge term at the view (principled.glsl's principled_environment)
         c6 = pow5(1.0 - s.NoV) * (1.0 - s.NoV)
         metal = np.maximum(metal - p.metal_M * p.metal_b * _rgb_scalar(s.NoV * c6 * E), 0.0)
+        if "THIN_FILM" in LOBES and np.any(thin_film.on_metal(s.thin_film)):  # the film's at the view
+            F0m = np.broadcast_to(F0m, np.shape(metal))
+            film = p.metal_M * thin_film.metal(s.thin_film, F0m, p.metal_b, s.NoV) * _rgb_scalar(E)
+            metal = np.where(thin_film.on_metal(s.thin_film)[..., None], film, metal)
         specular = (s.metal3 * metal + (1.0 - s.metal3) * p.albedo) * prefiltered
         if sampled is not None:
             specular = np.broadcast_to(sampled, np.shape(specular))

@@ -169,6 +169,13 @@ class MaterialParams:
     sheen_weight: float = 0.0
     sheen_roughness: float = 0.5
     sheen_tint: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    #: the Thin Film (glsl/thin_film.glsl): thickness in nm (0.1 or less: none) and IOR; whether the
+    #: running Blender's Cycles puts it over the metal too (5.0) and below what thickness (nm) its IOR
+    #: blends to the air's (5.0: 1; 4.2 and 4.5: 30)
+    thin_film_thickness: float = 0.0
+    thin_film_ior: float = 1.33
+    thin_film_metal: bool = True
+    thin_film_blend: float = 1.0
 
     @property
     def lobes(self) -> frozenset[str]:
@@ -176,23 +183,27 @@ class MaterialParams:
         else those its values turn on (a tint other than white, a weight above 0)."""
         if self.graph is not None:
             return self.graph.lobes
-        return lobes_of(self.specular_tint, self.coat_weight, self.sheen_weight, self.sheen_tint)
+        return lobes_of(self.specular_tint, self.coat_weight, self.sheen_weight, self.sheen_tint,
+                        self.thin_film_thickness)
 
 
 #: The Principled BSDF's lobes beyond its base the programs draw, as their defines name them
 #: (SL_<LOBE>).
-LOBES = ("SPECULAR_TINT", "COAT", "SHEEN")
+LOBES = ("SPECULAR_TINT", "COAT", "SHEEN", "THIN_FILM")
 
 
-def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint) -> frozenset[str]:
+def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint,
+             thin_film_thickness=0.0) -> frozenset[str]:
     """The lobes a Principled BSDF of these inputs draws: a Specular Tint other than white, a Coat
     Weight above 0, a Sheen Weight and Tint above 0 (Cycles adds no lobe of weight 0: its
-    CLOSURE_WEIGHT_CUTOFF is 1e-5). Scalars here; per-point arrays (the twin's) are any of them."""
+    CLOSURE_WEIGHT_CUTOFF is 1e-5), a Thin Film Thickness above 0. Scalars here; per-point arrays (the
+    twin's) are any of them."""
     tint = np.asarray(specular_tint, np.float64)
     sheen = np.asarray(sheen_weight, np.float64)[..., None] * np.asarray(sheen_tint, np.float64)
     used = {"SPECULAR_TINT": bool(np.any(tint != 1.0)),
             "COAT": bool(np.any(np.asarray(coat_weight, np.float64) > 1e-5)),
-            "SHEEN": bool(np.any(sheen > 1e-5))}
+            "SHEEN": bool(np.any(sheen > 1e-5)),
+            "THIN_FILM": bool(np.any(np.asarray(thin_film_thickness, np.float64) > 0.0))}
     return frozenset(name for name in LOBES if used.get(name))
 
 

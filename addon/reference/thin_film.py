@@ -1,0 +1,273 @@
+"""The Principled BSDF's Thin Film (glsl/thin_film.glsl's twin): the iridescent Fresnel of a film of
+thickness d (nm) and IOR n2 over the dielectric or metallic base, as Cycles 5.0 evaluates it
+(kernel/closure/bsdf_util.h's fresnel_iridescence, bsdf_microfacet.h's microfacet_fresnel), after
+Belcour & Barla 2017, "A Practical Extension to Microfacet Theory for the Modeling of Varying
+Iridescence": the Airy series of the film's multiple reflections, summed in closed form for its
+mean (the m = 0 term) and over the path differences m = 1..3 through the Fourier transform of the
+colour matching functions (``sensitivity``), per polarisation, averaged.
+
+Pure numpy (no ``bpy``, no ``gpu``): arrays broadcast; cosines, thicknesses and IORs may be per point.
+"""
+
+from __future__ import annotations
+
+from functools import lru_cache
+from pathlib import Path
+
+import numpy as np
+
+#: The sensitivity table's size and the path difference it covers (Cycles' THIN_FILM_TABLE_SIZE,
+#: 0 .. 60 um).
+TABLE_SIZE = 512
+TABLE_END_NM = 60000.0
+#: A film of this thickness (nm) or less is no film (Cycles' THINFILM_THICKNESS_CUTOFF).
+THICKNESS_CUTOFF = 0.1
+#: Below this thickness (nm) the film's IOR blends towards the air's (Cycles 5.0: 1 nm; 4.2 and 4.5:
+#: 30 nm), where the Airy summation no longer applies.
+BLEND_NM = 1.0
+SHIPPED = Path(__file__).with_name("thin_film_cmf.npz")
+
+
+@lru_cache(maxsize=1)
+def cmf_table() -> np.ndarray:
+    """(512, 6) float64: the CIE 1931 XYZ functions' Fourier transform (Re X, Re Y, Re Z, Im X, Im Y,
+    Im Z) at x = 2 pi D / 60 um = i / 511 (scripts/thin_film_table.py)."""
+    return np.load(SHIPPED)["cmf"].astype(np.float64)
+
+
+def sensitivity_table(xyz_to_rgb) -> np.ndarray:
+    """(512, 2, 3) float32: the transform in the scene linear RGB of ``xyz_to_rgb`` (rows), real then
+    imaginary part, normalised so that its first (DC) entry is 1 per channel (Cycles 5.0's
+    ShaderManager::compute_thin_film_table: the colour matching functions of unit area)."""
+    m = np.asarray(xyz_to_rgb, np.float64)
+    table = cmf_table()
+    re = table[:, :3] @ m.T
+    im = table[:, 3:] @ m.T
+    norm = 1.0 / re[0]
+    return np.stack([re * norm, im * norm], axis=1).astype(np.float32)
+
+
+def sensitivity(opd, table):
+    """(re, im) (..., 3) of the table at path difference ``opd`` (nm), linearly interpolated as
+    Cycles' lookup_table_read (x clamped to [0, 1])."""
+    x = np.clip(2.0 * np.pi * np.asarray(opd, np.float64) / TABLE_END_NM, 0.0, 1.0) * (TABLE_SIZE - 1)
+    i = np.minimum(x.astype(np.int64), TABLE_SIZE - 1)
+    j = np.minimum(i + 1, TABLE_SIZE - 1)
+    t = (x - i)[..., None, None]
+    rows = np.asarray(table, np.float64)
+    value = (1.0 - t) * rows[i] + t * rows[j]
+    return value[..., 0, :], value[..., 1, :]
+
+
+def fresnel_polarized(cos_i, eta):
+    """(R_s, R_p, cos_t, sign_s, sign_p): the reflectances of a dielectric interface of relative IOR
+    ``eta`` for s- and p-polarised light, the refracted cosine (negative: relative to the normal)
+    and the signs of the reflected amplitudes (the phase shift 0 or pi), Cycles'
+    fresnel_dielectric_polarized; total internal reflection: 1, 1, 0 and no phase shift."""
+    cos_i = np.abs(np.asarray(cos_i, np.float64))
+    eta = np.asarray(eta, np.float64)
+    t2 = eta * eta - (1.0 - cos_i * cos_i)
+    tir = t2 <= 0.0
+    with np.errstate(divide="ignore", invalid="ignore"):
+        cos_t = -np.sqrt(np.maximum(t2, 0.0)) / eta
+        r_s = (cos_i + eta * cos_t) / (cos_i - eta * cos_t)
+        r_p = (cos_t + eta * cos_i) / (eta * cos_i - cos_t)
+    one = np.ones(np.broadcast(cos_i, eta).shape)
+    return (np.where(tir, one, r_s * r_s), np.where(tir, one, r_p * r_p), np.where(tir, 0.0, cos_t),
+            np.where(tir | (r_s >= 0.0), 1.0, -1.0), np.where(tir | (r_p >= 0.0), 1.0, -1.0))
+
+
+def f82(cos_i, f0, b):
+    """Cycles' fresnel_f82: Schlick's curve less b cos (1 - cos)^6, within [0, 1]."""
+    cos_i = np.asarray(cos_i, np.float64)
+    s = np.clip(1.0 - cos_i, 0.0, 1.0)
+    s5 = s ** 5
+    return np.clip(f0 + (1.0 - f0) * s5 - b * cos_i * s5 * s, 0.0, 1.0)
+
+
+def f82_b(f0, f82_value):
+    """Cycles' fresnel_f82_B: b of the F82 model whose value at cos = 1/7 is ``f82_value``."""
+    f = 6.0 / 7.0
+    f5 = f ** 5
+    return (7.0 / (f5 * f)) * (f0 + (1.0 - f0) * f5 - f82_value)
+
+
+def metal_ior(f0, b):
+    """(n, k, g): a metal's complex IOR from its F0 and F82-tint b (Gulbrandsen 2014, "Artist
+    Friendly Metallic Fresnel", with F0 as the reflectivity r and the F82 value g as the edge tint),
+    as Cycles' microfacet_fresnel reads the Principled BSDF's metal under a film; F0 at most 0.999."""
+    f0 = np.asarray(f0, np.float64)
+    r = np.minimum(f0, 0.999)
+    g = f82(1.0 / 7.0, f0, b)
+    sqrt_r = np.sqrt(r)
+    n = (1.0 + sqrt_r) / (1.0 - sqrt_r) * (1.0 - g) + (1.0 - r) / (1.0 + r) * g
+    k = np.sqrt(np.maximum((r * (n + 1.0) ** 2 - (n - 1.0) ** 2) / (1.0 - r), 0.0))
+    return n, k, g
+
+
+def conductor_polarized(cos_i, eta1, n, k, f82_value):
+    """(R, phase_s, phase_p): a metal of IOR n + ik under a medium of IOR ``eta1`` (Cycles'
+    fresnel_conductor_polarized, after Born & Wolf 14.4.1): its reflectance by the F82 model
+    with F0 recomputed against eta1 (both polarisations alike), and the complex phasors
+    exp(i phi_s), exp(i phi_p) of the exact Fresnel amplitudes (re, im)."""
+    cos_i = np.asarray(cos_i, np.float64)[..., None]
+    eta1 = np.asarray(eta1, np.float64)[..., None]
+    t1 = n * n - k * k - eta1 * eta1 * (1.0 - cos_i * cos_i)
+    t2 = np.sqrt(t1 * t1 + (2.0 * n * k) ** 2)
+    u2 = np.maximum(0.5 * (t2 + t1), 0.0)
+    v2 = np.maximum(0.5 * (t2 - t1), 0.0)
+    u, v = np.sqrt(u2), np.sqrt(v2)
+    nr = n / eta1
+    kr2 = (k / eta1) ** 2
+    F0 = ((nr - 1.0) ** 2 + kr2) / ((nr + 1.0) ** 2 + kr2)
+    R = f82(cos_i, F0, f82_b(F0, f82_value))
+
+    def unit(re, im):
+        mag = np.sqrt(re * re + im * im)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(mag == 0.0, 1.0, re / mag), np.where(mag == 0.0, 0.0, im / mag)
+
+    phase_s = unit(-u2 - v2 + (eta1 * cos_i) ** 2, -2.0 * eta1 * cos_i * v)
+    phase_p = unit(((n * n + k * k) * cos_i) ** 2 - eta1 * eta1 * (u2 + v2),
+                   2.0 * eta1 * cos_i * (2.0 * n * k * u - (n * n - k * k) * v))
+    return R, phase_s, phase_p
+
+
+def airy(R12, R23, opd, phasor, table):
+    """The film's reflectance (..., 3) for one polarisation (Belcour & Barla 2017, eq. 10; Cycles'
+    iridescence_airy_summation): the series' mean R12 + T121^2 R23 / (1 - R12 R23) and its terms
+    m = 1..3, each C_m times the sensitivity at m D turned by the reflections' phasor^m."""
+    R12 = np.asarray(R12, np.float64)[..., None]
+    R23 = np.asarray(R23, np.float64)
+    R23 = R23[..., None] if R23.ndim < R12.ndim else R23  # a dielectric's: one for every channel
+    T121 = 1.0 - R12
+    R123 = R12 * R23
+    r123 = np.sqrt(R123)
+    # R12 R23 < 1 off total internal reflection (handled before); 1e-7: float32's step below 1
+    Rs = T121 * T121 * R23 / np.maximum(1.0 - R123, 1e-7)
+    R = Rs + R12
+    Cm = Rs - T121
+    re, im = (np.broadcast_to(np.asarray(c, np.float64), R.shape) for c in phasor)
+    acc_re, acc_im = re, im
+    for m in range(1, 4):
+        Cm = Cm * r123
+        s_re, s_im = sensitivity(m * np.asarray(opd, np.float64), table)
+        R = R + Cm * 2.0 * (acc_re * s_re + acc_im * s_im)
+        acc_re, acc_im = acc_re * re - acc_im * im, acc_re * im + acc_im * re
+    return R
+
+
+def _film_ior(thickness, film_ior, blend=BLEND_NM):
+    """The film's IOR, blended towards the air's (1) by smoothstep(0, blend, d) below ``blend`` nm."""
+    d = np.asarray(thickness, np.float64)
+    t = np.clip(d / blend, 0.0, 1.0)
+    return np.where(d < blend, 1.0 + (np.asarray(film_ior, np.float64) - 1.0) * t * t * (3.0 - 2.0 * t),
+                    film_ior)
+
+
+def iridescence_dielectric(cos_i, thickness, film_ior, eta, table, blend=BLEND_NM):
+    """(..., 3): Cycles' fresnel_iridescence over a dielectric of IOR ``eta`` (air above)."""
+    n2 = _film_ior(thickness, film_ior, blend)
+    R12s, R12p, cos2, ph12s, ph12p = fresnel_polarized(cos_i, n2)
+    R23s, R23p, _, ph23s, ph23p = fresnel_polarized(-cos2, np.asarray(eta, np.float64) / n2)
+    opd = -2.0 * n2 * np.asarray(thickness, np.float64) * cos2
+    Rs = airy(R12s, R23s, opd, ((ph23s * -ph12s)[..., None], 0.0), table)
+    Rp = airy(R12p, R23p, opd, ((ph23p * -ph12p)[..., None], 0.0), table)
+    tir = ((R12s == 1.0) & (R12p == 1.0)) | ((R23s == 1.0) & (R23p == 1.0))
+    return np.where(tir[..., None], 1.0, np.clip(0.5 * (Rs + Rp), 0.0, 1.0))
+
+
+def iridescence_metal(cos_i, thickness, film_ior, f0, b, table, blend=BLEND_NM):
+    """(..., 3): Cycles' fresnel_iridescence over the Principled BSDF's metal of F0 ``f0`` and
+    F82-tint b (its IOR from ``metal_ior``)."""
+    n, k, g = metal_ior(f0, b)
+    n2 = _film_ior(thickness, film_ior, blend)
+    R12s, R12p, cos2, ph12s, ph12p = fresnel_polarized(cos_i, n2)
+    R23, (ps_re, ps_im), (pp_re, pp_im) = conductor_polarized(-cos2, n2, n, k, g)
+    opd = -2.0 * n2 * np.asarray(thickness, np.float64) * cos2
+    Rs = airy(R12s, R23, opd, (ps_re * -ph12s[..., None], ps_im * -ph12s[..., None]), table)
+    Rp = airy(R12p, R23, opd, (pp_re * -ph12p[..., None], pp_im * -ph12p[..., None]), table)
+    tir = (R12s == 1.0) & (R12p == 1.0)
+    return np.where(tir[..., None], 1.0, np.clip(0.5 * (Rs + Rp), 0.0, 1.0))
+
+
+def dielectric_fresnel(cos_i, thickness, film_ior, eta, f0_tinted, table, blend=BLEND_NM):
+    """The Principled BSDF's dielectric Fresnel under a film (Cycles' microfacet_fresnel,
+    GENERALIZED_SCHLICK with a film): the iridescent Fresnel, each channel scaled towards the tinted
+    F0 over the substrate's own F0 as it nears that F0 from 1 (no scaling where the substrate's
+    F0 is below 1e-5 or the film reflects everything)."""
+    F = iridescence_dielectric(cos_i, thickness, film_ior, eta, table, blend)
+    eta = np.asarray(eta, np.float64)
+    F0 = ((eta - 1.0) / (eta + 1.0)) ** 2
+    scaled = (F0 > 1e-5)[..., None] & ~np.all(F == 1.0, axis=-1, keepdims=True)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s = np.clip((F - 1.0) / (F0[..., None] - 1.0), 0.0, 1.0)
+        factor = np.asarray(f0_tinted, np.float64) / F0[..., None]
+        out = F * (1.0 + (factor - 1.0) * s)
+    return np.where(scaled, out, F)
+
+
+# --- the independent reference: the exact film over wavelengths ------------------------------------
+
+def airy_spectral(lam_nm, cos_i, thickness, film_ior, eta3):
+    """(..., L) the exact reflectance of a film of thickness d and IOR n2 between air and a substrate
+    of (complex) IOR eta3 at each wavelength (Airy's summation of the film's reflections in closed
+    form: r = (r12 + r23 e^{i delta}) / (1 + r12 r23 e^{i delta}), delta = 4 pi n2 d cos theta2 / lambda,
+    per polarisation, unpolarised mean); no dispersion. For tests: the classic formula, independent
+    of the Fourier-space summation above."""
+    cos1 = np.asarray(cos_i, np.float64)[..., None]
+    n2 = complex(film_ior)
+    n3 = np.asarray(eta3, np.complex128)
+    sin1 = np.sqrt(1.0 - cos1 * cos1)
+    cos2 = np.sqrt(1.0 - (sin1 / n2) ** 2 + 0j)
+    cos3 = np.sqrt(1.0 - (sin1 / n3) ** 2 + 0j)
+    r12s = (cos1 - n2 * cos2) / (cos1 + n2 * cos2)
+    r12p = (n2 * cos1 - cos2) / (n2 * cos1 + cos2)
+    r23s = (n2 * cos2 - n3 * cos3) / (n2 * cos2 + n3 * cos3)
+    r23p = (n3 * cos2 - n2 * cos3) / (n3 * cos2 + n2 * cos3)
+    phase = np.exp(2j * (2.0 * np.pi / np.asarray(lam_nm, np.float64)) * n2 * thickness * cos2)
+    rs = (r12s + r23s * phase) / (1.0 + r12s * r23s * phase)
+    rp = (r12p + r23p * phase) / (1.0 + r12p * r23p * phase)
+    return 0.5 * (np.abs(rs) ** 2 + np.abs(rp) ** 2)
+
+
+# --- the Principled set's film (principled.glsl's hooks, thin_film.glsl's thin_film_at) -----------
+
+@lru_cache(maxsize=1)
+def engine_table() -> np.ndarray:
+    """The table the engine samples (gpu_library.thin_film_table): Blender 5.0's scene linear Rec. 709."""
+    from ..materials.convert import XYZ_TO_RGB
+
+    return sensitivity_table(XYZ_TO_RGB)
+
+
+def film_of(material) -> np.ndarray:
+    """(..., 4): MaterialData's thin_film of a material (thickness at least 0, IOR at least 1e-5,
+    1 if over the metal too, the blend's thickness), as thin_film_at floors them."""
+    thickness = np.maximum(np.asarray(getattr(material, "thin_film_thickness", 0.0), np.float64), 0.0)
+    ior = np.maximum(np.asarray(getattr(material, "thin_film_ior", 1.33), np.float64), 1e-5)
+    metal = np.asarray(1.0 if getattr(material, "thin_film_metal", True) else 0.0, np.float64)
+    blend = np.asarray(getattr(material, "thin_film_blend", BLEND_NM), np.float64)
+    return np.stack(np.broadcast_arrays(thickness, ior, metal, blend), axis=-1)
+
+
+def has_film(film) -> np.ndarray:
+    """Where the film is on (thicker than Cycles' THINFILM_THICKNESS_CUTOFF)."""
+    return np.asarray(film)[..., 0] > THICKNESS_CUTOFF
+
+
+def dielectric(film, eta, f0_tinted, cos_i):
+    """``dielectric_fresnel`` for MaterialData's ``film`` (thin_film.glsl's F_ThinFilmTinted)."""
+    film = np.asarray(film, np.float64)
+    return dielectric_fresnel(cos_i, film[..., 0], film[..., 1], eta, f0_tinted, engine_table(), film[..., 3])
+
+
+def metal(film, f0, b, cos_i):
+    """``iridescence_metal`` for MaterialData's ``film`` (thin_film.glsl's F_ThinFilmMetal)."""
+    film = np.asarray(film, np.float64)
+    return iridescence_metal(cos_i, film[..., 0], film[..., 1], f0, b, engine_table(), film[..., 3])
+
+
+def on_metal(film) -> np.ndarray:
+    """thin_film.glsl's thin_film_on_metal: a film the running Blender puts over the metal too."""
+    return has_film(film) & (np.asarray(film)[..., 2] > 0.5)

@@ -1,0 +1,225 @@
+/* The Principled BSDF's Thin Film (SL_THIN_FILM): the iridescent Fresnel of a film of thickness d (nm)
+ * and IOR n2 over the dielectric or the metallic base, as Cycles 5.0 evaluates it (kernel/closure/
+ * bsdf_util.h's fresnel_iridescence, bsdf_microfacet.h's microfacet_fresnel), after Belcour & Barla
+ * 2017, "A Practical Extension to Microfacet Theory for the Modeling of Varying Iridescence": the
+ * Airy series of the film's reflections, its mean in closed form and its terms m = 1..3 through the
+ * Fourier transform of the colour matching functions at m times the optical path difference
+ * (thin_film_table: 512 x 2 texels, row 0 its real part, row 1 its imaginary part, rgb, for
+ * x = 2 pi D / 60 um = i / 511; addon/reference/thin_film.py's sensitivity_table), per
+ * polarisation, averaged. Twin: addon/reference/thin_film.py. */
+
+#ifdef SL_THIN_FILM
+
+/* The sensitivity at path difference D (nm), linear between the table's entries and clamped at its
+ * ends, as Cycles' lookup_table_read: its real part in re, imaginary part in im. */
+void thin_film_sensitivity(float opd, out vec3 re, out vec3 im)
+{
+  float x = clamp(2.0 * PI * opd / 60000.0, 0.0, 1.0) * 511.0;
+  int i = min(int(x), 511);
+  int j = min(i + 1, 511);
+  float t = x - float(i);
+  re = mix(texelFetch(thin_film_table, ivec2(i, 0), 0).rgb, texelFetch(thin_film_table, ivec2(j, 0), 0).rgb, t);
+  im = mix(texelFetch(thin_film_table, ivec2(i, 1), 0).rgb, texelFetch(thin_film_table, ivec2(j, 1), 0).rgb, t);
+}
+
+/* An interface of relative IOR eta lit at cosine |cos_i|: the s- and p-reflectances (R), the refracted
+ * cosine (negative: relative to the normal) and the reflected amplitudes' signs (their phase shift,
+ * 0 or pi), Cycles' fresnel_dielectric_polarized; total internal reflection: R = 1, cos_t = 0, no shift. */
+vec2 fresnel_polarized(float cos_i, float eta, out float cos_t, out vec2 sign_r)
+{
+  cos_i = abs(cos_i);
+  float t2 = eta * eta - (1.0 - cos_i * cos_i);
+  if (t2 <= 0.0) {
+    cos_t = 0.0;
+    sign_r = vec2(1.0);
+    return vec2(1.0);
+  }
+  cos_t = -sqrt(t2) / eta;
+  /* both denominators are positive: cos_i >= 0 > eta cos_t (eta > 0: the IORs are floored at 1e-5) */
+  float r_s = (cos_i + eta * cos_t) / (cos_i - eta * cos_t);
+  float r_p = (cos_t + eta * cos_i) / (eta * cos_i - cos_t);
+  sign_r = vec2(r_s >= 0.0 ? 1.0 : -1.0, r_p >= 0.0 ? 1.0 : -1.0);
+  return vec2(r_s * r_s, r_p * r_p);
+}
+
+/* Cycles' fresnel_f82 and fresnel_f82_B, one channel: Schlick's curve less b cos (1 - cos)^6, and
+ * the b whose curve passes through f82 at cos = 1/7. */
+float F82_scalar(float f0, float b, float cos_i)
+{
+  float s = saturate(1.0 - cos_i);
+  float s5 = pow5(s);
+  return clamp(mix(f0, 1.0, s5) - b * cos_i * s5 * s, 0.0, 1.0);
+}
+
+float F82_b_of(float f0, float f82)
+{
+  const float f = 6.0 / 7.0;
+  float f5 = pow5(f);
+  return (7.0 / (f5 * f)) * (mix(f0, 1.0, f5) - f82);
+}
+
+/* Unit phasor of (re, im); 1 where it vanishes (Cycles'). */
+vec2 unit_phasor(float re, float im)
+{
+  float mag = sqrt(re * re + im * im);
+  return mag == 0.0 ? vec2(1.0, 0.0) : vec2(re, im) / mag;
+}
+
+/* One channel of a metal of IOR n + ik under a film of IOR eta1 at cosine cos_i (> 0), Cycles'
+ * fresnel_conductor_polarized with its F82 model (Born & Wolf 14.4.1 for the phases): the
+ * reflectance of F82 with F0 recomputed against eta1 and the value f82 at cos = 1/7, alike for both
+ * polarisations; the s- and p-phasors (re, im) in phase_s, phase_p. */
+float conductor_polarized(float cos_i, float eta1, float n, float k, float f82, out vec2 phase_s, out vec2 phase_p)
+{
+  float t1 = n * n - k * k - eta1 * eta1 * (1.0 - cos_i * cos_i);
+  float t2 = sqrt(t1 * t1 + 4.0 * n * n * k * k);
+  float u2 = max(0.5 * (t2 + t1), 0.0);
+  float v2 = max(0.5 * (t2 - t1), 0.0);
+  float u = sqrt(u2);
+  float v = sqrt(v2);
+  float nr = n / eta1;
+  float kr2 = (k / eta1) * (k / eta1);
+  float F0 = ((nr - 1.0) * (nr - 1.0) + kr2) / ((nr + 1.0) * (nr + 1.0) + kr2);
+  float ec = eta1 * cos_i;
+  phase_s = unit_phasor(-u2 - v2 + ec * ec, -2.0 * ec * v);
+  float nk2 = (n * n + k * k) * cos_i;
+  phase_p = unit_phasor(nk2 * nk2 - eta1 * eta1 * (u2 + v2), 2.0 * ec * (2.0 * n * k * u - (n * n - k * k) * v));
+  return F82_scalar(F0, F82_b_of(F0, f82), cos_i);
+}
+
+/* The film's reflectance for one polarisation (Belcour & Barla 2017, eq. 10; Cycles'
+ * iridescence_airy_summation): the series' mean R12 + T121^2 R23 / (1 - R12 R23), then m = 1..3,
+ * each C_m times the sensitivity at m D turned by phasor^m (re, im per channel). */
+vec3 thin_film_airy(float R12, vec3 R23, float opd, vec3 phasor_re, vec3 phasor_im)
+{
+  float T121 = 1.0 - R12;
+  vec3 R123 = R12 * R23;
+  vec3 r123 = sqrt(R123);
+  /* R12 R23 < 1 off total internal reflection (returned before): 1e-7, float32's step below 1 */
+  vec3 Rs = T121 * T121 * R23 / max(1.0 - R123, vec3(1e-7));
+  vec3 R = Rs + R12;
+  vec3 Cm = Rs - T121;
+  vec3 acc_re = phasor_re;
+  vec3 acc_im = phasor_im;
+  for (int m = 1; m < 4; m++) {
+    Cm *= r123;
+    vec3 s_re, s_im;
+    thin_film_sensitivity(float(m) * opd, s_re, s_im);
+    R += Cm * 2.0 * (acc_re * s_re + acc_im * s_im);
+    vec3 next_re = acc_re * phasor_re - acc_im * phasor_im;
+    acc_im = acc_re * phasor_im + acc_im * phasor_re;
+    acc_re = next_re;
+  }
+  return R;
+}
+
+/* The film's IOR: below `blend` nm it blends towards the air's by smoothstep (Cycles 5.0: 1 nm; 4.2
+ * and 4.5: 30 nm), where the wave optics of the Airy summation no longer apply. */
+float thin_film_ior(vec4 film)
+{
+  return film.x < film.w ? mix(1.0, film.y, smoothstep(0.0, film.w, film.x)) : film.y;
+}
+
+/* The iridescent Fresnel over a dielectric of IOR eta (air above; `film` as MaterialData's thin_film:
+ * thickness, IOR, -, blend), Cycles' fresnel_iridescence<float>. */
+vec3 F_ThinFilmDielectric(vec4 film, float eta, float cos_i)
+{
+  float n2 = thin_film_ior(film);
+  float cos2, cos3;
+  vec2 sign12, sign23;
+  vec2 R12 = fresnel_polarized(cos_i, n2, cos2, sign12);
+  vec2 R23 = fresnel_polarized(-cos2, eta / n2, cos3, sign23);
+  if (all(equal(R12, vec2(1.0))) || all(equal(R23, vec2(1.0)))) {
+    return vec3(1.0); /* total internal reflection at either interface */
+  }
+  float opd = -2.0 * n2 * film.x * cos2;
+  vec3 Rs = thin_film_airy(R12.x, vec3(R23.x), opd, vec3(-sign12.x * sign23.x), vec3(0.0));
+  vec3 Rp = thin_film_airy(R12.y, vec3(R23.y), opd, vec3(-sign12.y * sign23.y), vec3(0.0));
+  return clamp(0.5 * (Rs + Rp), 0.0, 1.0);
+}
+
+/* The Principled BSDF's dielectric under the film (Cycles' microfacet_fresnel, generalized Schlick
+ * with a film): the iridescent Fresnel, each channel scaled towards the tinted F0 over the
+ * substrate's own F0 as it nears that F0 from 1; not where the substrate's F0 is below 1e-5 (an IOR of
+ * 1: no tint to carry) or the film reflects everything. */
+vec3 F_ThinFilmTinted(vec4 film, float eta, vec3 f0_tinted, float cos_i)
+{
+  vec3 F = F_ThinFilmDielectric(film, eta, cos_i);
+  float ratio = (eta - 1.0) / (eta + 1.0);
+  float f0 = ratio * ratio;
+  if (f0 <= 1e-5 || all(equal(F, vec3(1.0)))) {
+    return F;
+  }
+  vec3 s = clamp((F - 1.0) / (f0 - 1.0), 0.0, 1.0); /* f0 <= 0.99 (surface.glsl's eta): no division by 0 */
+  return F * mix(vec3(1.0), f0_tinted / f0, s);
+}
+
+/* A metal's complex IOR from its F0 and F82-tint b (Gulbrandsen 2014, "Artist Friendly Metallic
+ * Fresnel": F0 the reflectivity r, at most 0.999, the F82 value g the edge tint), as Cycles'
+ * microfacet_fresnel reads the Principled BSDF's metal under a film; g in `g`. */
+void thin_film_metal_ior(vec3 f0, vec3 b, out vec3 n, out vec3 k, out vec3 g)
+{
+  vec3 r = min(f0, vec3(0.999));
+  g = vec3(F82_scalar(f0.r, b.r, 1.0 / 7.0), F82_scalar(f0.g, b.g, 1.0 / 7.0), F82_scalar(f0.b, b.b, 1.0 / 7.0));
+  vec3 sqrt_r = sqrt(r);
+  n = mix((1.0 + sqrt_r) / (1.0 - sqrt_r), (1.0 - r) / (1.0 + r), g);
+  k = sqrt(max((r * (n + 1.0) * (n + 1.0) - (n - 1.0) * (n - 1.0)) / (1.0 - r), 0.0));
+}
+
+/* The iridescent Fresnel over the Principled BSDF's metal (its IOR n + ik and F82 value g from
+ * thin_film_metal_ior), Cycles' fresnel_iridescence<Spectrum> with F82. */
+vec3 F_ThinFilmMetal(vec4 film, vec3 n, vec3 k, vec3 g, float cos_i)
+{
+  float n2 = thin_film_ior(film);
+  float cos2;
+  vec2 sign12;
+  vec2 R12 = fresnel_polarized(cos_i, n2, cos2, sign12);
+  if (all(equal(R12, vec2(1.0)))) {
+    return vec3(1.0); /* total internal reflection into the film */
+  }
+  vec3 R23;
+  vec2 ps[3], pp[3];
+  for (int c = 0; c < 3; c++) {
+    R23[c] = conductor_polarized(-cos2, n2, n[c], k[c], g[c], ps[c], pp[c]);
+  }
+  float opd = -2.0 * n2 * film.x * cos2;
+  vec3 Rs = thin_film_airy(R12.x, R23, opd, -sign12.x * vec3(ps[0].x, ps[1].x, ps[2].x),
+                           -sign12.x * vec3(ps[0].y, ps[1].y, ps[2].y));
+  vec3 Rp = thin_film_airy(R12.y, R23, opd, -sign12.y * vec3(pp[0].x, pp[1].x, pp[2].x),
+                           -sign12.y * vec3(pp[0].y, pp[1].y, pp[2].y));
+  return clamp(0.5 * (Rs + Rp), 0.0, 1.0);
+}
+
+#endif
+
+#if defined(SL_THIN_FILM) && defined(SL_LAYERS) /* the Principled set's programs */
+/* The film at the view (make_surface, after principled_layers_at): MaterialData's thin_film, the
+ * metal's IOR under it, and what the film makes of the dielectric layer's albedo estimate, which
+ * the base below loses: Cycles' bsdf_microfacet_estimate_albedo has no table for a film and takes
+ * the specular reflection's Fresnel at the view instead, E M F(n.v) (the compensation M as without
+ * the film: Cycles' average Fresnel Fss ignores it). A film of 0.1 nm or less is none (Cycles'
+ * THINFILM_THICKNESS_CUTOFF); a film over an IOR of 1 still reflects (Cycles keeps the lobe). */
+void thin_film_at(inout Surface s, vec4 film)
+{
+  s.thin_film = vec4(max(film.x, 0.0), max(film.y, 1e-5), film.zw); /* IOR floored as Cycles' */
+  if (s.thin_film.x <= 0.1) {
+    return;
+  }
+#  ifdef SL_SPECULAR_TINT
+  vec3 b = s.layers.metal_b;
+#  else
+  const vec3 b = vec3(0.0);
+#  endif
+  thin_film_metal_ior(min(s.base_color, vec3(1.0)), b, s.film_metal_n, s.film_metal_k, s.film_metal_g);
+  float E_mu = max(ms_albedo(s.NoV, s.roughness), 1e-3);
+  s.layers.albedo = E_mu * s.layers.dielectric_M * F_ThinFilmTinted(s.thin_film, s.eta, s.layers.dielectric_f0, s.NoV);
+  s.layers.layer = max(s.layers.albedo.r, max(s.layers.albedo.g, s.layers.albedo.b));
+}
+
+/* The metal's Fresnel under the film where the running Blender puts it there (film.z: Cycles 5.0
+ * does, 4.2 and 4.5 leave the metal bare). */
+bool thin_film_on_metal(Surface s)
+{
+  return s.thin_film.x > 0.1 && s.thin_film.z > 0.5;
+}
+#endif
