@@ -143,6 +143,7 @@ void apply_closure_lobes(inout MaterialData m, ClosureLobes l, float inv)
   m.coat_normal = vec4(l.coat_normal * coat_inv, 0.0);
   float sheen_inv = l.sheen_weight > 1e-8 ? 1.0 / l.sheen_weight : 0.0;
   m.sheen = vec4(l.sheen * inv, l.sheen_roughness * sheen_inv);
+  m.anisotropy = vec4(l.tangent * inv, l.stretch * inv);
 }
 
 /* The Surface closure as the models read it: its BSDFs' mean inputs replace the material's values

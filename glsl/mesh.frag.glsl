@@ -212,6 +212,9 @@ MaterialData load_material(int row)
 #ifdef SL_SHEEN
   m.sheen = texelFetch(material_table, ivec2(12, row), 0);
 #endif
+#ifdef SL_ANISOTROPY
+  m.anisotropy = vec4(0.0, 0.0, 0.0, 1.0); /* isotropic: an anisotropic lobe compiles a graph */
+#endif
   return m;
 }
 #endif

@@ -72,6 +72,8 @@ struct MaterialData {
   vec4 coat_tint;        /* rgb: Coat Tint (the base's colour through the coat at normal incidence) */
   vec4 sheen;            /* rgb: Sheen Weight x Sheen Tint; w: Sheen Roughness */
   vec4 coat_normal;      /* xyz: the coat's normal where a node graph gives it one (0: the surface's) */
+  vec4 anisotropy;       /* xyz: the anisotropic lobe's tangent (world space, any length; 0: none);
+                          * w: its roughness stretch k (glsl/anisotropy.glsl; 1: isotropic) */
 };
 
 /* The world's light, precomputed (glsl/ibl.glsl, addon/reference/environment.py): nine SH coefficients
