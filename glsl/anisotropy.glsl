@@ -74,7 +74,13 @@ float Lambda_GGXAnisotropic(AnisotropicLobe a, vec3 n, vec3 w)
  * the surface's (floored at MIN_COS), n.l > 0 (shade_direct returns before). */
 float V_SmithGGXCorrelatedAnisotropic(AnisotropicLobe a, vec3 n, vec3 v, float NoV, vec3 l, float NoL)
 {
-  float lv = length(vec3(a.alpha_x * dot(v, a.x), a.alpha_y * dot(v, a.y), NoV));
+  vec2 vt = vec2(dot(v, a.x), dot(v, a.y));
+  float t2 = dot(vt, vt);
+  /* v at or below the horizon (its n.v floored): its part along the surface as the floored
+   * cosine's, |vt|^2 = 1 - n.v^2, as the round lobe's Lambda(n.v) takes it (2 % apart at n.v = -0.2
+   * otherwise); a no-op above it */
+  vt *= t2 > 0.0 ? sqrt(max(1.0 - NoV * NoV, 0.0) / t2) : 0.0;
+  float lv = length(vec3(a.alpha_x * vt.x, a.alpha_y * vt.y, NoV));
   float ll = length(vec3(a.alpha_x * dot(l, a.x), a.alpha_y * dot(l, a.y), NoL));
   return 0.5 / (NoL * lv + NoV * ll);
 }

@@ -106,6 +106,9 @@ MEASURED = {"sphere-0.5": (1.09e-3, 3.95e-3), "sphere-1-rotated": (1.70e-3, 9.0e
             "radial-x": (1.32e-3, 6.07e-3), "plane-radial": (9.53e-4, 7.45e-3), "plane-uv": (4.5e-5, 2.89e-4),
             "glossy-negative": (1.75e-3, 7.92e-3), "glossy-positive": (1.01e-3, 7.25e-3),
             "metallic": (1.37e-3, 6.06e-3)}
+if bpy.app.version < (5, 0, 0):  # Blender 4.x's Cycles draws the pixel at the pole, where the radial
+    # tangent vanishes, otherwise (3.7 of 103 apart from 5.0's; every other pixel alike): bpy 4.5.15
+    MEASURED["sphere-1-rotated"] = (7.65e-3, 9.0e-3)
 
 
 def _anisotropic_nodes():

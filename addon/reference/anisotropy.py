@@ -87,7 +87,10 @@ def V(v, l, n, x, y, alpha_x, alpha_y, NoV=None):
     floored as the surface floors it, where given)."""
     NoV = _dot(v, n) if NoV is None else NoV
     NoL = _dot(l, n)
-    lv = np.sqrt((alpha_x * _dot(v, x)) ** 2 + (alpha_y * _dot(v, y)) ** 2 + NoV ** 2)
+    vx, vy = _dot(v, x), _dot(v, y)
+    t2 = vx * vx + vy * vy  # v's part along the surface as the floored n.v's (below the horizon)
+    scale = np.where(t2 > 0.0, np.sqrt(np.maximum(1.0 - NoV * NoV, 0.0) / np.maximum(t2, 1e-300)), 0.0)
+    lv = np.sqrt((alpha_x * vx * scale) ** 2 + (alpha_y * vy * scale) ** 2 + NoV ** 2)
     ll = np.sqrt((alpha_x * _dot(l, x)) ** 2 + (alpha_y * _dot(l, y)) ** 2 + NoL ** 2)
     return 0.5 / (NoL * lv + NoV * ll)
 
