@@ -146,6 +146,7 @@ void apply_closure_lobes(inout MaterialData m, ClosureLobes l, float inv)
   /* the film's IOR its mean over the closures that have a film; its z, w as the material's */
   float film_inv = l.thin_film > 1e-8 ? 1.0 / l.thin_film : 0.0;
   m.thin_film = vec4(l.thin_film * inv, l.thin_film_ior * film_inv, m.thin_film.zw);
+  m.anisotropy = vec4(l.tangent * inv, l.stretch * inv);
 }
 
 /* The Surface closure as the models read it: its BSDFs' mean inputs replace the material's values

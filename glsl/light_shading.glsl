@@ -131,8 +131,16 @@ vec3 shade_light_surface(Surface s, LightData light, vec3 l, vec3 E, float visib
 #    endif
     Surface wide = s;
     float wide_weight, point_weight;
-    vec3 l_specular = sphere_light_specular(light, s.p, reflect(-s.v, s.n), s.alpha, wide.alpha,
+#    ifdef SL_ANISOTROPY
+    vec3 r_specular = anisotropic_reflection(s); /* the stretched lobe's stand-in (anisotropy.glsl) */
+#    else
+    vec3 r_specular = reflect(-s.v, s.n);
+#    endif
+    vec3 l_specular = sphere_light_specular(light, s.p, r_specular, s.alpha, wide.alpha,
                                             wide_weight, point_weight);
+#    ifdef SL_ANISOTROPY
+    wide.aniso = anisotropic_widened(s.aniso, s.alpha, wide.alpha);
+#    endif
     vec4 specular = factors * vec4(0.0, 1.0, 1.0, 1.0);
     vec3 c_point = shade_direct(s, l, E, factors * vec4(1.0, 0.0, 1.0, 1.0)) +
                    shade_direct(wide, l, E * wide_weight, specular) +

@@ -215,6 +215,9 @@ MaterialData load_material(int row)
 #ifdef SL_THIN_FILM
   m.thin_film = texelFetch(material_table, ivec2(14, row), 0);
 #endif
+#ifdef SL_ANISOTROPY
+  m.anisotropy = vec4(0.0, 0.0, 0.0, 1.0); /* isotropic: an anisotropic lobe compiles a graph */
+#endif
   return m;
 }
 #endif

@@ -29,7 +29,11 @@ float pbr_lobe(Surface s, vec3 l)
   float NoH = saturate(dot(s.n, h));
   vec3 NxH = cross(s.n, h);
   float LoH = saturate(dot(l, h));
+#ifdef SL_PRINCIPLED
+  return principled_DV(s, l, h, NoL, NoH, dot(NxH, NxH)) * NoL;
+#else
   return pbr_distribution(NoH, dot(NxH, NxH), s.alpha) * pbr_visibility(s.NoV, NoL, NoH, LoH, s.alpha) * NoL;
+#endif
 }
 
 vec3 shade_direct(Surface s, vec3 l, vec3 E, vec4 factors)
@@ -44,7 +48,7 @@ vec3 shade_direct(Surface s, vec3 l, vec3 E, vec4 factors)
   float LoH = saturate(dot(l, h));
   float LoV = dot(l, s.v);
 #ifdef SL_PRINCIPLED
-  return principled_direct(s, NoL, NoH, dot(NxH, NxH), LoH, E, factors);
+  return principled_direct(s, l, h, NoL, NoH, dot(NxH, NxH), LoH, E, factors);
 #endif
   vec3 F = pbr_fresnel(s, LoH);
   float D = pbr_distribution(NoH, dot(NxH, NxH), s.alpha);
@@ -135,10 +139,16 @@ vec3 env_sampled_specular(Surface s)
 vec3 shade_environment_surface(Surface s, vec2 weights)
 {
   vec2 EB = env_split_sum(s.NoV, s.roughness);
-  vec3 r = reflect(-s.v, s.n);
+#  ifdef SL_ANISOTROPY
+  /* an anisotropic lobe's stand-in: the isotropic lobe about its bent normal (anisotropy.glsl) */
+  vec3 n_r = anisotropic_bent_normal(s.aniso, s.n, s.v, s.roughness);
+#  else
+  vec3 n_r = s.n;
+#  endif
+  vec3 r = reflect(-s.v, n_r);
   float ao = env_occlusion_diffuse();
   float specular_ao = env_occlusion_specular(s.n, r, s.alpha);
-  vec3 radiance = env_prefiltered(s.roughness > MIN_PERCEPTUAL_ROUGHNESS ? env_dominant_direction(s.n, r, s.alpha) : r,
+  vec3 radiance = env_prefiltered(s.roughness > MIN_PERCEPTUAL_ROUGHNESS ? env_dominant_direction(n_r, r, s.alpha) : r,
                                   s.roughness) * specular_ao;
   vec3 irradiance = env_irradiance(env_bent_normal(s.n)) * ao;
 #  ifdef SL_PRINCIPLED

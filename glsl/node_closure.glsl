@@ -22,18 +22,22 @@ struct ClosureLobes {
   float sheen_roughness; /* times that */
   float thin_film;       /* Thin Film Thickness (nm) */
   float thin_film_ior;   /* Thin Film IOR times the thickness */
+  vec3 tangent;          /* the anisotropic lobe's tangent (unit, node_anisotropy.glsl; 0: none) */
+  float stretch;         /* its roughness stretch k (alpha_x = alpha k, alpha_y = alpha / k; 1: none) */
 };
 
 ClosureLobes lobes_none()
 {
-  return ClosureLobes(vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0.0, 0.0, 0.0);
+  return ClosureLobes(vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0.0, 0.0, 0.0,
+                      vec3(0.0), 0.0);
 }
 
-/* A BSDF's own lobes of weight 1: a white Specular Tint, no coat, no sheen. */
+/* A BSDF's own lobes of weight 1: a white Specular Tint, no coat, no sheen, isotropic. */
 ClosureLobes lobes_base()
 {
   ClosureLobes l = lobes_none();
   l.specular_tint = vec3(1.0);
+  l.stretch = 1.0;
   return l;
 }
 
@@ -41,7 +45,7 @@ ClosureLobes lobes_scale(ClosureLobes l, float w)
 {
   return ClosureLobes(l.specular_tint * w, l.coat * w, l.coat_roughness * w, l.coat_ior * w, l.coat_tint * w,
                       l.coat_normal * w, l.sheen * w, l.sheen_weight * w, l.sheen_roughness * w,
-                      l.thin_film * w, l.thin_film_ior * w);
+                      l.thin_film * w, l.thin_film_ior * w, l.tangent * w, l.stretch * w);
 }
 
 ClosureLobes lobes_add(ClosureLobes a, ClosureLobes b)
@@ -49,7 +53,8 @@ ClosureLobes lobes_add(ClosureLobes a, ClosureLobes b)
   return ClosureLobes(a.specular_tint + b.specular_tint, a.coat + b.coat, a.coat_roughness + b.coat_roughness,
                       a.coat_ior + b.coat_ior, a.coat_tint + b.coat_tint, a.coat_normal + b.coat_normal,
                       a.sheen + b.sheen, a.sheen_weight + b.sheen_weight, a.sheen_roughness + b.sheen_roughness,
-                      a.thin_film + b.thin_film, a.thin_film_ior + b.thin_film_ior);
+                      a.thin_film + b.thin_film, a.thin_film_ior + b.thin_film_ior, a.tangent + b.tangent,
+                      a.stretch + b.stretch);
 }
 
 struct Closure {

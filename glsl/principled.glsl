@@ -186,6 +186,9 @@ Surface coat_surface(Surface s)
 #  ifdef SL_THIN_FILM
   c.thin_film.x = 0.0; /* the film lies on the base, under the coat */
 #  endif
+#  ifdef SL_ANISOTROPY
+  c.aniso = anisotropic_none(c.n, c.alpha); /* Cycles' coat is isotropic */
+#  endif
   return c;
 }
 #endif
@@ -218,12 +221,22 @@ vec3 principled_specular_tint(Surface s, float LoH)
   return s.metalness * metal + (1.0 - s.metalness) * dielectric;
 }
 
-vec3 principled_direct(Surface s, float NoL, float NoH, float NxH2, float LoH, vec3 E, vec4 factors)
+/* The Principled set's D V towards l (half vector h): GGX and Smith height-correlated, anisotropic
+ * where the program draws an anisotropic lobe (anisotropy.glsl). */
+float principled_DV(Surface s, vec3 l, vec3 h, float NoL, float NoH, float NxH2)
 {
-  float D = D_GGX(NoH, NxH2, s.alpha);
-  float V = V_SmithGGXCorrelated(s.NoV, NoL, s.alpha);
+#ifdef SL_ANISOTROPY
+  return anisotropic_DV(s.aniso, s.n, s.v, s.NoV, l, NoL, h);
+#else
+  return D_GGX(NoH, NxH2, s.alpha) * V_SmithGGXCorrelated(s.NoV, NoL, s.alpha);
+#endif
+}
+
+vec3 principled_direct(Surface s, vec3 l, vec3 h, float NoL, float NoH, float NxH2, float LoH, vec3 E,
+                       vec4 factors)
+{
   PrincipledLayers p = principled_layers(s);
-  vec3 specular = principled_specular_tint(s, LoH) * (D * V);
+  vec3 specular = principled_specular_tint(s, LoH) * principled_DV(s, l, h, NoL, NoH, NxH2);
   vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) * INV_PI;
   return (diffuse * factors.x + specular * factors.y) * E * NoL;
 }

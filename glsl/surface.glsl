@@ -67,6 +67,19 @@ SheenLobe sheen_at(vec3 n, vec3 v, float roughness, vec3 color);
 float ltc_density(vec4 m, vec3 w, float floor_cosine);
 #endif
 
+#ifdef SL_ANISOTROPY
+/* The anisotropic GGX lobe at the shading point (anisotropy.glsl's anisotropic_lobe): its frame
+ * (x along the tangent, y = n x x) and its roughness along each axis, made once per shading point. */
+struct AnisotropicLobe {
+  vec3 x;
+  vec3 y;
+  float alpha_x;
+  float alpha_y;
+};
+AnisotropicLobe anisotropic_lobe(vec3 n, vec3 t, float alpha, float stretch);
+float anisotropic_roughness(AnisotropicLobe a);
+#endif
+
 #ifdef SL_MULTISCATTER
 /* The specular lobe's multiple-scattering compensation (multiscatter.glsl): it depends on the view
  * only, so make_surface computes it once per shading point, not once per light. */
@@ -125,6 +138,9 @@ struct Surface {
   vec3 film_metal_k;
   vec3 film_metal_g;
 #endif
+#ifdef SL_ANISOTROPY
+  AnisotropicLobe aniso; /* the specular lobes' anisotropic GGX (roughness, alpha: its isotropic stand-in's) */
+#endif
 };
 #if defined(SL_THIN_FILM) && defined(SL_LAYERS)
 void thin_film_at(inout Surface s, vec4 film);
@@ -154,6 +170,14 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
   s.ambient_color = m.ambient_color.rgb;
   s.roughness = max(m.params.x, MIN_PERCEPTUAL_ROUGHNESS);
   s.alpha = s.roughness * s.roughness;
+#ifdef SL_ANISOTROPY
+  s.aniso = anisotropic_lobe(n, m.anisotropy.xyz, s.alpha, m.anisotropy.w);
+  /* what stands in for it isotropically (the layers' estimate and compensation, area lights' LTC,
+   * the world's split sum) takes its (alpha_x alpha_y)^(1/4), as Cycles' compensation does: the
+   * roughness itself, unless an axis was clamped at 1 */
+  s.roughness = max(anisotropic_roughness(s.aniso), MIN_PERCEPTUAL_ROUGHNESS);
+  s.alpha = s.roughness * s.roughness;
+#endif
   s.metalness = m.params.y;
   s.shininess = m.params.z;
   s.f0_dielectric = m.params.w;

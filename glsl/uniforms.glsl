@@ -74,6 +74,8 @@ struct MaterialData {
   vec4 coat_normal;      /* xyz: the coat's normal where a node graph gives it one (0: the surface's) */
   vec4 thin_film;        /* x: Thin Film Thickness (nm), y: Thin Film IOR, z: 1 if the film covers the
                           * metal too, w: the thickness below which its IOR blends to 1 (SL_THIN_FILM) */
+  vec4 anisotropy;       /* xyz: the anisotropic lobe's tangent (world space, any length; 0: none);
+                          * w: its roughness stretch k (glsl/anisotropy.glsl; 1: isotropic) */
 };
 
 /* The world's light, precomputed (glsl/ibl.glsl, addon/reference/environment.py): nine SH coefficients

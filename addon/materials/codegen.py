@@ -74,6 +74,7 @@ OPTIONAL_LIBRARY += ("node_float.glsl", "node_tex_gradient.glsl", "node_tex_chec
                      "node_tex_magic.glsl", "node_tex_brick.glsl", "node_tex_radial_tiling.glsl")
 OPTIONAL_LIBRARY += ("node_tex_voronoi.glsl",)  # after node_hash.glsl, whose hashes it calls
 OPTIONAL_LIBRARY += ("node_tex_noise.glsl", "node_tex_wave.glsl")  # Noise; Wave (calls Noise's fBM)
+OPTIONAL_LIBRARY += ("node_anisotropy.glsl",)  # an anisotropic BSDF's stretch and tangent
 #: Node kinds drawn from a bake even where an emitter compiles them (empty: none). Tests and the
 #: benchmark set it to compare a node's bake with its compiled code and with Cycles.
 FORCE_BAKE: frozenset[str] = frozenset()
@@ -806,7 +807,50 @@ def _principled(w: _Writer, node: FlatNode) -> dict:
     n = _normal_input(w, node)
     coat = node.inputs.get("Coat Normal")
     coat_n = w.arg(node, "Coat Normal") if coat is not None and isinstance(coat.source, Ref) else n
-    return {"BSDF": f"closure_principled({', '.join(args)}, {n}, {coat_n})"}
+    return {"BSDF": _anisotropic(w, node, f"closure_principled({', '.join(args)}, {n}, {coat_n})")}
+
+
+#: The anisotropic BSDFs' inputs (glsl/node_anisotropy.glsl), by node kind: the amount's socket, the
+#: rotation's, the GLSL function of the lobe's stretch, and the amount's threshold (Cycles'
+#: svm_node_closure_bsdf: the Principled and Metallic BSDFs' saturated amount above 0, the Glossy
+#: BSDF's |Anisotropy| above 1e-4; the Principled BSDF's tangent only from 1e-5, CLOSURE_WEIGHT_CUTOFF).
+ANISOTROPIC = {"ShaderNodeBsdfPrincipled": ("Anisotropic", "Anisotropic Rotation",
+                                            "principled_anisotropic_stretch", lambda a: a >= 1e-5),
+               "ShaderNodeBsdfMetallic": ("Anisotropy", "Rotation", "principled_anisotropic_stretch",
+                                          lambda a: a > 0.0),
+               "ShaderNodeBsdfGlossy": ("Anisotropy", "Rotation", "glossy_anisotropic_stretch",
+                                        lambda a: abs(a) > 1e-4)}
+ANISOTROPIC["ShaderNodeBsdfAnisotropic"] = ANISOTROPIC["ShaderNodeBsdfGlossy"]  # the Glossy BSDF's own name
+
+
+def anisotropic(node: FlatNode) -> bool:
+    """Whether the BSDF ``node`` can draw an anisotropic lobe: its amount linked (per fragment: on),
+    or its value past Cycles' threshold (``ANISOTROPIC``)."""
+    spec = ANISOTROPIC.get(node.kind)
+    amount = node.inputs.get(spec[0]) if spec is not None else None
+    if amount is None:
+        return False
+    if not isinstance(amount.source, Const):
+        return True
+    value = amount.source.value
+    return value is not None and spec[3](float(value))
+
+
+def _anisotropic(w: _Writer, node: FlatNode, closure: str) -> str:
+    """The BSDF's ``closure`` made anisotropic where it can be (``anisotropic``): its stretch, Tangent
+    (where nothing is linked to it the Geometry node's, radial about Generated's Z, as Cycles links
+    LINK_TANGENT sockets) and Rotation about its normal. Isotropic BSDFs compile without them (and
+    without Generated); turning the amount on or off changes the source, as it changes the program's
+    lobes (SL_ANISOTROPY) too."""
+    if not anisotropic(node):
+        return closure
+    amount, rotation, stretch, _ = ANISOTROPIC[node.kind]
+    tangent = node.inputs.get("Tangent")
+    t = w.arg(node, "Tangent") if tangent is not None and isinstance(tangent.source, Ref) \
+        else "node_tangent_radial_z(g)"
+    turn = w.arg(node, rotation) if rotation in node.inputs else w.constant(0.0, "VALUE")
+    n = _normal_input(w, node)
+    return f"closure_anisotropic({closure}, {stretch}({w.arg(node, amount)}), {t}, {turn}, {n})"
 
 
 def _closure_color(w: _Writer, node: FlatNode) -> str:
@@ -830,9 +874,10 @@ def _unknown_closure(w: _Writer, node: FlatNode) -> dict:
 
 
 def _glossy(w: _Writer, node: FlatNode) -> dict:
-    """Glossy, Anisotropic and Metallic BSDFs: a metal of their colour and roughness."""
-    return {"BSDF": f"closure_glossy({_closure_color(w, node)}, {_closure_roughness(w, node)}, "
-                    f"{_normal_input(w, node)})"}
+    """Glossy, Anisotropic and Metallic BSDFs: a metal of their colour and roughness, anisotropic
+    where they are (``_anisotropic``)."""
+    return {"BSDF": _anisotropic(w, node, f"closure_glossy({_closure_color(w, node)}, "
+                                          f"{_closure_roughness(w, node)}, {_normal_input(w, node)})")}
 
 
 CLOSURES = {

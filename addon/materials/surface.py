@@ -130,10 +130,10 @@ def _plain(flat: FlatGraph) -> bool:
     if surface is None or isinstance(surface.source, Const):
         return True
     node = flat.nodes[surface.source.node]
-    # (a Holdout: the constant path has no alpha to cut)
+    # (a Holdout: the constant path has no alpha to cut; an anisotropic BSDF: its tangent is per fragment)
     return node.kind in codegen.CLOSURES and node.kind not in ("ShaderNodeMixShader", "ShaderNodeAddShader",
                                                                 "ShaderNodeHoldout") \
-        and all(isinstance(i.source, Const) for i in node.inputs.values())
+        and all(isinstance(i.source, Const) for i in node.inputs.values()) and not codegen.anisotropic(node)
 
 
 def _transparent(flat: FlatGraph) -> bool:
@@ -252,9 +252,12 @@ def _compiled(flat: FlatGraph, targets: dict, function: str, whole: FlatGraph,
 
 def _lobes(flat: FlatGraph) -> frozenset[str]:
     """The lobes (``snapshot.LOBES``) the graph's Principled BSDFs can draw: each whose inputs turn
-    it on (``snapshot.lobes_of``), a linked input taken as on (its value is per fragment)."""
+    it on (``snapshot.lobes_of``), a linked input taken as on (its value is per fragment); and an
+    anisotropic lobe of any BSDF that has one (``codegen.anisotropic``)."""
     out = set()
     for node in flat.nodes.values():
+        if codegen.anisotropic(node):  # a Principled, Glossy or Metallic BSDF's anisotropic lobe
+            out.add("ANISOTROPY")
         if node.kind != "ShaderNodeBsdfPrincipled":
             continue
         values = {}
@@ -398,14 +401,18 @@ def _textured(flat: FlatGraph) -> dict:
 LOBE_INPUTS = {"SPECULAR_TINT": ("Specular Tint",),
                "COAT": ("Coat Weight", "Coat Roughness", "Coat IOR", "Coat Tint", "Coat Normal"),
                "SHEEN": ("Sheen Weight", "Sheen Roughness", "Sheen Tint"),
-               "THIN_FILM": ("Thin Film Thickness", "Thin Film IOR")}
+               "THIN_FILM": ("Thin Film Thickness", "Thin Film IOR"),
+               "ANISOTROPY": ("Anisotropic", "Anisotropic Rotation", "Tangent")}
+#: The Glossy and Metallic BSDFs' anisotropic inputs (``codegen.ANISOTROPIC``)
+ANISOTROPIC_INPUTS = {"Anisotropy", "Rotation", "Tangent"}
 #: What of each closure the shading models read (the rest is drawn as nothing: Principled BSDF's
 #: coat, sheen, transmission ...).
 READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_BASE_INPUTS) | {"Normal"}
                | {socket for lobe in LOBES for socket in LOBE_INPUTS[lobe]},
                "ShaderNodeBsdfDiffuse": {"Color", "Normal"},
-               "ShaderNodeBsdfGlossy": {"Color", "Roughness", "Normal"},
-               "ShaderNodeBsdfMetallic": {"Base Color", "Roughness", "Normal"}}
+               "ShaderNodeBsdfGlossy": {"Color", "Roughness", "Normal"} | ANISOTROPIC_INPUTS,
+               "ShaderNodeBsdfMetallic": {"Base Color", "Roughness", "Normal"} | ANISOTROPIC_INPUTS}
+READ_INPUTS["ShaderNodeBsdfAnisotropic"] = READ_INPUTS["ShaderNodeBsdfGlossy"]  # the Glossy BSDF's own name
 
 
 def _unread(flat: FlatGraph) -> list[str]:

@@ -90,7 +90,16 @@ MISSING = {
 }
 #: The Principled BSDF's lobes (``snapshot.LOBES``), which the Principled set alone draws, named for
 #: "why".
-LOBE_LABELS = {"SPECULAR_TINT": "specular tint", "COAT": "coat", "SHEEN": "sheen", "THIN_FILM": "thin film"}
+LOBE_LABELS = {"SPECULAR_TINT": "specular tint", "COAT": "coat", "SHEEN": "sheen", "THIN_FILM": "thin film",
+               "ANISOTROPY": "anisotropy"}
+#: The lobes the prediction's twin does not draw: a material with one takes the Principled set, which
+#: alone draws it, unpredicted (its why names the lobe).
+UNPREDICTED_LOBES = ("ANISOTROPY",)
+
+
+def unpredicted_lobes(material: MaterialParams) -> tuple[str, ...]:
+    """The labels of ``material``'s lobes in ``UNPREDICTED_LOBES``."""
+    return tuple(LOBE_LABELS[lobe] for lobe in UNPREDICTED_LOBES if lobe in material.lobes)
 COSTS_FILE = Path(__file__).with_name("term_costs.json")
 #: Where a scene samples an image world's specular (World Specular: Sampled), the world joins the
 #: candidates: each term set with the split sum instead, named with this suffix, cheaper than
@@ -849,14 +858,16 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
         return alone, allowed, merge_small_savings(alone, allowed, {k: e.share for k, e in found.items()},
                                                    programs_of, fixed, frame_ms, first_use, payback)
 
-    predicted_keys = {key for key, e in found.items() if e.count and reach[key] * payback >= first_use}
-    small = {key for key, e in found.items() if e.count and key not in predicted_keys}
+    unpredicted = {key for key in found if unpredicted_lobes(snapshot.materials[key])}  # Principled, said
+    predicted_keys = {key for key, e in found.items() if e.count and reach[key] * payback >= first_use
+                      and key not in unpredicted}
+    small = {key for key, e in found.items() if e.count and key not in predicted_keys | unpredicted}
     if sum(reach[key] for key in small) * payback >= first_use:
         predicted_keys |= small  # together they might repay a program
     alone, _allowed, chosen = choices(predicted_keys)
     in_use = fixed | {programs_of(key, name) for key, name in chosen.items() if found[key].count}
-    joinable = {key for key, e in found.items() if e.count and key not in predicted_keys and any(
-        programs_of(key, n) in in_use for n in order if n != "PRINCIPLED")}
+    joinable = {key for key, e in found.items() if e.count and key not in predicted_keys | unpredicted
+                and any(programs_of(key, n) in in_use for n in order if n != "PRINCIPLED")}
     if joinable:
         predicted_keys |= joinable
         alone, _allowed, chosen = choices(predicted_keys)
@@ -865,6 +876,10 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
         name = chosen[key]
         if entry.count == 0:
             out[key] = Choice(name, candidate_terms(name), 0.0, samples=0)
+        elif key in unpredicted:  # a lobe the Principled set alone draws, beyond the twin's prediction
+            lobes = ", ".join(unpredicted_lobes(snapshot.materials[key]))
+            out[key] = Choice(name, candidate_terms(name), 0.0, lobes, "drawn by the Principled set alone",
+                              samples=entry.count, costs_ms=reach[key])
         elif key not in predicted_keys:  # too small to be worth a program, none cheaper to join
             # (a prediction kept from an earlier choice, with another payback, decided nothing here)
             out[key] = Choice(name, candidate_terms(name), 0.0, samples=entry.count, costs_ms=reach[key])

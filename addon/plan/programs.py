@@ -58,7 +58,8 @@ MODEL_FILES = {
     "PBR": "model_pbr.glsl",
 }
 FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "environment.glsl", "ibl.glsl")
-PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "thin_film.glsl", "principled.glsl", "ltc.glsl")
+PBR_LIBRARY = ("anisotropy.glsl", "multiscatter.glsl", "pbr_terms.glsl", "thin_film.glsl", "principled.glsl",
+               "ltc.glsl")
 #: How the world lights a program: "" not at all (a black world), "UNIFORM" a constant radiance,
 #: "MAP" environment images (glsl/ibl.glsl).
 ENVIRONMENTS = ("", "UNIFORM", "MAP")
@@ -927,6 +928,7 @@ def pack_material(m: MaterialParams) -> bytes:
         [*(m.sheen_weight * c for c in m.sheen_tint), m.sheen_roughness],
         [0.0, 0.0, 0.0, 0.0],  # the coat's normal: the surface's (a node graph's own is per fragment)
         [m.thin_film_thickness, m.thin_film_ior, 1.0 if m.thin_film_metal else 0.0, m.thin_film_blend],
+        [0.0, 0.0, 0.0, 1.0],  # anisotropy: none (an anisotropic BSDF compiles a graph)
     ]
     return np.asarray(rows, np.float32).tobytes()
 

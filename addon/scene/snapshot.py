@@ -189,7 +189,9 @@ class MaterialParams:
 
 #: The Principled BSDF's lobes beyond its base the programs draw, as their defines name them
 #: (SL_<LOBE>).
-LOBES = ("SPECULAR_TINT", "COAT", "SHEEN", "THIN_FILM")
+#: ANISOTROPY: the anisotropic GGX lobe (glsl/anisotropy.glsl) of a Principled, Glossy or Metallic BSDF:
+#: only a compiled graph has one (its tangent is per fragment: ``materials.surface._lobes``).
+LOBES = ("SPECULAR_TINT", "COAT", "SHEEN", "THIN_FILM", "ANISOTROPY")
 
 
 def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint,

@@ -1,0 +1,127 @@
+/* The anisotropic GGX lobe (SL_ANISOTROPY: compiled only into the Principled set's programs whose
+ * materials have an anisotropic Principled, Glossy or Metallic BSDF), as Cycles 5.0 evaluates it
+ * (kernel/closure/bsdf_microfacet.h: bsdf_aniso_D, bsdf_aniso_lambda, the height-correlated
+ * 1 / (1 + Lambda_i + Lambda_o); Heitz 2014, "Understanding the Masking-Shadowing Function in
+ * Microfacet-Based BRDFs", eqs. 85-86 and 72 with alpha_o^2 = alpha_x^2 cos^2 phi +
+ * alpha_y^2 sin^2 phi). The seed's isotropic D (eq. 1.15) and Smith G (eqs. 1.16-1.17) are its
+ * alpha_x = alpha_y case. Its inputs (the stretch k, the rotated tangent) come from
+ * node_anisotropy.glsl; twin: addon/reference/anisotropy.py. */
+
+#ifdef SL_ANISOTROPY
+/* The lobe at a shading point (surface.glsl's AnisotropicLobe) about the unit normal n, from the
+ * tangent t (any length: Cycles' make_orthonormals_tangent, y = normalize(n x t), x = y x n, so the
+ * tangent's part along n drops out), the isotropic lobe's alpha and the stretch k: alpha_x =
+ * alpha k, alpha_y = alpha / k, each at most 1 (bsdf_microfacet_ggx_setup saturates them). A
+ * tangent of no direction across n (zero, or along n: Cycles' frame is NaN there) gives the
+ * isotropic lobe in any frame. */
+AnisotropicLobe anisotropic_lobe(vec3 n, vec3 t, float alpha, float stretch)
+{
+  AnisotropicLobe a;
+  vec3 y = cross(n, t);
+  float y2 = dot(y, y);
+  /* guards the frame: t zero, or within ~1e-3 rad of n (float32's cross product loses the
+   * direction below) */
+  bool framed = y2 > 1e-6 * dot(t, t) && y2 > 1e-30;
+  if (!framed) {
+    vec3 other = abs(n.x) < 0.9 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
+    y = cross(n, other);
+    y2 = dot(y, y);
+  }
+  a.y = y * inversesqrt(y2);
+  a.x = cross(a.y, n);
+  /* k: 1 without a frame; a BSDF-less closure's mean (0) is none either; within the Glossy
+   * BSDF's extremes 1 / 100 .. 100 (its Anisotropy +-0.99) */
+  float k = framed && stretch > 0.0 ? clamp(stretch, 0.01, 100.0) : 1.0;
+  a.alpha_x = min(alpha * k, 1.0);
+  a.alpha_y = min(alpha / k, 1.0);
+  return a;
+}
+
+/* The isotropic lobe of roughness alpha about n (a coat: Cycles' coat is isotropic). */
+AnisotropicLobe anisotropic_none(vec3 n, float alpha)
+{
+  return anisotropic_lobe(n, vec3(0.0), alpha, 1.0);
+}
+
+/* The perceptual roughness the lobe's isotropic approximations and its multiple-scattering
+ * compensation take: (alpha_x alpha_y)^(1/4), as Cycles' microfacet_ggx_preserve_energy and
+ * bsdf_microfacet_estimate_albedo (the isotropic roughness, unless a clamp at 1 shortened an axis). */
+float anisotropic_roughness(AnisotropicLobe a)
+{
+  return sqrt(sqrt(a.alpha_x * a.alpha_y));
+}
+
+/* D(h) for the unit half vector h (Cycles' bsdf_aniso_D): 1 / (pi ax ay (hx^2 / ax^2 + hy^2 / ay^2 +
+ * hz^2)^2). (ax, ay <= 1: the sum is at least |h|^2 = 1, never 0.) */
+float D_GGXAnisotropic(AnisotropicLobe a, vec3 n, vec3 h)
+{
+  vec3 s = vec3(dot(h, a.x) / a.alpha_x, dot(h, a.y) / a.alpha_y, dot(h, n));
+  float d = dot(s, s);
+  return 1.0 / (PI * a.alpha_x * a.alpha_y * d * d);
+}
+
+/* Smith's Lambda towards the unit w (Cycles' bsdf_aniso_lambda): (sqrt(1 + (ax^2 wx^2 + ay^2 wy^2)
+ * / wz^2) - 1) / 2, for w above the surface (wz > 0). */
+float Lambda_GGXAnisotropic(AnisotropicLobe a, vec3 n, vec3 w)
+{
+  vec3 s = vec3(a.alpha_x * dot(w, a.x), a.alpha_y * dot(w, a.y), dot(w, n));
+  return 0.5 * (length(s) / s.z - 1.0);
+}
+
+/* The height-correlated visibility G2 / (4 n.v n.l) = 1 / (4 n.v n.l (1 + Lambda_v + Lambda_l)),
+ * written as Heitz's 0.5 / (n.l |(ax vx, ay vy, n.v)| + n.v |(ax lx, ay ly, n.l)|) (the form
+ * Filament's V_SmithGGXCorrelated_Anisotropic takes: no 1 / n.v to overflow at grazing). n.v is
+ * the surface's (floored at MIN_COS), n.l > 0 (shade_direct returns before). */
+float V_SmithGGXCorrelatedAnisotropic(AnisotropicLobe a, vec3 n, vec3 v, float NoV, vec3 l, float NoL)
+{
+  vec2 vt = vec2(dot(v, a.x), dot(v, a.y));
+  float t2 = dot(vt, vt);
+  /* v at or below the horizon (its n.v floored): its part along the surface as the floored
+   * cosine's, |vt|^2 = 1 - n.v^2, as the round lobe's Lambda(n.v) takes it (2 % apart at n.v = -0.2
+   * otherwise); a no-op above it */
+  vt *= t2 > 0.0 ? sqrt(max(1.0 - NoV * NoV, 0.0) / t2) : 0.0;
+  float lv = length(vec3(a.alpha_x * vt.x, a.alpha_y * vt.y, NoV));
+  float ll = length(vec3(a.alpha_x * dot(l, a.x), a.alpha_y * dot(l, a.y), NoL));
+  return 0.5 / (NoL * lv + NoV * ll);
+}
+
+/* D V of the lobe towards l with half vector h (what principled_direct multiplies by F). */
+float anisotropic_DV(AnisotropicLobe a, vec3 n, vec3 v, float NoV, vec3 l, float NoL, vec3 h)
+{
+  return D_GGXAnisotropic(a, n, h) * V_SmithGGXCorrelatedAnisotropic(a, n, v, NoV, l, NoL);
+}
+
+/* The normal the lobe's isotropic stand-ins reflect about (the world's prefiltered light, a sphere
+ * light's representative point): Filament's bent normal for anisotropic reflections (Filament's
+ * getReflectedVector, after McAuley's and Revie's "bent reflection vector"): the normal leaned, by
+ * the anisotropy |ax - ay| / (ax + ay) times saturate(5 r), towards the one that faces v within
+ * the plane across the lobe's long axis, where a stretched lobe spreads its reflection. */
+vec3 anisotropic_bent_normal(AnisotropicLobe a, vec3 n, vec3 v, float roughness)
+{
+  float anisotropy = (a.alpha_x - a.alpha_y) / (a.alpha_x + a.alpha_y);
+  vec3 across = anisotropy >= 0.0 ? a.y : a.x; /* the short axis: the long one's plane is across it */
+  vec3 facing = v - across * dot(v, across);   /* v within the plane of n and the long axis */
+  float f2 = dot(facing, facing);
+  float bend = abs(anisotropy) * saturate(5.0 * roughness);
+  /* v along the short axis (f2 -> 0): nothing to lean towards */
+  vec3 bent = f2 > 1e-12 ? mix(n, facing * inversesqrt(f2), bend) : n;
+  float b2 = dot(bent, bent);
+  return b2 > 1e-12 ? bent * inversesqrt(b2) : n; /* n and facing opposite at bend 1/2 */
+}
+
+/* The reflection of v about the bent normal. */
+vec3 anisotropic_reflection(Surface s)
+{
+  return reflect(-s.v, anisotropic_bent_normal(s.aniso, s.n, s.v, s.roughness));
+}
+
+/* The lobe of a sphere light's widened stand-in (lights.glsl's size_lobe_weights: alpha_wide^2 =
+ * alpha^2 + theta^2): each axis widened by the disc alike, in quadrature. */
+AnisotropicLobe anisotropic_widened(AnisotropicLobe a, float alpha, float alpha_wide)
+{
+  float theta2 = max(alpha_wide * alpha_wide - alpha * alpha, 0.0);
+  a.alpha_x = min(sqrt(a.alpha_x * a.alpha_x + theta2), 1.0);
+  a.alpha_y = min(sqrt(a.alpha_y * a.alpha_y + theta2), 1.0);
+  return a;
+}
+#endif
