@@ -20,11 +20,15 @@ struct ClosureLobes {
   vec3 sheen;            /* Sheen Weight x Sheen Tint */
   float sheen_weight;    /* its mean over the channels: what Sheen Roughness is weighted by */
   float sheen_roughness; /* times that */
+  vec3 translucent;      /* the Translucent BSDFs' colour (glsl/subsurface.glsl) */
+  float subsurface;      /* Subsurface Weight (the Subsurface Scattering node's: 1) */
+  vec3 subsurface_radius; /* its mean free paths (m, per channel: glsl/subsurface.glsl) times that */
 };
 
 ClosureLobes lobes_none()
 {
-  return ClosureLobes(vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0.0);
+  return ClosureLobes(vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0.0, vec3(0.0), 0.0,
+                      vec3(0.0));
 }
 
 /* A BSDF's own lobes of weight 1: a white Specular Tint, no coat, no sheen. */
@@ -38,14 +42,17 @@ ClosureLobes lobes_base()
 ClosureLobes lobes_scale(ClosureLobes l, float w)
 {
   return ClosureLobes(l.specular_tint * w, l.coat * w, l.coat_roughness * w, l.coat_ior * w, l.coat_tint * w,
-                      l.coat_normal * w, l.sheen * w, l.sheen_weight * w, l.sheen_roughness * w);
+                      l.coat_normal * w, l.sheen * w, l.sheen_weight * w, l.sheen_roughness * w,
+                      l.translucent * w, l.subsurface * w, l.subsurface_radius * w);
 }
 
 ClosureLobes lobes_add(ClosureLobes a, ClosureLobes b)
 {
   return ClosureLobes(a.specular_tint + b.specular_tint, a.coat + b.coat, a.coat_roughness + b.coat_roughness,
                       a.coat_ior + b.coat_ior, a.coat_tint + b.coat_tint, a.coat_normal + b.coat_normal,
-                      a.sheen + b.sheen, a.sheen_weight + b.sheen_weight, a.sheen_roughness + b.sheen_roughness);
+                      a.sheen + b.sheen, a.sheen_weight + b.sheen_weight, a.sheen_roughness + b.sheen_roughness,
+                      a.translucent + b.translucent, a.subsurface + b.subsurface,
+                      a.subsurface_radius + b.subsurface_radius);
 }
 
 struct Closure {
@@ -105,7 +112,8 @@ Closure closure_mix(float fac, Closure a, Closure b)
 Closure closure_principled(vec4 base_color, float metallic, float roughness, float ior, float level,
                            float alpha, vec4 emission_color, float emission_strength, vec4 specular_tint,
                            float coat, float coat_roughness, float coat_ior, vec4 coat_tint, float sheen,
-                           float sheen_roughness, vec4 sheen_tint, vec3 n, vec3 coat_n)
+                           float sheen_roughness, vec4 sheen_tint, vec3 n, vec3 coat_n, float subsurface,
+                           vec3 subsurface_path)
 {
   float r = (max(ior, 1.0) - 1.0) / (max(ior, 1.0) + 1.0);
   Closure c = closure_bsdf(base_color.rgb, metallic, roughness, min(r * r * 2.0 * max(level, 0.0), 1.0), n);
@@ -118,6 +126,8 @@ Closure closure_principled(vec4 base_color, float metallic, float roughness, flo
   c.lobes.sheen = max(sheen, 0.0) * max(sheen_tint.rgb, 0.0);
   c.lobes.sheen_weight = dot(c.lobes.sheen, vec3(1.0 / 3.0));
   c.lobes.sheen_roughness = c.lobes.sheen_weight * clamp(sheen_roughness, 0.0, 1.0);
+  c.lobes.subsurface = clamp(subsurface, 0.0, 1.0);
+  c.lobes.subsurface_radius = c.lobes.subsurface * subsurface_path; /* (node_subsurface.glsl) */
   c.emission = emission_color.rgb * emission_strength;
   float a = clamp(alpha, 0.0, 1.0);
   c = closure_scale(c, a);
@@ -135,6 +145,15 @@ Closure closure_diffuse(vec4 color, vec3 n)
 Closure closure_glossy(vec4 color, float roughness, vec3 n)
 {
   return closure_bsdf(color.rgb, 1.0, roughness, 0.0, n);
+}
+
+/* Translucent BSDF (Cycles' bsdf_translucent: a Lambertian lobe on the far side of the normal):
+ * a BSDF of no reflection, its colour the translucent lobe's (SL_TRANSLUCENT) */
+Closure closure_translucent(vec4 color, vec3 n)
+{
+  Closure c = closure_bsdf(vec3(0.0), 0.0, 1.0, 0.0, n);
+  c.lobes.translucent = max(color.rgb, 0.0);
+  return c;
 }
 
 Closure closure_emission(vec4 color, float strength)

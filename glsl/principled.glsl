@@ -212,6 +212,9 @@ vec3 principled_direct(Surface s, float NoL, float NoH, float NxH2, float LoH, v
   PrincipledLayers p = principled_layers(s);
   vec3 specular = principled_specular_tint(s, LoH) * (D * V);
   vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) * INV_PI;
+#  ifdef SL_SUBSURFACE
+  diffuse *= 1.0 - s.subsurface; /* the rest scatters below the surface (subsurface.glsl) */
+#  endif
   return (diffuse * factors.x + specular * factors.y) * E * NoL;
 }
 

@@ -72,6 +72,9 @@ struct MaterialData {
   vec4 coat_tint;        /* rgb: Coat Tint (the base's colour through the coat at normal incidence) */
   vec4 sheen;            /* rgb: Sheen Weight x Sheen Tint; w: Sheen Roughness */
   vec4 coat_normal;      /* xyz: the coat's normal where a node graph gives it one (0: the surface's) */
+  vec4 translucent;      /* rgb: a node graph's Translucent BSDFs' colour (SL_TRANSLUCENT) */
+  vec4 subsurface;       /* rgb: the subsurface's mean free path per channel (m); w: Subsurface Weight
+                          * (SL_SUBSURFACE, glsl/subsurface.glsl) */
 };
 
 /* The world's light, precomputed (glsl/ibl.glsl, addon/reference/environment.py): nine SH coefficients

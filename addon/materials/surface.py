@@ -130,9 +130,10 @@ def _plain(flat: FlatGraph) -> bool:
     if surface is None or isinstance(surface.source, Const):
         return True
     node = flat.nodes[surface.source.node]
-    # (a Holdout: the constant path has no alpha to cut)
+    # (a Holdout: the constant path has no alpha to cut; Translucent, Subsurface Scattering: nor these
+    # lobes)
     return node.kind in codegen.CLOSURES and node.kind not in ("ShaderNodeMixShader", "ShaderNodeAddShader",
-                                                                "ShaderNodeHoldout") \
+                                                                "ShaderNodeHoldout", *_CLOSURE_LOBES) \
         and all(isinstance(i.source, Const) for i in node.inputs.values())
 
 
@@ -255,22 +256,28 @@ def _lobes(flat: FlatGraph) -> frozenset[str]:
     it on (``snapshot.lobes_of``), a linked input taken as on (its value is per fragment)."""
     out = set()
     for node in flat.nodes.values():
+        out |= _CLOSURE_LOBES.get(node.kind, set())
         if node.kind != "ShaderNodeBsdfPrincipled":
             continue
         values = {}
-        for socket in ("Specular Tint", "Coat Weight", "Sheen Weight", "Sheen Tint"):
+        for socket in ("Specular Tint", "Coat Weight", "Sheen Weight", "Sheen Tint", "Subsurface Weight"):
             spec = node.inputs.get(socket)
             if spec is not None and not isinstance(spec.source, Const):
                 value = {"Specular Tint": (0.0,) * 3, "Coat Weight": 1.0, "Sheen Weight": 1.0,
-                         "Sheen Tint": (1.0,) * 3}[socket]  # linked: on
+                         "Sheen Tint": (1.0,) * 3, "Subsurface Weight": 1.0}[socket]  # linked: on
             elif spec is not None and spec.source.value is not None:
                 value = spec.source.value
             else:
-                value = codegen.PRINCIPLED_DEFAULTS[socket][0]
+                value = codegen.PRINCIPLED_DEFAULTS.get(socket, (0.0,))[0]
             values[socket] = tuple(value)[:3] if isinstance(value, (tuple, list)) else float(value)
         out |= lobes_of(values["Specular Tint"], values["Coat Weight"], values["Sheen Weight"],
-                        values["Sheen Tint"])
+                        values["Sheen Tint"], subsurface_weight=values["Subsurface Weight"])
     return frozenset(out)
+
+
+#: The closure nodes that are a lobe by themselves (``snapshot.LOBES``).
+_CLOSURE_LOBES = {"ShaderNodeBsdfTranslucent": {"TRANSLUCENT"},
+                  "ShaderNodeSubsurfaceScattering": {"SUBSURFACE"}}
 
 
 def compile_material(graph: Graph, groups: dict[str, Graph],
@@ -397,14 +404,18 @@ def _textured(flat: FlatGraph) -> dict:
 #: The Principled BSDF's inputs of each lobe (``snapshot.LOBES``).
 LOBE_INPUTS = {"SPECULAR_TINT": ("Specular Tint",),
                "COAT": ("Coat Weight", "Coat Roughness", "Coat IOR", "Coat Tint", "Coat Normal"),
-               "SHEEN": ("Sheen Weight", "Sheen Roughness", "Sheen Tint")}
+               "SHEEN": ("Sheen Weight", "Sheen Roughness", "Sheen Tint"),
+               "TRANSLUCENT": (),
+               "SUBSURFACE": ("Subsurface Weight", "Subsurface Radius", "Subsurface Scale", "Subsurface IOR")}
 #: What of each closure the shading models read (the rest is drawn as nothing: Principled BSDF's
 #: coat, sheen, transmission ...).
 READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_BASE_INPUTS) | {"Normal"}
                | {socket for lobe in LOBES for socket in LOBE_INPUTS[lobe]},
                "ShaderNodeBsdfDiffuse": {"Color", "Normal"},
                "ShaderNodeBsdfGlossy": {"Color", "Roughness", "Normal"},
-               "ShaderNodeBsdfMetallic": {"Base Color", "Roughness", "Normal"}}
+               "ShaderNodeBsdfMetallic": {"Base Color", "Roughness", "Normal"},
+               "ShaderNodeBsdfTranslucent": {"Color", "Normal"},
+               "ShaderNodeSubsurfaceScattering": {"Color", "Scale", "Radius", "IOR", "Normal"}}
 
 
 def _unread(flat: FlatGraph) -> list[str]:

@@ -169,6 +169,14 @@ class MaterialParams:
     sheen_weight: float = 0.0
     sheen_roughness: float = 0.5
     sheen_tint: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    #: the subsurface (glsl/subsurface.glsl): Subsurface Weight, Radius, Scale, IOR, Anisotropy and the
+    #: method (reference/subsurface.py's METHODS)
+    subsurface_weight: float = 0.0
+    subsurface_radius: tuple[float, float, float] = (1.0, 0.2, 0.1)
+    subsurface_scale: float = 0.05
+    subsurface_ior: float = 1.4
+    subsurface_anisotropy: float = 0.0
+    subsurface_method: str = "RANDOM_WALK"
 
     @property
     def lobes(self) -> frozenset[str]:
@@ -176,23 +184,26 @@ class MaterialParams:
         else those its values turn on (a tint other than white, a weight above 0)."""
         if self.graph is not None:
             return self.graph.lobes
-        return lobes_of(self.specular_tint, self.coat_weight, self.sheen_weight, self.sheen_tint)
+        return lobes_of(self.specular_tint, self.coat_weight, self.sheen_weight, self.sheen_tint,
+                        subsurface_weight=self.subsurface_weight)
 
 
 #: The Principled BSDF's lobes beyond its base the programs draw, as their defines name them
 #: (SL_<LOBE>).
-LOBES = ("SPECULAR_TINT", "COAT", "SHEEN")
+LOBES = ("SPECULAR_TINT", "COAT", "SHEEN", "TRANSLUCENT", "SUBSURFACE")
 
 
-def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint) -> frozenset[str]:
+def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint, subsurface_weight=0.0) -> frozenset[str]:
     """The lobes a Principled BSDF of these inputs draws: a Specular Tint other than white, a Coat
-    Weight above 0, a Sheen Weight and Tint above 0 (Cycles adds no lobe of weight 0: its
-    CLOSURE_WEIGHT_CUTOFF is 1e-5). Scalars here; per-point arrays (the twin's) are any of them."""
+    Weight above 0, a Sheen Weight and Tint above 0, a Subsurface Weight above 0 (Cycles adds no lobe
+    of weight 0: its CLOSURE_WEIGHT_CUTOFF is 1e-5). Scalars here; per-point arrays (the twin's) are
+    any of them. (The translucent lobe is a node graph's: its Translucent BSDF.)"""
     tint = np.asarray(specular_tint, np.float64)
     sheen = np.asarray(sheen_weight, np.float64)[..., None] * np.asarray(sheen_tint, np.float64)
     used = {"SPECULAR_TINT": bool(np.any(tint != 1.0)),
             "COAT": bool(np.any(np.asarray(coat_weight, np.float64) > 1e-5)),
-            "SHEEN": bool(np.any(sheen > 1e-5))}
+            "SHEEN": bool(np.any(sheen > 1e-5)),
+            "SUBSURFACE": bool(np.any(np.asarray(subsurface_weight, np.float64) > 1e-5))}
     return frozenset(name for name in LOBES if used.get(name))
 
 
