@@ -147,6 +147,9 @@ void apply_closure_lobes(inout MaterialData m, ClosureLobes l, float inv)
   float film_inv = l.thin_film > 1e-8 ? 1.0 / l.thin_film : 0.0;
   m.thin_film = vec4(l.thin_film * inv, l.thin_film_ior * film_inv, m.thin_film.zw);
   m.anisotropy = vec4(l.tangent * inv, l.stretch * inv);
+  m.translucent = vec4(l.translucent * inv, 0.0);
+  float subsurface_inv = l.subsurface > 1e-8 ? 1.0 / l.subsurface : 0.0; /* none: its radius does not matter */
+  m.subsurface = vec4(l.subsurface_radius * subsurface_inv, l.subsurface * inv);
 }
 
 /* The Surface closure as the models read it: its BSDFs' mean inputs replace the material's values
@@ -164,6 +167,11 @@ MaterialData apply_closure(MaterialData m, Closure c, inout vec3 n, out float sc
   float inv = c.weight > 1e-8 ? 1.0 / c.weight : 0.0; /* no BSDF: its inputs do not matter (scale 0) */
 #ifndef SL_KEEP_BASE_COLOR
   m.base_color.rgb = c.base_color * inv;
+#  ifndef SL_TRANSLUCENT
+  /* a program without the translucent lobe (another model or term set) draws a Translucent BSDF as a
+   * diffuse of its colour (as unknown closures are) */
+  m.base_color.rgb += c.lobes.translucent * inv;
+#  endif
 #endif
 #ifndef SL_KEEP_METALNESS
   m.params.y = clamp(c.metallic * inv, 0.0, 1.0);

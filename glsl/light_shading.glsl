@@ -175,6 +175,10 @@ vec3 shade_light(Surface s, LightData light, vec3 l, vec3 E, float visibility, v
   vec3 sheen = sheen_direct(s, l) * E * factors.x;
 #  endif
 #endif
+#ifdef SL_SUBSURFACE
+  /* the subsurface's share of the base, at the light's direction (every kind of light as a point) */
+  c += subsurface_direct(s, l) * E * factors.x;
+#endif
 #if defined(SL_COAT) || defined(SL_SHEEN)
   c *= s.below;
 #endif
@@ -184,6 +188,11 @@ vec3 shade_light(Surface s, LightData light, vec3 l, vec3 E, float visibility, v
 #endif
 #ifdef SL_SHEEN
   c += sheen;
+#endif
+#ifdef SL_TRANSLUCENT
+  /* a closure of its own beside the Principled BSDF's layers, lit from behind (every kind of light
+   * as a point) */
+  c += translucent_direct(s.translucent, s.n, l) * E * factors.x;
 #endif
   return c;
 }

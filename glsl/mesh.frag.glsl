@@ -113,6 +113,10 @@ vec3 light_share(Surface s, vec3 ng, LightData light, bool shadowed)
   vec3 l;
   vec3 E = light_irradiance(light, s.p, l);
   bool lit = dot(s.n, l) > 0.0;
+#if defined(SL_TRANSLUCENT) || defined(SL_SUBSURFACE)
+  /* the translucent lobe is lit from behind, the subsurface past the terminator */
+  lit = true;
+#endif
 #ifdef SL_GRAPH_BENT_NORMAL
   /* a normal the node graph bent: Cycles' rules for light from behind the surface, the specular
    * lobe's at its own normal (bent_normal.glsl) */
@@ -218,6 +222,7 @@ MaterialData load_material(int row)
 #ifdef SL_ANISOTROPY
   m.anisotropy = vec4(0.0, 0.0, 0.0, 1.0); /* isotropic: an anisotropic lobe compiles a graph */
 #endif
+  /* (no program with the translucent or the subsurface lobe is shaded deferred: Features) */
   return m;
 }
 #endif
@@ -247,6 +252,9 @@ void main()
   /* screen derivatives and textures (the node graph's) first: they need every fragment of the
    * quad alive */
   vec3 n = shading_normal(world_position);
+#ifdef SL_SUBSURFACE
+  float curvature = subsurface_curvature(n, world_position);
+#endif
 #ifdef SL_SHADOWS
   /* the flat face's normal, for shadow lookups (the receiver's plane) */
   vec3 ng = face_normal(world_position, n);
@@ -285,6 +293,9 @@ void main()
   }
 #endif
   Surface s = make_surface(world_position, outward ? n : -n, v, m);
+#  ifdef SL_SUBSURFACE
+  s.curvature = curvature;
+#  endif
 #  ifdef SL_GRAPH_BENT_NORMAL
   s.smooth_n = smooth_n;
   bent_specular = make_surface(world_position, specular_n, v, m);

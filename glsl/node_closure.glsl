@@ -24,12 +24,15 @@ struct ClosureLobes {
   float thin_film_ior;   /* Thin Film IOR times the thickness */
   vec3 tangent;          /* the anisotropic lobe's tangent (unit, node_anisotropy.glsl; 0: none) */
   float stretch;         /* its roughness stretch k (alpha_x = alpha k, alpha_y = alpha / k; 1: none) */
+  vec3 translucent;      /* the Translucent BSDFs' colour (glsl/subsurface.glsl) */
+  float subsurface;      /* Subsurface Weight (the Subsurface Scattering node's: 1) */
+  vec3 subsurface_radius; /* its mean free paths (m, per channel: glsl/subsurface.glsl) times that */
 };
 
 ClosureLobes lobes_none()
 {
   return ClosureLobes(vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0.0, 0.0, 0.0,
-                      vec3(0.0), 0.0);
+                      vec3(0.0), 0.0, vec3(0.0), 0.0, vec3(0.0));
 }
 
 /* A BSDF's own lobes of weight 1: a white Specular Tint, no coat, no sheen, isotropic. */
@@ -45,7 +48,8 @@ ClosureLobes lobes_scale(ClosureLobes l, float w)
 {
   return ClosureLobes(l.specular_tint * w, l.coat * w, l.coat_roughness * w, l.coat_ior * w, l.coat_tint * w,
                       l.coat_normal * w, l.sheen * w, l.sheen_weight * w, l.sheen_roughness * w,
-                      l.thin_film * w, l.thin_film_ior * w, l.tangent * w, l.stretch * w);
+                      l.thin_film * w, l.thin_film_ior * w, l.tangent * w, l.stretch * w,
+                      l.translucent * w, l.subsurface * w, l.subsurface_radius * w);
 }
 
 ClosureLobes lobes_add(ClosureLobes a, ClosureLobes b)
@@ -54,7 +58,8 @@ ClosureLobes lobes_add(ClosureLobes a, ClosureLobes b)
                       a.coat_ior + b.coat_ior, a.coat_tint + b.coat_tint, a.coat_normal + b.coat_normal,
                       a.sheen + b.sheen, a.sheen_weight + b.sheen_weight, a.sheen_roughness + b.sheen_roughness,
                       a.thin_film + b.thin_film, a.thin_film_ior + b.thin_film_ior, a.tangent + b.tangent,
-                      a.stretch + b.stretch);
+                      a.stretch + b.stretch, a.translucent + b.translucent, a.subsurface + b.subsurface,
+                      a.subsurface_radius + b.subsurface_radius);
 }
 
 struct Closure {
@@ -116,7 +121,7 @@ Closure closure_principled(vec4 base_color, float metallic, float roughness, flo
                            float alpha, vec4 emission_color, float emission_strength, vec4 specular_tint,
                            float coat, float coat_roughness, float coat_ior, vec4 coat_tint, float sheen,
                            float sheen_roughness, vec4 sheen_tint, float thin_film, float thin_film_ior, vec3 n,
-                           vec3 coat_n)
+                           vec3 coat_n, float subsurface, vec3 subsurface_path)
 {
   float r = (max(ior, 1.0) - 1.0) / (max(ior, 1.0) + 1.0);
   Closure c = closure_bsdf(base_color.rgb, metallic, roughness, min(r * r * 2.0 * max(level, 0.0), 1.0), n);
@@ -131,6 +136,8 @@ Closure closure_principled(vec4 base_color, float metallic, float roughness, flo
   c.lobes.sheen_roughness = c.lobes.sheen_weight * clamp(sheen_roughness, 0.0, 1.0);
   c.lobes.thin_film = max(thin_film, 0.0);
   c.lobes.thin_film_ior = c.lobes.thin_film * max(thin_film_ior, 1e-5);
+  c.lobes.subsurface = clamp(subsurface, 0.0, 1.0);
+  c.lobes.subsurface_radius = c.lobes.subsurface * subsurface_path; /* (node_subsurface.glsl) */
   c.emission = emission_color.rgb * emission_strength;
   float a = clamp(alpha, 0.0, 1.0);
   c = closure_scale(c, a);
@@ -148,6 +155,15 @@ Closure closure_diffuse(vec4 color, vec3 n)
 Closure closure_glossy(vec4 color, float roughness, vec3 n)
 {
   return closure_bsdf(color.rgb, 1.0, roughness, 0.0, n);
+}
+
+/* Translucent BSDF (Cycles' bsdf_translucent: a Lambertian lobe on the far side of the normal):
+ * a BSDF of no reflection, its colour the translucent lobe's (SL_TRANSLUCENT) */
+Closure closure_translucent(vec4 color, vec3 n)
+{
+  Closure c = closure_bsdf(vec3(0.0), 0.0, 1.0, 0.0, n);
+  c.lobes.translucent = max(color.rgb, 0.0);
+  return c;
 }
 
 Closure closure_emission(vec4 color, float strength)

@@ -238,6 +238,9 @@ vec3 principled_direct(Surface s, vec3 l, vec3 h, float NoL, float NoH, float Nx
   PrincipledLayers p = principled_layers(s);
   vec3 specular = principled_specular_tint(s, LoH) * principled_DV(s, l, h, NoL, NoH, NxH2);
   vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) * INV_PI;
+#  ifdef SL_SUBSURFACE
+  diffuse *= 1.0 - s.subsurface; /* the rest scatters below the surface (subsurface.glsl) */
+#  endif
   return (diffuse * factors.x + specular * factors.y) * E * NoL;
 }
 

@@ -141,6 +141,14 @@ struct Surface {
 #ifdef SL_ANISOTROPY
   AnisotropicLobe aniso; /* the specular lobes' anisotropic GGX (roughness, alpha: its isotropic stand-in's) */
 #endif
+#ifdef SL_TRANSLUCENT
+  vec3 translucent;   /* a node graph's Translucent BSDFs' colour (glsl/subsurface.glsl) */
+#endif
+#ifdef SL_SUBSURFACE
+  float subsurface;        /* Subsurface Weight: the share of the diffuse base that scatters below */
+  vec3 subsurface_radius;  /* its mean free path per channel (m) */
+  float curvature;         /* the surface's curvature (1/m) where the mesh program measures it, else 0 */
+#endif
 };
 #if defined(SL_THIN_FILM) && defined(SL_LAYERS)
 void thin_film_at(inout Surface s, vec4 film);
@@ -229,6 +237,15 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
 #endif
 #ifdef SL_LTC
   s.ltc = ltc_frame_at(n, v, s.NoV, s.roughness);
+#endif
+#ifdef SL_TRANSLUCENT
+  s.translucent = max(m.translucent.rgb, 0.0);
+#endif
+#ifdef SL_SUBSURFACE
+  /* the weight within [0, 1] and the paths at least 0, as Cycles' svm_node_closure_bsdf clamps them */
+  s.subsurface = saturate(m.subsurface.w);
+  s.subsurface_radius = max(m.subsurface.rgb, 0.0);
+  s.curvature = 0.0;
 #endif
   return s;
 }

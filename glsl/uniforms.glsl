@@ -76,6 +76,9 @@ struct MaterialData {
                           * metal too, w: the thickness below which its IOR blends to 1 (SL_THIN_FILM) */
   vec4 anisotropy;       /* xyz: the anisotropic lobe's tangent (world space, any length; 0: none);
                           * w: its roughness stretch k (glsl/anisotropy.glsl; 1: isotropic) */
+  vec4 translucent;      /* rgb: a node graph's Translucent BSDFs' colour (SL_TRANSLUCENT) */
+  vec4 subsurface;       /* rgb: the subsurface's mean free path per channel (m); w: Subsurface Weight
+                          * (SL_SUBSURFACE, glsl/subsurface.glsl) */
 };
 
 /* The world's light, precomputed (glsl/ibl.glsl, addon/reference/environment.py): nine SH coefficients

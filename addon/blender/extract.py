@@ -155,6 +155,13 @@ def _principled_lobes(node) -> dict:
             "coat_ior": max(float(_input(node, "Coat IOR", 1.5)), 1.0), "coat_tint": colour("Coat Tint"),
             "sheen_weight": max(float(_input(node, "Sheen Weight", 0.0)), 0.0),
             "sheen_roughness": unit("Sheen Roughness", 0.5), "sheen_tint": colour("Sheen Tint"),
+            "subsurface_weight": unit("Subsurface Weight", 0.0),
+            "subsurface_radius": tuple(float(c) for c in
+                                       _input(node, "Subsurface Radius", (1.0, 0.2, 0.1))[:3]),
+            "subsurface_scale": float(_input(node, "Subsurface Scale", 0.05)),
+            "subsurface_ior": float(_input(node, "Subsurface IOR", 1.4)),
+            "subsurface_anisotropy": float(_input(node, "Subsurface Anisotropy", 0.0)),
+            "subsurface_method": getattr(node, "subsurface_method", "RANDOM_WALK"),
             **_thin_film(node)}
 
 

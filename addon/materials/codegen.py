@@ -75,6 +75,8 @@ OPTIONAL_LIBRARY += ("node_float.glsl", "node_tex_gradient.glsl", "node_tex_chec
 OPTIONAL_LIBRARY += ("node_tex_voronoi.glsl",)  # after node_hash.glsl, whose hashes it calls
 OPTIONAL_LIBRARY += ("node_tex_noise.glsl", "node_tex_wave.glsl")  # Noise; Wave (calls Noise's fBM)
 OPTIONAL_LIBRARY += ("node_anisotropy.glsl",)  # an anisotropic BSDF's stretch and tangent
+#: the subsurface's mean free path, the Subsurface Scattering node
+OPTIONAL_LIBRARY += ("node_subsurface.glsl",)
 #: Node kinds drawn from a bake even where an emitter compiles them (empty: none). Tests and the
 #: benchmark set it to compare a node's bake with its compiled code and with Cycles.
 FORCE_BAKE: frozenset[str] = frozenset()
@@ -807,7 +809,12 @@ def _principled(w: _Writer, node: FlatNode) -> dict:
     n = _normal_input(w, node)
     coat = node.inputs.get("Coat Normal")
     coat_n = w.arg(node, "Coat Normal") if coat is not None and isinstance(coat.source, Ref) else n
-    return {"BSDF": _anisotropic(w, node, f"closure_principled({', '.join(args)}, {n}, {coat_n})")}
+    path = _subsurface_path(w, node, "subsurface_method", "Subsurface Radius", "Subsurface Scale",
+                            args[0], "Subsurface IOR")
+    weight = (w.arg(node, "Subsurface Weight") if "Subsurface Weight" in node.inputs
+              else w.constant(0.0, "VALUE"))
+    closure = f"closure_principled({', '.join(args)}, {n}, {coat_n}, {weight}, {path})"
+    return {"BSDF": _anisotropic(w, node, closure)}
 
 
 #: The anisotropic BSDFs' inputs (glsl/node_anisotropy.glsl), by node kind: the amount's socket, the
@@ -853,6 +860,34 @@ def _anisotropic(w: _Writer, node: FlatNode, closure: str) -> str:
     return f"closure_anisotropic({closure}, {stretch}({w.arg(node, amount)}), {t}, {turn}, {n})"
 
 
+
+#: The subsurface methods' mean free path functions (glsl/node_subsurface.glsl)
+SUBSURFACE_PATHS = {"BURLEY": "subsurface_path", "RANDOM_WALK": "subsurface_path",
+                    "RANDOM_WALK_SKIN": "subsurface_path_skin"}
+
+
+def _subsurface_path(w: _Writer, node: FlatNode, method: str, radius: str, scale: str, albedo: str,
+                     ior: str) -> str:
+    """The mean free path of a Principled BSDF's subsurface or a Subsurface Scattering node, its
+    method (the node's setting ``method``) choosing the function; a missing input: Blender's default."""
+    def arg(socket, default, kind):
+        return w.arg(node, socket) if socket in node.inputs else w.constant(default, kind)
+
+    r = f"{arg(radius, (1.0, 0.2, 0.1), 'VECTOR')}.xyz"
+    s = arg(scale, 0.05, "VALUE")
+    function = SUBSURFACE_PATHS.get(node.props.get(method, "RANDOM_WALK"), "subsurface_path")
+    if function == "subsurface_path_skin":
+        return f"{function}({r}, {s}, {albedo}.rgb, {arg(ior, 1.4, 'VALUE')})"
+    return f"{function}({r}, {s})"
+
+
+def _subsurface(w: _Writer, node: FlatNode) -> dict:
+    """The Subsurface Scattering node (closure_subsurface), its Falloff choosing the mean free path."""
+    color = _closure_color(w, node)
+    path = _subsurface_path(w, node, "falloff", "Radius", "Scale", color, "IOR")
+    return {"BSSRDF": f"closure_subsurface({color}, {path}, {_normal_input(w, node)})"}
+
+
 def _closure_color(w: _Writer, node: FlatNode) -> str:
     """A closure's colour input ("Color", the Metallic BSDF's "Base Color"); grey where it has none."""
     for socket in ("Color", "Base Color"):
@@ -889,6 +924,9 @@ CLOSURES = {
     "ShaderNodeBsdfMetallic": _glossy,
     "ShaderNodeEmission": lambda w, n: _call("closure_emission", w, n, ("Color", "Strength"), "Emission"),
     "ShaderNodeBsdfTransparent": lambda w, n: _call("closure_transparent", w, n, ("Color",), "BSDF"),
+    "ShaderNodeBsdfTranslucent": lambda w, n: {"BSDF": f"closure_translucent({_closure_color(w, n)}, "
+                                                       f"{_normal_input(w, n)})"},
+    "ShaderNodeSubsurfaceScattering": _subsurface,
     "ShaderNodeHoldout": lambda w, n: {"Holdout": "closure_holdout()"},
     "ShaderNodeMixShader": lambda w, n: _call("closure_mix", w, n, ("Fac", "Shader", "Shader_001"), "Shader"),
     "ShaderNodeAddShader": lambda w, n: _call("closure_add", w, n, ("Shader", "Shader_001"), "Shader"),

@@ -130,9 +130,10 @@ def _plain(flat: FlatGraph) -> bool:
     if surface is None or isinstance(surface.source, Const):
         return True
     node = flat.nodes[surface.source.node]
-    # (a Holdout: the constant path has no alpha to cut; an anisotropic BSDF: its tangent is per fragment)
+    # (a Holdout: the constant path has no alpha to cut; an anisotropic BSDF: its tangent is per fragment;
+    # Translucent, Subsurface Scattering: nor these lobes)
     return node.kind in codegen.CLOSURES and node.kind not in ("ShaderNodeMixShader", "ShaderNodeAddShader",
-                                                                "ShaderNodeHoldout") \
+                                                                "ShaderNodeHoldout", *_CLOSURE_LOBES) \
         and all(isinstance(i.source, Const) for i in node.inputs.values()) and not codegen.anisotropic(node)
 
 
@@ -258,22 +259,31 @@ def _lobes(flat: FlatGraph) -> frozenset[str]:
     for node in flat.nodes.values():
         if codegen.anisotropic(node):  # a Principled, Glossy or Metallic BSDF's anisotropic lobe
             out.add("ANISOTROPY")
+        out |= _CLOSURE_LOBES.get(node.kind, set())
         if node.kind != "ShaderNodeBsdfPrincipled":
             continue
         values = {}
-        for socket in ("Specular Tint", "Coat Weight", "Sheen Weight", "Sheen Tint", "Thin Film Thickness"):
+        for socket in ("Specular Tint", "Coat Weight", "Sheen Weight", "Sheen Tint", "Thin Film Thickness",
+                       "Subsurface Weight"):
             spec = node.inputs.get(socket)
             if spec is not None and not isinstance(spec.source, Const):
                 value = {"Specular Tint": (0.0,) * 3, "Coat Weight": 1.0, "Sheen Weight": 1.0,
-                         "Sheen Tint": (1.0,) * 3, "Thin Film Thickness": 1.0}[socket]  # linked: on
+                         "Sheen Tint": (1.0,) * 3, "Thin Film Thickness": 1.0,
+                         "Subsurface Weight": 1.0}[socket]  # linked: on
             elif spec is not None and spec.source.value is not None:
                 value = spec.source.value
             else:
-                value = codegen.PRINCIPLED_DEFAULTS[socket][0]
+                value = codegen.PRINCIPLED_DEFAULTS.get(socket, (0.0,))[0]
             values[socket] = tuple(value)[:3] if isinstance(value, (tuple, list)) else float(value)
         out |= lobes_of(values["Specular Tint"], values["Coat Weight"], values["Sheen Weight"],
-                        values["Sheen Tint"], values["Thin Film Thickness"])
+                        values["Sheen Tint"], values["Thin Film Thickness"],
+                        subsurface_weight=values["Subsurface Weight"])
     return frozenset(out)
+
+
+#: The closure nodes that are a lobe by themselves (``snapshot.LOBES``).
+_CLOSURE_LOBES = {"ShaderNodeBsdfTranslucent": {"TRANSLUCENT"},
+                  "ShaderNodeSubsurfaceScattering": {"SUBSURFACE"}}
 
 
 def compile_material(graph: Graph, groups: dict[str, Graph],
@@ -402,7 +412,9 @@ LOBE_INPUTS = {"SPECULAR_TINT": ("Specular Tint",),
                "COAT": ("Coat Weight", "Coat Roughness", "Coat IOR", "Coat Tint", "Coat Normal"),
                "SHEEN": ("Sheen Weight", "Sheen Roughness", "Sheen Tint"),
                "THIN_FILM": ("Thin Film Thickness", "Thin Film IOR"),
-               "ANISOTROPY": ("Anisotropic", "Anisotropic Rotation", "Tangent")}
+               "ANISOTROPY": ("Anisotropic", "Anisotropic Rotation", "Tangent"),
+               "TRANSLUCENT": (),
+               "SUBSURFACE": ("Subsurface Weight", "Subsurface Radius", "Subsurface Scale", "Subsurface IOR")}
 #: The Glossy and Metallic BSDFs' anisotropic inputs (``codegen.ANISOTROPIC``)
 ANISOTROPIC_INPUTS = {"Anisotropy", "Rotation", "Tangent"}
 #: What of each closure the shading models read (the rest is drawn as nothing: Principled BSDF's
@@ -411,7 +423,9 @@ READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_BASE_INPUTS) |
                | {socket for lobe in LOBES for socket in LOBE_INPUTS[lobe]},
                "ShaderNodeBsdfDiffuse": {"Color", "Normal"},
                "ShaderNodeBsdfGlossy": {"Color", "Roughness", "Normal"} | ANISOTROPIC_INPUTS,
-               "ShaderNodeBsdfMetallic": {"Base Color", "Roughness", "Normal"} | ANISOTROPIC_INPUTS}
+               "ShaderNodeBsdfMetallic": {"Base Color", "Roughness", "Normal"} | ANISOTROPIC_INPUTS,
+               "ShaderNodeBsdfTranslucent": {"Color", "Normal"},
+               "ShaderNodeSubsurfaceScattering": {"Color", "Scale", "Radius", "IOR", "Normal"}}
 READ_INPUTS["ShaderNodeBsdfAnisotropic"] = READ_INPUTS["ShaderNodeBsdfGlossy"]  # the Glossy BSDF's own name
 
 

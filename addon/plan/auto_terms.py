@@ -91,7 +91,8 @@ MISSING = {
 #: The Principled BSDF's lobes (``snapshot.LOBES``), which the Principled set alone draws, named for
 #: "why".
 LOBE_LABELS = {"SPECULAR_TINT": "specular tint", "COAT": "coat", "SHEEN": "sheen", "THIN_FILM": "thin film",
-               "ANISOTROPY": "anisotropy"}
+               "ANISOTROPY": "anisotropy", "TRANSLUCENT": "translucent",
+               "SUBSURFACE": "subsurface"}
 #: The lobes the prediction's twin does not draw: a material with one takes the Principled set, which
 #: alone draws it, unpredicted (its why names the lobe).
 UNPREDICTED_LOBES = ("ANISOTROPY",)

@@ -14,6 +14,7 @@ import numpy as np
 from ..materials import codegen
 from ..materials.codegen import glsl_dir
 from ..materials.surface import GraphProgram
+from ..reference import subsurface
 from ..reference.multiscatter import MS_SIZE, S_SIZE
 from ..reference.sheen import SIZE as SHEEN_SIZE
 from ..scene.matrices import invert
@@ -59,7 +60,7 @@ MODEL_FILES = {
 }
 FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "environment.glsl", "ibl.glsl")
 PBR_LIBRARY = ("anisotropy.glsl", "multiscatter.glsl", "pbr_terms.glsl", "thin_film.glsl", "principled.glsl",
-               "ltc.glsl")
+               "ltc.glsl", "subsurface.glsl")
 #: How the world lights a program: "" not at all (a black world), "UNIFORM" a constant radiance,
 #: "MAP" environment images (glsl/ibl.glsl).
 ENVIRONMENTS = ("", "UNIFORM", "MAP")
@@ -188,6 +189,8 @@ class Features:
             raise ValueError(f"unknown lobes {sorted(unknown)}; expected some of {LOBES}")
         if not (self.model == "PBR" and self.terms.principled):  # the other sets have none of them
             object.__setattr__(self, "lobes", frozenset())
+        if {"TRANSLUCENT", "SUBSURFACE"} & set(self.lobes):  # the subsurface measures the surface's
+            object.__setattr__(self, "deferred", False)  # curvature from screen derivatives
 
     @classmethod
     def from_snapshot(cls, snapshot: Snapshot, model: str | None = None,
@@ -929,6 +932,9 @@ def pack_material(m: MaterialParams) -> bytes:
         [0.0, 0.0, 0.0, 0.0],  # the coat's normal: the surface's (a node graph's own is per fragment)
         [m.thin_film_thickness, m.thin_film_ior, 1.0 if m.thin_film_metal else 0.0, m.thin_film_blend],
         [0.0, 0.0, 0.0, 1.0],  # anisotropy: none (an anisotropic BSDF compiles a graph)
+        [0.0, 0.0, 0.0, 0.0],  # the translucent lobe: a node graph's alone
+        [*subsurface.mean_free_path(m.subsurface_radius, m.subsurface_scale, m.subsurface_method,
+                                    m.base_color, m.subsurface_ior), m.subsurface_weight],
     ]
     return np.asarray(rows, np.float32).tobytes()
 

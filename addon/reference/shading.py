@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene.snapshot import LOBES, Light, MaterialParams, Terms
-from . import environment, ltc, thin_film
+from . import environment, ltc, subsurface, thin_film
 from . import multiscatter as M
 from . import sheen as sheen_table
 from .brdf import (
@@ -374,6 +374,14 @@ class Surface:
                       * np.maximum(np.asarray(material.sheen_tint, f64), 0.0))
         self.sheen_roughness = np.clip(np.asarray(material.sheen_roughness, f64), 0.0, 1.0)
         self.thin_film = thin_film.film_of(material)  # MaterialData's thin_film (thin_film.film_of)
+        # the subsurface (glsl/subsurface.glsl): its weight, mean free path and the surface's curvature
+        # (which the mesh program measures; 0 unless a caller sets it); a node graph's translucent lobe
+        self.subsurface = np.clip(np.asarray(material.subsurface_weight, f64), 0.0, 1.0)
+        self.subsurface_radius = subsurface.mean_free_path(
+            material.subsurface_radius, material.subsurface_scale, material.subsurface_method,
+            np.clip(self.base_color, 0.0, 1.0), material.subsurface_ior)
+        self.curvature = np.zeros(np.shape(self.NoV))
+        self.translucent = np.zeros(3)
 
 
 def blinn_phong_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
@@ -671,7 +679,16 @@ def principled_direct(s: Surface, NoL, NoH, NxH2, LoH):
     specular = principled_specular_tint(s, LoH) * _rgb_scalar(D * V)
     layer = principled_layers(s).layer
     diffuse = s.base_color * (1.0 - s.metal3) * _rgb_scalar(np.clip(1.0 - layer, 0.0, 1.0)) * INV_PI
+    diffuse = diffuse * _rgb_scalar(1.0 - s.subsurface)  # the rest scatters below (subsurface_direct)
     return diffuse, specular
+
+
+def subsurface_direct(s: Surface, l):
+    """glsl/subsurface.glsl's subsurface_direct: the subsurface's f (n.l) towards l per unit irradiance."""
+    layer = principled_layers(s).layer
+    weight = (1.0 - s.metalness) * np.clip(1.0 - layer, 0.0, 1.0) * s.subsurface * INV_PI
+    color = s.base_color * _rgb_scalar(weight)
+    return color * subsurface.ramp(_dot(s.n, l), s.subsurface_radius, s.curvature)
 
 
 def pbr_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
@@ -1038,6 +1055,14 @@ def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAU
     upper = upper_layers(s) if model == "PBR" and terms.principled else None
     sheen = None if upper is None or upper.sheen is None else {"lobe": upper.sheen, "value": None}
     c = shade_light_surface(model, s, light, E, l, terms, visibility, ltc_jitter, memo, sheen)
+    if model == "PBR" and terms.principled:
+        # the subsurface's share of the base at the light's direction; the translucent lobe beside the
+        # layers, lit from behind (light_shading.glsl)
+        with np.errstate(invalid="ignore"):
+            c = c + subsurface_direct(s, l) * E * light.diffuse_factor
+        translucent = subsurface.translucent_direct(s.translucent, s.n, l) * E * light.diffuse_factor
+        if upper is None:
+            return c + translucent
     if upper is None:
         return c
     c = c * upper.below
@@ -1049,7 +1074,7 @@ def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAU
         at_l = sheen_direct(upper.sheen, l) * E * light.diffuse_factor
         polygon = sheen["value"]
         c = c + (at_l if polygon is None else np.where(np.isnan(polygon), at_l, polygon))
-    return c
+    return c + translucent
 
 
 def shade_light_surface(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAULT_TERMS,

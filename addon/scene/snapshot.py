@@ -176,6 +176,14 @@ class MaterialParams:
     thin_film_ior: float = 1.33
     thin_film_metal: bool = True
     thin_film_blend: float = 1.0
+    #: the subsurface (glsl/subsurface.glsl): Subsurface Weight, Radius, Scale, IOR, Anisotropy and the
+    #: method (reference/subsurface.py's METHODS)
+    subsurface_weight: float = 0.0
+    subsurface_radius: tuple[float, float, float] = (1.0, 0.2, 0.1)
+    subsurface_scale: float = 0.05
+    subsurface_ior: float = 1.4
+    subsurface_anisotropy: float = 0.0
+    subsurface_method: str = "RANDOM_WALK"
 
     @property
     def lobes(self) -> frozenset[str]:
@@ -184,28 +192,30 @@ class MaterialParams:
         if self.graph is not None:
             return self.graph.lobes
         return lobes_of(self.specular_tint, self.coat_weight, self.sheen_weight, self.sheen_tint,
-                        self.thin_film_thickness)
+                        self.thin_film_thickness, subsurface_weight=self.subsurface_weight)
 
 
 #: The Principled BSDF's lobes beyond its base the programs draw, as their defines name them
 #: (SL_<LOBE>).
 #: ANISOTROPY: the anisotropic GGX lobe (glsl/anisotropy.glsl) of a Principled, Glossy or Metallic BSDF:
 #: only a compiled graph has one (its tangent is per fragment: ``materials.surface._lobes``).
-LOBES = ("SPECULAR_TINT", "COAT", "SHEEN", "THIN_FILM", "ANISOTROPY")
+LOBES = ("SPECULAR_TINT", "COAT", "SHEEN", "THIN_FILM", "ANISOTROPY", "TRANSLUCENT", "SUBSURFACE")
 
 
 def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint,
-             thin_film_thickness=0.0) -> frozenset[str]:
+             thin_film_thickness=0.0, subsurface_weight=0.0) -> frozenset[str]:
     """The lobes a Principled BSDF of these inputs draws: a Specular Tint other than white, a Coat
-    Weight above 0, a Sheen Weight and Tint above 0 (Cycles adds no lobe of weight 0: its
-    CLOSURE_WEIGHT_CUTOFF is 1e-5), a Thin Film Thickness above 0. Scalars here; per-point arrays (the
-    twin's) are any of them."""
+    Weight above 0, a Sheen Weight and Tint above 0, a Subsurface Weight above 0 (Cycles adds no lobe
+    of weight 0: its CLOSURE_WEIGHT_CUTOFF is 1e-5), a Thin Film Thickness above 0. Scalars here;
+    per-point arrays (the twin's) are any of them. (The translucent lobe is a node graph's: its
+    Translucent BSDF; the anisotropic lobe too.)"""
     tint = np.asarray(specular_tint, np.float64)
     sheen = np.asarray(sheen_weight, np.float64)[..., None] * np.asarray(sheen_tint, np.float64)
     used = {"SPECULAR_TINT": bool(np.any(tint != 1.0)),
             "COAT": bool(np.any(np.asarray(coat_weight, np.float64) > 1e-5)),
             "SHEEN": bool(np.any(sheen > 1e-5)),
-            "THIN_FILM": bool(np.any(np.asarray(thin_film_thickness, np.float64) > 0.0))}
+            "THIN_FILM": bool(np.any(np.asarray(thin_film_thickness, np.float64) > 0.0)),
+            "SUBSURFACE": bool(np.any(np.asarray(subsurface_weight, np.float64) > 1e-5))}
     return frozenset(name for name in LOBES if used.get(name))
 
 
