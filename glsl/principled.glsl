@@ -202,6 +202,9 @@ vec3 principled_specular_tint(Surface s, float LoH)
   vec3 metal = p.metal_M * F_Schlick(min(s.base_color, vec3(1.0)), 1.0, LoH);
 #endif
   vec3 dielectric = p.dielectric_M * F_DielectricTinted(s.eta, p.dielectric_f0, LoH);
+#ifdef SL_TRANSMISSION
+  dielectric *= s.transmission.reflection_tint; /* the Glass BSDF's Color (transmission.glsl) */
+#endif
   return s.metalness * metal + (1.0 - s.metalness) * dielectric;
 }
 
@@ -212,6 +215,9 @@ vec3 principled_direct(Surface s, float NoL, float NoH, float NxH2, float LoH, v
   PrincipledLayers p = principled_layers(s);
   vec3 specular = principled_specular_tint(s, LoH) * (D * V);
   vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) * INV_PI;
+#ifdef SL_TRANSMISSION
+  diffuse *= 1.0 - s.transmission.share; /* the glass's share transmits instead (transmission.glsl) */
+#endif
   return (diffuse * factors.x + specular * factors.y) * E * NoL;
 }
 
@@ -237,9 +243,17 @@ vec3 principled_environment(Surface s, vec2 EB, vec3 radiance, vec3 irradiance, 
   float c6 = pow5(1.0 - s.NoV) * (1.0 - s.NoV);
   metal = max(metal - p.metal_M * p.metal_b * (s.NoV * c6 * EB.x), 0.0);
 #    endif
+#      ifdef SL_TRANSMISSION
+  vec3 specular = (s.metalness * metal + (1.0 - s.metalness) * p.albedo * s.transmission.reflection_tint) *
+                  radiance;
+#      else
   vec3 specular = (s.metalness * metal + (1.0 - s.metalness) * p.albedo) * radiance;
+#      endif
 #    endif
   vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) * irradiance * INV_PI;
+#    ifdef SL_TRANSMISSION
+  diffuse *= 1.0 - s.transmission.share;
+#    endif
   return diffuse * weights.x + specular * weights.y;
 }
 #  endif

@@ -67,6 +67,19 @@ SheenLobe sheen_at(vec3 n, vec3 v, float roughness, vec3 color);
 float ltc_density(vec4 m, vec3 w, float floor_cosine);
 #endif
 
+#ifdef SL_TRANSMISSION
+/* The glass at the shading point (transmission.glsl's transmission_at). */
+struct TransmissionLobe {
+  float share;         /* the glass share of the non-metallic part (what the diffuse base loses) */
+  float weight;        /* the glass share of the whole surface: share x (1 - metalness) */
+  bool fresnel;        /* the Fresnel splits reflection and transmission (else all transmitted) */
+  float eta;           /* its IOR (inside over outside) */
+  vec3 tint;           /* each crossing's tint */
+  vec3 reflection_tint; /* the dielectric reflection's tint */
+};
+TransmissionLobe transmission_at(MaterialData m, float metalness);
+#endif
+
 #ifdef SL_MULTISCATTER
 /* The specular lobe's multiple-scattering compensation (multiscatter.glsl): it depends on the view
  * only, so make_surface computes it once per shading point, not once per light. */
@@ -118,6 +131,9 @@ struct Surface {
 #if defined(SL_COAT) || defined(SL_SHEEN)
   vec3 below;         /* what the sheen and the coat above leave the base at the view (rgb) */
 #endif
+#ifdef SL_TRANSMISSION
+  TransmissionLobe transmission;
+#endif
 };
 
 /* Unit half vector of eq. 1.6; l + v = 0 only when the light is exactly behind the viewer's
@@ -155,6 +171,9 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
   s.has_complex_ior = m.fresnel.z > 0.5;
   s.ior_n = m.ior_n.rgb;
   s.ior_k = m.ior_k.rgb;
+#ifdef SL_TRANSMISSION
+  s.transmission = transmission_at(m, s.metalness);
+#endif
 #ifdef SL_SPECULAR_TINT
   s.specular_tint = max(m.specular_tint.rgb, 0.0);
   vec3 tint = s.specular_tint;

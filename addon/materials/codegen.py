@@ -787,13 +787,15 @@ PRINCIPLED_BASE_INPUTS = ("Base Color", "Metallic", "Roughness", "IOR", "Specula
                           "Emission Color", "Emission Strength")
 PRINCIPLED_INPUTS = PRINCIPLED_BASE_INPUTS + ("Specular Tint", "Coat Weight", "Coat Roughness", "Coat IOR",
                                               "Coat Tint", "Sheen Weight", "Sheen Roughness", "Sheen Tint")
+PRINCIPLED_INPUTS += ("Transmission Weight",)
 
 #: The values of the Principled BSDF's lobe inputs a node read from an older file may lack (Blender's
 #: defaults: they add no lobe), with their socket types.
 PRINCIPLED_DEFAULTS = {"Specular Tint": ((1.0, 1.0, 1.0, 1.0), "RGBA"), "Coat Weight": (0.0, "VALUE"),
                        "Coat Roughness": (0.03, "VALUE"), "Coat IOR": (1.5, "VALUE"),
                        "Coat Tint": ((1.0, 1.0, 1.0, 1.0), "RGBA"), "Sheen Weight": (0.0, "VALUE"),
-                       "Sheen Roughness": (0.5, "VALUE"), "Sheen Tint": ((1.0, 1.0, 1.0, 1.0), "RGBA")}
+                       "Sheen Roughness": (0.5, "VALUE"), "Sheen Tint": ((1.0, 1.0, 1.0, 1.0), "RGBA"),
+                       "Transmission Weight": (0.0, "VALUE")}
 
 
 def _principled(w: _Writer, node: FlatNode) -> dict:
@@ -827,6 +829,14 @@ def _unknown_closure(w: _Writer, node: FlatNode) -> dict:
             for s, t in node.outputs.items() if t == "SHADER"}
 
 
+def _glass(function: str, w: _Writer, node: FlatNode) -> dict:
+    """Glass and Refraction BSDFs (glsl/node_closure.glsl's closure_glass, closure_refraction): a
+    transmitting dielectric of their colour, roughness and IOR; their distribution (GGX, Beckmann,
+    Multiscatter GGX) is drawn as the Principled set's GGX."""
+    return {"BSDF": f"{function}({_closure_color(w, node)}, {_closure_roughness(w, node)}, "
+                    f"{w.arg(node, 'IOR')}, {_normal_input(w, node)})"}
+
+
 def _glossy(w: _Writer, node: FlatNode) -> dict:
     """Glossy, Anisotropic and Metallic BSDFs: a metal of their colour and roughness."""
     return {"BSDF": f"closure_glossy({_closure_color(w, node)}, {_closure_roughness(w, node)}, "
@@ -840,6 +850,8 @@ CLOSURES = {
     "ShaderNodeBsdfGlossy": _glossy,
     "ShaderNodeBsdfAnisotropic": _glossy,
     "ShaderNodeBsdfMetallic": _glossy,
+    "ShaderNodeBsdfGlass": lambda w, n: _glass("closure_glass", w, n),
+    "ShaderNodeBsdfRefraction": lambda w, n: _glass("closure_refraction", w, n),
     "ShaderNodeEmission": lambda w, n: _call("closure_emission", w, n, ("Color", "Strength"), "Emission"),
     "ShaderNodeBsdfTransparent": lambda w, n: _call("closure_transparent", w, n, ("Color",), "BSDF"),
     "ShaderNodeHoldout": lambda w, n: {"Holdout": "closure_holdout()"},

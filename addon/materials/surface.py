@@ -255,21 +255,23 @@ def _lobes(flat: FlatGraph) -> frozenset[str]:
     it on (``snapshot.lobes_of``), a linked input taken as on (its value is per fragment)."""
     out = set()
     for node in flat.nodes.values():
+        if node.kind in GLASS_CLOSURES:  # transmitting alone
+            out.add("TRANSMISSION")
         if node.kind != "ShaderNodeBsdfPrincipled":
             continue
         values = {}
-        for socket in ("Specular Tint", "Coat Weight", "Sheen Weight", "Sheen Tint"):
+        for socket in ("Specular Tint", "Coat Weight", "Sheen Weight", "Sheen Tint", "Transmission Weight"):
             spec = node.inputs.get(socket)
             if spec is not None and not isinstance(spec.source, Const):
                 value = {"Specular Tint": (0.0,) * 3, "Coat Weight": 1.0, "Sheen Weight": 1.0,
-                         "Sheen Tint": (1.0,) * 3}[socket]  # linked: on
+                         "Sheen Tint": (1.0,) * 3, "Transmission Weight": 1.0}[socket]  # linked: on
             elif spec is not None and spec.source.value is not None:
                 value = spec.source.value
             else:
                 value = codegen.PRINCIPLED_DEFAULTS[socket][0]
             values[socket] = tuple(value)[:3] if isinstance(value, (tuple, list)) else float(value)
         out |= lobes_of(values["Specular Tint"], values["Coat Weight"], values["Sheen Weight"],
-                        values["Sheen Tint"])
+                        values["Sheen Tint"], values["Transmission Weight"])
     return frozenset(out)
 
 
@@ -397,14 +399,19 @@ def _textured(flat: FlatGraph) -> dict:
 #: The Principled BSDF's inputs of each lobe (``snapshot.LOBES``).
 LOBE_INPUTS = {"SPECULAR_TINT": ("Specular Tint",),
                "COAT": ("Coat Weight", "Coat Roughness", "Coat IOR", "Coat Tint", "Coat Normal"),
-               "SHEEN": ("Sheen Weight", "Sheen Roughness", "Sheen Tint")}
+               "SHEEN": ("Sheen Weight", "Sheen Roughness", "Sheen Tint"),
+               "TRANSMISSION": ("Transmission Weight",)}
+#: The closures that transmit alone (glsl/node_closure.glsl's closure_glass, closure_refraction).
+GLASS_CLOSURES = ("ShaderNodeBsdfGlass", "ShaderNodeBsdfRefraction")
 #: What of each closure the shading models read (the rest is drawn as nothing: Principled BSDF's
 #: coat, sheen, transmission ...).
 READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_BASE_INPUTS) | {"Normal"}
                | {socket for lobe in LOBES for socket in LOBE_INPUTS[lobe]},
                "ShaderNodeBsdfDiffuse": {"Color", "Normal"},
                "ShaderNodeBsdfGlossy": {"Color", "Roughness", "Normal"},
-               "ShaderNodeBsdfMetallic": {"Base Color", "Roughness", "Normal"}}
+               "ShaderNodeBsdfMetallic": {"Base Color", "Roughness", "Normal"},
+               "ShaderNodeBsdfGlass": {"Color", "Roughness", "IOR", "Normal"},
+               "ShaderNodeBsdfRefraction": {"Color", "Roughness", "IOR", "Normal"}}
 
 
 def _unread(flat: FlatGraph) -> list[str]:

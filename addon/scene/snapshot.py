@@ -169,6 +169,17 @@ class MaterialParams:
     sheen_weight: float = 0.0
     sheen_roughness: float = 0.5
     sheen_tint: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    #: transmission (glsl/transmission.glsl): the share of the non-metallic part that is glass
+    #: (the Principled BSDF's Transmission Weight; 1 for a Glass or Refraction BSDF), its IOR, the
+    #: tint of each crossing of the surface (the Principled BSDF's sqrt(Base Color), the Glass and
+    #: Refraction BSDFs' Color), the dielectric reflection's tint (the Glass BSDF's Color; 0: the
+    #: Refraction BSDF reflects nothing) and whether the Fresnel splits the light between reflection
+    #: and transmission (off: the Refraction BSDF transmits all of it)
+    transmission_weight: float = 0.0
+    transmission_ior: float = 1.5
+    transmission_tint: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    reflection_tint: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    transmission_fresnel: bool = True
 
     @property
     def lobes(self) -> frozenset[str]:
@@ -176,23 +187,26 @@ class MaterialParams:
         else those its values turn on (a tint other than white, a weight above 0)."""
         if self.graph is not None:
             return self.graph.lobes
-        return lobes_of(self.specular_tint, self.coat_weight, self.sheen_weight, self.sheen_tint)
+        return lobes_of(self.specular_tint, self.coat_weight, self.sheen_weight, self.sheen_tint,
+                        self.transmission_weight)
 
 
 #: The Principled BSDF's lobes beyond its base the programs draw, as their defines name them
 #: (SL_<LOBE>).
-LOBES = ("SPECULAR_TINT", "COAT", "SHEEN")
+LOBES = ("SPECULAR_TINT", "COAT", "SHEEN", "TRANSMISSION")
 
 
-def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint) -> frozenset[str]:
+def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint, transmission_weight=0.0) -> frozenset[str]:
     """The lobes a Principled BSDF of these inputs draws: a Specular Tint other than white, a Coat
-    Weight above 0, a Sheen Weight and Tint above 0 (Cycles adds no lobe of weight 0: its
-    CLOSURE_WEIGHT_CUTOFF is 1e-5). Scalars here; per-point arrays (the twin's) are any of them."""
+    Weight above 0, a Sheen Weight and Tint above 0, a Transmission Weight above 0 (Cycles adds no
+    lobe of weight 0: its CLOSURE_WEIGHT_CUTOFF is 1e-5). Scalars here; per-point arrays (the
+    twin's) are any of them."""
     tint = np.asarray(specular_tint, np.float64)
     sheen = np.asarray(sheen_weight, np.float64)[..., None] * np.asarray(sheen_tint, np.float64)
     used = {"SPECULAR_TINT": bool(np.any(tint != 1.0)),
             "COAT": bool(np.any(np.asarray(coat_weight, np.float64) > 1e-5)),
-            "SHEEN": bool(np.any(sheen > 1e-5))}
+            "SHEEN": bool(np.any(sheen > 1e-5)),
+            "TRANSMISSION": bool(np.any(np.asarray(transmission_weight, np.float64) > 1e-5))}
     return frozenset(name for name in LOBES if used.get(name))
 
 
