@@ -249,7 +249,7 @@ void main()
 #endif
   MaterialData m = material;
   bool outward = facing_outward();
-#ifdef SL_TRANSMISSION
+#ifdef REFRACTION_LEVELS
   bool entering = outward; /* the viewer outside the surface (transmission.glsl) */
 #endif
   vec3 v = view_direction(world_position);
@@ -354,7 +354,7 @@ void main()
 #ifdef SL_LIGHTS_AREA
   shade_group(c, s, ng, listed, k, int(frame.group_ends[1].w), LIGHT_AREA, false);
 #endif
-#ifdef SL_TRANSMISSION
+#ifdef REFRACTION_LEVELS
   /* what lies behind, through the glass (passes.RefractionPass), under the upper layers */
 #  if defined(SL_COAT) || defined(SL_SHEEN)
   c += transmission_behind(s, entering) * s.below * lobes.y;

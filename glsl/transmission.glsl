@@ -102,6 +102,8 @@ vec3 transmission_light(Surface s, vec3 l, vec3 E, vec4 factors)
 
 /* --- what lies behind, in screen space (passes.RefractionPass) ------------------------------ */
 
+#  ifdef REFRACTION_LEVELS /* the shading programs drawn by the pass (programs.program_source) */
+
 /* A world position's clip coordinates (the frame's camera). */
 vec4 refraction_clip(vec3 p)
 {
@@ -296,4 +298,5 @@ vec3 transmission_behind(Surface s, bool entering)
   vec3 pixel = refraction_pixel(refraction_clip(hit.xyz));
   return throughput * refraction_sample(pixel.xy, lod) * t.weight;
 }
+#  endif
 #endif

@@ -79,7 +79,7 @@ struct MaterialData {
   vec4 reflection_tint;  /* rgb: the dielectric reflection's tint (the Glass BSDF's Color) */
 };
 
-#ifdef SL_TRANSMISSION
+#ifdef REFRACTION_LEVELS
 /* What the glass reads of the opaque scene behind it (glsl/transmission.glsl, addon/frame/passes.py's
  * RefractionPass): the camera's clip -> world, the rectangles (x, y, width, height in texels) of the
  * copy's levels in refraction_behind (level 0 the target's size, its alpha the depth; each next half

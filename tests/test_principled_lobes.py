@@ -369,7 +369,8 @@ def _material_lines(lobe: dict) -> str:
     """GLSL setting test_stability's MaterialData ``m``'s lobe rows as pack_material writes them."""
     m = S.MaterialParams(**lobe)
     rows = np.frombuffer(programs.pack_material(m), np.float32).reshape(-1, 4)[9:]
-    names = ("specular_tint", "coat", "coat_tint", "sheen", "coat_normal")
+    names = ("specular_tint", "coat", "coat_tint", "sheen", "coat_normal", "transmission",
+             "transmission_tint", "reflection_tint")
     return "".join(f"m.{name} = vec4({', '.join(repr(float(x)) for x in row)});\n"
                    for name, row in zip(names, rows))
 

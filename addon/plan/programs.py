@@ -58,7 +58,7 @@ MODEL_FILES = {
     "PBR": "model_pbr.glsl",
 }
 FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "environment.glsl", "ibl.glsl")
-PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "principled.glsl", "ltc.glsl")
+PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "principled.glsl", "ltc.glsl", "transmission.glsl")
 #: The screen-space refraction (glsl/transmission.glsl, passes.RefractionPass): the most levels of
 #: the blurred copy of what is behind the glass (each half the last's size), the steps a refracted
 #: ray is marched in across the screen and the bisections refining where it meets a surface, and the
@@ -333,11 +333,6 @@ class Features:
             out += [("SL_" + lobe, "1") for lobe in sorted(self.lobes)]
             if self.uses_sheen_table:
                 out.append(("SL_SHEEN_SIZE", str(SHEEN_SIZE)))
-            if "TRANSMISSION" in self.lobes:
-                out += [("REFRACTION_LEVELS", str(REFRACTION_LEVELS)),
-                        ("REFRACTION_STEPS", str(REFRACTION_STEPS)),
-                        ("REFRACTION_BISECTIONS", str(REFRACTION_BISECTIONS)),
-                        ("REFRACTION_BLUR", repr(float(REFRACTION_BLUR)))]
         elif self.model == "PBR":
             out += [("SL_FRESNEL_" + t.fresnel, "1"), ("SL_NDF_" + t.ndf, "1"),
                     ("SL_VISIBILITY_" + t.visibility, "1"), ("SL_DIFFUSE_" + t.diffuse, "1")]
@@ -477,8 +472,6 @@ def program_source(features: Features) -> ProgramSource:
     fragment = [read_glsl(name) for name in FRAGMENT_LIBRARY]
     if features.model == "PBR":
         fragment += [read_glsl(name) for name in PBR_LIBRARY]
-        if "TRANSMISSION" in features.lobes:  # before the light loop, which calls it
-            fragment.append(read_glsl("transmission.glsl"))
     fragment.append(read_glsl(MODEL_FILES[features.model]))
     fragment.append(read_glsl("view.glsl"))
     fragment.append(read_glsl("light_shading.glsl"))  # after the model: it calls shade_direct
@@ -495,8 +488,19 @@ def program_source(features: Features) -> ProgramSource:
         vertex=(read_glsl("deferred_depth.glsl") + "\n" + read_glsl("deferred.vert.glsl")
                 if features.deferred else mesh_vertex()),
         fragment="\n".join(fragment),
-        defines=tuple(sorted(features.defines() + (("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)),))),
+        defines=tuple(sorted(features.defines() + (("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)),)
+                             + refraction_defines(features))),
     )
+
+
+def refraction_defines(features: Features) -> tuple[tuple[str, str], ...]:
+    """The screen-space refraction's constants (glsl/transmission.glsl's, under REFRACTION_LEVELS) for
+    a program drawing transmission: those drawn by passes.RefractionPass, which binds what they read."""
+    if "TRANSMISSION" not in features.lobes:
+        return ()
+    return (("REFRACTION_LEVELS", str(REFRACTION_LEVELS)), ("REFRACTION_STEPS", str(REFRACTION_STEPS)),
+            ("REFRACTION_BISECTIONS", str(REFRACTION_BISECTIONS)),
+            ("REFRACTION_BLUR", repr(float(REFRACTION_BLUR))))
 
 
 @dataclass(frozen=True)
