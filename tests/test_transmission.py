@@ -97,22 +97,18 @@ def _scene(make_material, shape="SPHERE"):
     return scene
 
 
+#: Cycles' settings: the bounces a refraction through a solid needs, the glass's lobes as they are
+#: (no Filter Glossy), samples at pixel centres, every light sample kept
+CYCLES = {"device": "CPU", "use_adaptive_sampling": False, "use_denoising": False, "max_bounces": 2,
+          "transmission_bounces": 2, "glossy_bounces": 0, "diffuse_bounces": 0, "transparent_max_bounces": 0,
+          "volume_bounces": 0, "blur_glossy": 0.0, "pixel_filter_type": "GAUSSIAN", "filter_width": 0.01,
+          "use_light_tree": False, "light_sampling_threshold": 0.0, "seed": 1}
+
+
 def _cycles(scene, path, samples):
     scene.render.engine = "CYCLES"
-    c = scene.cycles
-    c.device = "CPU"
-    c.samples = samples
-    c.use_adaptive_sampling = False
-    c.use_denoising = False
-    c.max_bounces = 2
-    c.transmission_bounces = 2
-    c.glossy_bounces = c.diffuse_bounces = c.transparent_max_bounces = c.volume_bounces = 0
-    c.blur_glossy = 0.0
-    c.pixel_filter_type = "GAUSSIAN"
-    c.filter_width = 0.01
-    c.use_light_tree = False
-    c.light_sampling_threshold = 0.0
-    c.seed = 1
+    for name, value in {**CYCLES, "samples": samples}.items():
+        setattr(scene.cycles, name, value)
     try:
         return scenes.render(scene, path)[..., :3].astype(np.float64)
     finally:

@@ -660,21 +660,28 @@ class OcclusionPass(Pass):
         return True
 
     @staticmethod
-    def _draw_prepass(frame: Frame, view: View, lists, target: Target, back_faces: bool) -> None:
+    def _draw_prepass(frame: Frame, view: View, lists, target: Target, back_faces: bool,
+                      groups=None) -> None:
         """The opaque surfaces' nearest depth and normals into ``target`` (its depth alone where
-        it has no colour; ``back_faces``: the nearest faces turned away, depth alone)."""
-        front_culling = None if back_faces else view_culling(frame, view, lists.opaque)
+        it has no colour; ``back_faces``: the nearest faces turned away, depth alone). ``groups``:
+        the refraction pass's transmitting surfaces in place of ``lists``' opaque ones, their
+        nearest faces turned away with their normals facing the viewer (where rays leave them)."""
+        normals = groups is not None
+        groups = lists.opaque if groups is None else groups
+        front_culling = None if back_faces else view_culling(frame, view, groups)
         with target.bind():
             target.clear(color=(0.0, 0.0, 1.0, 0.0), depth=1.0)
             gpu.state.depth_test_set("LESS_EQUAL")
             gpu.state.depth_mask_set(True)
             gpu.state.blend_set("NONE")
-            # (the faces turned away keep their program: it leaves out those towards the viewer)
-            shader = gpu_library.prepass_program(back_faces, depth_only=not (target.colors or back_faces))
+            # (the faces turned away keep their program: it leaves out those towards the viewer;
+            # their normals' program draws whatever the culling leaves it)
+            shader = gpu_library.prepass_program(back_faces and not normals,
+                                                 depth_only=not (target.colors or back_faces))
             try:
-                for _features, draws in lists.opaque:
+                for _features, draws in groups:
                     culling = None
-                    if back_faces and CULL_BACK_PREPASS:
+                    if back_faces and (CULL_BACK_PREPASS or normals):
                         # the faces turned away alone: the others culled before they rasterise
                         # (the program discards them too); a mirrored object's outward faces
                         # wind the other way (turning the winding with front_facing_set would
@@ -1097,6 +1104,22 @@ class BackgroundPass(Pass):
         return True
 
 
+def draw_nearest(frame: Frame, view: View, groups, test: str, bind) -> bool:
+    """Draw ``groups`` ((features, draws)) into the bound framebuffer, each pixel keeping the
+    fragment nearest by the depth ``test`` and writing its depth, unblended; False if cancelled."""
+    gpu.state.depth_test_set(test)
+    gpu.state.depth_mask_set(True)
+    gpu.state.blend_set("NONE")
+    try:
+        for features, draws in groups:
+            if not frame.scene.draw_group(features, draws, view.lobes, frame.should_stop, bind):
+                return False
+    finally:
+        gpu.state.depth_test_set("NONE")
+        gpu.state.depth_mask_set(False)
+    return True
+
+
 class RefractionPass(Pass):
     """The transmitting surfaces (a Transmission Weight, Glass and Refraction BSDFs: glsl/transmission.glsl),
     drawn over ``<view>.scene`` once the opaque surfaces and the world are in it -- what they refract,
@@ -1135,7 +1158,8 @@ class RefractionPass(Pass):
         target = frame.outputs[view.output("scene")]
         self._buffers(target.width, target.height)
         self._copy(frame, target)
-        self._draw_back_faces(frame, groups)
+        # the transmitting surfaces' nearest faces turned away from the viewer: depth and normals
+        OcclusionPass._draw_prepass(frame, view, None, self.back, back_faces=True, groups=groups)
         inverse = invert(np.asarray(frame.view_projection(view), np.float64))
         self.block = gpu.types.GPUUniformBuf(programs.pack_refraction(
             inverse, self.rects, (self.atlas.width, self.atlas.height)))
@@ -1147,18 +1171,8 @@ class RefractionPass(Pass):
             shader.uniform_block("refraction", self.block)
 
         with target.bind():
-            gpu.state.depth_test_set("LESS_EQUAL")
-            gpu.state.depth_mask_set(True)
-            gpu.state.blend_set("NONE")
             gpu.state.face_culling_set("NONE")
-            try:
-                for features, draws in groups:
-                    if not frame.scene.draw_group(features, draws, view.lobes, frame.should_stop, bind):
-                        return False
-            finally:
-                gpu.state.depth_test_set("NONE")
-                gpu.state.depth_mask_set(False)
-        return True
+            return draw_nearest(frame, view, groups, "LESS_EQUAL", bind)
 
     def _copy(self, frame: Frame, target: Target) -> None:
         """The scene target's colour and depth into level 0, each next level from the last, and
@@ -1187,25 +1201,6 @@ class RefractionPass(Pass):
                     frame.full_screen.draw(pack)
             finally:
                 gpu.state.viewport_set(0, 0, atlas.width, atlas.height)
-
-    def _draw_back_faces(self, frame: Frame, groups) -> None:
-        """The transmitting surfaces' nearest faces turned away from the viewer: their depth and
-        their normals facing the viewer (the prepass program, front faces culled; a mirrored
-        object's winding the other way)."""
-        shader = gpu_library.prepass_program(back_faces=False, depth_only=False)
-        with self.back.bind():
-            self.back.clear(color=(0.0, 0.0, 1.0, 0.0), depth=1.0)
-            gpu.state.depth_test_set("LESS_EQUAL")
-            gpu.state.depth_mask_set(True)
-            gpu.state.blend_set("NONE")
-            try:
-                for _features, draws in groups:
-                    culling = ["BACK" if h < 0 else "FRONT" for h in frame.scene.handedness(draws)]
-                    frame.scene.draw_positions(draws, shader, culling=culling)
-            finally:
-                gpu.state.depth_test_set("NONE")
-                gpu.state.depth_mask_set(False)
-                gpu.state.face_culling_set("NONE")
 
     def free(self) -> None:
         for target in (*self.levels, self.atlas, self.back):
@@ -1309,17 +1304,7 @@ class TransparencyPass(Pass):
 
         with framebuffer.bind():
             framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
-            gpu.state.depth_test_set("LESS")
-            gpu.state.depth_mask_set(True)
-            gpu.state.blend_set("NONE")
-            try:
-                for features, draws in groups:
-                    if not frame.scene.draw_group(features, draws, view.lobes, frame.should_stop, bind):
-                        return False
-            finally:
-                gpu.state.depth_test_set("NONE")
-                gpu.state.depth_mask_set(False)
-        return True
+            return draw_nearest(frame, view, groups, "LESS", bind)
 
     def free(self) -> None:
         if self._size is not None:
