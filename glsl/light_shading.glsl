@@ -168,6 +168,9 @@ vec3 shade_light(Surface s, LightData light, vec3 l, vec3 E, float visibility, v
 #  endif
 #endif
   vec3 c = shade_light_surface(s, light, l, E, visibility, factors);
+#ifdef SL_TRANSMISSION
+  c += transmission_light(s, l, E, factors); /* from behind the surface, through it */
+#endif
 #ifdef SL_SHEEN
 #  ifdef SL_LTC
   vec3 sheen = sheen_polygon_light.x >= 0.0 ? sheen_polygon_light : sheen_direct(s, l) * E * factors.x;

@@ -263,6 +263,9 @@ void main()
 #endif
   MaterialData m = material;
   bool outward = facing_outward();
+#ifdef REFRACTION_LEVELS
+  bool entering = outward; /* the viewer outside the surface (transmission.glsl) */
+#endif
   vec3 v = view_direction(world_position);
 #ifdef SL_GRAPH
   /* the material's node graph: its closures' inputs at this fragment */
@@ -367,6 +370,14 @@ void main()
 #endif
 #ifdef SL_LIGHTS_AREA
   shade_group(c, s, ng, listed, k, int(frame.group_ends[1].w), LIGHT_AREA, false);
+#endif
+#ifdef REFRACTION_LEVELS
+  /* what lies behind, through the glass (passes.RefractionPass), under the upper layers */
+#  if defined(SL_COAT) || defined(SL_SHEEN)
+  c += transmission_behind(s, entering) * s.below * lobes.y;
+#  else
+  c += transmission_behind(s, entering) * lobes.y;
+#  endif
 #endif
   /* a node graph's BSDFs' weight over the coverage (1 without a graph), then the emission (neither
    * lobe: weight z) */

@@ -27,12 +27,18 @@ struct ClosureLobes {
   vec3 translucent;      /* the Translucent BSDFs' colour (glsl/subsurface.glsl) */
   float subsurface;      /* Subsurface Weight (the Subsurface Scattering node's: 1) */
   vec3 subsurface_radius; /* its mean free paths (m, per channel: glsl/subsurface.glsl) times that */
+  float transmission;    /* the glass share of the non-metallic part (glsl/transmission.glsl) */
+  float transmission_ior;     /* each of the glass's inputs times that share */
+  vec3 transmission_tint;
+  float transmission_fresnel; /* 1: the Fresnel splits reflection and transmission (0: Refraction BSDF) */
+  vec3 reflection_tint;  /* the dielectric reflection's tint, times the closure's weight (the Glass
+                          * BSDF's Color, 0 for the Refraction BSDF, else white) */
 };
 
 ClosureLobes lobes_none()
 {
   return ClosureLobes(vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0.0, 0.0, 0.0,
-                      vec3(0.0), 0.0, vec3(0.0), 0.0, vec3(0.0));
+                      vec3(0.0), 0.0, vec3(0.0), 0.0, vec3(0.0), 0.0, 0.0, vec3(0.0), 0.0, vec3(0.0));
 }
 
 /* A BSDF's own lobes of weight 1: a white Specular Tint, no coat, no sheen, isotropic. */
@@ -41,6 +47,7 @@ ClosureLobes lobes_base()
   ClosureLobes l = lobes_none();
   l.specular_tint = vec3(1.0);
   l.stretch = 1.0;
+  l.reflection_tint = vec3(1.0);
   return l;
 }
 
@@ -49,7 +56,9 @@ ClosureLobes lobes_scale(ClosureLobes l, float w)
   return ClosureLobes(l.specular_tint * w, l.coat * w, l.coat_roughness * w, l.coat_ior * w, l.coat_tint * w,
                       l.coat_normal * w, l.sheen * w, l.sheen_weight * w, l.sheen_roughness * w,
                       l.thin_film * w, l.thin_film_ior * w, l.tangent * w, l.stretch * w,
-                      l.translucent * w, l.subsurface * w, l.subsurface_radius * w);
+                      l.translucent * w, l.subsurface * w, l.subsurface_radius * w,
+                      l.transmission * w, l.transmission_ior * w, l.transmission_tint * w,
+                      l.transmission_fresnel * w, l.reflection_tint * w);
 }
 
 ClosureLobes lobes_add(ClosureLobes a, ClosureLobes b)
@@ -59,7 +68,10 @@ ClosureLobes lobes_add(ClosureLobes a, ClosureLobes b)
                       a.sheen + b.sheen, a.sheen_weight + b.sheen_weight, a.sheen_roughness + b.sheen_roughness,
                       a.thin_film + b.thin_film, a.thin_film_ior + b.thin_film_ior, a.tangent + b.tangent,
                       a.stretch + b.stretch, a.translucent + b.translucent, a.subsurface + b.subsurface,
-                      a.subsurface_radius + b.subsurface_radius);
+                      a.subsurface_radius + b.subsurface_radius,
+                      a.transmission + b.transmission, a.transmission_ior + b.transmission_ior,
+                      a.transmission_tint + b.transmission_tint, a.transmission_fresnel + b.transmission_fresnel,
+                      a.reflection_tint + b.reflection_tint);
 }
 
 struct Closure {
@@ -120,8 +132,8 @@ Closure closure_mix(float fac, Closure a, Closure b)
 Closure closure_principled(vec4 base_color, float metallic, float roughness, float ior, float level,
                            float alpha, vec4 emission_color, float emission_strength, vec4 specular_tint,
                            float coat, float coat_roughness, float coat_ior, vec4 coat_tint, float sheen,
-                           float sheen_roughness, vec4 sheen_tint, float thin_film, float thin_film_ior, vec3 n,
-                           vec3 coat_n, float subsurface, vec3 subsurface_path)
+                           float sheen_roughness, vec4 sheen_tint, float thin_film, float thin_film_ior,
+                           float transmission, vec3 n, vec3 coat_n, float subsurface, vec3 subsurface_path)
 {
   float r = (max(ior, 1.0) - 1.0) / (max(ior, 1.0) + 1.0);
   Closure c = closure_bsdf(base_color.rgb, metallic, roughness, min(r * r * 2.0 * max(level, 0.0), 1.0), n);
@@ -138,10 +150,45 @@ Closure closure_principled(vec4 base_color, float metallic, float roughness, flo
   c.lobes.thin_film_ior = c.lobes.thin_film * max(thin_film_ior, 1e-5);
   c.lobes.subsurface = clamp(subsurface, 0.0, 1.0);
   c.lobes.subsurface_radius = c.lobes.subsurface * subsurface_path; /* (node_subsurface.glsl) */
+  /* the glass part (Cycles' Transmission component): each crossing tinted by sqrt(Base Color), the
+   * base colour within [0, 1]; the IOR the Principled BSDF's, at least 1e-5 */
+  c.lobes.transmission = clamp(transmission, 0.0, 1.0);
+  c.lobes.transmission_ior = c.lobes.transmission * max(ior, 1e-5);
+  c.lobes.transmission_tint = c.lobes.transmission * sqrt(clamp(base_color.rgb, 0.0, 1.0));
+  c.lobes.transmission_fresnel = c.lobes.transmission;
   c.emission = emission_color.rgb * emission_strength;
   float a = clamp(alpha, 0.0, 1.0);
   c = closure_scale(c, a);
   c.transparency = 1.0 - a;
+  return c;
+}
+
+/* Glass BSDF (Cycles' svm_node_closure_bsdf, CLOSURE_BSDF_MICROFACET_GGX_GLASS_ID): a dielectric that
+ * reflects and transmits by the Fresnel of its IOR (at least 1e-5), its Color tinting both, each
+ * crossing of the surface; no diffuse part. */
+Closure closure_glass(vec4 color, float roughness, float ior, vec3 n)
+{
+  float eta = max(ior, 1e-5);
+  float r = (eta - 1.0) / (eta + 1.0);
+  vec3 tint = max(color.rgb, 0.0);
+  Closure c = closure_bsdf(tint, 0.0, roughness, min(r * r, 1.0), n);
+  c.lobes.transmission = 1.0;
+  c.lobes.transmission_ior = eta;
+  c.lobes.transmission_tint = tint;
+  c.lobes.transmission_fresnel = 1.0;
+  c.lobes.reflection_tint = tint;
+  return c;
+}
+
+/* Refraction BSDF (Cycles' CLOSURE_BSDF_MICROFACET_GGX_REFRACTION_ID: no Fresnel): all the light
+ * transmitted (but where it reflects totally inside), tinted by its Color at each crossing; no
+ * reflection, no diffuse part. */
+Closure closure_refraction(vec4 color, float roughness, float ior, vec3 n)
+{
+  Closure c = closure_glass(color, roughness, ior, n);
+  c.specular = 0.0;
+  c.lobes.transmission_fresnel = 0.0;
+  c.lobes.reflection_tint = vec3(0.0);
   return c;
 }
 

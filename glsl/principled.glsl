@@ -218,6 +218,9 @@ vec3 principled_specular_tint(Surface s, float LoH)
     metal = p.metal_M * F_ThinFilmMetal(s.thin_film, s.film_metal_n, s.film_metal_k, s.film_metal_g, LoH);
   }
 #endif
+#ifdef SL_TRANSMISSION
+  dielectric *= s.transmission.reflection_tint; /* the Glass BSDF's Color (transmission.glsl) */
+#endif
   return s.metalness * metal + (1.0 - s.metalness) * dielectric;
 }
 
@@ -241,6 +244,9 @@ vec3 principled_direct(Surface s, vec3 l, vec3 h, float NoL, float NoH, float Nx
 #  ifdef SL_SUBSURFACE
   diffuse *= 1.0 - s.subsurface; /* the rest scatters below the surface (subsurface.glsl) */
 #  endif
+#ifdef SL_TRANSMISSION
+  diffuse *= 1.0 - s.transmission.share; /* the glass's share transmits instead (transmission.glsl) */
+#endif
   return (diffuse * factors.x + specular * factors.y) * E * NoL;
 }
 
@@ -273,9 +279,17 @@ vec3 principled_environment(Surface s, vec2 EB, vec3 radiance, vec3 irradiance, 
     metal = p.metal_M * F_ThinFilmMetal(s.thin_film, s.film_metal_n, s.film_metal_k, s.film_metal_g, s.NoV) * EB.x;
   }
 #    endif
+#      ifdef SL_TRANSMISSION
+  vec3 specular = (s.metalness * metal + (1.0 - s.metalness) * p.albedo * s.transmission.reflection_tint) *
+                  radiance;
+#      else
   vec3 specular = (s.metalness * metal + (1.0 - s.metalness) * p.albedo) * radiance;
+#      endif
 #    endif
   vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) * irradiance * INV_PI;
+#    ifdef SL_TRANSMISSION
+  diffuse *= 1.0 - s.transmission.share;
+#    endif
   return diffuse * weights.x + specular * weights.y;
 }
 #  endif

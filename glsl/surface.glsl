@@ -79,6 +79,18 @@ struct AnisotropicLobe {
 AnisotropicLobe anisotropic_lobe(vec3 n, vec3 t, float alpha, float stretch);
 float anisotropic_roughness(AnisotropicLobe a);
 #endif
+#ifdef SL_TRANSMISSION
+/* The glass at the shading point (transmission.glsl's transmission_at). */
+struct TransmissionLobe {
+  float share;         /* the glass share of the non-metallic part (what the diffuse base loses) */
+  float weight;        /* the glass share of the whole surface: share x (1 - metalness) */
+  bool fresnel;        /* the Fresnel splits reflection and transmission (else all transmitted) */
+  float eta;           /* its IOR (inside over outside) */
+  vec3 tint;           /* each crossing's tint */
+  vec3 reflection_tint; /* the dielectric reflection's tint */
+};
+TransmissionLobe transmission_at(MaterialData m, float metalness);
+#endif
 
 #ifdef SL_MULTISCATTER
 /* The specular lobe's multiple-scattering compensation (multiscatter.glsl): it depends on the view
@@ -149,6 +161,9 @@ struct Surface {
   vec3 subsurface_radius;  /* its mean free path per channel (m) */
   float curvature;         /* the surface's curvature (1/m) where the mesh program measures it, else 0 */
 #endif
+#ifdef SL_TRANSMISSION
+  TransmissionLobe transmission;
+#endif
 };
 #if defined(SL_THIN_FILM) && defined(SL_LAYERS)
 void thin_film_at(inout Surface s, vec4 film);
@@ -197,6 +212,9 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
   s.has_complex_ior = m.fresnel.z > 0.5;
   s.ior_n = m.ior_n.rgb;
   s.ior_k = m.ior_k.rgb;
+#ifdef SL_TRANSMISSION
+  s.transmission = transmission_at(m, s.metalness);
+#endif
 #ifdef SL_SPECULAR_TINT
   s.specular_tint = max(m.specular_tint.rgb, 0.0);
   vec3 tint = s.specular_tint;

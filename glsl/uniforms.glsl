@@ -79,7 +79,25 @@ struct MaterialData {
   vec4 translucent;      /* rgb: a node graph's Translucent BSDFs' colour (SL_TRANSLUCENT) */
   vec4 subsurface;       /* rgb: the subsurface's mean free path per channel (m); w: Subsurface Weight
                           * (SL_SUBSURFACE, glsl/subsurface.glsl) */
+  /* transmission (glsl/transmission.glsl, SL_TRANSMISSION) */
+  vec4 transmission;     /* x: the glass share of the non-metallic part; y: 1 the Fresnel splits reflection
+                          * and transmission (0: all transmitted); z: its IOR */
+  vec4 transmission_tint; /* rgb: the tint of each crossing of the surface */
+  vec4 reflection_tint;  /* rgb: the dielectric reflection's tint (the Glass BSDF's Color) */
 };
+
+#ifdef REFRACTION_LEVELS
+/* What the glass reads of the opaque scene behind it (glsl/transmission.glsl, addon/frame/passes.py's
+ * RefractionPass): the camera's clip -> world, the rectangles (x, y, width, height in texels) of the
+ * copy's levels in refraction_behind (level 0 the target's size, its alpha the depth; each next half
+ * the size, blurred); info: x the number of levels, yz the texture's size, w how far (m, along the
+ * view) behind an opaque surface a ray still meets it. */
+struct RefractionData {
+  mat4 inverse_view_projection;
+  vec4 rect[REFRACTION_LEVELS];
+  vec4 info;
+};
+#endif
 
 /* The world's light, precomputed (glsl/ibl.glsl, addon/reference/environment.py): nine SH coefficients
  * premultiplied by the cosine kernel's band factors, the rectangles in the atlas (x, y, width,

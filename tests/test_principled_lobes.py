@@ -370,7 +370,7 @@ def _material_lines(lobe: dict) -> str:
     m = S.MaterialParams(**lobe)
     rows = np.frombuffer(programs.pack_material(m), np.float32).reshape(-1, 4)[9:]
     names = ("specular_tint", "coat", "coat_tint", "sheen", "coat_normal", "thin_film", "anisotropy",
-             "translucent", "subsurface")
+             "translucent", "subsurface", "transmission", "transmission_tint", "reflection_tint")
     return "".join(f"m.{name} = vec4({', '.join(repr(float(x)) for x in row)});\n"
                    for name, row in zip(names, rows))
 

@@ -95,6 +95,8 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
     elif kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"):
         base, metal = _rgb(_input(node, "Color", base)), 1.0
         rough = float(_input(node, "Roughness", rough))
+    elif kind in GLASS_NODES:
+        base, metal, rough, f0 = _glass(node, maps)
     graph, aovs = _material_graph(material, images, warnings)
     if graph is not None:  # its closures' inputs, per fragment
         maps["graph"] = graph
@@ -142,7 +144,7 @@ def material_params(material: bpy.types.Material | None, images: dict | None = N
 def _principled_lobes(node) -> dict:
     """The Principled BSDF's lobes beyond its base (MaterialParams' fields), clamped as Cycles'
     svm_node_closure_bsdf clamps them: tints and weights at least 0, roughnesses within [0, 1], the
-    coat's IOR at least 1."""
+    coat's IOR at least 1, the Transmission Weight within [0, 1]."""
     def colour(name):
         return tuple(max(c, 0.0) for c in _rgb(_input(node, name, (1.0, 1.0, 1.0))))
 
@@ -162,6 +164,12 @@ def _principled_lobes(node) -> dict:
             "subsurface_ior": float(_input(node, "Subsurface IOR", 1.4)),
             "subsurface_anisotropy": float(_input(node, "Subsurface Anisotropy", 0.0)),
             "subsurface_method": getattr(node, "subsurface_method", "RANDOM_WALK"),
+            # the glass part (Cycles' Transmission component): each crossing tinted by sqrt(Base
+            # Color), the base colour clamped to [0, 1] first; its IOR the Principled BSDF's
+            "transmission_weight": unit("Transmission Weight", 0.0),
+            "transmission_ior": max(float(_input(node, "IOR", 1.5)), 1e-5),
+            "transmission_tint": tuple(min(max(c, 0.0), 1.0) ** 0.5 for c in _rgb(_input(node, "Base Color",
+                                                                                           (0.8, 0.8, 0.8)))),
             **_thin_film(node)}
 
 
@@ -178,6 +186,25 @@ def _thin_film_version() -> dict:
     the dielectric alone (the metal bare) and blend its IOR to the air's below 30 nm (5.0: 1 nm)."""
     modern = bpy.app.version >= (5, 0, 0)
     return {"thin_film_metal": modern, "thin_film_blend": 1.0 if modern else 30.0}
+
+
+#: The closures that transmit alone (glsl/transmission.glsl): the Glass BSDF (reflects and transmits
+#: by the Fresnel) and the Refraction BSDF (transmits all, reflects nothing).
+GLASS_NODES = ("ShaderNodeBsdfGlass", "ShaderNodeBsdfRefraction")
+
+
+def _glass(node, maps: dict) -> tuple:
+    """A Glass or Refraction BSDF as the surface: (base colour, metalness, roughness, F0), its
+    transmission into ``maps``, as Cycles' svm_node_closure_bsdf sets its closure up: the Color
+    tints each crossing (and the Glass BSDF's reflection), the IOR at least 1e-5, the roughness
+    within [0, 1]; the Refraction BSDF has no reflection (F0 0) and no Fresnel."""
+    color = tuple(max(c, 0.0) for c in _rgb(_input(node, "Color", (1.0, 1.0, 1.0))))
+    ior = max(float(_input(node, "IOR", 1.5)), 1e-5)
+    rough = min(max(float(_input(node, "Roughness", 0.0)), 0.0), 1.0)
+    glass = node.bl_idname == "ShaderNodeBsdfGlass"
+    maps.update(transmission_weight=1.0, transmission_ior=ior, transmission_tint=color,
+                reflection_tint=color if glass else (0.0, 0.0, 0.0), transmission_fresnel=glass)
+    return color, 0.0, rough, S.f0_from_ior(ior) if glass else 0.0
 
 
 #: The Material panel's explicit values a compiled graph leaves as they are: its input -> the flag.

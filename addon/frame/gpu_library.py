@@ -350,6 +350,9 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
                 3: "thin_film_table" if features.uses_thin_film_table else None}
     if features.peel:
         samplers.update({6: "opaque_depth", 7: "peel_depth"})
+    if "TRANSMISSION" in features.lobes:  # what is behind the glass (passes.RefractionPass); a glass is
+        # never shaded deferred (Features), so it takes the G-buffer's units
+        samplers.update({17: "refraction_behind", 18: "refraction_back", 19: "refraction_back_depth"})
     samplers[8] = "env_atlas" if features.environment == "MAP" else None  # irradiance, levels
     samplers[9] = "split_table" if features.uses_split_table else None
     samplers[10] = "env_chain" if features.uses_env_chain else None
@@ -376,6 +379,8 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
         info.uniform_buf(len(_BLOCKS), "EnvironmentData", "env")
     if features.uses_env_chain:
         info.uniform_buf(len(_BLOCKS) + 1, "ChainData", "chain")
+    if "TRANSMISSION" in features.lobes:
+        info.uniform_buf(len(_BLOCKS) + 5, "RefractionData", "refraction")
     if features.graph is not None:  # the material's node graph: its constants, images, the object's data
         info.uniform_buf(len(_BLOCKS) + 4, "GraphBlock", "graph")
         _declare_graph_images(info, features.graph)
@@ -682,6 +687,19 @@ def split_table(terms) -> gpu.types.GPUTexture:
         return rgba32f_texture(multiscatter.split_sum_table(ndf, visibility))
 
     return LIBRARY.table(("SPLIT", ndf, visibility), build)
+
+
+def refraction_copy_program(stage: str) -> gpu.types.GPUShader:
+    """A stage of the copy of what is behind the glass (programs.REFRACTION_COPY_STAGES)."""
+    samplers = ("source", "source_depth") if stage == "COPY" else ("source",)
+
+    def declare(info):
+        _declare_full_screen(*samplers)(info)
+        if stage == "PACK":
+            info.push_constant("VEC4", "offset")
+
+    return LIBRARY.program(("refraction", stage), "refraction copy", programs.refraction_copy_source(stage),
+                           declare)
 
 
 def occupancy_program() -> gpu.types.GPUShader:

@@ -26,7 +26,7 @@ import hashlib
 import math
 from collections import Counter
 from collections.abc import Callable
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 
 import gpu
 import numpy as np
@@ -170,10 +170,13 @@ class Draw:
 @dataclass
 class DrawLists:
     """The draws of one view, grouped per shading program (sorted by defines): opaque surfaces,
-    and partly transparent ones (drawn by the depth-peeling program)."""
+    partly transparent ones (drawn by the depth-peeling program) and transmitting ones."""
 
     opaque: list[tuple[programs.Features, list[Draw]]]
     blended: list[tuple[programs.Features, list[Draw]]]
+    #: the transmitting ones (a Transmission Weight, Glass and Refraction BSDFs), drawn over the
+    #: opaque scene and the world, which they refract (passes.RefractionPass)
+    refracted: list[tuple[programs.Features, list[Draw]]] = field(default_factory=list)
 
 
 class _Block:
@@ -482,12 +485,13 @@ class SceneResources:
         return np.where(beyond, facing, 0).astype(np.int8)
 
     def shadow_casters(self, covering: bool = True) -> list[Draw]:
-        """The draws of the items that cast shadows: the opaque ones, then (``covering``) the
+        """The draws of the items that cast shadows: the opaque and transmitting ones (glass casts a
+        whole shadow, as Cycles' shadow rays stop at it), then (``covering``) the
         partly covering ones (``covering``), which the shadow pass draws by their coverage
         (``draw_coverage``); without, partly covering surfaces cast nothing."""
         items = self.snapshot.items
         lists = self.draw_lists(None, False)
-        groups = (lists.opaque, lists.blended) if covering else (lists.opaque,)
+        groups = (lists.opaque, lists.refracted) + ((lists.blended,) if covering else ())
         return [draw for group in groups for _features, draws in group for draw in draws
                 if items[draw.order].casts_shadow]
 
@@ -662,6 +666,7 @@ class SceneResources:
                     for key, m in snapshot.materials.items()}
         opaque: dict[programs.Features, list[Draw]] = {}
         blended: dict[programs.Features, list[Draw]] = {}
+        refracted: dict[programs.Features, list[Draw]] = {}
         block_size = programs.OBJECT_BLOCK
         for order, item in enumerate(snapshot.items):
             for slot, batch, parts in self._batches.get(item.geometry, ()):
@@ -672,13 +677,15 @@ class SceneResources:
                 draw = Draw(order, order // block_size, order % block_size, key, batch, slot)
                 if material.alpha < 1.0 or (material.graph is not None and material.graph.transparent):
                     blended.setdefault(replace(features[key], peel=True, occlusion=False), []).append(draw)
+                elif "TRANSMISSION" in features[key].lobes:
+                    refracted.setdefault(features[key], []).append(draw)
                 else:
                     opaque.setdefault(features[key], []).append(draw)
 
         def ordered(groups):
             return sorted(groups.items(), key=lambda kv: kv[0].defines())
 
-        lists = self._draw_lists[view_kind] = DrawLists(ordered(opaque), ordered(blended))
+        lists = self._draw_lists[view_kind] = DrawLists(ordered(opaque), ordered(blended), ordered(refracted))
         return lists
 
     def _attribute_batch(self, key: str, slot: int, parts: tuple, attributes: tuple) -> gpu.types.GPUBatch:

@@ -3,8 +3,8 @@
 A frame is a list of steps, each a pass and its input, run in order (``Renderer.run``):
 
     per frame: EnvironmentPass (the world's light), ShadowPass (the lights' shadow maps)
-    per view:  OcclusionPass ─► OpaquePass ─► BackgroundPass ─► TransparencyPass ─► ResolvePass
-               ─► ExposurePass ─► DisplayPass
+    per view:  OcclusionPass ─► OpaquePass ─► BackgroundPass ─► RefractionPass ─► TransparencyPass
+               ─► ResolvePass ─► ExposurePass ─► DisplayPass
     then:      ComparePass (A|B: two views composited)
 
 Lifetimes:
@@ -15,6 +15,7 @@ Lifetimes:
   viewport redraws into the same ones), freed with the renderer.
 
 A pass with nothing to do does nothing: no transparency layers without transparent surfaces, no
+copy of the scene without transmitting ones, no
 resolve without supersampling, no metering under manual exposure, no display pass under
 Blender's view transform (unless automatic exposure scales Combined), no shadow maps without a
 light that casts. The per-frame passes run ahead of the views, reading the same
@@ -659,21 +660,28 @@ class OcclusionPass(Pass):
         return True
 
     @staticmethod
-    def _draw_prepass(frame: Frame, view: View, lists, target: Target, back_faces: bool) -> None:
+    def _draw_prepass(frame: Frame, view: View, lists, target: Target, back_faces: bool,
+                      groups=None) -> None:
         """The opaque surfaces' nearest depth and normals into ``target`` (its depth alone where
-        it has no colour; ``back_faces``: the nearest faces turned away, depth alone)."""
-        front_culling = None if back_faces else view_culling(frame, view, lists.opaque)
+        it has no colour; ``back_faces``: the nearest faces turned away, depth alone). ``groups``:
+        the refraction pass's transmitting surfaces in place of ``lists``' opaque ones, their
+        nearest faces turned away with their normals facing the viewer (where rays leave them)."""
+        normals = groups is not None
+        groups = lists.opaque if groups is None else groups
+        front_culling = None if back_faces else view_culling(frame, view, groups)
         with target.bind():
             target.clear(color=(0.0, 0.0, 1.0, 0.0), depth=1.0)
             gpu.state.depth_test_set("LESS_EQUAL")
             gpu.state.depth_mask_set(True)
             gpu.state.blend_set("NONE")
-            # (the faces turned away keep their program: it leaves out those towards the viewer)
-            shader = gpu_library.prepass_program(back_faces, depth_only=not (target.colors or back_faces))
+            # (the faces turned away keep their program: it leaves out those towards the viewer;
+            # their normals' program draws whatever the culling leaves it)
+            shader = gpu_library.prepass_program(back_faces and not normals,
+                                                 depth_only=not (target.colors or back_faces))
             try:
-                for _features, draws in lists.opaque:
+                for _features, draws in groups:
                     culling = None
-                    if back_faces and CULL_BACK_PREPASS:
+                    if back_faces and (CULL_BACK_PREPASS or normals):
                         # the faces turned away alone: the others culled before they rasterise
                         # (the program discards them too); a mirrored object's outward faces
                         # wind the other way (turning the winding with front_facing_set would
@@ -1096,6 +1104,116 @@ class BackgroundPass(Pass):
         return True
 
 
+def draw_nearest(frame: Frame, view: View, groups, test: str, bind) -> bool:
+    """Draw ``groups`` ((features, draws)) into the bound framebuffer, each pixel keeping the
+    fragment nearest by the depth ``test`` and writing its depth, unblended; False if cancelled."""
+    gpu.state.depth_test_set(test)
+    gpu.state.depth_mask_set(True)
+    gpu.state.blend_set("NONE")
+    try:
+        for features, draws in groups:
+            if not frame.scene.draw_group(features, draws, view.lobes, frame.should_stop, bind):
+                return False
+    finally:
+        gpu.state.depth_test_set("NONE")
+        gpu.state.depth_mask_set(False)
+    return True
+
+
+class RefractionPass(Pass):
+    """The transmitting surfaces (a Transmission Weight, Glass and Refraction BSDFs: glsl/transmission.glsl),
+    drawn over ``<view>.scene`` once the opaque surfaces and the world are in it -- what they refract,
+    in screen space (EEVEE's refraction): a copy of its colour with its depth (level 0), halved and
+    blurred into levels for rough glass, packed into one texture; and the nearest faces of the
+    transmitting surfaces turned away from the viewer (depth and normals: where a ray through a
+    closed object leaves it). Then each transmitting surface's nearest fragment is shaded, its
+    transmitted part read from the copy where its refracted ray meets the opaque scene, and written
+    with its depth (the partly transparent surfaces after it are drawn over it where in front, and
+    hidden behind it). Nothing where no surface transmits."""
+
+    draws_geometry = True
+
+    def __init__(self):
+        self._size: tuple | None = None
+        self.levels: list[Target] = []
+        self.atlas: Target | None = None
+        self.back: Target | None = None
+        self.block = None
+
+    def _buffers(self, width: int, height: int) -> None:
+        if self._size == (width, height):
+            return
+        self.free()
+        sizes, self.rects, atlas = programs.refraction_layout(width, height)
+        self.levels = [Target(w, h, "RGBA32F", depth=False) for w, h in sizes]
+        self.atlas = Target(*atlas, "RGBA32F", depth=False)
+        self.back = Target(width, height, "RGBA32F", depth=True)
+        self._size = (width, height)
+
+    def run(self, frame: Frame, view: View) -> bool:
+        groups = view_lists(frame, view).refracted
+        if not groups:
+            self.free()  # a viewport keeps no copy once nothing transmits
+            return True
+        target = frame.outputs[view.output("scene")]
+        self._buffers(target.width, target.height)
+        self._copy(frame, target)
+        # the transmitting surfaces' nearest faces turned away from the viewer: depth and normals
+        OcclusionPass._draw_prepass(frame, view, None, self.back, back_faces=True, groups=groups)
+        inverse = invert(np.asarray(frame.view_projection(view), np.float64))
+        self.block = gpu.types.GPUUniformBuf(programs.pack_refraction(
+            inverse, self.rects, (self.atlas.width, self.atlas.height)))
+
+        def bind(shader):
+            gpu_library.bind_sampler(shader, "refraction_behind", self.atlas.texture_color)
+            gpu_library.bind_sampler(shader, "refraction_back", self.back.texture_color)
+            gpu_library.bind_sampler(shader, "refraction_back_depth", self.back.texture_depth)
+            shader.uniform_block("refraction", self.block)
+
+        with target.bind():
+            gpu.state.face_culling_set("NONE")
+            return draw_nearest(frame, view, groups, "LESS_EQUAL", bind)
+
+    def _copy(self, frame: Frame, target: Target) -> None:
+        """The scene target's colour and depth into level 0, each next level from the last, and
+        every level into its rectangle of the atlas."""
+        def bind_copy(shader):
+            gpu_library.bind_sampler(shader, "source", target.texture_color)
+            gpu_library.bind_sampler(shader, "source_depth", target.texture_depth)
+
+        frame.draw_full_screen(gpu_library.refraction_copy_program("COPY"), bind_copy, self.levels[0])
+        down = gpu_library.refraction_copy_program("DOWN")
+        for source, level in zip(self.levels, self.levels[1:]):
+            frame.draw_full_screen(down, lambda s, source=source: gpu_library.bind_sampler(
+                s, "source", source.texture_color), level)
+        pack = gpu_library.refraction_copy_program("PACK")
+        atlas = self.atlas
+        with atlas.bind():
+            atlas.framebuffer.clear(color=(0.0, 0.0, 0.0, 1.0))
+            gpu.state.depth_test_set("NONE")
+            gpu.state.blend_set("NONE")
+            pack.bind()
+            try:
+                for level, (x, y, w, h) in zip(self.levels, self.rects):
+                    gpu.state.viewport_set(x, y, w, h)
+                    gpu_library.bind_sampler(pack, "source", level.texture_color)
+                    pack.uniform_float("offset", (float(x), float(y), 0.0, 0.0))
+                    frame.full_screen.draw(pack)
+            finally:
+                gpu.state.viewport_set(0, 0, atlas.width, atlas.height)
+
+    def free(self) -> None:
+        for target in (*self.levels, self.atlas, self.back):
+            if target is not None:
+                target.free()
+        self.levels, self.atlas, self.back, self.block = [], None, None, None
+        self._size = None
+
+    def textures(self) -> list:
+        targets = (*self.levels, self.atlas, self.back)
+        return [t for target in targets if target is not None for t in target.owned()]
+
+
 class TransparencyPass(Pass):
     """Depth peeling (Everitt 2001) over the partly transparent surfaces: up to the scene's
     Transparency Layers passes, each keeping per pixel the nearest fragment behind the previous
@@ -1186,17 +1304,7 @@ class TransparencyPass(Pass):
 
         with framebuffer.bind():
             framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0), depth=1.0)
-            gpu.state.depth_test_set("LESS")
-            gpu.state.depth_mask_set(True)
-            gpu.state.blend_set("NONE")
-            try:
-                for features, draws in groups:
-                    if not frame.scene.draw_group(features, draws, view.lobes, frame.should_stop, bind):
-                        return False
-            finally:
-                gpu.state.depth_test_set("NONE")
-                gpu.state.depth_mask_set(False)
-        return True
+            return draw_nearest(frame, view, groups, "LESS", bind)
 
     def free(self) -> None:
         if self._size is not None:
@@ -1326,5 +1434,5 @@ class ComparePass(TargetPass):
 
 
 #: The passes that draw one view, in order.
-VIEW_PASSES = (OcclusionPass, OpaquePass, BackgroundPass, TransparencyPass, ResolvePass, ExposurePass,
-               DisplayPass)
+VIEW_PASSES = (OcclusionPass, OpaquePass, BackgroundPass, RefractionPass, TransparencyPass, ResolvePass,
+               ExposurePass, DisplayPass)

@@ -791,6 +791,7 @@ PRINCIPLED_BASE_INPUTS = ("Base Color", "Metallic", "Roughness", "IOR", "Specula
 PRINCIPLED_INPUTS = PRINCIPLED_BASE_INPUTS + ("Specular Tint", "Coat Weight", "Coat Roughness", "Coat IOR",
                                               "Coat Tint", "Sheen Weight", "Sheen Roughness", "Sheen Tint",
                                               "Thin Film Thickness", "Thin Film IOR")
+PRINCIPLED_INPUTS += ("Transmission Weight",)
 
 #: The values of the Principled BSDF's lobe inputs a node read from an older file may lack (Blender's
 #: defaults: they add no lobe), with their socket types.
@@ -798,7 +799,8 @@ PRINCIPLED_DEFAULTS = {"Specular Tint": ((1.0, 1.0, 1.0, 1.0), "RGBA"), "Coat We
                        "Coat Roughness": (0.03, "VALUE"), "Coat IOR": (1.5, "VALUE"),
                        "Coat Tint": ((1.0, 1.0, 1.0, 1.0), "RGBA"), "Sheen Weight": (0.0, "VALUE"),
                        "Sheen Roughness": (0.5, "VALUE"), "Sheen Tint": ((1.0, 1.0, 1.0, 1.0), "RGBA"),
-                       "Thin Film Thickness": (0.0, "VALUE"), "Thin Film IOR": (1.33, "VALUE")}
+                       "Thin Film Thickness": (0.0, "VALUE"), "Thin Film IOR": (1.33, "VALUE"),
+                       "Transmission Weight": (0.0, "VALUE")}
 
 
 def _principled(w: _Writer, node: FlatNode) -> dict:
@@ -908,6 +910,14 @@ def _unknown_closure(w: _Writer, node: FlatNode) -> dict:
             for s, t in node.outputs.items() if t == "SHADER"}
 
 
+def _glass(function: str, w: _Writer, node: FlatNode) -> dict:
+    """Glass and Refraction BSDFs (glsl/node_closure.glsl's closure_glass, closure_refraction): a
+    transmitting dielectric of their colour, roughness and IOR; their distribution (GGX, Beckmann,
+    Multiscatter GGX) is drawn as the Principled set's GGX."""
+    return {"BSDF": f"{function}({_closure_color(w, node)}, {_closure_roughness(w, node)}, "
+                    f"{w.arg(node, 'IOR')}, {_normal_input(w, node)})"}
+
+
 def _glossy(w: _Writer, node: FlatNode) -> dict:
     """Glossy, Anisotropic and Metallic BSDFs: a metal of their colour and roughness, anisotropic
     where they are (``_anisotropic``)."""
@@ -922,6 +932,8 @@ CLOSURES = {
     "ShaderNodeBsdfGlossy": _glossy,
     "ShaderNodeBsdfAnisotropic": _glossy,
     "ShaderNodeBsdfMetallic": _glossy,
+    "ShaderNodeBsdfGlass": lambda w, n: _glass("closure_glass", w, n),
+    "ShaderNodeBsdfRefraction": lambda w, n: _glass("closure_refraction", w, n),
     "ShaderNodeEmission": lambda w, n: _call("closure_emission", w, n, ("Color", "Strength"), "Emission"),
     "ShaderNodeBsdfTransparent": lambda w, n: _call("closure_transparent", w, n, ("Color",), "BSDF"),
     "ShaderNodeBsdfTranslucent": lambda w, n: {"BSDF": f"closure_translucent({_closure_color(w, n)}, "

@@ -260,16 +260,18 @@ def _lobes(flat: FlatGraph) -> frozenset[str]:
         if codegen.anisotropic(node):  # a Principled, Glossy or Metallic BSDF's anisotropic lobe
             out.add("ANISOTROPY")
         out |= _CLOSURE_LOBES.get(node.kind, set())
+        if node.kind in GLASS_CLOSURES:  # transmitting alone
+            out.add("TRANSMISSION")
         if node.kind != "ShaderNodeBsdfPrincipled":
             continue
         values = {}
         for socket in ("Specular Tint", "Coat Weight", "Sheen Weight", "Sheen Tint", "Thin Film Thickness",
-                       "Subsurface Weight"):
+                       "Subsurface Weight", "Transmission Weight"):
             spec = node.inputs.get(socket)
             if spec is not None and not isinstance(spec.source, Const):
                 value = {"Specular Tint": (0.0,) * 3, "Coat Weight": 1.0, "Sheen Weight": 1.0,
                          "Sheen Tint": (1.0,) * 3, "Thin Film Thickness": 1.0,
-                         "Subsurface Weight": 1.0}[socket]  # linked: on
+                         "Subsurface Weight": 1.0, "Transmission Weight": 1.0}[socket]  # linked: on
             elif spec is not None and spec.source.value is not None:
                 value = spec.source.value
             else:
@@ -277,7 +279,8 @@ def _lobes(flat: FlatGraph) -> frozenset[str]:
             values[socket] = tuple(value)[:3] if isinstance(value, (tuple, list)) else float(value)
         out |= lobes_of(values["Specular Tint"], values["Coat Weight"], values["Sheen Weight"],
                         values["Sheen Tint"], values["Thin Film Thickness"],
-                        subsurface_weight=values["Subsurface Weight"])
+                        subsurface_weight=values["Subsurface Weight"],
+                        transmission_weight=values["Transmission Weight"])
     return frozenset(out)
 
 
@@ -414,9 +417,12 @@ LOBE_INPUTS = {"SPECULAR_TINT": ("Specular Tint",),
                "THIN_FILM": ("Thin Film Thickness", "Thin Film IOR"),
                "ANISOTROPY": ("Anisotropic", "Anisotropic Rotation", "Tangent"),
                "TRANSLUCENT": (),
-               "SUBSURFACE": ("Subsurface Weight", "Subsurface Radius", "Subsurface Scale", "Subsurface IOR")}
+               "SUBSURFACE": ("Subsurface Weight", "Subsurface Radius", "Subsurface Scale", "Subsurface IOR"),
+               "TRANSMISSION": ("Transmission Weight",)}
 #: The Glossy and Metallic BSDFs' anisotropic inputs (``codegen.ANISOTROPIC``)
 ANISOTROPIC_INPUTS = {"Anisotropy", "Rotation", "Tangent"}
+#: The closures that transmit alone (glsl/node_closure.glsl's closure_glass, closure_refraction).
+GLASS_CLOSURES = ("ShaderNodeBsdfGlass", "ShaderNodeBsdfRefraction")
 #: What of each closure the shading models read (the rest is drawn as nothing: Principled BSDF's
 #: coat, sheen, transmission ...).
 READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_BASE_INPUTS) | {"Normal"}
@@ -425,7 +431,9 @@ READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_BASE_INPUTS) |
                "ShaderNodeBsdfGlossy": {"Color", "Roughness", "Normal"} | ANISOTROPIC_INPUTS,
                "ShaderNodeBsdfMetallic": {"Base Color", "Roughness", "Normal"} | ANISOTROPIC_INPUTS,
                "ShaderNodeBsdfTranslucent": {"Color", "Normal"},
-               "ShaderNodeSubsurfaceScattering": {"Color", "Scale", "Radius", "IOR", "Normal"}}
+               "ShaderNodeSubsurfaceScattering": {"Color", "Scale", "Radius", "IOR", "Normal"},
+               "ShaderNodeBsdfGlass": {"Color", "Roughness", "IOR", "Normal"},
+               "ShaderNodeBsdfRefraction": {"Color", "Roughness", "IOR", "Normal"}}
 READ_INPUTS["ShaderNodeBsdfAnisotropic"] = READ_INPUTS["ShaderNodeBsdfGlossy"]  # the Glossy BSDF's own name
 
 

@@ -92,7 +92,7 @@ MISSING = {
 #: "why".
 LOBE_LABELS = {"SPECULAR_TINT": "specular tint", "COAT": "coat", "SHEEN": "sheen", "THIN_FILM": "thin film",
                "ANISOTROPY": "anisotropy", "TRANSLUCENT": "translucent",
-               "SUBSURFACE": "subsurface"}
+               "SUBSURFACE": "subsurface", "TRANSMISSION": "transmission"}
 #: The lobes the prediction's twin does not draw: a material with one takes the Principled set, which
 #: alone draws it, unpredicted (its why names the lobe).
 UNPREDICTED_LOBES = ("ANISOTROPY",)

@@ -60,7 +60,45 @@ MODEL_FILES = {
 }
 FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "environment.glsl", "ibl.glsl")
 PBR_LIBRARY = ("anisotropy.glsl", "multiscatter.glsl", "pbr_terms.glsl", "thin_film.glsl", "principled.glsl",
-               "ltc.glsl", "subsurface.glsl")
+               "ltc.glsl", "subsurface.glsl",
+               "transmission.glsl")
+#: The screen-space refraction (glsl/transmission.glsl, passes.RefractionPass): the most levels of
+#: the blurred copy of what is behind the glass (each half the last's size), the steps a refracted
+#: ray is marched in across the screen and the bisections refining where it meets a surface, and the
+#: blur's scale: a level's texels per pixel of the refracted lobe's radius.
+REFRACTION_LEVELS = 7
+REFRACTION_STEPS = 48
+REFRACTION_BISECTIONS = 6
+REFRACTION_BLUR = 1.0
+#: How far (m, along the view) behind an opaque surface a refracted ray may pass at a step and
+#: still meet it (farther, it passed behind a nearer object and goes on), beyond two steps' length.
+REFRACTION_THICKNESS = 0.1
+
+
+def refraction_layout(width: int, height: int) -> tuple[list, list, tuple[int, int]]:
+    """The copy of what is behind the glass (passes.RefractionPass) for a ``width`` x ``height``
+    target: its levels' sizes (level 0 the target's, each next half the last's, rounded up, at most
+    REFRACTION_LEVELS), their rectangles (x, y, width, height) in one texture (level 0 at the
+    origin, the others stacked to its right) and that texture's size."""
+    sizes = [(width, height)]
+    while len(sizes) < REFRACTION_LEVELS and max(sizes[-1]) > 1:
+        w, h = sizes[-1]
+        sizes.append((-(-w // 2), -(-h // 2)))
+    rects, y = [(0, 0, width, height)], 0
+    for w, h in sizes[1:]:
+        rects.append((width, y, w, h))
+        y += h
+    return sizes, rects, (width + (sizes[1][0] if len(sizes) > 1 else 0), max(height, y))
+
+
+def pack_refraction(inverse_view_projection: np.ndarray, rects, size: tuple[int, int]) -> bytes:
+    """The RefractionData block (glsl/uniforms.glsl) of ``refraction_layout``'s rectangles and size."""
+    rows = np.zeros((REFRACTION_LEVELS, 4), np.float32)
+    rows[:len(rects)] = rects
+    info = np.array([len(rects), *size, REFRACTION_THICKNESS], np.float32)
+    return np.concatenate([_mat(inverse_view_projection), rows.ravel(), info]).tobytes()
+
+
 #: How the world lights a program: "" not at all (a black world), "UNIFORM" a constant radiance,
 #: "MAP" environment images (glsl/ibl.glsl).
 ENVIRONMENTS = ("", "UNIFORM", "MAP")
@@ -191,6 +229,11 @@ class Features:
             object.__setattr__(self, "lobes", frozenset())
         if {"TRANSLUCENT", "SUBSURFACE"} & set(self.lobes):  # the subsurface measures the surface's
             object.__setattr__(self, "deferred", False)  # curvature from screen derivatives
+        if self.peel and "TRANSMISSION" in self.lobes:  # a partly transparent glass is peeled: what is
+            object.__setattr__(self, "lobes", self.lobes - {"TRANSMISSION"})  # behind it, not refracted
+        if "TRANSMISSION" in self.lobes:  # drawn over the opaque scene (passes.RefractionPass), which
+            object.__setattr__(self, "deferred", False)  # the occlusion pass saw without it
+            object.__setattr__(self, "occlusion", False)
 
     @classmethod
     def from_snapshot(cls, snapshot: Snapshot, model: str | None = None,
@@ -456,8 +499,19 @@ def program_source(features: Features) -> ProgramSource:
         vertex=(read_glsl("deferred_depth.glsl") + "\n" + read_glsl("deferred.vert.glsl")
                 if features.deferred else mesh_vertex()),
         fragment="\n".join(fragment),
-        defines=tuple(sorted(features.defines() + (("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)),))),
+        defines=tuple(sorted(features.defines() + (("SL_OBJECT_BLOCK", str(OBJECT_BLOCK)),)
+                             + refraction_defines(features))),
     )
+
+
+def refraction_defines(features: Features) -> tuple[tuple[str, str], ...]:
+    """The screen-space refraction's constants (glsl/transmission.glsl's, under REFRACTION_LEVELS) for
+    a program drawing transmission: those drawn by passes.RefractionPass, which binds what they read."""
+    if "TRANSMISSION" not in features.lobes:
+        return ()
+    return (("REFRACTION_LEVELS", str(REFRACTION_LEVELS)), ("REFRACTION_STEPS", str(REFRACTION_STEPS)),
+            ("REFRACTION_BISECTIONS", str(REFRACTION_BISECTIONS)),
+            ("REFRACTION_BLUR", repr(float(REFRACTION_BLUR))))
 
 
 @dataclass(frozen=True)
@@ -510,7 +564,8 @@ def clear_source_caches() -> None:
     for cached in (read_glsl, program_source, post_source, compare_source, occupancy_source, under_source,
                    background_source, env_bake_source, env_downsample_source, env_prefilter_source,
                    env_irradiance_source, prepass_source, gtao_source, occlusion_resolve_source,
-                   occlusion_depths_source, shadow_source, exposure_source, gbuffer_source):
+                   occlusion_depths_source, shadow_source, exposure_source, gbuffer_source,
+                   refraction_copy_source):
         cached.cache_clear()
 
 
@@ -660,6 +715,15 @@ def occupancy_source() -> ProgramSource:
 def group_depth_source() -> ProgramSource:
     fragment = read_glsl("deferred_depth.glsl") + "\n" + read_glsl("group_depth.frag.glsl")
     return ProgramSource(typedefs="", vertex=read_glsl("post.vert.glsl"), fragment=fragment, defines=())
+
+
+#: The screen-space refraction's copy stages (glsl/refraction_copy.frag.glsl).
+REFRACTION_COPY_STAGES = ("COPY", "DOWN", "PACK")
+
+
+@lru_cache(maxsize=3)
+def refraction_copy_source(stage: str) -> ProgramSource:
+    return _full_screen_source("refraction_copy.frag.glsl", defines=(("SL_REFRACTION_" + stage, "1"),))
 
 
 @lru_cache(maxsize=1)
@@ -935,6 +999,10 @@ def pack_material(m: MaterialParams) -> bytes:
         [0.0, 0.0, 0.0, 0.0],  # the translucent lobe: a node graph's alone
         [*subsurface.mean_free_path(m.subsurface_radius, m.subsurface_scale, m.subsurface_method,
                                     m.base_color, m.subsurface_ior), m.subsurface_weight],
+        [min(max(m.transmission_weight, 0.0), 1.0), 1.0 if m.transmission_fresnel else 0.0,
+         max(m.transmission_ior, 1e-5), 0.0],
+        [*m.transmission_tint, 0.0],
+        [*m.reflection_tint, 0.0],
     ]
     return np.asarray(rows, np.float32).tobytes()
 

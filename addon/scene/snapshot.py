@@ -184,6 +184,17 @@ class MaterialParams:
     subsurface_ior: float = 1.4
     subsurface_anisotropy: float = 0.0
     subsurface_method: str = "RANDOM_WALK"
+    #: transmission (glsl/transmission.glsl): the share of the non-metallic part that is glass
+    #: (the Principled BSDF's Transmission Weight; 1 for a Glass or Refraction BSDF), its IOR, the
+    #: tint of each crossing of the surface (the Principled BSDF's sqrt(Base Color), the Glass and
+    #: Refraction BSDFs' Color), the dielectric reflection's tint (the Glass BSDF's Color; 0: the
+    #: Refraction BSDF reflects nothing) and whether the Fresnel splits the light between reflection
+    #: and transmission (off: the Refraction BSDF transmits all of it)
+    transmission_weight: float = 0.0
+    transmission_ior: float = 1.5
+    transmission_tint: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    reflection_tint: tuple[float, float, float] = (1.0, 1.0, 1.0)
+    transmission_fresnel: bool = True
 
     @property
     def lobes(self) -> frozenset[str]:
@@ -192,20 +203,23 @@ class MaterialParams:
         if self.graph is not None:
             return self.graph.lobes
         return lobes_of(self.specular_tint, self.coat_weight, self.sheen_weight, self.sheen_tint,
-                        self.thin_film_thickness, subsurface_weight=self.subsurface_weight)
+                        self.thin_film_thickness, subsurface_weight=self.subsurface_weight,
+                        transmission_weight=self.transmission_weight)
 
 
 #: The Principled BSDF's lobes beyond its base the programs draw, as their defines name them
 #: (SL_<LOBE>).
 #: ANISOTROPY: the anisotropic GGX lobe (glsl/anisotropy.glsl) of a Principled, Glossy or Metallic BSDF:
 #: only a compiled graph has one (its tangent is per fragment: ``materials.surface._lobes``).
-LOBES = ("SPECULAR_TINT", "COAT", "SHEEN", "THIN_FILM", "ANISOTROPY", "TRANSLUCENT", "SUBSURFACE")
+LOBES = ("SPECULAR_TINT", "COAT", "SHEEN", "THIN_FILM", "ANISOTROPY", "TRANSLUCENT", "SUBSURFACE",
+         "TRANSMISSION")
 
 
 def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint,
-             thin_film_thickness=0.0, subsurface_weight=0.0) -> frozenset[str]:
+             thin_film_thickness=0.0, subsurface_weight=0.0,
+             transmission_weight=0.0) -> frozenset[str]:
     """The lobes a Principled BSDF of these inputs draws: a Specular Tint other than white, a Coat
-    Weight above 0, a Sheen Weight and Tint above 0, a Subsurface Weight above 0 (Cycles adds no lobe
+    Weight above 0, a Sheen Weight and Tint above 0, a Subsurface or Transmission Weight above 0 (Cycles adds no lobe
     of weight 0: its CLOSURE_WEIGHT_CUTOFF is 1e-5), a Thin Film Thickness above 0. Scalars here;
     per-point arrays (the twin's) are any of them. (The translucent lobe is a node graph's: its
     Translucent BSDF; the anisotropic lobe too.)"""
@@ -215,7 +229,8 @@ def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint,
             "COAT": bool(np.any(np.asarray(coat_weight, np.float64) > 1e-5)),
             "SHEEN": bool(np.any(sheen > 1e-5)),
             "THIN_FILM": bool(np.any(np.asarray(thin_film_thickness, np.float64) > 0.0)),
-            "SUBSURFACE": bool(np.any(np.asarray(subsurface_weight, np.float64) > 1e-5))}
+            "SUBSURFACE": bool(np.any(np.asarray(subsurface_weight, np.float64) > 1e-5)),
+            "TRANSMISSION": bool(np.any(np.asarray(transmission_weight, np.float64) > 1e-5))}
     return frozenset(name for name in LOBES if used.get(name))
 
 

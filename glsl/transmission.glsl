@@ -1,0 +1,302 @@
+/* Transmission (SL_TRANSMISSION): the Principled BSDF's Transmission Weight, the Glass and Refraction
+ * BSDFs. A dielectric interface splits the light between reflection (the Principled set's dielectric
+ * lobe, tinted by the Glass BSDF's Color) and transmission by the exact Fresnel; the transmitted
+ * part is what lies behind the surface as the rasteriser has it, in screen space (EEVEE's
+ * screen-space refraction): a copy of the opaque scene and the world behind it (passes.RefractionPass:
+ * its colour and depth, and blurred levels of it for rough glass), read where the refracted ray meets
+ * it. A closed object refracts twice: the ray enters at the fragment, crosses the object to the face
+ * turned away from the viewer that it meets (the back faces' depth and normals, drawn by the pass)
+ * and leaves there refracted again; where it meets none (an open surface, a plane) it refracts once.
+ * Lights behind the surface shine through it by the GGX transmission lobe (transmission_ggx).
+ * Twin: addon/reference/transmission.py. */
+
+#ifdef SL_TRANSMISSION
+/* The glass at the shading point (surface.glsl's TransmissionLobe) from MaterialData's rows: its
+ * share of the whole surface (the glass share of the non-metallic part times 1 - metalness, as
+ * Cycles' svm_node_closure_bsdf weighs its Transmission component), IOR, tints. */
+TransmissionLobe transmission_at(MaterialData m, float metalness)
+{
+  TransmissionLobe t;
+  t.share = saturate(m.transmission.x);
+  t.weight = t.share * (1.0 - metalness);
+  t.fresnel = m.transmission.y > 0.5;
+  t.eta = max(m.transmission.z, 1e-5);
+  t.tint = max(m.transmission_tint.rgb, 0.0);
+  t.reflection_tint = max(m.reflection_tint.rgb, 0.0);
+  return t;
+}
+
+/* The fraction of light crossing a smooth dielectric interface at cos_i (> 0, the side it comes
+ * from) into a medium of relative IOR eta (inside over outside): 1 - F, F the exact Fresnel
+ * (brdf.glsl's F_Dielectric, Walter et al. 2007 eq. 22), 0 under total internal reflection; all of
+ * it without Fresnel (the Refraction BSDF, but for total internal reflection as Cycles'). */
+float transmission_fraction(float cos_i, float eta, bool fresnel)
+{
+  float F = F_Dielectric(eta, cos_i);
+  return fresnel ? 1.0 - F : (F >= 1.0 ? 0.0 : 1.0);
+}
+
+/* The direction light travelling along unit d takes through an interface of unit normal n (facing
+ * against d) into a medium of relative IOR eta (Snell's law, Walter et al. 2007 eq. 40); 0 under
+ * total internal reflection. */
+vec3 transmission_direction(vec3 d, vec3 n, float eta)
+{
+  return refract(d, n, 1.0 / eta);
+}
+
+/* The GGX transmission lobe times |n.l| for light arriving along l from behind the surface (n.l <
+ * 0), towards v (n.v > 0), into relative IOR eta, per unit irradiance, without its Fresnel and tint
+ * (Walter et al. 2007 eq. 21 with the height-correlated Smith term, as Cycles' bsdf_microfacet_eval
+ * evaluates a glass closure's transmission: D G2 eta^2 |h.v| |h.l| / (n.v (h.v + eta h.l)^2)), and
+ * the cosine h.v its Fresnel is taken at. 0 where the half vector faces away from either side (no
+ * microfacet refracts l into v). */
+float transmission_ggx(vec3 n, vec3 v, vec3 l, float eta, float alpha, out float HoV)
+{
+  HoV = 0.0;
+  float NoV = dot(n, v);
+  float NoL = dot(n, l);
+  if (NoV <= 0.0 || NoL >= 0.0 || abs(eta - 1.0) < 1e-4) {
+    /* eta = 1: every microfacet passes l straight on, a lobe of no width (a delta, not evaluated) */
+    return 0.0;
+  }
+  vec3 h = -(v + eta * l);
+  float len2 = dot(h, h);
+  if (len2 <= 1e-20) {
+    return 0.0;
+  }
+  h *= inversesqrt(len2);
+  h = dot(h, n) < 0.0 ? -h : h;
+  HoV = dot(h, v);
+  float HoL = dot(h, l);
+  if (HoV <= 0.0 || HoL >= 0.0) {
+    return 0.0; /* a microfacet seen from behind, or l in front of it */
+  }
+  float NoH = dot(n, h);
+  vec3 NxH = cross(n, h);
+  float D = D_GGX(NoH, dot(NxH, NxH), alpha);
+  float V = V_SmithGGXCorrelated(max(NoV, MIN_COS), max(-NoL, MIN_COS), alpha); /* G2 / (4 n.v |n.l|) */
+  float denominator = HoV + eta * HoL;
+  /* h.v + eta h.l -> 0 only where h is perpendicular to both (no refraction there): its square
+   * floored at 1e-12 keeps the ratio finite where it rounds to 0 */
+  return 4.0 * D * V * (-NoL) * eta * eta * HoV * (-HoL) / max(denominator * denominator, 1e-12);
+}
+
+/* A light's radiance through the surface from behind it (n.l < 0): the glass share times its tint,
+ * the transmission's Fresnel at h.v and the GGX lobe, per unit irradiance E (Cycles evaluates the
+ * glass closure's transmission for lights behind the surface, the light's shadow through the rest of
+ * the object not looked up: a closed object's far side does not dim it). Single scattering: the
+ * lobe's multiple-scattering compensation (Cycles' glass tables) is not applied. */
+vec3 transmission_light(Surface s, vec3 l, vec3 E, vec4 factors)
+{
+  if (s.transmission.weight <= 0.0 || dot(s.n, l) >= 0.0) {
+    return vec3(0.0);
+  }
+  float HoV;
+  float lobe = transmission_ggx(s.n, s.v, l, s.transmission.eta, s.alpha, HoV);
+  if (lobe <= 0.0) {
+    return vec3(0.0);
+  }
+  float crossing = transmission_fraction(HoV, s.transmission.eta, s.transmission.fresnel);
+  return s.transmission.tint * (s.transmission.weight * crossing * lobe * factors.y) * E;
+}
+
+/* --- what lies behind, in screen space (passes.RefractionPass) ------------------------------ */
+
+#  ifdef REFRACTION_LEVELS /* the shading programs drawn by the pass (programs.program_source) */
+
+/* A world position's clip coordinates (the frame's camera). */
+vec4 refraction_clip(vec3 p)
+{
+  return frame.view_proj * vec4(p, 1.0);
+}
+
+/* Distance along the camera's axis from the camera (perspective and orthographic alike). */
+float refraction_view_depth(vec3 p)
+{
+  return dot(p - frame.camera_position.xyz, frame.camera_forward.xyz);
+}
+
+/* The depth (0..1) the pass's maps hold at texel t: the faces turned away from the viewer
+ * (`back`), or the opaque scene (level 0 of refraction_behind holds it in alpha). */
+float refraction_map_depth(bool back, ivec2 t)
+{
+  return back ? texelFetch(refraction_back_depth, t, 0).r : texelFetch(refraction_behind, t, 0).a;
+}
+
+/* How far along the ray p + t d it leaves the view (the clip volume -w <= x, y, z <= w: each bound
+ * linear in t), at most `far`. */
+float refraction_ray_end(vec4 c0, vec4 cd, float far)
+{
+  float t = far;
+  for (int axis = 0; axis < 3; axis++) {
+    for (int side = 0; side < 2; side++) {
+      float sign = side == 0 ? 1.0 : -1.0;
+      float f0 = c0.w - sign * c0[axis];
+      float slope = cd.w - sign * cd[axis];
+      if (slope < 0.0) {
+        t = min(t, max(f0, 0.0) / -slope);
+      }
+    }
+  }
+  return t;
+}
+
+/* The pixel of clip position c (the target's texel) and its depth (0..1). */
+vec3 refraction_pixel(vec4 c)
+{
+  vec3 ndc = c.xyz / c.w;
+  return vec3((ndc.xy * 0.5 + 0.5) * frame.viewport.xy, ndc.z * 0.5 + 0.5);
+}
+
+/* Where the ray from p along unit d first passes behind the surface of a depth map (`back`: the
+ * faces turned away, else the opaque scene), marched in REFRACTION_STEPS steps even across the
+ * screen up to where it leaves the view, the crossing refined by bisection: xyz the point on the
+ * ray, w 1 where it met the surface (for the opaque scene: within `thickness` of it along the
+ * view, so that a ray passing behind a nearer object goes on), 0 where it met none (then xyz where
+ * it left the view). Positions along the screen map to the ray's length perspective-correctly
+ * (1 / w is linear across the screen). */
+vec4 refraction_march(bool back, vec3 p, vec3 d, float far)
+{
+  vec4 c0 = refraction_clip(p);
+  vec4 cd = frame.view_proj * vec4(d, 0.0);
+  float end = refraction_ray_end(c0, cd, far);
+  float w1 = c0.w + end * cd.w;
+  /* the ray's length at a fraction f of its way across the screen */
+  float previous = 0.0;
+  for (int k = 1; k <= REFRACTION_STEPS; k++) {
+    float f = float(k) / float(REFRACTION_STEPS);
+    float t = f * end / w1 / ((1.0 - f) / c0.w + f / w1);
+    vec3 q = refraction_pixel(c0 + t * cd);
+    ivec2 texel = clamp(ivec2(q.xy), ivec2(0), ivec2(frame.viewport.xy) - 1);
+    float depth = refraction_map_depth(back, texel);
+    if (q.z >= depth && depth < 1.0) {
+      /* behind the map's surface: bisect between the last step in front and this one */
+      float lo = previous;
+      float hi = t;
+      for (int i = 0; i < REFRACTION_BISECTIONS; i++) {
+        float mid = 0.5 * (lo + hi);
+        vec3 m = refraction_pixel(c0 + mid * cd);
+        ivec2 mt = clamp(ivec2(m.xy), ivec2(0), ivec2(frame.viewport.xy) - 1);
+        if (m.z >= refraction_map_depth(back, mt)) {
+          hi = mid;
+        }
+        else {
+          lo = mid;
+        }
+      }
+      vec3 hit = p + hi * d;
+      if (back) {
+        return vec4(hit, 1.0);
+      }
+      /* the opaque surface's point at that pixel, along the view */
+      vec3 at = refraction_pixel(c0 + hi * cd);
+      ivec2 ht = clamp(ivec2(at.xy), ivec2(0), ivec2(frame.viewport.xy) - 1);
+      vec2 ndc = (vec2(ht) + 0.5) / frame.viewport.xy * 2.0 - 1.0;
+      vec4 surface = refraction.inverse_view_projection *
+                     vec4(ndc, refraction_map_depth(false, ht) * 2.0 - 1.0, 1.0);
+      float gap = refraction_view_depth(hit) - refraction_view_depth(surface.xyz / surface.w);
+      if (gap <= max(refraction.info.w, 2.0 * (t - previous))) {
+        return vec4(hit, 1.0);
+      }
+    }
+    previous = t;
+  }
+  return vec4(p + end * d, 0.0);
+}
+
+/* The copy of what is behind at target pixel `pixel`, its blurred level `lod` (0: the copy itself,
+ * each next level half the size), bilinear within a level and linear between levels. */
+vec3 refraction_level(int k, vec2 pixel)
+{
+  vec4 rect = refraction.rect[k];
+  /* bilinear by hand within the level (its edge texels repeat): no filtering state to rely on */
+  vec2 x = clamp(pixel * (rect.zw / frame.viewport.xy), vec2(0.5), rect.zw - 0.5) - 0.5;
+  ivec2 i0 = ivec2(floor(x));
+  vec2 f = x - vec2(i0);
+  ivec2 i1 = min(i0 + 1, ivec2(rect.zw) - 1);
+  ivec2 o = ivec2(rect.xy);
+  vec3 a = mix(texelFetch(refraction_behind, o + i0, 0).rgb, texelFetch(refraction_behind, o + ivec2(i1.x, i0.y), 0).rgb,
+               f.x);
+  vec3 b = mix(texelFetch(refraction_behind, o + ivec2(i0.x, i1.y), 0).rgb, texelFetch(refraction_behind, o + i1, 0).rgb,
+               f.x);
+  return mix(a, b, f.y);
+}
+
+vec3 refraction_sample(vec2 pixel, float lod)
+{
+  lod = clamp(lod, 0.0, refraction.info.x - 1.0);
+  int k = int(floor(lod));
+  int k1 = min(k + 1, int(refraction.info.x) - 1);
+  return mix(refraction_level(k, pixel), refraction_level(k1, pixel), lod - float(k));
+}
+
+/* The pixels a world-space radius r spans at p on screen. */
+float refraction_pixels(vec3 p, float r)
+{
+  vec3 up = vec3(frame.view[0][1], frame.view[1][1], frame.view[2][1]); /* the camera's up in the world */
+  vec3 a = refraction_pixel(refraction_clip(p));
+  vec3 b = refraction_pixel(refraction_clip(p + r * up));
+  return length(b.xy - a.xy);
+}
+
+/* The radiance reaching the viewer through the surface from what lies behind it: the ray refracted
+ * into the surface (entering: from the outside; else the viewer is inside, relative IOR 1 / eta),
+ * through a closed object to its far side and out again, to the opaque scene behind (or where it
+ * leaves the view); each crossing times the Fresnel's transmitted fraction (at the view for the
+ * first: 1 - the reflection's albedo for rough glass, all the lobe's microfacets together) and the
+ * tint; 0 where the ray reflects totally inside (Cycles' internal reflections are glossy bounces,
+ * which its transmission tests turn off). Rough glass reads a blurred level: the refracted lobe's
+ * spread, alpha (1 - 1 / eta) radians entering and alpha (eta - 1) leaving (a microfacet tilted by
+ * alpha turns the ray by that much), over the length it then travels, in pixels. */
+vec3 transmission_behind(Surface s, bool entering)
+{
+  TransmissionLobe t = s.transmission;
+  if (t.weight <= 0.0) {
+    return vec3(0.0);
+  }
+  float eta = entering ? t.eta : 1.0 / t.eta;
+#  ifdef SL_LAYERS
+  /* the reflection's albedo estimate at the view (the smooth Fresnel at roughness 0) */
+  vec3 first = t.fresnel ? max(1.0 - s.layers.albedo, 0.0) : vec3(transmission_fraction(s.NoV, eta, false));
+#  else
+  vec3 first = vec3(transmission_fraction(s.NoV, eta, t.fresnel));
+#  endif
+  vec3 d = transmission_direction(-s.v, s.n, eta);
+  if (dot(d, d) <= 0.0) {
+    return vec3(0.0); /* total internal reflection (the viewer inside, at a grazing angle) */
+  }
+  vec3 throughput = t.tint * first;
+  vec3 start = s.p;
+  float inside = 0.0;
+  float spread_in = s.alpha * abs(1.0 - 1.0 / eta);
+  float spread_out = 0.0;
+  if (entering) {
+    vec4 exit = refraction_march(true, s.p, d, 1e6);
+    /* (the ray leaves through a face turned away from the viewer at least a hair behind the
+     * fragment: a face of its own, an open surface seen from behind, is no far side) */
+    if (exit.w > 0.5 && distance(exit.xyz, s.p) > 1e-5) {
+      vec3 pixel = refraction_pixel(refraction_clip(exit.xyz));
+      ivec2 texel = clamp(ivec2(pixel.xy), ivec2(0), ivec2(frame.viewport.xy) - 1);
+      vec3 n2 = texelFetch(refraction_back, texel, 0).xyz; /* facing the viewer: against d */
+      n2 = dot(n2, d) < 0.0 ? n2 : -n2;
+      float cos2 = -dot(d, n2);
+      vec3 out_d = transmission_direction(d, n2, 1.0 / eta);
+      if (dot(out_d, out_d) <= 0.0) {
+        return vec3(0.0); /* totally reflected inside */
+      }
+      throughput *= t.tint * transmission_fraction(cos2, 1.0 / eta, t.fresnel);
+      inside = distance(exit.xyz, s.p);
+      start = exit.xyz;
+      d = out_d;
+      spread_out = s.alpha * abs(eta - 1.0);
+    }
+  }
+  vec4 hit = refraction_march(false, start, d, 1e6);
+  float beyond = distance(hit.xyz, start);
+  float radius = spread_in * (inside + beyond) + spread_out * beyond;
+  float lod = log2(max(refraction_pixels(hit.xyz, radius) * REFRACTION_BLUR, 1.0));
+  vec3 pixel = refraction_pixel(refraction_clip(hit.xyz));
+  return throughput * refraction_sample(pixel.xy, lod) * t.weight;
+}
+#  endif
+#endif
