@@ -219,10 +219,10 @@ def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint,
              thin_film_thickness=0.0, subsurface_weight=0.0,
              transmission_weight=0.0) -> frozenset[str]:
     """The lobes a Principled BSDF of these inputs draws: a Specular Tint other than white, a Coat
-    Weight above 0, a Sheen Weight and Tint above 0, a Subsurface or Transmission Weight above 0 (Cycles adds no lobe
-    of weight 0: its CLOSURE_WEIGHT_CUTOFF is 1e-5), a Thin Film Thickness above 0. Scalars here;
-    per-point arrays (the twin's) are any of them. (The translucent lobe is a node graph's: its
-    Translucent BSDF; the anisotropic lobe too.)"""
+    Weight above 0, a Sheen Weight and Tint above 0, a Subsurface or Transmission Weight above 0
+    (Cycles adds no lobe of weight 0: its CLOSURE_WEIGHT_CUTOFF is 1e-5), a Thin Film Thickness above
+    0. Scalars here; per-point arrays (the twin's) are any of them. (The translucent lobe is a node
+    graph's: its Translucent BSDF; the anisotropic lobe too.)"""
     tint = np.asarray(specular_tint, np.float64)
     sheen = np.asarray(sheen_weight, np.float64)[..., None] * np.asarray(sheen_tint, np.float64)
     used = {"SPECULAR_TINT": bool(np.any(tint != 1.0)),
