@@ -165,8 +165,10 @@ struct Surface {
   TransmissionLobe transmission;
 #endif
 };
-#if defined(SL_THIN_FILM) && defined(SL_LAYERS)
+#ifdef SL_THIN_FILM
+#  ifdef SL_LAYERS
 void thin_film_at(inout Surface s, vec4 film);
+#  endif
 #endif
 
 /* Unit half vector of eq. 1.6; l + v = 0 only when the light is exactly behind the viewer's

@@ -192,7 +192,8 @@ vec3 F_ThinFilmMetal(vec4 film, vec3 n, vec3 k, vec3 g, float cos_i)
 
 #endif
 
-#if defined(SL_THIN_FILM) && defined(SL_LAYERS) /* the Principled set's programs */
+#ifdef SL_THIN_FILM
+#  ifdef SL_LAYERS /* the Principled set's programs */
 /* The film at the view (make_surface, after principled_layers_at): MaterialData's thin_film, the
  * metal's IOR under it, and what the film makes of the dielectric layer's albedo estimate, which
  * the base below loses: Cycles' bsdf_microfacet_estimate_albedo has no table for a film and takes
@@ -222,4 +223,5 @@ bool thin_film_on_metal(Surface s)
 {
   return s.thin_film.x > 0.1 && s.thin_film.z > 0.5;
 }
+#  endif
 #endif
