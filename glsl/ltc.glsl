@@ -25,7 +25,9 @@
 float ltc_density(vec4 m, vec3 w, float floor_cosine)
 {
   vec3 y = vec3(m.x * w.x + m.y * w.z, w.y, m.z * w.x + m.w * w.z);
-  float len2 = max(dot(y, y), 1e-30);
+  /* |M^-1 w| = 0 (w = 0: a light at the shaded point) gives 0, not 0 / 0: floored where len2^1.5
+   * is still a normal float32 (1e-30's 1e-45 flushed to 0 on llvmpipe: the sheen NaN at distance 0) */
+  float len2 = max(dot(y, y), 1e-24);
   float cosine = max(y.z * inversesqrt(len2), floor_cosine);
   return cosine * abs(m.x * m.w - m.y * m.z) / (PI * len2 * sqrt(len2));
 }

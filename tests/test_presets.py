@@ -19,6 +19,7 @@ import scenes
 
 from addon.blender import extract, scene_builder
 from addon.scene import presets as P
+from addon.scene import snapshot as S
 
 ROOT = Path(__file__).resolve().parent.parent
 
@@ -29,13 +30,21 @@ SHIPPED = {
     "hdr": (4, 2),
     "roughness_sweep": (13, 2),
     "softbox": (13, 2),
-    "material_grid": (12, 2),
+    "material_grid": (19, 2),
     "portability": (6, 3),
     "furnace": (12, 42),
     "world": (6, 0),
+    "car_paint": (3, 2),
+    "velvet": (3, 2),
+    "tinted_metal": (3, 2),
+    "brushed_metal": (3, 2),
+    "oil_film": (3, 2),
+    "glass_of_water": (5, 2),
+    "wax_candle": (3, 2),
 }
 MATERIALS = {"gold", "copper", "aluminium", "silver", "iron", "titanium", "plastic", "rubber", "glass",
-             "water", "skin"}
+             "water", "skin", "car_paint", "velvet", "tinted_metal", "brushed_metal", "oil_film",
+             "clear_glass", "wax"}
 
 
 def _meshes(scene):
@@ -100,7 +109,8 @@ def test_material_library_values():
     copper = lib["copper"].base_color
     assert copper[0] > copper[1] > copper[2]
     metals = {n for n, m in lib.items() if m.metalness == 1.0}
-    assert metals == {"gold", "copper", "aluminium", "silver", "iron", "titanium"}
+    assert metals == {"gold", "copper", "aluminium", "silver", "iron", "titanium", "tinted_metal",
+                      "brushed_metal"}
     assert min(lib["silver"].base_color) > max(lib["iron"].base_color)  # silver is the brighter
     assert lib["water"].dielectric_f0 == pytest.approx(0.02)
     assert lib["skin"].dielectric_f0 == pytest.approx(0.028)
@@ -175,6 +185,47 @@ def test_built_materials_carry_the_preset_values():
         assert got.f0 == pytest.approx(m.dielectric_f0, abs=1e-6), name
         assert not any(getattr(mat.shading_lab, "use_" + k) for k in
                        ("base_color", "metalness", "roughness", "f0", "shininess", "specular_color"))
+        node = next(n for n in mat.node_tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+        sockets = {socket.identifier: socket for socket in node.inputs}
+        for key, spec in P.PRINCIPLED_INPUTS.items():  # every lobe input: the preset's, else the default
+            want = dict(m.principled).get(key, spec.default)
+            value = sockets[spec.socket].default_value
+            assert (tuple(value)[:3] if spec.color else value) == pytest.approx(want, rel=1e-6), (name, key)
+            if hasattr(got, key):  # a lobe the renderer reads
+                assert getattr(got, key) == pytest.approx(want, rel=1e-6), (name, key)
+        drawn = {lobe for lobe in m.lobes if lobe in got.lobes}
+        assert drawn == m.lobes & set(S.LOBES), (name, m.lobes, got.lobes)
+
+
+def test_a_library_preset_replaces_the_lobes_of_the_material():
+    """Applying a preset without a coat to a coated material leaves no coat; an inline override of
+    a lobe input keeps the library entry's others."""
+    scenes.reset()
+    lib = P.load_material_presets()
+    mat = scene_builder.apply_material_preset(bpy.data.materials.new("Paint"), lib["car_paint"])
+    assert extract.material_params(mat).lobes == {"COAT"}
+    scene_builder.apply_material_preset(mat, lib["velvet"])
+    got = extract.material_params(mat)
+    assert got.lobes == {"SHEEN"} and got.coat_weight == 0.0 and got.sheen_roughness == pytest.approx(0.3)
+    preset = P.load_scene_preset("car_paint")
+    torus = next(o.material for o in preset.objects if o.name == "Paint torus")
+    assert dict(torus.principled)["coat_weight"] == 1.0
+    assert P.lobe_off("COAT") == {"coat_weight": 0.0}
+    assert P.lobe_off("SPECULAR_TINT") == {"specular_tint": (1.0, 1.0, 1.0)}
+
+
+def test_every_lobe_has_a_scene_and_a_library_material():
+    """Each lobe the presets can set has one scene that names it (the lobes benchmark's), showing a
+    library material with the lobe on."""
+    scenes_of = {}
+    for name in P.scene_preset_names():
+        preset = P.load_scene_preset(name)
+        if preset.lobe is not None:
+            scenes_of.setdefault(preset.lobe, []).append(name)
+    assert sorted(scenes_of) == sorted(P.LOBE_NAMES), scenes_of
+    assert all(len(v) == 1 for v in scenes_of.values()), scenes_of
+    library = {lobe for m in P.load_material_presets().values() for lobe in m.lobes}
+    assert library == set(P.LOBE_NAMES)
 
 
 def test_apply_material_preset_sets_explicit_values_and_replaces_the_surface():
@@ -352,7 +403,7 @@ BAD = {
                       ["objects[0].location: expected 3 numbers, got [1, 2]"]),
     "unknown_key": (HEADER + SPHERE + "material = { roughnes = 0.5 }\n",
                     ['objects[0].material.roughnes: unknown key (did you mean "roughness"?)',
-                     "expected one of: base_color, f0, ior"]),
+                     "expected one of: anisotropic, anisotropic_rotation, base_color"]),
     "unknown_top_level": (HEADER + SPHERE + "[[light]]\nkind = \"sun\"\nstrength = 1\n",
                           ['light: unknown key (did you mean "lights"?)', "expected one of: arrays"]),
     "out_of_range_roughness": (HEADER + SPHERE + "material = { roughness = 1.5 }\n",
@@ -391,6 +442,18 @@ BAD = {
                       ['scene.world_image: did you mean "forest"?', '"city", "courtyard", "forest"']),
     "world_strength_alone": (HEADER.replace('[64, 64]', '[64, 64]\nworld_strength = 2') + SPHERE,
                              ["scene.world_strength: expected a world_image beside it, got 2"]),
+    "lobe_out_of_range": (HEADER + SPHERE + "material = { coat_ior = 5.0 }\n",
+                          ["objects[0].material.coat_ior: expected a number in [1, 4], got 5.0"]),
+    "lobe_tint_length": (HEADER + SPHERE + "material = { sheen_tint = [1.0, 0.5] }\n",
+                         ["objects[0].material.sheen_tint: expected 3 numbers [r, g, b] (linear) in [0, 1]"]),
+    "lobe_unknown": (HEADER + SPHERE + "material = { coat_wieght = 1.0 }\n",
+                     ['objects[0].material.coat_wieght: unknown key (did you mean "coat_weight"?)']),
+    "scene_lobe_unused": (HEADER.replace('[64, 64]', '[64, 64]\nlobe = "sheen"') + SPHERE
+                          + 'material = { preset = "car_paint" }\n',
+                          ["scene.lobe: no object's material has it; expected a material with sheen on",
+                           'got "sheen"']),
+    "scene_lobe_unknown": (HEADER.replace('[64, 64]', '[64, 64]\nlobe = "shen"') + SPHERE,
+                           ['scene.lobe: did you mean "sheen"?', '"specular_tint", "coat"']),
     "variant_unlit": (HEADER + SPHERE + '[[variants]]\nname = "dark"\n',
                       ["variants[0].lights: expected at least one [[variants.lights]] table, or a "
                        "world_image"]),
@@ -435,7 +498,7 @@ def test_bad_material_library_is_refused(tmp_path):
 
 
 def test_unknown_scene_name_is_refused():
-    hint = r'no such scene preset \(did you mean "fresnel"\?\); expected one of fresnel, furnace, hdr'
+    hint = r'no such scene preset \(did you mean "fresnel"\?\); expected one of brushed_metal, car_paint'
     with pytest.raises(P.PresetError, match=hint):
         P.load_scene_preset("fresnell")
 

@@ -10,7 +10,9 @@ and the lobes at their extremes stay finite and within the white furnace.
 
 from __future__ import annotations
 
+import dataclasses
 import math
+from dataclasses import dataclass
 
 import bpy
 import numpy as np
@@ -26,6 +28,7 @@ from test_twin import _compare as _twin_compare
 
 from addon.plan import programs
 from addon.reference import shading
+from addon.scene import presets as P
 from addon.scene import snapshot as S
 
 # --- Specular Tint ------------------------------------------------------------------------------
@@ -344,25 +347,75 @@ def test_gpu_matches_twin(lobe, sizes, tmp_path):
 
 # --- stability at the extremes --------------------------------------------------------------------
 
-#: Each lobe's inputs at their extremes, each crossed with test_stability's reduced sweep: roughness,
-#: metalness, F0 and base colour at their ends (a mirror metal among them: a coat over it), n.v and
-#: n.l from 1 through 1e-7 and 0 to below 0, the light touching the point to 1e6 m away, intensity 0
-#: and 1e8, under test_stability's first group of lights (a point, a 0.1 m sphere light, a 0.1 m
-#: square, an area light of size 0). Every program holds every lobe (weight 0 included).
-LOBE_EXTREMES = {
-    "tint-black": dict(specular_tint=(0.0, 0.0, 0.0)),
-    "tint-huge": dict(specular_tint=(1e4, 1.0, 0.0)),
-    "coat-mirror": dict(coat_weight=1.0, coat_roughness=0.0),
-    "coat-rough-black-tint": dict(coat_weight=1.0, coat_roughness=1.0, coat_ior=3.0,
-                                  coat_tint=(0.0, 0.0, 0.0)),
-    "coat-ior-1": dict(coat_weight=1.0, coat_roughness=0.0, coat_ior=1.0, coat_tint=(0.5, 0.5, 0.5)),
-    "coat-weight-0": dict(coat_weight=0.0, coat_roughness=0.5, coat_tint=(0.2, 0.2, 0.2)),
-    "sheen-roughness-0": dict(sheen_weight=1.0, sheen_roughness=0.0),
-    "sheen-rough-over-coat": dict(sheen_weight=1.0, sheen_roughness=1.0, coat_weight=1.0,
-                                  coat_roughness=0.0),
-    "sheen-black-tint": dict(sheen_weight=1.0, sheen_roughness=0.5, sheen_tint=(0.0, 0.0, 0.0)),
-    "sheen-weight-10": dict(sheen_weight=10.0, sheen_roughness=0.5),
+@dataclass(frozen=True)
+class Lobe:
+    """What the checks over every lobe need of one lobe of ``snapshot.LOBES`` (MaterialParams
+    fields): ``furnace``, its inputs in the white furnace with every lobe on (at their brightest);
+    ``extremes``, named cases of its inputs at their extremes for the stability sweep."""
+
+    furnace: dict
+    extremes: dict
+
+
+#: The lobes the checks over every lobe cover: a lobe joins them by its entry here (a test fails
+#: until every lobe of snapshot.LOBES has one, and until its extremes reach each end of each of
+#: its inputs: presets.PRINCIPLED_INPUTS' range, an open one beyond 1e3, colours black and white).
+LOBE_CHECKS = {
+    "SPECULAR_TINT": Lobe(
+        furnace=dict(specular_tint=(1.0, 1.0, 1.0)),  # white: the tint at its brightest
+        extremes={"tint-black": dict(specular_tint=(0.0, 0.0, 0.0)),
+                  "tint-huge": dict(specular_tint=(1e4, 1.0, 0.0))}),
+    "COAT": Lobe(
+        furnace=dict(coat_weight=1.0),  # its roughness: FURNACE's
+        extremes={"coat-mirror": dict(coat_weight=1.0, coat_roughness=0.0),
+                  "coat-rough-black-tint": dict(coat_weight=1.0, coat_roughness=1.0, coat_ior=3.0,
+                                                coat_tint=(0.0, 0.0, 0.0)),
+                  "coat-ior-1": dict(coat_weight=1.0, coat_roughness=0.0, coat_ior=1.0,
+                                     coat_tint=(0.5, 0.5, 0.5)),
+                  "coat-ior-hundreds": dict(coat_weight=1.0, coat_roughness=0.0, coat_ior=400.0),
+                  "coat-weight-0": dict(coat_weight=0.0, coat_roughness=0.5, coat_tint=(0.2, 0.2, 0.2))}),
+    "SHEEN": Lobe(
+        furnace=dict(sheen_weight=1.0, sheen_roughness=0.5),
+        extremes={"sheen-roughness-0": dict(sheen_weight=1.0, sheen_roughness=0.0),
+                  "sheen-rough-over-coat": dict(sheen_weight=1.0, sheen_roughness=1.0, coat_weight=1.0,
+                                                coat_roughness=0.0),
+                  "sheen-black-tint": dict(sheen_weight=1.0, sheen_roughness=0.5, sheen_tint=(0.0, 0.0, 0.0)),
+                  "sheen-weight-10": dict(sheen_weight=10.0, sheen_roughness=0.5),
+                  "sheen-weight-0-huge-tint": dict(sheen_weight=0.0, sheen_roughness=0.0,
+                                                   sheen_tint=(1e4, 1.0, 0.0))}),
 }
+
+#: Each lobe's inputs at their extremes, each crossed with test_stability's reduced sweep: roughness,
+#: metalness, F0 and base colour at their ends (a mirror metal among them: a coat over it; F0 0: an
+#: IOR of 1), n.v and n.l from 1 through 1e-7 and 0 to below 0, the light touching the point to 1e6 m
+#: away, intensity 0 and 1e8, under test_stability's first group of lights (a point, a 0.1 m sphere
+#: light, a 0.1 m square, an area light of size 0). Every program holds every lobe (weight 0 included).
+LOBE_EXTREMES = {name: inputs for lobe in LOBE_CHECKS.values() for name, inputs in lobe.extremes.items()}
+#: Every lobe on in the white furnaces
+FURNACE_LOBES = {key: value for lobe in LOBE_CHECKS.values() for key, value in lobe.furnace.items()}
+
+
+def _lobe_inputs(lobe: str) -> dict:
+    """{MaterialParams field: presets.PrincipledInput} of ``lobe``'s inputs."""
+    fields = {f.name for f in dataclasses.fields(S.MaterialParams)}
+    return {key: spec for key, spec in P.PRINCIPLED_INPUTS.items() if spec.lobe == lobe and key in fields}
+
+
+def test_every_lobe_is_checked_at_its_extremes_and_in_the_furnace():
+    """Each lobe the programs draw has its entry in LOBE_CHECKS, turns itself on in the furnace, and
+    its extremes reach both ends of each of its inputs (a case's missing input at the default)."""
+    assert set(LOBE_CHECKS) == set(S.LOBES), f"lobes without checks: {set(S.LOBES) - set(LOBE_CHECKS)}"
+    furnace = S.MaterialParams(**FURNACE_LOBES)
+    assert furnace.lobes >= set(S.LOBES) - {"SPECULAR_TINT"}, furnace.lobes  # a white tint draws as none
+    for lobe, checks in LOBE_CHECKS.items():
+        inputs = _lobe_inputs(lobe)
+        assert inputs, f"{lobe}: no inputs in presets.PRINCIPLED_INPUTS"
+        for key, spec in inputs.items():
+            values = [np.max(case.get(key, spec.default)) for case in checks.extremes.values()]
+            mins = [np.min(case.get(key, spec.default)) for case in checks.extremes.values()]
+            top = 1e3 if spec.hi is None else spec.hi
+            assert min(mins) <= spec.lo, f"{lobe}: {key} never at its low end {spec.lo} ({mins})"
+            assert max(values) >= top, f"{lobe}: {key} never at its high end {top} ({values})"
 
 
 def _material_lines(lobe: dict) -> str:
@@ -469,15 +522,15 @@ def _lobe_albedo(samples, s_of, part):
 
 
 def test_white_furnace_with_every_lobe_is_at_most_one():
-    """The twin's directional albedo with every lobe on (white base, white coat of weight 1, specular
-    tint white), views 0-85 degrees: the sheen's (its colour x its albedo, exactly), the coat's own
-    lobe (quadrature dense about its peak) and the base's under what they leave it (each lobe by its
-    quadrature, test_reference's) sum to at most 1."""
+    """The twin's directional albedo with every lobe on (FURNACE_LOBES: white base, white coat of
+    weight 1, specular tint white, the sheen), views 0-85 degrees: the sheen's (its colour x its
+    albedo, exactly), the coat's own lobe (quadrature dense about its peak) and the base's under what
+    they leave it (each lobe by its quadrature, test_reference's) sum to at most 1."""
     terms = S.Terms(principled=True)
     worst = 0.0
     for metal, rough, coat in FURNACE:
-        mat = S.MaterialParams(base_color=(1.0, 1.0, 1.0), metalness=metal, roughness=rough, coat_weight=1.0,
-                               coat_roughness=coat, **FURNACE_SHEEN)
+        mat = S.MaterialParams(base_color=(1.0, 1.0, 1.0), metalness=metal, roughness=rough,
+                               **{**FURNACE_LOBES, "coat_roughness": coat})
 
         def surface(v, mat=mat):
             return shading.Surface(np.zeros_like(v), np.broadcast_to(TR.N, v.shape), v, mat)
@@ -503,8 +556,8 @@ def test_white_furnace_with_every_lobe_is_at_most_one():
 
 
 def test_white_furnace_world_with_every_lobe(tmp_path):
-    """Spheres of every FURNACE material in a uniform white world (radiance 1): the world's split sum
-    under the lobes reflects at most the world's radiance."""
+    """Spheres of every FURNACE material (every lobe on: FURNACE_LOBES) in a uniform white world
+    (radiance 1): the world's split sum under the lobes reflects at most the world's radiance."""
     scene = scenes.reset(size=64)
     scene.render.resolution_x, scene.render.resolution_y = 32 * len(FURNACE), 32
     scene.render.film_transparent = True
@@ -514,9 +567,9 @@ def test_white_furnace_world_with_every_lobe(tmp_path):
     TW._world(scene, color=(1.0, 1.0, 1.0))
     scenes.ortho_camera(scene, location=(0.0, 0.0, 10.0), scale=2.0 * len(FURNACE))
     for i, (metal, rough, coat) in enumerate(FURNACE):
+        lobes = {**FURNACE_LOBES, "coat_roughness": coat}
         mat = _principled(f"Furnace{i}", base_color=(1.0, 1.0, 1.0, 1.0), metallic=metal, roughness=rough,
-                          coat_weight=1.0, coat_roughness=coat, **{k: (*v, 1.0) if isinstance(v, tuple) else v
-                                                                   for k, v in FURNACE_SHEEN.items()})
+                          **{k: (*v, 1.0) if isinstance(v, tuple) else v for k, v in lobes.items()})
         TW._sphere((-len(FURNACE) + 1.0 + 2.0 * i, 0.0, 0.0), mat, radius=0.95)
     image = scenes.render(scene, tmp_path / "furnace.exr")
     inside = image[..., 3] > 0.999
@@ -524,10 +577,6 @@ def test_white_furnace_world_with_every_lobe(tmp_path):
     print(f"the white furnace with every lobe: at most {top:.4f} of the world's radiance")
     assert top <= 1.0 + 1e-3, f"{top:.4f}"
     assert top >= 0.9, f"{top:.4f}: the spheres reflect little of the world?"
-
-
-#: The sheen's inputs in the furnaces
-FURNACE_SHEEN = dict(sheen_weight=1.0, sheen_roughness=0.5)
 
 
 # --- the Auto term set ----------------------------------------------------------------------------

@@ -103,6 +103,8 @@ def apply_material_preset(material: bpy.types.Material, preset: P.MaterialPreset
     ior = preset.ior if preset.ior is not None else ior_from_f0(f0)
     node.inputs["IOR"].default_value = ior
     node.inputs["Specular IOR Level"].default_value = 0.5  # 0.5: F0 exactly from the IOR
+    set_principled_inputs(node, {**{k: spec.default for k, spec in P.PRINCIPLED_INPUTS.items()},
+                                 **dict(preset.principled)})
     material.diffuse_color = rgba  # the viewport's Solid mode and the extractor's fallback
     material.metallic = preset.metalness
     material.roughness = preset.roughness
@@ -118,6 +120,19 @@ def apply_material_preset(material: bpy.types.Material, preset: P.MaterialPreset
         if preset.specular_color is not None:
             props.use_specular_color, props.specular_color = True, preset.specular_color
     return material
+
+
+def set_principled_inputs(node, values: dict) -> None:
+    """Set the Principled BSDF ``node``'s inputs named by ``values``' keys (``PRINCIPLED_INPUTS``'
+    preset keys; the lobes the material preset leaves out at Blender's defaults, so a preset
+    applied to a coated material leaves no coat behind)."""
+    # by identifier: an unavailable input (Subsurface IOR outside the Random Walk (Skin) method) is
+    # not found by name, yet keeps its value for when it is
+    sockets = {socket.identifier: socket for socket in node.inputs}
+    for key, value in values.items():
+        socket = sockets[P.PRINCIPLED_INPUTS[key].socket]
+        size = len(socket.default_value) if P.PRINCIPLED_INPUTS[key].color else 0
+        socket.default_value = (*value, 1.0)[:size] if size else value
 
 
 # --- geometry ----------------------------------------------------------------------------------

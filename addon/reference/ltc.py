@@ -236,7 +236,7 @@ def ltc_density(minv: np.ndarray, w: np.ndarray, floor=0.0) -> np.ndarray:
     unit, minv (3, 3) or broadcastable (..., 3, 3) (any scale: D does not depend on it). ``floor``
     (0: the clamped cosine's own): ``density_floor``'s, for a small light."""
     y = np.einsum("...ij,...j->...i", minv, w)
-    len2 = np.maximum(np.sum(y * y, axis=-1), 1e-30)
+    len2 = np.maximum(np.sum(y * y, axis=-1), 1e-24)  # ltc.glsl's: len2^1.5 a normal float32
     cosine = np.maximum(y[..., 2] / np.sqrt(len2), floor)
     return cosine * np.abs(np.linalg.det(minv)) / (np.pi * len2 * np.sqrt(len2))
 

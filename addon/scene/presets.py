@@ -105,6 +105,9 @@ class MaterialPreset:
     specular_color: Vec3 | None = None
     description: str = ""
     preset: str = ""  # the library entry this material starts from, "" for an inline material
+    #: the Principled BSDF's lobe inputs set (keys of ``PRINCIPLED_INPUTS``, in its order); the
+    #: others stay at Blender's defaults
+    principled: tuple[tuple[str, float | Vec3], ...] = ()
 
     @property
     def dielectric_f0(self) -> float:
@@ -113,6 +116,12 @@ class MaterialPreset:
         if self.ior is not None:
             return f0_from_ior(self.ior)
         return 0.04
+
+    @property
+    def lobes(self) -> frozenset[str]:
+        """The lobes (``LOBE_NAMES``) the material turns on: a switch off its default."""
+        return frozenset(PRINCIPLED_INPUTS[key].lobe for key, value in self.principled
+                         if PRINCIPLED_INPUTS[key].switch and value != PRINCIPLED_INPUTS[key].default)
 
 
 @dataclass(frozen=True)
@@ -212,6 +221,7 @@ class ScenePreset:
     ambient_source: str = "CONSTANT"  # the scene.shading_lab.ambient_source enum item
     world_color: Vec3 = (0.0, 0.0, 0.0)
     world: WorldPreset | None = None  # a world image (else the world is world_color)
+    lobe: str | None = None  # the Principled lobe the scene shows (``LOBE_NAMES``), for the benchmarks
 
     @property
     def variant_names(self) -> tuple[str, ...]:
@@ -470,6 +480,58 @@ _MATERIAL_RANGES = {  # key: (lo, hi)
     "shininess": (0.0, 1e6),
 }
 _MATERIAL_VALUE_KEYS = ("base_color", "metalness", "roughness", "f0", "ior", "shininess", "specular_color")
+
+
+@dataclass(frozen=True)
+class PrincipledInput:
+    """One of the Principled BSDF's lobe inputs a material preset may set: the input it sets, the
+    lobe it belongs to, Blender's default and the range the preset may give (a colour: each
+    channel). A lobe is on where one of its ``switch`` inputs is off its default (Blender's
+    defaults turn every lobe off)."""
+
+    socket: str
+    lobe: str
+    default: float | Vec3
+    lo: float
+    hi: float | None
+    switch: bool = False
+
+    @property
+    def color(self) -> bool:
+        return isinstance(self.default, tuple)
+
+
+_WHITE = (1.0, 1.0, 1.0)
+#: The Principled BSDF's inputs beyond the base a material preset may set (Blender 4.2 to 5.0 have
+#: them all), by preset key; their ranges are the node's. A lobe joins the presets by its rows here.
+PRINCIPLED_INPUTS = {
+    "specular_tint": PrincipledInput("Specular Tint", "SPECULAR_TINT", _WHITE, 0.0, 1.0, switch=True),
+    "coat_weight": PrincipledInput("Coat Weight", "COAT", 0.0, 0.0, 1.0, switch=True),
+    "coat_roughness": PrincipledInput("Coat Roughness", "COAT", 0.03, 0.0, 1.0),
+    "coat_ior": PrincipledInput("Coat IOR", "COAT", 1.5, 1.0, 4.0),
+    "coat_tint": PrincipledInput("Coat Tint", "COAT", _WHITE, 0.0, 1.0),
+    "sheen_weight": PrincipledInput("Sheen Weight", "SHEEN", 0.0, 0.0, 1.0, switch=True),
+    "sheen_roughness": PrincipledInput("Sheen Roughness", "SHEEN", 0.5, 0.0, 1.0),
+    "sheen_tint": PrincipledInput("Sheen Tint", "SHEEN", _WHITE, 0.0, 1.0),
+    "anisotropic": PrincipledInput("Anisotropic", "ANISOTROPY", 0.0, 0.0, 1.0, switch=True),
+    "anisotropic_rotation": PrincipledInput("Anisotropic Rotation", "ANISOTROPY", 0.0, 0.0, 1.0),
+    "thin_film_thickness": PrincipledInput("Thin Film Thickness", "THIN_FILM", 0.0, 0.0, 1e5, switch=True),
+    "thin_film_ior": PrincipledInput("Thin Film IOR", "THIN_FILM", 1.33, 1.0, 1000.0),
+    "transmission_weight": PrincipledInput("Transmission Weight", "TRANSMISSION", 0.0, 0.0, 1.0,
+                                           switch=True),
+    "subsurface_weight": PrincipledInput("Subsurface Weight", "SUBSURFACE", 0.0, 0.0, 1.0, switch=True),
+    "subsurface_radius": PrincipledInput("Subsurface Radius", "SUBSURFACE", (1.0, 0.2, 0.1), 0.0, None),
+    "subsurface_scale": PrincipledInput("Subsurface Scale", "SUBSURFACE", 0.05, 0.0, None),
+    "subsurface_ior": PrincipledInput("Subsurface IOR", "SUBSURFACE", 1.4, 1.01, 3.8),
+    "subsurface_anisotropy": PrincipledInput("Subsurface Anisotropy", "SUBSURFACE", 0.0, 0.0, 1.0),
+}
+#: The lobes the presets can turn on, in ``PRINCIPLED_INPUTS``' order
+LOBE_NAMES = tuple(dict.fromkeys(spec.lobe for spec in PRINCIPLED_INPUTS.values()))
+
+
+def lobe_off(lobe: str) -> dict[str, float | Vec3]:
+    """The Principled inputs (preset keys) that turn ``lobe`` off: its switches at their defaults."""
+    return {key: spec.default for key, spec in PRINCIPLED_INPUTS.items() if spec.lobe == lobe and spec.switch}
 _LIBRARY_NAME = re.compile(r"^[a-z][a-z0-9_]*$")
 
 
@@ -489,7 +551,20 @@ def _material_values(r: _Reader, tbl: dict, path: str) -> dict:
         out["ior"] = None
     if "ior" in out and out["ior"] is not None:
         out["f0"] = None
+    principled = {}
+    for key, spec in PRINCIPLED_INPUTS.items():
+        if key in tbl:
+            principled[key] = (r.color(tbl, key, path, hi=spec.hi) if spec.color
+                               else r.number(tbl, key, path, lo=spec.lo, hi=spec.hi))
+    if principled:
+        out["principled"] = principled
     return out
+
+
+def _principled(*tables: dict) -> tuple:
+    """Principled inputs of ``tables`` (later ones win) in ``PRINCIPLED_INPUTS``' order."""
+    merged = {k: v for t in tables for k, v in t.items()}
+    return tuple((key, merged[key]) for key in PRINCIPLED_INPUTS if key in merged)
 
 
 def load_material_presets(path: str | Path | None = None) -> dict[str, MaterialPreset]:
@@ -504,10 +579,11 @@ def load_material_presets(path: str | Path | None = None) -> dict[str, MaterialP
         if not _LIBRARY_NAME.match(name):
             r.fail(name, "a material name of lower-case letters, digits and _", got=name)
         r.table(tbl, name)
-        r.keys(tbl, name, {"description", *_MATERIAL_VALUE_KEYS})
+        r.keys(tbl, name, {"description", *_MATERIAL_VALUE_KEYS, *PRINCIPLED_INPUTS})
         for key in ("base_color", "metalness", "roughness"):
             r.get(tbl, key, name, required=True)
         values = _material_values(r, tbl, name)
+        values["principled"] = _principled(values.get("principled", {}))
         out[name] = MaterialPreset(name=name, description=r.string(tbl, "description", name, ""),
                                    preset=name, **values)
     if not out:
@@ -599,13 +675,17 @@ def _label(values: dict) -> str:
 
 def _material(r: _Reader, value: Any, path: str, library: _Library, default_name: str) -> MaterialPreset:
     tbl = r.table(value, path)
-    r.keys(tbl, path, {"preset", *_MATERIAL_VALUE_KEYS})
+    r.keys(tbl, path, {"preset", *_MATERIAL_VALUE_KEYS, *PRINCIPLED_INPUTS})
     values = _material_values(r, tbl, path)
+    principled = values.get("principled", {})
     if "preset" in tbl:
         base = library.get(tbl["preset"], r.join(path, "preset"))
         if not values:
             return base
-        return replace(base, name=f"{base.name} {_label(values)}", **values)
+        label = _label({**{k: v for k, v in values.items() if k != "principled"}, **principled})
+        values["principled"] = _principled(dict(base.principled), principled)
+        return replace(base, name=f"{base.name} {label}", **values)
+    values["principled"] = _principled(principled)
     return MaterialPreset(name=default_name, **values)
 
 
@@ -793,7 +873,7 @@ def load_scene_preset(path_or_name: str | Path) -> ScenePreset:
     scene = r.table(r.get(data, "scene", "", True), "scene")
     r.keys(scene, "scene", {"name", "description", "resolution", "model", "ambient", "ambient_source",
                             "world_color",
-                            "world_image", "world_strength", "world_rotation", "materials"})
+                            "world_image", "world_strength", "world_rotation", "materials", "lobe"})
     name = r.string(scene, "name", "scene")
     description = r.string(scene, "description", "scene")
     resolution = scene.get("resolution", [960, 540])
@@ -838,10 +918,18 @@ def load_scene_preset(path_or_name: str | Path) -> ScenePreset:
         objects += _arrays(r, data["arrays"], library, len(objects))
     if not objects:
         r.fail("objects", "at least one [[objects]] or [[arrays]] table", note="the scene is empty")
+    lobe = None
+    if "lobe" in scene:
+        lobe = r.string(scene, "lobe", "scene", choices=tuple(n.lower() for n in LOBE_NAMES)).upper()
+        if not any(o.material is not None and lobe in o.material.lobes for o in objects):
+            r.fail("scene.lobe", f"a material with {lobe.lower()} on (one of {lobe.lower()}'s inputs "
+                   f"{', '.join(lobe_off(lobe))} off its default)", got=scene["lobe"],
+                   note="no object's material has it")
     return ScenePreset(
         name=name, description=description, path=path.resolve(), camera=camera, lights=lights,
         objects=tuple(objects), variants=tuple(variants), resolution=(resolution[0], resolution[1]),
-        model=model, ambient=ambient, ambient_source=ambient_source, world_color=world_color, world=world)
+        model=model, ambient=ambient, ambient_source=ambient_source, world_color=world_color, world=world,
+        lobe=lobe)
 
 
 def _world_image(r, tbl: dict, path: str) -> WorldPreset | None:

@@ -99,19 +99,9 @@ def _image_material(folder):
 
 
 def _scene(args):
-    import bpy
-
-    scene = scenes.empty(args.resolution)
-    scene.shading_lab.model = "PBR"
-    scene.shading_lab.term_set = "PRINCIPLED"
-    width, height = args.resolution
-    scenes.camera(scene, (0.0, 0.0, 5.0), ortho=2.0)
-    scenes.black_world(scene)
+    scene, plane = scenes.filled_plane(args.resolution)
     scenes.light(scene, "Sun", "SUN", rotation=(math.radians(20.0), math.radians(-15.0), 0.0), energy=3.0,
                  angle=0.0, use_shadow=False)
-    bpy.ops.mesh.primitive_plane_add(size=2.0)
-    plane = bpy.context.active_object
-    plane.scale = (1.0, height / width, 1.0) if width >= height else (width / height, 1.0, 1.0)
     return scene, plane
 
 

@@ -97,3 +97,21 @@ def show_only(groups: dict, key) -> None:
 def lights(scene, casting: bool = False) -> list:
     """The scene's lights (their data), only those casting a shadow with ``casting``."""
     return [o.data for o in scene.objects if o.type == "LIGHT" and (o.data.use_shadow or not casting)]
+
+
+def filled_plane(size: tuple[int, int]):
+    """(scene, plane): Blender's empty scene at ``size`` drawn by the physically based model's
+    Principled set, a black world, and a 2 m plane filling an orthographic view from above (its
+    lights are the benchmark's)."""
+    import bpy
+
+    scene = empty(size)
+    scene.shading_lab.model = "PBR"
+    scene.shading_lab.term_set = "PRINCIPLED"
+    width, height = size
+    camera(scene, (0.0, 0.0, 5.0), ortho=2.0)
+    black_world(scene)
+    bpy.ops.mesh.primitive_plane_add(size=2.0)
+    plane = bpy.context.active_object
+    plane.scale = (1.0, height / width, 1.0) if width >= height else (width / height, 1.0, 1.0)
+    return scene, plane
