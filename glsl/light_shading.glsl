@@ -177,5 +177,11 @@ vec3 shade_light(Surface s, LightData light, vec3 l, vec3 E, float visibility, v
 #ifdef SL_SHEEN
   c += sheen;
 #endif
+#ifdef SL_CLOSURE_BSDFS
+  /* the velvet and the toons (closures.glsl), at the light's direction */
+  vec3 closure_diffuse, closure_glossy;
+  closure_bsdfs_direct(s, l, closure_diffuse, closure_glossy);
+  c += (closure_diffuse * factors.x + closure_glossy * factors.y) * E;
+#endif
   return c;
 }

@@ -212,6 +212,8 @@ MaterialData load_material(int row)
 #ifdef SL_SHEEN
   m.sheen = texelFetch(material_table, ivec2(12, row), 0);
 #endif
+  /* the closure nodes' rows: a node graph's alone, and none is shaded deferred (its sheen layered) */
+  m.closure_bsdfs = vec4(1.0, 0.0, 0.0, 0.0);
   return m;
 }
 #endif

@@ -211,7 +211,13 @@ vec3 principled_direct(Surface s, float NoL, float NoH, float NxH2, float LoH, v
   float V = V_SmithGGXCorrelated(s.NoV, NoL, s.alpha);
   PrincipledLayers p = principled_layers(s);
   vec3 specular = principled_specular_tint(s, LoH) * (D * V);
+#  ifdef SL_DIFFUSE_ROUGHNESS
+  /* the Diffuse BSDF's Oren-Nayar in place of 1 / pi (closures.glsl); l.v = 2 (l.h)^2 - 1 */
+  vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) *
+                 oren_nayar_factor(s, NoL, 2.0 * LoH * LoH - 1.0);
+#  else
   vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) * INV_PI;
+#  endif
   return (diffuse * factors.x + specular * factors.y) * E * NoL;
 }
 
@@ -240,6 +246,9 @@ vec3 principled_environment(Surface s, vec2 EB, vec3 radiance, vec3 irradiance, 
   vec3 specular = (s.metalness * metal + (1.0 - s.metalness) * p.albedo) * radiance;
 #    endif
   vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) * irradiance * INV_PI;
+#    ifdef SL_DIFFUSE_ROUGHNESS
+  diffuse *= s.bsdfs.on_albedo; /* Oren-Nayar's albedo at the view over Lambert's (closures.glsl) */
+#    endif
   return diffuse * weights.x + specular * weights.y;
 }
 #  endif

@@ -67,6 +67,31 @@ SheenLobe sheen_at(vec3 n, vec3 v, float roughness, vec3 color);
 float ltc_density(vec4 m, vec3 w, float floor_cosine);
 #endif
 
+#ifdef SL_CLOSURE_BSDFS
+/* The closure nodes drawn beside the Principled BSDF's lobes, at the view (closures.glsl's
+ * closure_bsdfs_at), made once per shading point. */
+struct ClosureBsdfLobes {
+#  ifdef SL_DIFFUSE_ROUGHNESS
+  bool oren_nayar;     /* the Diffuse BSDF's Roughness above 0 (else Lambert) */
+  float on_a;          /* Oren-Nayar's A and B */
+  float on_b;
+  vec3 on_ms;          /* its multiple scattering's E_ms (1 - E(v)) */
+  vec3 on_albedo;      /* its directional albedo at the view over the base colour */
+#  endif
+#  ifdef SL_VELVET
+  vec3 velvet;         /* Sheen BSDF (Ashikhmin) colour */
+  float velvet_inv_sigma2;
+#  endif
+#  ifdef SL_TOON
+  vec3 toon_diffuse;   /* Toon BSDF colours, Size and Smooth in radians */
+  vec2 toon_diffuse_shape;
+  vec3 toon_glossy;
+  vec2 toon_glossy_shape;
+#  endif
+};
+ClosureBsdfLobes closure_bsdfs_at(vec3 n, vec3 v, vec3 base_color, MaterialData m);
+#endif
+
 #ifdef SL_MULTISCATTER
 /* The specular lobe's multiple-scattering compensation (multiscatter.glsl): it depends on the view
  * only, so make_surface computes it once per shading point, not once per light. */
@@ -118,7 +143,13 @@ struct Surface {
 #if defined(SL_COAT) || defined(SL_SHEEN)
   vec3 below;         /* what the sheen and the coat above leave the base at the view (rgb) */
 #endif
+#ifdef SL_CLOSURE_BSDFS
+  ClosureBsdfLobes bsdfs;
+#endif
 };
+#ifdef SL_DIFFUSE_ROUGHNESS
+vec3 oren_nayar_factor(Surface s, float NoL, float LoV); /* closures.glsl */
+#endif
 
 /* Unit half vector of eq. 1.6; l + v = 0 only when the light is exactly behind the viewer's
  * line of sight, where any unit vector serves: fall back to n. */
@@ -181,7 +212,8 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
   s.sheen = sheen_at(sheen_n, v, m.sheen.w, max(m.sheen.rgb, 0.0));
   /* Cycles' closure_layering_weight of the sheen's albedo (colour x albedo): its largest channel,
    * what the sheen leaves the coat's lobe as well as the base */
-  float sheen_left = saturate(1.0 - max(s.sheen.color.r, max(s.sheen.color.g, s.sheen.color.b)));
+  float sheen_left = saturate(1.0 - max(s.sheen.color.r, max(s.sheen.color.g, s.sheen.color.b)) *
+                                     saturate(m.closure_bsdfs.x)); /* a Sheen BSDF's is over nothing */
   s.below *= sheen_left;
 #  ifdef SL_COAT
   s.coat.weight *= sheen_left;
@@ -189,6 +221,9 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
 #endif
 #ifdef SL_MULTISCATTER
   s.ms_compensation = ms_compensation_at(s.NoV, s.roughness, s.f0);
+#endif
+#ifdef SL_CLOSURE_BSDFS
+  s.bsdfs = closure_bsdfs_at(n, v, s.base_color, m);
 #endif
 #ifdef SL_LTC
   s.ltc = ltc_frame_at(n, v, s.NoV, s.roughness);

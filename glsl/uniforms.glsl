@@ -72,6 +72,15 @@ struct MaterialData {
   vec4 coat_tint;        /* rgb: Coat Tint (the base's colour through the coat at normal incidence) */
   vec4 sheen;            /* rgb: Sheen Weight x Sheen Tint; w: Sheen Roughness */
   vec4 coat_normal;      /* xyz: the coat's normal where a node graph gives it one (0: the surface's) */
+  /* The closure nodes beside the Principled BSDF (glsl/closures.glsl; a node graph's, per fragment:
+   * graph_surface.glsl's apply_closure_bsdfs) */
+  vec4 closure_bsdfs;    /* x: the share of the sheen layered over the base (1: the Principled BSDF's;
+                          * 0: a Sheen BSDF's), y: the Diffuse BSDF's Roughness (Oren-Nayar),
+                          * z: the velvet's sigma */
+  vec4 velvet;           /* rgb: Sheen BSDF (Ashikhmin) colour */
+  vec4 toon_diffuse;     /* rgb: Toon BSDF (Diffuse) colour, w: its Size */
+  vec4 toon_glossy;      /* rgb: Toon BSDF (Glossy) colour, w: its Size */
+  vec4 toon_smooth;      /* x: the Diffuse component's Smooth, y: the Glossy's */
 };
 
 /* The world's light, precomputed (glsl/ibl.glsl, addon/reference/environment.py): nine SH coefficients

@@ -74,6 +74,7 @@ OPTIONAL_LIBRARY += ("node_float.glsl", "node_tex_gradient.glsl", "node_tex_chec
                      "node_tex_magic.glsl", "node_tex_brick.glsl", "node_tex_radial_tiling.glsl")
 OPTIONAL_LIBRARY += ("node_tex_voronoi.glsl",)  # after node_hash.glsl, whose hashes it calls
 OPTIONAL_LIBRARY += ("node_tex_noise.glsl", "node_tex_wave.glsl")  # Noise; Wave (calls Noise's fBM)
+OPTIONAL_LIBRARY += ("node_closure_bsdfs.glsl",)  # the Sheen and Toon BSDFs
 #: Node kinds drawn from a bake even where an emitter compiles them (empty: none). Tests and the
 #: benchmark set it to compare a node's bake with its compiled code and with Cycles.
 FORCE_BAKE: frozenset[str] = frozenset()
@@ -833,10 +834,52 @@ def _glossy(w: _Writer, node: FlatNode) -> dict:
                     f"{_normal_input(w, node)})"}
 
 
+def _bsdf(fn: str, w: _Writer, node: FlatNode, inputs: tuple[str, ...]) -> dict:
+    """A BSDF node's closure: ``fn`` of its ``inputs`` and its Normal."""
+    return {"BSDF": f"{fn}({', '.join(w.arg(node, s) for s in inputs)}, {_normal_input(w, node)})"}
+
+
+def _sheen(w: _Writer, node: FlatNode) -> dict | None:
+    """The Sheen BSDF: Microfiber the Principled BSDF's sheen alone, Ashikhmin the velvet
+    (glsl/node_closure_bsdfs.glsl)."""
+    fn = {"MICROFIBER": "closure_sheen_microfiber", "ASHIKHMIN": "closure_sheen_ashikhmin"}.get(
+        node.props.get("distribution", "MICROFIBER"))
+    if fn is None:
+        return None
+    return _bsdf(fn, w, node, ("Color", "Roughness"))
+
+
+def _toon(w: _Writer, node: FlatNode) -> dict | None:
+    """The Toon BSDF, its Diffuse or Glossy component (glsl/node_closure_bsdfs.glsl)."""
+    component = node.props.get("component", "DIFFUSE")
+    if component not in ("DIFFUSE", "GLOSSY"):
+        return None
+    args = ", ".join(w.arg(node, s) for s in ("Color", "Size", "Smooth"))
+    return {"BSDF": f"closure_toon({args}, {_normal_input(w, node)}, {str(component == 'GLOSSY').lower()})"}
+
+
+#: The Sheen BSDF's distributions and the lobe each draws.
+SHEEN_LOBES = {"MICROFIBER": "SHEEN", "ASHIKHMIN": "VELVET"}
+
+
+def closure_node_lobe(node: FlatNode) -> str | None:
+    """The lobe (``snapshot.LOBES``) a closure node other than the Principled BSDF draws, if any: the
+    Diffuse BSDF's Oren-Nayar roughness, the Sheen BSDF's (Microfiber: the Principled BSDF's sheen),
+    the Toon BSDF's."""
+    if node.kind == "ShaderNodeBsdfDiffuse":
+        return "DIFFUSE_ROUGHNESS"
+    if node.kind == "ShaderNodeBsdfSheen":
+        return SHEEN_LOBES.get(node.props.get("distribution", "MICROFIBER"))
+    if node.kind == "ShaderNodeBsdfToon":
+        return "TOON"
+    return None
+
+
 CLOSURES = {
     "ShaderNodeBsdfPrincipled": _principled,
-    "ShaderNodeBsdfDiffuse": lambda w, n: {"BSDF": f"closure_diffuse({_closure_color(w, n)}, "
-                                                   f"{_normal_input(w, n)})"},
+    "ShaderNodeBsdfDiffuse": lambda w, n: _bsdf("closure_diffuse", w, n, ("Color", "Roughness")),
+    "ShaderNodeBsdfSheen": _sheen,
+    "ShaderNodeBsdfToon": _toon,
     "ShaderNodeBsdfGlossy": _glossy,
     "ShaderNodeBsdfAnisotropic": _glossy,
     "ShaderNodeBsdfMetallic": _glossy,

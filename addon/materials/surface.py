@@ -22,7 +22,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..scene.nodes import MATERIAL_OUTPUT, Graph
-from ..scene.snapshot import LOBES, lobes_of
+from ..scene.snapshot import CLOSURE_LOBES, LOBES, lobes_of
 from . import bake, codegen
 from .graph import Const, FlatGraph, flatten
 
@@ -133,7 +133,7 @@ def _plain(flat: FlatGraph) -> bool:
     # (a Holdout: the constant path has no alpha to cut)
     return node.kind in codegen.CLOSURES and node.kind not in ("ShaderNodeMixShader", "ShaderNodeAddShader",
                                                                 "ShaderNodeHoldout") \
-        and all(isinstance(i.source, Const) for i in node.inputs.values())
+        and all(isinstance(i.source, Const) for i in node.inputs.values()) and not _closure_lobes(flat)
 
 
 def _transparent(flat: FlatGraph) -> bool:
@@ -270,7 +270,23 @@ def _lobes(flat: FlatGraph) -> frozenset[str]:
             values[socket] = tuple(value)[:3] if isinstance(value, (tuple, list)) else float(value)
         out |= lobes_of(values["Specular Tint"], values["Coat Weight"], values["Sheen Weight"],
                         values["Sheen Tint"])
-    return frozenset(out)
+    return frozenset(out | _closure_lobes(flat))
+
+
+def _closure_lobes(flat: FlatGraph) -> set[str]:
+    """The lobes (``snapshot.CLOSURE_LOBES``, and the Principled BSDF's SHEEN for a Sheen BSDF) the
+    graph's other closure nodes draw (codegen.CLOSURE_NODE_LOBES): a Diffuse BSDF's Roughness where
+    it is linked or above 0."""
+    out = set()
+    for node in flat.nodes.values():
+        lobe = codegen.closure_node_lobe(node)
+        if lobe == "DIFFUSE_ROUGHNESS":
+            spec = node.inputs.get("Roughness")
+            if spec is None or (isinstance(spec.source, Const) and not float(spec.source.value or 0.0) > 0.0):
+                continue  # Lambert (Cycles' below 1e-5: the closure clamps to it, the lobe reads 0)
+        if lobe is not None:
+            out.add(lobe)
+    return out
 
 
 def compile_material(graph: Graph, groups: dict[str, Graph],
@@ -397,12 +413,15 @@ def _textured(flat: FlatGraph) -> dict:
 #: The Principled BSDF's inputs of each lobe (``snapshot.LOBES``).
 LOBE_INPUTS = {"SPECULAR_TINT": ("Specular Tint",),
                "COAT": ("Coat Weight", "Coat Roughness", "Coat IOR", "Coat Tint", "Coat Normal"),
-               "SHEEN": ("Sheen Weight", "Sheen Roughness", "Sheen Tint")}
+               "SHEEN": ("Sheen Weight", "Sheen Roughness", "Sheen Tint"),
+               **{lobe: () for lobe in CLOSURE_LOBES}}  # (the closure nodes': READ_INPUTS)
 #: What of each closure the shading models read (the rest is drawn as nothing: Principled BSDF's
 #: coat, sheen, transmission ...).
 READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_BASE_INPUTS) | {"Normal"}
                | {socket for lobe in LOBES for socket in LOBE_INPUTS[lobe]},
-               "ShaderNodeBsdfDiffuse": {"Color", "Normal"},
+               "ShaderNodeBsdfDiffuse": {"Color", "Roughness", "Normal"},
+               "ShaderNodeBsdfSheen": {"Color", "Roughness", "Normal"},
+               "ShaderNodeBsdfToon": {"Color", "Size", "Smooth", "Normal"},
                "ShaderNodeBsdfGlossy": {"Color", "Roughness", "Normal"},
                "ShaderNodeBsdfMetallic": {"Base Color", "Roughness", "Normal"}}
 

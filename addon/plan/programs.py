@@ -18,6 +18,7 @@ from ..reference.multiscatter import MS_SIZE, S_SIZE
 from ..reference.sheen import SIZE as SHEEN_SIZE
 from ..scene.matrices import invert
 from ..scene.snapshot import (
+    CLOSURE_LOBES,
     LIGHT_KINDS,
     LOBES,
     MAX_ENVIRONMENT_IMAGES,
@@ -58,7 +59,7 @@ MODEL_FILES = {
     "PBR": "model_pbr.glsl",
 }
 FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "environment.glsl", "ibl.glsl")
-PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "principled.glsl", "ltc.glsl")
+PBR_LIBRARY = ("multiscatter.glsl", "pbr_terms.glsl", "principled.glsl", "ltc.glsl", "closures.glsl")
 #: How the world lights a program: "" not at all (a black world), "UNIFORM" a constant radiance,
 #: "MAP" environment images (glsl/ibl.glsl).
 ENVIRONMENTS = ("", "UNIFORM", "MAP")
@@ -289,6 +290,8 @@ class Features:
             out += [("SL_PRINCIPLED", "1"), ("SL_LAYERS", "1"), ("SL_MS_SIZE", str(MS_SIZE)),
                     ("SL_S_SIZE", str(S_SIZE))]
             out += [("SL_" + lobe, "1") for lobe in sorted(self.lobes)]
+            if self.lobes & CLOSURE_LOBES:  # glsl/closures.glsl's lobes
+                out.append(("SL_CLOSURE_BSDFS", "1"))
             if self.uses_sheen_table:
                 out.append(("SL_SHEEN_SIZE", str(SHEEN_SIZE)))
         elif self.model == "PBR":
@@ -920,6 +923,13 @@ def pack_material(m: MaterialParams) -> bytes:
         [*m.coat_tint, 0.0],
         [*(m.sheen_weight * c for c in m.sheen_tint), m.sheen_roughness],
         [0.0, 0.0, 0.0, 0.0],  # the coat's normal: the surface's (a node graph's own is per fragment)
+        # the closure nodes beside the Principled BSDF (a node graph's, per fragment): the sheen layered
+        # over the base, no Oren-Nayar roughness, no velvet, no toon
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 0.0],
     ]
     return np.asarray(rows, np.float32).tobytes()
 

@@ -182,6 +182,10 @@ class MaterialParams:
 #: The Principled BSDF's lobes beyond its base the programs draw, as their defines name them
 #: (SL_<LOBE>).
 LOBES = ("SPECULAR_TINT", "COAT", "SHEEN")
+#: The closure nodes' lobes beside the Principled BSDF's (glsl/closures.glsl): the Diffuse BSDF's
+#: Oren-Nayar roughness, the Sheen BSDF's Ashikhmin velvet, the Toon BSDF; a node graph's alone.
+CLOSURE_LOBES = frozenset({"DIFFUSE_ROUGHNESS", "VELVET", "TOON"})
+LOBES += tuple(sorted(CLOSURE_LOBES))
 
 
 def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint) -> frozenset[str]:
