@@ -162,6 +162,7 @@ void apply_closure_bsdfs(inout MaterialData m, ClosureBsdfs b, float sheen_weigh
   m.toon_diffuse = vec4(b.toon_diffuse * inv, b.toon_diffuse_shape.y * toon_d_inv);
   m.toon_glossy = vec4(b.toon_glossy * inv, b.toon_glossy_shape.y * toon_g_inv);
   m.toon_smooth = vec4(b.toon_diffuse_shape.z * toon_d_inv, b.toon_glossy_shape.z * toon_g_inv, 0.0, 0.0);
+  m.diffuse_ms = vec4(b.diffuse_ms * inv, 0.0);
 }
 
 /* The Surface closure as the models read it: its BSDFs' mean inputs replace the material's values

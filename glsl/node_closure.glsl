@@ -55,6 +55,7 @@ ClosureLobes lobes_add(ClosureLobes a, ClosureLobes b)
 struct ClosureBsdfs {
   float diffuse_weight;     /* the weight of the BSDFs with a diffuse base (all but Glossy) */
   float diffuse_roughness;  /* the Diffuse BSDFs' Roughness times their weight */
+  vec3 diffuse_ms;          /* their Oren-Nayar's multiple scattering: Color x E_ms(Color) x weight */
   float sheen_layered;      /* the Principled BSDFs' sheen_weight (ClosureLobes'): layered over them */
   vec3 velvet;              /* Sheen BSDF (Ashikhmin): Color x weight */
   float velvet_weight;
@@ -67,12 +68,13 @@ struct ClosureBsdfs {
 
 ClosureBsdfs bsdfs_none()
 {
-  return ClosureBsdfs(0.0, 0.0, 0.0, vec3(0.0), 0.0, 0.0, vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
+  return ClosureBsdfs(0.0, 0.0, vec3(0.0), 0.0, vec3(0.0), 0.0, 0.0, vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
 }
 
 ClosureBsdfs bsdfs_scale(ClosureBsdfs b, float w)
 {
-  return ClosureBsdfs(b.diffuse_weight * w, b.diffuse_roughness * w, b.sheen_layered * w, b.velvet * w,
+  return ClosureBsdfs(b.diffuse_weight * w, b.diffuse_roughness * w, b.diffuse_ms * w, b.sheen_layered * w,
+                      b.velvet * w,
                       b.velvet_weight * w, b.velvet_sigma * w, b.toon_diffuse * w, b.toon_diffuse_shape * w,
                       b.toon_glossy * w, b.toon_glossy_shape * w);
 }
@@ -80,6 +82,7 @@ ClosureBsdfs bsdfs_scale(ClosureBsdfs b, float w)
 ClosureBsdfs bsdfs_add(ClosureBsdfs a, ClosureBsdfs b)
 {
   return ClosureBsdfs(a.diffuse_weight + b.diffuse_weight, a.diffuse_roughness + b.diffuse_roughness,
+                      a.diffuse_ms + b.diffuse_ms,
                       a.sheen_layered + b.sheen_layered, a.velvet + b.velvet, a.velvet_weight + b.velvet_weight,
                       a.velvet_sigma + b.velvet_sigma, a.toon_diffuse + b.toon_diffuse,
                       a.toon_diffuse_shape + b.toon_diffuse_shape, a.toon_glossy + b.toon_glossy,
@@ -167,13 +170,22 @@ Closure closure_principled(vec4 base_color, float metallic, float roughness, flo
 }
 
 /* Diffuse BSDF: no specular lobe (F0 0); its Roughness Cycles' Oren-Nayar (glsl/closures.glsl,
- * where the program draws it: SL_DIFFUSE_ROUGHNESS), Lambert at 0, clamped to [0, 1] as
- * bsdf_oren_nayar_setup clamps it */
+ * where the program draws it: SL_DIFFUSE_ROUGHNESS), Lambert below 1e-5 (bsdf_diffuse_setup),
+ * clamped to [0, 1] as bsdf_oren_nayar_setup clamps it, and its multiple scattering's colour here,
+ * per closure, as it is not linear in the colour: Color x E_ms, E_ms = rho^2 E_avg / (1 - E_avg) /
+ * (pi (1 - rho (1 - E_avg))) of rho = Color within [0, 1] (bsdf_oren_nayar_setup; the closure's
+ * weight is its Color). */
 Closure closure_diffuse(vec4 color, float roughness, vec3 n)
 {
   Closure c = closure_bsdf(color.rgb, 0.0, 1.0, 0.0, n);
+  float sigma = clamp(roughness, 0.0, 1.0);
   c.bsdfs.diffuse_weight = 1.0;
-  c.bsdfs.diffuse_roughness = clamp(roughness, 0.0, 1.0);
+  c.bsdfs.diffuse_roughness = sigma;
+  if (sigma >= 1e-5) {
+    float e_avg = oren_nayar_coefficients(sigma).z; /* < 1 for sigma >= 1e-5 */
+    vec3 rho = clamp(color.rgb, 0.0, 1.0);
+    c.bsdfs.diffuse_ms = color.rgb * rho * rho * (e_avg / (1.0 - e_avg)) * INV_PI / (1.0 - rho * (1.0 - e_avg));
+  }
   return c;
 }
 

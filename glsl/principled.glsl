@@ -212,9 +212,9 @@ vec3 principled_direct(Surface s, float NoL, float NoH, float NxH2, float LoH, v
   PrincipledLayers p = principled_layers(s);
   vec3 specular = principled_specular_tint(s, LoH) * (D * V);
 #  ifdef SL_DIFFUSE_ROUGHNESS
-  /* the Diffuse BSDF's Oren-Nayar in place of 1 / pi (closures.glsl); l.v = 2 (l.h)^2 - 1 */
-  vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) *
-                 oren_nayar_factor(s, NoL, 2.0 * LoH * LoH - 1.0);
+  /* the Diffuse BSDF's Oren-Nayar in place of Lambert (closures.glsl); l.v = 2 (l.h)^2 - 1 */
+  vec3 diffuse = (1.0 - s.metalness) * saturate(1.0 - p.layer) *
+                 oren_nayar_diffuse(s, s.base_color, NoL, 2.0 * LoH * LoH - 1.0);
 #  else
   vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) * INV_PI;
 #  endif
@@ -245,10 +245,12 @@ vec3 principled_environment(Surface s, vec2 EB, vec3 radiance, vec3 irradiance, 
 #    endif
   vec3 specular = (s.metalness * metal + (1.0 - s.metalness) * p.albedo) * radiance;
 #    endif
-  vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) * irradiance * INV_PI;
 #    ifdef SL_DIFFUSE_ROUGHNESS
-  diffuse *= s.bsdfs.on_albedo; /* Oren-Nayar's albedo at the view over Lambert's (closures.glsl) */
+  vec3 rho = s.bsdfs.on_albedo; /* Oren-Nayar's directional albedo at the view (closures.glsl) */
+#    else
+  vec3 rho = s.base_color;
 #    endif
+  vec3 diffuse = rho * (1.0 - s.metalness) * saturate(1.0 - p.layer) * irradiance * INV_PI;
   return diffuse * weights.x + specular * weights.y;
 }
 #  endif

@@ -75,8 +75,8 @@ struct ClosureBsdfLobes {
   bool oren_nayar;     /* the Diffuse BSDF's Roughness above 0 (else Lambert) */
   float on_a;          /* Oren-Nayar's A and B */
   float on_b;
-  vec3 on_ms;          /* its multiple scattering's E_ms (1 - E(v)) */
-  vec3 on_albedo;      /* its directional albedo at the view over the base colour */
+  vec3 on_ms;          /* its multiple scattering's colour x E_ms (1 - E(v)) */
+  vec3 on_albedo;      /* the diffuse base's directional albedo at the view (rgb) */
 #  endif
 #  ifdef SL_VELVET
   vec3 velvet;         /* Sheen BSDF (Ashikhmin) colour */
@@ -148,7 +148,7 @@ struct Surface {
 #endif
 };
 #ifdef SL_DIFFUSE_ROUGHNESS
-vec3 oren_nayar_factor(Surface s, float NoL, float LoV); /* closures.glsl */
+vec3 oren_nayar_diffuse(Surface s, vec3 rho, float NoL, float LoV); /* closures.glsl */
 #endif
 
 /* Unit half vector of eq. 1.6; l + v = 0 only when the light is exactly behind the viewer's

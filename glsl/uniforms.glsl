@@ -81,6 +81,7 @@ struct MaterialData {
   vec4 toon_diffuse;     /* rgb: Toon BSDF (Diffuse) colour, w: its Size */
   vec4 toon_glossy;      /* rgb: Toon BSDF (Glossy) colour, w: its Size */
   vec4 toon_smooth;      /* x: the Diffuse component's Smooth, y: the Glossy's */
+  vec4 diffuse_ms;       /* rgb: the Diffuse BSDF's Oren-Nayar multiple scattering, Color x E_ms */
 };
 
 /* The world's light, precomputed (glsl/ibl.glsl, addon/reference/environment.py): nine SH coefficients

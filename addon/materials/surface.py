@@ -275,7 +275,7 @@ def _lobes(flat: FlatGraph) -> frozenset[str]:
 
 def _closure_lobes(flat: FlatGraph) -> set[str]:
     """The lobes (``snapshot.CLOSURE_LOBES``, and the Principled BSDF's SHEEN for a Sheen BSDF) the
-    graph's other closure nodes draw (codegen.CLOSURE_NODE_LOBES): a Diffuse BSDF's Roughness where
+    graph's other closure nodes draw (codegen.closure_node_lobe): a Diffuse BSDF's Roughness where
     it is linked or above 0."""
     out = set()
     for node in flat.nodes.values():
