@@ -57,6 +57,7 @@ struct ClosureBsdfs {
   float diffuse_roughness;  /* the Diffuse BSDFs' Roughness times their weight */
   vec3 diffuse_ms;          /* their Oren-Nayar's multiple scattering: Color x E_ms(Color) x weight */
   float sheen_layered;      /* the Principled BSDFs' sheen_weight (ClosureLobes'): layered over them */
+  float unlayered;          /* the weight of diffuse bases beside their specular layer, not under it */
   vec3 velvet;              /* Sheen BSDF (Ashikhmin): Color x weight */
   float velvet_weight;
   float velvet_sigma;       /* its Roughness times velvet_weight */
@@ -64,29 +65,32 @@ struct ClosureBsdfs {
   vec3 toon_diffuse_shape;  /* its weight, Size and Smooth times it */
   vec3 toon_glossy;         /* Toon BSDF (Glossy) likewise */
   vec3 toon_glossy_shape;
+  vec4 glossy;              /* the weights of the metal lobes of a constant Fresnel (Glossy BSDF: its
+                             * colour), of those uncompensated (GGX, Beckmann, Ashikhmin-Shirley), of
+                             * the Beckmann and the Ashikhmin-Shirley distributions */
 };
 
 ClosureBsdfs bsdfs_none()
 {
-  return ClosureBsdfs(0.0, 0.0, vec3(0.0), 0.0, vec3(0.0), 0.0, 0.0, vec3(0.0), vec3(0.0), vec3(0.0), vec3(0.0));
+  return ClosureBsdfs(0.0, 0.0, vec3(0.0), 0.0, 0.0, vec3(0.0), 0.0, 0.0, vec3(0.0), vec3(0.0), vec3(0.0),
+                      vec3(0.0), vec4(0.0));
 }
 
 ClosureBsdfs bsdfs_scale(ClosureBsdfs b, float w)
 {
   return ClosureBsdfs(b.diffuse_weight * w, b.diffuse_roughness * w, b.diffuse_ms * w, b.sheen_layered * w,
-                      b.velvet * w,
+                      b.unlayered * w, b.velvet * w,
                       b.velvet_weight * w, b.velvet_sigma * w, b.toon_diffuse * w, b.toon_diffuse_shape * w,
-                      b.toon_glossy * w, b.toon_glossy_shape * w);
+                      b.toon_glossy * w, b.toon_glossy_shape * w, b.glossy * w);
 }
 
 ClosureBsdfs bsdfs_add(ClosureBsdfs a, ClosureBsdfs b)
 {
   return ClosureBsdfs(a.diffuse_weight + b.diffuse_weight, a.diffuse_roughness + b.diffuse_roughness,
-                      a.diffuse_ms + b.diffuse_ms,
-                      a.sheen_layered + b.sheen_layered, a.velvet + b.velvet, a.velvet_weight + b.velvet_weight,
-                      a.velvet_sigma + b.velvet_sigma, a.toon_diffuse + b.toon_diffuse,
+                      a.diffuse_ms + b.diffuse_ms, a.sheen_layered + b.sheen_layered, a.unlayered + b.unlayered,
+                      a.velvet + b.velvet, a.velvet_weight + b.velvet_weight, a.velvet_sigma + b.velvet_sigma, a.toon_diffuse + b.toon_diffuse,
                       a.toon_diffuse_shape + b.toon_diffuse_shape, a.toon_glossy + b.toon_glossy,
-                      a.toon_glossy_shape + b.toon_glossy_shape);
+                      a.toon_glossy_shape + b.toon_glossy_shape, a.glossy + b.glossy);
 }
 
 struct Closure {
@@ -189,10 +193,15 @@ Closure closure_diffuse(vec4 color, float roughness, vec3 n)
   return c;
 }
 
-/* Glossy BSDF (and the Metallic BSDF's colour): a metal of that colour */
+/* Glossy BSDF, Multiscatter GGX (Cycles 5.0: bsdf_microfacet_setup_fresnel_constant): GGX of its
+ * colour, compensated for multiple scattering with that colour as its Fresnel; a metal of that colour
+ * where the program has no such lobe (SL_GLOSSY: principled.glsl). (The Metallic BSDF's Physical
+ * Conductor: a metal of its Base Color.) */
 Closure closure_glossy(vec4 color, float roughness, vec3 n)
 {
-  return closure_bsdf(color.rgb, 1.0, roughness, 0.0, n);
+  Closure c = closure_bsdf(max(color.rgb, 0.0), 1.0, roughness, 0.0, n);
+  c.bsdfs.glossy.x = 1.0;
+  return c;
 }
 
 Closure closure_emission(vec4 color, float strength)

@@ -115,6 +115,10 @@ PrincipledLayers principled_layers_at(float NoV, float roughness, vec3 base_colo
   p.dielectric_f0 = f0;
   vec3 dielectric_Fss = mix(f0, vec3(1.0), s_avg);
   p.metal_M = principled_M(metal_Fss, E_mu, Eavg);
+#ifdef SL_GLOSSY
+  /* a constant Fresnel: the colour is its average (bsdf_microfacet_setup_fresnel_constant) */
+  p.glossy_M = principled_M(max(base_color, 0.0), E_mu, Eavg);
+#endif
   p.dielectric_M = principled_M(dielectric_Fss, E_mu, Eavg);
   p.albedo = eta > 1.0 ? E_mu * p.dielectric_M * mix(f0, vec3(1.0), principled_S(roughness, NoV, sqrt(abs(ratio))))
                        : vec3(0.0);
@@ -180,6 +184,9 @@ Surface coat_surface(Surface s)
   c.metalness = 0.0;
   c.eta = s.coat.eta;
   c.layers = s.coat.layers;
+#  ifdef SL_GLOSSY
+  c.glossy = vec4(0.0); /* the coat is the Principled BSDF's own GGX dielectric */
+#  endif
 #  ifdef SL_LTC
   c.ltc = s.coat.ltc;
 #  endif
@@ -201,6 +208,10 @@ vec3 principled_specular_tint(Surface s, float LoH)
 #else
   vec3 metal = p.metal_M * F_Schlick(min(s.base_color, vec3(1.0)), 1.0, LoH);
 #endif
+#ifdef SL_GLOSSY
+  /* the Glossy BSDFs' constant Fresnel, the uncompensated distributions (closures.glsl) */
+  metal = glossy_metal(s, metal / p.metal_M, p.metal_M, 1.0);
+#endif
   vec3 dielectric = p.dielectric_M * F_DielectricTinted(s.eta, p.dielectric_f0, LoH);
   return s.metalness * metal + (1.0 - s.metalness) * dielectric;
 }
@@ -209,8 +220,12 @@ vec3 principled_direct(Surface s, float NoL, float NoH, float NxH2, float LoH, v
 {
   float D = D_GGX(NoH, NxH2, s.alpha);
   float V = V_SmithGGXCorrelated(s.NoV, NoL, s.alpha);
+  float DV = D * V;
+#  ifdef SL_GLOSSY
+  DV = glossy_lobe(s, DV, NoL, NoH, NxH2, LoH); /* the Glossy BSDFs' distributions (closures.glsl) */
+#  endif
   PrincipledLayers p = principled_layers(s);
-  vec3 specular = principled_specular_tint(s, LoH) * (D * V);
+  vec3 specular = principled_specular_tint(s, LoH) * DV;
 #  ifdef SL_DIFFUSE_ROUGHNESS
   /* the Diffuse BSDF's Oren-Nayar in place of Lambert (closures.glsl); l.v = 2 (l.h)^2 - 1 */
   vec3 diffuse = (1.0 - s.metalness) * saturate(1.0 - p.layer) *
@@ -242,6 +257,10 @@ vec3 principled_environment(Surface s, vec2 EB, vec3 radiance, vec3 irradiance, 
    * albedo estimate leaves it out: bsdf_microfacet_estimate_albedo) */
   float c6 = pow5(1.0 - s.NoV) * (1.0 - s.NoV);
   metal = max(metal - p.metal_M * p.metal_b * (s.NoV * c6 * EB.x), 0.0);
+#    endif
+#    ifdef SL_GLOSSY
+  /* a constant Fresnel: the lobe's albedo times the colour */
+  metal = glossy_metal(s, metal / p.metal_M, p.metal_M, EB.x);
 #    endif
   vec3 specular = (s.metalness * metal + (1.0 - s.metalness) * p.albedo) * radiance;
 #    endif

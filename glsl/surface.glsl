@@ -14,6 +14,9 @@ struct PrincipledLayers {
 #ifdef SL_SPECULAR_TINT
   vec3 metal_b;        /* F82-tint's b */
 #endif
+#ifdef SL_GLOSSY
+  vec3 glossy_M;       /* the compensation of a metal lobe whose Fresnel is its colour (Glossy BSDF) */
+#endif
 };
 PrincipledLayers principled_layers_at(float NoV, float roughness, vec3 base_color, float eta, vec3 tint);
 #endif
@@ -146,9 +149,16 @@ struct Surface {
 #ifdef SL_CLOSURE_BSDFS
   ClosureBsdfLobes bsdfs;
 #endif
+#ifdef SL_GLOSSY
+  vec4 glossy;        /* MaterialData's glossy: the Glossy BSDFs' shares (closures.glsl) */
+#endif
 };
 #ifdef SL_DIFFUSE_ROUGHNESS
 vec3 oren_nayar_diffuse(Surface s, vec3 rho, float NoL, float LoV); /* closures.glsl */
+#endif
+#ifdef SL_GLOSSY
+vec3 glossy_metal(Surface s, vec3 F, vec3 M, float albedo); /* closures.glsl */
+float glossy_lobe(Surface s, float DV, float NoL, float NoH, float NxH2, float LoH);
 #endif
 
 /* Unit half vector of eq. 1.6; l + v = 0 only when the light is exactly behind the viewer's
@@ -194,6 +204,11 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
 #endif
 #ifdef SL_LAYERS
   s.layers = principled_layers_at(s.NoV, s.roughness, s.base_color, s.eta, tint);
+#  ifdef SL_GRAPH
+  /* the share of the diffuse base beside the specular layer, not under it (a node graph's Specular
+   * BSDF, EEVEE's: node_closure_bsdfs.glsl) */
+  s.layers.layer *= 1.0 - saturate(m.closure_bsdfs.w);
+#  endif
 #endif
   /* the Principled BSDF's upper layers, each attenuating what lies below it at the view (Cycles'
    * svm_node_closure_bsdf: the sheen over the coat over the rest) */
@@ -212,8 +227,11 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
   s.sheen = sheen_at(sheen_n, v, m.sheen.w, max(m.sheen.rgb, 0.0));
   /* Cycles' closure_layering_weight of the sheen's albedo (colour x albedo): its largest channel,
    * what the sheen leaves the coat's lobe as well as the base */
-  float sheen_left = saturate(1.0 - max(s.sheen.color.r, max(s.sheen.color.g, s.sheen.color.b)) *
-                                     saturate(m.closure_bsdfs.x)); /* a Sheen BSDF's is over nothing */
+  float sheen_max = max(s.sheen.color.r, max(s.sheen.color.g, s.sheen.color.b));
+#  ifdef SL_GRAPH
+  sheen_max *= saturate(m.closure_bsdfs.x); /* a Sheen BSDF's share is over nothing (node graphs') */
+#  endif
+  float sheen_left = saturate(1.0 - sheen_max);
   s.below *= sheen_left;
 #  ifdef SL_COAT
   s.coat.weight *= sheen_left;
@@ -224,6 +242,9 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
 #endif
 #ifdef SL_CLOSURE_BSDFS
   s.bsdfs = closure_bsdfs_at(n, v, s.base_color, m);
+#endif
+#ifdef SL_GLOSSY
+  s.glossy = m.glossy;
 #endif
 #ifdef SL_LTC
   s.ltc = ltc_frame_at(n, v, s.NoV, s.roughness);

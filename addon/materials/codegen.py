@@ -828,10 +828,36 @@ def _unknown_closure(w: _Writer, node: FlatNode) -> dict:
             for s, t in node.outputs.items() if t == "SHADER"}
 
 
-def _glossy(w: _Writer, node: FlatNode) -> dict:
-    """Glossy, Anisotropic and Metallic BSDFs: a metal of their colour and roughness."""
-    return {"BSDF": f"closure_glossy({_closure_color(w, node)}, {_closure_roughness(w, node)}, "
-                    f"{_normal_input(w, node)})"}
+#: The Glossy BSDF's distributions, each its closure (glsl/node_closure.glsl, node_closure_bsdfs.glsl).
+GLOSSY_DISTRIBUTIONS = {"MULTI_GGX": "closure_glossy", "GGX": "closure_glossy_ggx",
+                        "BECKMANN": "closure_glossy_beckmann",
+                        "ASHIKHMIN_SHIRLEY": "closure_glossy_ashikhmin_shirley"}
+
+
+def _glossy(w: _Writer, node: FlatNode) -> dict | None:
+    """Glossy and Anisotropic BSDFs: its colour times its distribution's lobe (a metal of its colour
+    where the program does not draw the GLOSSY lobe)."""
+    fn = GLOSSY_DISTRIBUTIONS.get(node.props.get("distribution", "MULTI_GGX"))
+    if fn is None:
+        return None
+    args = f"{_closure_color(w, node)}, {_closure_roughness(w, node)}, {_normal_input(w, node)}"
+    return {"BSDF": f"{fn}({args})"}
+
+
+def _metallic(w: _Writer, node: FlatNode) -> dict | None:
+    """The Metallic BSDF (glsl/node_closure_bsdfs.glsl): F82 Tint the Principled BSDF's metal with its
+    edge tint; Physical Conductor the metal of its IOR's and Extinction's reflectance at normal
+    incidence; its GGX and Beckmann distributions marked (Multiscatter GGX: the metal's own)."""
+    fresnel = node.props.get("fresnel_type", "F82")
+    if fresnel == "F82":
+        out = _bsdf("closure_metallic_f82", w, node, ("Base Color", "Edge Tint", "Roughness"))
+    elif fresnel == "PHYSICAL_CONDUCTOR":
+        out = _bsdf("closure_metallic_conductor", w, node, ("IOR", "Extinction", "Roughness"))
+    else:
+        return None
+    mark = {"GGX": "closure_metallic_ggx", "BECKMANN": "closure_metallic_beckmann"}.get(
+        node.props.get("distribution", "MULTI_GGX"))
+    return {"BSDF": f"{mark}({out['BSDF']})"} if mark else out
 
 
 def _bsdf(fn: str, w: _Writer, node: FlatNode, inputs: tuple[str, ...]) -> dict:
@@ -858,6 +884,8 @@ def _toon(w: _Writer, node: FlatNode) -> dict | None:
     return {"BSDF": f"closure_toon({args}, {_normal_input(w, node)}, {str(component == 'GLOSSY').lower()})"}
 
 
+#: The Specular BSDF's (EEVEE's node) inputs read, in glsl/node_closure_bsdfs.glsl's closure_specular order.
+SPECULAR_INPUTS = ("Base Color", "Specular", "Roughness", "Emissive Color", "Transparency")
 #: The Sheen BSDF's distributions and the lobe each draws.
 SHEEN_LOBES = {"MICROFIBER": "SHEEN", "ASHIKHMIN": "VELVET"}
 
@@ -872,6 +900,17 @@ def closure_node_lobe(node: FlatNode) -> str | None:
         return SHEEN_LOBES.get(node.props.get("distribution", "MICROFIBER"))
     if node.kind == "ShaderNodeBsdfToon":
         return "TOON"
+    if node.kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic") or (
+            node.kind == "ShaderNodeBsdfMetallic" and node.props.get("distribution") in ("GGX", "BECKMANN")):
+        return "GLOSSY"
+    if node.kind == "ShaderNodeBsdfMetallic" and node.props.get("fresnel_type", "F82") == "F82":
+        tint = node.inputs.get("Edge Tint")  # the metal's F82 edge tint
+        white = tint is None or isinstance(tint.source, Const) and tuple(tint.source.value[:3]) == (1.0,) * 3
+        return None if white else "SPECULAR_TINT"
+    if node.kind == "ShaderNodeEeveeSpecular":  # its Specular's colour: the dielectric's F0 tint
+        spec = node.inputs.get("Specular")
+        grey = spec is not None and isinstance(spec.source, Const) and len(set(spec.source.value[:3])) == 1
+        return None if grey else "SPECULAR_TINT"
     return None
 
 
@@ -880,9 +919,10 @@ CLOSURES = {
     "ShaderNodeBsdfDiffuse": lambda w, n: _bsdf("closure_diffuse", w, n, ("Color", "Roughness")),
     "ShaderNodeBsdfSheen": _sheen,
     "ShaderNodeBsdfToon": _toon,
+    "ShaderNodeEeveeSpecular": lambda w, n: _bsdf("closure_specular", w, n, SPECULAR_INPUTS),
     "ShaderNodeBsdfGlossy": _glossy,
     "ShaderNodeBsdfAnisotropic": _glossy,
-    "ShaderNodeBsdfMetallic": _glossy,
+    "ShaderNodeBsdfMetallic": _metallic,
     "ShaderNodeEmission": lambda w, n: _call("closure_emission", w, n, ("Color", "Strength"), "Emission"),
     "ShaderNodeBsdfTransparent": lambda w, n: _call("closure_transparent", w, n, ("Color",), "BSDF"),
     "ShaderNodeHoldout": lambda w, n: {"Holdout": "closure_holdout()"},

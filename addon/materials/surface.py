@@ -22,7 +22,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..scene.nodes import MATERIAL_OUTPUT, Graph
-from ..scene.snapshot import CLOSURE_LOBES, LOBES, lobes_of
+from ..scene.snapshot import CLOSURE_LOBES, GLOSSY_LOBE, LOBES, lobes_of
 from . import bake, codegen
 from .graph import Const, FlatGraph, flatten
 
@@ -133,7 +133,14 @@ def _plain(flat: FlatGraph) -> bool:
     # (a Holdout: the constant path has no alpha to cut)
     return node.kind in codegen.CLOSURES and node.kind not in ("ShaderNodeMixShader", "ShaderNodeAddShader",
                                                                 "ShaderNodeHoldout") \
-        and all(isinstance(i.source, Const) for i in node.inputs.values()) and not _closure_lobes(flat)
+        and all(isinstance(i.source, Const) for i in node.inputs.values()) and not _closure_lobes(flat) \
+        and node.kind not in GRAPH_ONLY
+
+
+#: Closure nodes the constant path (addon/blender/extract.py's material_params) does not read: compiled
+#: even alone with nothing linked.
+GRAPH_ONLY = frozenset({"ShaderNodeBsdfSheen", "ShaderNodeBsdfToon", "ShaderNodeEeveeSpecular",
+                        "ShaderNodeBsdfMetallic"})
 
 
 def _transparent(flat: FlatGraph) -> bool:
@@ -414,7 +421,7 @@ def _textured(flat: FlatGraph) -> dict:
 LOBE_INPUTS = {"SPECULAR_TINT": ("Specular Tint",),
                "COAT": ("Coat Weight", "Coat Roughness", "Coat IOR", "Coat Tint", "Coat Normal"),
                "SHEEN": ("Sheen Weight", "Sheen Roughness", "Sheen Tint"),
-               **{lobe: () for lobe in CLOSURE_LOBES}}  # (the closure nodes': READ_INPUTS)
+               **{lobe: () for lobe in (*CLOSURE_LOBES, GLOSSY_LOBE)}}  # (the closure nodes': READ_INPUTS)
 #: What of each closure the shading models read (the rest is drawn as nothing: Principled BSDF's
 #: coat, sheen, transmission ...).
 READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_BASE_INPUTS) | {"Normal"}
@@ -422,8 +429,10 @@ READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_BASE_INPUTS) |
                "ShaderNodeBsdfDiffuse": {"Color", "Roughness", "Normal"},
                "ShaderNodeBsdfSheen": {"Color", "Roughness", "Normal"},
                "ShaderNodeBsdfToon": {"Color", "Size", "Smooth", "Normal"},
+               "ShaderNodeEeveeSpecular": {*codegen.SPECULAR_INPUTS, "Normal"},
                "ShaderNodeBsdfGlossy": {"Color", "Roughness", "Normal"},
-               "ShaderNodeBsdfMetallic": {"Base Color", "Roughness", "Normal"}}
+               "ShaderNodeBsdfMetallic": {"Base Color", "Edge Tint", "IOR", "Extinction", "Roughness",
+                                          "Normal"}}
 
 
 def _unread(flat: FlatGraph) -> list[str]:

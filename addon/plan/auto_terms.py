@@ -92,7 +92,8 @@ MISSING = {
 #: The Principled BSDF's lobes (``snapshot.LOBES``), which the Principled set alone draws, named for
 #: "why".
 LOBE_LABELS = {"SPECULAR_TINT": "specular tint", "COAT": "coat", "SHEEN": "sheen"}
-LOBE_LABELS.update({"DIFFUSE_ROUGHNESS": "Oren-Nayar diffuse", "VELVET": "velvet sheen", "TOON": "toon"})
+LOBE_LABELS.update({"DIFFUSE_ROUGHNESS": "Oren-Nayar diffuse", "VELVET": "velvet sheen", "TOON": "toon",
+                    "GLOSSY": "Glossy BSDF"})
 COSTS_FILE = Path(__file__).with_name("term_costs.json")
 #: Where a scene samples an image world's specular (World Specular: Sampled), the world joins the
 #: candidates: each term set with the split sum instead, named with this suffix, cheaper than

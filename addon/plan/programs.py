@@ -931,6 +931,7 @@ def pack_material(m: MaterialParams) -> bytes:
         [0.0, 0.0, 0.0, 0.0],
         [0.0, 0.0, 0.0, 0.0],
         [0.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 0.0],
     ]
     return np.asarray(rows, np.float32).tobytes()
 

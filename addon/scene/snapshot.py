@@ -185,7 +185,10 @@ LOBES = ("SPECULAR_TINT", "COAT", "SHEEN")
 #: The closure nodes' lobes beside the Principled BSDF's (glsl/closures.glsl): the Diffuse BSDF's
 #: Oren-Nayar roughness, the Sheen BSDF's Ashikhmin velvet, the Toon BSDF; a node graph's alone.
 CLOSURE_LOBES = frozenset({"DIFFUSE_ROUGHNESS", "VELVET", "TOON"})
-LOBES += tuple(sorted(CLOSURE_LOBES))
+#: The Glossy BSDF's own Fresnel (its colour) and distributions in the Principled set's specular lobe
+#: (glsl/closures.glsl's SL_GLOSSY; a node graph's alone; other sets draw a metal of its colour).
+GLOSSY_LOBE = "GLOSSY"
+LOBES += tuple(sorted(CLOSURE_LOBES)) + (GLOSSY_LOBE,)
 
 
 def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint) -> frozenset[str]:
