@@ -228,19 +228,6 @@ vec3 closure_bsdfs_environment(Surface s, vec2 weights)
  * Fresnel but its colour (bsdf_microfacet.h's MicrofacetFresnel::NONE; Multiscatter GGX's
  * compensation takes the colour as its average Fresnel), and GGX, Beckmann or Ashikhmin-Shirley. */
 
-/* The metal lobe's Fresnel times its compensation: the Principled BSDF's F82-tint `F` (its albedo
- * for the world's split sum) and compensation M beside the Glossy BSDFs' share of the lobe, their
- * colour (times `albedo`, the lobe's own albedo for the world's split sum, 1 towards a light) and its
- * compensation; the share of uncompensated lobes (GGX, Beckmann, Ashikhmin-Shirley) without it, spread
- * over both where both are mixed. */
-vec3 glossy_metal(Surface s, vec3 F, vec3 M, float albedo)
-{
-  float colour_share = s.glossy.x;
-  float uncompensated = s.glossy.y;
-  vec3 glossy = max(s.base_color, 0.0) * albedo * mix(s.layers.glossy_M, vec3(1.0), uncompensated);
-  return (1.0 - colour_share) * F * mix(M, vec3(1.0), uncompensated) + colour_share * glossy;
-}
-
 /* Ashikhmin & Shirley 2000's isotropic lobe as Cycles evaluates it (bsdf_ashikhmin_shirley_eval; its
  * Fresnel left out): (e + 1) / (8 pi) (n.h)^e over (l.h) max(n.v, n.l), e = 2 / alpha^2 - 2, the
  * cosines floored at 1e-6 as Cycles floors them; f = this times the colour. */
@@ -252,6 +239,20 @@ float D_V_AshikhminShirley(float NoV, float NoL, float NoH, float LoH, float alp
   float e = 2.0 / (alpha * alpha) - 2.0;
   float pump = 1.0 / max(1e-6, max(LoH, 1e-6) * max(max(NoV, NoL), 1e-6));
   return (e + 1.0) / (8.0 * PI) * pow(max(NoH, 1e-6), e) * pump;
+}
+
+#  ifdef SL_LAYERS /* the Principled set's (its metal lobe's compensation) */
+/* The metal lobe's Fresnel times its compensation: the Principled BSDF's F82-tint `F` (its albedo
+ * for the world's split sum) and compensation M beside the Glossy BSDFs' share of the lobe, their
+ * colour (times `albedo`, the lobe's own albedo for the world's split sum, 1 towards a light) and its
+ * compensation; the share of uncompensated lobes (GGX, Beckmann, Ashikhmin-Shirley) without it, spread
+ * over both where both are mixed. */
+vec3 glossy_metal(Surface s, vec3 F, vec3 M, float albedo)
+{
+  float colour_share = s.glossy.x;
+  float uncompensated = s.glossy.y;
+  vec3 glossy = max(s.base_color, 0.0) * albedo * mix(s.layers.glossy_M, vec3(1.0), uncompensated);
+  return (1.0 - colour_share) * F * mix(M, vec3(1.0), uncompensated) + colour_share * glossy;
 }
 
 /* The specular lobe's D V with the Glossy BSDFs' shares of Beckmann (Smith height-correlated, the
@@ -267,4 +268,5 @@ float glossy_lobe(Surface s, float DV, float NoL, float NoH, float NxH2, float L
   float a = ashikhmin > 0.0 ? D_V_AshikhminShirley(s.NoV, NoL, NoH, LoH, s.alpha) : 0.0;
   return (1.0 - beckmann - ashikhmin) * DV + beckmann * b + ashikhmin * a;
 }
+#  endif
 #endif

@@ -384,6 +384,16 @@ def test_gpu_matches_twin():
     print(f"GPU against twin (relative, of values at least 1): velvet {worst[0]:.2e}, toon {worst[1]:.2e}, "
           f"toon albedo {worst[2]:.2e}, Oren-Nayar G {worst[3]:.2e}")
     assert (worst <= [5e-7, 1.1e-6, 2e-5, 8e-6]).all(), worst  # measured 1.7e-7, 3.6e-7, 6.3e-6, 2.6e-6
+    # the Glossy BSDF's Ashikhmin-Shirley lobe (SL_GLOSSY), at roughness 0.045 (the floor) to 1
+    alpha = np.concatenate([rng.uniform(0.045, 1.0, count - 4), [0.045, 1.0, 0.045, 0.5]]) ** 2
+    rows = {"a": np.stack([cos_v, cos_l, cos_nh, cos_hl], -1), "b": np.stack([alpha, 0 * alpha, 0 * alpha,
+                                                                           0 * alpha], -1)}
+    gpu = evaluate("result = vec4(D_V_AshikhminShirley(a.x, a.y, a.z, a.w, b.x));", rows,
+                   {"SL_GLOSSY": "1"})[:, 0].astype(np.float64)
+    twin = C.D_V_AshikhminShirley(cos_v, cos_l, cos_nh, cos_hl, alpha)
+    rel = float((np.abs(gpu - twin) / np.maximum(twin, 1.0)).max())
+    print(f"Ashikhmin-Shirley GPU against twin: {rel:.2e}")
+    assert np.isfinite(gpu).all() and rel <= 4e-5, rel  # measured 1.3e-5 (pow of a float32 n.h)
 
 
 # --- stability, only what the scene requires, Auto --------------------------------------------------
@@ -392,39 +402,16 @@ def test_gpu_matches_twin():
 def test_extremes_render_finite(tmp_path):
     """Size from 0 to 1 and Smooth 0 (Toon), roughness 0 to 1 (Oren-Nayar, velvet, sheen) on one sphere
     of four quarters, under a sun, a point light touching the sphere and a world: finite, not negative."""
+    def extreme(tree, node, u, v):  # v (0 .. 1) into Size or Roughness; Smooth 0
+        tree.links.new(v, node.inputs["Size" if "Size" in node.inputs else "Roughness"])
+        if "Smooth" in node.inputs:
+            node.inputs["Smooth"].default_value = 0.0
+
     def quarters():
-        mat, tree, out = _tree("Extremes")
-        u, v = _uv(tree)
-        nodes = []
-        for kind, props, sockets in (("ShaderNodeBsdfToon", {"component": "DIFFUSE"}, ("Size",)),
-                                     ("ShaderNodeBsdfToon", {"component": "GLOSSY"}, ("Size",)),
-                                     ("ShaderNodeBsdfSheen", {"distribution": "ASHIKHMIN"}, ("Roughness",)),
-                                     ("ShaderNodeBsdfDiffuse", {}, ("Roughness",))):
-            node = tree.nodes.new(kind)
-            for key, value in props.items():
-                setattr(node, key, value)
-            for socket in sockets:
-                tree.links.new(v, node.inputs[socket])
-            if "Smooth" in node.inputs:
-                node.inputs["Smooth"].default_value = 0.0
-            nodes.append(node)
-        left = tree.nodes.new("ShaderNodeMixShader")
-        right = tree.nodes.new("ShaderNodeMixShader")
-        both = tree.nodes.new("ShaderNodeMixShader")
-        for mix, a, b, fac in ((left, nodes[0], nodes[1], 0.25), (right, nodes[2], nodes[3], 0.75),
-                               (both, None, None, 0.5)):
-            step = tree.nodes.new("ShaderNodeMath")
-            step.operation = "GREATER_THAN"
-            tree.links.new(u, step.inputs[0])
-            step.inputs[1].default_value = fac
-            tree.links.new(step.outputs[0], mix.inputs["Fac"])
-            if a is not None:
-                tree.links.new(a.outputs["BSDF"], mix.inputs[1])
-                tree.links.new(b.outputs["BSDF"], mix.inputs[2])
-        tree.links.new(left.outputs["Shader"], both.inputs[1])
-        tree.links.new(right.outputs["Shader"], both.inputs[2])
-        tree.links.new(both.outputs["Shader"], out.inputs["Surface"])
-        return mat
+        return _quarters("Extremes", [("ShaderNodeBsdfToon", {"component": "DIFFUSE"}, {}),
+                                      ("ShaderNodeBsdfToon", {"component": "GLOSSY"}, {}),
+                                      ("ShaderNodeBsdfSheen", {"distribution": "ASHIKHMIN"}, {}),
+                                      ("ShaderNodeBsdfDiffuse", {}, {})], extreme)
 
     scene, _ = _scene(quarters)
     scenes.light(scene, "POINT", energy=1e6, location=(0.0, 0.0, 0.9))  # on the sphere's top
@@ -435,14 +422,17 @@ def test_extremes_render_finite(tmp_path):
 
 
 def test_lobes_reach_only_the_programs_that_use_them():
-    """A graph's Toon, velvet, Microfiber sheen or rough Diffuse names its lobe, the program its define
-    (and SL_CLOSURE_BSDFS for closures.glsl's lobes), the library file node_closure_bsdfs.glsl only where
-    the graph calls it; a Principled BSDF alone none of them, and a plain Diffuse BSDF no Oren-Nayar."""
+    """A graph's Glossy (Beckmann), Toon, velvet, Microfiber sheen or rough Diffuse names its lobe, the
+    program its define (and SL_CLOSURE_BSDFS for closures.glsl's lobes), the library file
+    node_closure_bsdfs.glsl only where the graph calls it; the other term sets none of them, and a plain
+    Diffuse BSDF no Oren-Nayar."""
     from addon.blender import extract
 
-    expect = {"Toon": ({"TOON"}, True), "Velvet": ({"VELVET"}, True), "Microfiber": ({"SHEEN"}, True),
+    expect = {"Glossy": ({"GLOSSY"}, True), "Toon": ({"TOON"}, True), "Velvet": ({"VELVET"}, True),
+              "Microfiber": ({"SHEEN"}, True),
               "RoughDiffuse": ({"DIFFUSE_ROUGHNESS"}, False), "Plain": (set(), False)}
-    makers = {"Toon": lambda: _closure("Toon", "ShaderNodeBsdfToon", {}),
+    makers = {"Glossy": lambda: _closure("Glossy", "ShaderNodeBsdfGlossy", {}, {"distribution": "BECKMANN"}),
+              "Toon": lambda: _closure("Toon", "ShaderNodeBsdfToon", {}),
               "Velvet": lambda: _closure("Velvet", "ShaderNodeBsdfSheen", {}, {"distribution": "ASHIKHMIN"}),
               "Microfiber": lambda: _closure("Microfiber", "ShaderNodeBsdfSheen", {}),
               "RoughDiffuse": lambda: _closure("RoughDiffuse", "ShaderNodeBsdfDiffuse", {"Roughness": 0.5}),

@@ -416,7 +416,7 @@ def test_lobes_at_their_extremes_stay_finite_and_match_the_twin(case):
     terms = S.Terms(principled=True)
     kinds = frozenset(ST.LIGHTS[name].kind for name in sw.lights)
     features = programs.Features("PBR", 1, kinds, terms, sphere_lights=True,
-                                 lobes=frozenset(S.LOBES) - S.CLOSURE_LOBES)  # (test_closure_nodes: the rest)
+                                 lobes=frozenset(S.LOBES) - S.NODE_LOBES)  # (test_closure_nodes: the rest)
     call = "Surface s = make_surface"
     head = ST.BODY_HEAD.replace(call, _material_lines(lobe) + call)
     gpu = evaluate(head + ST.LIGHT_LOOP + ST.BODY_TAIL, sw.gpu_inputs(), dict(features.defines()),

@@ -131,3 +131,14 @@ def toon_albedo(size, smooth):
     im = 2.0 * hw * hw - (np.sin(w) - w * np.cos(w)) / m
     ramp = np.where((smooth > 0.0) & (w > 0.0), np.sin(size) * re + np.cos(size) * im, 0.0)
     return (2.0 * np.sin(0.5 * size) ** 2 + ramp) / (2.0 * np.sin(0.5 * cone) ** 2)
+
+
+def D_V_AshikhminShirley(NoV, NoL, NoH, LoH, alpha):
+    """closures.glsl's Ashikhmin-Shirley lobe (Cycles' bsdf_ashikhmin_shirley_eval over n.l, its
+    Fresnel left out): (e + 1) / (8 pi) (n.h)^e / ((l.h) max(n.v, n.l)), e = 2 / alpha^2 - 2; 0 at
+    alpha <= 1e-4."""
+    alpha = np.asarray(alpha, np.float64)
+    e = 2.0 / np.maximum(alpha, 1e-4) ** 2 - 2.0
+    pump = 1.0 / np.maximum(1e-6, np.maximum(LoH, 1e-6) * np.maximum(np.maximum(NoV, NoL), 1e-6))
+    out = (e + 1.0) / (8.0 * np.pi) * np.maximum(NoH, 1e-6) ** e * pump
+    return np.where(alpha <= 1e-4, 0.0, out)

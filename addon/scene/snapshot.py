@@ -189,6 +189,8 @@ CLOSURE_LOBES = frozenset({"DIFFUSE_ROUGHNESS", "VELVET", "TOON"})
 #: (glsl/closures.glsl's SL_GLOSSY; a node graph's alone; other sets draw a metal of its colour).
 GLOSSY_LOBE = "GLOSSY"
 LOBES += tuple(sorted(CLOSURE_LOBES)) + (GLOSSY_LOBE,)
+#: The lobes a node graph's closures alone draw (no Principled BSDF input turns them on).
+NODE_LOBES = CLOSURE_LOBES | {GLOSSY_LOBE}
 
 
 def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint) -> frozenset[str]:
