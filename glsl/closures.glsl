@@ -88,6 +88,27 @@ float toon_albedo(vec2 shape)
   return (2.0 * h * h + ramp) / (2.0 * s * s);
 }
 
+/* The share of a cone of half-angle `c` about an axis at cos_axis from n that lies above the horizon:
+ * the solid angle of two spherical caps' intersection (the cone's and the hemisphere's; Tovchigrechko &
+ * Vakser 2001) over the cone's, 2 (pi - acos(cos g / sin c) - cos c acos(-cot g cot c)) / (2 pi (1 - cos c)),
+ * g the axis' angle from n; 1 wholly above, 0 wholly below. */
+float cone_above_horizon(float cos_axis, float c)
+{
+  float g = acos_accurate(cos_axis);
+  if (g + c <= 0.5 * PI) {
+    return 1.0;
+  }
+  if (g - c >= 0.5 * PI) {
+    return 0.0;
+  }
+  float sin_c = max(sin(c), 1e-6); /* c > 0 here: the cone straddles the horizon */
+  float sin_g = max(sin(g), 1e-6);
+  float half_cap = sin(0.5 * c);
+  float omega = 2.0 * (PI - acos_accurate(cos_axis / sin_c) -
+                       cos(c) * acos_accurate(-cos_axis * cos(c) / (sin_g * sin_c)));
+  return saturate(omega / (4.0 * PI * half_cap * half_cap));
+}
+
 /* The closure lobes at the view (surface.glsl's ClosureBsdfLobes, made once per shading point by
  * make_surface) from MaterialData's closure rows, as Cycles' setups take them: Oren-Nayar's A and B
  * of sigma = roughness and its multiple scattering's colour times 1 - E(v) (bsdf_oren_nayar_setup; the
@@ -202,7 +223,8 @@ float velvet_albedo(Surface s)
 /* The world's light on the velvet and the toons: each lobe's directional albedo times the world's
  * light around its axis, the diffuse lobes' the irradiance about n over pi (exact for a uniform world),
  * the Glossy toon's the prefiltered radiance about the view's reflection at the roughness whose
- * GGX lobe is about as wide as its cone (alpha = tan of the cone's half-angle, at most 1). */
+ * GGX lobe is about as wide as its cone (alpha = tan of the cone's half-angle, at most 1), times the
+ * share of its cone above the horizon (its solid angle's, the ramp taken as flat). */
 vec3 closure_bsdfs_environment(Surface s, vec2 weights)
 {
   vec3 c = vec3(0.0);
@@ -215,8 +237,10 @@ vec3 closure_bsdfs_environment(Surface s, vec2 weights)
   vec3 r = reflect(-s.v, s.n);
   float cone = min(s.bsdfs.toon_glossy_shape.x + s.bsdfs.toon_glossy_shape.y, 0.5 * PI);
   float roughness = sqrt(min(tan(min(cone, 0.25 * PI)), 1.0));
+  /* the cone's part below the horizon reflects nothing (Cycles' eval: n.l > 0) */
+  float above = cone_above_horizon(dot(s.n, r), cone);
   c += s.bsdfs.toon_glossy * toon_albedo(s.bsdfs.toon_glossy_shape) * env_prefiltered(r, roughness) *
-       (env_occlusion_specular(s.n, r, roughness * roughness) * weights.y);
+       (above * env_occlusion_specular(s.n, r, roughness * roughness) * weights.y);
 #    endif
   return c;
 }

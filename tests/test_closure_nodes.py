@@ -17,6 +17,7 @@ import bpy
 import numpy as np
 import pytest
 import scenes
+import test_world_light as TW
 from glsl_harness import evaluate
 from test_cycles import _cycles
 from test_material_render import _against_cycles, _mix_colors, _scene, _tree, _uv, _within
@@ -251,6 +252,53 @@ def test_specular_bsdf_follows_eevee(case, tmp_path):
     _within(rel, *measured, f"Specular BSDF against EEVEE, {case}")
 
 
+def _swept_v(tree, node, u, v):
+    """v (0 .. 1) into Size or Roughness (Size from 0.05); Smooth 0.2."""
+    tree.links.new(_from(tree, v, 0.05) if "Size" in node.inputs else v,
+                   node.inputs["Size" if "Size" in node.inputs else "Roughness"])
+    if "Smooth" in node.inputs:
+        node.inputs["Smooth"].default_value = 0.2
+
+
+#: the world's light on them: (mean, p99) relative error against Cycles (64 samples: its noise), measured
+#: with bpy 5.0.1 (the Glossy toon's world: its albedo times the share of its cone above the horizon)
+WORLD_MEASURED = {"toon diffuse": (7.6e-3, 2.53e-2), "Oren-Nayar": (2.35e-3, 2.37e-2),
+                  "toon glossy": (3.43e-2, 1.01e-1), "velvet": (2.29e-2, 7.74e-2)}
+
+
+def test_world_light_on_the_closure_nodes(tmp_path):
+    """A uniform world (0.5) on a sphere of four quarters (Toon Diffuse and Glossy of Size 0.05-1,
+    Ashikhmin velvet and Oren-Nayar of roughness 0-1), no lights: each lobe's directional albedo
+    times the world (exact for a uniform world but the velvet's 16 x 8 points and the Glossy toon's cone
+    below the horizon) against Cycles (64 samples: its noise included)."""
+    def quarters():
+        return _quarters("WorldLit", [("ShaderNodeBsdfToon", {"component": "DIFFUSE"}, {}),
+                                      ("ShaderNodeBsdfToon", {"component": "GLOSSY"}, {}),
+                                      ("ShaderNodeBsdfSheen", {"distribution": "ASHIKHMIN"}, {}),
+                                      ("ShaderNodeBsdfDiffuse", {}, {"Color": (0.8, 0.8, 0.8, 1.0)})],
+                         _swept_v)
+
+    scene, _ = _scene(quarters, lights=())
+    TW._world(scene, color=(0.5, 0.5, 0.5))
+    scene.shading_lab.world_occlusion = False
+    scene.render.film_transparent = True
+    ours = scenes.render(scene, tmp_path / "ours.exr").astype(np.float64)
+    ref = _cycles(scene, tmp_path / "cycles.exr", samples=64).astype(np.float64)
+    inside = (ours[..., 3] > 0.999) & (ref[..., 3] > 0.999)
+    lit = inside & (ref[..., :3].max(-1) > 0.02 * ref[..., :3].max())
+    # the camera looks down on the sphere's pole: its UVs' u is the longitude about the image's centre,
+    # each node a quadrant of the image (u 0-0.25 bottom left, then counter-clockwise)
+    h, w = inside.shape
+    y, x = np.mgrid[0:h, 0:w]
+    top, left = y < h / 2.0, x < w / 2.0
+    quadrants = {"Oren-Nayar": top & left, "velvet": top & ~left, "toon glossy": ~top & ~left,
+                 "toon diffuse": ~top & left}
+    for name, quadrant in quadrants.items():
+        mine = lit & quadrant
+        rel = np.abs(ours[..., :3] - ref[..., :3]).max(-1)[mine] / ref[..., :3].max(-1)[mine]
+        _within(rel, *WORLD_MEASURED[name], f"world light on the {name}")
+
+
 def test_rough_diffuse_of_roughness_0_is_lambert(tmp_path):
     """A Diffuse BSDF of Roughness 0 draws no Oren-Nayar lobe (no SL_DIFFUSE_ROUGHNESS program) and
     one whose roughness is linked to 0 draws Lambert through it: the same image to float rounding."""
@@ -384,6 +432,23 @@ def test_gpu_matches_twin():
     print(f"GPU against twin (relative, of values at least 1): velvet {worst[0]:.2e}, toon {worst[1]:.2e}, "
           f"toon albedo {worst[2]:.2e}, Oren-Nayar G {worst[3]:.2e}")
     assert (worst <= [5e-7, 1.1e-6, 2e-5, 8e-6]).all(), worst  # measured 1.7e-7, 3.6e-7, 6.3e-6, 2.6e-6
+    # the share of the Glossy toon's cone above the horizon: a half where its axis lies on it, against
+    # a Monte Carlo count of directions in the cone
+    half = C.cone_above_horizon(0.0, np.array([0.1, 0.7, 1.5]))
+    np.testing.assert_allclose(half, 0.5, atol=1e-9)
+    dirs = rng.normal(size=(200_000, 3))
+    dirs /= np.linalg.norm(dirs, axis=-1, keepdims=True)
+    for cos_axis, c in ((0.3, 1.4), (0.8, 0.9), (-0.2, 0.5)):
+        axis = np.array([math.sqrt(1.0 - cos_axis ** 2), 0.0, cos_axis])
+        in_cone = dirs @ axis > math.cos(c)
+        counted = float((dirs[in_cone, 2] > 0.0).mean())
+        assert abs(float(C.cone_above_horizon(cos_axis, c)) - counted) < 0.01, (cos_axis, c, counted)
+    shares = evaluate("result = vec4(cone_above_horizon(a.x, a.y));",
+                      {"a": np.stack([cos_v * 2.0 - 1.0, np.pi / 2 * sigma, 0 * sigma, 0 * sigma], -1)},
+                      defines)[:, 0].astype(np.float64)
+    worst = float(np.abs(shares - C.cone_above_horizon(cos_v * 2.0 - 1.0, np.pi / 2 * sigma)).max())
+    print(f"cone above the horizon, GPU against twin: {worst:.2e}")
+    assert worst <= 1.2e-4, worst  # measured 4.1e-5 (acos near the ends)
     # the Glossy BSDF's Ashikhmin-Shirley lobe (SL_GLOSSY), at roughness 0.045 (the floor) to 1
     alpha = np.concatenate([rng.uniform(0.045, 1.0, count - 4), [0.045, 1.0, 0.045, 0.5]]) ** 2
     rows = {"a": np.stack([cos_v, cos_l, cos_nh, cos_hl], -1), "b": np.stack([alpha, 0 * alpha, 0 * alpha,

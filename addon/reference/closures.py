@@ -142,3 +142,17 @@ def D_V_AshikhminShirley(NoV, NoL, NoH, LoH, alpha):
     pump = 1.0 / np.maximum(1e-6, np.maximum(LoH, 1e-6) * np.maximum(np.maximum(NoV, NoL), 1e-6))
     out = (e + 1.0) / (8.0 * np.pi) * np.maximum(NoH, 1e-6) ** e * pump
     return np.where(alpha <= 1e-4, 0.0, out)
+
+
+def cone_above_horizon(cos_axis, c):
+    """closures.glsl's share of a cone of half-angle ``c`` about an axis at ``cos_axis`` from n that
+    lies above the horizon (two spherical caps' intersection over the cone's solid angle)."""
+    cos_axis = np.clip(np.asarray(cos_axis, np.float64), -1.0, 1.0)
+    c = np.asarray(c, np.float64)
+    g = np.arccos(cos_axis)
+    sin_c, sin_g = np.maximum(np.sin(c), 1e-6), np.maximum(np.sin(g), 1e-6)
+    with np.errstate(invalid="ignore"):
+        omega = 2.0 * (np.pi - np.arccos(np.clip(cos_axis / sin_c, -1.0, 1.0))
+                       - np.cos(c) * np.arccos(np.clip(-cos_axis * np.cos(c) / (sin_g * sin_c), -1.0, 1.0)))
+    share = np.clip(omega / (4.0 * np.pi * np.sin(0.5 * c) ** 2), 0.0, 1.0)
+    return np.where(g + c <= 0.5 * np.pi, 1.0, np.where(g - c >= 0.5 * np.pi, 0.0, share))
