@@ -154,5 +154,6 @@ def cone_above_horizon(cos_axis, c):
     with np.errstate(invalid="ignore"):
         omega = 2.0 * (np.pi - np.arccos(np.clip(cos_axis / sin_c, -1.0, 1.0))
                        - np.cos(c) * np.arccos(np.clip(-cos_axis * np.cos(c) / (sin_g * sin_c), -1.0, 1.0)))
-    share = np.clip(omega / (4.0 * np.pi * np.sin(0.5 * c) ** 2), 0.0, 1.0)
+    # a cone of no width lies wholly on one side (the cases below): its share here is not used
+    share = np.clip(omega / np.maximum(4.0 * np.pi * np.sin(0.5 * c) ** 2, 1e-300), 0.0, 1.0)
     return np.where(g + c <= 0.5 * np.pi, 1.0, np.where(g - c >= 0.5 * np.pi, 0.0, share))
