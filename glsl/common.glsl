@@ -31,6 +31,17 @@ float acos_accurate(float x)
   return atan(sqrt(max(1.0 - x * x, 0.0)), x);
 }
 
+/* The Diffuse BSDF's Oren-Nayar of roughness sigma in [0, 1] as Cycles 5.0 sets it up
+ * (bsdf_oren_nayar_setup: Fujii's improved model, OpenPBR's multiple scattering): A, B and the
+ * average albedo E_avg of its single scattering. Here because both the closure (node_closure.glsl,
+ * in every program a node graph makes) and the lobe (closures.glsl) need it. */
+vec3 oren_nayar_coefficients(float sigma)
+{
+  float a = 1.0 / (PI + sigma * (0.5 * PI - 2.0 / 3.0));
+  float b = sigma * a;
+  return vec3(a, b, a * PI + ((2.0 * PI - 5.6) / 3.0) * b);
+}
+
 /* atan2 to float precision, in every quadrant: Mesa llvmpipe's atan(y, x) was measured off by
  * 2.1e-5 relative at every scale (through tests/glsl_harness.py, against float64), and an area
  * light's form factor, a sum of edge angles that cancel, multiplied that into 2e-3 of the light a

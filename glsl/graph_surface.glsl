@@ -158,6 +158,29 @@ void apply_closure_lobes(inout MaterialData m, ClosureLobes l, float inv)
   m.reflection_tint = vec4(l.reflection_tint * inv, 0.0);
 }
 
+/* The closure nodes beside the Principled BSDF as the models read them (MaterialData's rows): their
+ * colours' means over the BSDFs (`inv`: 1 / their weight), their shapes' over the closures of each
+ * kind; the sheen's layered share of its weight (ClosureLobes'), the Diffuse Roughness' mean over the
+ * BSDFs with a diffuse base, the Glossy BSDFs' shares of the metal lobe and of the BSDFs. */
+void apply_closure_bsdfs(inout MaterialData m, ClosureBsdfs b, float sheen_weight, float metallic, float inv)
+{
+  /* none of a kind: its inputs do not matter (its colour is 0) */
+  float diffuse_inv = b.diffuse_weight > 1e-8 ? 1.0 / b.diffuse_weight : 0.0;
+  float velvet_inv = b.velvet_weight > 1e-8 ? 1.0 / b.velvet_weight : 0.0;
+  float layered = sheen_weight > 1e-8 ? saturate(b.sheen_layered / sheen_weight) : 1.0;
+  m.closure_bsdfs = vec4(layered, b.diffuse_roughness * diffuse_inv, b.velvet_sigma * velvet_inv,
+                         b.unlayered * diffuse_inv);
+  m.velvet = vec4(b.velvet * inv, 0.0);
+  float toon_d_inv = b.toon_diffuse_shape.x > 1e-8 ? 1.0 / b.toon_diffuse_shape.x : 0.0;
+  float toon_g_inv = b.toon_glossy_shape.x > 1e-8 ? 1.0 / b.toon_glossy_shape.x : 0.0;
+  m.toon_diffuse = vec4(b.toon_diffuse * inv, b.toon_diffuse_shape.y * toon_d_inv);
+  m.toon_glossy = vec4(b.toon_glossy * inv, b.toon_glossy_shape.y * toon_g_inv);
+  m.toon_smooth = vec4(b.toon_diffuse_shape.z * toon_d_inv, b.toon_glossy_shape.z * toon_g_inv, 0.0, 0.0);
+  m.diffuse_ms = vec4(b.diffuse_ms * inv, 0.0);
+  float metal_inv = metallic > 1e-8 ? 1.0 / metallic : 0.0; /* no metal lobe: its shares do not matter */
+  m.glossy = clamp(vec4(b.glossy.xy * metal_inv, b.glossy.zw * inv), 0.0, 1.0);
+}
+
 /* The Surface closure as the models read it: its BSDFs' mean inputs replace the material's values
  * (but those the Material panel sets, SL_KEEP_*), the empirical models' colours and exponent follow
  * them as addon/blender/extract.py's material_params derives them, n becomes the BSDFs' normal,
@@ -205,6 +228,7 @@ MaterialData apply_closure(MaterialData m, Closure c, inout vec3 n, out float sc
     n = c.normal * inversesqrt(len2);
   }
   apply_closure_lobes(m, c.lobes, inv);
+  apply_closure_bsdfs(m, c.bsdfs, c.lobes.sheen_weight, c.metallic, inv);
   return m;
 }
 #endif

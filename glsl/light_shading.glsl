@@ -197,5 +197,11 @@ vec3 shade_light(Surface s, LightData light, vec3 l, vec3 E, float visibility, v
    * as a point) */
   c += translucent_direct(s.translucent, s.n, l) * E * factors.x;
 #endif
+#ifdef SL_CLOSURE_BSDFS
+  /* the velvet and the toons (closures.glsl), at the light's direction */
+  vec3 bsdfs_diffuse, bsdfs_glossy;
+  closure_bsdfs_direct(s, l, bsdfs_diffuse, bsdfs_glossy);
+  c += (bsdfs_diffuse * factors.x + bsdfs_glossy * factors.y) * E;
+#endif
   return c;
 }

@@ -223,6 +223,8 @@ MaterialData load_material(int row)
   m.anisotropy = vec4(0.0, 0.0, 0.0, 1.0); /* isotropic: an anisotropic lobe compiles a graph */
 #endif
   /* (no program with the translucent or the subsurface lobe is shaded deferred: Features) */
+  /* the closure nodes' rows: a node graph's alone, and none is shaded deferred (its sheen layered) */
+  m.closure_bsdfs = vec4(1.0, 0.0, 0.0, 0.0);
   return m;
 }
 #endif

@@ -194,6 +194,9 @@ vec3 shade_environment(Surface s, vec2 weights)
 #  ifdef SL_SHEEN
   c += s.sheen.color * env_irradiance(env_bent_normal(s.sheen.n)) * (env_occlusion_diffuse() * INV_PI * weights.x);
 #  endif
+#  ifdef SL_CLOSURE_BSDFS
+  c += closure_bsdfs_environment(s, weights); /* the velvet's and the toons' (closures.glsl) */
+#  endif
   return c;
 }
 #else

@@ -74,6 +74,51 @@ ClosureLobes lobes_add(ClosureLobes a, ClosureLobes b)
                       a.reflection_tint + b.reflection_tint);
 }
 
+/* The closure nodes beyond the Principled BSDF's lobes (glsl/closures.glsl draws them), each input
+ * times its closure's weight as the Closure's: the Diffuse BSDF's roughness over the BSDFs with a
+ * diffuse base, the Sheen BSDF's (a sheen not layered over anything: the share of the sheen that
+ * is the Principled BSDFs' layers the rest), Ashikhmin's velvet and the Toon BSDF's components. */
+struct ClosureBsdfs {
+  float diffuse_weight;     /* the weight of the BSDFs with a diffuse base (all but Glossy) */
+  float diffuse_roughness;  /* the Diffuse BSDFs' Roughness times their weight */
+  vec3 diffuse_ms;          /* their Oren-Nayar's multiple scattering: Color x E_ms(Color) x weight */
+  float sheen_layered;      /* the Principled BSDFs' sheen_weight (ClosureLobes'): layered over them */
+  float unlayered;          /* the weight of diffuse bases beside their specular layer, not under it */
+  vec3 velvet;              /* Sheen BSDF (Ashikhmin): Color x weight */
+  float velvet_weight;
+  float velvet_sigma;       /* its Roughness times velvet_weight */
+  vec3 toon_diffuse;        /* Toon BSDF (Diffuse): Color x weight */
+  vec3 toon_diffuse_shape;  /* its weight, Size and Smooth times it */
+  vec3 toon_glossy;         /* Toon BSDF (Glossy) likewise */
+  vec3 toon_glossy_shape;
+  vec4 glossy;              /* the weights of the metal lobes of a constant Fresnel (Glossy BSDF: its
+                             * colour), of those uncompensated (GGX, Beckmann, Ashikhmin-Shirley), of
+                             * the Beckmann and the Ashikhmin-Shirley distributions */
+};
+
+ClosureBsdfs bsdfs_none()
+{
+  return ClosureBsdfs(0.0, 0.0, vec3(0.0), 0.0, 0.0, vec3(0.0), 0.0, 0.0, vec3(0.0), vec3(0.0), vec3(0.0),
+                      vec3(0.0), vec4(0.0));
+}
+
+ClosureBsdfs bsdfs_scale(ClosureBsdfs b, float w)
+{
+  return ClosureBsdfs(b.diffuse_weight * w, b.diffuse_roughness * w, b.diffuse_ms * w, b.sheen_layered * w,
+                      b.unlayered * w, b.velvet * w,
+                      b.velvet_weight * w, b.velvet_sigma * w, b.toon_diffuse * w, b.toon_diffuse_shape * w,
+                      b.toon_glossy * w, b.toon_glossy_shape * w, b.glossy * w);
+}
+
+ClosureBsdfs bsdfs_add(ClosureBsdfs a, ClosureBsdfs b)
+{
+  return ClosureBsdfs(a.diffuse_weight + b.diffuse_weight, a.diffuse_roughness + b.diffuse_roughness,
+                      a.diffuse_ms + b.diffuse_ms, a.sheen_layered + b.sheen_layered, a.unlayered + b.unlayered,
+                      a.velvet + b.velvet, a.velvet_weight + b.velvet_weight, a.velvet_sigma + b.velvet_sigma, a.toon_diffuse + b.toon_diffuse,
+                      a.toon_diffuse_shape + b.toon_diffuse_shape, a.toon_glossy + b.toon_glossy,
+                      a.toon_glossy_shape + b.toon_glossy_shape, a.glossy + b.glossy);
+}
+
 struct Closure {
   float weight;        /* the BSDFs' total weight */
   vec3 base_color;     /* the BSDFs' inputs, each times its weight */
@@ -86,25 +131,26 @@ struct Closure {
   float holdout;       /* the Holdout closures' weight: the share of the pixel left transparent in the
                         * render's alpha, hiding what is behind (Cycles' holdout) */
   ClosureLobes lobes;
+  ClosureBsdfs bsdfs;
 };
 
 Closure closure_none()
 {
-  return Closure(0.0, vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lobes_none());
+  return Closure(0.0, vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), 0.0, 0.0, lobes_none(), bsdfs_none());
 }
 
 /* A BSDF of weight 1 with these inputs. */
 Closure closure_bsdf(vec3 base_color, float metallic, float roughness, float specular, vec3 n)
 {
   return Closure(1.0, base_color, clamp(metallic, 0.0, 1.0), clamp(roughness, 0.0, 1.0),
-                 clamp(specular, 0.0, 1.0), n, vec3(0.0), 0.0, 0.0, lobes_base());
+                 clamp(specular, 0.0, 1.0), n, vec3(0.0), 0.0, 0.0, lobes_base(), bsdfs_none());
 }
 
 Closure closure_scale(Closure c, float w)
 {
   return Closure(c.weight * w, c.base_color * w, c.metallic * w, c.roughness * w, c.specular * w,
                  c.normal * w, c.emission * w, c.transparency * w, c.holdout * w,
-                 lobes_scale(c.lobes, w));
+                 lobes_scale(c.lobes, w), bsdfs_scale(c.bsdfs, w));
 }
 
 Closure closure_add(Closure a, Closure b)
@@ -112,7 +158,7 @@ Closure closure_add(Closure a, Closure b)
   return Closure(a.weight + b.weight, a.base_color + b.base_color, a.metallic + b.metallic,
                  a.roughness + b.roughness, a.specular + b.specular, a.normal + b.normal,
                  a.emission + b.emission, a.transparency + b.transparency, a.holdout + b.holdout,
-                 lobes_add(a.lobes, b.lobes));
+                 lobes_add(a.lobes, b.lobes), bsdfs_add(a.bsdfs, b.bsdfs));
 }
 
 /* Mix Shader: (1 - fac) a + fac b, the factor clamped to [0, 1] as Cycles' svm_node_mix_closure */
@@ -156,6 +202,8 @@ Closure closure_principled(vec4 base_color, float metallic, float roughness, flo
   c.lobes.transmission_ior = c.lobes.transmission * max(ior, 1e-5);
   c.lobes.transmission_tint = c.lobes.transmission * sqrt(clamp(base_color.rgb, 0.0, 1.0));
   c.lobes.transmission_fresnel = c.lobes.transmission;
+  c.bsdfs.diffuse_weight = 1.0;
+  c.bsdfs.sheen_layered = c.lobes.sheen_weight;
   c.emission = emission_color.rgb * emission_strength;
   float a = clamp(alpha, 0.0, 1.0);
   c = closure_scale(c, a);
@@ -192,16 +240,35 @@ Closure closure_refraction(vec4 color, float roughness, float ior, vec3 n)
   return c;
 }
 
-/* Diffuse BSDF: no specular lobe (F0 0) */
-Closure closure_diffuse(vec4 color, vec3 n)
+/* Diffuse BSDF: no specular lobe (F0 0); its Roughness Cycles' Oren-Nayar (glsl/closures.glsl,
+ * where the program draws it: SL_DIFFUSE_ROUGHNESS), Lambert below 1e-5 (bsdf_diffuse_setup),
+ * clamped to [0, 1] as bsdf_oren_nayar_setup clamps it, and its multiple scattering's colour here,
+ * per closure, as it is not linear in the colour: Color x E_ms, E_ms = rho^2 E_avg / (1 - E_avg) /
+ * (pi (1 - rho (1 - E_avg))) of rho = Color within [0, 1] (bsdf_oren_nayar_setup; the closure's
+ * weight is its Color). */
+Closure closure_diffuse(vec4 color, float roughness, vec3 n)
 {
-  return closure_bsdf(color.rgb, 0.0, 1.0, 0.0, n);
+  Closure c = closure_bsdf(color.rgb, 0.0, 1.0, 0.0, n);
+  float sigma = clamp(roughness, 0.0, 1.0);
+  c.bsdfs.diffuse_weight = 1.0;
+  c.bsdfs.diffuse_roughness = sigma;
+  if (sigma >= 1e-5) {
+    float e_avg = oren_nayar_coefficients(sigma).z; /* < 1 for sigma >= 1e-5 */
+    vec3 rho = clamp(color.rgb, 0.0, 1.0);
+    c.bsdfs.diffuse_ms = color.rgb * rho * rho * (e_avg / (1.0 - e_avg)) * INV_PI / (1.0 - rho * (1.0 - e_avg));
+  }
+  return c;
 }
 
-/* Glossy BSDF (and the Metallic BSDF's colour): a metal of that colour */
+/* Glossy BSDF, Multiscatter GGX (Cycles 5.0: bsdf_microfacet_setup_fresnel_constant): GGX of its
+ * colour, compensated for multiple scattering with that colour as its Fresnel; a metal of that colour
+ * where the program has no such lobe (SL_GLOSSY: principled.glsl). (The Metallic BSDF's Physical
+ * Conductor: a metal of its Base Color.) */
 Closure closure_glossy(vec4 color, float roughness, vec3 n)
 {
-  return closure_bsdf(color.rgb, 1.0, roughness, 0.0, n);
+  Closure c = closure_bsdf(max(color.rgb, 0.0), 1.0, roughness, 0.0, n);
+  c.bsdfs.glossy.x = 1.0;
+  return c;
 }
 
 /* Translucent BSDF (Cycles' bsdf_translucent: a Lambertian lobe on the far side of the normal):

@@ -115,6 +115,10 @@ PrincipledLayers principled_layers_at(float NoV, float roughness, vec3 base_colo
   p.dielectric_f0 = f0;
   vec3 dielectric_Fss = mix(f0, vec3(1.0), s_avg);
   p.metal_M = principled_M(metal_Fss, E_mu, Eavg);
+#ifdef SL_GLOSSY
+  /* a constant Fresnel: the colour is its average (bsdf_microfacet_setup_fresnel_constant) */
+  p.glossy_M = principled_M(max(base_color, 0.0), E_mu, Eavg);
+#endif
   p.dielectric_M = principled_M(dielectric_Fss, E_mu, Eavg);
   p.albedo = eta > 1.0 ? E_mu * p.dielectric_M * mix(f0, vec3(1.0), principled_S(roughness, NoV, sqrt(abs(ratio))))
                        : vec3(0.0);
@@ -180,6 +184,9 @@ Surface coat_surface(Surface s)
   c.metalness = 0.0;
   c.eta = s.coat.eta;
   c.layers = s.coat.layers;
+#  ifdef SL_GLOSSY
+  c.glossy = vec4(0.0); /* the coat is the Principled BSDF's own GGX dielectric */
+#  endif
 #  ifdef SL_LTC
   c.ltc = s.coat.ltc;
 #  endif
@@ -206,6 +213,10 @@ vec3 principled_specular_tint(Surface s, float LoH)
   vec3 metal = p.metal_M * F_F82Tint(min(s.base_color, vec3(1.0)), p.metal_b, LoH);
 #else
   vec3 metal = p.metal_M * F_Schlick(min(s.base_color, vec3(1.0)), 1.0, LoH);
+#endif
+#ifdef SL_GLOSSY
+  /* the Glossy BSDFs' constant Fresnel, the uncompensated distributions (closures.glsl) */
+  metal = glossy_metal(s, metal / p.metal_M, p.metal_M, 1.0);
 #endif
   vec3 dielectric = p.dielectric_M * F_DielectricTinted(s.eta, p.dielectric_f0, LoH);
 #ifdef SL_THIN_FILM
@@ -238,15 +249,25 @@ float principled_DV(Surface s, vec3 l, vec3 h, float NoL, float NoH, float NxH2)
 vec3 principled_direct(Surface s, vec3 l, vec3 h, float NoL, float NoH, float NxH2, float LoH, vec3 E,
                        vec4 factors)
 {
+  float DV = principled_DV(s, l, h, NoL, NoH, NxH2);
+#  ifdef SL_GLOSSY
+  DV = glossy_lobe(s, DV, NoL, NoH, NxH2, LoH); /* the Glossy BSDFs' distributions (closures.glsl) */
+#  endif
   PrincipledLayers p = principled_layers(s);
-  vec3 specular = principled_specular_tint(s, LoH) * principled_DV(s, l, h, NoL, NoH, NxH2);
+  vec3 specular = principled_specular_tint(s, LoH) * DV;
+#  ifdef SL_DIFFUSE_ROUGHNESS
+  /* the Diffuse BSDF's Oren-Nayar in place of Lambert (closures.glsl); l.v = 2 (l.h)^2 - 1 */
+  vec3 diffuse = (1.0 - s.metalness) * saturate(1.0 - p.layer) *
+                 oren_nayar_diffuse(s, s.base_color, NoL, 2.0 * LoH * LoH - 1.0);
+#  else
   vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) * INV_PI;
+#  endif
 #  ifdef SL_SUBSURFACE
   diffuse *= 1.0 - s.subsurface; /* the rest scatters below the surface (subsurface.glsl) */
 #  endif
-#ifdef SL_TRANSMISSION
+#  ifdef SL_TRANSMISSION
   diffuse *= 1.0 - s.transmission.share; /* the glass's share transmits instead (transmission.glsl) */
-#endif
+#  endif
   return (diffuse * factors.x + specular * factors.y) * E * NoL;
 }
 
@@ -279,6 +300,10 @@ vec3 principled_environment(Surface s, vec2 EB, vec3 radiance, vec3 irradiance, 
     metal = p.metal_M * F_ThinFilmMetal(s.thin_film, s.film_metal_n, s.film_metal_k, s.film_metal_g, s.NoV) * EB.x;
   }
 #    endif
+#    ifdef SL_GLOSSY
+  /* a constant Fresnel: the lobe's albedo times the colour */
+  metal = glossy_metal(s, metal / p.metal_M, p.metal_M, EB.x);
+#    endif
 #      ifdef SL_TRANSMISSION
   vec3 specular = (s.metalness * metal + (1.0 - s.metalness) * p.albedo * s.transmission.reflection_tint) *
                   radiance;
@@ -286,7 +311,12 @@ vec3 principled_environment(Surface s, vec2 EB, vec3 radiance, vec3 irradiance, 
   vec3 specular = (s.metalness * metal + (1.0 - s.metalness) * p.albedo) * radiance;
 #      endif
 #    endif
-  vec3 diffuse = s.base_color * (1.0 - s.metalness) * saturate(1.0 - p.layer) * irradiance * INV_PI;
+#    ifdef SL_DIFFUSE_ROUGHNESS
+  vec3 rho = s.bsdfs.on_albedo; /* Oren-Nayar's directional albedo at the view (closures.glsl) */
+#    else
+  vec3 rho = s.base_color;
+#    endif
+  vec3 diffuse = rho * (1.0 - s.metalness) * saturate(1.0 - p.layer) * irradiance * INV_PI;
 #    ifdef SL_TRANSMISSION
   diffuse *= 1.0 - s.transmission.share;
 #    endif

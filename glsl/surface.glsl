@@ -14,6 +14,9 @@ struct PrincipledLayers {
 #ifdef SL_SPECULAR_TINT
   vec3 metal_b;        /* F82-tint's b */
 #endif
+#ifdef SL_GLOSSY
+  vec3 glossy_M;       /* the compensation of a metal lobe whose Fresnel is its colour (Glossy BSDF) */
+#endif
 };
 PrincipledLayers principled_layers_at(float NoV, float roughness, vec3 base_color, float eta, vec3 tint);
 #endif
@@ -91,6 +94,30 @@ struct TransmissionLobe {
 };
 TransmissionLobe transmission_at(MaterialData m, float metalness);
 #endif
+#ifdef SL_CLOSURE_BSDFS
+/* The closure nodes drawn beside the Principled BSDF's lobes, at the view (closures.glsl's
+ * closure_bsdfs_at), made once per shading point. */
+struct ClosureBsdfLobes {
+#  ifdef SL_DIFFUSE_ROUGHNESS
+  bool oren_nayar;     /* the Diffuse BSDF's Roughness above 0 (else Lambert) */
+  float on_a;          /* Oren-Nayar's A and B */
+  float on_b;
+  vec3 on_ms;          /* its multiple scattering's colour x E_ms (1 - E(v)) */
+  vec3 on_albedo;      /* the diffuse base's directional albedo at the view (rgb) */
+#  endif
+#  ifdef SL_VELVET
+  vec3 velvet;         /* Sheen BSDF (Ashikhmin) colour */
+  float velvet_inv_sigma2;
+#  endif
+#  ifdef SL_TOON
+  vec3 toon_diffuse;   /* Toon BSDF colours, Size and Smooth in radians */
+  vec2 toon_diffuse_shape;
+  vec3 toon_glossy;
+  vec2 toon_glossy_shape;
+#  endif
+};
+ClosureBsdfLobes closure_bsdfs_at(vec3 n, vec3 v, vec3 base_color, MaterialData m);
+#endif
 
 #ifdef SL_MULTISCATTER
 /* The specular lobe's multiple-scattering compensation (multiscatter.glsl): it depends on the view
@@ -164,11 +191,24 @@ struct Surface {
 #ifdef SL_TRANSMISSION
   TransmissionLobe transmission;
 #endif
+#ifdef SL_CLOSURE_BSDFS
+  ClosureBsdfLobes bsdfs;
+#endif
+#ifdef SL_GLOSSY
+  vec4 glossy;        /* MaterialData's glossy: the Glossy BSDFs' shares (closures.glsl) */
+#endif
 };
 #ifdef SL_THIN_FILM
 #  ifdef SL_LAYERS
 void thin_film_at(inout Surface s, vec4 film);
 #  endif
+#endif
+#ifdef SL_DIFFUSE_ROUGHNESS
+vec3 oren_nayar_diffuse(Surface s, vec3 rho, float NoL, float LoV); /* closures.glsl */
+#endif
+#ifdef SL_GLOSSY
+vec3 glossy_metal(Surface s, vec3 F, vec3 M, float albedo); /* closures.glsl */
+float glossy_lobe(Surface s, float DV, float NoL, float NoH, float NxH2, float LoH);
 #endif
 
 /* Unit half vector of eq. 1.6; l + v = 0 only when the light is exactly behind the viewer's
@@ -228,6 +268,11 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
 #  ifdef SL_THIN_FILM
   thin_film_at(s, m.thin_film);
 #  endif
+#  ifdef SL_GRAPH
+  /* the share of the diffuse base beside the specular layer, not under it (a node graph's Specular
+   * BSDF, EEVEE's: node_closure_bsdfs.glsl) */
+  s.layers.layer *= 1.0 - saturate(m.closure_bsdfs.w);
+#  endif
 #endif
   /* the Principled BSDF's upper layers, each attenuating what lies below it at the view (Cycles'
    * svm_node_closure_bsdf: the sheen over the coat over the rest) */
@@ -246,7 +291,11 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
   s.sheen = sheen_at(sheen_n, v, m.sheen.w, max(m.sheen.rgb, 0.0));
   /* Cycles' closure_layering_weight of the sheen's albedo (colour x albedo): its largest channel,
    * what the sheen leaves the coat's lobe as well as the base */
-  float sheen_left = saturate(1.0 - max(s.sheen.color.r, max(s.sheen.color.g, s.sheen.color.b)));
+  float sheen_max = max(s.sheen.color.r, max(s.sheen.color.g, s.sheen.color.b));
+#  ifdef SL_GRAPH
+  sheen_max *= saturate(m.closure_bsdfs.x); /* a Sheen BSDF's share is over nothing (node graphs') */
+#  endif
+  float sheen_left = saturate(1.0 - sheen_max);
   s.below *= sheen_left;
 #  ifdef SL_COAT
   s.coat.weight *= sheen_left;
@@ -254,6 +303,12 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
 #endif
 #ifdef SL_MULTISCATTER
   s.ms_compensation = ms_compensation_at(s.NoV, s.roughness, s.f0);
+#endif
+#ifdef SL_CLOSURE_BSDFS
+  s.bsdfs = closure_bsdfs_at(n, v, s.base_color, m);
+#endif
+#ifdef SL_GLOSSY
+  s.glossy = m.glossy;
 #endif
 #ifdef SL_LTC
   s.ltc = ltc_frame_at(n, v, s.NoV, s.roughness);

@@ -84,6 +84,19 @@ struct MaterialData {
                           * and transmission (0: all transmitted); z: its IOR */
   vec4 transmission_tint; /* rgb: the tint of each crossing of the surface */
   vec4 reflection_tint;  /* rgb: the dielectric reflection's tint (the Glass BSDF's Color) */
+  /* The closure nodes beside the Principled BSDF (glsl/closures.glsl; a node graph's, per fragment:
+   * graph_surface.glsl's apply_closure_bsdfs) */
+  vec4 closure_bsdfs;    /* x: the share of the sheen layered over the base (1: the Principled BSDF's;
+                          * 0: a Sheen BSDF's), y: the Diffuse BSDF's Roughness (Oren-Nayar),
+                          * z: the velvet's sigma, w: the share of the diffuse base beside the
+                          * specular layer, not under it (EEVEE's Specular BSDF) */
+  vec4 velvet;           /* rgb: Sheen BSDF (Ashikhmin) colour */
+  vec4 toon_diffuse;     /* rgb: Toon BSDF (Diffuse) colour, w: its Size */
+  vec4 toon_glossy;      /* rgb: Toon BSDF (Glossy) colour, w: its Size */
+  vec4 toon_smooth;      /* x: the Diffuse component's Smooth, y: the Glossy's */
+  vec4 diffuse_ms;       /* rgb: the Diffuse BSDF's Oren-Nayar multiple scattering, Color x E_ms */
+  vec4 glossy;           /* the metal lobe's shares of a constant Fresnel (x) and uncompensated (y), the
+                          * specular lobe's of Beckmann (z) and Ashikhmin-Shirley (w) (Glossy BSDF) */
 };
 
 #ifdef REFRACTION_LEVELS

@@ -95,12 +95,12 @@ def material(name="Material", **overrides) -> bpy.types.Material:
     return mat
 
 
-def unread_material(name="Tooned") -> bpy.types.Material:
-    """A material whose surface is a Toon BSDF (a shader Shading Lab does not compile)."""
+def unread_material(name="Haired") -> bpy.types.Material:
+    """A material whose surface is a Hair BSDF (a shader Shading Lab does not compile)."""
     mat = bpy.data.materials.new(name)
     tree = node_tree(mat)
     out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
-    tree.links.new(tree.nodes.new("ShaderNodeBsdfToon").outputs[0], out.inputs["Surface"])
+    tree.links.new(tree.nodes.new("ShaderNodeBsdfHair").outputs[0], out.inputs["Surface"])
     return mat
 
 

@@ -209,8 +209,8 @@ def test_warnings_are_listed_once_per_run(tmp_path):
     proc = _run(blend, "--model", "all", "--resolution", "8x8", "--out", tmp_path / "out")
     assert proc.returncode == 0, proc.stderr[-2000:]
     listed = [line for line in proc.stderr.splitlines() if line.startswith("warning: ")]
-    assert listed == ["warning: Material 'Tooned': 1 of 1 nodes not compiled (Toon BSDF "
-                      "(ShaderNodeBsdfToon)); what they feed takes its socket's own value"], \
+    assert listed == ["warning: Material 'Haired': 1 of 1 nodes not compiled (Hair BSDF "
+                      "(ShaderNodeBsdfHair)); what they feed takes its socket's own value"], \
         proc.stderr[-2000:]
 
 

@@ -485,7 +485,7 @@ def test_what_is_not_read_is_said_once():
     snap = extract.snapshot(bpy.context.evaluated_depsgraph_get())
     said = "\n".join(snap.warnings)
     assert len(snap.warnings) == 5, snap.warnings
-    assert "Material 'Tooned': 1 of 1 nodes not compiled (Toon BSDF (ShaderNodeBsdfToon))" in said
+    assert "Material 'Haired': 1 of 1 nodes not compiled (Hair BSDF (ShaderNodeBsdfHair))" in said
     assert ("Material 'Ramped': 1 of 3 nodes not compiled (Particle Info (ShaderNodeParticleInfo)): "
             "baked") in said
     # (the plane has no UV map to bake on: its object says so)

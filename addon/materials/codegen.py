@@ -77,6 +77,7 @@ OPTIONAL_LIBRARY += ("node_tex_noise.glsl", "node_tex_wave.glsl")  # Noise; Wave
 OPTIONAL_LIBRARY += ("node_anisotropy.glsl",)  # an anisotropic BSDF's stretch and tangent
 #: the subsurface's mean free path, the Subsurface Scattering node
 OPTIONAL_LIBRARY += ("node_subsurface.glsl",)
+OPTIONAL_LIBRARY += ("node_closure_bsdfs.glsl",)  # the Sheen and Toon BSDFs
 #: Node kinds drawn from a bake even where an emitter compiles them (empty: none). Tests and the
 #: benchmark set it to compare a node's bake with its compiled code and with Cycles.
 FORCE_BAKE: frozenset[str] = frozenset()
@@ -918,20 +919,102 @@ def _glass(function: str, w: _Writer, node: FlatNode) -> dict:
                     f"{w.arg(node, 'IOR')}, {_normal_input(w, node)})"}
 
 
-def _glossy(w: _Writer, node: FlatNode) -> dict:
-    """Glossy, Anisotropic and Metallic BSDFs: a metal of their colour and roughness, anisotropic
-    where they are (``_anisotropic``)."""
-    return {"BSDF": _anisotropic(w, node, f"closure_glossy({_closure_color(w, node)}, "
-                                          f"{_closure_roughness(w, node)}, {_normal_input(w, node)})")}
+#: The Glossy BSDF's distributions, each its closure (glsl/node_closure.glsl, node_closure_bsdfs.glsl).
+GLOSSY_DISTRIBUTIONS = {"MULTI_GGX": "closure_glossy", "GGX": "closure_glossy_ggx",
+                        "BECKMANN": "closure_glossy_beckmann",
+                        "ASHIKHMIN_SHIRLEY": "closure_glossy_ashikhmin_shirley"}
+
+
+def _glossy(w: _Writer, node: FlatNode) -> dict | None:
+    """Glossy and Anisotropic BSDFs: its colour times its distribution's lobe (a metal of its colour
+    where the program does not draw the GLOSSY lobe), anisotropic where it is (``_anisotropic``)."""
+    fn = GLOSSY_DISTRIBUTIONS.get(node.props.get("distribution", "MULTI_GGX"))
+    if fn is None:
+        return None
+    args = f"{_closure_color(w, node)}, {_closure_roughness(w, node)}, {_normal_input(w, node)}"
+    return {"BSDF": _anisotropic(w, node, f"{fn}({args})")}
+
+
+def _metallic(w: _Writer, node: FlatNode) -> dict | None:
+    """The Metallic BSDF (glsl/node_closure_bsdfs.glsl): F82 Tint the Principled BSDF's metal with its
+    edge tint; Physical Conductor the metal of its IOR's and Extinction's reflectance at normal
+    incidence; its GGX and Beckmann distributions marked (Multiscatter GGX: the metal's own)."""
+    fresnel = node.props.get("fresnel_type", "F82")
+    if fresnel == "F82":
+        out = _bsdf("closure_metallic_f82", w, node, ("Base Color", "Edge Tint", "Roughness"))
+    elif fresnel == "PHYSICAL_CONDUCTOR":
+        out = _bsdf("closure_metallic_conductor", w, node, ("IOR", "Extinction", "Roughness"))
+    else:
+        return None
+    mark = {"GGX": "closure_metallic_ggx", "BECKMANN": "closure_metallic_beckmann"}.get(
+        node.props.get("distribution", "MULTI_GGX"))
+    closure = f"{mark}({out['BSDF']})" if mark else out["BSDF"]
+    return {"BSDF": _anisotropic(w, node, closure)}
+
+
+def _bsdf(fn: str, w: _Writer, node: FlatNode, inputs: tuple[str, ...]) -> dict:
+    """A BSDF node's closure: ``fn`` of its ``inputs`` and its Normal."""
+    return {"BSDF": f"{fn}({', '.join(w.arg(node, s) for s in inputs)}, {_normal_input(w, node)})"}
+
+
+def _sheen(w: _Writer, node: FlatNode) -> dict | None:
+    """The Sheen BSDF: Microfiber the Principled BSDF's sheen alone, Ashikhmin the velvet
+    (glsl/node_closure_bsdfs.glsl)."""
+    fn = {"MICROFIBER": "closure_sheen_microfiber", "ASHIKHMIN": "closure_sheen_ashikhmin"}.get(
+        node.props.get("distribution", "MICROFIBER"))
+    if fn is None:
+        return None
+    return _bsdf(fn, w, node, ("Color", "Roughness"))
+
+
+def _toon(w: _Writer, node: FlatNode) -> dict | None:
+    """The Toon BSDF, its Diffuse or Glossy component (glsl/node_closure_bsdfs.glsl)."""
+    component = node.props.get("component", "DIFFUSE")
+    if component not in ("DIFFUSE", "GLOSSY"):
+        return None
+    args = ", ".join(w.arg(node, s) for s in ("Color", "Size", "Smooth"))
+    return {"BSDF": f"closure_toon({args}, {_normal_input(w, node)}, {str(component == 'GLOSSY').lower()})"}
+
+
+#: The Specular BSDF's (EEVEE's node) inputs read, in glsl/node_closure_bsdfs.glsl's closure_specular order.
+SPECULAR_INPUTS = ("Base Color", "Specular", "Roughness", "Emissive Color", "Transparency")
+#: The Sheen BSDF's distributions and the lobe each draws.
+SHEEN_LOBES = {"MICROFIBER": "SHEEN", "ASHIKHMIN": "VELVET"}
+
+
+def closure_node_lobe(node: FlatNode) -> str | None:
+    """The lobe (``snapshot.LOBES``) a closure node other than the Principled BSDF draws, if any: the
+    Diffuse BSDF's Oren-Nayar roughness, the Sheen BSDF's (Microfiber: the Principled BSDF's sheen),
+    the Toon BSDF's."""
+    if node.kind == "ShaderNodeBsdfDiffuse":
+        return "DIFFUSE_ROUGHNESS"
+    if node.kind == "ShaderNodeBsdfSheen":
+        return SHEEN_LOBES.get(node.props.get("distribution", "MICROFIBER"))
+    if node.kind == "ShaderNodeBsdfToon":
+        return "TOON"
+    if node.kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic") or (
+            node.kind == "ShaderNodeBsdfMetallic" and node.props.get("distribution") in ("GGX", "BECKMANN")):
+        return "GLOSSY"
+    if node.kind == "ShaderNodeBsdfMetallic" and node.props.get("fresnel_type", "F82") == "F82":
+        tint = node.inputs.get("Edge Tint")  # the metal's F82 edge tint
+        white = tint is None or isinstance(tint.source, Const) and tuple(tint.source.value[:3]) == (1.0,) * 3
+        return None if white else "SPECULAR_TINT"
+    if node.kind == "ShaderNodeEeveeSpecular":  # its Specular's colour: the dielectric's F0 tint
+        spec = node.inputs.get("Specular")
+        grey = spec is not None and isinstance(spec.source, Const) and len(set(spec.source.value[:3])) == 1
+        return None if grey else "SPECULAR_TINT"
+    return None
 
 
 CLOSURES = {
     "ShaderNodeBsdfPrincipled": _principled,
-    "ShaderNodeBsdfDiffuse": lambda w, n: {"BSDF": f"closure_diffuse({_closure_color(w, n)}, "
-                                                   f"{_normal_input(w, n)})"},
+    "ShaderNodeBsdfDiffuse": lambda w, n: _bsdf("closure_diffuse", w, n, ("Color", "Roughness")),
+    "ShaderNodeBsdfSheen": _sheen,
+    "ShaderNodeBsdfToon": _toon,
+    "ShaderNodeEeveeSpecular": lambda w, n: _bsdf("closure_specular", w, n, SPECULAR_INPUTS),
     "ShaderNodeBsdfGlossy": _glossy,
     "ShaderNodeBsdfAnisotropic": _glossy,
-    "ShaderNodeBsdfMetallic": _glossy,
+    "ShaderNodeBsdfMetallic": _metallic,
     "ShaderNodeBsdfGlass": lambda w, n: _glass("closure_glass", w, n),
     "ShaderNodeBsdfRefraction": lambda w, n: _glass("closure_refraction", w, n),
     "ShaderNodeEmission": lambda w, n: _call("closure_emission", w, n, ("Color", "Strength"), "Emission"),

@@ -22,7 +22,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..scene.nodes import MATERIAL_OUTPUT, Graph
-from ..scene.snapshot import LOBES, lobes_of
+from ..scene.snapshot import CLOSURE_LOBES, GLOSSY_LOBE, LOBES, lobes_of
 from . import bake, codegen
 from .graph import Const, FlatGraph, flatten
 
@@ -134,7 +134,14 @@ def _plain(flat: FlatGraph) -> bool:
     # Translucent, Subsurface Scattering: nor these lobes)
     return node.kind in codegen.CLOSURES and node.kind not in ("ShaderNodeMixShader", "ShaderNodeAddShader",
                                                                 "ShaderNodeHoldout", *_CLOSURE_LOBES) \
-        and all(isinstance(i.source, Const) for i in node.inputs.values()) and not codegen.anisotropic(node)
+        and all(isinstance(i.source, Const) for i in node.inputs.values()) and not codegen.anisotropic(node) \
+        and not _closure_lobes(flat) and node.kind not in GRAPH_ONLY
+
+
+#: Closure nodes the constant path (addon/blender/extract.py's material_params) does not read: compiled
+#: even alone with nothing linked.
+GRAPH_ONLY = frozenset({"ShaderNodeBsdfSheen", "ShaderNodeBsdfToon", "ShaderNodeEeveeSpecular",
+                        "ShaderNodeBsdfMetallic"})
 
 
 def _transparent(flat: FlatGraph) -> bool:
@@ -281,7 +288,23 @@ def _lobes(flat: FlatGraph) -> frozenset[str]:
                         values["Sheen Tint"], values["Thin Film Thickness"],
                         subsurface_weight=values["Subsurface Weight"],
                         transmission_weight=values["Transmission Weight"])
-    return frozenset(out)
+    return frozenset(out | _closure_lobes(flat))
+
+
+def _closure_lobes(flat: FlatGraph) -> set[str]:
+    """The lobes (``snapshot.CLOSURE_LOBES``, and the Principled BSDF's SHEEN for a Sheen BSDF) the
+    graph's other closure nodes draw (codegen.closure_node_lobe): a Diffuse BSDF's Roughness where
+    it is linked or above 0."""
+    out = set()
+    for node in flat.nodes.values():
+        lobe = codegen.closure_node_lobe(node)
+        if lobe == "DIFFUSE_ROUGHNESS":
+            spec = node.inputs.get("Roughness")
+            if spec is None or (isinstance(spec.source, Const) and not float(spec.source.value or 0.0) > 0.0):
+                continue  # Lambert (Cycles' below 1e-5: the closure clamps to it, the lobe reads 0)
+        if lobe is not None:
+            out.add(lobe)
+    return out
 
 
 #: The closure nodes that are a lobe by themselves (``snapshot.LOBES``).
@@ -418,7 +441,8 @@ LOBE_INPUTS = {"SPECULAR_TINT": ("Specular Tint",),
                "ANISOTROPY": ("Anisotropic", "Anisotropic Rotation", "Tangent"),
                "TRANSLUCENT": (),
                "SUBSURFACE": ("Subsurface Weight", "Subsurface Radius", "Subsurface Scale", "Subsurface IOR"),
-               "TRANSMISSION": ("Transmission Weight",)}
+               "TRANSMISSION": ("Transmission Weight",),
+               **{lobe: () for lobe in (*CLOSURE_LOBES, GLOSSY_LOBE)}}  # (the closure nodes': READ_INPUTS)
 #: The Glossy and Metallic BSDFs' anisotropic inputs (``codegen.ANISOTROPIC``)
 ANISOTROPIC_INPUTS = {"Anisotropy", "Rotation", "Tangent"}
 #: The closures that transmit alone (glsl/node_closure.glsl's closure_glass, closure_refraction).
@@ -427,9 +451,13 @@ GLASS_CLOSURES = ("ShaderNodeBsdfGlass", "ShaderNodeBsdfRefraction")
 #: coat, sheen, transmission ...).
 READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_BASE_INPUTS) | {"Normal"}
                | {socket for lobe in LOBES for socket in LOBE_INPUTS[lobe]},
-               "ShaderNodeBsdfDiffuse": {"Color", "Normal"},
+               "ShaderNodeBsdfDiffuse": {"Color", "Roughness", "Normal"},
+               "ShaderNodeBsdfSheen": {"Color", "Roughness", "Normal"},
+               "ShaderNodeBsdfToon": {"Color", "Size", "Smooth", "Normal"},
+               "ShaderNodeEeveeSpecular": {*codegen.SPECULAR_INPUTS, "Normal"},
                "ShaderNodeBsdfGlossy": {"Color", "Roughness", "Normal"} | ANISOTROPIC_INPUTS,
-               "ShaderNodeBsdfMetallic": {"Base Color", "Roughness", "Normal"} | ANISOTROPIC_INPUTS,
+               "ShaderNodeBsdfMetallic": {"Base Color", "Edge Tint", "IOR", "Extinction", "Roughness",
+                                          "Normal"} | ANISOTROPIC_INPUTS,
                "ShaderNodeBsdfTranslucent": {"Color", "Normal"},
                "ShaderNodeSubsurfaceScattering": {"Color", "Scale", "Radius", "IOR", "Normal"},
                "ShaderNodeBsdfGlass": {"Color", "Roughness", "IOR", "Normal"},

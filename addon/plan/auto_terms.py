@@ -42,6 +42,7 @@ from ..materials.convert import LUMA
 from ..reference import environment, shading
 from ..reference.brdf import half_vector
 from ..scene.snapshot import (
+    CLOSURE_LOBES,
     LOBES,
     ImageData,
     MaterialParams,
@@ -92,7 +93,9 @@ MISSING = {
 #: "why".
 LOBE_LABELS = {"SPECULAR_TINT": "specular tint", "COAT": "coat", "SHEEN": "sheen", "THIN_FILM": "thin film",
                "ANISOTROPY": "anisotropy", "TRANSLUCENT": "translucent",
-               "SUBSURFACE": "subsurface", "TRANSMISSION": "transmission"}
+               "SUBSURFACE": "subsurface", "TRANSMISSION": "transmission",
+               "DIFFUSE_ROUGHNESS": "Oren-Nayar diffuse", "VELVET": "velvet sheen", "TOON": "toon",
+               "GLOSSY": "Glossy BSDF"}
 #: The lobes the prediction's twin does not draw: a material with one takes the Principled set, which
 #: alone draws it, unpredicted (its why names the lobe).
 UNPREDICTED_LOBES = ("ANISOTROPY",)
@@ -793,7 +796,17 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
     occlusion = snapshot.settings.world_occlusion
     users = material_users(snapshot)
     found: dict[str, _Prediction] = {}
+    closure_only: dict[str, Choice] = {}  # the closure nodes only the Principled set draws
     for key, material in snapshot.materials.items():
+        drawn_alone = sorted(material.lobes & CLOSURE_LOBES) if key in users else ()
+        if drawn_alone and material.model in ("", "PBR") and not any(
+                (material.fresnel, material.ndf, material.visibility, material.diffuse)):
+            # a Toon, velvet or rough Diffuse BSDF: every other set would draw another closure
+            # (glsl/node_closure_bsdfs.glsl's fallbacks), which the twin does not predict
+            closure_only[key] = Choice("PRINCIPLED", candidate_terms("PRINCIPLED"), 0.0,
+                                       ", ".join(LOBE_LABELS[lobe] for lobe in drawn_alone),
+                                       "closure nodes only the Principled set draws")
+            continue
         if material.model not in ("", "PBR") or any(
                 (material.fresnel, material.ndf, material.visibility, material.diffuse)) \
                 or material.environment_samples >= 0:  # its own terms or World Specular: kept
@@ -891,7 +904,7 @@ def choose(snapshot: Snapshot, bound: float = DEFAULT_BOUND, quantile: float = D
             saving = entry.share * (frame_ms[name] - frame_ms[alone[key]]) if was_merged else 0.0
             out[key] = Choice(name, candidate_terms(name), errors[name], limiting, reason,
                               tuple(errors.items()), entry.count, alone[key] if was_merged else "", saving)
-    return out
+    return {**out, **closure_only}
 
 
 def _program_keys(snapshot: Snapshot) -> Callable[[str, str | None], tuple]:

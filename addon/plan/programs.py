@@ -19,6 +19,7 @@ from ..reference.multiscatter import MS_SIZE, S_SIZE
 from ..reference.sheen import SIZE as SHEEN_SIZE
 from ..scene.matrices import invert
 from ..scene.snapshot import (
+    CLOSURE_LOBES,
     LIGHT_KINDS,
     LOBES,
     MAX_ENVIRONMENT_IMAGES,
@@ -61,7 +62,7 @@ MODEL_FILES = {
 FRAGMENT_LIBRARY = ("common.glsl", "surface.glsl", "brdf.glsl", "lights.glsl", "environment.glsl", "ibl.glsl")
 PBR_LIBRARY = ("anisotropy.glsl", "multiscatter.glsl", "pbr_terms.glsl", "thin_film.glsl", "principled.glsl",
                "ltc.glsl", "subsurface.glsl",
-               "transmission.glsl")
+               "transmission.glsl", "closures.glsl")
 #: The screen-space refraction (glsl/transmission.glsl, passes.RefractionPass): the most levels of
 #: the blurred copy of what is behind the glass (each half the last's size), the steps a refracted
 #: ray is marched in across the screen and the bisections refining where it meets a surface, and the
@@ -342,6 +343,8 @@ class Features:
             out += [("SL_PRINCIPLED", "1"), ("SL_LAYERS", "1"), ("SL_MS_SIZE", str(MS_SIZE)),
                     ("SL_S_SIZE", str(S_SIZE))]
             out += [("SL_" + lobe, "1") for lobe in sorted(self.lobes)]
+            if self.lobes & CLOSURE_LOBES:  # glsl/closures.glsl's lobes
+                out.append(("SL_CLOSURE_BSDFS", "1"))
             if self.uses_sheen_table:
                 out.append(("SL_SHEEN_SIZE", str(SHEEN_SIZE)))
         elif self.model == "PBR":
@@ -1003,6 +1006,15 @@ def pack_material(m: MaterialParams) -> bytes:
          max(m.transmission_ior, 1e-5), 0.0],
         [*m.transmission_tint, 0.0],
         [*m.reflection_tint, 0.0],
+        # the closure nodes beside the Principled BSDF (a node graph's, per fragment): the sheen layered
+        # over the base, no Oren-Nayar roughness, no velvet, no toon
+        [1.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 0.0],
+        [0.0, 0.0, 0.0, 0.0],
     ]
     return np.asarray(rows, np.float32).tobytes()
 

@@ -213,6 +213,15 @@ class MaterialParams:
 #: only a compiled graph has one (its tangent is per fragment: ``materials.surface._lobes``).
 LOBES = ("SPECULAR_TINT", "COAT", "SHEEN", "THIN_FILM", "ANISOTROPY", "TRANSLUCENT", "SUBSURFACE",
          "TRANSMISSION")
+#: The closure nodes' lobes beside the Principled BSDF's (glsl/closures.glsl): the Diffuse BSDF's
+#: Oren-Nayar roughness, the Sheen BSDF's Ashikhmin velvet, the Toon BSDF; a node graph's alone.
+CLOSURE_LOBES = frozenset({"DIFFUSE_ROUGHNESS", "VELVET", "TOON"})
+#: The Glossy BSDF's own Fresnel (its colour) and distributions in the Principled set's specular lobe
+#: (glsl/closures.glsl's SL_GLOSSY; a node graph's alone; other sets draw a metal of its colour).
+GLOSSY_LOBE = "GLOSSY"
+LOBES += tuple(sorted(CLOSURE_LOBES)) + (GLOSSY_LOBE,)
+#: The lobes a node graph's closures alone draw (no Principled BSDF input turns them on).
+NODE_LOBES = CLOSURE_LOBES | {GLOSSY_LOBE}
 
 
 def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint,

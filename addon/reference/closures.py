@@ -1,0 +1,159 @@
+"""Numpy twins of glsl/closures.glsl: the closure nodes drawn beside the Principled BSDF's lobes, as
+Cycles 5.0 evaluates them (kernel/closure/bsdf_oren_nayar.h, bsdf_ashikhmin_velvet.h, bsdf_toon.h).
+
+Every ``*_eval`` returns Cycles' bsdf eval, f (n.l): radiance per unit irradiance arriving along l.
+Arrays broadcast; no ``bpy``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: Cycles' FLT_MIN (Oren-Nayar's t over max(n.l, n.v) where both vanish)
+FLT_MIN = 1.175494e-38
+
+
+def oren_nayar_G(cos_theta):
+    """Fujii's G(theta) (bsdf_oren_nayar_G): E(theta) = A pi + B G(theta); its Taylor expansion below
+    cos 1e-6."""
+    c = np.asarray(cos_theta, np.float64)
+    safe = np.maximum(c, 1e-6)
+    s = np.sqrt(np.maximum(1.0 - safe * safe, 0.0))
+    theta = np.arccos(np.clip(safe, -1.0, 1.0))
+    g = s * (theta - 2.0 / 3.0 - s * safe) + 2.0 / 3.0 * (s / safe) * (1.0 - s * s * s)
+    return np.where(c < 1e-6, (0.5 * np.pi - 2.0 / 3.0) - c, g)
+
+
+def oren_nayar_setup(sigma, albedo, cos_v):
+    """(A, B, E_ms (1 - E(v)) per channel, E_avg) of Cycles' bsdf_oren_nayar_setup: sigma within
+    [0, 1], the albedo (the base colour) within [0, 1]."""
+    sigma = np.clip(np.asarray(sigma, np.float64), 0.0, 1.0)
+    a = 1.0 / (np.pi + sigma * (0.5 * np.pi - 2.0 / 3.0))
+    b = sigma * a
+    rho = np.clip(np.asarray(albedo, np.float64), 0.0, 1.0)
+    e_avg = a * np.pi + (2.0 * np.pi - 5.6) / 3.0 * b
+    ratio = (e_avg / np.maximum(1.0 - e_avg, 1e-6))[..., None]
+    e_ms = rho * rho * ratio / (np.pi * (1.0 - rho * (1.0 - e_avg)[..., None]))
+    e_v = a * np.pi + b * oren_nayar_G(np.maximum(cos_v, 0.0))
+    return a, b, e_ms * (1.0 - e_v)[..., None], e_avg
+
+
+def oren_nayar_eval(sigma, albedo, cos_v, cos_l, cos_lv):
+    """f (n.l) over the base colour (rgb) of Cycles' Diffuse BSDF of roughness ``sigma``
+    (bsdf_oren_nayar_get_intensity; Lambert's n.l / pi where sigma < 1e-5, bsdf_diffuse_setup)."""
+    a, b, ms, _ = oren_nayar_setup(sigma, albedo, cos_v)
+    nl = np.maximum(cos_l, 0.0)
+    nv = np.maximum(cos_v, 0.0)
+    t = cos_lv - nl * nv
+    t = np.where(t > 0.0, t / (np.maximum(nl, nv) + FLT_MIN), t)
+    e_l = a * np.pi + b * oren_nayar_G(nl)
+    f = (a + b * t)[..., None] + ms * (1.0 - e_l)[..., None]
+    lambert = np.asarray(sigma, np.float64) < 1e-5
+    return np.where(lambert[..., None], 1.0 / np.pi, f) * nl[..., None]
+
+
+def oren_nayar_albedo(sigma, albedo, cos_v):
+    """The directional albedo at the view over the base colour (rgb): E(v) + pi E_ms (1 - E(v))
+    (1 - E_avg), the integral of oren_nayar_eval over the light's hemisphere in closed form; 1 for
+    Lambert."""
+    a, b, ms, e_avg = oren_nayar_setup(sigma, albedo, cos_v)
+    e_v = a * np.pi + b * oren_nayar_G(np.maximum(cos_v, 0.0))
+    out = e_v[..., None] + np.pi * ms * (1.0 - e_avg)[..., None]
+    return np.where((np.asarray(sigma, np.float64) < 1e-5)[..., None], 1.0, out)
+
+
+def velvet_eval(sigma, cos_v, cos_l, cos_nh, cos_hl):
+    """Ashikhmin's velvet f (n.l) (bsdf_ashikhmin_velvet_eval), sigma floored at 0.01 as its setup."""
+    sigma = np.maximum(np.asarray(sigma, np.float64), 0.01)
+    inv = 1.0 / (sigma * sigma)
+    ok = (cos_v > 0.0) & (cos_l > 0.0) & (np.abs(cos_nh) < 1.0 - 1e-5) & (cos_hl > 1e-5)
+    safe_hl = np.where(ok, cos_hl, 1.0)
+    ratio = np.maximum(cos_nh / safe_hl, 1e-5)
+    g = np.minimum(1.0, 2.0 * ratio * np.minimum(cos_v, cos_l))
+    sin2 = np.where(ok, 1.0 - cos_nh * cos_nh, 1.0)
+    d = np.exp(-cos_nh * cos_nh / sin2 * inv) * inv / (np.pi * sin2 * sin2)
+    return np.where(ok, 0.25 * d * g / np.where(ok, cos_v, 1.0), 0.0)
+
+
+def velvet_at(sigma, n, v, l):
+    """velvet_eval of unit vectors (..., 3)."""
+    h = l + v
+    h = h / np.maximum(np.linalg.norm(h, axis=-1, keepdims=True), 1e-30)
+    dot = lambda a, b: np.sum(a * b, axis=-1)  # noqa: E731
+    return velvet_eval(sigma, dot(n, v), dot(n, l), dot(n, h), np.abs(dot(l, h)))
+
+
+def velvet_albedo(sigma, cos_v, points: tuple[int, int] = (16, 8)):
+    """The velvet's directional albedo by glsl/closures.glsl's midpoint rule: ``points`` over
+    t = sqrt(cos theta) and half the azimuth (the GLSL's 16 x 8)."""
+    cos_v = np.maximum(np.asarray(cos_v, np.float64), 1e-4)[..., None, None]
+    v = np.stack(np.broadcast_arrays(np.sqrt(1.0 - cos_v * cos_v), 0.0 * cos_v, cos_v), -1)
+    t = (np.arange(points[0]) + 0.5) / points[0]
+    c = t * t
+    phi = np.pi * (np.arange(points[1]) + 0.5) / points[1]
+    s = np.sqrt(1.0 - c * c)
+    l = np.stack(np.broadcast_arrays(s[:, None] * np.cos(phi)[None], s[:, None] * np.sin(phi)[None],
+                                     c[:, None] + 0.0 * phi[None]), -1)
+    n = np.array([0.0, 0.0, 1.0])
+    f = velvet_at(np.asarray(sigma, np.float64)[..., None, None], n, v, l) * (2.0 * t)[:, None]
+    return f.sum((-2, -1)) * (2.0 * np.pi / (points[0] * points[1]))
+
+
+def toon_shape(size, smooth):
+    """(Size, Smooth) in radians as bsdf_toon_setup_common takes them."""
+    return np.clip(size, 1e-5, 1.0) * 0.5 * np.pi, np.clip(smooth, 0.0, 1.0) * 0.5 * np.pi
+
+
+def toon_intensity(size, smooth, angle):
+    """bsdf_toon_get_intensity (radians)."""
+    ramp = np.where(smooth != 0.0, 1.0 - (angle - size) / np.where(smooth != 0.0, smooth, 1.0), 0.0)
+    return np.where(angle < size, 1.0, np.where((angle < size + smooth) & (smooth != 0.0), ramp, 0.0))
+
+
+def toon_eval(size, smooth, angle):
+    """The toon's f (n.l) at ``angle`` from its axis (n for Diffuse, the view's reflection for
+    Glossy), Size and Smooth in radians: its intensity times the uniform cone's pdf."""
+    cone = np.minimum(size + smooth, 0.5 * np.pi)
+    pdf = 1.0 / (4.0 * np.pi * np.sin(0.5 * cone) ** 2)
+    return np.where(angle < cone, toon_intensity(size, smooth, angle) * pdf, 0.0)
+
+
+def toon_albedo(size, smooth):
+    """The toon's directional albedo (its cone whole above the horizon), closures.glsl's closed form
+    free of cancellation: the inner cap 2 sin^2(size / 2) and the ramp over w = cone - size,
+    sin(size) Re J + cos(size) Im J, J = int_0^w (1 - u / smooth) e^(iu) du."""
+    size = np.minimum(size, 0.5 * np.pi)
+    cone = np.minimum(size + smooth, 0.5 * np.pi)
+    w = cone - size
+    m = np.where(smooth > 0.0, smooth, 1.0)
+    hw = np.sin(0.5 * w)
+    re = np.sin(w) - (w * np.sin(w) - 2.0 * hw * hw) / m
+    im = 2.0 * hw * hw - (np.sin(w) - w * np.cos(w)) / m
+    ramp = np.where((smooth > 0.0) & (w > 0.0), np.sin(size) * re + np.cos(size) * im, 0.0)
+    return (2.0 * np.sin(0.5 * size) ** 2 + ramp) / (2.0 * np.sin(0.5 * cone) ** 2)
+
+
+def D_V_AshikhminShirley(NoV, NoL, NoH, LoH, alpha):
+    """closures.glsl's Ashikhmin-Shirley lobe (Cycles' bsdf_ashikhmin_shirley_eval over n.l, its
+    Fresnel left out): (e + 1) / (8 pi) (n.h)^e / ((l.h) max(n.v, n.l)), e = 2 / alpha^2 - 2; 0 at
+    alpha <= 1e-4."""
+    alpha = np.asarray(alpha, np.float64)
+    e = 2.0 / np.maximum(alpha, 1e-4) ** 2 - 2.0
+    pump = 1.0 / np.maximum(1e-6, np.maximum(LoH, 1e-6) * np.maximum(np.maximum(NoV, NoL), 1e-6))
+    out = (e + 1.0) / (8.0 * np.pi) * np.maximum(NoH, 1e-6) ** e * pump
+    return np.where(alpha <= 1e-4, 0.0, out)
+
+
+def cone_above_horizon(cos_axis, c):
+    """closures.glsl's share of a cone of half-angle ``c`` about an axis at ``cos_axis`` from n that
+    lies above the horizon (two spherical caps' intersection over the cone's solid angle)."""
+    cos_axis = np.clip(np.asarray(cos_axis, np.float64), -1.0, 1.0)
+    c = np.asarray(c, np.float64)
+    g = np.arccos(cos_axis)
+    sin_c, sin_g = np.maximum(np.sin(c), 1e-6), np.maximum(np.sin(g), 1e-6)
+    with np.errstate(invalid="ignore"):
+        omega = 2.0 * (np.pi - np.arccos(np.clip(cos_axis / sin_c, -1.0, 1.0))
+                       - np.cos(c) * np.arccos(np.clip(-cos_axis * np.cos(c) / (sin_g * sin_c), -1.0, 1.0)))
+    # a cone of no width lies wholly on one side (the cases below): its share here is not used
+    share = np.clip(omega / np.maximum(4.0 * np.pi * np.sin(0.5 * c) ** 2, 1e-300), 0.0, 1.0)
+    return np.where(g + c <= 0.5 * np.pi, 1.0, np.where(g - c >= 0.5 * np.pi, 0.0, share))
