@@ -485,6 +485,43 @@ def test_the_calibration_script_end_to_end(tmp_path):
     assert unwritable.returncode == 2 and "cannot write" in unwritable.stderr, unwritable.stderr[-500:]
 
 
+def _on_a_random_sphere(seed: int, make_material, tmp_path):
+    """The material ``make_material()`` makes on the first sphere of random scene ``seed``,
+    rendered with the Principled set, the default terms (Custom) and Auto: (the snapshot, the
+    material, Auto's choice for it, its measured errors {"CUSTOM", "AUTO"} against the Principled
+    set's image, the scene's settings)."""
+    import bpy
+
+    scene, camera, names = auto_scenes.random_scene(seed)
+    mat = make_material()
+    sphere = next(o for o in scene.objects if o.type == "MESH" and o.data.materials[0].name == names[0])
+    sphere.data.materials[0] = mat
+    names[0] = mat.name
+    bpy.context.view_layer.update()
+    snap = extract.snapshot(bpy.context.evaluated_depsgraph_get())
+    props = scene.shading_lab
+    mask = {mat.name: auto_scenes.material_masks(camera, names)[mat.name]}
+    images = {}
+    for term_set in ("PRINCIPLED", "CUSTOM", "AUTO"):  # Custom: the default terms
+        props.term_set = term_set
+        images[term_set] = scenes.render(scene, tmp_path / f"{term_set}.exr")
+    measured = {name: auto_scenes.measured_errors(images[name], images["PRINCIPLED"], mask,
+                                                  props.auto_quantile / 100.0)[mat.name]
+                for name in ("CUSTOM", "AUTO")}
+    return snap, mat, engine.last_term_choices[mat.name], measured, props
+
+
+def _assert_predicted(choice, measured, props) -> None:
+    """The default terms' measured error within a factor 2 of their prediction, Auto's within the
+    bound."""
+    predicted = dict(choice.errors)
+    assert choice.samples > 0 and predicted, choice  # predicted, not passed over
+    ratio = measured["CUSTOM"] / predicted["DEFAULT"]
+    assert 0.5 <= ratio <= 2.0, (f"default terms: measured {measured['CUSTOM']:.2f}, "
+                                 f"predicted {predicted['DEFAULT']:.2f}")
+    assert measured["AUTO"] <= props.auto_error_bound, f"Auto ({choice.name}) measured {measured['AUTO']:.3f}"
+
+
 def test_textured_materials_are_predicted_from_their_texels(tmp_path, monkeypatch):
     """A material whose base colour and roughness come from images is predicted from random
     texels of them, one for every point (the highlight points once had none: the prediction failed
@@ -497,42 +534,26 @@ def test_textured_materials_are_predicted_from_their_texels(tmp_path, monkeypatc
 
     monkeypatch.setattr(auto_terms, "PAYBACK_FRAMES", NEVER_MERGE)
     seed = 11
-    scene, camera, names = auto_scenes.random_scene(seed)
-    sphere = next(o for o in scene.objects if o.type == "MESH" and o.data.materials[0].name == names[0])
-    mat = bpy.data.materials.new("Textured")
-    tree = scenes.node_tree(mat)
-    bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
-    rng = np.random.default_rng(seed)
-    for socket, non_color in (("Base Color", False), ("Roughness", True)):
-        image = bpy.data.images.new(socket, 16, 16, alpha=False)
-        image.pixels.foreach_set(np.c_[rng.random((256, 3)), np.ones(256)].astype(np.float32).ravel())
-        if non_color:
-            image.colorspace_settings.name = "Non-Color"
-        node = tree.nodes.new("ShaderNodeTexImage")
-        node.image = image
-        tree.links.new(node.outputs["Color"], bsdf.inputs[socket])
-    sphere.data.materials[0] = mat
-    names[0] = mat.name
-    bpy.context.view_layer.update()
-    snap = extract.snapshot(bpy.context.evaluated_depsgraph_get())
+
+    def textured():
+        mat = bpy.data.materials.new("Textured")
+        tree = scenes.node_tree(mat)
+        bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+        rng = np.random.default_rng(seed)
+        for socket, non_color in (("Base Color", False), ("Roughness", True)):
+            image = bpy.data.images.new(socket, 16, 16, alpha=False)
+            image.pixels.foreach_set(np.c_[rng.random((256, 3)), np.ones(256)].astype(np.float32).ravel())
+            if non_color:
+                image.colorspace_settings.name = "Non-Color"
+            node = tree.nodes.new("ShaderNodeTexImage")
+            node.image = image
+            tree.links.new(node.outputs["Color"], bsdf.inputs[socket])
+        return mat
+
+    snap, mat, choice, measured, props = _on_a_random_sphere(seed, textured, tmp_path)
     assert set(snap.materials[mat.name].graph.textured) == {"base_color", "roughness"}
-    props = scene.shading_lab
-    mask = {mat.name: auto_scenes.material_masks(camera, names)[mat.name]}
-    images = {}
-    for term_set in ("PRINCIPLED", "CUSTOM", "AUTO"):  # Custom: the default terms
-        props.term_set = term_set
-        images[term_set] = scenes.render(scene, tmp_path / f"{term_set}.exr")
-    choice = engine.last_term_choices[mat.name]
-    measured = {name: auto_scenes.measured_errors(images[name], images["PRINCIPLED"], mask,
-                                                  props.auto_quantile / 100.0)[mat.name]
-                for name in ("CUSTOM", "AUTO")}
-    predicted = dict(choice.errors)
-    print(f"{choice.name}: predicted {predicted}; measured {measured}")
-    assert choice.samples > 0 and predicted, choice  # predicted, not passed over
-    ratio = measured["CUSTOM"] / predicted["DEFAULT"]
-    assert 0.5 <= ratio <= 2.0, (f"default terms: measured {measured['CUSTOM']:.2f}, "
-                                 f"predicted {predicted['DEFAULT']:.2f}")
-    assert measured["AUTO"] <= props.auto_error_bound, f"Auto ({choice.name}) measured {measured['AUTO']:.3f}"
+    print(f"{choice.name}: predicted {dict(choice.errors)}; measured {measured}")
+    _assert_predicted(choice, measured, props)
 
 
 def _procedural_material(name: str):
@@ -571,29 +592,11 @@ def test_procedural_materials_are_predicted_from_their_values(tmp_path, monkeypa
     inputs' socket values: the default terms' measured error within a factor 2 of the prediction
     (by socket values, as before, it is under-predicted 3.6-4.5x), and Auto's choice within the
     bound."""
-    import bpy
-
     monkeypatch.setattr(auto_terms, "PAYBACK_FRAMES", NEVER_MERGE)
-    scene, camera, names = auto_scenes.random_scene(seed)
-    sphere = next(o for o in scene.objects if o.type == "MESH" and o.data.materials[0].name == names[0])
-    mat = _procedural_material("Procedural")
-    sphere.data.materials[0] = mat
-    names[0] = mat.name
-    bpy.context.view_layer.update()
-    snap = extract.snapshot(bpy.context.evaluated_depsgraph_get())
+    snap, mat, choice, measured, props = _on_a_random_sphere(seed, lambda: _procedural_material("Procedural"),
+                                                             tmp_path)
     assert {entry[0] for entry in snap.materials[mat.name].graph.procedural} == \
         {"base_color", "roughness", "metalness"}
-    props = scene.shading_lab
-    mask = {mat.name: auto_scenes.material_masks(camera, names)[mat.name]}
-    images = {}
-    for term_set in ("PRINCIPLED", "CUSTOM", "AUTO"):  # Custom: the default terms
-        props.term_set = term_set
-        images[term_set] = scenes.render(scene, tmp_path / f"{term_set}.exr")
-    choice = engine.last_term_choices[mat.name]
-    measured = {name: auto_scenes.measured_errors(images[name], images["PRINCIPLED"], mask,
-                                                  props.auto_quantile / 100.0)[mat.name]
-                for name in ("CUSTOM", "AUTO")}
-    predicted = dict(choice.errors)
     # the prediction by socket values (the graph not evaluated), for the record
     with monkeypatch.context() as patch:
         patch.setattr(auto_terms.evaluate, "evaluate", lambda *args: None)
@@ -601,11 +604,7 @@ def test_procedural_materials_are_predicted_from_their_values(tmp_path, monkeypa
     by_socket = auto_terms.predict(samples, snap.lights, auto_terms.world_radiance(snap.world), ["DEFAULT"],
                                    float(snap.settings.exposure), props.auto_quantile / 100.0,
                                    snap.settings.world_occlusion)
-    print(f"seed {seed}: {choice.name}: predicted {predicted}; by socket values {by_socket}; "
+    print(f"seed {seed}: {choice.name}: predicted {dict(choice.errors)}; by socket values {by_socket}; "
           f"measured {measured}")
-    assert choice.samples > 0 and predicted, choice
-    ratio = measured["CUSTOM"] / predicted["DEFAULT"]
-    assert 0.5 <= ratio <= 2.0, (f"default terms: measured {measured['CUSTOM']:.2f}, "
-                                 f"predicted {predicted['DEFAULT']:.2f}")
+    _assert_predicted(choice, measured, props)
     assert measured["CUSTOM"] / by_socket["DEFAULT"] > 2.0, by_socket  # (the case tells the two apart)
-    assert measured["AUTO"] <= props.auto_error_bound, f"Auto ({choice.name}) measured {measured['AUTO']:.3f}"
