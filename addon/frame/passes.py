@@ -1117,6 +1117,7 @@ class TransparencyPass(Pass):
 
     def __init__(self):
         self._size: tuple | None = None
+        self.holdout = None  # the layer's Holdout share (a texture), while a peeled Holdout is drawn
 
     def _buffers(self, width: int, height: int, format: str, holdout: bool) -> None:
         if self._size == (width, height, format, holdout):
