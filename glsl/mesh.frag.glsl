@@ -397,9 +397,19 @@ void main()
 #ifdef SL_GRAPH
 #  ifndef SL_PEEL
   /* a Holdout's share of an opaque surface is left transparent (Cycles' holdout: colour and alpha
-   * reduced by its weight, what is behind hidden); a partly transparent one keeps its coverage */
+   * reduced by its weight, what is behind hidden); a partly transparent (peeled) one below */
   alpha = clamp(alpha - closure.holdout, 0.0, 1.0);
 #  endif
 #endif
   frag_color = vec4(write_target(lobes.w > 0.5 ? shade_finish(c) : c), alpha);
+#ifdef SL_PEEL
+  /* a peeled layer keeps its coverage (what is behind stays hidden) and gives its Holdout share
+   * apart, for the composite to take out of the render's alpha (glsl/under.frag.glsl); the share
+   * within the coverage (a Holdout's weight is part of it: guards weights summing over 1) */
+#  ifdef SL_GRAPH
+  frag_holdout = vec4(0.0, 0.0, 0.0, clamp(closure.holdout, 0.0, alpha));
+#  else
+  frag_holdout = vec4(0.0);
+#  endif
+#endif
 }

@@ -30,7 +30,9 @@ float float_fma(float a, float b, float c)
   PRECISE float v = s - p;
   PRECISE float t = (p - (s - v)) + (c - v);
   PRECISE float r = s + (t + e);
-  return r;
+  /* NaN from the split where |a| or |b| >= 2^115 or the product overflows (4097 x, or the halves'
+   * products, infinite): there the plain product and sum, as large as the fused result */
+  return isnan(r) ? p + c : r;
 }
 
 vec3 float_fma(vec3 a, vec3 b, vec3 c)

@@ -6,7 +6,11 @@
  * z, W), the others 0 and never read. fma() marks the products Cycles' CPU kernel (AVX2, built
  * with -ffast-math) fuses with a sum: with them the twin equals Cycles' output bit for bit. A
  * GPU whose fma() rounds twice (Mesa's llvmpipe lowers it to a product and a sum) differs by float
- * rounding (2.3e-6 at most undistorted), measured in tests/test_texture_noise.py. Compiled into a program only where its graph
+ * rounding (2.3e-6 at most undistorted), measured in tests/test_texture_noise.py. node_float.glsl's
+ * float_fma, one rounding from plain operations, in fma()'s place gave Cycles' bits there too (0 in
+ * every case) but cost the Noise Texture 1.9-2.1x its time on llvmpipe (float64 arithmetic: 1.6x,
+ * and Metal has none); a GPU whose fma() is its fused instruction gives those bits at no cost. So
+ * fma() stays. Compiled into a program only where its graph
  * uses a Noise or Wave Texture (codegen.OPTIONAL_LIBRARY); the lattice hashes are node_hash.glsl's. */
 
 /* the Noise Texture's types (Cycles' NodeNoiseType, our order) */

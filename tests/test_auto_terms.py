@@ -485,6 +485,43 @@ def test_the_calibration_script_end_to_end(tmp_path):
     assert unwritable.returncode == 2 and "cannot write" in unwritable.stderr, unwritable.stderr[-500:]
 
 
+def _on_a_random_sphere(seed: int, make_material, tmp_path):
+    """The material ``make_material()`` makes on the first sphere of random scene ``seed``,
+    rendered with the Principled set, the default terms (Custom) and Auto: (the snapshot, the
+    material, Auto's choice for it, its measured errors {"CUSTOM", "AUTO"} against the Principled
+    set's image, the scene's settings)."""
+    import bpy
+
+    scene, camera, names = auto_scenes.random_scene(seed)
+    mat = make_material()
+    sphere = next(o for o in scene.objects if o.type == "MESH" and o.data.materials[0].name == names[0])
+    sphere.data.materials[0] = mat
+    names[0] = mat.name
+    bpy.context.view_layer.update()
+    snap = extract.snapshot(bpy.context.evaluated_depsgraph_get())
+    props = scene.shading_lab
+    mask = {mat.name: auto_scenes.material_masks(camera, names)[mat.name]}
+    images = {}
+    for term_set in ("PRINCIPLED", "CUSTOM", "AUTO"):  # Custom: the default terms
+        props.term_set = term_set
+        images[term_set] = scenes.render(scene, tmp_path / f"{term_set}.exr")
+    measured = {name: auto_scenes.measured_errors(images[name], images["PRINCIPLED"], mask,
+                                                  props.auto_quantile / 100.0)[mat.name]
+                for name in ("CUSTOM", "AUTO")}
+    return snap, mat, engine.last_term_choices[mat.name], measured, props
+
+
+def _assert_predicted(choice, measured, props) -> None:
+    """The default terms' measured error within a factor 2 of their prediction, Auto's within the
+    bound."""
+    predicted = dict(choice.errors)
+    assert choice.samples > 0 and predicted, choice  # predicted, not passed over
+    ratio = measured["CUSTOM"] / predicted["DEFAULT"]
+    assert 0.5 <= ratio <= 2.0, (f"default terms: measured {measured['CUSTOM']:.2f}, "
+                                 f"predicted {predicted['DEFAULT']:.2f}")
+    assert measured["AUTO"] <= props.auto_error_bound, f"Auto ({choice.name}) measured {measured['AUTO']:.3f}"
+
+
 def test_textured_materials_are_predicted_from_their_texels(tmp_path, monkeypatch):
     """A material whose base colour and roughness come from images is predicted from random
     texels of them, one for every point (the highlight points once had none: the prediction failed
@@ -497,39 +534,77 @@ def test_textured_materials_are_predicted_from_their_texels(tmp_path, monkeypatc
 
     monkeypatch.setattr(auto_terms, "PAYBACK_FRAMES", NEVER_MERGE)
     seed = 11
-    scene, camera, names = auto_scenes.random_scene(seed)
-    sphere = next(o for o in scene.objects if o.type == "MESH" and o.data.materials[0].name == names[0])
-    mat = bpy.data.materials.new("Textured")
+
+    def textured():
+        mat = bpy.data.materials.new("Textured")
+        tree = scenes.node_tree(mat)
+        bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+        rng = np.random.default_rng(seed)
+        for socket, non_color in (("Base Color", False), ("Roughness", True)):
+            image = bpy.data.images.new(socket, 16, 16, alpha=False)
+            image.pixels.foreach_set(np.c_[rng.random((256, 3)), np.ones(256)].astype(np.float32).ravel())
+            if non_color:
+                image.colorspace_settings.name = "Non-Color"
+            node = tree.nodes.new("ShaderNodeTexImage")
+            node.image = image
+            tree.links.new(node.outputs["Color"], bsdf.inputs[socket])
+        return mat
+
+    snap, mat, choice, measured, props = _on_a_random_sphere(seed, textured, tmp_path)
+    assert set(snap.materials[mat.name].graph.textured) == {"base_color", "roughness"}
+    print(f"{choice.name}: predicted {dict(choice.errors)}; measured {measured}")
+    _assert_predicted(choice, measured, props)
+
+
+def _procedural_material(name: str):
+    """Base Color from a Voronoi Texture's cell colours, Roughness from a Noise Texture mapped to
+    [0.6, 1] (rough: where single scattering loses most), Metallic from a Checker Texture (half
+    the surface a metal), at Generated; the sockets' own values (0.8 grey, 0.5, 0) say otherwise."""
+    import bpy
+
+    mat = bpy.data.materials.new(name)
     tree = scenes.node_tree(mat)
     bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
-    rng = np.random.default_rng(seed)
-    for socket, non_color in (("Base Color", False), ("Roughness", True)):
-        image = bpy.data.images.new(socket, 16, 16, alpha=False)
-        image.pixels.foreach_set(np.c_[rng.random((256, 3)), np.ones(256)].astype(np.float32).ravel())
-        if non_color:
-            image.colorspace_settings.name = "Non-Color"
-        node = tree.nodes.new("ShaderNodeTexImage")
-        node.image = image
-        tree.links.new(node.outputs["Color"], bsdf.inputs[socket])
-    sphere.data.materials[0] = mat
-    names[0] = mat.name
-    bpy.context.view_layer.update()
-    snap = extract.snapshot(bpy.context.evaluated_depsgraph_get())
-    assert set(snap.materials[mat.name].graph.textured) == {"base_color", "roughness"}
-    props = scene.shading_lab
-    mask = {mat.name: auto_scenes.material_masks(camera, names)[mat.name]}
-    images = {}
-    for term_set in ("PRINCIPLED", "CUSTOM", "AUTO"):  # Custom: the default terms
-        props.term_set = term_set
-        images[term_set] = scenes.render(scene, tmp_path / f"{term_set}.exr")
-    choice = engine.last_term_choices[mat.name]
-    measured = {name: auto_scenes.measured_errors(images[name], images["PRINCIPLED"], mask,
-                                                  props.auto_quantile / 100.0)[mat.name]
-                for name in ("CUSTOM", "AUTO")}
-    predicted = dict(choice.errors)
-    print(f"{choice.name}: predicted {predicted}; measured {measured}")
-    assert choice.samples > 0 and predicted, choice  # predicted, not passed over
-    ratio = measured["CUSTOM"] / predicted["DEFAULT"]
-    assert 0.5 <= ratio <= 2.0, (f"default terms: measured {measured['CUSTOM']:.2f}, "
-                                 f"predicted {predicted['DEFAULT']:.2f}")
-    assert measured["AUTO"] <= props.auto_error_bound, f"Auto ({choice.name}) measured {measured['AUTO']:.3f}"
+    cells = tree.nodes.new("ShaderNodeTexVoronoi")
+    cells.inputs["Scale"].default_value = 3.0
+    tree.links.new(cells.outputs["Color"], bsdf.inputs["Base Color"])
+    noise = tree.nodes.new("ShaderNodeTexNoise")
+    ranged = tree.nodes.new("ShaderNodeMapRange")
+    ranged.inputs["To Min"].default_value, ranged.inputs["To Max"].default_value = 0.6, 1.0
+    tree.links.new(noise.outputs["Fac"], ranged.inputs["Value"])
+    tree.links.new(ranged.outputs["Result"], bsdf.inputs["Roughness"])
+    checker = tree.nodes.new("ShaderNodeTexChecker")
+    checker.inputs["Scale"].default_value = 2.0
+    tree.links.new(checker.outputs["Fac"], bsdf.inputs["Metallic"])
+    return mat
+
+
+#: Random scenes the procedural material is tried in. Its default terms' error (Delta E_ITP, 99th
+#: percentile), measured 2026-12-07: seed 11 predicted 35.1, measured 33.3 (by socket values 7.3);
+#: seed 23 predicted 32.4, measured 29.6 (by socket values 8.2).
+PROCEDURAL_SEEDS = (11, 23)
+
+
+@pytest.mark.parametrize("seed", PROCEDURAL_SEEDS)
+def test_procedural_materials_are_predicted_from_their_values(tmp_path, monkeypatch, seed):
+    """A material whose base colour, roughness and metalness come from procedural textures is
+    predicted from the values its graph gives at each point (``materials.evaluate``), not from its
+    inputs' socket values: the default terms' measured error within a factor 2 of the prediction
+    (by socket values, as before, it is under-predicted 3.6-4.5x), and Auto's choice within the
+    bound."""
+    monkeypatch.setattr(auto_terms, "PAYBACK_FRAMES", NEVER_MERGE)
+    snap, mat, choice, measured, props = _on_a_random_sphere(seed, lambda: _procedural_material("Procedural"),
+                                                             tmp_path)
+    assert {entry[0] for entry in snap.materials[mat.name].graph.procedural} == \
+        {"base_color", "roughness", "metalness"}
+    # the prediction by socket values (the graph not evaluated), for the record
+    with monkeypatch.context() as patch:
+        patch.setattr(auto_terms.evaluate, "evaluate", lambda *args: None)
+        samples = auto_terms.material_samples(snap, mat.name)
+    by_socket = auto_terms.predict(samples, snap.lights, auto_terms.world_radiance(snap.world), ["DEFAULT"],
+                                   float(snap.settings.exposure), props.auto_quantile / 100.0,
+                                   snap.settings.world_occlusion)
+    print(f"seed {seed}: {choice.name}: predicted {dict(choice.errors)}; by socket values {by_socket}; "
+          f"measured {measured}")
+    _assert_predicted(choice, measured, props)
+    assert measured["CUSTOM"] / by_socket["DEFAULT"] > 2.0, by_socket  # (the case tells the two apart)

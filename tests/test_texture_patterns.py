@@ -318,6 +318,38 @@ def test_pattern_library_compiled_where_called():
     assert needed == codegen.LIBRARY + ("node_float.glsl", "node_tex_brick.glsl")
 
 
+def test_float_fma_rounds_once_and_stays_finite():
+    """node_float.glsl's float_fma against a fused multiply-add (the twin's noise.fma: the product
+    exact in float64, one rounding to float32): equal at random operands whose sum cancels to
+    various depths (measured: every one of 4,096); where the split overflows (|a| >= 2^115) or the
+    product does, the plain product and sum, finite where the fused result is (before: NaN)."""
+    from glsl_harness import evaluate
+
+    from addon.reference import noise
+
+    rng = np.random.default_rng(52)
+    a = (rng.uniform(1, 2, 4096) * 2.0 ** rng.integers(-30, 30, 4096) * rng.choice([-1, 1], 4096))
+    b = (rng.uniform(1, 2, 4096) * 2.0 ** rng.integers(-30, 30, 4096)).astype(np.float32)
+    a = a.astype(np.float32)
+    product = a.astype(np.float64) * b
+    c = (-product * (1.0 + rng.choice([0.0, 1e-7, 1e-4, 0.5, -3.0], 4096))).astype(np.float32)
+    extremes = np.array([[1e35, 1e-35, 0.5], [3e38, 1.0, 0.0], [-3e38, 0.5, 1.0], [1e20, 1e20, 0.0],
+                         [np.inf, 1.0, 0.0], [2.0, 3.0, 1.0]], np.float32)
+    rows = np.concatenate([np.stack([a, b, c], 1), extremes])
+    rows = np.concatenate([rows, np.zeros((len(rows), 1), np.float32)], 1)
+    ours = evaluate("result = vec4(float_fma(a.x, a.y, a.z));", {"a": rows},
+                    extra=codegen.library("float_fma();"),
+                    source="vec4 graph_table(int i) { return vec4(0.0); }")[:, 0]
+    with np.errstate(over="ignore"):  # (1e20 x 1e20 is infinite in float32, as fused)
+        fused = noise.fma(rows[:, 0], rows[:, 1], rows[:, 2])
+    random, tail = slice(0, 4096), slice(4096, None)
+    differ = int((ours[random] != fused[random]).sum())
+    assert differ == 0, f"{differ} of 4096 differ from one rounding (measured 0)"
+    assert np.isfinite(ours[tail]).tolist() == np.isfinite(fused[tail]).tolist(), (ours[tail], fused[tail])
+    finite = np.isfinite(fused[tail])
+    assert np.allclose(ours[tail][finite], fused[tail][finite], rtol=2.0 ** -22, atol=0.0), ours[tail]
+
+
 def test_settings_are_constants():
     """A pattern's numbers (Brick's offset, squash and frequencies, Magic's Depth, Radial Tiling's
     Sides) are constants of the compiled graph: editing them keeps the source (one program); a

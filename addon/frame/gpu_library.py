@@ -350,6 +350,8 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
                 3: "thin_film_table" if features.uses_thin_film_table else None}
     if features.peel:
         samplers.update({6: "opaque_depth", 7: "peel_depth"})
+        # the layer's Holdout share (0 but for a graph's Holdout), where the pass keeps one
+        info.fragment_out(1, "VEC4", "frag_holdout")
     if "TRANSMISSION" in features.lobes:  # what is behind the glass (passes.RefractionPass); a glass is
         # never shaded deferred (Features), so it takes the G-buffer's units
         samplers.update({17: "refraction_behind", 18: "refraction_back", 19: "refraction_back_depth"})
@@ -717,9 +719,19 @@ def group_depth_program() -> gpu.types.GPUShader:
     return LIBRARY.program(("group depth",), "deferred groups' depth", programs.group_depth_source(), declare)
 
 
-def under_program() -> gpu.types.GPUShader:
-    return LIBRARY.program(("under",), "transparency composite", programs.under_source(),
-                           _declare_full_screen("accumulated", "peeled"))
+def under_program(holdout: bool = False) -> gpu.types.GPUShader:
+    """The transparency composite's step (glsl/under.frag.glsl); ``holdout``: the layers' Holdout
+    share too, read and written as a second colour."""
+    variant = "UNDER_HOLDOUT" if holdout else "UNDER"
+    samplers = ("accumulated", "peeled") + (("accumulated_holdout", "peeled_holdout") if holdout else ())
+
+    def declare(info):
+        _declare_full_screen(*samplers)(info)
+        if holdout:
+            info.fragment_out(1, "VEC4", "frag_holdout")
+
+    return LIBRARY.program(("under", variant), "transparency composite", programs.under_source(variant),
+                           declare)
 
 
 # --- the tables -------------------------------------------------------------------------------

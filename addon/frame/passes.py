@@ -1223,26 +1223,37 @@ class TransparencyPass(Pass):
     Owns what peeling needs, the same for any number of layers: the layer being peeled (colour,
     and two depths taking turns as the one written and the previous layer's, read), two
     accumulators taking turns, and a small occupancy map that tells whether a layer holds
-    anything. Dropped when a frame has nothing transparent."""
+    anything. Dropped when a frame has nothing transparent.
+
+    Where a peeled material holds a Holdout (``Features.holdout``), the layer and the accumulators
+    have a second colour, the Holdout's share of the coverage (glsl/under.frag.glsl), and the share
+    accumulated is subtracted from the alpha of the result (Cycles' alpha: a Holdout of 0.4 mixed
+    with a Transparent BSDF over the world leaves 0.6 with the film opaque, 0 with it transparent);
+    those colours exist only while such a material is drawn."""
 
     draws_geometry = True
 
     def __init__(self):
         self._size: tuple | None = None
+        self.holdout = None  # the layer's Holdout share (a texture), while a peeled Holdout is drawn
 
-    def _buffers(self, width: int, height: int, format: str) -> None:
-        if self._size == (width, height, format):
+    def _buffers(self, width: int, height: int, format: str, holdout: bool) -> None:
+        if self._size == (width, height, format, holdout):
             return
         self.colour = new_texture(width, height, format)
+        # the layer's Holdout share (its alpha), where a peeled material has a Holdout
+        self.holdout = new_texture(width, height, format) if holdout else None
         self.depths = [new_texture(width, height, "DEPTH_COMPONENT32F") for _ in range(2)]
+        colours = (self.colour, self.holdout) if holdout else self.colour
         # layer i writes depth (i + 1) % 2 and reads depth i % 2, the previous layer's
-        self.layer_fbs = [gpu.types.GPUFrameBuffer(color_slots=self.colour, depth_slot=depth)
+        self.layer_fbs = [gpu.types.GPUFrameBuffer(color_slots=colours, depth_slot=depth)
                           for depth in (self.depths[1], self.depths[0])]
         self.first = gpu.types.GPUFrameBuffer(depth_slot=self.depths[0])  # cleared to 0 for layer 0
-        self.accumulators = [Target(width, height, format, depth=False) for _ in range(2)]
+        self.accumulators = [Target(width, height, format, depth=False, colors=2 if holdout else 1)
+                             for _ in range(2)]
         block = programs.OCCUPANCY_BLOCK
         self.occupancy = Target(-(-width // block), -(-height // block), depth=False)
-        self._size = (width, height, format)
+        self._size = (width, height, format, holdout)
 
     def _any_fragment(self, frame: Frame, depth: gpu.types.GPUTexture) -> bool:
         """Whether a peeled layer's depth holds any fragment: reduced on the GPU to one texel per
@@ -1258,14 +1269,15 @@ class TransparencyPass(Pass):
             self.free()  # a viewport keeps no peeling buffers once nothing is transparent
             return True
         target = frame.outputs[view.output("scene")]
-        self._buffers(target.width, target.height, target.format)
+        holdout = any(features.holdout for features, _ in groups)
+        self._buffers(target.width, target.height, target.format, holdout)
         with self.first.bind():
             self.first.clear(depth=0.0)
         current = 0
         with self.accumulators[current].bind():
             self.accumulators[current].framebuffer.clear(color=(0.0, 0.0, 0.0, 0.0))
         used = 0
-        under = gpu_library.under_program()
+        under = gpu_library.under_program(holdout)
         for i in range(max(int(frame.snapshot.settings.transparency_layers), 1)):
             previous = self.depths[i % 2]  # written by the last pass (cleared to 0 before the first)
             if used and not self._any_fragment(frame, previous):
@@ -1279,6 +1291,9 @@ class TransparencyPass(Pass):
             def bind_under(shader, accumulated=accumulated):
                 gpu_library.bind_sampler(shader, "accumulated", accumulated.texture_color)
                 gpu_library.bind_sampler(shader, "peeled", self.colour)
+                if holdout:
+                    gpu_library.bind_sampler(shader, "accumulated_holdout", accumulated.more_colors[0])
+                    gpu_library.bind_sampler(shader, "peeled_holdout", self.holdout)
 
             frame.draw_full_screen(under, bind_under, self.accumulators[current])
             used += 1
@@ -1291,6 +1306,10 @@ class TransparencyPass(Pass):
             copy.bind()
             gpu_library.bind_sampler(copy, "hdr_image", self.accumulators[current].texture_color)
             frame.full_screen.draw(copy)
+            if holdout:  # and the Holdout's share out of the alpha: (0, 0, 0, H) subtracted
+                gpu.state.blend_set("SUBTRACT")
+                gpu_library.bind_sampler(copy, "hdr_image", self.accumulators[current].more_colors[0])
+                frame.full_screen.draw(copy)
             gpu.state.blend_set("NONE")
         return True
 
@@ -1310,15 +1329,15 @@ class TransparencyPass(Pass):
         if self._size is not None:
             for target in (*self.accumulators, self.occupancy):
                 target.free()
-            self.colour = self.depths = self.layer_fbs = self.first = None
+            self.colour = self.holdout = self.depths = self.layer_fbs = self.first = None
             self.accumulators = self.occupancy = None
             self._size = None
 
     def textures(self) -> list:
         if self._size is None:
             return []
-        return [self.colour, *self.depths] + [t for target in (*self.accumulators, self.occupancy)
-                                              for t in target.owned()]
+        own = [self.colour, *self.depths] + ([self.holdout] if self.holdout is not None else [])
+        return own + [t for target in (*self.accumulators, self.occupancy) for t in target.owned()]
 
 
 class ResolvePass(TargetPass):

@@ -23,7 +23,7 @@ import numpy as np
 
 from ..scene.nodes import MATERIAL_OUTPUT, Graph
 from ..scene.snapshot import CLOSURE_LOBES, GLOSSY_LOBE, LOBES, lobes_of
-from . import bake, codegen
+from . import bake, codegen, evaluate
 from .graph import Const, FlatGraph, flatten
 
 #: The function every compiled material defines.
@@ -100,6 +100,10 @@ class MaterialGraph:
     read: tuple | None = None
     #: the Principled BSDF's lobes beyond its base its closures can draw (``snapshot.LOBES``)
     lobes: frozenset[str] = frozenset()
+    #: the Principled BSDF's inputs a procedural texture gives (``_procedural``), for the Auto term
+    #: set's prediction, which evaluates them at its points (``evaluate``): (field, the nodes
+    #: they read, the input's source) each
+    procedural: tuple = ()
 
     def _identity(self) -> tuple:
         constants = np.asarray(self.constants, np.float32).tobytes()
@@ -252,10 +256,11 @@ def _compiled(flat: FlatGraph, targets: dict, function: str, whole: FlatGraph,
     drawn_baked = set(compiled.baked) | (set(full.nodes) - set(flat.nodes))
     baked_names = tuple(n for n in full.nodes if n in drawn_baked and full.nodes[n].kind not in
                         ("Convert", *codegen.SINKS))
+    textured = _textured(flat)
     return MaterialGraph(program, compiled.constants, compiled.images, compiled.attributes, compiled.missing,
-                         nodes, _transparent(flat), _unread(flat), _textured(flat),
+                         nodes, _transparent(flat), _unread(flat), textured,
                          compiled.notes, compiled.uniform_attributes, bakes, baked_names,
-                         lobes=_lobes(flat))
+                         lobes=_lobes(flat), procedural=_procedural(flat, set(textured), missing))
 
 
 def _lobes(flat: FlatGraph) -> frozenset[str]:
@@ -431,6 +436,27 @@ def _textured(flat: FlatGraph) -> dict:
         if node is not None and node.kind == "ShaderNodeTexImage" and node.props.get("image"):
             out[field] = (node.props["image"], channel)
     return out
+
+
+def _procedural(flat: FlatGraph, textured: set, missing: set) -> tuple:
+    """(MaterialParams field, the flat nodes it reads, its source) of the one Principled BSDF's
+    Base Color, Metallic and Roughness that ``evaluate`` can compute at points and a procedural
+    texture varies: not the ``textured`` fields (an image gives them), nor those reading a node of
+    ``missing`` (not compiled: the program draws its socket's value)."""
+    principled = [n for n in flat.nodes.values() if n.kind == "ShaderNodeBsdfPrincipled"]
+    if len(principled) != 1:
+        return ()
+    out = []
+    for socket, field in TEXTURED_INPUTS.items():
+        spec = principled[0].inputs.get(socket)
+        if spec is None or isinstance(spec.source, Const) or field in textured:
+            continue
+        if evaluate.evaluable(flat, spec.source):
+            names = evaluate.upstream(flat, spec.source)
+            if not missing & set(names):
+                sub = FlatGraph(nodes={n: flat.nodes[n] for n in names}, luma=flat.luma, version=flat.version)
+                out.append((field, sub, spec.source))
+    return tuple(out)
 
 
 #: The Principled BSDF's inputs of each lobe (``snapshot.LOBES``).

@@ -3,7 +3,8 @@ against the Principled set stays within the artist's bound.
 
 The prediction looks at what each material really shows: points on its surfaces, drawn where they
 cover pixels (area x n.v / d^2, inside the view), with their normals, the view and the scene's
-lights, and its textures' texel values. At those points the numpy twin (``shading.py``, itself
+lights, its textures' texel values and what its procedural textures give there (the graph's
+nodes evaluated in numpy, ``materials.evaluate``). At those points the numpy twin (``shading.py``, itself
 checked against the GLSL, Mitsuba and Cycles) shades every candidate term set and the Principled
 set; the error is Delta E_ITP (ITU-R BT.2124) between the two, on the radiance as a display of
 100 cd/m^2 white and 0.1 cd/m^2 black shows it after the exposure, and its ``quantile`` over the
@@ -38,6 +39,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..materials import evaluate
 from ..materials.convert import LUMA
 from ..reference import environment, shading
 from ..reference.brdf import half_vector
@@ -391,11 +393,14 @@ def material_users(snapshot: Snapshot) -> dict[str, list]:
     return users
 
 
-def _triangles(snapshot: Snapshot, key: str, items, rng, per_item: int = 20000):
+def _triangles(snapshot: Snapshot, key: str, items, rng, per_item: int = 20000, coordinates: bool = False):
     """(corners (T, 3, 3) world positions, corner normals (T, 3, 3), weight per triangle) of the
     triangles drawn with material ``key`` by ``items`` (``material_users``'); a mesh with more
-    than ``per_item`` of them contributes a uniform random subset, weighted up."""
+    than ``per_item`` of them contributes a uniform random subset, weighted up. ``coordinates``:
+    and a fourth, the corners' coordinates a graph reads ({"generated", "object", "uv"}: (T, 3, 3)
+    each: the object's texture space, object space, the active UV map or 0)."""
     corners, normals, weights = [], [], []
+    coords = {"generated": [], "object": [], "uv": []}
     for item in items:
         geometry = snapshot.geometries.get(item.geometry)
         if geometry is None:
@@ -415,16 +420,28 @@ def _triangles(snapshot: Snapshot, key: str, items, rng, per_item: int = 20000):
             nm = np.asarray(item.normal_matrix, np.float64)[:3, :3]
             nrm = geometry.normals[rows].astype(np.float64) @ nm.T
             pos, nrm = pos.reshape(-1, 3, 3), nrm.reshape(-1, 3, 3)
+            by_place = slice(None)
             if scale == 1.0:  # all of them: sorted by centroid
                 centroid = pos.mean(axis=1)
                 by_place = np.lexsort(centroid.T[::-1])
                 pos, nrm = pos[by_place], nrm[by_place]
+            if coordinates:
+                local = geometry.positions[rows].astype(np.float64).reshape(-1, 3, 3)[by_place]
+                location, size = (np.asarray(v, np.float64) for v in item.texspace)
+                # glsl/graph_surface.glsl's graph_generated (a zero size: guarded by 1, as no texture space)
+                coords["generated"].append((local - location) / np.where(size != 0.0, size, 1.0) * 0.5 + 0.5)
+                coords["object"].append(local)
+                uv = np.zeros((len(rows), 3))
+                if geometry.uvs is not None:
+                    uv[:, :2] = geometry.uvs[rows]
+                coords["uv"].append(uv.reshape(-1, 3, 3)[by_place])
             corners.append(pos)
             normals.append(nrm)
             weights.append(np.full(len(tri), scale))
     if not corners:
         return None
-    return np.concatenate(corners), np.concatenate(normals), np.concatenate(weights)
+    found = np.concatenate(corners), np.concatenate(normals), np.concatenate(weights)
+    return found + ({k: np.concatenate(v) for k, v in coords.items()},) if coordinates else found
 
 
 def _texels(image: ImageData, count: int, rng) -> np.ndarray:
@@ -441,13 +458,18 @@ def material_samples(snapshot: Snapshot, key: str, count: int = SAMPLES, camera=
     """Points where material ``key`` covers pixels (None: it covers none): area-sampled on its
     triangles, then resampled by how many pixels each covers (n.v, and 1 / d^2 in perspective),
     inside the view (``camera``'s, else the snapshot's); textured inputs take random texels of
-    their images. ``users``: ``material_users(snapshot)``, when the caller has it."""
+    their images, inputs a procedural texture gives its value at each point (the compiled graph's
+    nodes in numpy: ``materials.evaluate``). ``users``: ``material_users(snapshot)``, when the
+    caller has it."""
     rng = _rng(key)
     users = material_users(snapshot) if users is None else users
-    found = _triangles(snapshot, key, users.get(key, ()), rng)
+    material = snapshot.materials[key]
+    procedural = [entry for entry in (material.graph.procedural if material.graph is not None else ())
+                  if entry[0] not in material.graph_keep]
+    found = _triangles(snapshot, key, users.get(key, ()), rng, coordinates=bool(procedural))
     if found is None:
         return None
-    corners, normals, tri_weight = found
+    corners, normals, tri_weight = found[:3]
     e1, e2 = corners[:, 1] - corners[:, 0], corners[:, 2] - corners[:, 0]
     area = 0.5 * np.linalg.norm(np.cross(e1, e2), axis=-1) * tri_weight
     if not np.any(area > 0.0):
@@ -485,7 +507,6 @@ def material_samples(snapshot: Snapshot, key: str, count: int = SAMPLES, camera=
     pick = rng.choice(pool, count, p=weight / weight.sum())
     highlights = _highlight_points(snapshot, p, n, v, weight, int(HIGHLIGHT_SHARE * count))
     pick = np.concatenate([pick, highlights])
-    material = snapshot.materials[key]
     changes = {}
     textured = material.graph.textured if material.graph is not None else {}
     for field, (image_key, channel) in sorted(textured.items()):
@@ -500,6 +521,16 @@ def material_samples(snapshot: Snapshot, key: str, count: int = SAMPLES, camera=
         else:
             values = texels[:, channel]
         changes[field] = np.clip(values, 0.0, None if field == "base_color" else 1.0)
+    if procedural:  # the procedurals' values where the points are (the compiled graph's, in numpy)
+        at = {k: np.einsum("ij,ijk->ik", bary[pick], corners_of[tri[pick]]).astype(np.float32)
+              for k, corners_of in found[3].items()}
+        points = evaluate.Points(at["generated"], at["object"], at["uv"])
+        for field, flat, source in procedural:
+            values = evaluate.evaluate(flat, source, points)
+            if values is not None:
+                values = values[:, :3] if field == "base_color" else values
+                changes[field] = np.clip(np.nan_to_num(values.astype(np.float64)), 0.0,
+                                         None if field == "base_color" else 1.0)
     if changes:
         material = replace(material, **changes)
     return Samples(p[pick], n[pick], v[pick], material, share)
@@ -729,7 +760,7 @@ def _prediction_key(snapshot: Snapshot, key: str, items, camera, world: bytes | 
                    sorted(material.graph.textured.items() if material.graph is not None else ()))
     geometry = tuple(sorted((item.geometry.rsplit(":", 1)[0],
                              _geometry_fingerprint(snapshot.geometries.get(item.geometry)),
-                             np.asarray(item.matrix, np.float32).tobytes())
+                             np.asarray(item.matrix, np.float32).tobytes(), tuple(map(tuple, item.texspace)))
                             for item in items))
     view = (np.asarray(camera.view).tobytes(), np.asarray(camera.projection).tobytes(), camera.is_perspective)
     return (key, replace(material, terms=None), images, geometry, view, tuple(snapshot.lights),

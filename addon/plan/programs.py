@@ -296,6 +296,13 @@ class Features:
         )
 
     @property
+    def holdout(self) -> bool:
+        """A node graph holding a Holdout (codegen's closure_holdout): its surface cuts the render's
+        alpha by the Holdout's weight; peeled, its layers carry that share apart (``SL_PEEL``'s
+        second output, composited by ``under_source(holdout=True)``)."""
+        return self.graph is not None and "closure_holdout(" in self.graph.source
+
+    @property
     def uses_ltc(self) -> bool:
         """The program shades area and sphere lights' specular lobe by linearly transformed
         cosines (glsl/ltc.glsl): it samples ``ltc_table``, and ``ms_table`` for the lobe's
@@ -729,10 +736,15 @@ def refraction_copy_source(stage: str) -> ProgramSource:
     return _full_screen_source("refraction_copy.frag.glsl", defines=(("SL_REFRACTION_" + stage, "1"),))
 
 
-@lru_cache(maxsize=1)
-def under_source() -> ProgramSource:
+#: The transparency composite's programs (glsl/under.frag.glsl): the layers' radiance and coverage
+#: ("UNDER"), also their Holdout share ("UNDER_HOLDOUT").
+UNDER_VARIANTS = {"UNDER": (), "UNDER_HOLDOUT": (("SL_HOLDOUT", "1"),)}
+
+
+@lru_cache(maxsize=None)
+def under_source(variant: str = "UNDER") -> ProgramSource:
     return ProgramSource(typedefs="", vertex=read_glsl("post.vert.glsl"),
-                         fragment=read_glsl("under.frag.glsl"), defines=())
+                         fragment=read_glsl("under.frag.glsl"), defines=UNDER_VARIANTS[variant])
 
 
 # --- uniform-buffer packing (std140, vec4/mat4 members only; matrices column-major) ---------
