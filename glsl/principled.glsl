@@ -196,6 +196,9 @@ Surface coat_surface(Surface s)
 #  ifdef SL_ANISOTROPY
   c.aniso = anisotropic_none(c.n, c.alpha); /* Cycles' coat is isotropic */
 #  endif
+#  ifdef SL_TRANSMISSION
+  c.transmission.reflection_tint = vec3(1.0); /* a Glass BSDF's Color tints its own lobe, not the coat */
+#  endif
   return c;
 }
 #endif

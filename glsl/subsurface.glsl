@@ -75,6 +75,11 @@ float subsurface_curvature(vec3 n, vec3 p)
 vec3 subsurface_direct(Surface s, vec3 l)
 {
   vec3 color = s.base_color * ((1.0 - s.metalness) * saturate(1.0 - s.layers.layer) * s.subsurface * INV_PI);
+#  ifdef SL_TRANSMISSION
+  /* under what the glass's share leaves, as the diffuse (Cycles' svm_node_closure_bsdf weighs its
+   * subsurface by 1 - Transmission Weight, kernel/svm/closure.h) */
+  color *= 1.0 - s.transmission.share;
+#  endif
   return color * subsurface_ramp(dot(s.n, l), s.subsurface_radius, s.curvature);
 }
 #endif

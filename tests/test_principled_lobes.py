@@ -27,7 +27,7 @@ from test_material_render import _against_cycles, _mix_colors, _scene, _tree, _u
 from test_twin import _compare as _twin_compare
 
 from addon.plan import programs
-from addon.reference import shading
+from addon.reference import shading, subsurface, transmission
 from addon.scene import presets as P
 from addon.scene import snapshot as S
 
@@ -349,13 +349,50 @@ def test_gpu_matches_twin(lobe, sizes, tmp_path):
 
 @dataclass(frozen=True)
 class Lobe:
-    """What the checks over every lobe need of one lobe of ``snapshot.LOBES`` (MaterialParams
-    fields): ``furnace``, its inputs in the white furnace with every lobe on (at their brightest);
-    ``extremes``, named cases of its inputs at their extremes for the stability sweep."""
+    """What the checks over every lobe need of one lobe of ``snapshot.LOBES``: ``furnace``, its inputs
+    in the white furnaces with every lobe on (at their brightest: MaterialParams fields, or
+    ``GRAPH_INPUTS``' keys where a node graph alone has the lobe); ``extremes``, named cases of its
+    inputs at their extremes for the stability sweep (MaterialParams fields, or ``ROW_INPUTS``' keys:
+    MaterialData rows set directly); ``float32``, the cases checked finite and non-negative only
+    (where float32 cannot follow the float64 twin: the case's lobe says why); ``elsewhere``, a
+    lobe whose extremes its own test file sweeps: (module, test, its dict of extremes), held to
+    ``inputs``' ends there; ``inputs``, the ranges of a lobe that is not in
+    presets.PRINCIPLED_INPUTS as MaterialParams fields."""
 
     furnace: dict
-    extremes: dict
+    extremes: dict = dataclasses.field(default_factory=dict)
+    float32: tuple = ()
+    elsewhere: tuple = ()
+    inputs: dict = dataclasses.field(default_factory=dict)
 
+
+#: The film at its extremes (thickness 0, at the cutoff, a hair above it, huge; film IOR 1 (air),
+#: 1e-5 (Cycles' floor: total reflection into the film), very high; over a coat)
+FILM_EXTREMES = {
+    "film-thickness-0": dict(thin_film_thickness=0.0, thin_film_ior=1.33),
+    "film-thickness-cutoff": dict(thin_film_thickness=0.1, thin_film_ior=2.0),
+    "film-thickness-tiny": dict(thin_film_thickness=0.2, thin_film_ior=2.0),
+    "film-thickness-huge": dict(thin_film_thickness=1e9, thin_film_ior=1.33),
+    "film-ior-1": dict(thin_film_thickness=300.0, thin_film_ior=1.0),
+    "film-ior-floor": dict(thin_film_thickness=300.0, thin_film_ior=1e-5),
+    "film-ior-high": dict(thin_film_thickness=300.0, thin_film_ior=1e4),
+    "film-under-coat": dict(thin_film_thickness=500.0, thin_film_ior=1.5, coat_weight=1.0,
+                            coat_roughness=0.0),
+}
+#: Where the GPU's float32 Airy sum cancels (measured against the float64 twin, not against Cycles): at
+#: grazing views over a substrate of IOR 1 (R12 R23 -> 1; the base keeps 1 - the layer's albedo, near
+#: 0: 16 % off at 0.2 nm, 1.2 % at 1e9 nm), a film of IOR 1e4 at grazing views (95 %), and where the
+#: exact Fresnel is 0 (a film of IOR 1 over IOR 1: float32 leaves ~1e-8 under a mirror's huge D;
+#: IOR 1e-5: 1.4e-4): finite and non-negative only.
+FILM_FLOAT32 = ("film-thickness-tiny", "film-thickness-huge", "film-ior-1", "film-ior-high", "film-ior-floor")
+
+#: MaterialData rows the extremes may set directly (a node graph's lobe, per fragment): key -> (row,
+#: its GLSL value from the case's value), and the twin's Surface attribute it sets
+ROW_INPUTS = {"translucent": ("translucent", lambda c: f"vec4({', '.join(repr(float(x)) for x in c)}, 0.0)")}
+#: The furnace's inputs of a lobe only a node graph has: key -> what the white furnace's graph does
+#: with it (test_white_furnace_world_with_every_lobe; the twin's furnace: test_white_furnace_with_every_lobe
+#: mixes the translucent in as the graph does)
+GRAPH_INPUTS = ("anisotropic", "translucent_mix")
 
 #: The lobes the checks over every lobe cover: a lobe joins them by its entry here (a test fails
 #: until every lobe of snapshot.LOBES has one, and until its extremes reach each end of each of
@@ -383,6 +420,49 @@ LOBE_CHECKS = {
                   "sheen-weight-10": dict(sheen_weight=10.0, sheen_roughness=0.5),
                   "sheen-weight-0-huge-tint": dict(sheen_weight=0.0, sheen_roughness=0.0,
                                                    sheen_tint=(1e4, 1.0, 0.0))}),
+    # a film of a high IOR raises the dielectric layer's reflectance: the base below keeps less
+    "THIN_FILM": Lobe(furnace=dict(thin_film_thickness=250.0, thin_film_ior=2.5), extremes=FILM_EXTREMES,
+                      float32=FILM_FLOAT32),
+    # the tangent and stretch are per fragment (a node graph's): tests/test_anisotropy.py sweeps
+    # MaterialData's anisotropy row at the Principled BSDF's Anisotropic 0 and 1 (stretch 1 and
+    # principled_stretch(1)), the Glossy BSDF's +-0.99 and degenerate tangents (GPU only: the twin's
+    # Surface draws no anisotropic lobe; its functions are held to the GPU there). Anisotropic
+    # Rotation turns the tangent only: any tangent is both its ends (0 and 1 turn).
+    "ANISOTROPY": Lobe(furnace=dict(anisotropic=1.0),
+                       elsewhere=("test_anisotropy", "test_lobe_at_its_extremes_stays_finite", "EXTREMES")),
+    # a node graph's Translucent BSDF: its colour row set directly, black, white and huge
+    "TRANSLUCENT": Lobe(
+        furnace=dict(translucent_mix=0.5),  # a white Translucent BSDF mixed half with the Principled
+        extremes={"translucent-white": dict(translucent=(1.0, 1.0, 1.0)),
+                  "translucent-black-huge": dict(translucent=(0.0, 1e4, 0.0), coat_weight=1.0,
+                                                 sheen_weight=1.0)},
+        inputs={"translucent": P.PrincipledInput("Color", "TRANSLUCENT", (0.0, 0.0, 0.0), 0.0, 1.0)}),
+    "SUBSURFACE": Lobe(
+        furnace=dict(subsurface_weight=1.0),
+        extremes={"subsurface-whole": dict(subsurface_weight=1.0, subsurface_radius=(1.0, 0.2, 0.1),
+                                           subsurface_scale=1e4, subsurface_ior=1.01,
+                                           subsurface_anisotropy=1.0),
+                  "subsurface-none-wide": dict(subsurface_weight=0.0, subsurface_radius=(0.0, 0.0, 0.0),
+                                               subsurface_scale=0.0, subsurface_ior=3.8,
+                                               subsurface_anisotropy=0.0),
+                  "subsurface-skin": dict(subsurface_weight=1.0, subsurface_radius=(1e4, 0.0, 1.0),
+                                          subsurface_scale=0.05, subsurface_ior=3.8,
+                                          subsurface_method="RANDOM_WALK_SKIN"),
+                  "subsurface-under-glass": dict(subsurface_weight=1.0, transmission_weight=0.5)}),
+    # glass in the furnace: a world of radiance 1 on both sides, what passes through from behind
+    # (the lights' lobe; the rasteriser's refraction of the white world) and what reflects sum to at
+    # most 1
+    "TRANSMISSION": Lobe(
+        furnace=dict(transmission_weight=0.5, transmission_ior=1.5),  # half: the base and subsurface show
+        extremes={"glass": dict(transmission_weight=1.0, transmission_ior=1.5),
+                  "glass-ior-1": dict(transmission_weight=1.0, transmission_ior=1.0),
+                  "glass-ior-tiny-tinted": dict(transmission_weight=1.0, transmission_ior=1e-5,
+                                                transmission_tint=(0.0, 1e4, 1.0),
+                                                reflection_tint=(1e4, 0.0, 1.0)),
+                  "glass-ior-huge-refraction": dict(transmission_weight=1.0, transmission_ior=1e4,
+                                                    transmission_fresnel=False,
+                                                    reflection_tint=(0.0, 0.0, 0.0)),
+                  "glass-weight-0": dict(transmission_weight=0.0, transmission_ior=0.9)}),
 }
 
 #: Each lobe's inputs at their extremes, each crossed with test_stability's reduced sweep: roughness,
@@ -391,41 +471,77 @@ LOBE_CHECKS = {
 #: away, intensity 0 and 1e8, under test_stability's first group of lights (a point, a 0.1 m sphere
 #: light, a 0.1 m square, an area light of size 0). Every program holds every lobe (weight 0 included).
 LOBE_EXTREMES = {name: inputs for lobe in LOBE_CHECKS.values() for name, inputs in lobe.extremes.items()}
-#: Every lobe on in the white furnaces
-FURNACE_LOBES = {key: value for lobe in LOBE_CHECKS.values() for key, value in lobe.furnace.items()}
+#: The cases checked finite and non-negative only
+FLOAT32_ONLY = {name for lobe in LOBE_CHECKS.values() for name in lobe.float32}
+#: Every lobe on in the white furnaces: MaterialParams fields, and the graph's (GRAPH_INPUTS)
+FURNACE_ALL = {key: value for lobe in LOBE_CHECKS.values() for key, value in lobe.furnace.items()}
+FURNACE_LOBES = {key: value for key, value in FURNACE_ALL.items() if key not in GRAPH_INPUTS}
 
 
 def _lobe_inputs(lobe: str) -> dict:
-    """{MaterialParams field: presets.PrincipledInput} of ``lobe``'s inputs."""
+    """{input: presets.PrincipledInput} of ``lobe``'s inputs: its MaterialParams fields in
+    presets.PRINCIPLED_INPUTS, else its registry entry's own."""
     fields = {f.name for f in dataclasses.fields(S.MaterialParams)}
-    return {key: spec for key, spec in P.PRINCIPLED_INPUTS.items() if spec.lobe == lobe and key in fields}
+    found = {key: spec for key, spec in P.PRINCIPLED_INPUTS.items() if spec.lobe == lobe and key in fields}
+    return found or dict(LOBE_CHECKS[lobe].inputs)
+
+
+def _elsewhere_extremes(lobe: str) -> list[dict]:
+    """The extremes a lobe's own test file sweeps (``Lobe.elsewhere``), as its inputs: ANISOTROPY's
+    stretches as the Anisotropic that gives them (principled_stretch inverted)."""
+    import importlib
+
+    module, test, table = LOBE_CHECKS[lobe].elsewhere
+    tests = importlib.import_module(module)
+    assert callable(getattr(tests, test, None)) and test.startswith("test_"), f"{lobe}: no {module}.{test}"
+    cases = getattr(tests, table)
+    assert cases, f"{lobe}: {module}.{table} is empty"
+    if lobe == "ANISOTROPY":  # k = 1 / sqrt(1 - 0.9 a): a = (1 - 1 / k^2) / 0.9
+        return [dict(anisotropic=(1.0 - 1.0 / k ** 2) / 0.9) for _, k in cases.values() if k >= 1.0]
+    raise AssertionError(f"{lobe}: {module}.{table}'s cases read by no rule here")
 
 
 def test_every_lobe_is_checked_at_its_extremes_and_in_the_furnace():
     """Each lobe the programs draw has its entry in LOBE_CHECKS, turns itself on in the furnace, and
-    its extremes reach both ends of each of its inputs (a case's missing input at the default)."""
+    its extremes (here, or its own test file's) reach both ends of each of its inputs (a case's
+    missing input at the default)."""
     assert set(LOBE_CHECKS) == set(S.LOBES), f"lobes without checks: {set(S.LOBES) - set(LOBE_CHECKS)}"
     furnace = S.MaterialParams(**FURNACE_LOBES)
-    assert furnace.lobes >= set(S.LOBES) - {"SPECULAR_TINT"}, furnace.lobes  # a white tint draws as none
+    # a white tint draws as none; a node graph's lobes turn on in the furnace's graph
+    graph_only = {"SPECULAR_TINT", "ANISOTROPY", "TRANSLUCENT"}
+    assert furnace.lobes >= set(S.LOBES) - graph_only, furnace.lobes
+    assert set(FURNACE_ALL) - set(FURNACE_LOBES) == set(GRAPH_INPUTS), FURNACE_ALL
     for lobe, checks in LOBE_CHECKS.items():
-        inputs = _lobe_inputs(lobe)
-        assert inputs, f"{lobe}: no inputs in presets.PRINCIPLED_INPUTS"
+        assert checks.furnace, f"{lobe}: not in the furnace"
+        assert bool(checks.extremes) != bool(checks.elsewhere), f"{lobe}: extremes here or elsewhere, one"
+        assert set(checks.float32) <= set(checks.extremes), checks.float32
+        cases = list(checks.extremes.values()) if checks.extremes else _elsewhere_extremes(lobe)
+        inputs = P.PRINCIPLED_INPUTS if checks.elsewhere else _lobe_inputs(lobe)
+        inputs = {key: spec for key, spec in inputs.items() if spec.lobe == lobe}
+        if checks.elsewhere:  # Anisotropic Rotation turns the tangent only (the entry's comment)
+            inputs = {key: spec for key, spec in inputs.items() if spec.switch}
+        assert inputs, f"{lobe}: no inputs"
         for key, spec in inputs.items():
-            values = [np.max(case.get(key, spec.default)) for case in checks.extremes.values()]
-            mins = [np.min(case.get(key, spec.default)) for case in checks.extremes.values()]
+            values = [np.max(case.get(key, spec.default)) for case in cases]
+            mins = [np.min(case.get(key, spec.default)) for case in cases]
             top = 1e3 if spec.hi is None else spec.hi
             assert min(mins) <= spec.lo, f"{lobe}: {key} never at its low end {spec.lo} ({mins})"
-            assert max(values) >= top, f"{lobe}: {key} never at its high end {top} ({values})"
+            assert max(values) >= top - 1e-9, f"{lobe}: {key} never at its high end {top} ({values})"
 
 
 def _material_lines(lobe: dict) -> str:
-    """GLSL setting test_stability's MaterialData ``m``'s lobe rows as pack_material writes them."""
-    m = S.MaterialParams(**lobe)
+    """GLSL setting test_stability's MaterialData ``m``'s lobe rows as pack_material writes them, and
+    those of ROW_INPUTS the case sets directly."""
+    m = S.MaterialParams(**{k: v for k, v in lobe.items() if k not in ROW_INPUTS})
     rows = np.frombuffer(programs.pack_material(m), np.float32).reshape(-1, 4)[9:]
     names = ("specular_tint", "coat", "coat_tint", "sheen", "coat_normal", "thin_film", "anisotropy",
              "translucent", "subsurface", "transmission", "transmission_tint", "reflection_tint")
-    return "".join(f"m.{name} = vec4({', '.join(repr(float(x)) for x in row)});\n"
-                   for name, row in zip(names, rows))
+    lines = {name: f"vec4({', '.join(repr(float(x)) for x in row)})" for name, row in zip(names, rows)}
+    for key, value in lobe.items():
+        if key in ROW_INPUTS:
+            row, glsl = ROW_INPUTS[key]
+            lines[row] = glsl(value)
+    return "".join(f"m.{name} = {value};\n" for name, value in lines.items())
 
 
 def _remap_spread(sw, terms, rows, reference) -> np.ndarray:
@@ -464,7 +580,7 @@ def test_lobes_at_their_extremes_stay_finite_and_match_the_twin(case):
     """Finite, non-negative on the GPU and in the twin, and every row agreeing to test_stability's
     REL_TOL + SPREAD_FACTOR x the twin's own spread under float32 roundings of its inputs (and of the
     tinted dielectric's remap, _remap_spread), relative to the row's brightest channel."""
-    check_extremes(case, LOBE_EXTREMES[case])
+    check_extremes(case, LOBE_EXTREMES[case], twin=case not in FLOAT32_ONLY)
 
 
 def check_extremes(case: str, lobe: dict, twin: bool = True):
@@ -472,7 +588,9 @@ def check_extremes(case: str, lobe: dict, twin: bool = True):
     ``twin`` False: finite and non-negative only (the GPU's float32 cancels where the twin's float64
     does not)."""
     sw = ST.Sweep(True, ST.REDUCED_AXES, ST.LIGHT_GROUPS[0])
-    sw.material_extra = lobe
+    sw.material_extra = {k: v for k, v in lobe.items() if k not in ROW_INPUTS}
+    sw.surface_extra = {ROW_INPUTS[k][0]: np.asarray(v, np.float64)
+                        for k, v in lobe.items() if k in ROW_INPUTS}
     terms = S.Terms(principled=True)
     kinds = frozenset(ST.LIGHTS[name].kind for name in sw.lights)
     features = programs.Features("PBR", 1, kinds, terms, sphere_lights=True,
@@ -522,13 +640,38 @@ def _lobe_albedo(samples, s_of, part):
     return np.array([chunk.sum() for chunk in np.split(values, np.cumsum(counts)[:-1])])
 
 
+def _transmission_samples(alpha, eta, nu=256, nphi=64):
+    """Per view: directions l behind the surface (light refracted towards v through microfacets h on
+    test_reference's grid dense where D is) and weights dl = (h.v + eta h.l)^2 / (eta^2 |h.l|) dh
+    (Walter et al. 2007, eq. 17 inverted)."""
+    theta, dtheta = TR._theta_grid(alpha, nu)
+    phi = (np.arange(nphi) + 0.5) / nphi * np.pi
+    T, Ph = np.meshgrid(theta, phi, indexing="ij")
+    h = np.stack([np.sin(T) * np.cos(Ph), np.sin(T) * np.sin(Ph), np.cos(T)], -1).reshape(-1, 3)
+    dh = ((np.sin(theta) * dtheta)[:, None] * (2.0 * np.pi / nphi) * np.ones_like(Ph)).reshape(-1)
+    vs, ls, ws = [], [], []
+    for v in TR._views():
+        l = transmission.transmission_direction(np.broadcast_to(-v, h.shape), h, np.full(len(h), eta))
+        HoV, HoL = h @ v, np.sum(h * l, axis=1)
+        keep = (HoV > 0.0) & (HoL < 0.0) & (l[:, 2] < 0.0)
+        vs.append(np.broadcast_to(v, (keep.sum(), 3)))
+        ls.append(l[keep])
+        ws.append(dh[keep] * (HoV[keep] + eta * HoL[keep]) ** 2 / (eta * eta * -HoL[keep]))
+    return np.concatenate(vs), np.concatenate(ls), np.concatenate(ws), [len(w) for w in ws]
+
+
 def test_white_furnace_with_every_lobe_is_at_most_one():
     """The twin's directional albedo with every lobe on (FURNACE_LOBES: white base, white coat of
-    weight 1, specular tint white, the sheen), views 0-85 degrees: the sheen's (its colour x its
-    albedo, exactly), the coat's own lobe (quadrature dense about its peak) and the base's under what
-    they leave it (each lobe by its quadrature, test_reference's) sum to at most 1."""
+    weight 1, specular tint white, the sheen, a film, the subsurface, half of it glass), views 0-85
+    degrees: the sheen's (its colour x its albedo, exactly), the coat's own lobe (quadrature dense
+    about its peak) and the base's under what they leave it -- its reflection, diffuse, subsurface
+    and the glass's transmission of light from behind (each lobe by its quadrature, test_reference's)
+    -- mixed half and half with a white Translucent BSDF (its albedo of light from behind) as the
+    furnace's node graph mixes them (FURNACE_ALL's translucent_mix), sum to at most 1. (The
+    anisotropic lobe: the GPU's furnace alone.)"""
     terms = S.Terms(principled=True)
     worst = 0.0
+    mix = FURNACE_ALL["translucent_mix"]
     for metal, rough, coat in FURNACE:
         mat = S.MaterialParams(base_color=(1.0, 1.0, 1.0), metalness=metal, roughness=rough,
                                **{**FURNACE_LOBES, "coat_roughness": coat})
@@ -542,23 +685,63 @@ def test_white_furnace_with_every_lobe_is_at_most_one():
         specular = TR._specular_samples(max(rough, 0.045) ** 2)
         coat_samples = TR._specular_samples(max(coat, 0.045) ** 2)
         diffuse = TR._diffuse_samples()
+        behind = (diffuse[0], diffuse[1] * [1.0, 1.0, -1.0], diffuse[2], diffuse[3])  # mirrored below
+        glass = _transmission_samples(max(rough, 0.045) ** 2, FURNACE_LOBES["transmission_ior"])
         views = surface(TR._views())
         upper = shading.upper_layers(views)
         total = (_lobe_albedo(specular, surface, lambda s, l: base(s, l, (0.0, 1.0)))
-                 + _lobe_albedo(diffuse, surface, lambda s, l: base(s, l, (1.0, 0.0)))) * upper.below[:, 0]
+                 + _lobe_albedo(diffuse, surface, lambda s, l: base(s, l, (1.0, 0.0)))
+                 + _lobe_albedo(diffuse, surface, shading.subsurface_direct)
+                 + _lobe_albedo(glass, surface, lambda s, l: shading.transmission_light(
+                     s, l, np.ones_like(l), (1.0, 1.0)))) * upper.below[:, 0]
         coat_albedo = _lobe_albedo(coat_samples, lambda v: shading.coat_surface(surface(v)),
                                    lambda s, l: base(s, l, (0.0, 1.0)))
         total = total + upper.coat_weight * coat_albedo
         if upper.sheen is not None:
             total = total + upper.sheen.color[:, 0]
+        translucent = _lobe_albedo(behind, surface, lambda s, l: subsurface.translucent_direct(
+            np.ones(3), s.n, l))
+        assert np.allclose(translucent, 1.0, atol=1e-3), translucent  # a white Translucent's albedo: 1
+        total = (1.0 - mix) * total + mix * translucent
         worst = max(worst, float(total.max()))
         print(f"metal {metal}, roughness {rough}, coat roughness {coat}: albedo {np.round(total, 4)}")
     assert worst <= 1.0 + 2e-3, f"every lobe on: albedo {worst:.4f} > 1"
 
 
+#: The Principled BSDF's sockets of FURNACE_ALL's keys not named after them
+SOCKETS = {"transmission_ior": "IOR"}
+
+
+def _furnace_material(name, lobes: dict, **base):
+    """A Principled BSDF of ``base`` and ``lobes`` (FURNACE_ALL's: an Anisotropic linked, as a node
+    graph draws it) mixed with a white Translucent BSDF by ``translucent_mix``."""
+    mat, tree, out = _tree(name)
+    bsdf = tree.nodes.new("ShaderNodeBsdfPrincipled")
+    for key, value in {**base, **lobes}.items():
+        if key in GRAPH_INPUTS:
+            continue
+        socket = SOCKETS.get(key, key.replace("_", " ").title().replace("Ior", "IOR"))
+        bsdf.inputs[socket].default_value = (*value, 1.0) if isinstance(value, tuple) else value
+    anisotropic = tree.nodes.new("ShaderNodeValue")
+    anisotropic.outputs[0].default_value = lobes["anisotropic"]
+    tree.links.new(anisotropic.outputs[0], bsdf.inputs["Anisotropic"])
+    translucent = tree.nodes.new("ShaderNodeBsdfTranslucent")
+    translucent.inputs["Color"].default_value = (1.0, 1.0, 1.0, 1.0)
+    mix = tree.nodes.new("ShaderNodeMixShader")
+    mix.inputs["Fac"].default_value = lobes["translucent_mix"]
+    tree.links.new(bsdf.outputs["BSDF"], mix.inputs[1])
+    tree.links.new(translucent.outputs["BSDF"], mix.inputs[2])
+    tree.links.new(mix.outputs["Shader"], out.inputs["Surface"])
+    return mat
+
+
 def test_white_furnace_world_with_every_lobe(tmp_path):
-    """Spheres of every FURNACE material (every lobe on: FURNACE_LOBES) in a uniform white world
-    (radiance 1): the world's split sum under the lobes reflects at most the world's radiance."""
+    """Spheres of every FURNACE material (every lobe on: FURNACE_ALL, a node graph) in a uniform white
+    world (radiance 1): the world's split sum under the lobes, the glass's refraction of the white
+    world behind (the rasteriser's, through the sphere) and the translucent half reflect at most the
+    world's radiance."""
+    from addon.blender import extract
+
     scene = scenes.reset(size=64)
     scene.render.resolution_x, scene.render.resolution_y = 32 * len(FURNACE), 32
     scene.render.film_transparent = True
@@ -568,10 +751,10 @@ def test_white_furnace_world_with_every_lobe(tmp_path):
     TW._world(scene, color=(1.0, 1.0, 1.0))
     scenes.ortho_camera(scene, location=(0.0, 0.0, 10.0), scale=2.0 * len(FURNACE))
     for i, (metal, rough, coat) in enumerate(FURNACE):
-        lobes = {**FURNACE_LOBES, "coat_roughness": coat}
-        mat = _principled(f"Furnace{i}", base_color=(1.0, 1.0, 1.0, 1.0), metallic=metal, roughness=rough,
-                          **{k: (*v, 1.0) if isinstance(v, tuple) else v for k, v in lobes.items()})
+        mat = _furnace_material(f"Furnace{i}", {**FURNACE_ALL, "coat_roughness": coat},
+                                base_color=(1.0, 1.0, 1.0), metallic=metal, roughness=rough)
         TW._sphere((-len(FURNACE) + 1.0 + 2.0 * i, 0.0, 0.0), mat, radius=0.95)
+    assert extract.material_params(bpy.data.materials["Furnace0"]).lobes == set(S.LOBES) - {"SPECULAR_TINT"}
     image = scenes.render(scene, tmp_path / "furnace.exr")
     inside = image[..., 3] > 0.999
     top = float(image[..., :3][inside].max())

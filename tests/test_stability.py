@@ -214,8 +214,10 @@ class Sweep:
         self.kind = np.array([LIGHTS[name].kind for name in lights])[self.index["light"]]
         self.twin_lights = [_f32(LIGHTS[name]) for name in lights]
         self._light_stage = {}
-        #: more MaterialParams fields for every row (tests/test_principled_lobes.py's lobes)
+        #: more MaterialParams fields for every row (tests/test_principled_lobes.py's lobes), and the
+        #: twin Surface's attributes a node graph sets per fragment (its translucent lobe)
         self.material_extra = {}
+        self.surface_extra = {}
 
     def describe(self, rows) -> str:
         """The axis values of ``rows`` (the first few), for assertion messages."""
@@ -248,7 +250,10 @@ class Sweep:
         p = self.p[rows] if p is None else p
         v = self.v[rows] if v is None else v
         n = np.broadcast_to(np.array([0.0, 0.0, 1.0]), (len(p), 3))
-        return shading.Surface(p.astype(np.float64), n, v.astype(np.float64), mat)
+        s = shading.Surface(p.astype(np.float64), n, v.astype(np.float64), mat)
+        for key, value in self.surface_extra.items():
+            setattr(s, key, value)
+        return s
 
     def twin_light(self, j: int, rows, intensity, sun_direction=None) -> S.Light:
         light = dataclasses.replace(self.twin_lights[j], intensity=intensity)

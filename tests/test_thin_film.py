@@ -1,6 +1,7 @@
 """The Principled BSDF's Thin Film (glsl/thin_film.glsl, twin addon/reference/thin_film.py): the
 iridescent Fresnel against Cycles, the GPU against the twin, the twin against the exact film
-summed over wavelengths, the film at its extremes, and only where a material has one.
+summed over wavelengths, and only where a material has one (the film at its extremes:
+test_principled_lobes.py's checks over every lobe).
 
 Cycles' Fresnel itself is read off mirror spheres (roughness 0, black base) in a uniform white
 world: each pixel's radiance is the Fresnel at the pixel's n.v, exactly (one sample at the pixel's
@@ -367,34 +368,8 @@ def test_gpu_matches_twin_in_programs(sizes, tmp_path):
         _compare("PBR", 700 + seed + (100 if sizes else 0), tmp_path / str(seed), sizes=sizes, lobes=lobes)
 
 
-#: The film at its extremes, each crossed with test_stability's reduced sweep (test_principled_lobes'
-#: check_extremes): thickness 0, at the cutoff, a hair above it, huge; film IOR 1 (air), 1e-5 (Cycles'
-#: floor: total reflection into the film), very high; over a coat.
-FILM_EXTREMES = {
-    "thickness-0": dict(thin_film_thickness=0.0, thin_film_ior=1.33),
-    "thickness-cutoff": dict(thin_film_thickness=0.1, thin_film_ior=2.0),
-    "thickness-tiny": dict(thin_film_thickness=0.2, thin_film_ior=2.0),
-    "thickness-huge": dict(thin_film_thickness=1e9, thin_film_ior=1.33),
-    "ior-1": dict(thin_film_thickness=300.0, thin_film_ior=1.0),
-    "ior-floor": dict(thin_film_thickness=300.0, thin_film_ior=1e-5),
-    "ior-high": dict(thin_film_thickness=300.0, thin_film_ior=1e4),
-    "under-coat": dict(thin_film_thickness=500.0, thin_film_ior=1.5, coat_weight=1.0, coat_roughness=0.0),
-}
-
-
-#: Where the GPU's float32 Airy sum cancels (measured against the float64 twin, not against Cycles): at
-#: grazing views over a substrate of IOR 1 (R12 R23 -> 1; the base keeps 1 - the layer's albedo, near
-#: 0: 16 % off at 0.2 nm, 1.2 % at 1e9 nm), a film of IOR 1e4 at grazing views (95 %), and where the
-#: exact Fresnel is 0 (a film of IOR 1 over IOR 1: float32 leaves ~1e-8 under a mirror's huge D;
-#: IOR 1e-5: 1.4e-4): finite and non-negative only.
-FLOAT32_GRAZING = ("thickness-tiny", "thickness-huge", "ior-1", "ior-high", "ior-floor")
-
-
-@pytest.mark.parametrize("case", FILM_EXTREMES)
-def test_film_at_its_extremes_stays_finite_and_matches_the_twin(case):
-    """Finite and non-negative on the GPU and in the twin; and agreeing as test_principled_lobes'
-    extremes do but where the float32 sum cancels (FLOAT32_GRAZING)."""
-    PL.check_extremes(f"thin film, {case}", FILM_EXTREMES[case], twin=case not in FLOAT32_GRAZING)
+# The film at its extremes: test_principled_lobes.py's LOBE_CHECKS["THIN_FILM"] (FILM_EXTREMES, the
+# float32-only cases FILM_FLOAT32), checked there with every lobe's.
 
 
 # --- only what the scene requires, and Auto naming the lobe --------------------------------------------

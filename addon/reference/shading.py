@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene.snapshot import LOBES, Light, MaterialParams, Terms
-from . import environment, ltc, subsurface, thin_film
+from . import environment, ltc, subsurface, thin_film, transmission
 from . import multiscatter as M
 from . import sheen as sheen_table
 from .brdf import (
@@ -382,6 +382,15 @@ class Surface:
             np.clip(self.base_color, 0.0, 1.0), material.subsurface_ior)
         self.curvature = np.zeros(np.shape(self.NoV))
         self.translucent = np.zeros(3)
+        # transmission (glsl/transmission.glsl's transmission_at): the glass share of the non-metallic
+        # part, its weight of the whole surface, IOR (floored as pack_material floors it), the tint of
+        # each crossing, the dielectric reflection's tint, whether the Fresnel splits the light
+        self.transmission_share = np.clip(np.asarray(material.transmission_weight, f64), 0.0, 1.0)
+        self.transmission_weight = self.transmission_share * (1.0 - self.metalness)
+        self.transmission_eta = np.maximum(np.asarray(material.transmission_ior, f64), 1e-5)
+        self.transmission_tint = np.maximum(np.asarray(material.transmission_tint, f64), 0.0)
+        self.reflection_tint = np.maximum(np.asarray(material.reflection_tint, f64), 0.0)
+        self.transmission_fresnel = bool(material.transmission_fresnel)
 
 
 def blinn_phong_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
@@ -547,6 +556,7 @@ def principled_specular_tint(s: Surface, LoH):
         F0m = np.broadcast_to(np.minimum(s.base_color, 1.0), np.shape(metal))
         metal = np.where(thin_film.on_metal(s.thin_film)[..., None],
                          p.metal_M * thin_film.metal(s.thin_film, F0m, p.metal_b, LoH), metal)
+    dielectric = dielectric * s.reflection_tint  # the Glass BSDF's Color (transmission.glsl)
     return s.metal3 * metal + (1.0 - s.metal3) * dielectric
 
 
@@ -589,6 +599,7 @@ def coat_surface(s: Surface) -> Surface:
     c.coat_weight = np.zeros(np.shape(s.coat_weight))
     c.sheen = np.zeros(3)
     c.thin_film = s.thin_film * np.array([0.0, 1.0, 1.0, 1.0])  # the film lies on the base, under the coat
+    c.reflection_tint = np.ones(3)  # no Glass BSDF's Color on the coat
     return c
 
 
@@ -680,6 +691,7 @@ def principled_direct(s: Surface, NoL, NoH, NxH2, LoH):
     layer = principled_layers(s).layer
     diffuse = s.base_color * (1.0 - s.metal3) * _rgb_scalar(np.clip(1.0 - layer, 0.0, 1.0)) * INV_PI
     diffuse = diffuse * _rgb_scalar(1.0 - s.subsurface)  # the rest scatters below (subsurface_direct)
+    diffuse = diffuse * _rgb_scalar(1.0 - s.transmission_share)  # the glass's share transmits instead
     return diffuse, specular
 
 
@@ -687,8 +699,23 @@ def subsurface_direct(s: Surface, l):
     """glsl/subsurface.glsl's subsurface_direct: the subsurface's f (n.l) towards l per unit irradiance."""
     layer = principled_layers(s).layer
     weight = (1.0 - s.metalness) * np.clip(1.0 - layer, 0.0, 1.0) * s.subsurface * INV_PI
+    # under what the glass's share leaves (Cycles' svm_node_closure_bsdf weighs the subsurface by
+    # 1 - Transmission Weight, as the diffuse)
+    weight = weight * (1.0 - s.transmission_share)
     color = s.base_color * _rgb_scalar(weight)
     return color * subsurface.ramp(_dot(s.n, l), s.subsurface_radius, s.curvature)
+
+
+def transmission_light(s: Surface, l, E, factors):
+    """glsl/transmission.glsl's transmission_light: a light's radiance through the surface from behind
+    it (n.l < 0) per unit irradiance E: the glass's weight, tint, Fresnel at h.v and GGX lobe."""
+    eta = np.broadcast_to(s.transmission_eta, np.shape(s.NoV))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        lobe, HoV = transmission.transmission_ggx(s.n, s.v, l, eta, s.alpha)
+        crossing = transmission.transmission_fraction(HoV, eta, s.transmission_fresnel)
+    weight = np.where((s.transmission_weight > 0.0) & (_dot(s.n, l) < 0.0) & (lobe > 0.0),
+                      s.transmission_weight * crossing * lobe * factors[1], 0.0)
+    return s.transmission_tint * _rgb_scalar(weight) * E
 
 
 def pbr_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
@@ -752,10 +779,11 @@ def shade_environment(s: Surface, prefiltered, irradiance, terms: Terms = DEFAUL
             F0m = np.broadcast_to(F0m, np.shape(metal))
             film = p.metal_M * thin_film.metal(s.thin_film, F0m, p.metal_b, s.NoV) * _rgb_scalar(E)
             metal = np.where(thin_film.on_metal(s.thin_film)[..., None], film, metal)
-        specular = (s.metal3 * metal + (1.0 - s.metal3) * p.albedo) * prefiltered
+        specular = (s.metal3 * metal + (1.0 - s.metal3) * p.albedo * s.reflection_tint) * prefiltered
         if sampled is not None:
             specular = np.broadcast_to(sampled, np.shape(specular))
         diffuse = base * _rgb_scalar(np.clip(1.0 - p.layer, 0.0, 1.0)) * irradiance * INV_PI
+        diffuse = diffuse * _rgb_scalar(1.0 - s.transmission_share)  # (principled_environment)
         return diffuse * weights[0] + specular * weights[1]
     albedo = s.f0 * _rgb_scalar(E - B) + _rgb_scalar(s.f90 * B)
     specular = albedo * prefiltered if sampled is None else np.asarray(sampled, np.float64)
@@ -1060,6 +1088,7 @@ def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAU
         # layers, lit from behind (light_shading.glsl)
         with np.errstate(invalid="ignore"):
             c = c + subsurface_direct(s, l) * E * light.diffuse_factor
+        c = c + transmission_light(s, l, E, (light.diffuse_factor, light.specular_factor))
         translucent = subsurface.translucent_direct(s.translucent, s.n, l) * E * light.diffuse_factor
         if upper is None:
             return c + translucent
