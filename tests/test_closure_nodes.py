@@ -464,6 +464,14 @@ def test_gpu_matches_twin():
 # --- stability, only what the scene requires, Auto --------------------------------------------------
 
 
+#: The inputs each closure node's lobe is swept over at its ends (test_principled_lobes' LOBE_CHECKS
+#: reads it): test_extremes_render_finite links v (0 .. 1) into the Toons' Size (Smooth 0) and the
+#: velvet's and Oren-Nayar's Roughness; test_closure_node_matches_cycles sweeps the Glossy BSDF's
+#: roughness 0 .. 1 for every distribution.
+EXTREME_RANGES = {"TOON": {"size": (0.0, 1.0), "smooth": (0.0, 0.0)}, "VELVET": {"roughness": (0.0, 1.0)},
+                  "DIFFUSE_ROUGHNESS": {"roughness": (0.0, 1.0)}, "GLOSSY": {"roughness": (0.0, 1.0)}}
+
+
 def test_extremes_render_finite(tmp_path):
     """Size from 0 to 1 and Smooth 0 (Toon), roughness 0 to 1 (Oren-Nayar, velvet, sheen) on one sphere
     of four quarters, under a sun, a point light touching the sphere and a world: finite, not negative."""

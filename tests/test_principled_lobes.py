@@ -357,13 +357,17 @@ class Lobe:
     (where float32 cannot follow the float64 twin: the case's lobe says why); ``elsewhere``, a
     lobe whose extremes its own test file sweeps: (module, test, its dict of extremes), held to
     ``inputs``' ends there; ``inputs``, the ranges of a lobe that is not in
-    presets.PRINCIPLED_INPUTS as MaterialParams fields."""
+    presets.PRINCIPLED_INPUTS as MaterialParams fields; ``furnace_elsewhere``, a closure node's lobe
+    whose albedo its own test file checks."""
 
     furnace: dict
     extremes: dict = dataclasses.field(default_factory=dict)
     float32: tuple = ()
     elsewhere: tuple = ()
     inputs: dict = dataclasses.field(default_factory=dict)
+    #: a node graph's closure-node lobe whose directional albedo its own file holds to <= 1 (closed
+    #: forms and quadratures: (module, test)) in place of a furnace entry here
+    furnace_elsewhere: tuple = ()
 
 
 #: The film at its extremes (thickness 0, at the cutoff, a hair above it, huge; film IOR 1 (air),
@@ -465,6 +469,29 @@ LOBE_CHECKS = {
                   "glass-weight-0": dict(transmission_weight=0.0, transmission_ior=0.9)}),
 }
 
+
+def _closure_node(lobe: str, albedo_test: str, inputs: dict, extremes_test: str) -> Lobe:
+    """A closure node's lobe (snapshot.NODE_LOBES: a node graph's alone): its extremes swept by
+    tests/test_closure_nodes.py (its EXTREME_RANGES: each input's ends, through a node graph) and its
+    directional albedo held to its closed form there (at most 1: the white Oren-Nayar exactly 1)."""
+    return Lobe(furnace={}, furnace_elsewhere=("test_closure_nodes", albedo_test),
+                elsewhere=("test_closure_nodes", extremes_test, "EXTREME_RANGES"),
+                inputs={key: P.PrincipledInput(key.title(), lobe, lo, lo, hi)
+                        for key, (lo, hi) in inputs.items()})
+
+
+LOBE_CHECKS.update({
+    "DIFFUSE_ROUGHNESS": _closure_node("DIFFUSE_ROUGHNESS", "test_oren_nayar_twin_closed_forms",
+                                       {"roughness": (0.0, 1.0)}, "test_extremes_render_finite"),
+    "VELVET": _closure_node("VELVET", "test_velvet_albedo_quadrature", {"roughness": (0.0, 1.0)},
+                            "test_extremes_render_finite"),
+    "TOON": _closure_node("TOON", "test_toon_twin_closed_forms", {"size": (0.0, 1.0), "smooth": (0.0, 0.0)},
+                          "test_extremes_render_finite"),
+    # the Glossy BSDF's distributions: roughness 0 to 1 swept against Cycles (finite where it matches)
+    "GLOSSY": _closure_node("GLOSSY", "test_gpu_matches_twin", {"roughness": (0.0, 1.0)},
+                            "test_closure_node_matches_cycles"),
+})
+
 #: Each lobe's inputs at their extremes, each crossed with test_stability's reduced sweep: roughness,
 #: metalness, F0 and base colour at their ends (a mirror metal among them: a coat over it; F0 0: an
 #: IOR of 1), n.v and n.l from 1 through 1e-7 and 0 to below 0, the light touching the point to 1e6 m
@@ -498,6 +525,9 @@ def _elsewhere_extremes(lobe: str) -> list[dict]:
     assert cases, f"{lobe}: {module}.{table} is empty"
     if lobe == "ANISOTROPY":  # k = 1 / sqrt(1 - 0.9 a): a = (1 - 1 / k^2) / 0.9
         return [dict(anisotropic=(1.0 - 1.0 / k ** 2) / 0.9) for _, k in cases.values() if k >= 1.0]
+    if table == "EXTREME_RANGES":  # each input of the lobe at its low end, then at its high end
+        ranges = cases[lobe]
+        return [{key: ends[i] for key, ends in ranges.items()} for i in (0, 1)]
     raise AssertionError(f"{lobe}: {module}.{table}'s cases read by no rule here")
 
 
@@ -508,17 +538,23 @@ def test_every_lobe_is_checked_at_its_extremes_and_in_the_furnace():
     assert set(LOBE_CHECKS) == set(S.LOBES), f"lobes without checks: {set(S.LOBES) - set(LOBE_CHECKS)}"
     furnace = S.MaterialParams(**FURNACE_LOBES)
     # a white tint draws as none; a node graph's lobes turn on in the furnace's graph
-    graph_only = {"SPECULAR_TINT", "ANISOTROPY", "TRANSLUCENT"}
+    graph_only = {"SPECULAR_TINT", "ANISOTROPY", "TRANSLUCENT"} | S.NODE_LOBES
     assert furnace.lobes >= set(S.LOBES) - graph_only, furnace.lobes
     assert set(FURNACE_ALL) - set(FURNACE_LOBES) == set(GRAPH_INPUTS), FURNACE_ALL
     for lobe, checks in LOBE_CHECKS.items():
-        assert checks.furnace, f"{lobe}: not in the furnace"
+        assert bool(checks.furnace) != bool(checks.furnace_elsewhere), f"{lobe}: one furnace"
+        if checks.furnace_elsewhere:
+            import importlib
+
+            module, test = checks.furnace_elsewhere
+            found = getattr(importlib.import_module(module), test, None)
+            assert callable(found), f"{lobe}: no {module}.{test}"
         assert bool(checks.extremes) != bool(checks.elsewhere), f"{lobe}: extremes here or elsewhere, one"
         assert set(checks.float32) <= set(checks.extremes), checks.float32
         cases = list(checks.extremes.values()) if checks.extremes else _elsewhere_extremes(lobe)
-        inputs = P.PRINCIPLED_INPUTS if checks.elsewhere else _lobe_inputs(lobe)
+        inputs = P.PRINCIPLED_INPUTS if checks.elsewhere and not checks.inputs else _lobe_inputs(lobe)
         inputs = {key: spec for key, spec in inputs.items() if spec.lobe == lobe}
-        if checks.elsewhere:  # Anisotropic Rotation turns the tangent only (the entry's comment)
+        if checks.elsewhere and not checks.inputs:  # Anisotropic Rotation turns the tangent only
             inputs = {key: spec for key, spec in inputs.items() if spec.switch}
         assert inputs, f"{lobe}: no inputs"
         for key, spec in inputs.items():
@@ -754,7 +790,9 @@ def test_white_furnace_world_with_every_lobe(tmp_path):
         mat = _furnace_material(f"Furnace{i}", {**FURNACE_ALL, "coat_roughness": coat},
                                 base_color=(1.0, 1.0, 1.0), metallic=metal, roughness=rough)
         TW._sphere((-len(FURNACE) + 1.0 + 2.0 * i, 0.0, 0.0), mat, radius=0.95)
-    assert extract.material_params(bpy.data.materials["Furnace0"]).lobes == set(S.LOBES) - {"SPECULAR_TINT"}
+    # (the closure nodes' lobes: their albedo in test_closure_nodes, Lobe.furnace_elsewhere)
+    drawn = set(S.LOBES) - {"SPECULAR_TINT"} - {k for k, c in LOBE_CHECKS.items() if c.furnace_elsewhere}
+    assert extract.material_params(bpy.data.materials["Furnace0"]).lobes == drawn
     image = scenes.render(scene, tmp_path / "furnace.exr")
     inside = image[..., 3] > 0.999
     top = float(image[..., :3][inside].max())
