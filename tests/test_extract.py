@@ -476,7 +476,7 @@ def test_what_is_not_read_is_said_once():
     bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
     # a Particle Info node (a particle's data: not compiled)
     tree.links.new(tree.nodes.new("ShaderNodeParticleInfo").outputs["Random"], bsdf.inputs["Base Color"])
-    tree.links.new(tree.nodes.new("ShaderNodeValue").outputs[0], bsdf.inputs["Subsurface Weight"])
+    tree.links.new(tree.nodes.new("ShaderNodeValue").outputs[0], bsdf.inputs["Subsurface Anisotropy"])
     for i, mat in enumerate((mix, mix, ramp)):
         scenes.plane(scene, size=0.5, location=(i, 0.0, 0.0), material=mat)
     for i in range(2):
@@ -490,7 +490,7 @@ def test_what_is_not_read_is_said_once():
             "baked") in said
     # (the plane has no UV map to bake on: its object says so)
     assert "material 'Ramped': Particle Info > Random not compiled and not baked (it has no UV map)" in said
-    assert "Material 'Ramped': its Subsurface Weight (Principled BSDF) not drawn" in said
+    assert "Material 'Ramped': its Subsurface Anisotropy (Principled BSDF) not drawn" in said
     assert "Not drawn (Shading Lab draws meshes): 2 hair curves object(s), 1 volume(s)" in said
 
 

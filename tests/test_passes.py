@@ -495,7 +495,7 @@ def test_closed_surfaces_seen_from_outside_cull_their_hidden_faces_changing_no_p
     assert facing["Mirrored"] == {-1} and facing["Inward"] == {-1}, facing
     assert facing["Room"] == {0} and facing["Cut"] == {0}, facing
     grid = {key: f for key, f in facing.items() if key not in ("Mirrored", "Inward", "Room", "Cut")}
-    assert len(grid) == 11 and all(f == {1} for f in grid.values()), f"the grid's spheres: {facing}"
+    assert len(grid) == 18 and all(f == {1} for f in grid.values()), f"the grid's 6 x 3 spheres: {facing}"
     for deferred in (True, False):
         image = out[deferred, True]
         lit = (image[..., :3].max(axis=2) > 0.0).mean()

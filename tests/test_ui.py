@@ -103,7 +103,7 @@ def test_material_panel_reports_the_node_graph_per_node():
     tree.links.new(tree.nodes.new("ShaderNodeParticleInfo").outputs["Random"], bsdf.inputs["Roughness"])
     ramp = tree.nodes.new("ShaderNodeValToRGB")
     tree.links.new(ramp.outputs["Color"], bsdf.inputs["Base Color"])
-    tree.links.new(tree.nodes.new("ShaderNodeValue").outputs[0], bsdf.inputs["Subsurface Weight"])
+    tree.links.new(tree.nodes.new("ShaderNodeValue").outputs[0], bsdf.inputs["Subsurface Anisotropy"])
     tree.links.new(tree.nodes.new("ShaderNodeDisplacement").outputs[0], out.inputs["Displacement"])
     aov = tree.nodes.new("ShaderNodeOutputAOV")
     aov.aov_name = "mask"
@@ -118,7 +118,7 @@ def test_material_panel_reports_the_node_graph_per_node():
     plane = next(o for o in scene.objects if o.type == "MESH")  # no UV map: its bake cannot be made
     labels = _draw(ui.SHADINGLAB_PT_material, SimpleNamespace(material=mat, object=plane)).labels()
     assert ("Not baked on 'Plane': it has no UV map; what they feed takes its socket's value") in labels
-    assert "Subsurface Weight (Principled BSDF): not drawn (the models have no such input)" in labels
+    assert "Subsurface Anisotropy (Principled BSDF): not drawn (the models have no such input)" in labels
     assert "Displacement: not drawn" in labels and "AOV Outputs: mask" in labels
 
 

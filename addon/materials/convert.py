@@ -8,20 +8,14 @@ link from a shader to a value socket is invalid in Blender, and the input keeps 
 
 from __future__ import annotations
 
+from ..scene.colour import XYZ_TO_RGB, XYZ_TO_RGB_4  # noqa: F401 (read here by nodes.py)
+
 #: Colour -> float: the Y row of the default colour configuration's scene linear (Rec. 709) to
 #: XYZ D65 matrix, as Cycles' rgb_to_y holds it in Blender 5.0: against Cycles' RGB to BW node
 #: 8e-7 (the config's rounded ``luma``, 0.2126 / 0.7152 / 0.0722, was 4.8e-5 off). Blender 4.2 and
 #: 4.5 hold LUMA_4 (1.2e-6 there); the reader names the one of the running Blender (``Graph.luma``).
 LUMA = (0.2126390, 0.7151687, 0.0721923)
 LUMA_4 = (0.2126729, 0.7151522, 0.0721750)
-#: CIE XYZ -> scene linear (Rec. 709), as Cycles' xyz_to_rgb holds it (the Wavelength node): Blender
-#: 5.0's, the inverse of the matrix LUMA is the Y row of (Rec. 709's primaries and D65's xy);
-#: Blender 4.x's, the inverse of the one LUMA_4 is the Y row of.
-XYZ_TO_RGB = ((3.2409699, -1.5373832, -0.4986108), (-0.9692436, 1.8759675, 0.0415551),
-              (0.0556301, -0.2039770, 1.0569715))
-XYZ_TO_RGB_4 = ((3.2404548, -1.5371389, -0.4985316), (-0.9692664, 1.8760109, 0.0415561),
-                (0.0556434, -0.2040259, 1.0572252))
-
 #: Socket types that carry one number, three, or a colour (four, alpha last).
 SCALARS = ("VALUE", "INT", "BOOLEAN")
 VECTORS = ("VECTOR",)

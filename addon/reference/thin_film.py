@@ -16,6 +16,8 @@ from pathlib import Path
 
 import numpy as np
 
+from ..scene.colour import XYZ_TO_RGB
+
 #: The sensitivity table's size and the path difference it covers (Cycles' THIN_FILM_TABLE_SIZE,
 #: 0 .. 60 um).
 TABLE_SIZE = 512
@@ -236,8 +238,6 @@ def airy_spectral(lam_nm, cos_i, thickness, film_ior, eta3):
 @lru_cache(maxsize=1)
 def engine_table() -> np.ndarray:
     """The table the engine samples (gpu_library.thin_film_table): Blender 5.0's scene linear Rec. 709."""
-    from ..materials.convert import XYZ_TO_RGB
-
     return sensitivity_table(XYZ_TO_RGB)
 
 
