@@ -113,7 +113,12 @@ def test_tangent_space_normal_map(tmp_path):
 def _bump_shadowing(ns, n, l) -> float:
     """Cycles' diffuse weight for a normal bent from the smooth ns to n, light towards l: Smith's
     GGX masking G1 = 2 / (1 + sqrt(1 + a^2 tan^2 i)) at the light's angle i to ns, with a^2 = tan^2 d
-    / 8 from the bend d (Conty Estevez, Lecocq and Stein 2019, as Cycles' bump_shadowing_term)."""
+    / 8 from the bend d (Conty Estevez, Lecocq and Stein 2019, as Cycles' bump_shadowing_term); in
+    Blender 4.2 Chiang, Li and Burley 2019's: g = (ns.l) / ((n.l)(ns.n)), 1 from g >= 1, else
+    -g^3 + g^2 + g (4.2's kernel/closure/bsdf.h)."""
+    if bpy.app.version < (4, 3, 0):
+        g = float(ns @ l) / (float(n @ l) * float(ns @ n))
+        return 1.0 if g >= 1.0 else max(-g ** 3 + g ** 2 + g, 0.0) if g >= 0.0 else 0.0
     cos_i, cos_d = abs(float(ns @ l)), abs(float(ns @ n))
     alpha2 = min(max(0.125 * (1.0 / cos_d ** 2 - 1.0), 0.0), 1.0)
     return 2.0 / (1.0 + math.sqrt(1.0 + alpha2 * (1.0 / cos_i ** 2 - 1.0)))
