@@ -108,7 +108,8 @@ LOBE_SOCKETS = {"specular_tint": "Specular Tint", "coat_weight": "Coat Weight",
 
 def _compare(model, seed, tmp_path, sizes=False, lobes=None):
     """``lobes``: the Principled BSDF's lobe inputs (MaterialParams' fields -> values) of the
-    material's surface, drawn by the Principled term set (else the scene's default terms)."""
+    material's surface, drawn by the Principled term set (else the scene's default terms); fields
+    without a socket (LOBE_SOCKETS) are the twin's alone (what the reader sets itself)."""
     rng = np.random.default_rng(1000 * seed + len(model))
     tilt, mat, lights = _random_case(rng, sizes)
     scene = scenes.reset(size=SIZE)
@@ -122,6 +123,8 @@ def _compare(model, seed, tmp_path, sizes=False, lobes=None):
         scene.shading_lab.term_set = "PRINCIPLED"
         bsdf = next(n for n in scenes.node_tree(material).nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
         for field, value in lobes.items():
+            if field not in LOBE_SOCKETS:
+                continue
             rgba = (*value, 1.0) if isinstance(value, tuple) else value
             bsdf.inputs[LOBE_SOCKETS[field]].default_value = rgba
     scenes.plane(scene, size=10.0, rotation=tilt, material=material)
