@@ -978,6 +978,9 @@ def _toon(w: _Writer, node: FlatNode) -> dict | None:
 
 #: The Specular BSDF's (EEVEE's node) inputs read, in glsl/node_closure_bsdfs.glsl's closure_specular order.
 SPECULAR_INPUTS = ("Base Color", "Specular", "Roughness", "Emissive Color", "Transparency")
+#: The closure nodes that are a lobe by themselves, whatever their settings.
+CLOSURE_NODE_LOBES = {"ShaderNodeBsdfToon": "TOON", "ShaderNodeBsdfTranslucent": "TRANSLUCENT",
+                      "ShaderNodeSubsurfaceScattering": "SUBSURFACE"}
 #: The Sheen BSDF's distributions and the lobe each draws.
 SHEEN_LOBES = {"MICROFIBER": "SHEEN", "ASHIKHMIN": "VELVET"}
 
@@ -985,13 +988,13 @@ SHEEN_LOBES = {"MICROFIBER": "SHEEN", "ASHIKHMIN": "VELVET"}
 def closure_node_lobe(node: FlatNode) -> str | None:
     """The lobe (``snapshot.LOBES``) a closure node other than the Principled BSDF draws, if any: the
     Diffuse BSDF's Oren-Nayar roughness, the Sheen BSDF's (Microfiber: the Principled BSDF's sheen),
-    the Toon BSDF's."""
+    the Toon BSDF's, the Translucent BSDF's and the Subsurface Scattering node's."""
+    if node.kind in CLOSURE_NODE_LOBES:
+        return CLOSURE_NODE_LOBES[node.kind]
     if node.kind == "ShaderNodeBsdfDiffuse":
         return "DIFFUSE_ROUGHNESS"
     if node.kind == "ShaderNodeBsdfSheen":
         return SHEEN_LOBES.get(node.props.get("distribution", "MICROFIBER"))
-    if node.kind == "ShaderNodeBsdfToon":
-        return "TOON"
     if node.kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic") or (
             node.kind == "ShaderNodeBsdfMetallic" and node.props.get("distribution") in ("GGX", "BECKMANN")):
         return "GLOSSY"

@@ -135,9 +135,9 @@ def _plain(flat: FlatGraph) -> bool:
         return True
     node = flat.nodes[surface.source.node]
     # (a Holdout: the constant path has no alpha to cut; an anisotropic BSDF: its tangent is per fragment;
-    # Translucent, Subsurface Scattering: nor these lobes)
+    # a closure node's lobe (Translucent, Subsurface Scattering, Toon ...): nor these lobes)
     return node.kind in codegen.CLOSURES and node.kind not in ("ShaderNodeMixShader", "ShaderNodeAddShader",
-                                                                "ShaderNodeHoldout", *_CLOSURE_LOBES) \
+                                                                "ShaderNodeHoldout") \
         and all(isinstance(i.source, Const) for i in node.inputs.values()) and not codegen.anisotropic(node) \
         and not _closure_lobes(flat) and node.kind not in GRAPH_ONLY
 
@@ -271,7 +271,7 @@ def _lobes(flat: FlatGraph) -> frozenset[str]:
     for node in flat.nodes.values():
         if codegen.anisotropic(node):  # a Principled, Glossy or Metallic BSDF's anisotropic lobe
             out.add("ANISOTROPY")
-        out |= _CLOSURE_LOBES.get(node.kind, set())
+        out |= _node_lobe(node)
         if node.kind in GLASS_CLOSURES:  # transmitting alone
             out.add("TRANSMISSION")
         if node.kind != "ShaderNodeBsdfPrincipled":
@@ -293,28 +293,24 @@ def _lobes(flat: FlatGraph) -> frozenset[str]:
                         values["Sheen Tint"], values["Thin Film Thickness"],
                         subsurface_weight=values["Subsurface Weight"],
                         transmission_weight=values["Transmission Weight"])
-    return frozenset(out | _closure_lobes(flat))
+    return frozenset(out)
+
+
+def _node_lobe(node) -> set[str]:
+    """The lobe (``snapshot.LOBES``) a closure node other than the Principled BSDF draws
+    (codegen.closure_node_lobe), as a set (empty: none): a Diffuse BSDF's Roughness only where it is
+    linked or above 0."""
+    lobe = codegen.closure_node_lobe(node)
+    if lobe == "DIFFUSE_ROUGHNESS":
+        spec = node.inputs.get("Roughness")
+        if spec is None or (isinstance(spec.source, Const) and not float(spec.source.value or 0.0) > 0.0):
+            return set()  # Lambert (Cycles' below 1e-5: the closure clamps to it, the lobe reads 0)
+    return {lobe} if lobe is not None else set()
 
 
 def _closure_lobes(flat: FlatGraph) -> set[str]:
-    """The lobes (``snapshot.CLOSURE_LOBES``, and the Principled BSDF's SHEEN for a Sheen BSDF) the
-    graph's other closure nodes draw (codegen.closure_node_lobe): a Diffuse BSDF's Roughness where
-    it is linked or above 0."""
-    out = set()
-    for node in flat.nodes.values():
-        lobe = codegen.closure_node_lobe(node)
-        if lobe == "DIFFUSE_ROUGHNESS":
-            spec = node.inputs.get("Roughness")
-            if spec is None or (isinstance(spec.source, Const) and not float(spec.source.value or 0.0) > 0.0):
-                continue  # Lambert (Cycles' below 1e-5: the closure clamps to it, the lobe reads 0)
-        if lobe is not None:
-            out.add(lobe)
-    return out
-
-
-#: The closure nodes that are a lobe by themselves (``snapshot.LOBES``).
-_CLOSURE_LOBES = {"ShaderNodeBsdfTranslucent": {"TRANSLUCENT"},
-                  "ShaderNodeSubsurfaceScattering": {"SUBSURFACE"}}
+    """The lobes the graph's closure nodes other than the Principled BSDF draw (``_node_lobe``)."""
+    return set().union(*(_node_lobe(node) for node in flat.nodes.values()))
 
 
 def compile_material(graph: Graph, groups: dict[str, Graph],
