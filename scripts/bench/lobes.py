@@ -194,8 +194,7 @@ def _cost(args, ctx, lobes) -> tuple[list[str], dict]:
              "lobe's library material on a plane filling the view under N point lights in a ring 1.5 m above "
              "it (shadows off), against the same material with the lobe off. *Preset scene*: the lobe's "
              "preset as shipped (its lights cast shadows), the lobe on against off on every material. A "
-             "material without a lobe pays nothing for it: its program holds none of the lobe's code. A lobe "
-             "not drawn yet changes no program: its ratio is this run's noise between identical renders.", "",
+             "material without a lobe pays nothing for it: its program holds none of the lobe's code.", "",
              *page.table(header, rows), ""]
     return lines, ratios
 
