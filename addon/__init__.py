@@ -106,7 +106,7 @@ def unregister():
 
 
 def _unregister():
-    from .blender import engine, extract
+    from .blender import engine, extract, images
     from .frame import gpu_library
 
     global _registered
@@ -120,6 +120,6 @@ def _unregister():
     classes, modules = _classes()
     _undo([*classes, *modules])
     gpu_library.LIBRARY.clear()
-    extract.IMAGES.clear()
+    images.IMAGES.clear()
     extract.GEOMETRY_MEMO.clear()
     extract.bake.forget()

@@ -4,7 +4,7 @@ Cycles evaluating the same node into AOVs.
 Images are made here from random texels (7 x 5 and 5 x 7: texel boundaries and wrapping show at
 33 x 33 pixels): an 8-bit sRGB PNG with alpha (0, 255 and between), an 8-bit Non-Color PNG, a
 float EXR with alpha (values below 0 and above 1), a generated (not a file's) float image. Each is
-read into ``ImageData`` by the engine's own reader (extract._read_image) and uploaded as the
+read into ``ImageData`` by the engine's own reader (image_reader.read_image) and uploaded as the
 engine uploads it (gpu_scene.image_texture); Cycles reads the files itself. The Vector comes from
 the UV through a Vector Math multiply-add, to cross the image's edges on both sides."""
 
@@ -25,7 +25,7 @@ from test_material_nodes import (
     cycles_aovs_and_graph,
 )
 
-from addon.blender import extract
+from addon.blender import images as image_reader
 from addon.blender import nodes as reader
 from addon.materials import codegen, graph
 
@@ -134,7 +134,7 @@ def _against_cycles(scene, mat, obj, tmp) -> dict:
     images: dict = {}
     cycles, compiled = cycles_aovs_and_graph(scene, mat, tmp, images)
     warnings: list[str] = []
-    samplers = {f"graph_image_{k}": extract._read_image(key, images[key], warnings)
+    samplers = {f"graph_image_{k}": image_reader.read_image(key, images[key], warnings)
                 for k, key in enumerate(compiled.images)}
     assert not warnings, warnings
     fragment = {}
@@ -273,7 +273,7 @@ def test_one_image_at_one_coordinate_is_sampled_once(tmp_path):
     for name, node in zip("abcd", (a, b, c, d)):
         _aov(scene, tree, name, node.outputs["Color"], "COLOR")
     compiled, images = _compile(mat, "abcd")
-    key = extract.image_key(image)
+    key = image_reader.image_key(image)
     assert compiled.images == (key,) and set(images) == {key} and images[key] == image
     assert compiled.source.count("node_tex_image_flat(graph_image_0") == 2, compiled.source
     assert compiled.source.count("node_tex_image_box(graph_image_0") == 1

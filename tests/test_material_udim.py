@@ -22,6 +22,7 @@ from test_cycles import _cycles
 from test_material_nodes import SIZE, _aov, _node, _plane_scene
 
 from addon.blender import extract
+from addon.blender import images as image_reader
 from addon.blender import nodes as reader
 from addon.materials import codegen, surface
 
@@ -166,7 +167,7 @@ def test_tiles_one_size_are_one_array_sampler(rendered):
     _, _, _, snap, images = rendered
     aovs = dict(next(m.aovs for m in snap.materials.values() if m.aovs))
     graph = aovs["linear_repeat_color"]
-    key = extract.image_key(images["same"])
+    key = image_reader.image_key(images["same"])
     assert graph.images == (tuple(codegen.tile_key(key, t) for t in TILES),)
     assert graph.program.arrays == (0,)
     assert "1001" not in graph.program.source and "1011" not in graph.program.source
@@ -202,20 +203,20 @@ def test_packed_tiles_are_read_as_their_files(tmp_path):
     pixels the files gave; each tile is cached under its own key, and forgetting the image
     forgets its tiles."""
     image = _tiled(tmp_path, "packed", {1001: (5, 4), 1002: (3, 2)}, 4)
-    key = extract.image_key(image)
+    key = image_reader.image_key(image)
     warnings: list[str] = []
-    files = {t: extract.IMAGES.get(codegen.tile_key(key, t), image, warnings) for t in (1001, 1002)}
+    files = {t: image_reader.IMAGES.get(codegen.tile_key(key, t), image, warnings) for t in (1001, 1002)}
     assert not warnings and files[1001].size == (5, 4) and files[1002].size == (3, 2)
     image.pack()
     for t in (1001, 1002):
         (tmp_path / f"packed.{t}.png").unlink()
-    extract.IMAGES.forget({key})
-    packed = {t: extract.IMAGES.get(codegen.tile_key(key, t), image, warnings) for t in (1001, 1002)}
+    image_reader.IMAGES.forget({key})
+    packed = {t: image_reader.IMAGES.get(codegen.tile_key(key, t), image, warnings) for t in (1001, 1002)}
     assert not warnings, warnings
     for t in (1001, 1002):
         assert packed[t] is not files[t] and np.array_equal(packed[t].pixels, files[t].pixels)
         assert packed[t].storage == files[t].storage == "SRGB8"
-    assert extract.IMAGES.get(codegen.tile_key(key, 1001), image, warnings) is packed[1001]  # cached
-    assert extract.IMAGES.get(codegen.tile_key(key, 1003), image, warnings) is None
+    assert image_reader.IMAGES.get(codegen.tile_key(key, 1001), image, warnings) is packed[1001]  # cached
+    assert image_reader.IMAGES.get(codegen.tile_key(key, 1003), image, warnings) is None
     assert "no UDIM tile 1003" in warnings[-1]
     assert not [i.name for i in bpy.data.images if " tile " in i.name]  # the temporary images went

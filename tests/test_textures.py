@@ -246,7 +246,7 @@ def test_image_pixels_are_read_and_uploaded_once_and_again_after_an_edit(tmp_pat
     (each final render is a new renderer: the program library keeps the texture); an unsaved edit
     (new pixels, as painting makes) is read and uploaded again by the next render, and seen, and
     the old texture is not kept beside the new one."""
-    from addon.blender import extract
+    from addon.blender import images
     from addon.frame import gpu_library
 
     rng = np.random.default_rng(11)
@@ -257,10 +257,10 @@ def test_image_pixels_are_read_and_uploaded_once_and_again_after_an_edit(tmp_pat
     image.file_format = "PNG"
     image.save()
     assert not image.is_dirty
-    reads, uploads = extract.IMAGES.reads, gpu_library.LIBRARY.image_uploads
+    reads, uploads = images.IMAGES.reads, gpu_library.LIBRARY.image_uploads
     a = scenes.render(scene, tmp_path / "a.exr")[..., :3]
     b = scenes.render(scene, tmp_path / "b.exr")[..., :3]
-    assert extract.IMAGES.reads - reads == 1, "the second render read the image again"
+    assert images.IMAGES.reads - reads == 1, "the second render read the image again"
     assert gpu_library.LIBRARY.image_uploads - uploads == 1, "the second render uploaded the image again"
     kept = gpu_library.LIBRARY.image_bytes()
     assert kept >= TEXELS * TEXELS * 4, kept

@@ -106,7 +106,7 @@ class _Cache:
 
 
 CACHE = _Cache()
-_REVISIONS = itertools.count(1 << 40)  # apart from the image reader's (extract._REVISIONS)
+_REVISIONS = itertools.count(1 << 40)  # apart from the image reader's (images._REVISIONS)
 
 
 @dataclass(frozen=True)

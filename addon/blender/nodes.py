@@ -16,6 +16,7 @@ import numpy as np
 
 from ..materials import convert
 from ..scene import nodes as N
+from .images import image_key
 
 #: The output target a material is read for (Material Output > Target): EEVEE's outputs, as the
 #: engine draws what EEVEE draws; ``ALL`` outputs serve it where the file has no EEVEE one.
@@ -148,12 +149,10 @@ def _group_key(tree) -> str:
 
 
 def _image_props(node, images: dict | None) -> dict:
-    """An Image Texture node's image as the compiler needs it: its key (``extract.image_key``, the
+    """An Image Texture node's image as the compiler needs it: its key (``images.image_key``, the
     key of its pixels in ``Snapshot.images``; None without an image), and what decides how Cycles
     reads its texels: alpha mode, colour space (and whether it is data), float or bytes, source
     (``TILED``: a UDIM image, with its tile numbers and sizes). The image goes into ``images`` by key."""
-    from .extract import image_key  # lazily: extract pulls in the planner and the scene reader
-
     image = getattr(node, "image", None)
     if image is None:
         return {"image": None}
@@ -215,7 +214,7 @@ def read_material(material, target: str = TARGET,
                   images: dict | None = None) -> tuple[N.Graph, dict[str, N.Graph]] | None:
     """A material's tree and its node groups' trees (by ``_group_key``), nested ones too; None for
     a material without a node tree. The images its Image Texture nodes read (in groups too) are
-    added to ``images`` (``extract.image_key`` -> ``bpy.types.Image``), as
+    added to ``images`` (``images.image_key`` -> ``bpy.types.Image``), as
     ``extract.material_params`` adds its maps'."""
     tree = getattr(material, "node_tree", None)
     if tree is None:

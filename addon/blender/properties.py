@@ -16,7 +16,7 @@ from bpy.props import (
 
 from ..reference.tonemap import TONE_MAPPER_CHOICES
 from ..scene.snapshot import MODEL_CHOICES, enum_items
-from . import extract
+from . import extract, images
 
 MODEL_ITEMS = enum_items(MODEL_CHOICES)
 
@@ -343,14 +343,14 @@ def _remember_scene(*_args):
 @persistent
 def _forget_changed_images(_scene, depsgraph):
     """Main-thread handler: images reloaded, repainted or regenerated are read again."""
-    extract.IMAGES.forget(extract.image_updates(depsgraph))
+    images.IMAGES.forget(images.image_updates(depsgraph))
 
 
 @persistent
 def _forget_all_images(*_args):
     """Main-thread handler: a file load starts with no cached pixels, nor meshes' geometry, nor
     fallback bakes."""
-    extract.IMAGES.clear()
+    images.IMAGES.clear()
     extract.GEOMETRY_MEMO.clear()
     extract.bake.forget()
 

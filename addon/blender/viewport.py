@@ -27,7 +27,7 @@ from ..frame.gpu_library import ShaderCompileError
 from ..frame.renderer import Renderer, frame_views
 from ..scene import exposure
 from ..scene import snapshot as S
-from . import bake, extract
+from . import bake, extract, images
 
 _NO_CAMERA = S.Camera(np.eye(4, dtype=np.float32), np.eye(4, dtype=np.float32), True, (0.0, 0.0, 0.0),
                       (0.0, 0.0, -1.0))
@@ -61,7 +61,7 @@ class ViewportSession:
         start = time.perf_counter()
         dirty = None if self.snapshot is None else extract.geometry_updates(depsgraph)
         materials = None if self.snapshot is None else extract.material_updates(depsgraph)
-        extract.IMAGES.forget(extract.image_updates(depsgraph))
+        images.IMAGES.forget(images.image_updates(depsgraph))
         self.snapshot = extract.snapshot(depsgraph, 1, 1, camera=_NO_CAMERA, previous=self.snapshot,
                                          dirty=dirty, auto_camera=self._view,
                                          auto_choice=self._view is not None, materials_dirty=materials)

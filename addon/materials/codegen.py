@@ -1046,7 +1046,7 @@ def image_texels(props: dict) -> str:
     """How the node's sampler holds its image and how Cycles stores it
     (glsl/node_texture_image.glsl's TEX_IMAGE_TEXELS_*), from the image's settings the reader
     read: float images as they are; 8-bit ones as bytes (sRGB ones as the engine's SRGB8 storage,
-    extract._read_image), alpha premultiplied in bytes as Cycles' image loader does unless the
+    images.read_image), alpha premultiplied in bytes as Cycles' image loader does unless the
     image is data, channel packed or has its alpha ignored."""
     if props.get("image_is_float"):
         return "TEX_IMAGE_TEXELS_FLOAT"
