@@ -398,6 +398,78 @@ def test_esc_stops_f12_s_bakes_and_the_render_draws_what_was_baked(noise_scene, 
         scene.shading_lab.bake_resolution = RESOLUTION
 
 
+class _Interface:
+    """What the F12 operator's modal steps do to the interface, recorded: the window manager's
+    timer and progress, the status bar's text, the reports, Blender's render started."""
+
+    def __init__(self):
+        self.calls = []
+        self.window_manager = self
+        self.workspace = self
+
+    def event_timer_remove(self, timer):
+        self.calls.append(("timer removed", timer))
+
+    def progress_update(self, value):
+        self.calls.append(("progress", round(value, 3)))
+
+    def progress_end(self):
+        self.calls.append(("progress end",))
+
+    def status_text_set(self, text):
+        self.calls.append(("status", text))
+
+
+def test_the_f12_operator_bakes_a_step_per_timer_event_and_esc_starts_the_render(noise_scene, monkeypatch):
+    """The operator's modal handler (its own functions, on a stand-in for the operator and the
+    interface: background mode has no window to run it in): a timer event bakes one step and shows
+    the progress; other events pass through, F12 again is taken; Esc closes the timer, progress
+    and status text, reports what was not baked and starts Blender's render."""
+    from types import SimpleNamespace
+
+    scene = noise_scene["scene"]
+    scene.shading_lab.bake_resolution = 40
+    monkeypatch.setattr(operators, "TICK_S", 0.0)
+    op = operators.SHADINGLAB_OT_render
+
+    class Operator:
+        modal, _close, _finish = op.modal, op._close, op._finish
+
+        def __init__(self):
+            self._baking, self._timer = operators.FallbackBaking(), "timer"
+            self.reports, self.rendered = [], 0
+            self._baking.budget = 0.0
+
+        def report(self, level, text):
+            self.reports.append((level, text))
+
+        def _render(self):
+            self.rendered += 1
+            return {"FINISHED"}
+
+    def event(kind, value="NOTHING"):
+        return SimpleNamespace(type=kind, value=value)
+
+    operator, interface = Operator(), _Interface()
+    try:
+        with monkeypatch.context() as m:
+            _never_drawn(m)
+            assert operator.modal(interface, event("TIMER")) == {"RUNNING_MODAL"}
+        last = operator._baking.last
+        said = f"Shading Lab: baked 1 of 2 fallback(s), the last {last} (Esc: stop and render)"
+        assert interface.calls == [("progress", 0.5), ("status", said)]
+        assert operator.modal(interface, event("MOUSEMOVE")) == {"PASS_THROUGH"}
+        assert operator.modal(interface, event("F12", "PRESS")) == {"RUNNING_MODAL"}
+        assert operator.rendered == 0 and len(interface.calls) == 2
+        assert operator.modal(interface, event("ESC", "PRESS")) == {"FINISHED"}
+        assert operator.rendered == 1
+        assert interface.calls[2:] == [("timer removed", "timer"), ("progress end",), ("status", None)]
+        assert [level for level, _ in operator.reports] == [{"WARNING"}] and \
+            operator.reports[0][1].startswith("Baking stopped: 1 of 2 fallback(s) baked"), operator.reports
+    finally:
+        scene.shading_lab.bake_resolution = RESOLUTION
+
+
 def test_a_failing_bake_leaves_f12_rendering_with_the_socket_value_and_says_why(noise_scene, tmp_path,
                                                                                 monkeypatch):
     """Cycles' bake failing (stand-in: it raises): F12's step ends with nothing baked (not tried
