@@ -25,7 +25,8 @@ def _classes():
     # importable without Blender, and importing this package runs this file first.
     from .blender import engine, operators, properties, ui
 
-    return (*properties.classes, *engine.classes, *operators.classes, *ui.classes), (properties, ui, engine)
+    return ((*properties.classes, *engine.classes, *operators.classes, *ui.classes),
+            (properties, ui, engine, operators))
 
 
 _registered = False
@@ -122,4 +123,5 @@ def _unregister():
     gpu_library.LIBRARY.clear()
     images.IMAGES.clear()
     extract.GEOMETRY_MEMO.clear()
+    extract.FALLBACK_READS.clear()
     extract.bake.forget()

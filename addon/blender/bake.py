@@ -11,12 +11,15 @@ draw callback or a depsgraph update: it adds data to the file while it works (a 
 a material, an image, all removed after) and marks Blender as rendering. So a bake runs
 
 * in a final render on the main thread -- ``blender -b`` batch renders, ``bpy.ops.render.render()``
-  from a script, the *Bake Fallbacks and Render* operator -- inside ``render()`` before it draws,
-  with progress (``engine``);
+  from a script -- inside ``render()`` before it draws, with progress (``engine``);
+* before F12 and Ctrl+F12 (``operators.SHADINGLAB_OT_render``, on those keys with this engine):
+  renders that only bake, on the main thread, a share of the current frame's bakes each, between
+  which the interface shows the progress; then Blender's own render, which finds them here;
 * for the viewport, in a timer on the main thread after the viewport asked (``schedule``); the
   viewport draws the socket's value meanwhile and says so;
-* never in a render Blender runs on a job thread (F12 from the interface, material previews):
-  those take what earlier bakes left in the cache, else the socket's value and a message.
+* never in a render Blender runs on a job thread (F12's render itself, an animation's frames,
+  material previews): those take what earlier bakes left in the cache, else the socket's value
+  and a message.
 
 **What is kept.** Baked pixels live in memory (``CACHE``), by the subgraph's content, the mesh
 (its positions, normals, UV map, triangles and texture space), the resolution and, where the
@@ -220,10 +223,12 @@ def uv_notes(geometry: S.MeshGeometry) -> list[str]:
 
 def can_bake_here() -> str:
     """Why a bake cannot run now ("" where it can): off the main thread (a render Blender runs on a
-    job thread: F12 from the interface, previews), or without Cycles."""
+    job thread: F12's render itself, an animation's frames, previews), or without Cycles."""
     if threading.current_thread() is not threading.main_thread():
-        return ("a render started from the interface runs beside it and cannot bake: use Render > Bake "
-                "Fallbacks and Render, or let the viewport bake them in Rendered shading")
+        return ("a render Blender runs beside the interface cannot bake: F12 and Ctrl+F12 bake what the "
+                "current frame needs before they render; the other frames of an animation whose bakes "
+                "change with the frame take their socket values (render it with blender -b to bake "
+                "every frame)")
     if "cycles" not in bpy.context.preferences.addons.keys() and not hasattr(bpy.types.Scene, "cycles"):
         return "Cycles is not available to bake with"
     return ""
@@ -391,19 +396,19 @@ def _pixels(image, resolution: int) -> np.ndarray:
 FAILED: set[str] = set()
 
 
-def bake(request: Request, depsgraph, progress=None) -> list[str]:
+def bake(request: Request, depsgraph, progress=None, should_stop=None) -> list[str]:
     """Bake ``request``'s targets that the cache lacks, on the main thread; ``progress(label)``
-    is told before each. The messages of the targets that could not be baked (their readers keep
-    their socket values)."""
+    is told before each, and none starts once ``should_stop()`` says so. The messages of the
+    targets that could not be baked (their readers keep their socket values)."""
     try:
-        return _bake(request, depsgraph, progress)
+        return _bake(request, depsgraph, progress, should_stop)
     except Exception as exc:  # the scene, object or mesh made for the bake failed: said, never fatal
         FAILED.update(request.keys)
         return [f"Material '{request.material}' on '{request.object}': not baked ({type(exc).__name__}: "
                 f"{exc}); what it feeds takes its socket's value"]
 
 
-def _bake(request: Request, depsgraph, progress=None) -> list[str]:
+def _bake(request: Request, depsgraph, progress=None, should_stop=None) -> list[str]:
     obj = _named(bpy.data.objects, request.object)
     material = _named(bpy.data.materials, request.material)
     if obj is None or material is None or material.node_tree is None:
@@ -461,6 +466,8 @@ def _bake(request: Request, depsgraph, progress=None) -> list[str]:
         for image in (main, check):
             image.colorspace_settings.is_data = True  # the values as they are, no view transform
         for target, cache_key in pending:
+            if should_stop is not None and should_stop():
+                break
             label = f"{material.name} > {target.label}"
             if progress is not None:
                 progress(label)
@@ -540,21 +547,27 @@ def _remove(block) -> None:
 
 
 def bake_all(requests, depsgraph, progress=None, should_stop=None) -> list[str]:
-    """Bake every request's missing targets (each key once); the messages of what failed."""
+    """Bake every request's missing targets (each key once), none started once ``should_stop()``
+    says so; the messages of what failed."""
     problems, seen = [], set()
     for request in requests:
         if should_stop is not None and should_stop():
             break
         if set(request.keys) <= seen:
             continue
-        problems += bake(request, depsgraph, progress)
+        problems += bake(request, depsgraph, progress, should_stop)
         seen |= set(request.keys)
     return problems
 
 
+def missing_keys(requests) -> set[str]:
+    """The keys of the bakes the requests still wait for."""
+    return {k for r in requests for _, k in r.missing()}
+
+
 def count_missing(requests) -> int:
     """How many bakes the requests still wait for (each key once)."""
-    return len({k for r in requests for _, k in r.missing()})
+    return len(missing_keys(requests))
 
 
 # --- the viewport's bakes: a timer on the main thread ------------------------------------------

@@ -7,6 +7,8 @@ the render result and reports progress and errors through Blender.
 from __future__ import annotations
 
 import contextlib
+import dataclasses
+import math
 import threading
 import time
 
@@ -155,6 +157,56 @@ class _Activity:
 
 
 ACTIVITY = _Activity()
+
+
+@dataclasses.dataclass
+class Preparation:
+    """A render that only bakes: F12's first step (``operators.SHADINGLAB_OT_render``). Run on the
+    main thread (``bpy.ops.render.render()`` inside ``preparing``), it reads the scene as the
+    render after it will -- Blender's render evaluation: modifiers at their render settings,
+    objects hidden in the viewport but rendered -- so the bakes it makes have the keys that render
+    looks for; it bakes what the frame lacks and draws nothing. No bake starts once ``budget``
+    seconds were spent baking (one at least), so the interface can show the progress between such
+    renders. What it found accumulates over the view layers Blender renders."""
+
+    budget: float = math.inf
+    #: the keys of the bakes the frame lacked when read
+    wanted: set[str] = dataclasses.field(default_factory=set)
+    #: what each bake started stands for ("Material > Node > Output"), in order
+    started: list[str] = dataclasses.field(default_factory=list)
+    #: what could not be baked (its readers take their socket values)
+    problems: list[str] = dataclasses.field(default_factory=list)
+    #: seconds spent baking
+    seconds: float = 0.0
+    _since: float | None = None
+
+    def begin(self, label: str) -> None:
+        """A bake starts."""
+        if self._since is None:
+            self._since = time.perf_counter()
+        self.started.append(label)
+
+    def should_stop(self) -> bool:
+        return self._since is not None and time.perf_counter() - self._since >= self.budget
+
+    def left(self) -> set[str]:
+        """The keys of the wanted bakes still missing."""
+        return {k for k in self.wanted if bake.CACHE.get(k) is None}
+
+
+#: The preparation the renders on the main thread serve meanwhile (``preparing``).
+_PREPARING: list[Preparation | None] = [None]
+
+
+@contextlib.contextmanager
+def preparing(job: Preparation):
+    """Final renders on the main thread only bake meanwhile, for ``job`` (``Preparation``)."""
+    _PREPARING[0] = job
+    try:
+        yield job
+    finally:
+        _PREPARING[0] = None
+
 
 #: Held while the add-on registers or unregisters: a render job starting meanwhile waits for it.
 REGISTRATION = threading.RLock()
@@ -345,6 +397,10 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
             self._render(depsgraph)
 
     def _render(self, depsgraph):
+        job = _PREPARING[0] if threading.current_thread() is threading.main_thread() else None
+        if job is not None and not self.is_preview:
+            self._prepare(depsgraph, job)
+            return
         _set_timings({})  # a render that fails leaves none, not the previous render's
         start = time.perf_counter()
         self.update_stats("", "Shading Lab | Reading scene")
@@ -463,20 +519,39 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
                 last_warnings[:] = snap.warnings
         return snap
 
-    def _bake_fallbacks(self, depsgraph, snap) -> None:
+    def _prepare(self, depsgraph, job: Preparation) -> None:
+        """Read the scene as this render would and bake what it lacks, drawing nothing
+        (``Preparation``). A scene that cannot be read is left to the render that follows, which
+        says why."""
+        scene = depsgraph.scene
+        width, height = extract.render_size(scene)
+        self.update_stats("", "Shading Lab | Finding fallback bakes")
+        try:
+            snap = extract.snapshot(depsgraph, width, height, settings=extract.final_render_settings(scene),
+                                    aovs=True, auto_choice=False, bakes_only=True)
+        except Exception:  # (no camera, say): the render that follows reports it
+            return
+        if snap.bake_requests:
+            self._bake_fallbacks(depsgraph, snap, job)
+
+    def _bake_fallbacks(self, depsgraph, snap, job: Preparation | None = None) -> None:
         """Bake what the snapshot's materials need that the compiler cannot compile (``bake``), before
-        anything is drawn, where this render runs on the main thread (batch renders, scripts);
-        else say why their readers take their socket values. Progress in the stats line, the
-        progress bar and, in background mode, on the console."""
+        anything is drawn, where this render runs on the main thread (batch renders, scripts, F12's
+        ``Preparation`` ``job``: within its budget); else say why their readers take their socket
+        values. Progress in the stats line, the progress bar and, in background mode, on the console."""
         count = bake.count_missing(snap.bake_requests)
         why = bake.can_bake_here()
         if why or self.is_preview:
+            said = f"{count} fallback bake(s) not made ({why}): what they stand for takes its socket's value"
             if not self.is_preview:
-                snap.warnings.append(f"{count} fallback bake(s) not made ({why}): what they stand for takes "
-                                     f"its socket's value")
+                snap.warnings.append(said)
+            if job is not None:
+                job.problems.append(said)
             return
         done = [0]
         resolution = snap.bake_requests[0].resolution
+        if job is not None:
+            job.wanted |= bake.missing_keys(snap.bake_requests)
 
         def progress(label: str) -> None:
             done[0] += 1
@@ -485,9 +560,18 @@ class ShadingLabRenderEngine(bpy.types.RenderEngine):
             self.update_progress(0.2 * (done[0] - 1) / max(count, 1))
             if bpy.app.background:
                 print(f"Shading Lab: {text}", flush=True)
+            if job is not None:
+                job.begin(label)
+
+        def should_stop() -> bool:
+            return self.test_break() or (job is not None and job.should_stop())
 
         start = time.perf_counter()
-        snap.warnings.extend(bake.bake_all(snap.bake_requests, depsgraph, progress, self.test_break))
+        problems = bake.bake_all(snap.bake_requests, depsgraph, progress, should_stop)
+        snap.warnings.extend(problems)
+        if job is not None:
+            job.problems.extend(problems)
+            job.seconds += time.perf_counter() - start
         extract.apply_bakes(snap)
         if bpy.app.background and done[0]:
             seconds = time.perf_counter() - start

@@ -1169,7 +1169,8 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
              camera: S.Camera | None = None, settings: S.Settings | None = None,
              previous: S.Snapshot | None = None, dirty: set[str] | None = None,
              auto_camera: S.Camera | None = None, auto_choice: bool = True,
-             aovs: bool = False, materials_dirty: set[str] | None = None) -> S.Snapshot:
+             aovs: bool = False, materials_dirty: set[str] | None = None,
+             bakes_only: bool = False) -> S.Snapshot:
     """Everything the renderer draws, read from the evaluated scene.
 
     ``camera`` may be given (the viewport passes its own); otherwise the scene camera is used
@@ -1181,6 +1182,9 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
     Lights, materials, matrices and the world are cheap and always read. With the Auto term set,
     materials get their terms chosen as seen from ``auto_camera`` (else ``camera``), unless
     ``auto_choice`` is off (a viewport that has drawn no view yet chooses at its first draw).
+    With ``bakes_only``, only the objects a material of which has fallback bakes are read, for
+    their ``bake_requests`` (F12's bake steps: the others' evaluated meshes are not even asked for,
+    which would subdivide them).
     """
     scene = depsgraph.scene
     if width is None or height is None:
@@ -1222,6 +1226,8 @@ def snapshot(depsgraph, width: int | None = None, height: int | None = None,
                 skipped_kinds[obj.type] += 1
             continue
         if not inst.show_self:  # an instancer its instances hide (Show Instancer off), as Cycles skips it
+            continue
+        if bakes_only and not _bakes_in(obj):
             continue
         key = _geometry_key(obj)
         if key in skipped_empty:
@@ -1323,10 +1329,10 @@ def bake_resolution(scene) -> int:
 
 
 def _fallback_slots(snap: S.Snapshot, inst, slots: list[str], key: str, depsgraph) -> list[str]:
-    """The object's material slots, each with its fallback bakes where the cache holds them all
-    (a material of its own: ``_with_bakes``); a slot still waiting for bakes keeps its material
-    (the socket values) and its request goes into ``snap.bake_requests``. An object whose mesh
-    cannot hold a bake (no UV map) keeps the socket values, and the warnings say why."""
+    """The object's material slots, each with the fallback bakes the cache holds (a material of
+    its own: ``_with_bakes``; the outputs not baked yet keep their socket values); a slot still
+    waiting for bakes has its request in ``snap.bake_requests``. An object whose mesh cannot hold
+    a bake (no UV map) keeps the socket values, and the warnings say why."""
     geometry = snap.geometries[key]
     obj = inst.object
     owner = obj.original.name_full if obj.original is not None else obj.name_full
@@ -1362,20 +1368,23 @@ def _fallback_slots(snap: S.Snapshot, inst, slots: list[str], key: str, depsgrap
         request = bake.Request(owner, mkey, tuple(targets), keys, uv, resolution, matrix,
                                scene.frame_current + scene.frame_subframe, len(snap.items), k)
         bake.REQUESTS[(owner, mkey)] = request
-        variant = _with_bakes(snap, request)
-        if variant is None:
+        variant, waiting = _with_bakes(snap, request)
+        if waiting:
             snap.bake_requests.append(request)
         out.append(variant or mkey)
     return out
 
 
-def _with_bakes(snap: S.Snapshot, request) -> str | None:
-    """The key of ``request``'s material with its bakes sampled (added to ``snap.materials``, the
-    baked pixels to ``snap.images``); None while a bake is missing from the cache."""
+def _with_bakes(snap: S.Snapshot, request) -> tuple[str | None, bool]:
+    """The key of ``request``'s material with the bakes the cache holds sampled (added to
+    ``snap.materials``, the baked pixels to ``snap.images``; None where it holds none of them:
+    the material as it is), and whether a bake is still missing (the outputs not baked keep their
+    socket values: a bake that failed, or F12's bakes stopped, leaves the others drawn)."""
     found = [bake.CACHE.get(k) for k in request.keys]
-    if any(b is None for b in found):
-        return None
-    baked = {(t.node, t.socket): k for t, k in zip(request.targets, request.keys)}
+    waiting = any(b is None for b in found)
+    baked = {(t.node, t.socket): k for t, k, b in zip(request.targets, request.keys, found) if b is not None}
+    if not baked:
+        return None, waiting
     variant = f"{request.material}\x1f{hashlib.sha1(repr(sorted(baked.items())).encode()).hexdigest()[:16]}"
     if variant not in snap.materials:
         params = snap.materials[request.material]
@@ -1386,8 +1395,9 @@ def _with_bakes(snap: S.Snapshot, request) -> str | None:
         if request.material in snap.term_choices:
             snap.term_choices[variant] = snap.term_choices[request.material]
     for b in found:
-        snap.images[b.image.key] = b.image
-    return variant
+        if b is not None:
+            snap.images[b.image.key] = b.image
+    return variant, waiting
 
 
 def _with_orco(snap: S.Snapshot, mkey: str) -> str:
@@ -1410,12 +1420,13 @@ def _with_orco(snap: S.Snapshot, mkey: str) -> str:
 
 def apply_bakes(snap: S.Snapshot) -> int:
     """Give the draw items whose bakes have since been made their materials with the bakes
-    (``snap.bake_requests`` keeps the rest); how many slots changed."""
+    (``snap.bake_requests`` keeps those still missing one); how many slots changed."""
     changed, waiting = 0, []
     for request in snap.bake_requests:
-        variant = _with_bakes(snap, request)
-        if variant is None:
+        variant, missing = _with_bakes(snap, request)
+        if missing:
             waiting.append(request)
+        if variant is None:
             continue
         item = snap.items[request.item]
         if surface.ORCO in snap.geometries[item.geometry].attributes:  # deformed (snapshot's slots)
@@ -1424,6 +1435,48 @@ def apply_bakes(snap: S.Snapshot) -> int:
         changed += 1
     snap.bake_requests[:] = waiting
     return changed
+
+
+#: What ``fallback_materials`` last found of each material: full name -> (its read,
+#: ``nodes.read_material``, and ``codegen.FORCE_BAKE`` then; its bakes' labels).
+FALLBACK_READS: dict[str, tuple] = {}
+
+
+def fallback_materials(depsgraph) -> dict[str, tuple[str, ...]]:
+    """The materials that the view layer's objects use and whose graphs have node outputs Cycles
+    bakes (``MaterialGraph.bakes``), each with the bakes' labels: what F12 asks before it renders,
+    reading no object's geometry. The objects: the view layer's (those the viewport hides too) and
+    ``depsgraph``'s evaluated ones (instanced collections', materials geometry nodes set). A
+    material is compiled again only where its nodes read differently from the last time."""
+    materials = {}
+    for obj in [*depsgraph.view_layer.objects, *depsgraph.objects]:
+        for slot in getattr(obj, "material_slots", ()):
+            material = slot.material
+            if material is not None and material.original is not None:
+                materials.setdefault(material.original.name_full, material.original)
+    found = {name: _fallback_labels(material) for name, material in materials.items()}
+    return {name: labels for name, labels in found.items() if labels}
+
+
+def _fallback_labels(material) -> tuple[str, ...]:
+    """The labels of the bakes the graphs of ``material`` (an original) have ("Node > Output"),
+    compiled again only where its nodes read differently from the last time (``FALLBACK_READS``)."""
+    read = nodes.read_material(material)
+    if read is None:
+        return ()
+    known = FALLBACK_READS.get(material.name_full)
+    if known is not None and known[0] == (read, codegen.FORCE_BAKE):
+        return known[1]
+    graphs = [surface.compile_material(*read), *surface.compile_aovs(*read).values()]
+    labels = tuple(dict.fromkeys(t.label for g in graphs if g is not None for t in g.bakes))
+    FALLBACK_READS[material.name_full] = ((read, codegen.FORCE_BAKE), labels)
+    return labels
+
+
+def _bakes_in(obj) -> bool:
+    """Whether a material of ``obj`` (evaluated) has bakes (``_fallback_labels``)."""
+    return any(slot.material is not None and slot.material.original is not None
+               and _fallback_labels(slot.material.original) for slot in obj.material_slots)
 
 
 def choose_terms(snap: S.Snapshot, previous: dict | None = None, camera: S.Camera | None = None) -> None:

@@ -352,6 +352,7 @@ def _forget_all_images(*_args):
     fallback bakes."""
     images.IMAGES.clear()
     extract.GEOMETRY_MEMO.clear()
+    extract.FALLBACK_READS.clear()
     extract.bake.forget()
 
 

@@ -134,7 +134,7 @@ class SHADINGLAB_PT_render(ShadingLabPanel, bpy.types.Panel):
         layout.prop(props, "transparency_layers")
         col = layout.column(heading="Fallback Bakes")
         col.prop(props, "bake_resolution", text="Resolution")
-        col.operator("shading_lab.bake_fallbacks", icon="RENDER_STILL")
+        col.operator("shading_lab.render", icon="RENDER_STILL")
         # Blender's own setting (Cycles shows it under Performance): final renders keep the shadow
         # maps the last one drew where the lights and casters are the same
         layout.prop(context.scene.render, "use_persistent_data", text="Persistent Data")
@@ -351,7 +351,7 @@ def _bake_report(box, material, obj) -> None:
         box.label(text=f"    error between texels {e.text()}{seen}")
         if baked.note:
             box.label(text=f"    {baked.note}", icon="ERROR")
-    box.operator("shading_lab.bake_fallbacks", icon="RENDER_STILL")
+    box.operator("shading_lab.render", icon="RENDER_STILL")
 
 
 def _auto_choice(layout, context) -> None:
@@ -388,14 +388,31 @@ def _auto_choice(layout, context) -> None:
     box.operator("shading_lab.verify_auto_terms", icon="VIEWZOOM")
 
 
+def render_menu(self, context) -> None:
+    """Atop Blender's Render menu with this engine: what F12 and Ctrl+F12 run here, the fallback
+    bakes the current frame needs first (``operators.SHADINGLAB_OT_render``)."""
+    if getattr(getattr(context, "scene", None), "render", None) is None or \
+            context.scene.render.engine != ENGINE_ID:
+        return
+    layout = self.layout
+    for animation, text, icon in ((False, "Bake Fallbacks and Render Image", "RENDER_STILL"),
+                                  (True, "Bake Fallbacks and Render Animation", "RENDER_ANIMATION")):
+        props = layout.operator("shading_lab.render", text=text, icon=icon)
+        props.animation = animation
+        props.use_viewport = True  # as the F12 keys set it: the menu shows them beside
+    layout.separator()
+
+
 classes = (SHADINGLAB_PT_render, SHADINGLAB_PT_light, SHADINGLAB_PT_world, SHADINGLAB_PT_material)
 
 
 def register():
     for panel in builtin_panels():
         panel.COMPAT_ENGINES.add(ENGINE_ID)
+    bpy.types.TOPBAR_MT_render.prepend(render_menu)
 
 
 def unregister():
+    bpy.types.TOPBAR_MT_render.remove(render_menu)
     for panel in builtin_panels():
         panel.COMPAT_ENGINES.discard(ENGINE_ID)
