@@ -1,17 +1,49 @@
 /* The Principled BSDF's Thin Film (SL_THIN_FILM): the iridescent Fresnel of a film of thickness d (nm)
- * and IOR n2 over the dielectric or the metallic base, as Cycles 5.0 evaluates it (kernel/closure/
- * bsdf_util.h's fresnel_iridescence, bsdf_microfacet.h's microfacet_fresnel), after Belcour & Barla
- * 2017, "A Practical Extension to Microfacet Theory for the Modeling of Varying Iridescence": the
- * Airy series of the film's reflections, its mean in closed form and its terms m = 1..3 through the
- * Fourier transform of the colour matching functions at m times the optical path difference
- * (thin_film_table: 512 x 2 texels, row 0 its real part, row 1 its imaginary part, rgb, for
- * x = 2 pi D / 60 um = i / 511; addon/reference/thin_film.py's sensitivity_table), per
- * polarisation, averaged. Twin: addon/reference/thin_film.py. */
+ * and IOR n2 over the dielectric or the metallic base, as the Cycles of the Blender that read the
+ * material evaluates it (kernel/closure/bsdf_util.h's fresnel_iridescence, bsdf_microfacet.h's
+ * microfacet_fresnel), after Belcour & Barla 2017, "A Practical Extension to Microfacet Theory for
+ * the Modeling of Varying Iridescence": the Airy series of the film's reflections, its mean in closed
+ * form and its terms m = 1..3 through the Fourier transform of the colour matching functions at m
+ * times the optical path difference, per polarisation, averaged. Twin: addon/reference/thin_film.py.
+ *
+ * Cycles' rule by version (snapshot.THIN_FILM_RULES, chosen by the reader), side by side below where
+ * they differ: Blender 5.0's (no define) reads the CIE 1931 functions' transform from a table, films
+ * the metal too and blends the film's IOR below 1 nm; 4.2 and 4.5's (SL_THIN_FILM_CYCLES_4) evaluate
+ * Belcour & Barla's Gaussian fit of it in XYZ, leave the metal bare and blend below 30 nm. */
 
 #ifdef SL_THIN_FILM
 
-/* The sensitivity at path difference D (nm), linear between the table's entries and clamped at its
- * ends, as Cycles' lookup_table_read: its real part in re, imaginary part in im. */
+#  ifdef SL_THIN_FILM_CYCLES_4
+/* Blender 4.2 and 4.5 (Cycles' iridescence_lookup_sensitivity): the sensitivity at path difference D
+ * (nm) from Belcour & Barla's fit of the XYZ functions' transform, a Gaussian per channel (X two),
+ * each about 1 at D = 0, turned into RGB by SL_THIN_FILM_RGB (reference/thin_film.py's gaussian_rgb:
+ * 4.x multiplies the XYZ sum by the white point before its XYZ -> RGB); the real part the fit's
+ * cosine, the imaginary part minus its sine (so that re cos(m phi) + im sin(m phi) is Cycles'
+ * cos(pos phase + m phi)). Its constants: reference/thin_film.py's GAUSSIAN_*. */
+void thin_film_sensitivity(float opd, out vec3 re, out vec3 im)
+{
+  const vec3 amp = vec3(5.4856e-13, 4.4201e-13, 5.2481e-13);
+  const vec3 pos = vec3(1.6810e+06, 1.7953e+06, 2.2084e+06);
+  const vec3 var = vec3(4.3278e+09, 9.3046e+09, 6.6121e+09);
+  float phase = 2.0 * PI * 1e-9 * opd;
+  vec3 a = amp * sqrt(2.0 * PI * var) * exp(-phase * phase * var);
+  vec3 arg = pos * phase;
+  re = a * cos(arg);
+  im = -a * sin(arg);
+  float a2 = 1.64408e-8 * exp(-4.5282e+09 * phase * phase);
+  re.x += a2 * cos(2.2399e+06 * phase);
+  im.x -= a2 * sin(2.2399e+06 * phase);
+  re = SL_THIN_FILM_RGB * (re / 1.0685e-7);
+  im = SL_THIN_FILM_RGB * (im / 1.0685e-7);
+}
+
+/* Below this thickness (nm) the film's IOR blends to the air's (Cycles 4.2 and 4.5) */
+const float THIN_FILM_BLEND = 30.0;
+#  else
+/* Blender 5.0: the sensitivity at path difference D (nm) from thin_film_table (512 x 2 texels, row 0
+ * its real part, row 1 its imaginary part, rgb, for x = 2 pi D / 60 um = i / 511; reference/
+ * thin_film.py's sensitivity_table), linear between the table's entries and clamped at its ends, as
+ * Cycles' lookup_table_read. */
 void thin_film_sensitivity(float opd, out vec3 re, out vec3 im)
 {
   float x = clamp(2.0 * PI * opd / 60000.0, 0.0, 1.0) * 511.0;
@@ -21,6 +53,10 @@ void thin_film_sensitivity(float opd, out vec3 re, out vec3 im)
   re = mix(texelFetch(thin_film_table, ivec2(i, 0), 0).rgb, texelFetch(thin_film_table, ivec2(j, 0), 0).rgb, t);
   im = mix(texelFetch(thin_film_table, ivec2(i, 1), 0).rgb, texelFetch(thin_film_table, ivec2(j, 1), 0).rgb, t);
 }
+
+/* Below this thickness (nm) the film's IOR blends to the air's (Cycles 5.0) */
+const float THIN_FILM_BLEND = 1.0;
+#  endif
 
 /* An interface of relative IOR eta lit at cosine |cos_i|: the s- and p-reflectances (R), the refracted
  * cosine (negative: relative to the normal) and the reflected amplitudes' signs (their phase shift,
@@ -113,15 +149,15 @@ vec3 thin_film_airy(float R12, vec3 R23, float opd, vec3 phasor_re, vec3 phasor_
   return R;
 }
 
-/* The film's IOR: below `blend` nm it blends towards the air's by smoothstep (Cycles 5.0: 1 nm; 4.2
- * and 4.5: 30 nm), where the wave optics of the Airy summation no longer apply. */
+/* The film's IOR: below THIN_FILM_BLEND nm it blends towards the air's by smoothstep, where the wave
+ * optics of the Airy summation no longer apply. */
 float thin_film_ior(vec4 film)
 {
-  return film.x < film.w ? mix(1.0, film.y, smoothstep(0.0, film.w, film.x)) : film.y;
+  return film.x < THIN_FILM_BLEND ? mix(1.0, film.y, smoothstep(0.0, THIN_FILM_BLEND, film.x)) : film.y;
 }
 
 /* The iridescent Fresnel over a dielectric of IOR eta (air above; `film` as MaterialData's thin_film:
- * thickness, IOR, -, blend), Cycles' fresnel_iridescence<float>. */
+ * thickness, IOR), Cycles' fresnel_iridescence<float>. */
 vec3 F_ThinFilmDielectric(vec4 film, float eta, float cos_i)
 {
   float n2 = thin_film_ior(film);
@@ -202,26 +238,32 @@ vec3 F_ThinFilmMetal(vec4 film, vec3 n, vec3 k, vec3 g, float cos_i)
  * THINFILM_THICKNESS_CUTOFF); a film over an IOR of 1 still reflects (Cycles keeps the lobe). */
 void thin_film_at(inout Surface s, vec4 film)
 {
-  s.thin_film = vec4(max(film.x, 0.0), max(film.y, 1e-5), film.zw); /* IOR floored as Cycles' */
+  s.thin_film = vec4(max(film.x, 0.0), max(film.y, 1e-5), 0.0, 0.0); /* IOR floored as Cycles' */
   if (s.thin_film.x <= 0.1) {
     return;
   }
-#  ifdef SL_SPECULAR_TINT
+#    ifndef SL_THIN_FILM_CYCLES_4 /* (4.x's metal has no film) */
+#      ifdef SL_SPECULAR_TINT
   vec3 b = s.layers.metal_b;
-#  else
+#      else
   const vec3 b = vec3(0.0);
-#  endif
+#      endif
   thin_film_metal_ior(min(s.base_color, vec3(1.0)), b, s.film_metal_n, s.film_metal_k, s.film_metal_g);
+#    endif
   float E_mu = max(ms_albedo(s.NoV, s.roughness), 1e-3);
   s.layers.albedo = E_mu * s.layers.dielectric_M * F_ThinFilmTinted(s.thin_film, s.eta, s.layers.dielectric_f0, s.NoV);
   s.layers.layer = max(s.layers.albedo.r, max(s.layers.albedo.g, s.layers.albedo.b));
 }
 
-/* The metal's Fresnel under the film where the running Blender puts it there (film.z: Cycles 5.0
- * does, 4.2 and 4.5 leave the metal bare). */
+/* The metal's Fresnel under the film where the rule puts it there (Cycles 5.0 does, 4.2 and 4.5
+ * leave the metal bare). */
 bool thin_film_on_metal(Surface s)
 {
-  return s.thin_film.x > 0.1 && s.thin_film.z > 0.5;
+#    ifdef SL_THIN_FILM_CYCLES_4
+  return false;
+#    else
+  return s.thin_film.x > 0.1;
+#    endif
 }
 #  endif
 #endif
