@@ -174,7 +174,9 @@ COSINES = np.array([1.0, 0.9, 0.6, 0.3, 0.1, 0.01, 0.0])
 
 
 #: The GPU's float32 against the twin, per rule: the largest difference, and the largest where n.v >= 0.1
-GPU_MEASURED = {"CYCLES_5": (2.6e-4, 3.1e-5), "CYCLES_4": (5.5e-5, 3.1e-5)}
+#: (both over the metal of F0 (0.04, 0.2, 1): Gulbrandsen's k from 1 - r at r = 0.999, as Cycles'; the
+#: dielectric's 1 - R12 R23 no longer cancels: thin_film.glsl's optical cosines, was 2.6e-4 at n.v 0.01)
+GPU_MEASURED = {"CYCLES_5": (5.1e-5, 3.1e-5), "CYCLES_4": (4.1e-5, 3.1e-5)}
 
 
 @pytest.mark.parametrize("rule", S.THIN_FILM_RULES)
@@ -218,7 +220,6 @@ def test_gpu_fresnel_matches_twin(rule):
           f"{a[worst]}, {b[worst]}")
     assert np.all(np.isfinite(gpu))
     print(f"median {np.median(err):.3g}, n.v >= 0.1: {err[a[:, 3] >= 0.1].max():.3g}")
-    # the largest at n.v 0.01 over IOR 1 with a 0.5 nm film: float32's 1 - R12 R23 near 1 (Cycles' too)
     worst_all, worst_lit = GPU_MEASURED[rule]
     assert err.max() <= 3.0 * worst_all, f"{err.max():.3g} at {a[worst]}, {b[worst]}"
     assert err[a[:, 3] >= 0.1].max() <= 3.0 * worst_lit, err[a[:, 3] >= 0.1].max()

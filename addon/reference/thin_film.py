@@ -112,22 +112,29 @@ def sensitivity(opd, table):
     return value[..., 0, :], value[..., 1, :]
 
 
-def fresnel_polarized(cos_i, eta):
-    """(R_s, R_p, cos_t, sign_s, sign_p): the reflectances of a dielectric interface of relative IOR
-    ``eta`` for s- and p-polarised light, the refracted cosine (negative: relative to the normal)
-    and the signs of the reflected amplitudes (the phase shift 0 or pi), Cycles'
-    fresnel_dielectric_polarized; total internal reflection: 1, 1, 0 and no phase shift."""
-    cos_i = np.abs(np.asarray(cos_i, np.float64))
-    eta = np.asarray(eta, np.float64)
-    t2 = eta * eta - (1.0 - cos_i * cos_i)
-    tir = t2 <= 0.0
-    with np.errstate(divide="ignore", invalid="ignore"):
-        cos_t = -np.sqrt(np.maximum(t2, 0.0)) / eta
-        r_s = (cos_i + eta * cos_t) / (cos_i - eta * cos_t)
-        r_p = (cos_t + eta * cos_i) / (eta * cos_i - cos_t)
-    one = np.ones(np.broadcast(cos_i, eta).shape)
-    return (np.where(tir, one, r_s * r_s), np.where(tir, one, r_p * r_p), np.where(tir, 0.0, cos_t),
-            np.where(tir | (r_s >= 0.0), 1.0, -1.0), np.where(tir | (r_p >= 0.0), 1.0, -1.0))
+def optical_cosine_sq(n, cos_i):
+    """q^2 = n^2 cos^2(theta) of a layer of IOR ``n`` under the view at cosine ``cos_i`` from the air
+    (Snell's invariant: n^2 - sin^2(theta_i) = (n - 1)(n + 1) + cos_i^2, for an IOR below 1/2 n^2 -
+    (1 - cos_i)(1 + cos_i)); at most 0: total internal reflection into it. thin_film.glsl's
+    optical_cosine_sq (its header says why optical cosines)."""
+    n, cos_i = np.asarray(n, np.float64), np.asarray(cos_i, np.float64)
+    return np.where(n < 0.5, n * n - (1.0 - cos_i) * (1.0 + cos_i), (n - 1.0) * (n + 1.0) + cos_i * cos_i)
+
+
+def interface_polarized(qa, qb, na2, nb2):
+    """(R_s, R_p, T_s, T_p, sign_s, sign_p): the interface from a layer of IOR^2 ``na2`` to one of
+    ``nb2`` at optical cosines qa >= 0, qb > 0: the reflectances of the amplitudes r_s = (qa - qb) /
+    (qa + qb), r_p = (nb2 qa - na2 qb) / (nb2 qa + na2 qb) (Cycles' fresnel_dielectric_polarized's,
+    written with n cos), their transmittances 1 - R = 4 a b / (a + b)^2 and the amplitudes' signs
+    (the phase shift 0 or pi). thin_film.glsl's interface_polarized."""
+    qa, qb = np.asarray(qa, np.float64), np.asarray(qb, np.float64)
+    out = []
+    for a, b in ((qa, qb), (np.asarray(nb2, np.float64) * qa, np.asarray(na2, np.float64) * qb)):
+        with np.errstate(divide="ignore", invalid="ignore"):  # a + b = 0: total internal reflection
+            inv = 1.0 / (a + b)  # (the callers replace those rows)
+            out.append(((a - b) * inv, 4.0 * (a * inv) * (b * inv)))
+    (r_s, t_s), (r_p, t_p) = out
+    return r_s * r_s, r_p * r_p, t_s, t_p, np.where(r_s >= 0.0, 1.0, -1.0), np.where(r_p >= 0.0, 1.0, -1.0)
 
 
 def f82(cos_i, f0, b):
@@ -158,14 +165,15 @@ def metal_ior(f0, b):
     return n, k, g
 
 
-def conductor_polarized(cos_i, eta1, n, k, f82_value):
-    """(R, phase_s, phase_p): a metal of IOR n + ik under a medium of IOR ``eta1`` (Cycles'
-    fresnel_conductor_polarized, after Born & Wolf 14.4.1): its reflectance by the F82 model
-    with F0 recomputed against eta1 (both polarisations alike), and the complex phasors
-    exp(i phi_s), exp(i phi_p) of the exact Fresnel amplitudes (re, im)."""
+def conductor_polarized(cos_i, eta1, sin2_view, n, k, f82_value):
+    """(R, phase_s, phase_p): a metal of IOR n + ik under a medium of IOR ``eta1`` at cosine ``cos_i``
+    (the view's sin^2 ``sin2_view`` = eta1^2 (1 - cos_i^2) by Snell's invariant; Cycles'
+    fresnel_conductor_polarized, after Born & Wolf 14.4.1): its reflectance by the F82 model with F0
+    recomputed against eta1 (both polarisations alike), and the complex phasors exp(i phi_s),
+    exp(i phi_p) of the exact Fresnel amplitudes (re, im)."""
     cos_i = np.asarray(cos_i, np.float64)[..., None]
     eta1 = np.asarray(eta1, np.float64)[..., None]
-    t1 = n * n - k * k - eta1 * eta1 * (1.0 - cos_i * cos_i)
+    t1 = n * n - k * k - np.asarray(sin2_view, np.float64)[..., None]
     t2 = np.sqrt(t1 * t1 + (2.0 * n * k) ** 2)
     u2 = np.maximum(0.5 * (t2 + t1), 0.0)
     v2 = np.maximum(0.5 * (t2 - t1), 0.0)
@@ -186,20 +194,24 @@ def conductor_polarized(cos_i, eta1, n, k, f82_value):
     return R, phase_s, phase_p
 
 
-def airy(R12, R23, opd, phasor, table):
+def airy(R12, T12, R23, T23, opd, phasor, table):
     """The film's reflectance (..., 3) for one polarisation (Belcour & Barla 2017, eq. 10; Cycles'
     iridescence_airy_summation): the series' mean R12 + T121^2 R23 / (1 - R12 R23) and its terms
-    m = 1..3, each C_m times the sensitivity at m D turned by the reflections' phasor^m."""
+    m = 1..3, each C_m times the sensitivity at m D turned by the reflections' phasor^m; with the
+    transmittances T12 = T121 and T23 apart (thin_film.glsl's thin_film_airy: 1 - R12 R23 = T12 +
+    R12 T23, C_0 = Rs - T121 = -T12 T23 / (1 - R12 R23))."""
     R12 = np.asarray(R12, np.float64)[..., None]
-    R23 = np.asarray(R23, np.float64)
-    R23 = R23[..., None] if R23.ndim < R12.ndim else R23  # a dielectric's: one for every channel
-    T121 = 1.0 - R12
-    R123 = R12 * R23
-    r123 = np.sqrt(R123)
-    # R12 R23 < 1 off total internal reflection (handled before); 1e-7: float32's step below 1
-    Rs = T121 * T121 * R23 / np.maximum(1.0 - R123, 1e-7)
+    T12 = np.asarray(T12, np.float64)[..., None]
+    R23, T23 = np.asarray(R23, np.float64), np.asarray(T23, np.float64)
+    if R23.ndim < R12.ndim:  # a dielectric's: one for every channel
+        R23, T23 = R23[..., None], T23[..., None]
+    r123 = np.sqrt(R12 * R23)
+    # 0 only where both interfaces reflect all (a view at 90 degrees onto a base reflecting all):
+    # 1e-30 keeps Rs and C_0 at 0 there (their numerators are 0)
+    inv = 1.0 / np.maximum(T12 + R12 * T23, 1e-30)
+    Rs = T12 * T12 * R23 * inv
     R = Rs + R12
-    Cm = Rs - T121
+    Cm = -T12 * T23 * inv
     re, im = (np.broadcast_to(np.asarray(c, np.float64), R.shape) for c in phasor)
     acc_re, acc_im = re, im
     for m in range(1, 4):
@@ -221,12 +233,16 @@ def _film_ior(thickness, film_ior, blend=BLEND_NM["CYCLES_5"]):
 def iridescence_dielectric(cos_i, thickness, film_ior, eta, table, blend=BLEND_NM["CYCLES_5"]):
     """(..., 3): Cycles' fresnel_iridescence over a dielectric of IOR ``eta`` (air above)."""
     n2 = _film_ior(thickness, film_ior, blend)
-    R12s, R12p, cos2, ph12s, ph12p = fresnel_polarized(cos_i, n2)
-    R23s, R23p, _, ph23s, ph23p = fresnel_polarized(-cos2, np.asarray(eta, np.float64) / n2)
-    opd = -2.0 * n2 * np.asarray(thickness, np.float64) * cos2
-    Rs = airy(R12s, R23s, opd, ((ph23s * -ph12s)[..., None], 0.0), table)
-    Rp = airy(R12p, R23p, opd, ((ph23p * -ph12p)[..., None], 0.0), table)
-    tir = ((R12s == 1.0) & (R12p == 1.0)) | ((R23s == 1.0) & (R23p == 1.0))
+    cos_i = np.abs(np.asarray(cos_i, np.float64))
+    eta = np.asarray(eta, np.float64)
+    q2sq, q3sq = optical_cosine_sq(n2, cos_i), optical_cosine_sq(eta, cos_i)
+    tir = (q2sq <= 0.0) | (q3sq <= 0.0)  # total internal reflection at either interface
+    q2, q3 = np.sqrt(np.where(tir, 1.0, q2sq)), np.sqrt(np.where(tir, 1.0, q3sq))
+    R12s, R12p, T12s, T12p, ph12s, ph12p = interface_polarized(cos_i, q2, 1.0, n2 * n2)
+    R23s, R23p, T23s, T23p, ph23s, ph23p = interface_polarized(q2, q3, n2 * n2, eta * eta)
+    opd = 2.0 * np.asarray(thickness, np.float64) * q2  # 2 n2 d cos(theta_2)
+    Rs = airy(R12s, T12s, R23s, T23s, opd, ((ph23s * -ph12s)[..., None], 0.0), table)
+    Rp = airy(R12p, T12p, R23p, T23p, opd, ((ph23p * -ph12p)[..., None], 0.0), table)
     return np.where(tir[..., None], 1.0, np.clip(0.5 * (Rs + Rp), 0.0, 1.0))
 
 
@@ -235,12 +251,16 @@ def iridescence_metal(cos_i, thickness, film_ior, f0, b, table, blend=BLEND_NM["
     F82-tint b (its IOR from ``metal_ior``)."""
     n, k, g = metal_ior(f0, b)
     n2 = _film_ior(thickness, film_ior, blend)
-    R12s, R12p, cos2, ph12s, ph12p = fresnel_polarized(cos_i, n2)
-    R23, (ps_re, ps_im), (pp_re, pp_im) = conductor_polarized(-cos2, n2, n, k, g)
-    opd = -2.0 * n2 * np.asarray(thickness, np.float64) * cos2
-    Rs = airy(R12s, R23, opd, (ps_re * -ph12s[..., None], ps_im * -ph12s[..., None]), table)
-    Rp = airy(R12p, R23, opd, (pp_re * -ph12p[..., None], pp_im * -ph12p[..., None]), table)
-    tir = (R12s == 1.0) & (R12p == 1.0)
+    cos_i = np.abs(np.asarray(cos_i, np.float64))
+    q2sq = optical_cosine_sq(n2, cos_i)
+    tir = q2sq <= 0.0  # total internal reflection into the film
+    q2 = np.sqrt(np.where(tir, 1.0, q2sq))
+    R12s, R12p, T12s, T12p, ph12s, ph12p = interface_polarized(cos_i, q2, 1.0, n2 * n2)
+    sin2_view = (1.0 - cos_i) * (1.0 + cos_i)
+    R23, (ps_re, ps_im), (pp_re, pp_im) = conductor_polarized(q2 / n2, n2, sin2_view, n, k, g)
+    opd = 2.0 * np.asarray(thickness, np.float64) * q2  # 2 n2 d cos(theta_2)
+    Rs = airy(R12s, T12s, R23, 1.0 - R23, opd, (ps_re * -ph12s[..., None], ps_im * -ph12s[..., None]), table)
+    Rp = airy(R12p, T12p, R23, 1.0 - R23, opd, (pp_re * -ph12p[..., None], pp_im * -ph12p[..., None]), table)
     return np.where(tir[..., None], 1.0, np.clip(0.5 * (Rs + Rp), 0.0, 1.0))
 
 
