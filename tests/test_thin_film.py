@@ -391,7 +391,8 @@ def test_twin_thickness_0_is_no_film():
 def test_gpu_matches_twin_in_programs(sizes, tmp_path):
     """test_twin's random planes and lights (every kind; point and spot lights with a radius), the
     Principled set with a film: float32 agreement (test_principled_lobes' bound). The twin's material
-    holds the running Blender's film as the reader sets it (4.x: the metal bare, a 30 nm blend)."""
+    holds the running Blender's film rule as the reader sets it (4.x: the Gaussian fit, the metal bare,
+    a 30 nm blend), the program its define."""
     from test_twin import _compare
 
     from addon.blender import extract
