@@ -171,8 +171,8 @@ struct Surface {
   vec3 below;         /* what the sheen and the coat above leave the base at the view (rgb) */
 #endif
 #ifdef SL_THIN_FILM
-  vec4 thin_film;     /* the Thin Film: thickness (nm; 0.1 or less: none), IOR, 1 if over the metal too,
-                       * the thickness (nm) below which its IOR blends to the air's (thin_film.glsl) */
+  vec4 thin_film;     /* the Thin Film: thickness (nm; 0.1 or less: none), IOR, 0, 0 (its rule: the
+                       * program's define, thin_film.glsl) */
   vec3 film_metal_n;  /* the metal's IOR n + ik under it (thin_film_metal_ior) and its F82 value */
   vec3 film_metal_k;
   vec3 film_metal_g;

@@ -72,8 +72,8 @@ struct MaterialData {
   vec4 coat_tint;        /* rgb: Coat Tint (the base's colour through the coat at normal incidence) */
   vec4 sheen;            /* rgb: Sheen Weight x Sheen Tint; w: Sheen Roughness */
   vec4 coat_normal;      /* xyz: the coat's normal where a node graph gives it one (0: the surface's) */
-  vec4 thin_film;        /* x: Thin Film Thickness (nm), y: Thin Film IOR, z: 1 if the film covers the
-                          * metal too, w: the thickness below which its IOR blends to 1 (SL_THIN_FILM) */
+  vec4 thin_film;        /* x: Thin Film Thickness (nm), y: Thin Film IOR, z, w: 0 (SL_THIN_FILM; the
+                          * rule of the Blender that read it: SL_THIN_FILM_CYCLES_4 or none) */
   vec4 anisotropy;       /* xyz: the anisotropic lobe's tangent (world space, any length; 0: none);
                           * w: its roughness stretch k (glsl/anisotropy.glsl; 1: isotropic) */
   vec4 translucent;      /* rgb: a node graph's Translucent BSDFs' colour (SL_TRANSLUCENT) */

@@ -67,7 +67,8 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
         if "SL_SHEEN" in defs:
             info.sampler(slot, "FLOAT_2D", "sheen_table")
             slot += 1
-        if "SL_THIN_FILM" in defs:
+        film_table = "SL_THIN_FILM" in defs and "SL_THIN_FILM_CYCLES_4" not in defs  # (4.x's: no table)
+        if film_table:
             info.sampler(slot, "FLOAT_2D", "thin_film_table")
             slot += 1
         for name in arrays:
@@ -103,7 +104,7 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
                     shader.uniform_sampler("ltc_table", gpu_library.ltc_table(terms))
                 if "SL_SHEEN" in defs:
                     shader.uniform_sampler("sheen_table", gpu_library.sheen_table())
-                if "SL_THIN_FILM" in defs:
+                if film_table:
                     shader.uniform_sampler("thin_film_table", gpu_library.thin_film_table())
                 for name, texture in textures.items():
                     shader.uniform_sampler(f"in_{name}", texture)

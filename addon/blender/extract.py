@@ -180,10 +180,10 @@ def _thin_film(node) -> dict:
 
 
 def _thin_film_version() -> dict:
-    """What this Blender's Cycles does with a Thin Film where 5.0's differs: 4.2 and 4.5 put it over
-    the dielectric alone (the metal bare) and blend its IOR to the air's below 30 nm (5.0: 1 nm)."""
-    modern = bpy.app.version >= (5, 0, 0)
-    return {"thin_film_metal": modern, "thin_film_blend": 1.0 if modern else 30.0}
+    """The rule this Blender's Cycles draws a Thin Film by (``snapshot.THIN_FILM_RULES``: 4.2 and 4.5
+    sum its colour through a Gaussian fit in XYZ, leave the metal bare and blend its IOR to the air's
+    below 30 nm; 5.0 reads a table, films the metal, blends below 1 nm)."""
+    return {"thin_film_rule": S.thin_film_rule(bpy.app.version)}
 
 
 #: The closures that transmit alone (glsl/transmission.glsl): the Glass BSDF (reflects and transmits

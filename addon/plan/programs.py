@@ -14,7 +14,7 @@ import numpy as np
 from ..materials import codegen
 from ..materials.codegen import glsl_dir
 from ..materials.surface import GraphProgram
-from ..reference import subsurface
+from ..reference import subsurface, thin_film
 from ..reference.multiscatter import MS_SIZE, S_SIZE
 from ..reference.sheen import SIZE as SHEEN_SIZE
 from ..scene.matrices import invert
@@ -24,6 +24,7 @@ from ..scene.snapshot import (
     LOBES,
     MAX_ENVIRONMENT_IMAGES,
     MODELS,
+    THIN_FILM_RULES,
     MaterialParams,
     Snapshot,
     Terms,
@@ -171,6 +172,9 @@ class Features:
     #: the Principled BSDF's lobes beyond its base the material draws (``snapshot.LOBES``: each a
     #: define, SL_<LOBE>); the physically based model's Principled set alone draws them
     lobes: frozenset[str] = frozenset()
+    #: the Cycles rule a Thin Film follows (``snapshot.THIN_FILM_RULES``: the reader's Blender's);
+    #: 5.0's where the program draws no film (programs of other rules are the same program)
+    thin_film_rule: str = "CYCLES_5"
 
     def __post_init__(self):
         if self.model not in MODELS:
@@ -235,6 +239,11 @@ class Features:
         if "TRANSMISSION" in self.lobes:  # drawn over the opaque scene (passes.RefractionPass), which
             object.__setattr__(self, "deferred", False)  # the occlusion pass saw without it
             object.__setattr__(self, "occlusion", False)
+        if self.thin_film_rule not in THIN_FILM_RULES:
+            raise ValueError(f"unknown thin film rule {self.thin_film_rule!r}; "
+                             f"expected one of {THIN_FILM_RULES}")
+        if "THIN_FILM" not in self.lobes:
+            object.__setattr__(self, "thin_film_rule", "CYCLES_5")
 
     @classmethod
     def from_snapshot(cls, snapshot: Snapshot, model: str | None = None,
@@ -278,6 +287,7 @@ class Features:
             graph=material.graph.program if material is not None and material.graph is not None else None,
             graph_keep=material.graph_keep if material is not None else frozenset(),
             lobes=material.lobes if material is not None else frozenset(),
+            thin_film_rule=material.thin_film_rule if material is not None else "CYCLES_5",
             environment=environment_kind(snapshot.world),
             env_diffuse=snapshot.settings.environment_diffuse,
             env_samples=env_samples,
@@ -332,9 +342,9 @@ class Features:
 
     @property
     def uses_thin_film_table(self) -> bool:
-        """The program samples ``thin_film_table`` (the Principled BSDF's Thin Film,
-        addon/reference/thin_film.py)."""
-        return "THIN_FILM" in self.lobes
+        """The program samples ``thin_film_table`` (the Principled BSDF's Thin Film by Cycles 5.0's
+        rule, addon/reference/thin_film.py; 4.x's evaluates its Gaussian fit instead)."""
+        return "THIN_FILM" in self.lobes and self.thin_film_rule == "CYCLES_5"
 
     @property
     def uses_s_table(self) -> bool:
@@ -354,6 +364,8 @@ class Features:
                 out.append(("SL_CLOSURE_BSDFS", "1"))
             if self.uses_sheen_table:
                 out.append(("SL_SHEEN_SIZE", str(SHEEN_SIZE)))
+            if "THIN_FILM" in self.lobes and self.thin_film_rule == "CYCLES_4":
+                out += [("SL_THIN_FILM_CYCLES_4", "1"), ("SL_THIN_FILM_RGB", thin_film_rgb_source())]
         elif self.model == "PBR":
             out += [("SL_FRESNEL_" + t.fresnel, "1"), ("SL_NDF_" + t.ndf, "1"),
                     ("SL_VISIBILITY_" + t.visibility, "1"), ("SL_DIFFUSE_" + t.diffuse, "1")]
@@ -415,6 +427,14 @@ class Features:
             out += graph_defines(self.graph)
             out += [("SL_KEEP_" + name.upper(), "1") for name in sorted(self.graph_keep)]
         return tuple(sorted(out))
+
+
+@lru_cache(maxsize=1)
+def thin_film_rgb_source() -> str:
+    """SL_THIN_FILM_RGB: Cycles 4.2 and 4.5's XYZ -> RGB of the thin film's sum (reference/thin_film.py's
+    gaussian_rgb of Blender 4.x's XYZ_TO_RGB_4), a GLSL mat3 (by columns)."""
+    m = thin_film.engine_sensitivity("CYCLES_4")
+    return "mat3(" + ", ".join(f"{float(x):.9g}" for x in np.asarray(m).T.ravel()) + ")"
 
 
 def mesh_vertex() -> str:
@@ -1009,7 +1029,7 @@ def pack_material(m: MaterialParams) -> bytes:
         [*m.coat_tint, 0.0],
         [*(m.sheen_weight * c for c in m.sheen_tint), m.sheen_roughness],
         [0.0, 0.0, 0.0, 0.0],  # the coat's normal: the surface's (a node graph's own is per fragment)
-        [m.thin_film_thickness, m.thin_film_ior, 1.0 if m.thin_film_metal else 0.0, m.thin_film_blend],
+        [m.thin_film_thickness, m.thin_film_ior, 0.0, 0.0],  # (its rule: the program's define)
         [0.0, 0.0, 0.0, 1.0],  # anisotropy: none (an anisotropic BSDF compiles a graph)
         [0.0, 0.0, 0.0, 0.0],  # the translucent lobe: a node graph's alone
         [*subsurface.mean_free_path(m.subsurface_radius, m.subsurface_scale, m.subsurface_method,

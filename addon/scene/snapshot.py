@@ -169,13 +169,11 @@ class MaterialParams:
     sheen_weight: float = 0.0
     sheen_roughness: float = 0.5
     sheen_tint: tuple[float, float, float] = (1.0, 1.0, 1.0)
-    #: the Thin Film (glsl/thin_film.glsl): thickness in nm (0.1 or less: none) and IOR; whether the
-    #: running Blender's Cycles puts it over the metal too (5.0) and below what thickness (nm) its IOR
-    #: blends to the air's (5.0: 1; 4.2 and 4.5: 30)
+    #: the Thin Film (glsl/thin_film.glsl): thickness in nm (0.1 or less: none) and IOR; the Cycles
+    #: rule it follows (``THIN_FILM_RULES``: the reader's Blender's)
     thin_film_thickness: float = 0.0
     thin_film_ior: float = 1.33
-    thin_film_metal: bool = True
-    thin_film_blend: float = 1.0
+    thin_film_rule: str = "CYCLES_5"
     #: the subsurface (glsl/subsurface.glsl): Subsurface Weight, Radius, Scale, IOR, Anisotropy and the
     #: method (reference/subsurface.py's METHODS)
     subsurface_weight: float = 0.0
@@ -205,6 +203,22 @@ class MaterialParams:
         return lobes_of(self.specular_tint, self.coat_weight, self.sheen_weight, self.sheen_tint,
                         self.thin_film_thickness, subsurface_weight=self.subsurface_weight,
                         transmission_weight=self.transmission_weight)
+
+
+#: Cycles' rules for the Principled BSDF's Thin Film, by the Blender that reads the material (its
+#: kernels read side by side: addon/reference/thin_film.py says where they differ): "CYCLES_4", 4.2 to
+#: 4.5's (Belcour & Barla's Gaussian fit of the colour matching functions in XYZ, the metal bare, the
+#: film's IOR blended to the air's below 30 nm; 4.3 and 4.4, not measured, taken as 4.5), "CYCLES_5"
+#: (the CIE 1931 functions' table, the metal under the film too, a 1 nm blend). A program draws one:
+#: the define SL_THIN_FILM_CYCLES_4 (plan/programs.py), none for 5.0's.
+THIN_FILM_RULES = ("CYCLES_4", "CYCLES_5")
+#: The first Blender (major, minor) of each rule but the first
+_THIN_FILM_RULE_FROM = ((5, 0),)
+
+
+def thin_film_rule(version) -> str:
+    """The rule of ``THIN_FILM_RULES`` the Cycles of Blender ``version`` (major, minor, ...) follows."""
+    return THIN_FILM_RULES[sum(tuple(version[:2]) >= start for start in _THIN_FILM_RULE_FROM)]
 
 
 #: The Principled BSDF's lobes beyond its base the programs draw, as their defines name them
