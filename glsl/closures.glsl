@@ -334,7 +334,10 @@ vec3 oren_nayar_environment(Surface s, vec3 irradiance)
   }
   /* the multiple scattering's albedo: on_albedo's rest beside the single scattering's A pi + B G */
   vec3 multiple = s.bsdfs.on_albedo - s.base_color * (s.bsdfs.on_a * PI + s.bsdfs.on_b * G);
-  return s.base_color * (s.bsdfs.on_a * PI * irradiance + s.bsdfs.on_b * max(b_light, 0.0)) + multiple * irradiance;
+  /* a world far from linear (a small bright source on the far side) can take the B term below 0: no
+   * negative light from it (Cycles' B term, against any world, darkens by less than the A term lights) */
+  b_light = max(b_light, 0.0);
+  return s.base_color * (s.bsdfs.on_a * PI * irradiance + s.bsdfs.on_b * b_light) + multiple * irradiance;
 }
 #    endif
 

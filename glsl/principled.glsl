@@ -312,6 +312,7 @@ vec3 principled_environment(Surface s, vec2 EB, vec3 radiance, vec3 irradiance, 
   /* a constant Fresnel: the lobe's albedo times the colour; Beckmann's and Ashikhmin-Shirley's albedo
    * in their shares (closures.glsl), the metal's split sum scaled by it */
   float E_lobe = glossy_albedo(s, EB.x, s.NoV, s.roughness);
+  /* the lobes' albedos' ratio: GGX's floored where it vanishes (n.v -> 0), the split sum's metal with it */
   metal = glossy_metal(s, metal / p.metal_M * (E_lobe / max(EB.x, 1e-4)), p.metal_M, E_lobe);
 #    endif
 #      ifdef SL_TRANSMISSION
