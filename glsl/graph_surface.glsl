@@ -161,7 +161,8 @@ void apply_closure_lobes(inout MaterialData m, ClosureLobes l, float inv)
 /* The closure nodes beside the Principled BSDF as the models read them (MaterialData's rows): their
  * colours' means over the BSDFs (`inv`: 1 / their weight), their shapes' over the closures of each
  * kind; the sheen's layered share of its weight (ClosureLobes'), the Diffuse Roughness' mean over the
- * BSDFs with a diffuse base, the Glossy BSDFs' shares of the metal lobe and of the BSDFs. */
+ * BSDFs with a diffuse base, the Glossy BSDFs' shares of the metal lobe and of the BSDFs, the Physical
+ * Conductors' mean IOR and Extinction in the complex IOR's rows, their share of the metal lobe in w. */
 void apply_closure_bsdfs(inout MaterialData m, ClosureBsdfs b, float sheen_weight, float metallic, float inv)
 {
   /* none of a kind: its inputs do not matter (its colour is 0) */
@@ -179,6 +180,10 @@ void apply_closure_bsdfs(inout MaterialData m, ClosureBsdfs b, float sheen_weigh
   m.diffuse_ms = vec4(b.diffuse_ms * inv, 0.0);
   float metal_inv = metallic > 1e-8 ? 1.0 / metallic : 0.0; /* no metal lobe: its shares do not matter */
   m.glossy = clamp(vec4(b.glossy.xy * metal_inv, b.glossy.zw * inv), 0.0, 1.0);
+  if (b.conductor.w > 1e-8) { /* none: the material's own complex IOR rows, its share 0 (w) */
+    m.ior_n = vec4(b.conductor.rgb / b.conductor.w, saturate(b.conductor.w * metal_inv));
+    m.ior_k = vec4(b.conductor_k / b.conductor.w, 0.0);
+  }
 }
 
 /* The Surface closure as the models read it: its BSDFs' mean inputs replace the material's values

@@ -39,7 +39,11 @@ vec3 shade_polygon_light(Surface s, LightPolygon poly, vec3 L, float form_factor
   float form_factor_lobe = ltc_polygon(s, poly, l, density);
   if (form_factor_lobe > 0.0) {
     float LoH = saturate(dot(l, half_vector(l, s.v, s.n)));
-    float lobe = ltc_lobe_integral(form_factor_lobe, s.ltc.albedo, pbr_lobe(s, l), density);
+    vec3 l_lobe = l;
+#  ifdef SL_GLOSSY
+    glossy_ltc_direction(s, poly, form_factor_lobe, l_lobe, density); /* Beckmann's (closures.glsl) */
+#  endif
+    float lobe = ltc_lobe_integral(form_factor_lobe, s.ltc.albedo, pbr_lobe(s, l_lobe), density);
     c += pbr_specular_tint(s, LoH) * L * (lobe * factors.y * specular_scale);
   }
   return c;
@@ -198,9 +202,9 @@ vec3 shade_light(Surface s, LightData light, vec3 l, vec3 E, float visibility, v
   c += translucent_direct(s.translucent, s.n, l) * E * factors.x;
 #endif
 #ifdef SL_CLOSURE_BSDFS
-  /* the velvet and the toons (closures.glsl), at the light's direction */
+  /* the velvet and the toons (closures.glsl), over an area or sphere light */
   vec3 bsdfs_diffuse, bsdfs_glossy;
-  closure_bsdfs_direct(s, l, bsdfs_diffuse, bsdfs_glossy);
+  closure_bsdfs_light(s, light, l, bsdfs_diffuse, bsdfs_glossy);
   c += (bsdfs_diffuse * factors.x + bsdfs_glossy * factors.y) * E;
 #endif
   return c;

@@ -30,7 +30,11 @@ float pbr_lobe(Surface s, vec3 l)
   vec3 NxH = cross(s.n, h);
   float LoH = saturate(dot(l, h));
 #ifdef SL_PRINCIPLED
-  return principled_DV(s, l, h, NoL, NoH, dot(NxH, NxH)) * NoL;
+  float DV = principled_DV(s, l, h, NoL, NoH, dot(NxH, NxH));
+#  ifdef SL_GLOSSY
+  DV = glossy_lobe(s, DV, NoL, NoH, dot(NxH, NxH), LoH); /* the Glossy BSDFs' distributions (closures.glsl) */
+#  endif
+  return DV * NoL;
 #else
   return pbr_distribution(NoH, dot(NxH, NxH), s.alpha) * pbr_visibility(s.NoV, NoL, NoH, LoH, s.alpha) * NoL;
 #endif

@@ -7,18 +7,24 @@
  * bilinearly here (texelFetch, so that the numpy twin interpolates identically). */
 
 #if defined(SL_MULTISCATTER) || defined(SL_LAYERS) || defined(SL_LTC)
-float ms_albedo(float NoV, float roughness)
+/* The table whose rows start at `first_row` (the program's own at 0; glossy_albedo's after it). */
+float ms_albedo_rows(float NoV, float roughness, int first_row)
 {
   float n = float(SL_MS_SIZE);
   vec2 x = clamp(vec2(NoV, roughness) * (n - 1.0), vec2(0.0), vec2(n - 1.0));
   ivec2 i0 = ivec2(floor(x));
   ivec2 i1 = min(i0 + 1, ivec2(SL_MS_SIZE - 1));
   vec2 t = x - vec2(i0);
-  float e00 = texelFetch(ms_table, ivec2(i0.x, i0.y), 0).r;
-  float e10 = texelFetch(ms_table, ivec2(i1.x, i0.y), 0).r;
-  float e01 = texelFetch(ms_table, ivec2(i0.x, i1.y), 0).r;
-  float e11 = texelFetch(ms_table, ivec2(i1.x, i1.y), 0).r;
+  float e00 = texelFetch(ms_table, ivec2(i0.x, first_row + i0.y), 0).r;
+  float e10 = texelFetch(ms_table, ivec2(i1.x, first_row + i0.y), 0).r;
+  float e01 = texelFetch(ms_table, ivec2(i0.x, first_row + i1.y), 0).r;
+  float e11 = texelFetch(ms_table, ivec2(i1.x, first_row + i1.y), 0).r;
   return mix(mix(e00, e10, t.x), mix(e01, e11, t.x), t.y);
+}
+
+float ms_albedo(float NoV, float roughness)
+{
+  return ms_albedo_rows(NoV, roughness, 0);
 }
 
 #endif

@@ -94,12 +94,14 @@ struct ClosureBsdfs {
   vec4 glossy;              /* the weights of the metal lobes of a constant Fresnel (Glossy BSDF: its
                              * colour), of those uncompensated (GGX, Beckmann, Ashikhmin-Shirley), of
                              * the Beckmann and the Ashikhmin-Shirley distributions */
+  vec4 conductor;           /* Metallic BSDF (Physical Conductor): rgb its IOR x weight, w its weight */
+  vec3 conductor_k;         /* its Extinction x weight */
 };
 
 ClosureBsdfs bsdfs_none()
 {
   return ClosureBsdfs(0.0, 0.0, vec3(0.0), 0.0, 0.0, vec3(0.0), 0.0, 0.0, vec3(0.0), vec3(0.0), vec3(0.0),
-                      vec3(0.0), vec4(0.0));
+                      vec3(0.0), vec4(0.0), vec4(0.0), vec3(0.0));
 }
 
 ClosureBsdfs bsdfs_scale(ClosureBsdfs b, float w)
@@ -107,7 +109,8 @@ ClosureBsdfs bsdfs_scale(ClosureBsdfs b, float w)
   return ClosureBsdfs(b.diffuse_weight * w, b.diffuse_roughness * w, b.diffuse_ms * w, b.sheen_layered * w,
                       b.unlayered * w, b.velvet * w,
                       b.velvet_weight * w, b.velvet_sigma * w, b.toon_diffuse * w, b.toon_diffuse_shape * w,
-                      b.toon_glossy * w, b.toon_glossy_shape * w, b.glossy * w);
+                      b.toon_glossy * w, b.toon_glossy_shape * w, b.glossy * w, b.conductor * w,
+                      b.conductor_k * w);
 }
 
 ClosureBsdfs bsdfs_add(ClosureBsdfs a, ClosureBsdfs b)
@@ -116,7 +119,8 @@ ClosureBsdfs bsdfs_add(ClosureBsdfs a, ClosureBsdfs b)
                       a.diffuse_ms + b.diffuse_ms, a.sheen_layered + b.sheen_layered, a.unlayered + b.unlayered,
                       a.velvet + b.velvet, a.velvet_weight + b.velvet_weight, a.velvet_sigma + b.velvet_sigma, a.toon_diffuse + b.toon_diffuse,
                       a.toon_diffuse_shape + b.toon_diffuse_shape, a.toon_glossy + b.toon_glossy,
-                      a.toon_glossy_shape + b.toon_glossy_shape, a.glossy + b.glossy);
+                      a.toon_glossy_shape + b.toon_glossy_shape, a.glossy + b.glossy,
+                      a.conductor + b.conductor, a.conductor_k + b.conductor_k);
 }
 
 struct Closure {

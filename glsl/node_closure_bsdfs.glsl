@@ -115,16 +115,30 @@ Closure closure_glossy_ashikhmin_shirley(vec4 color, float roughness, vec3 n)
   return c;
 }
 
-/* Metallic BSDF, Physical Conductor (Cycles' CLOSURE_BSDF_PHYSICAL_CONDUCTOR): the F82-tint metal of its
- * reflectance at normal incidence, ((n - 1)^2 + k^2) / ((n + 1)^2 + k^2) per channel of IOR n and
- * Extinction k (both at least 0, as Cycles takes them), its edge untinted (Schlick's rise to 1 where the
- * exact conductor Fresnel dips before it: docs/limits.md). */
+/* Metallic BSDF, Physical Conductor (Cycles' CLOSURE_BSDF_PHYSICAL_CONDUCTOR, whose Fresnel is the exact
+ * conductor Fresnel of IOR n + i Extinction k per channel, both at least 0 as Cycles takes them): its IOR
+ * and Extinction for the lights' exact Fresnel (bsdfs.conductor: principled.glsl's
+ * principled_specular_tint), in the F82-tint metal that fits it at normal incidence and at cos 1/7
+ * (about 82 degrees) -- F0 = F(1) and the edge tint F(1/7) over Schlick's curve there, as Cycles fits it
+ * for the lobe's average Fresnel (bsdf_util.h's fresnel_conductor_Fss) -- for its multiple-scattering
+ * compensation (Cycles' own) and the world's split sum (within 0.033 of the exact Fresnel for gold,
+ * silver, copper, aluminium, iron and chromium, where Schlick's rise from F0 errs by up to 0.20 before
+ * grazing; docs/limits.md). The fitted tint is within [0, 1] but for conductors whose edge rises above
+ * Schlick's (n < 1 with little extinction), which the F82-tint model cannot draw (clamped to 1, as the
+ * Principled BSDF's tint). */
 Closure closure_metallic_conductor(vec3 ior, vec3 extinction, float roughness, vec3 n)
 {
-  vec3 eta = max(ior, 0.0);
-  vec3 k2 = max(extinction, 0.0) * max(extinction, 0.0);
-  vec3 f0 = ((eta - 1.0) * (eta - 1.0) + k2) / max((eta + 1.0) * (eta + 1.0) + k2, vec3(1e-30));
-  return closure_metallic_f82(vec4(f0, 1.0), vec4(1.0), roughness, n);
+  /* at least 0 (Cycles'); at most 1e4, where F_Conductor's n^2 k^2 is still a float32 (no metal's is
+   * above about 30: beyond, the Fresnel is 1 within float32 anyway) */
+  vec3 eta = clamp(ior, 0.0, 1e4);
+  vec3 k = clamp(extinction, 0.0, 1e4);
+  vec3 f0 = F_Conductor(eta, k, 1.0);
+  /* Schlick's curve at cos 1/7, mix(f0, 1, (6/7)^5), is at least (6/7)^5 */
+  vec3 tint = F_Conductor(eta, k, 1.0 / 7.0) / mix(f0, vec3(1.0), pow5(6.0 / 7.0));
+  Closure c = closure_metallic_f82(vec4(f0, 1.0), vec4(tint, 1.0), roughness, n);
+  c.bsdfs.conductor = vec4(eta, 1.0);
+  c.bsdfs.conductor_k = k;
+  return c;
 }
 
 /* The Metallic BSDF's GGX and Beckmann distributions: the metal lobe uncompensated (Cycles

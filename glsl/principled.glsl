@@ -214,6 +214,11 @@ vec3 principled_specular_tint(Surface s, float LoH)
   PrincipledLayers p = principled_layers(s);
 #ifdef SL_SPECULAR_TINT
   vec3 metal = p.metal_M * F_F82Tint(min(s.base_color, vec3(1.0)), p.metal_b, LoH);
+  if (s.conductor > 0.0) {
+    /* a Physical Conductor's exact Fresnel per channel (Cycles' fresnel_conductor, bsdf_util.h) in its
+     * share; its F82 fit (node_closure_bsdfs.glsl) stays the compensation's and the world's */
+    metal = mix(metal, p.metal_M * F_Conductor(s.ior_n, s.ior_k, LoH), s.conductor);
+  }
 #else
   vec3 metal = p.metal_M * F_Schlick(min(s.base_color, vec3(1.0)), 1.0, LoH);
 #endif
@@ -304,8 +309,11 @@ vec3 principled_environment(Surface s, vec2 EB, vec3 radiance, vec3 irradiance, 
   }
 #    endif
 #    ifdef SL_GLOSSY
-  /* a constant Fresnel: the lobe's albedo times the colour */
-  metal = glossy_metal(s, metal / p.metal_M, p.metal_M, EB.x);
+  /* a constant Fresnel: the lobe's albedo times the colour; Beckmann's and Ashikhmin-Shirley's albedo
+   * in their shares (closures.glsl), the metal's split sum scaled by it */
+  float E_lobe = glossy_albedo(s, EB.x, s.NoV, s.roughness);
+  /* the lobes' albedos' ratio: GGX's floored where it vanishes (n.v -> 0), the split sum's metal with it */
+  metal = glossy_metal(s, metal / p.metal_M * (E_lobe / max(EB.x, 1e-4)), p.metal_M, E_lobe);
 #    endif
 #      ifdef SL_TRANSMISSION
   vec3 specular = (s.metalness * metal + (1.0 - s.metalness) * p.albedo * s.transmission.reflection_tint) *
@@ -315,11 +323,11 @@ vec3 principled_environment(Surface s, vec2 EB, vec3 radiance, vec3 irradiance, 
 #      endif
 #    endif
 #    ifdef SL_DIFFUSE_ROUGHNESS
-  vec3 rho = s.bsdfs.on_albedo; /* Oren-Nayar's directional albedo at the view (closures.glsl) */
+  vec3 lit = oren_nayar_environment(s, irradiance); /* Oren-Nayar's (closures.glsl) */
 #    else
-  vec3 rho = s.base_color;
+  vec3 lit = s.base_color * irradiance;
 #    endif
-  vec3 diffuse = rho * (1.0 - s.metalness) * saturate(1.0 - p.layer) * irradiance * INV_PI;
+  vec3 diffuse = lit * ((1.0 - s.metalness) * saturate(1.0 - p.layer) * INV_PI);
 #    ifdef SL_TRANSMISSION
   diffuse *= 1.0 - s.transmission.share;
 #    endif

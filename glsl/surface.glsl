@@ -160,6 +160,7 @@ struct Surface {
 #endif
 #ifdef SL_SPECULAR_TINT
   vec3 specular_tint; /* the Principled BSDF's Specular Tint */
+  float conductor;    /* the Physical Conductors' share of the metal lobe: its Fresnel exact of ior_n, ior_k */
 #endif
 #ifdef SL_COAT
   CoatLayer coat;
@@ -205,10 +206,14 @@ void thin_film_at(inout Surface s, vec4 film);
 #endif
 #ifdef SL_DIFFUSE_ROUGHNESS
 vec3 oren_nayar_diffuse(Surface s, vec3 rho, float NoL, float LoV); /* closures.glsl */
+#  if defined(SL_ENV_UNIFORM) || defined(SL_ENV_MAP)
+vec3 oren_nayar_environment(Surface s, vec3 irradiance);
+#  endif
 #endif
 #ifdef SL_GLOSSY
 vec3 glossy_metal(Surface s, vec3 F, vec3 M, float albedo); /* closures.glsl */
 float glossy_lobe(Surface s, float DV, float NoL, float NoH, float NxH2, float LoH);
+float glossy_albedo(Surface s, float E_ggx, float NoV, float roughness);
 #endif
 
 /* Unit half vector of eq. 1.6; l + v = 0 only when the light is exactly behind the viewer's
@@ -258,6 +263,7 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
   s.transmission = transmission_at(m, s.metalness);
 #endif
 #ifdef SL_SPECULAR_TINT
+  s.conductor = saturate(m.ior_n.w);
   s.specular_tint = max(m.specular_tint.rgb, 0.0);
   vec3 tint = s.specular_tint;
 #else
@@ -312,6 +318,9 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
 #endif
 #ifdef SL_LTC
   s.ltc = ltc_frame_at(n, v, s.NoV, s.roughness);
+#  ifdef SL_GLOSSY
+  s.ltc.albedo = glossy_albedo(s, s.ltc.albedo, s.NoV, s.roughness); /* Beckmann's, Ashikhmin-Shirley's */
+#  endif
 #endif
 #ifdef SL_TRANSLUCENT
   s.translucent = max(m.translucent.rgb, 0.0);

@@ -61,7 +61,8 @@ struct MaterialData {
   vec4 ambient_color;    /* rgb: Blinn-Phong/Phong ambient colour */
   vec4 params;           /* x: perceptual roughness r; y: metalness; z: shininess; w: dielectric F0 */
   vec4 fresnel;          /* x: F90 (< 0: automatic); y: eq. 1.13's p; z: 1 if ior_n/ior_k are set */
-  vec4 ior_n;            /* rgb: conductor IOR, real part */
+  vec4 ior_n;            /* rgb: conductor IOR, real part; w: a node graph's Physical Conductors' share of
+                          * the metal lobe (the Principled set's exact conductor Fresnel, SL_SPECULAR_TINT) */
   vec4 ior_k;            /* rgb: conductor IOR, imaginary part (extinction) */
   vec4 emission;         /* rgb: emitted radiance (Principled Emission Color x Strength);
                           * w: alpha (coverage, 1 opaque) */

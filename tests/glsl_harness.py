@@ -97,7 +97,7 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
                 fb.clear(color=(0.0, 0.0, 0.0, 0.0))
                 shader.bind()
                 if albedo_table:
-                    shader.uniform_sampler("ms_table", gpu_library.albedo_table(terms))
+                    shader.uniform_sampler("ms_table", gpu_library.albedo_table(terms, "SL_GLOSSY" in defs))
                 if layers:
                     shader.uniform_sampler("s_table", gpu_library.s_table())
                 if "SL_LTC" in defs:

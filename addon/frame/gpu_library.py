@@ -749,21 +749,28 @@ def r32f_texture(table: np.ndarray) -> gpu.types.GPUTexture:
     return gpu.types.GPUTexture((w, h), format="R32F", data=data)
 
 
-def albedo_table(terms) -> gpu.types.GPUTexture:
+def albedo_table(terms, glossy: bool = False) -> gpu.types.GPUTexture:
     """The directional-albedo table of ``terms``' D and V as an R32F texture (built once); for the
     Principled set, GGX + Smith's table; with Eavg(r) (GGX + Smith's) as an extra row where the
-    layering estimate reads it (the Principled set, the LAYERED diffuse)."""
-    from ..reference import multiscatter
+    layering estimate reads it (the Principled set, the LAYERED diffuse); ``glossy`` (a program
+    drawing the Glossy BSDFs' lobe, SL_GLOSSY: always layered) adds, after that row, the albedo
+    tables of Beckmann + Smith and of Ashikhmin-Shirley (glsl/closures.glsl's glossy_albedo)."""
+    from ..reference import closures, multiscatter
 
     ndf, visibility = terms.lobe
+    glossy = glossy and terms.layered
 
     def build():
         table = multiscatter.albedo_table(ndf, visibility)
         if terms.layered:
             table = np.vstack([table, multiscatter.average_albedo()[None, :]])
+        if glossy:
+            table = np.vstack([table, multiscatter.albedo_table("BECKMANN", "SMITH_CORRELATED"),
+                               closures.ashikhmin_shirley_albedo_table(table.shape[1])])
         return r32f_texture(table)
 
-    return LIBRARY.table((ndf, visibility, "EAVG" if terms.layered else ""), build)
+    key = (ndf, visibility, "EAVG" if terms.layered else "", "GLOSSY" if glossy else "")
+    return LIBRARY.table(key, build)
 
 
 def ltc_table(terms) -> gpu.types.GPUTexture:

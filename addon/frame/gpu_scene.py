@@ -736,7 +736,8 @@ class SceneResources:
         except ValueError:  # the compiler removed it: a surface giving no light (a Holdout)
             pass
         if features.uses_albedo_table:
-            gpu_library.bind_sampler(shader, "ms_table", gpu_library.albedo_table(features.terms))
+            gpu_library.bind_sampler(shader, "ms_table",
+                                     gpu_library.albedo_table(features.terms, "GLOSSY" in features.lobes))
         if features.uses_s_table:
             gpu_library.bind_sampler(shader, "s_table", gpu_library.s_table())
         if features.uses_sheen_table:

@@ -985,28 +985,38 @@ CLOSURE_NODE_LOBES = {"ShaderNodeBsdfToon": "TOON", "ShaderNodeBsdfTranslucent":
 SHEEN_LOBES = {"MICROFIBER": "SHEEN", "ASHIKHMIN": "VELVET"}
 
 
-def closure_node_lobe(node: FlatNode) -> str | None:
-    """The lobe (``snapshot.LOBES``) a closure node other than the Principled BSDF draws, if any: the
-    Diffuse BSDF's Oren-Nayar roughness, the Sheen BSDF's (Microfiber: the Principled BSDF's sheen),
-    the Toon BSDF's, the Translucent BSDF's and the Subsurface Scattering node's."""
+def closure_node_lobes(node: FlatNode) -> frozenset[str]:
+    """The lobes (``snapshot.LOBES``) a closure node other than the Principled BSDF draws (empty: none):
+    the Diffuse BSDF's Oren-Nayar roughness, the Sheen BSDF's (Microfiber: the Principled BSDF's sheen),
+    the Toon BSDF's, the Translucent BSDF's and the Subsurface Scattering node's; the Glossy BSDF's and
+    the Metallic BSDF's GGX and Beckmann distributions, the Metallic BSDF's F82 edge tint where it is
+    not white (a Physical Conductor's always: its fitted edge tint, ``_metallic``), the Specular BSDF's
+    coloured F0."""
     if node.kind in CLOSURE_NODE_LOBES:
-        return CLOSURE_NODE_LOBES[node.kind]
+        return frozenset({CLOSURE_NODE_LOBES[node.kind]})
     if node.kind == "ShaderNodeBsdfDiffuse":
-        return "DIFFUSE_ROUGHNESS"
+        return frozenset({"DIFFUSE_ROUGHNESS"})
     if node.kind == "ShaderNodeBsdfSheen":
-        return SHEEN_LOBES.get(node.props.get("distribution", "MICROFIBER"))
-    if node.kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic") or (
-            node.kind == "ShaderNodeBsdfMetallic" and node.props.get("distribution") in ("GGX", "BECKMANN")):
-        return "GLOSSY"
-    if node.kind == "ShaderNodeBsdfMetallic" and node.props.get("fresnel_type", "F82") == "F82":
-        tint = node.inputs.get("Edge Tint")  # the metal's F82 edge tint
-        white = tint is None or isinstance(tint.source, Const) and tuple(tint.source.value[:3]) == (1.0,) * 3
-        return None if white else "SPECULAR_TINT"
+        lobe = SHEEN_LOBES.get(node.props.get("distribution", "MICROFIBER"))
+        return frozenset({lobe} if lobe else ())
+    if node.kind in ("ShaderNodeBsdfGlossy", "ShaderNodeBsdfAnisotropic"):
+        return frozenset({"GLOSSY"})
+    if node.kind == "ShaderNodeBsdfMetallic":
+        out = {"GLOSSY"} if node.props.get("distribution") in ("GGX", "BECKMANN") else set()
+        fresnel = node.props.get("fresnel_type", "F82")
+        if fresnel == "PHYSICAL_CONDUCTOR":
+            out.add("SPECULAR_TINT")
+        elif fresnel == "F82":
+            tint = node.inputs.get("Edge Tint")  # the metal's F82 edge tint
+            white = (1.0,) * 3
+            if not (tint is None or isinstance(tint.source, Const) and tuple(tint.source.value[:3]) == white):
+                out.add("SPECULAR_TINT")
+        return frozenset(out)
     if node.kind == "ShaderNodeEeveeSpecular":  # its Specular's colour: the dielectric's F0 tint
         spec = node.inputs.get("Specular")
         grey = spec is not None and isinstance(spec.source, Const) and len(set(spec.source.value[:3])) == 1
-        return None if grey else "SPECULAR_TINT"
-    return None
+        return frozenset() if grey else frozenset({"SPECULAR_TINT"})
+    return frozenset()
 
 
 CLOSURES = {

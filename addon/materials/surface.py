@@ -298,14 +298,14 @@ def _lobes(flat: FlatGraph) -> frozenset[str]:
 
 def _node_lobe(node) -> set[str]:
     """The lobe (``snapshot.LOBES``) a closure node other than the Principled BSDF draws
-    (codegen.closure_node_lobe), as a set (empty: none): a Diffuse BSDF's Roughness only where it is
+    (codegen.closure_node_lobes), as a set (empty: none): a Diffuse BSDF's Roughness only where it is
     linked or above 0."""
-    lobe = codegen.closure_node_lobe(node)
-    if lobe == "DIFFUSE_ROUGHNESS":
+    lobes = set(codegen.closure_node_lobes(node))
+    if "DIFFUSE_ROUGHNESS" in lobes:
         spec = node.inputs.get("Roughness")
         if spec is None or (isinstance(spec.source, Const) and not float(spec.source.value or 0.0) > 0.0):
             return set()  # Lambert (Cycles' below 1e-5: the closure clamps to it, the lobe reads 0)
-    return {lobe} if lobe is not None else set()
+    return lobes
 
 
 def _closure_lobes(flat: FlatGraph) -> set[str]:

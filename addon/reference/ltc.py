@@ -608,6 +608,17 @@ def lobe_integral(form_factor, albedo, lobe_at_mean, density_at_mean):
     return I * (c + (E - c) * np.minimum(I, 1.0))
 
 
+def mean_direction(minv_entries, corners_local) -> np.ndarray:
+    """The LTC's own mean direction over a polygon, M F (F the vector form factor of the polygon mapped by
+    M^-1, mapped back by M; unit, local frame): where closures.glsl's glossy_ltc_direction takes a
+    Beckmann or Ashikhmin-Shirley lobe for ``lobe_integral``'s ratio, in place of the light's
+    irradiance-weighted direction."""
+    minv = minv_from_entries(minv_entries)
+    mapped = np.einsum("...ij,...kj->...ki", minv, np.asarray(corners_local, np.float64))
+    d = np.linalg.solve(minv, polygon_form_factor_vector(mapped)[..., None])[..., 0]
+    return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+
 def area_specular(p, n, v, corners, roughness, ndf: str = "GGX", light_normal=None) -> np.ndarray:
     """The specular integral  int_P f(v, l) (n.l) dl  (F = 1, height-correlated Smith) of a
     polygon P: ``lobe_integral`` of the LTC's integral over P, the albedo E(mu, r) (multiscatter's
