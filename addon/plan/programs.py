@@ -65,12 +65,21 @@ PBR_LIBRARY = ("anisotropy.glsl", "multiscatter.glsl", "pbr_terms.glsl", "thin_f
                "transmission.glsl", "closures.glsl")
 #: The screen-space refraction (glsl/transmission.glsl, passes.RefractionPass): the most levels of
 #: the blurred copy of what is behind the glass (each half the last's size), the steps a refracted
-#: ray is marched in across the screen and the bisections refining where it meets a surface, and the
-#: blur's scale: a level's texels per pixel of the refracted lobe's radius.
+#: ray is marched in across the screen, the bisections refining where it meets a surface and the
+#: steps settling it onto that surface (the depth at the texel it reached), and the blur's scale: a
+#: level's texels per pixel of the refracted lobe's radius.
 REFRACTION_LEVELS = 7
 REFRACTION_STEPS = 48
 REFRACTION_BISECTIONS = 6
+REFRACTION_SETTLE = 3
 REFRACTION_BLUR = 1.0
+#: The roughness (alpha) a light seen through a closed object's far face is taken at, over the
+#: surface's: the two rough crossings' spreads together (two GGX slopes summed peak as one of
+#: sqrt(3) alpha: glsl/transmission.glsl's transmission_exit_light).
+REFRACTION_EXIT_ALPHA = 1.7320508
+#: The spread (radians per unit of perceptual roughness) of the incidence angles at which rough glass's
+#: far face is crossed from inside (glsl/transmission.glsl's transmission_exit_fraction).
+REFRACTION_EXIT_SPREAD = 0.25
 #: How far (m, along the view) behind an opaque surface a refracted ray may pass at a step and
 #: still meet it (farther, it passed behind a nearer object and goes on), beyond two steps' length.
 REFRACTION_THICKNESS = 0.1
@@ -521,7 +530,10 @@ def refraction_defines(features: Features) -> tuple[tuple[str, str], ...]:
         return ()
     return (("REFRACTION_LEVELS", str(REFRACTION_LEVELS)), ("REFRACTION_STEPS", str(REFRACTION_STEPS)),
             ("REFRACTION_BISECTIONS", str(REFRACTION_BISECTIONS)),
-            ("REFRACTION_BLUR", repr(float(REFRACTION_BLUR))))
+            ("REFRACTION_SETTLE", str(REFRACTION_SETTLE)),
+            ("REFRACTION_BLUR", repr(float(REFRACTION_BLUR))),
+            ("REFRACTION_EXIT_ALPHA", repr(float(REFRACTION_EXIT_ALPHA))),
+            ("REFRACTION_EXIT_SPREAD", repr(float(REFRACTION_EXIT_SPREAD))))
 
 
 @dataclass(frozen=True)
