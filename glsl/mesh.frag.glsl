@@ -425,6 +425,17 @@ void main()
   alpha = clamp(alpha - closure.holdout, 0.0, 1.0);
 #  endif
 #endif
+#ifdef REFRACTION_LEVELS
+  if (alpha < 1.0) {
+    /* a partly transparent glass (Alpha under 1, or a node graph's coverage): Cycles mixes in a
+     * Transparent BSDF by 1 - Alpha, through which what lies behind shows unrefracted -- the
+     * refraction pass's copy of it at this pixel (its alpha the depth: a surface covers, the world
+     * leaves the film's alpha) */
+    vec4 behind = texelFetch(refraction_behind, ivec2(gl_FragCoord.xy), 0);
+    c = alpha * c + (1.0 - alpha) * behind.rgb;
+    alpha += (1.0 - alpha) * (behind.a < 1.0 ? 1.0 : refraction.world.x);
+  }
+#endif
   frag_color = vec4(write_target(lobes.w > 0.5 ? shade_finish(c) : c), alpha);
 #ifdef SL_PEEL
   /* a peeled layer keeps its coverage (what is behind stays hidden) and gives its Holdout share

@@ -99,6 +99,7 @@ struct TransmissionLobe {
   vec3 exit_p;         /* where it leaves a closed object through a face turned away from the viewer */
   vec3 exit_n;         /* that face's normal, facing the inside (against `inner`) */
   bool exit;           /* it leaves through such a face (else it refracts once: an open surface) */
+  vec3 behind;         /* where it then meets the opaque scene (or leaves the view) */
 };
 TransmissionLobe transmission_at(MaterialData m, float metalness);
 #endif

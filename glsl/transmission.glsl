@@ -29,6 +29,7 @@ TransmissionLobe transmission_at(MaterialData m, float metalness)
   t.exit_p = vec3(0.0);
   t.exit_n = vec3(0.0);
   t.exit = false;
+  t.behind = vec3(0.0);
   return t;
 }
 
@@ -190,22 +191,26 @@ float refraction_depth_crossing(vec4 c0, vec4 cd, float depth)
 }
 
 /* Where the ray from p along unit d first passes behind the surface of a depth map (`back`: the
- * faces turned away, else the opaque scene), marched in REFRACTION_STEPS steps even across the
- * screen up to where it leaves the view, the crossing refined by bisection: xyz the point on the
- * ray, w 1 where it met the surface (for the opaque scene: within `thickness` of it along the
- * view, so that a ray passing behind a nearer object goes on), 0 where it met none (then xyz where
- * it left the view). Positions along the screen map to the ray's length perspective-correctly
- * (1 / w is linear across the screen). */
+ * faces turned away, else the opaque scene), marched in steps even across the screen up to where it
+ * leaves the view -- one per REFRACTION_STRIDE pixels of its way across the screen, at least one,
+ * at most REFRACTION_STEPS (a ray along the view stays on a few pixels, where the depth behind it is
+ * one: a step at its end finds it, the bisection and settling place it) -- the crossing refined by
+ * bisection: xyz the point on the ray, w 1 where it met the surface (for the opaque scene: within
+ * `thickness` of it along the view, so that a ray passing behind a nearer object goes on), 0 where
+ * it met none (then xyz where it left the view). Positions along the screen map to the ray's length
+ * perspective-correctly (1 / w is linear across the screen). */
 vec4 refraction_march(bool back, vec3 p, vec3 d, float far)
 {
   vec4 c0 = refraction_clip(p);
   vec4 cd = frame.view_proj * vec4(d, 0.0);
   float end = refraction_ray_end(c0, cd, far);
   float w1 = c0.w + end * cd.w;
+  float across = distance(refraction_pixel(c0).xy, refraction_pixel(c0 + end * cd).xy);
+  int steps = clamp(int(ceil(across / REFRACTION_STRIDE)), 1, REFRACTION_STEPS);
   /* the ray's length at a fraction f of its way across the screen */
   float previous = 0.0;
-  for (int k = 1; k <= REFRACTION_STEPS; k++) {
-    float f = float(k) / float(REFRACTION_STEPS);
+  for (int k = 1; k <= steps; k++) {
+    float f = float(k) / float(steps);
     float t = f * end / w1 / ((1.0 - f) / c0.w + f / w1);
     vec3 q = refraction_pixel(c0 + t * cd);
     ivec2 texel = clamp(ivec2(q.xy), ivec2(0), ivec2(frame.viewport.xy) - 1);
@@ -316,13 +321,15 @@ float refraction_pixels(vec3 p, float r)
 }
 
 /* The view ray's way into the glass and through it (s.transmission's inside, inner, exit_p, exit_n,
- * exit), before the lights, which shine through it too: refracted into the surface (entering: from
- * the outside; else the viewer is inside, relative IOR 1 / eta), times the first crossing's Fresnel
- * (at the view: 1 - the reflection's albedo estimate for rough glass, all the lobe's microfacets
- * together) and tint; entering, it crosses a closed object to the face turned away from the viewer
- * that it meets (the back faces' depth and normals), where it leaves; an open surface (a plane) has
- * no such face. Nothing crosses where the ray reflects totally (the viewer inside, at a grazing
- * angle). */
+ * exit, behind), before the lights, which shine through it too: refracted into the surface
+ * (entering: from the outside; else the viewer is inside, relative IOR 1 / eta), times the first
+ * crossing's Fresnel (at the view: 1 - the reflection's albedo estimate for rough glass, all the
+ * lobe's microfacets together) and tint; entering a closed object, it crosses to the face turned
+ * away from the viewer that it meets (the back faces' depth and normals) and leaves there refracted
+ * again; an open surface (a plane) has no such face. Then it is marched to the opaque scene. Nothing
+ * crosses where the ray reflects totally (the viewer inside at a grazing angle, or inside at the far
+ * face: then only the far face is found). The two marches are one loop (one copy of the march in the
+ * program: on the CPU rasteriser every branch of it runs, and its size costs as much). */
 void transmission_trace(inout Surface s, bool entering)
 {
   TransmissionLobe t = s.transmission;
@@ -342,15 +349,29 @@ void transmission_trace(inout Surface s, bool entering)
   }
   s.transmission.inside = t.weight * t.tint * first;
   s.transmission.inner = d;
-  if (entering) {
-    vec4 exit = refraction_march(true, s.p, d, 1e6);
+  /* a closed object has a face turned away behind the fragment at its own pixel (the view ray
+   * leaves through it); where none is (an open surface: a plane), nothing to march through */
+  float far_face = texelFetch(refraction_back_depth, ivec2(gl_FragCoord.xy), 0).r;
+  bool closed = entering && far_face < 1.0 && far_face > gl_FragCoord.z;
+  vec3 start = s.p;
+  for (int leg = closed ? 0 : 1; leg < 2; leg++) {
+    vec4 hit = refraction_march(leg == 0, start, d, 1e6);
+    if (leg == 1) {
+      s.transmission.behind = hit.xyz;
+    }
     /* (the ray leaves through a face turned away from the viewer at least a hair behind the
      * fragment: a face of its own, an open surface seen from behind, is no far side) */
-    if (exit.w > 0.5 && distance(exit.xyz, s.p) > 1e-5) {
-      vec3 n2 = refraction_back_normal(refraction_pixel(refraction_clip(exit.xyz)).xy);
-      s.transmission.exit_n = dot(n2, d) < 0.0 ? n2 : -n2; /* facing the inside: against d */
-      s.transmission.exit_p = exit.xyz;
+    else if (hit.w > 0.5 && distance(hit.xyz, s.p) > 1e-5) {
+      vec3 n2 = refraction_back_normal(refraction_pixel(refraction_clip(hit.xyz)).xy);
+      n2 = dot(n2, d) < 0.0 ? n2 : -n2; /* facing the inside: against d */
+      s.transmission.exit_n = n2;
+      s.transmission.exit_p = hit.xyz;
       s.transmission.exit = true;
+      start = hit.xyz;
+      d = transmission_direction(d, n2, 1.0 / eta);
+      if (dot(d, d) <= 0.0) {
+        break; /* totally reflected inside: nothing behind is seen (transmission_behind) */
+      }
     }
   }
 }
@@ -425,12 +446,12 @@ vec3 transmission_exit_light(Surface s, vec3 l, vec3 E, vec4 factors)
 }
 
 /* The radiance reaching the viewer through the surface from what lies behind it, along the way
- * transmission_trace found: out through a closed object's far face (refracted again, times that
- * crossing's Fresnel and tint; 0 where the ray reflects totally inside: Cycles' internal
- * reflections are glossy bounces, which its transmission tests turn off), then marched to the opaque
- * scene behind (or where it leaves the view). Rough glass reads a blurred level: the refracted
- * lobe's spread, alpha (1 - 1 / eta) radians entering and alpha (eta - 1) leaving (a microfacet
- * tilted by alpha turns the ray by that much), over the length it then travels, in pixels. */
+ * transmission_trace found: out through a closed object's far face (times that crossing's Fresnel,
+ * transmission_exit_fraction, and tint; 0 where the ray reflects totally inside: Cycles' internal
+ * reflections are glossy bounces, which its transmission tests turn off) to the opaque scene behind
+ * (or where it leaves the view). Rough glass reads a blurred level: the refracted lobe's spread,
+ * alpha (1 - 1 / eta) radians entering and alpha (eta - 1) leaving (a microfacet tilted by alpha
+ * turns the ray by that much), over the length it then travels, in pixels. */
 vec3 transmission_behind(Surface s, bool entering)
 {
   TransmissionLobe t = s.transmission;
@@ -440,27 +461,23 @@ vec3 transmission_behind(Surface s, bool entering)
   float eta = entering ? t.eta : 1.0 / t.eta;
   vec3 throughput = t.inside;
   vec3 start = s.p;
-  vec3 d = t.inner;
   float inside = 0.0;
   float spread_in = s.alpha * abs(1.0 - 1.0 / eta);
   float spread_out = 0.0;
   if (t.exit) {
-    float cos2 = -dot(d, t.exit_n);
-    vec3 out_d = transmission_direction(d, t.exit_n, 1.0 / eta);
-    if (dot(out_d, out_d) <= 0.0) {
-      return vec3(0.0); /* totally reflected inside */
+    float cos2 = -dot(t.inner, t.exit_n);
+    if (dot(transmission_direction(t.inner, t.exit_n, 1.0 / eta), t.inner) <= 0.0) {
+      return vec3(0.0); /* totally reflected inside (refract gave 0) */
     }
     throughput *= t.tint * transmission_exit_fraction(cos2, eta, s.roughness, t.fresnel);
     inside = distance(t.exit_p, s.p);
     start = t.exit_p;
-    d = out_d;
     spread_out = s.alpha * abs(eta - 1.0);
   }
-  vec4 hit = refraction_march(false, start, d, 1e6);
-  float beyond = distance(hit.xyz, start);
+  float beyond = distance(t.behind, start);
   float radius = spread_in * (inside + beyond) + spread_out * beyond;
-  float lod = log2(max(refraction_pixels(hit.xyz, radius) * REFRACTION_BLUR, 1.0));
-  vec3 pixel = refraction_pixel(refraction_clip(hit.xyz));
+  float lod = log2(max(refraction_pixels(t.behind, radius) * REFRACTION_BLUR, 1.0));
+  vec3 pixel = refraction_pixel(refraction_clip(t.behind));
   return throughput * refraction_sample(pixel.xy, lod);
 }
 #  endif

@@ -1162,7 +1162,7 @@ class RefractionPass(Pass):
         OcclusionPass._draw_prepass(frame, view, None, self.back, back_faces=True, groups=groups)
         inverse = invert(np.asarray(frame.view_projection(view), np.float64))
         self.block = gpu.types.GPUUniformBuf(programs.pack_refraction(
-            inverse, self.rects, (self.atlas.width, self.atlas.height)))
+            inverse, self.rects, (self.atlas.width, self.atlas.height), float(view.background[3])))
 
         def bind(shader):
             gpu_library.bind_sampler(shader, "refraction_behind", self.atlas.texture_color)

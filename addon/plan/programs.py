@@ -64,12 +64,15 @@ PBR_LIBRARY = ("anisotropy.glsl", "multiscatter.glsl", "pbr_terms.glsl", "thin_f
                "ltc.glsl", "subsurface.glsl",
                "transmission.glsl", "closures.glsl")
 #: The screen-space refraction (glsl/transmission.glsl, passes.RefractionPass): the most levels of
-#: the blurred copy of what is behind the glass (each half the last's size), the steps a refracted
-#: ray is marched in across the screen, the bisections refining where it meets a surface and the
-#: steps settling it onto that surface (the depth at the texel it reached), and the blur's scale: a
-#: level's texels per pixel of the refracted lobe's radius.
+#: the blurred copy of what is behind the glass (each half the last's size), the most steps a
+#: refracted ray is marched in across the screen and the pixels of its way across per step (a ray
+#: along the view takes one: on a glass plane filling the view 48 steps made the pass 40x the frame,
+#: 2 pixels per step measure the same errors), the bisections refining where it meets a surface
+#: and the steps settling it onto that surface (the depth at the texel it reached), and the blur's
+#: scale: a level's texels per pixel of the refracted lobe's radius.
 REFRACTION_LEVELS = 7
 REFRACTION_STEPS = 48
+REFRACTION_STRIDE = 2.0
 REFRACTION_BISECTIONS = 6
 REFRACTION_SETTLE = 3
 REFRACTION_BLUR = 1.0
@@ -101,12 +104,15 @@ def refraction_layout(width: int, height: int) -> tuple[list, list, tuple[int, i
     return sizes, rects, (width + (sizes[1][0] if len(sizes) > 1 else 0), max(height, y))
 
 
-def pack_refraction(inverse_view_projection: np.ndarray, rects, size: tuple[int, int]) -> bytes:
-    """The RefractionData block (glsl/uniforms.glsl) of ``refraction_layout``'s rectangles and size."""
+def pack_refraction(inverse_view_projection: np.ndarray, rects, size: tuple[int, int],
+                    world_alpha: float = 1.0) -> bytes:
+    """The RefractionData block (glsl/uniforms.glsl) of ``refraction_layout``'s rectangles and size,
+    and the alpha the world leaves where it is behind the glass."""
     rows = np.zeros((REFRACTION_LEVELS, 4), np.float32)
     rows[:len(rects)] = rects
     info = np.array([len(rects), *size, REFRACTION_THICKNESS], np.float32)
-    return np.concatenate([_mat(inverse_view_projection), rows.ravel(), info]).tobytes()
+    world = np.array([world_alpha, 0.0, 0.0, 0.0], np.float32)
+    return np.concatenate([_mat(inverse_view_projection), rows.ravel(), info, world]).tobytes()
 
 
 #: How the world lights a program: "" not at all (a black world), "UNIFORM" a constant radiance,
@@ -239,8 +245,8 @@ class Features:
             object.__setattr__(self, "lobes", frozenset())
         if {"TRANSLUCENT", "SUBSURFACE"} & set(self.lobes):  # the subsurface measures the surface's
             object.__setattr__(self, "deferred", False)  # curvature from screen derivatives
-        if self.peel and "TRANSMISSION" in self.lobes:  # a partly transparent glass is peeled: what is
-            object.__setattr__(self, "lobes", self.lobes - {"TRANSMISSION"})  # behind it, not refracted
+        if self.peel and "TRANSMISSION" in self.lobes:  # a peeling pass draws no glass (a partly
+            object.__setattr__(self, "lobes", self.lobes - {"TRANSMISSION"})  # transparent one: refracted)
         if "TRANSMISSION" in self.lobes:  # drawn over the opaque scene (passes.RefractionPass), which
             object.__setattr__(self, "deferred", False)  # the occlusion pass saw without it
             object.__setattr__(self, "occlusion", False)
@@ -529,6 +535,7 @@ def refraction_defines(features: Features) -> tuple[tuple[str, str], ...]:
     if "TRANSMISSION" not in features.lobes:
         return ()
     return (("REFRACTION_LEVELS", str(REFRACTION_LEVELS)), ("REFRACTION_STEPS", str(REFRACTION_STEPS)),
+            ("REFRACTION_STRIDE", repr(float(REFRACTION_STRIDE))),
             ("REFRACTION_BISECTIONS", str(REFRACTION_BISECTIONS)),
             ("REFRACTION_SETTLE", str(REFRACTION_SETTLE)),
             ("REFRACTION_BLUR", repr(float(REFRACTION_BLUR))),
