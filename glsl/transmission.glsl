@@ -47,23 +47,25 @@ float transmission_fraction(float cos_i, float eta, bool fresnel)
  * along the view ray refracted in, at cos_i to that face's normal, for glass of perceptual
  * `roughness`: the smooth fraction (transmission_fraction) averaged over the spread of incidence
  * angles that the two rough crossings give the ray (the first crossing's lobe turns it, the far
- * face's microfacets tilt under it), as four angles theta +- s, +- 3 s (the quartiles of a
- * Student-t of 2 degrees, GGX's slopes, s = REFRACTION_EXIT_SPREAD x roughness radians / sqrt(3) and
- * sqrt(3) x that); total internal reflection takes what passes the critical angle. Against a
+ * face's microfacets tilt under it), as four angles theta +- s / sqrt(3), +- sqrt(3) s (the quartiles
+ * of a Student-t of 2 degrees, GGX's slopes; s = `spread` x roughness radians: the programs'
+ * REFRACTION_EXIT_SPREAD); total internal reflection takes what passes the critical angle. Against a
  * Monte-Carlo integration of Cycles' two rough crossings of a slab (its glass lobe normalised by its
  * albedo, as Cycles' energy compensation does; IOR 1.33 and 1.5, roughness 0.1-0.77, views 0-73
  * degrees): 0.041 mean absolute difference (0.15 largest, near the critical angle), the smooth
  * fraction 0.137 (0.44). Exact at roughness 0. */
-float transmission_exit_fraction(float cos_i, float eta, float roughness, bool fresnel)
+float transmission_exit_fraction(float cos_i, float eta, float roughness, float spread, bool fresnel)
 {
-  float theta = acos(clamp(cos_i, 0.0, 1.0));
-  float s = REFRACTION_EXIT_SPREAD * roughness;
+  float c = clamp(cos_i, 0.0, 1.0);
+  float sin_i = sqrt(1.0 - c * c);
+  float s = spread * roughness;
   float sum = 0.0;
   for (int k = 0; k < 4; k++) {
     float offset = s * (k < 2 ? 0.57735027 : 1.7320508) * ((k & 1) == 0 ? 1.0 : -1.0);
-    /* (an angle past the normal is that angle on the other side; one past grazing is grazing) */
-    float angle = min(abs(theta + offset), 0.5 * PI);
-    sum += transmission_fraction(cos(angle), 1.0 / eta, fresnel);
+    /* cos(theta + offset) (an angle past the normal is that angle on the other side, cos being even;
+     * one past grazing is grazing: cos 0) */
+    float cos_k = max(c * cos(offset) - sin_i * sin(offset), 0.0);
+    sum += transmission_fraction(cos_k, 1.0 / eta, fresnel);
   }
   return 0.25 * sum;
 }
@@ -130,6 +132,64 @@ vec3 transmission_light(Surface s, vec3 l, vec3 E, vec4 factors)
   }
   float crossing = transmission_fraction(HoV, s.transmission.eta, s.transmission.fresnel);
   return s.transmission.tint * (s.transmission.weight * crossing * lobe * factors.y) * E;
+}
+
+/* A light's radiance reaching the viewer through a closed object's far face (s.transmission.exit),
+ * l and E taken at the exit point -- Cycles' light sampled at the second crossing of a path through
+ * the object, after a first crossing sampled from the view's lobe. A light beyond that face shines
+ * through both rough crossings: their lobes' convolution, taken as the mean of two single lobes, each
+ * at the two crossings' roughness together (alpha_factor times the surface's alpha, the programs'
+ * REFRACTION_EXIT_ALPHA: summing two GGX slopes, a Student-t of 2 degrees, gives the peak of one of
+ * sqrt(3) alpha): the far face's lobe
+ * seen from inside along the view ray refracted in, and the near face's lobe towards the light's
+ * ray refracted in at the far face (smooth, by Snell's law, so that the far face's bending of wide
+ * angles is exact: the light's irradiance crosses by cos_out / cos_in, the adjoint lobe's eta^2
+ * undone). Against a Monte-Carlo integration of the two crossings' single-scattering lobes (slabs and
+ * tilted far faces, IOR 1.33-1.8, alpha 0.03-0.5): 2.3 % of their sum, median ratio 0.96. A light on
+ * the inside's side is reflected by the far face (GGX at the same roughness, the Fresnel from inside:
+ * all of it beyond the critical angle; a shadow-casting light reaches there only through the object,
+ * which its shadow map shades). Times what crossed in (s.transmission). */
+vec3 transmission_exit_light(Surface s, vec3 l, vec3 E, vec4 factors, float alpha_factor, float spread)
+{
+  TransmissionLobe t = s.transmission;
+  vec3 n = t.exit_n;
+  float alpha = s.alpha * alpha_factor;
+  float NoL = dot(n, l);
+  if (NoL < 0.0) {
+    /* the far face's lobe, seen from inside along the view ray */
+    float HoV;
+    float lobe = transmission_ggx(n, -t.inner, l, 1.0 / t.eta, alpha, HoV);
+    vec3 far = t.inside * (lobe > 0.0 ? transmission_fraction(HoV, 1.0 / t.eta, t.fresnel) * lobe : 0.0);
+    /* the near face's lobe towards the light's ray refracted in at the far face (which faces it: -n) */
+    vec3 u = transmission_direction(-l, -n, t.eta);
+    float cos_in = dot(u, n);
+    vec3 near = vec3(0.0);
+    if (cos_in > 0.0) {
+      float HoV2;
+      float lobe2 = transmission_ggx(s.n, s.v, -u, t.eta, alpha, HoV2);
+      if (lobe2 > 0.0) {
+        float crossings = transmission_fraction(HoV2, t.eta, t.fresnel) *
+                          transmission_fraction(-NoL, t.eta, t.fresnel);
+        near = t.tint * (t.weight * crossings * lobe2 * (-NoL) / (t.eta * t.eta * cos_in));
+      }
+    }
+    /* what the spread loses at the far face beyond its smooth fraction (transmission_exit_fraction:
+     * on a sphere, rays turned towards its rim meet the far face more obliquely) */
+    float cos2 = -dot(t.inner, n);
+    float smooth_fraction = transmission_fraction(cos2, 1.0 / t.eta, t.fresnel);
+    float rough_fraction = transmission_exit_fraction(cos2, t.eta, s.roughness, spread, t.fresnel);
+    float loss = smooth_fraction > 0.0 ? min(rough_fraction / smooth_fraction, 1.0) : 1.0;
+    return t.tint * (0.5 * loss * factors.y) * (far + near) * E;
+  }
+  if (!t.fresnel) {
+    return vec3(0.0); /* the Refraction BSDF reflects nothing */
+  }
+  vec3 v = -t.inner;
+  float NoV = max(dot(n, v), MIN_COS);
+  vec3 h = half_vector(l, v, n);
+  vec3 NxH = cross(n, h);
+  float lobe = D_GGX(dot(n, h), dot(NxH, NxH), alpha) * V_SmithGGXCorrelated(NoV, max(NoL, MIN_COS), alpha) * NoL;
+  return t.inside * t.reflection_tint * (F_Dielectric(1.0 / t.eta, dot(h, v)) * lobe * factors.y) * E;
 }
 
 /* --- what lies behind, in screen space (passes.RefractionPass) ------------------------------ */
@@ -388,70 +448,14 @@ vec3 transmission_exit_lookup(Surface s)
   return p - s.transmission.exit_n * (2.0 / max(per_metre, 1e-6));
 }
 
-/* A light's radiance reaching the viewer through a closed object's far face (s.transmission.exit),
- * l and E taken at the exit point -- Cycles' light sampled at the second crossing of a path through
- * the object, after a first crossing sampled from the view's lobe. A light beyond that face shines
- * through both rough crossings: their lobes' convolution, taken as the mean of two single lobes, each
- * at the two crossings' roughness together (alpha REFRACTION_EXIT_ALPHA times the surface's: summing
- * two GGX slopes, a Student-t of 2 degrees, gives a peak of sqrt(3) alpha's): the far face's lobe
- * seen from inside along the view ray refracted in, and the near face's lobe towards the light's
- * ray refracted in at the far face (smooth, by Snell's law, so that the far face's bending of wide
- * angles is exact: the light's irradiance crosses by cos_out / cos_in, the adjoint lobe's eta^2
- * undone). Against a Monte-Carlo integration of the two crossings' single-scattering lobes (slabs and
- * tilted far faces, IOR 1.33-1.8, alpha 0.03-0.5): 2.3 % of their sum, median ratio 0.96. A light on
- * the inside's side is reflected by the far face (GGX at the same roughness, the Fresnel from inside:
- * all of it beyond the critical angle; a shadow-casting light reaches there only through the object,
- * which its shadow map shades). Times what crossed in (s.transmission). */
-vec3 transmission_exit_light(Surface s, vec3 l, vec3 E, vec4 factors)
-{
-  TransmissionLobe t = s.transmission;
-  vec3 n = t.exit_n;
-  float alpha = s.alpha * REFRACTION_EXIT_ALPHA;
-  float NoL = dot(n, l);
-  if (NoL < 0.0) {
-    /* the far face's lobe, seen from inside along the view ray */
-    float HoV;
-    float lobe = transmission_ggx(n, -t.inner, l, 1.0 / t.eta, alpha, HoV);
-    vec3 far = t.inside * (lobe > 0.0 ? transmission_fraction(HoV, 1.0 / t.eta, t.fresnel) * lobe : 0.0);
-    /* the near face's lobe towards the light's ray refracted in at the far face (which faces it: -n) */
-    vec3 u = transmission_direction(-l, -n, t.eta);
-    float cos_in = dot(u, n);
-    vec3 near = vec3(0.0);
-    if (cos_in > 0.0) {
-      float HoV2;
-      float lobe2 = transmission_ggx(s.n, s.v, -u, t.eta, alpha, HoV2);
-      if (lobe2 > 0.0) {
-        float crossings = transmission_fraction(HoV2, t.eta, t.fresnel) * transmission_fraction(-NoL, t.eta, t.fresnel);
-        near = t.tint * (t.weight * crossings * lobe2 * (-NoL) / (t.eta * t.eta * cos_in));
-      }
-    }
-    /* what the spread loses at the far face beyond its smooth fraction (transmission_exit_fraction:
-     * on a sphere, rays turned towards its rim meet the far face more obliquely) */
-    float cos2 = -dot(t.inner, n);
-    float smooth_fraction = transmission_fraction(cos2, 1.0 / t.eta, t.fresnel);
-    float spread = smooth_fraction > 0.0 ?
-                       min(transmission_exit_fraction(cos2, t.eta, s.roughness, t.fresnel) / smooth_fraction, 1.0) :
-                       1.0;
-    return t.tint * (0.5 * spread * factors.y) * (far + near) * E;
-  }
-  if (!t.fresnel) {
-    return vec3(0.0); /* the Refraction BSDF reflects nothing */
-  }
-  vec3 v = -t.inner;
-  float NoV = max(dot(n, v), MIN_COS);
-  vec3 h = half_vector(l, v, n);
-  vec3 NxH = cross(n, h);
-  float lobe = D_GGX(dot(n, h), dot(NxH, NxH), alpha) * V_SmithGGXCorrelated(NoV, max(NoL, MIN_COS), alpha) * NoL;
-  return t.inside * t.reflection_tint * (F_Dielectric(1.0 / t.eta, dot(h, v)) * lobe * factors.y) * E;
-}
-
 /* The radiance reaching the viewer through the surface from what lies behind it, along the way
  * transmission_trace found: out through a closed object's far face (times that crossing's Fresnel,
  * transmission_exit_fraction, and tint; 0 where the ray reflects totally inside: Cycles' internal
  * reflections are glossy bounces, which its transmission tests turn off) to the opaque scene behind
  * (or where it leaves the view). Rough glass reads a blurred level: the refracted lobe's spread,
  * alpha (1 - 1 / eta) radians entering and alpha (eta - 1) leaving (a microfacet tilted by alpha
- * turns the ray by that much), over the length it then travels, in pixels. */
+ * turns the ray by that much), over the length it then travels, in pixels (with one level, the
+ * frame's glass all smooth, the copy alone). */
 vec3 transmission_behind(Surface s, bool entering)
 {
   TransmissionLobe t = s.transmission;
@@ -462,17 +466,20 @@ vec3 transmission_behind(Surface s, bool entering)
   vec3 throughput = t.inside;
   vec3 start = s.p;
   float inside = 0.0;
-  float spread_in = s.alpha * abs(1.0 - 1.0 / eta);
+  /* glass at the roughness floor is smooth: unblurred, as Cycles' (programs.REFRACTION_SMOOTH) */
+  float alpha = s.roughness > MIN_PERCEPTUAL_ROUGHNESS ? s.alpha : 0.0;
+  float spread_in = alpha * abs(1.0 - 1.0 / eta);
   float spread_out = 0.0;
   if (t.exit) {
     float cos2 = -dot(t.inner, t.exit_n);
     if (dot(transmission_direction(t.inner, t.exit_n, 1.0 / eta), t.inner) <= 0.0) {
       return vec3(0.0); /* totally reflected inside (refract gave 0) */
     }
-    throughput *= t.tint * transmission_exit_fraction(cos2, eta, s.roughness, t.fresnel);
+    throughput *= t.tint * transmission_exit_fraction(cos2, eta, s.roughness, REFRACTION_EXIT_SPREAD,
+                                                      t.fresnel);
     inside = distance(t.exit_p, s.p);
     start = t.exit_p;
-    spread_out = s.alpha * abs(eta - 1.0);
+    spread_out = alpha * abs(eta - 1.0);
   }
   float beyond = distance(t.behind, start);
   float radius = spread_in * (inside + beyond) + spread_out * beyond;

@@ -83,18 +83,23 @@ REFRACTION_EXIT_ALPHA = 1.7320508
 #: The spread (radians per unit of perceptual roughness) of the incidence angles at which rough glass's
 #: far face is crossed from inside (glsl/transmission.glsl's transmission_exit_fraction).
 REFRACTION_EXIT_SPREAD = 0.25
+#: The Roughness up to which a glass is smooth: the refraction reads what is behind it unblurred
+#: (the shading's roughness floor, glsl/common.glsl's MIN_PERCEPTUAL_ROUGHNESS), and a frame whose
+#: glass is all smooth makes no blurred levels.
+REFRACTION_SMOOTH = 0.045
 #: How far (m, along the view) behind an opaque surface a refracted ray may pass at a step and
 #: still meet it (farther, it passed behind a nearer object and goes on), beyond two steps' length.
 REFRACTION_THICKNESS = 0.1
 
 
-def refraction_layout(width: int, height: int) -> tuple[list, list, tuple[int, int]]:
+def refraction_layout(width: int, height: int,
+                      levels: int = REFRACTION_LEVELS) -> tuple[list, list, tuple[int, int]]:
     """The copy of what is behind the glass (passes.RefractionPass) for a ``width`` x ``height``
     target: its levels' sizes (level 0 the target's, each next half the last's, rounded up, at most
-    REFRACTION_LEVELS), their rectangles (x, y, width, height) in one texture (level 0 at the
-    origin, the others stacked to its right) and that texture's size."""
+    ``levels``), their rectangles (x, y, width, height) in one texture (level 0 at the origin, the
+    others stacked to its right) and that texture's size."""
     sizes = [(width, height)]
-    while len(sizes) < REFRACTION_LEVELS and max(sizes[-1]) > 1:
+    while len(sizes) < min(levels, REFRACTION_LEVELS) and max(sizes[-1]) > 1:
         w, h = sizes[-1]
         sizes.append((-(-w // 2), -(-h // 2)))
     rects, y = [(0, 0, width, height)], 0
