@@ -65,6 +65,10 @@ LIGHT_CASES = {
 LIGHT_MEASURED = {"plane-point-0.3": (1.5e-3, 8.3e-3, 0.999), "slab-point-0.3": (0.163, 3.06, 0.992),
                   "slab-sun-0.6": (0.0569, 0.676, 1.012), "sphere-point-0.3": (0.230, 4.30, 1.085),
                   "sphere-sun-0.6": (0.381, 4.24, 0.848)}
+if bpy.app.version < (5, 0, 0):  # measured with bpy 4.5.15: Cycles 4.5's light through one face of
+    # rough glass differs from 5.0's by 0.6 % (the sum by 0.6 %), the slab's by 3.4 % in its sum
+    LIGHT_MEASURED.update({"plane-point-0.3": (5.8e-3, 1.34e-2, 0.994),
+                           "slab-point-0.3": (0.178, 2.72, 0.966)})
 
 
 @pytest.mark.parametrize("case", LIGHT_CASES)
