@@ -131,13 +131,30 @@ vec3 light_share(Surface s, vec3 ng, LightData light, bool shadowed)
     E *= visibility;
   }
 #endif
+  vec3 c = vec3(0.0);
+#ifdef REFRACTION_LEVELS
+  if (s.transmission.exit) {
+    /* through a closed glass object's far face, at the exit point (transmission.glsl) */
+    vec3 l_exit;
+    vec3 E_exit = light_irradiance(light, s.transmission.exit_p, l_exit);
+#  ifdef SL_SHADOWS
+    if (shadowed && max(E_exit.r, max(E_exit.g, E_exit.b)) > 0.0) {
+      E_exit *= light_visibility(light, transmission_exit_lookup(s), -s.transmission.exit_n);
+    }
+#  endif
+    c = transmission_exit_light(s, l_exit, E_exit, factors, REFRACTION_EXIT_ALPHA, REFRACTION_EXIT_SPREAD);
+#  if defined(SL_COAT) || defined(SL_SHEEN)
+    c *= s.below; /* under the upper layers, as the rest of the glass */
+#  endif
+  }
+#endif
 #ifdef SL_GRAPH_BENT_NORMAL
   if (bent_split) {
-    return shade_light(s, light, l, E, visibility, factors * vec4(1.0, 0.0, 1.0, 1.0)) +
+    return c + shade_light(s, light, l, E, visibility, factors * vec4(1.0, 0.0, 1.0, 1.0)) +
            shade_light(bent_specular, light, l, E, visibility, factors * vec4(0.0, 1.0, 1.0, 1.0));
   }
 #endif
-  return shade_light(s, light, l, E, visibility, factors);
+  return c + shade_light(s, light, l, E, visibility, factors);
 }
 
 /* Shade the fragment's lights from its k-th listed one up to light index `end` into c (k moves
@@ -313,6 +330,13 @@ void main()
 #    endif
 #  endif
 #endif
+#ifdef REFRACTION_LEVELS
+  /* the view ray's way through the glass, which the lights shine along too (transmission.glsl) */
+  transmission_trace(s, entering);
+#  ifdef SL_GRAPH_BENT_NORMAL
+  bent_specular.transmission = s.transmission;
+#  endif
+#endif
   /* ambient: neither a diffuse nor a specular lobe (weight z, off in lobe passes) */
   vec3 c = shade_ambient(s, frame.ambient.rgb) * lobes.z;
   /* the world is a light: its diffuse and specular parts go to the lobes' passes */
@@ -400,6 +424,17 @@ void main()
    * reduced by its weight, what is behind hidden); a partly transparent (peeled) one below */
   alpha = clamp(alpha - closure.holdout, 0.0, 1.0);
 #  endif
+#endif
+#ifdef REFRACTION_LEVELS
+  if (alpha < 1.0) {
+    /* a partly transparent glass (Alpha under 1, or a node graph's coverage): Cycles mixes in a
+     * Transparent BSDF by 1 - Alpha, through which what lies behind shows unrefracted -- the
+     * refraction pass's copy of it at this pixel (its alpha the depth: a surface covers, the world
+     * leaves the film's alpha) */
+    vec4 behind = texelFetch(refraction_behind, ivec2(gl_FragCoord.xy), 0);
+    c = alpha * c + (1.0 - alpha) * behind.rgb;
+    alpha += (1.0 - alpha) * (behind.a < 1.0 ? 1.0 : refraction.world.x);
+  }
 #endif
   frag_color = vec4(write_target(lobes.w > 0.5 ? shade_finish(c) : c), alpha);
 #ifdef SL_PEEL

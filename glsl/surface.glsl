@@ -91,6 +91,15 @@ struct TransmissionLobe {
   float eta;           /* its IOR (inside over outside) */
   vec3 tint;           /* each crossing's tint */
   vec3 reflection_tint; /* the dielectric reflection's tint */
+  /* the view ray's way through the glass (transmission.glsl's transmission_trace, in the programs
+   * passes.RefractionPass draws; else none: `inside` 0) */
+  vec3 inside;         /* what crosses into the surface towards the viewer, per unit behind (weight,
+                        * tint, the first crossing's Fresnel); 0 where nothing does */
+  vec3 inner;          /* the view ray refracted in: its direction inside */
+  vec3 exit_p;         /* where it leaves a closed object through a face turned away from the viewer */
+  vec3 exit_n;         /* that face's normal, facing the inside (against `inner`) */
+  bool exit;           /* it leaves through such a face (else it refracts once: an open surface) */
+  vec3 behind;         /* where it then meets the opaque scene (or leaves the view) */
 };
 TransmissionLobe transmission_at(MaterialData m, float metalness);
 #endif

@@ -105,11 +105,13 @@ struct MaterialData {
  * RefractionPass): the camera's clip -> world, the rectangles (x, y, width, height in texels) of the
  * copy's levels in refraction_behind (level 0 the target's size, its alpha the depth; each next half
  * the size, blurred); info: x the number of levels, yz the texture's size, w how far (m, along the
- * view) behind an opaque surface a ray still meets it. */
+ * view) behind an opaque surface a ray still meets it; world: x the alpha where the world is behind
+ * (0 with a transparent film). */
 struct RefractionData {
   mat4 inverse_view_projection;
   vec4 rect[REFRACTION_LEVELS];
   vec4 info;
+  vec4 world;
 };
 #endif
 

@@ -675,10 +675,12 @@ class SceneResources:
                 if material.graph is not None and material.graph.attributes:
                     batch = self._attribute_batch(item.geometry, slot, parts, material.graph.attributes)
                 draw = Draw(order, order // block_size, order % block_size, key, batch, slot)
-                if material.alpha < 1.0 or (material.graph is not None and material.graph.transparent):
-                    blended.setdefault(replace(features[key], peel=True, occlusion=False), []).append(draw)
-                elif "TRANSMISSION" in features[key].lobes:
+                if "TRANSMISSION" in features[key].lobes:
+                    # a glass, partly transparent too: its transparent part is what lies behind it
+                    # unrefracted, which the refraction pass has (glsl/mesh.frag.glsl)
                     refracted.setdefault(features[key], []).append(draw)
+                elif material.alpha < 1.0 or (material.graph is not None and material.graph.transparent):
+                    blended.setdefault(replace(features[key], peel=True, occlusion=False), []).append(draw)
                 else:
                     opaque.setdefault(features[key], []).append(draw)
 

@@ -1140,15 +1140,28 @@ class RefractionPass(Pass):
         self.back: Target | None = None
         self.block = None
 
-    def _buffers(self, width: int, height: int) -> None:
-        if self._size == (width, height):
+    def _buffers(self, width: int, height: int, levels: int) -> None:
+        if self._size == (width, height, levels):
             return
         self.free()
-        sizes, self.rects, atlas = programs.refraction_layout(width, height)
+        sizes, self.rects, atlas = programs.refraction_layout(width, height, levels)
         self.levels = [Target(w, h, "RGBA32F", depth=False) for w, h in sizes]
-        self.atlas = Target(*atlas, "RGBA32F", depth=False)
+        # one level is the copy alone (read where it is); more are packed into one texture
+        self.atlas = Target(*atlas, "RGBA32F", depth=False) if len(sizes) > 1 else None
         self.back = Target(width, height, "RGBA32F", depth=True)
-        self._size = (width, height)
+        self._size = (width, height, levels)
+
+    @staticmethod
+    def levels_needed(frame: Frame, groups) -> int:
+        """The blurred levels the transmitting surfaces ``groups`` read: the copy alone where each
+        is smooth (its material's Roughness at most ``programs.REFRACTION_SMOOTH`` and no node graph
+        that could make it rougher: glsl/transmission.glsl reads such glass unblurred), else every
+        level."""
+        materials = frame.snapshot.materials
+        rough = any(materials[draw.material].graph is not None
+                    or materials[draw.material].roughness > programs.REFRACTION_SMOOTH
+                    for _features, draws in groups for draw in draws)
+        return programs.REFRACTION_LEVELS if rough else 1
 
     def run(self, frame: Frame, view: View) -> bool:
         groups = view_lists(frame, view).refracted
@@ -1156,16 +1169,17 @@ class RefractionPass(Pass):
             self.free()  # a viewport keeps no copy once nothing transmits
             return True
         target = frame.outputs[view.output("scene")]
-        self._buffers(target.width, target.height)
+        self._buffers(target.width, target.height, self.levels_needed(frame, groups))
         self._copy(frame, target)
         # the transmitting surfaces' nearest faces turned away from the viewer: depth and normals
         OcclusionPass._draw_prepass(frame, view, None, self.back, back_faces=True, groups=groups)
         inverse = invert(np.asarray(frame.view_projection(view), np.float64))
+        behind = self.atlas or self.levels[0]
         self.block = gpu.types.GPUUniformBuf(programs.pack_refraction(
-            inverse, self.rects, (self.atlas.width, self.atlas.height)))
+            inverse, self.rects, (behind.width, behind.height), float(view.background[3])))
 
         def bind(shader):
-            gpu_library.bind_sampler(shader, "refraction_behind", self.atlas.texture_color)
+            gpu_library.bind_sampler(shader, "refraction_behind", behind.texture_color)
             gpu_library.bind_sampler(shader, "refraction_back", self.back.texture_color)
             gpu_library.bind_sampler(shader, "refraction_back_depth", self.back.texture_depth)
             shader.uniform_block("refraction", self.block)
@@ -1182,6 +1196,8 @@ class RefractionPass(Pass):
             gpu_library.bind_sampler(shader, "source_depth", target.texture_depth)
 
         frame.draw_full_screen(gpu_library.refraction_copy_program("COPY"), bind_copy, self.levels[0])
+        if self.atlas is None:
+            return  # the copy alone
         down = gpu_library.refraction_copy_program("DOWN")
         for source, level in zip(self.levels, self.levels[1:]):
             frame.draw_full_screen(down, lambda s, source=source: gpu_library.bind_sampler(

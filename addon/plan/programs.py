@@ -65,25 +65,42 @@ PBR_LIBRARY = ("anisotropy.glsl", "multiscatter.glsl", "pbr_terms.glsl", "thin_f
                "ltc.glsl", "subsurface.glsl",
                "transmission.glsl", "closures.glsl")
 #: The screen-space refraction (glsl/transmission.glsl, passes.RefractionPass): the most levels of
-#: the blurred copy of what is behind the glass (each half the last's size), the steps a refracted
-#: ray is marched in across the screen and the bisections refining where it meets a surface, and the
-#: blur's scale: a level's texels per pixel of the refracted lobe's radius.
+#: the blurred copy of what is behind the glass (each half the last's size), the most steps a
+#: refracted ray is marched in across the screen and the pixels of its way across per step (a ray
+#: along the view takes one: on a glass plane filling the view 48 steps made the pass 40x the frame,
+#: 2 pixels per step measure the same errors), the bisections refining where it meets a surface
+#: and the steps settling it onto that surface (the depth at the texel it reached), and the blur's
+#: scale: a level's texels per pixel of the refracted lobe's radius.
 REFRACTION_LEVELS = 7
 REFRACTION_STEPS = 48
+REFRACTION_STRIDE = 2.0
 REFRACTION_BISECTIONS = 6
+REFRACTION_SETTLE = 3
 REFRACTION_BLUR = 1.0
+#: The roughness (alpha) a light seen through a closed object's far face is taken at, over the
+#: surface's: the two rough crossings' spreads together (two GGX slopes summed peak as one of
+#: sqrt(3) alpha: glsl/transmission.glsl's transmission_exit_light).
+REFRACTION_EXIT_ALPHA = 1.7320508
+#: The spread (radians per unit of perceptual roughness) of the incidence angles at which rough glass's
+#: far face is crossed from inside (glsl/transmission.glsl's transmission_exit_fraction).
+REFRACTION_EXIT_SPREAD = 0.25
+#: The Roughness up to which a glass is smooth: the refraction reads what is behind it unblurred
+#: (the shading's roughness floor, glsl/common.glsl's MIN_PERCEPTUAL_ROUGHNESS), and a frame whose
+#: glass is all smooth makes no blurred levels.
+REFRACTION_SMOOTH = 0.045
 #: How far (m, along the view) behind an opaque surface a refracted ray may pass at a step and
 #: still meet it (farther, it passed behind a nearer object and goes on), beyond two steps' length.
 REFRACTION_THICKNESS = 0.1
 
 
-def refraction_layout(width: int, height: int) -> tuple[list, list, tuple[int, int]]:
+def refraction_layout(width: int, height: int,
+                      levels: int = REFRACTION_LEVELS) -> tuple[list, list, tuple[int, int]]:
     """The copy of what is behind the glass (passes.RefractionPass) for a ``width`` x ``height``
     target: its levels' sizes (level 0 the target's, each next half the last's, rounded up, at most
-    REFRACTION_LEVELS), their rectangles (x, y, width, height) in one texture (level 0 at the
-    origin, the others stacked to its right) and that texture's size."""
+    ``levels``), their rectangles (x, y, width, height) in one texture (level 0 at the origin, the
+    others stacked to its right) and that texture's size."""
     sizes = [(width, height)]
-    while len(sizes) < REFRACTION_LEVELS and max(sizes[-1]) > 1:
+    while len(sizes) < min(levels, REFRACTION_LEVELS) and max(sizes[-1]) > 1:
         w, h = sizes[-1]
         sizes.append((-(-w // 2), -(-h // 2)))
     rects, y = [(0, 0, width, height)], 0
@@ -93,12 +110,15 @@ def refraction_layout(width: int, height: int) -> tuple[list, list, tuple[int, i
     return sizes, rects, (width + (sizes[1][0] if len(sizes) > 1 else 0), max(height, y))
 
 
-def pack_refraction(inverse_view_projection: np.ndarray, rects, size: tuple[int, int]) -> bytes:
-    """The RefractionData block (glsl/uniforms.glsl) of ``refraction_layout``'s rectangles and size."""
+def pack_refraction(inverse_view_projection: np.ndarray, rects, size: tuple[int, int],
+                    world_alpha: float = 1.0) -> bytes:
+    """The RefractionData block (glsl/uniforms.glsl) of ``refraction_layout``'s rectangles and size,
+    and the alpha the world leaves where it is behind the glass."""
     rows = np.zeros((REFRACTION_LEVELS, 4), np.float32)
     rows[:len(rects)] = rects
     info = np.array([len(rects), *size, REFRACTION_THICKNESS], np.float32)
-    return np.concatenate([_mat(inverse_view_projection), rows.ravel(), info]).tobytes()
+    world = np.array([world_alpha, 0.0, 0.0, 0.0], np.float32)
+    return np.concatenate([_mat(inverse_view_projection), rows.ravel(), info, world]).tobytes()
 
 
 #: How the world lights a program: "" not at all (a black world), "UNIFORM" a constant radiance,
@@ -234,8 +254,8 @@ class Features:
             object.__setattr__(self, "lobes", frozenset())
         if {"TRANSLUCENT", "SUBSURFACE"} & set(self.lobes):  # the subsurface measures the surface's
             object.__setattr__(self, "deferred", False)  # curvature from screen derivatives
-        if self.peel and "TRANSMISSION" in self.lobes:  # a partly transparent glass is peeled: what is
-            object.__setattr__(self, "lobes", self.lobes - {"TRANSMISSION"})  # behind it, not refracted
+        if self.peel and "TRANSMISSION" in self.lobes:  # a peeling pass draws no glass (a partly
+            object.__setattr__(self, "lobes", self.lobes - {"TRANSMISSION"})  # transparent one: refracted)
         if "TRANSMISSION" in self.lobes:  # drawn over the opaque scene (passes.RefractionPass), which
             object.__setattr__(self, "deferred", False)  # the occlusion pass saw without it
             object.__setattr__(self, "occlusion", False)
@@ -540,8 +560,12 @@ def refraction_defines(features: Features) -> tuple[tuple[str, str], ...]:
     if "TRANSMISSION" not in features.lobes:
         return ()
     return (("REFRACTION_LEVELS", str(REFRACTION_LEVELS)), ("REFRACTION_STEPS", str(REFRACTION_STEPS)),
+            ("REFRACTION_STRIDE", repr(float(REFRACTION_STRIDE))),
             ("REFRACTION_BISECTIONS", str(REFRACTION_BISECTIONS)),
-            ("REFRACTION_BLUR", repr(float(REFRACTION_BLUR))))
+            ("REFRACTION_SETTLE", str(REFRACTION_SETTLE)),
+            ("REFRACTION_BLUR", repr(float(REFRACTION_BLUR))),
+            ("REFRACTION_EXIT_ALPHA", repr(float(REFRACTION_EXIT_ALPHA))),
+            ("REFRACTION_EXIT_SPREAD", repr(float(REFRACTION_EXIT_SPREAD))))
 
 
 @dataclass(frozen=True)
