@@ -107,3 +107,107 @@ def bent_normal(n, v, x, y, alpha_x, alpha_y, perceptual):
     bent = np.where((f2 > 1e-12)[..., None], n + (unit - n) * bend, n)
     b2 = _dot(bent, bent)
     return np.where((b2 > 1e-12)[..., None], bent / np.sqrt(np.maximum(b2, 1e-300))[..., None], n)
+
+
+# --- lights with a size: the lobe's integral over a polygon ------------------------------------------
+
+def _stretched_half(u, v, n, x, y, alpha_x, alpha_y):
+    """The half vector of the unit u and v in the lobe's hemisphere configuration, (h.x / ax, h.y / ay,
+    h.n) with h = u + v (any length: only its direction counts)."""
+    h = u + v
+    return np.stack([_dot(h, x) / alpha_x, _dot(h, y) / alpha_y, _dot(h, n)], -1)
+
+
+def _edge_term(a, b, u):
+    """theta g . u of the spherical edge from direction a to b (any lengths): the angle between them
+    times the unit normal of their plane, along u (Arvo 1995's edge term)."""
+    c = np.cross(a, b)
+    s = np.linalg.norm(c, axis=-1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return np.where(s > 0.0, np.arctan2(s, _dot(a, b)) / np.where(s > 0.0, s, 1.0) * _dot(c, u), 0.0)
+
+
+def _unit(w):
+    length = np.linalg.norm(w, axis=-1, keepdims=True)
+    return w / np.where(length > 0.0, length, 1.0)
+
+
+def visible_view(v, n, NoV):
+    """v with its height above the surface floored as the surface floors n.v (``V``'s rule): its part
+    along the surface scaled to sqrt(1 - n.v^2); n where v has none."""
+    vt = v - n * _dot(v, n)[..., None]
+    t2 = _dot(vt, vt)
+    scale = np.sqrt(np.maximum(1.0 - NoV * NoV, 0.0) / np.where(t2 > 1e-20, t2, 1.0))
+    return np.where((t2 > 1e-20)[..., None], n * np.asarray(NoV)[..., None] + vt * scale[..., None], n)
+
+
+#: A light's edge is split into pieces whose chords between unit directions are at most this long (~ the
+#: angle, radians), up to POLYGON_PIECES of them (``polygon_integral``; anisotropy.glsl's ANISOTROPIC_PIECE)
+POLYGON_PIECE = 0.15
+POLYGON_PIECES = 16
+
+
+def polygon_integral(n, v, NoV, x, y, alpha_x, alpha_y, offsets, to_centre):
+    """The lobe's integral over a light's polygon, int_P D V (n.l) dl (F = 1; anisotropy.glsl's
+    anisotropic_polygon): the polygon (corners to_centre + offsets from the points, (..., k, 3)) clipped
+    at the horizon, its edges mapped to the half vectors' hemisphere configuration and the visible
+    normals' clamped cosine integrated over them in closed form, each edge with its midpoint (Richardson's
+    extrapolation of the curved image), times G2 / G1(v) at the clipped boundary's mean direction."""
+    n, v = np.asarray(n, np.float64), np.asarray(v, np.float64)
+    NoV = np.asarray(NoV, np.float64)
+    corners = np.asarray(to_centre, np.float64)[..., None, :] + np.asarray(offsets, np.float64)
+    shape = np.broadcast_shapes(np.shape(n), corners.shape[:-2] + (3,))
+    n, v, x, y = (np.broadcast_to(a, shape) for a in (n, v, x, y))
+    alpha_x, alpha_y = np.broadcast_to(alpha_x, shape[:-1]), np.broadcast_to(alpha_y, shape[:-1])
+    corners = np.broadcast_to(corners, shape[:-1] + corners.shape[-2:])
+    ve = visible_view(v, n, np.broadcast_to(NoV, shape[:-1]))
+    vs = _unit(np.stack([alpha_x * _dot(ve, x), alpha_y * _dot(ve, y), _dot(ve, n)], -1))
+    frame = (ve, n, x, y, alpha_x, alpha_y)
+    state = {"first": None, "last": None, "sum": np.zeros(shape[:-1]), "mean": np.zeros(shape)}
+
+    def edge(ua, wa, ub, wb, mask):
+        pieces = np.clip(np.ceil(np.linalg.norm(ub - ua, axis=-1) / POLYGON_PIECE), 1, POLYGON_PIECES)
+        wp, total = wa, np.zeros(shape[:-1])
+        for j in range(1, int(pieces[mask].max(initial=1)) + 1):
+            last = j >= pieces
+            t = np.minimum(j / pieces, 1.0)[..., None]
+            u = _unit(ua + (ub - ua) * t)
+            w = np.where(last[..., None], wb, _stretched_half(u, *frame))
+            total += np.where(j <= pieces, _edge_term(wp, w, vs), 0.0)
+            state["mean"] += np.where((mask & (j <= pieces))[..., None], ua + (ub - ua) * (t - 1.0 / pieces[..., None]), 0.0)
+            wp = w
+        state["sum"] += np.where(mask, total, 0.0)
+
+    def emit(q, mask):
+        u = _unit(q)
+        w = _stretched_half(u, *frame)
+        if state["first"] is None:
+            state["first"] = [np.zeros(shape, bool)[..., 0], u, w]
+            state["last"] = [u, w]
+        has = state["first"][0]
+        edge(state["last"][0], state["last"][1], u, w, mask & has)
+        for k, value in ((1, u), (2, w)):
+            state["first"][k] = np.where((mask & ~has)[..., None], value, state["first"][k])
+        state["first"][0] = has | mask
+        state["last"] = [np.where(mask[..., None], u, state["last"][0]), np.where(mask[..., None], w, state["last"][1])]
+
+    height = np.sum(corners * n[..., None, :], axis=-1)
+    count = corners.shape[-2]
+    for i in range(count):
+        a, b = corners[..., i - 1, :], corners[..., i, :]
+        da, db = height[..., i - 1], height[..., i]
+        crossing = (da > 0.0) != (db > 0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t = np.where(crossing, da / np.where(crossing, da - db, 1.0), 0.0)
+        emit(a + (b - a) * t[..., None], crossing)
+        emit(b, db > 0.0)
+    first = state["first"]
+    edge(state["last"][0], state["last"][1], first[1], first[2], first[0])
+    visible = 2.0 / (1.0 + vs[..., 2]) * np.abs(state["sum"]) / (2.0 * np.pi)
+    l = _unit(state["mean"])
+    NoL = _dot(l, n)
+    lam_v = Lambda(ve, n, x, y, alpha_x, alpha_y)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lam_l = Lambda(l, n, x, y, alpha_x, alpha_y)
+        g = np.where(NoL > 0.0, (1.0 + lam_v) / (1.0 + lam_v + lam_l), 0.0)
+    return np.where(first[0], visible * g, 0.0)
