@@ -140,8 +140,6 @@ vec3 anisotropic_reflection(Surface s)
  * whole edges 6.8 %, pieces of 0.4 1.7 %, 0.2 0.43 %, 0.15 0.28 %, 0.1 0.15 %. */
 #    define ANISOTROPIC_PIECE 0.15
 #    define ANISOTROPIC_PIECES 16
-/* the clipped polygon's corners at most: every corner of a 16-gon and one more where the horizon cuts */
-#    define ANISOTROPIC_CORNERS (AREA_ELLIPSE_SIDES + 1)
 
 /* A unit light direction u's half vector with v, in the lobe's hemisphere configuration:
  * (h.x / ax, h.y / ay, h.n), h = u + v (unnormalised: the edge terms take directions only). */
@@ -149,6 +147,13 @@ vec3 anisotropic_stretched_half(AnisotropicLobe a, vec3 n, vec3 v, vec3 u)
 {
   vec3 h = u + v;
   return vec3(dot(h, a.x) / a.alpha_x, dot(h, a.y) / a.alpha_y, dot(h, n));
+}
+
+/* p / |p|, and 0 for 0 (a light edge-on through the shading point; two opposite directions'
+ * midpoint) rather than NaN */
+vec3 anisotropic_unit(vec3 p)
+{
+  return p * inversesqrt(max(dot(p, p), 1e-36));
 }
 
 /* theta g . z of the spherical edge from direction a to b (any lengths): the angle between them
@@ -174,49 +179,49 @@ float anisotropic_polygon(AnisotropicLobe a, vec3 n, vec3 v, float NoV, LightPol
   float extent = max(max(length(poly.to_centre), length(poly.x_half)), length(poly.y_half));
   float scale = exp2(-floor(log2(max(extent, 1e-30))));
   vec3 t = poly.to_centre * scale;
-  /* the polygon clipped at the horizon, corner by corner (Sutherland-Hodgman) */
-  vec3 corners[ANISOTROPIC_CORNERS];
-  int count = 0;
-  vec3 c_a = t + polygon_offset(poly, poly.sides - 1) * scale;
-  float h_a = dot(c_a, n);
-  int i = 0;
-  do { /* tested at the end (glsl/README.md): a polygon has 4 sides or more */
-    vec3 c_b = t + polygon_offset(poly, i) * scale;
-    float h_b = dot(c_b, n);
-    if ((h_a > 0.0) != (h_b > 0.0)) {
-      corners[count++] = c_a + (c_b - c_a) * (h_a / (h_a - h_b)); /* where the edge meets the horizon */
-    }
-    if (h_b > 0.0) {
-      corners[count++] = c_b;
-    }
-    c_a = c_b;
-    h_a = h_b;
-  } while (++i < poly.sides && i < AREA_ELLIPSE_SIDES);
-  if (count < 3) {
-    return 0.0; /* wholly below the horizon, or touching it */
-  }
-  /* the edges' terms in the hemisphere configuration, each edge in pieces; the outline's mean */
+  /* each edge clipped at the horizon (Sutherland-Hodgman, streamed) and, once round, the horizon's
+   * own edge from where the outline leaves the upper half-space to where it comes back; each taken in
+   * pieces: the edge terms in the hemisphere configuration, the outline's mean */
   float sum = 0.0;
   vec3 mean = vec3(0.0);
-  vec3 u_a = normalize(corners[count - 1]);
-  vec3 w_a = anisotropic_stretched_half(a, n, v, u_a);
-  int k = 0;
-  do {
-    vec3 u_b = normalize(corners[k]);
-    vec3 w_b = anisotropic_stretched_half(a, n, v, u_b);
+  vec3 c_a = t + polygon_offset(poly, poly.sides - 1) * scale;
+  float h_a = dot(c_a, n);
+  vec3 leaves = n;  /* where the outline leaves the upper half-space, and where it returns */
+  vec3 returns = n;
+  bool left = false;
+  int i = 0;
+  do { /* tested at the end (glsl/README.md): a polygon has 4 sides or more */
+    vec3 c_b = t + polygon_offset(poly, min(i, poly.sides - 1)) * scale;
+    float h_b = dot(c_b, n);
+    bool above_a = h_a > 0.0;
+    bool above_b = h_b > 0.0;
+    /* where the edge meets the horizon (taken only where it crosses it, h_a != h_b) */
+    vec3 x = c_a + (c_b - c_a) * (h_a / (above_a != above_b ? h_a - h_b : 1.0));
+    left = left || (above_a && !above_b);
+    leaves = above_a && !above_b ? x : leaves;
+    returns = !above_a && above_b ? x : returns;
+    /* the edge's part above the horizon; last, the horizon's own edge (where the outline left it) */
+    bool horizon = i == poly.sides;
+    bool on = horizon ? left : above_a || above_b;
+    vec3 p_a = horizon ? leaves : (above_a ? c_a : x);
+    vec3 p_b = horizon ? returns : (above_b ? c_b : x);
+    /* an edge wholly below adds nothing: taken along n, a point (an edge through the shading point
+     * itself, a light edge-on, has no direction: a zero vector, not NaN) */
+    vec3 u_a = on ? anisotropic_unit(p_a) : n;
+    vec3 u_b = on ? anisotropic_unit(p_b) : n;
     int pieces = clamp(int(ceil(length(u_b - u_a) / ANISOTROPIC_PIECE)), 1, ANISOTROPIC_PIECES);
-    vec3 w = w_a;
+    float step = 1.0 / float(pieces);
+    vec3 w = anisotropic_stretched_half(a, n, v, u_a);
     int j = 1;
     do {
-      vec3 u = mix(u_a, u_b, float(j) / float(pieces));
-      vec3 w_next = j == pieces ? w_b : anisotropic_stretched_half(a, n, v, normalize(u));
+      vec3 w_next = anisotropic_stretched_half(a, n, v, anisotropic_unit(mix(u_a, u_b, float(j) * step)));
       sum += anisotropic_edge_term(w, w_next, v_h);
-      mean += mix(u_a, u_b, float(j - 1) / float(pieces));
+      mean += on ? mix(u_a, u_b, float(j - 1) * step) : vec3(0.0);
       w = w_next;
     } while (++j <= pieces);
-    u_a = u_b;
-    w_a = w_b;
-  } while (++k < count);
+    c_a = c_b;
+    h_a = h_b;
+  } while (++i <= poly.sides && i <= AREA_ELLIPSE_SIDES);
   /* the visible normals' share over it: the clamped cosine about v_h over the polygon, F.v_h with
    * F = sum / (2 pi), over the hemisphere's projected area pi (1 + v_h.z) / 2 */
   float visible = abs(sum) / (PI * (1.0 + v_h.z));
