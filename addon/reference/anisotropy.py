@@ -4,12 +4,20 @@ svm_node_closure_bsdf: the stretch of alpha, the tangent rotated about the norma
 (kernel/closure/bsdf_microfacet.h: bsdf_aniso_D, bsdf_aniso_lambda; Heitz 2014, eqs. 85-86 and 72),
 and the bent normal its isotropic stand-ins reflect about (Filament's getReflectedVector).
 
+Lights with a size and the world (``polygon_integral``, ``sample``): the lobe by its visible normals,
+a clamped cosine in the hemisphere configuration (Heitz 2018), integrated over a light's polygon in
+closed form, sampled over the world.
+
 Vectors are (..., 3) arrays; every function broadcasts over the leading axes.
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+
+from .brdf import MIN_PERCEPTUAL_ROUGHNESS
 
 
 def _dot(a, b):
@@ -149,65 +157,107 @@ POLYGON_PIECES = 16
 
 def polygon_integral(n, v, NoV, x, y, alpha_x, alpha_y, offsets, to_centre):
     """The lobe's integral over a light's polygon, int_P D V (n.l) dl (F = 1; anisotropy.glsl's
-    anisotropic_polygon): the polygon (corners to_centre + offsets from the points, (..., k, 3)) clipped
-    at the horizon, its edges mapped to the half vectors' hemisphere configuration and the visible
-    normals' clamped cosine integrated over them in closed form, each edge with its midpoint (Richardson's
-    extrapolation of the curved image), times G2 / G1(v) at the clipped boundary's mean direction."""
+    anisotropic_polygon): each edge of the polygon (corners to_centre + offsets from the points,
+    (..., k, 3)) clipped at the horizon, and last the horizon's own edge where the outline crossed it,
+    split into pieces (chords of at most POLYGON_PIECE between unit directions), each piece's half
+    vectors mapped to the hemisphere configuration and the visible normals' clamped cosine integrated
+    over them in closed form (Arvo's edge terms); times G2 / G1(v) at the clipped outline's mean."""
     n, v = np.asarray(n, np.float64), np.asarray(v, np.float64)
-    NoV = np.asarray(NoV, np.float64)
     corners = np.asarray(to_centre, np.float64)[..., None, :] + np.asarray(offsets, np.float64)
     shape = np.broadcast_shapes(np.shape(n), corners.shape[:-2] + (3,))
     n, v, x, y = (np.broadcast_to(a, shape) for a in (n, v, x, y))
     alpha_x, alpha_y = np.broadcast_to(alpha_x, shape[:-1]), np.broadcast_to(alpha_y, shape[:-1])
     corners = np.broadcast_to(corners, shape[:-1] + corners.shape[-2:])
     ve = visible_view(v, n, np.broadcast_to(NoV, shape[:-1]))
-    vs = _unit(np.stack([alpha_x * _dot(ve, x), alpha_y * _dot(ve, y), _dot(ve, n)], -1))
+    vh = _unit(np.stack([alpha_x * _dot(ve, x), alpha_y * _dot(ve, y), _dot(ve, n)], -1))
     frame = (ve, n, x, y, alpha_x, alpha_y)
-    state = {"first": None, "last": None, "sum": np.zeros(shape[:-1]), "mean": np.zeros(shape)}
-
-    def edge(ua, wa, ub, wb, mask):
-        pieces = np.clip(np.ceil(np.linalg.norm(ub - ua, axis=-1) / POLYGON_PIECE), 1, POLYGON_PIECES)
-        wp, total = wa, np.zeros(shape[:-1])
-        for j in range(1, int(pieces[mask].max(initial=1)) + 1):
-            last = j >= pieces
-            t = np.minimum(j / pieces, 1.0)[..., None]
-            u = _unit(ua + (ub - ua) * t)
-            w = np.where(last[..., None], wb, _stretched_half(u, *frame))
-            total += np.where(j <= pieces, _edge_term(wp, w, vs), 0.0)
-            state["mean"] += np.where((mask & (j <= pieces))[..., None], ua + (ub - ua) * (t - 1.0 / pieces[..., None]), 0.0)
-            wp = w
-        state["sum"] += np.where(mask, total, 0.0)
-
-    def emit(q, mask):
-        u = _unit(q)
-        w = _stretched_half(u, *frame)
-        if state["first"] is None:
-            state["first"] = [np.zeros(shape, bool)[..., 0], u, w]
-            state["last"] = [u, w]
-        has = state["first"][0]
-        edge(state["last"][0], state["last"][1], u, w, mask & has)
-        for k, value in ((1, u), (2, w)):
-            state["first"][k] = np.where((mask & ~has)[..., None], value, state["first"][k])
-        state["first"][0] = has | mask
-        state["last"] = [np.where(mask[..., None], u, state["last"][0]), np.where(mask[..., None], w, state["last"][1])]
-
+    total = np.zeros(shape[:-1])
+    mean = np.zeros(shape)
+    sides = corners.shape[-2]
     height = np.sum(corners * n[..., None, :], axis=-1)
-    count = corners.shape[-2]
-    for i in range(count):
-        a, b = corners[..., i - 1, :], corners[..., i, :]
-        da, db = height[..., i - 1], height[..., i]
-        crossing = (da > 0.0) != (db > 0.0)
+    leaves, returns, left = n, n, np.zeros(shape[:-1], bool)
+    for i in range(sides + 1):
+        a, b = corners[..., i - 1, :], corners[..., min(i, sides - 1), :]
+        h_a, h_b = height[..., i - 1], height[..., min(i, sides - 1)]
+        above_a, above_b = h_a > 0.0, h_b > 0.0
         with np.errstate(divide="ignore", invalid="ignore"):
-            t = np.where(crossing, da / np.where(crossing, da - db, 1.0), 0.0)
-        emit(a + (b - a) * t[..., None], crossing)
-        emit(b, db > 0.0)
-    first = state["first"]
-    edge(state["last"][0], state["last"][1], first[1], first[2], first[0])
-    visible = 2.0 / (1.0 + vs[..., 2]) * np.abs(state["sum"]) / (2.0 * np.pi)
-    l = _unit(state["mean"])
-    NoL = _dot(l, n)
+            t = h_a / np.where(above_a != above_b, h_a - h_b, 1.0)
+        cut = a + (b - a) * t[..., None]
+        left = left | (above_a & ~above_b)
+        leaves = np.where((above_a & ~above_b)[..., None], cut, leaves)
+        returns = np.where((~above_a & above_b)[..., None], cut, returns)
+        horizon = i == sides
+        on = left if horizon else above_a | above_b
+        p_a = leaves if horizon else np.where(above_a[..., None], a, cut)
+        p_b = returns if horizon else np.where(above_b[..., None], b, cut)
+        u_a = np.where(on[..., None], _unit(p_a), n)
+        u_b = np.where(on[..., None], _unit(p_b), n)
+        pieces = np.clip(np.ceil(np.linalg.norm(u_b - u_a, axis=-1) / POLYGON_PIECE), 1, POLYGON_PIECES)
+        w = _stretched_half(u_a, *frame)
+        for j in range(1, int(pieces.max(initial=1)) + 1):
+            now = j <= pieces
+            w_next = _stretched_half(_unit(u_a + (u_b - u_a) * (j / pieces)[..., None]), *frame)
+            total += np.where(now, _edge_term(w, w_next, vh), 0.0)
+            start = u_a + (u_b - u_a) * ((j - 1) / pieces)[..., None]
+            mean += np.where((on & now)[..., None], start, 0.0)
+            w = np.where(now[..., None], w_next, w)
+    visible = np.abs(total) / (np.pi * (1.0 + vh[..., 2]))
+    l = _unit(mean)
     lam_v = Lambda(ve, n, x, y, alpha_x, alpha_y)
     with np.errstate(divide="ignore", invalid="ignore"):
         lam_l = Lambda(l, n, x, y, alpha_x, alpha_y)
-        g = np.where(NoL > 0.0, (1.0 + lam_v) / (1.0 + lam_v + lam_l), 0.0)
-    return np.where(first[0], visible * g, 0.0)
+        g = (1.0 + lam_v) / (1.0 + lam_v + lam_l)
+    return np.where(_dot(mean, n) > 0.0, visible * g, 0.0)
+
+
+def widened(alpha_x, alpha_y, alpha, alpha_wide):
+    """The lobe of a sphere light's widened stand-in (anisotropy.glsl's anisotropic_widened): each axis
+    widened by the disc alike, in quadrature, at most 1."""
+    theta2 = np.maximum(np.asarray(alpha_wide) ** 2 - np.asarray(alpha) ** 2, 0.0)
+    return tuple(np.minimum(np.sqrt(np.asarray(a) ** 2 + theta2), 1.0) for a in (alpha_x, alpha_y))
+
+
+# --- the world: samples of the visible normals ---------------------------------------------------------
+
+#: The world's split-sum light through the lobe takes this many of its visible normals (anisotropy.glsl's
+#: ANISOTROPIC_WORLD_SAMPLES, ``environment_samples``).
+WORLD_SAMPLES = 32
+GOLDEN_FRACTION = 0.61803399
+
+
+def sample(n, v, NoV, x, y, alpha_x, alpha_y, i: int, count: int):
+    """(l, pdf, v.h, weight) of sample ``i`` of ``count`` of the lobe's visible normals (anisotropy.glsl's
+    anisotropic_sample: Heitz 2018's listing 1 at the i-th point of a Fibonacci lattice): the light
+    direction the half vector reflects v to, its density per steradian of l, D G1(v) / (4 n.v), and
+    f (n.l) / pdf with F = 1, G2 / G1(v) (0 below the horizon)."""
+    n, v = np.asarray(n, np.float64), np.asarray(v, np.float64)
+    ve = visible_view(v, n, NoV)
+    vh = _unit(np.stack([alpha_x * _dot(ve, x), alpha_y * _dot(ve, y), _dot(ve, n)], -1))
+    across = np.stack([-vh[..., 1], vh[..., 0], np.zeros(np.shape(vh)[:-1])], -1)
+    t1 = np.where((vh[..., 2] < 0.9999)[..., None], _unit(across), [1.0, 0.0, 0.0])
+    t2 = np.cross(vh, t1)
+    r = math.sqrt((i + 0.5) / count)
+    phi = 2.0 * math.pi * ((i * GOLDEN_FRACTION + 0.5) % 1.0)
+    p1, p2 = r * math.cos(phi), r * math.sin(phi)
+    s = 0.5 * (1.0 + vh[..., 2])
+    p2 = (1.0 - s) * math.sqrt(max(1.0 - p1 * p1, 0.0)) + s * p2
+    lift = np.sqrt(np.maximum(1.0 - p1 * p1 - p2 * p2, 0.0))
+    nh = p1 * t1 + p2[..., None] * t2 + lift[..., None] * vh
+    h = _unit(x * (alpha_x * nh[..., 0])[..., None] + y * (alpha_y * nh[..., 1])[..., None]
+              + n * np.maximum(nh[..., 2], 0.0)[..., None])
+    VoH = _dot(ve, h)
+    l = 2.0 * VoH[..., None] * h - ve
+    lam_v = Lambda(ve, n, x, y, alpha_x, alpha_y)
+    pdf = D(h, n, x, y, alpha_x, alpha_y) / ((1.0 + lam_v) * 4.0 * NoV)
+    NoL = _dot(n, l)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        lam_l = Lambda(l, n, x, y, alpha_x, alpha_y)
+        weight = np.where(NoL > 0.0, (1.0 + lam_v) / (1.0 + lam_v + lam_l), 0.0)
+    return l, pdf, VoH, weight
+
+
+def sample_roughness(pdf, count: int):
+    """The perceptual roughness of the GGX lobe that covers a sample's share of the lobe, 1 / (N pdf)
+    sr = 4 pi alpha^2 (anisotropy.glsl's anisotropic_environment), within the floor and 1."""
+    alpha2 = 1.0 / (4.0 * np.pi * count * np.maximum(np.asarray(pdf, np.float64), 1e-30))
+    return np.clip(np.sqrt(np.sqrt(alpha2)), MIN_PERCEPTUAL_ROUGHNESS, 1.0)
