@@ -155,23 +155,37 @@ POLYGON_PIECE = 0.15
 POLYGON_PIECES = 16
 
 
-def polygon_integral(n, v, NoV, x, y, alpha_x, alpha_y, offsets, to_centre):
+def polygon_integral(n, v, NoV, x, y, alpha_x, alpha_y, offsets, to_centre, jitter=None):
     """The lobe's integral over a light's polygon, int_P D V (n.l) dl (F = 1; anisotropy.glsl's
     anisotropic_polygon): each edge of the polygon (corners to_centre + offsets from the points,
     (..., k, 3)) clipped at the horizon, and last the horizon's own edge where the outline crossed it,
     split into pieces (chords of at most POLYGON_PIECE between unit directions), each piece's half
     vectors mapped to the hemisphere configuration and the visible normals' clamped cosine integrated
-    over them in closed form (Arvo's edge terms); times G2 / G1(v) at the clipped outline's mean."""
+    over them in closed form (Arvo's edge terms); times G2 / G1(v) at the clipped outline's
+    length-weighted mean.
+    ``jitter`` (roundings, unit directions (..., 3)), for tests: the corners and each piece's unit
+    direction moved along the directions (alternately +-) by that many float32 roundings of their length,
+    and the edge terms' sum by as many of each term (ltc.ltc_integral's): the errors float32 leaves there
+    (tests/test_stability.py) -- the half vector u + v cancels where a direction nears -v (a grazing
+    view's mirror direction), where one rounding of u moves a narrow lobe's h by eps / |u + v|."""
     n, v = np.asarray(n, np.float64), np.asarray(v, np.float64)
     corners = np.asarray(to_centre, np.float64)[..., None, :] + np.asarray(offsets, np.float64)
     shape = np.broadcast_shapes(np.shape(n), corners.shape[:-2] + (3,))
     n, v, x, y = (np.broadcast_to(a, shape) for a in (n, v, x, y))
     alpha_x, alpha_y = np.broadcast_to(alpha_x, shape[:-1]), np.broadcast_to(alpha_y, shape[:-1])
     corners = np.broadcast_to(corners, shape[:-1] + corners.shape[-2:])
+    unit = 0.0
+    if jitter is not None:  # as many roundings of each corner's coordinates
+        roundings, direction = jitter
+        unit = roundings * float(np.finfo(np.float32).eps) / 2.0
+        sign = np.where(np.arange(corners.shape[-2]) % 2 == 0, 1.0, -1.0)[:, None]
+        corners = corners + (unit * np.linalg.norm(corners, axis=-1, keepdims=True) * sign
+                             * np.asarray(direction, np.float64)[..., None, :])
     ve = visible_view(v, n, np.broadcast_to(NoV, shape[:-1]))
     vh = _unit(np.stack([alpha_x * _dot(ve, x), alpha_y * _dot(ve, y), _dot(ve, n)], -1))
     frame = (ve, n, x, y, alpha_x, alpha_y)
     total = np.zeros(shape[:-1])
+    terms = np.zeros(shape[:-1])  # sum |term|, the scale of the sum's roundings
     mean = np.zeros(shape)
     sides = corners.shape[-2]
     height = np.sum(corners * n[..., None, :], axis=-1)
@@ -192,15 +206,26 @@ def polygon_integral(n, v, NoV, x, y, alpha_x, alpha_y, offsets, to_centre):
         p_b = returns if horizon else np.where(above_b[..., None], b, cut)
         u_a = np.where(on[..., None], _unit(p_a), n)
         u_b = np.where(on[..., None], _unit(p_b), n)
-        pieces = np.clip(np.ceil(np.linalg.norm(u_b - u_a, axis=-1) / POLYGON_PIECE), 1, POLYGON_PIECES)
+        if jitter is not None:  # the ends rounded (a horizon edge's are near opposite: their mean cancels)
+            u_a = u_a + unit * np.asarray(direction, np.float64)
+            u_b = u_b - unit * np.asarray(direction, np.float64)
+        chord = np.linalg.norm(u_b - u_a, axis=-1)
+        pieces = np.clip(np.ceil(chord / POLYGON_PIECE), 1, POLYGON_PIECES)
         w = _stretched_half(u_a, *frame)
         for j in range(1, int(pieces.max(initial=1)) + 1):
             now = j <= pieces
-            w_next = _stretched_half(_unit(u_a + (u_b - u_a) * (j / pieces)[..., None]), *frame)
-            total += np.where(now, _edge_term(w, w_next, vh), 0.0)
-            start = u_a + (u_b - u_a) * ((j - 1) / pieces)[..., None]
-            mean += np.where((on & now)[..., None], start, 0.0)
+            u = _unit(u_a + (u_b - u_a) * (j / pieces)[..., None])
+            if jitter is not None:  # each piece's direction rounded (h = u + v cancels where u ~ -v)
+                u = u + unit * (1.0 if j % 2 else -1.0) * np.asarray(direction, np.float64)
+            w_next = _stretched_half(u, *frame)
+            term = np.where(now, _edge_term(w, w_next, vh), 0.0)
+            total += term
+            terms += np.abs(term)
+            middle = (u_a + (u_b - u_a) * ((j - 0.5) / pieces)[..., None]) * (chord / pieces)[..., None]
+            mean += np.where((on & now)[..., None], middle, 0.0)  # (the pieces' length-weighted mean)
             w = np.where(now[..., None], w_next, w)
+    if jitter is not None:
+        total = total + unit * terms * np.sign(total) * np.asarray(direction, np.float64)[..., 2]
     visible = np.abs(total) / (np.pi * (1.0 + vh[..., 2]))
     l = _unit(mean)
     lam_v = Lambda(ve, n, x, y, alpha_x, alpha_y)

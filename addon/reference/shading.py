@@ -1097,7 +1097,7 @@ def shade_polygon_light(s: Surface, offsets, to_centre, L, form_factor, l, facto
     lobe = np.where(form_factor_lobe > 0.0, lobe, 0.0)
     if s.aniso is not None:  # by its visible normals over the polygon (anisotropy.glsl)
         with np.errstate(divide="ignore", invalid="ignore"):
-            lobe = anisotropy.polygon_integral(s.n, s.v, s.NoV, *s.aniso, offsets, to_centre)
+            lobe = anisotropy.polygon_integral(s.n, s.v, s.NoV, *s.aniso, offsets, to_centre, ltc_jitter)
     specular = pbr_specular_tint(s, LoH, terms) * L * (lobe * factors[1] * specular_scale)[..., None]
     return np.where(lit[..., None], diffuse + specular, 0.0)
 
