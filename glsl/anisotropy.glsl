@@ -282,11 +282,12 @@ AnisotropicView anisotropic_view(AnisotropicLobe a, vec3 n, vec3 v, float NoV)
 /* Sample i of `count` of the lobe's visible normals (Heitz 2018, "Sampling the GGX Distribution of
  * Visible Normals", listing 1: the hemisphere configuration's projected disc, its far half compressed
  * by (1 + v_h.z) / 2, lifted and stretched back), at the i-th point of a Fibonacci lattice on the
- * unit square ((i + 1/2) / count, i times the golden ratio's fraction of a turn: over tests/
- * test_anisotropy.py's lobes and views it holds the lobe's albedo to 0.79 % mean with 32 points, the
- * Hammersley set's 1.2 %). Returns the light direction l the half vector reflects v to; pdf: its
- * density per steradian of l, D_v(h) / (4 v.h) = D G1(v) / (4 n.v); weight: f (n.l) / pdf with F = 1,
- * G2 / G1(v) = (1 + Lambda_v) / (1 + Lambda_v + Lambda_l), 0 where l is below the horizon. */
+ * unit square ((i + 1/2) / count, i times the golden ratio's fraction of a turn: over 630 Principled
+ * lobes and views its 32 points hold the lobe's albedo to 0.79 % mean, a Hammersley set's to 1.2 %;
+ * tests/test_anisotropy.py's twenty: 1.4 %). Returns the light direction l the half vector reflects
+ * v to; pdf: its density per steradian of l, D_v(h) / (4 v.h) = D G1(v) / (4 n.v); weight:
+ * f (n.l) / pdf with F = 1, G2 / G1(v) = (1 + Lambda_v) / (1 + Lambda_v + Lambda_l), 0 where l is below
+ * the horizon. */
 vec3 anisotropic_sample(AnisotropicLobe a, vec3 n, AnisotropicView w, int i, int count, out float pdf,
                         out float VoH, out float weight)
 {
@@ -313,13 +314,15 @@ vec3 anisotropic_sample(AnisotropicLobe a, vec3 n, AnisotropicView w, int i, int
  * importance sampling, on the prefiltered levels: a lobe of alpha covers ~4 pi alpha^2 sr at its peak):
  * the mean of G2 / G1(v) L, i.e. the lobe's own albedo (F = 1) times the mean radiance it sees. No
  * split-sum table holds an anisotropic lobe (its albedo strays 5.5 % mean, up to 57 %, from the round
- * lobe's of the same (alpha_x alpha_y)^(1/4) over tests/test_anisotropy.py's lobes and views), and the prefiltered world is round: Filament's bent normal over it
- * erred 7.7 % mean on tests/test_anisotropy.py's sphere, 20 % (to 49 %) over two worlds and seven lobes,
- * against this one's 4.2 % and 4.1 % (7.4 %) (the round lobe's split sum: 3.4 %; 4.6 % (6.5 %)).
- * Measured against Cycles, forest and city worlds, metal spheres of roughness 0.2 / 0.35 / 0.6 and
- * Anisotropic 0.5-1 (rotation 0, 0.125, 0.25), mean error over the sphere: 16 samples 5.1 % (8.1 %),
- * 24 4.5 %, 32 4.1 %. A sample reads levels on the side of the suns' split (world_sun_specular) that
- * the lobe's own roughness takes: sharper ones would see a sun the lights already draw. */
+ * lobe's of the same (alpha_x alpha_y)^(1/4) over 630 Principled lobes and views), and the prefiltered
+ * world is round: Filament's bent normal over it erred 7.7 % mean on tests/test_anisotropy.py's sphere,
+ * 20 % (to 49 %) over two worlds and seven lobes, against this one's 4.2 % and 4.1 % (7.4 %) (the
+ * round lobe's split sum: 3.4 %; 4.6 % (6.5 %)). Against Cycles, forest and city worlds, metal spheres
+ * of roughness 0.2 / 0.35 / 0.6 and Anisotropic 0.5-1 (rotation 0, 0.125, 0.25), mean error over the
+ * sphere: 16 samples 5.1 % (8.1 %), 24 4.5 %, 32 4.1 %; each costs ~40 ns per pixel on llvmpipe (a
+ * plane under the forest world: 6-6.5x the round lobe's split sum at 32, 3.9x at 16). A sample reads
+ * levels on the side of the suns' split (world_sun_specular) that the lobe's own roughness takes:
+ * sharper ones would see a sun the lights already draw. */
 #    define ANISOTROPIC_WORLD_SAMPLES 32
 vec3 anisotropic_environment(AnisotropicLobe a, vec3 n, vec3 v, float NoV)
 {
@@ -336,7 +339,7 @@ vec3 anisotropic_environment(AnisotropicLobe a, vec3 n, vec3 v, float NoV)
   do { /* tested at the end (glsl/README.md) */
     float pdf, VoH, weight;
     vec3 l = anisotropic_sample(a, n, w, i, ANISOTROPIC_WORLD_SAMPLES, pdf, VoH, weight);
-    /* a lobe of alpha^2 = 1 / (4 pi N pdf); the pdf of a sample on the surface's horizon is > 0 */
+    /* a lobe of alpha^2 = 1 / (4 pi N pdf); a far tail's D underflows to 0 in float32: the roughest */
     float roughness = clamp(sqrt(sqrt(1.0 / (4.0 * PI * float(ANISOTROPIC_WORLD_SAMPLES) * max(pdf, 1e-30)))),
                             MIN_PERCEPTUAL_ROUGHNESS, 1.0);
 #    ifdef SL_ENV_MAP

@@ -76,21 +76,15 @@ vec3 env_sample_lobe(Surface s, sampler2D chain_map)
     float pdf, VoH, weight;
     vec3 l = anisotropic_sample(s.aniso, s.n, w, i, SL_ENV_SAMPLES, pdf, VoH, weight);
     if (weight > 0.0) {
-      sum += chain_lookup(chain_map, l, chain_lod(pdf, SL_ENV_SAMPLES, 0.0)) * principled_specular_tint(s, VoH) *
-             weight;
+      vec3 L = chain_lookup(chain_map, l, chain_lod(pdf, SL_ENV_SAMPLES, 0.0));
+      sum += L * principled_specular_tint(s, VoH) * weight;
     }
   } while (++i < SL_ENV_SAMPLES);
   return sum / float(SL_ENV_SAMPLES);
 #  else
-#  ifdef SL_ANISOTROPY
-  /* the anisotropic lobe's own frame (anisotropy.glsl) */
-  vec3 tx = s.aniso.x;
-  vec3 ty = s.aniso.y;
-#  else
   vec3 up = abs(s.n.z) < 0.999 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0);
   vec3 tx = normalize(cross(up, s.n));
   vec3 ty = cross(s.n, tx);
-#  endif
   float a2 = s.alpha * s.alpha;
   if (s.roughness <= MIN_PERCEPTUAL_ROUGHNESS) {
     /* at the roughness floor the lobe stands for a perfect mirror (roughness 0, as Cycles
@@ -107,23 +101,13 @@ vec3 env_sample_lobe(Surface s, sampler2D chain_map)
   do { /* tested at the end (glsl/README.md); `continue` goes to the test */
     float phi = 2.0 * PI * (float(i) + 0.5) / float(SL_ENV_SAMPLES);
     float xi = radical_inverse(uint(i));
-#  ifdef SL_ANISOTROPY
-    /* the anisotropic GGX's half vectors: the standard lobe's slope tan theta = sqrt(xi / (1 - xi))
-     * (alpha 1) stretched by (alpha_x, alpha_y) along the lobe's axes -- D (n.h) stretched, as Heitz
-     * 2014 (section 5.2) stretches the microsurface; Walter et al.'s eq. 35-36 at alpha_x = alpha_y */
-    vec2 slope = sqrt(xi / max(1.0 - xi, 1e-12)) * vec2(s.aniso.alpha_x * cos(phi), s.aniso.alpha_y * sin(phi));
-    vec3 h = normalize(tx * slope.x + ty * slope.y + s.n);
-    float cos_t = dot(h, s.n);
-    float sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
-#  else
-#    ifdef SL_NDF_BECKMANN
+#  ifdef SL_NDF_BECKMANN
     float cos_t = inversesqrt(1.0 - a2 * log(max(1.0 - xi, 1e-12)));
-#    else
+#  else
     float cos_t = sqrt((1.0 - xi) / (1.0 + (a2 - 1.0) * xi));
-#    endif
+#  endif
     float sin_t = sqrt(max(1.0 - cos_t * cos_t, 0.0));
     vec3 h = tx * (sin_t * cos(phi)) + ty * (sin_t * sin(phi)) + s.n * cos_t;
-#  endif
     float VoH = dot(s.v, h);
     vec3 l = 2.0 * VoH * h - s.v;
     float NoL = dot(s.n, l);
@@ -131,22 +115,14 @@ vec3 env_sample_lobe(Surface s, sampler2D chain_map)
       continue;
     }
     float NoH = max(cos_t, MIN_COS);
-#  ifdef SL_ANISOTROPY
-    float D = D_GGXAnisotropic(s.aniso, s.n, h);
-#  else
     float D = pbr_distribution(NoH, sin_t * sin_t, s.alpha);
-#  endif
     float pdf = D * NoH / (4.0 * VoH);
     /* no extra bias level: measured against Cycles on the bundled forest world, bias 0 and 0.5
      * differ by under 1 % at 256 samples; 1 blurs what near-mirror lobes see */
     vec3 L = chain_lookup(chain_map, l, chain_lod(pdf, SL_ENV_SAMPLES, 0.0));
 #  ifdef SL_PRINCIPLED
     vec3 F = principled_specular_tint(s, VoH);
-#    ifdef SL_ANISOTROPY
-    float V = V_SmithGGXCorrelatedAnisotropic(s.aniso, s.n, s.v, s.NoV, l, NoL);
-#    else
     float V = V_SmithGGXCorrelated(s.NoV, NoL, s.alpha);
-#    endif
 #  else
     vec3 F = pbr_fresnel(s, VoH);
     float V = pbr_visibility(s.NoV, NoL, NoH, VoH, s.alpha);
