@@ -115,6 +115,244 @@ vec3 anisotropic_reflection(Surface s)
   return reflect(-s.v, anisotropic_bent_normal(s.aniso, s.n, s.v, s.roughness));
 }
 
+/* v with its height above the surface floored as the surface floors n.v (NoV): below the horizon its
+ * part along the surface scaled to the floored cosine's, as V_SmithGGXCorrelatedAnisotropic takes it;
+ * along n (no part along the surface): n. A no-op above the floor. */
+vec3 anisotropic_view_above(vec3 n, vec3 v, float NoV)
+{
+  vec3 vt = v - n * dot(v, n);
+  float t2 = dot(vt, vt);
+  return t2 > 1e-20 ? n * NoV + vt * sqrt(max(1.0 - NoV * NoV, 0.0) / t2) : n;
+}
+
+/* The view (above the horizon) in the lobe's hemisphere configuration, in the lobe's frame (x, y, n):
+ * normalize(ax v.x, ay v.y, v.n) (Heitz 2018, section 3.2): the axis of its visible normals' cosine. */
+vec3 anisotropic_view_stretched(AnisotropicLobe a, vec3 n, vec3 v)
+{
+  return normalize(vec3(a.alpha_x * dot(v, a.x), a.alpha_y * dot(v, a.y), dot(v, n)));
+}
+
+#  ifdef SL_LTC
+/* Lights with a size: the lobe's integral over a light's polygon, int_P D V (n.l) dl (F = 1), by its
+ * visible normals. The distribution of visible normals of anisotropic GGX is a clamped cosine about
+ * the view stretched back to the hemisphere configuration, v_h = normalize(ax v.x, ay v.y, v.n),
+ * moved by the linear map diag(ax, ay, 1) (Heitz 2018, "Sampling the GGX Distribution of Visible
+ * Normals", sections 3-4: the standard configuration's visible normals). Reflected
+ * through h = (l + v) / |l + v| (dl = 4 (v.h) dh), the lobe is f (n.l) dl = D_v(h) G2 / G1(v) dh: so
+ * over the light's half vectors, mapped by diag(1 / ax, 1 / ay, 1), the visible normals' integral is
+ * a clamped cosine's over a spherical polygon -- in closed form (Arvo 1995's edge terms, lights.glsl's
+ * polygon_form_factor), exact for any alpha_x, alpha_y, view and tangent, with no fitted table.
+ * Approximated: a great arc between two light directions has a curved image in half-vector space, so
+ * each edge is split into pieces of at most ANISOTROPIC_PIECE radians as seen from the point (the
+ * image of each piece taken as a great arc); and G2 / G1(v) = (1 + Lambda_v) / (1 + Lambda_v +
+ * Lambda_l) is taken once, at the clipped outline's length-weighted mean direction. The polygon is
+ * clipped at the surface's horizon first (Sutherland-Hodgman; above it every half vector faces both
+ * the normal and the view, so no further clipping is needed). Twin: anisotropy.polygon_integral.
+ * Against quadrature of the lobe over test_ltc.py's lights (small and large, at the mirror
+ * direction, to the side, across the horizon; n.v 0.2-0.9; tests/test_anisotropy.py): 2.0 % mean,
+ * 10 % worst (a light holding much of the lobe: G2 / G1(v) varies over it); the round lobe's
+ * linearly transformed cosines err 3.7 % / 25 % at roughness 0.3 on the same lights. float32: where
+ * a direction nears -v (a grazing view's mirror direction) h = u + v cancels, and a narrow lobe's
+ * integral over a light that fills the sky there moves by up to ~2 % (tests/test_stability.py's
+ * sweeps hold the GPU to the twin within that spread). */
+
+/* Pieces an edge is split into: chords of at most this length between unit directions (~ the
+ * angle, radians), at most ANISOTROPIC_PIECES of them. Against quadrature on tests/test_anisotropy.py's
+ * area-light sphere (a 0.6 m square 1.5 m away, edges ~0.37 rad; mean error over the lit pixels' mean):
+ * whole edges 6.8 %, pieces of 0.4 1.7 %, 0.2 0.43 %, 0.15 0.28 %, 0.1 0.15 %. */
+#    define ANISOTROPIC_PIECE 0.15
+#    define ANISOTROPIC_PIECES 16
+
+/* A unit light direction u's half vector with v, in the lobe's hemisphere configuration:
+ * (h.x / ax, h.y / ay, h.n), h = u + v (unnormalised: the edge terms take directions only). */
+vec3 anisotropic_stretched_half(AnisotropicLobe a, vec3 n, vec3 v, vec3 u)
+{
+  vec3 h = u + v;
+  return vec3(dot(h, a.x) / a.alpha_x, dot(h, a.y) / a.alpha_y, dot(h, n));
+}
+
+/* p / |p|, and 0 for 0 (a light edge-on through the shading point; two opposite directions'
+ * midpoint) rather than NaN */
+vec3 anisotropic_unit(vec3 p)
+{
+  return p * inversesqrt(max(dot(p, p), 1e-36));
+}
+
+/* theta g . z of the spherical edge from direction a to b (any lengths): the angle between them
+ * times the unit normal of their plane, along z (Arvo 1995); 0 for parallel ones. */
+float anisotropic_edge_term(vec3 a, vec3 b, vec3 z)
+{
+  vec3 c = cross(a, b);
+  float s = length(c);
+  return s > 0.0 ? atan2_accurate(s, dot(a, b)) / s * dot(c, z) : 0.0;
+}
+
+/* The integral over the polygon `poly` seen from the shading point (anisotropy.glsl's header): n the
+ * unit normal, v the view, NoV its floored cosine. */
+float anisotropic_polygon(AnisotropicLobe a, vec3 n, vec3 v, float NoV, LightPolygon poly)
+{
+  v = anisotropic_view_above(n, v, NoV);
+  vec3 v_h = anisotropic_view_stretched(a, n, v);
+  /* near unit scale, as polygon_form_factor takes it: a micrometre light's corners normalised */
+  float extent = max(max(length(poly.to_centre), length(poly.x_half)), length(poly.y_half));
+  float scale = exp2(-floor(log2(max(extent, 1e-30))));
+  vec3 t = poly.to_centre * scale;
+  /* each edge clipped at the horizon (Sutherland-Hodgman, streamed) and, once round, the horizon's
+   * own edge from where the outline leaves the upper half-space to where it comes back; each taken in
+   * pieces: the edge terms in the hemisphere configuration, the outline's mean */
+  float sum = 0.0;
+  vec3 mean = vec3(0.0);
+  vec3 c_a = t + polygon_offset(poly, poly.sides - 1) * scale;
+  float h_a = dot(c_a, n);
+  vec3 leaves = n;  /* where the outline leaves the upper half-space, and where it returns */
+  vec3 returns = n;
+  bool left = false;
+  int i = 0;
+  do { /* tested at the end (glsl/README.md): a polygon has 4 sides or more */
+    vec3 c_b = t + polygon_offset(poly, min(i, poly.sides - 1)) * scale;
+    float h_b = dot(c_b, n);
+    bool above_a = h_a > 0.0;
+    bool above_b = h_b > 0.0;
+    /* where the edge meets the horizon (taken only where it crosses it, h_a != h_b) */
+    vec3 x = c_a + (c_b - c_a) * (h_a / (above_a != above_b ? h_a - h_b : 1.0));
+    left = left || (above_a && !above_b);
+    leaves = above_a && !above_b ? x : leaves;
+    returns = !above_a && above_b ? x : returns;
+    /* the edge's part above the horizon; last, the horizon's own edge (where the outline left it) */
+    bool horizon = i == poly.sides;
+    bool on = horizon ? left : above_a || above_b;
+    vec3 p_a = horizon ? leaves : (above_a ? c_a : x);
+    vec3 p_b = horizon ? returns : (above_b ? c_b : x);
+    /* an edge wholly below adds nothing: taken along n, a point (an edge through the shading point
+     * itself, a light edge-on, has no direction: a zero vector, not NaN) */
+    vec3 u_a = on ? anisotropic_unit(p_a) : n;
+    vec3 u_b = on ? anisotropic_unit(p_b) : n;
+    float chord = length(u_b - u_a);
+    int pieces = clamp(int(ceil(chord / ANISOTROPIC_PIECE)), 1, ANISOTROPIC_PIECES);
+    float step = 1.0 / float(pieces);
+    vec3 w = anisotropic_stretched_half(a, n, v, u_a);
+    int j = 1;
+    do {
+      vec3 w_next = anisotropic_stretched_half(a, n, v, anisotropic_unit(mix(u_a, u_b, float(j) * step)));
+      sum += anisotropic_edge_term(w, w_next, v_h);
+      /* the outline's mean, each piece's midpoint weighted by its length (an edge of no length, a
+       * corner on the horizon, weighs nothing: G2 / G1(v) stays continuous as it crosses) */
+      mean += on ? mix(u_a, u_b, (float(j) - 0.5) * step) * (chord * step) : vec3(0.0);
+      w = w_next;
+    } while (++j <= pieces);
+    c_a = c_b;
+    h_a = h_b;
+  } while (++i <= poly.sides && i <= AREA_ELLIPSE_SIDES);
+  /* the visible normals' share over it: the clamped cosine about v_h over the polygon, F.v_h with
+   * F = sum / (2 pi), over the hemisphere's projected area pi (1 + v_h.z) / 2 */
+  float visible = abs(sum) / (PI * (1.0 + v_h.z));
+  float NoL = dot(mean, n);
+  if (NoL <= 0.0) {
+    return 0.0; /* an outline along the horizon: no area */
+  }
+  float lambda_v = Lambda_GGXAnisotropic(a, n, v);
+  return visible * (1.0 + lambda_v) / (1.0 + lambda_v + Lambda_GGXAnisotropic(a, n, normalize(mean)));
+}
+#  endif
+
+/* The lobe's visible normals seen from a view, for sampling them (anisotropic_sample): the view above
+ * the horizon, its stretched direction and a frame about it (Heitz 2018, section 4.1), Lambda(v). */
+struct AnisotropicView {
+  vec3 v;
+  vec3 v_h;       /* in the lobe's frame (x, y, n) */
+  vec3 t1;
+  vec3 t2;
+  float lambda_v;
+  float NoV;
+};
+
+AnisotropicView anisotropic_view(AnisotropicLobe a, vec3 n, vec3 v, float NoV)
+{
+  AnisotropicView w;
+  w.v = anisotropic_view_above(n, v, NoV);
+  w.v_h = anisotropic_view_stretched(a, n, w.v);
+  /* v_h along n: any frame about it */
+  w.t1 = w.v_h.z < 0.9999 ? normalize(vec3(-w.v_h.y, w.v_h.x, 0.0)) : vec3(1.0, 0.0, 0.0);
+  w.t2 = cross(w.v_h, w.t1);
+  w.lambda_v = Lambda_GGXAnisotropic(a, n, w.v);
+  w.NoV = NoV;
+  return w;
+}
+
+/* Sample i of `count` of the lobe's visible normals (Heitz 2018, "Sampling the GGX Distribution of
+ * Visible Normals", listing 1: the hemisphere configuration's projected disc, its far half compressed
+ * by (1 + v_h.z) / 2, lifted and stretched back), at the i-th point of a Fibonacci lattice on the
+ * unit square ((i + 1/2) / count, i times the golden ratio's fraction of a turn: over 630 Principled
+ * lobes and views its 32 points hold the lobe's albedo to 0.79 % mean, a Hammersley set's to 1.2 %;
+ * tests/test_anisotropy.py's twenty: 1.4 %). Returns the light direction l the half vector reflects
+ * v to; pdf: its density per steradian of l, D_v(h) / (4 v.h) = D G1(v) / (4 n.v); weight:
+ * f (n.l) / pdf with F = 1, G2 / G1(v) = (1 + Lambda_v) / (1 + Lambda_v + Lambda_l), 0 where l is below
+ * the horizon. */
+vec3 anisotropic_sample(AnisotropicLobe a, vec3 n, AnisotropicView w, int i, int count, out float pdf,
+                        out float VoH, out float weight)
+{
+  float r = sqrt((float(i) + 0.5) / float(count));
+  float phi = 2.0 * PI * fract(float(i) * 0.61803399 + 0.5);
+  float p1 = r * cos(phi);
+  float p2 = r * sin(phi);
+  float s = 0.5 * (1.0 + w.v_h.z);
+  p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * p2;
+  vec3 n_h = p1 * w.t1 + p2 * w.t2 + sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0)) * w.v_h;
+  vec3 h = normalize(a.x * (a.alpha_x * n_h.x) + a.y * (a.alpha_y * n_h.y) + n * max(n_h.z, 0.0));
+  VoH = dot(w.v, h);
+  vec3 l = 2.0 * VoH * h - w.v;
+  float NoL = dot(n, l);
+  pdf = D_GGXAnisotropic(a, n, h) / ((1.0 + w.lambda_v) * 4.0 * w.NoV);
+  weight = NoL > 0.0 ? (1.0 + w.lambda_v) / (1.0 + w.lambda_v + Lambda_GGXAnisotropic(a, n, l)) : 0.0;
+  return l;
+}
+
+#  if defined(SL_ENV_UNIFORM) || defined(SL_ENV_MAP)
+/* The world's light through the lobe, in the split sum's place: ANISOTROPIC_WORLD_SAMPLES of its
+ * visible normals (anisotropic_sample), each reading the prefiltered world at the roughness whose GGX
+ * lobe covers the sample's share of the lobe, 1 / (N pdf) sr (Krivanek & Colbert 2008's filtered
+ * importance sampling, on the prefiltered levels: a lobe of alpha covers ~4 pi alpha^2 sr at its peak):
+ * the mean of G2 / G1(v) L, i.e. the lobe's own albedo (F = 1) times the mean radiance it sees. No
+ * split-sum table holds an anisotropic lobe (its albedo strays 5.5 % mean, up to 57 %, from the round
+ * lobe's of the same (alpha_x alpha_y)^(1/4) over 630 Principled lobes and views), and the prefiltered
+ * world is round: Filament's bent normal over it erred 7.7 % mean on tests/test_anisotropy.py's sphere,
+ * 20 % (to 49 %) over two worlds and seven lobes, against this one's 4.2 % and 4.1 % (7.4 %) (the
+ * round lobe's split sum: 3.4 %; 4.6 % (6.5 %)). Against Cycles, forest and city worlds, metal spheres
+ * of roughness 0.2 / 0.35 / 0.6 and Anisotropic 0.5-1 (rotation 0, 0.125, 0.25), mean error over the
+ * sphere: 16 samples 5.1 % (8.1 %), 24 4.5 %, 32 4.1 %; each costs ~40 ns per pixel on llvmpipe (a
+ * plane under the forest world: 6-6.5x the round lobe's split sum at 32, 3.9x at 16). A sample reads
+ * levels on the side of the suns' split (world_sun_specular) that the lobe's own roughness takes:
+ * sharper ones would see a sun the lights already draw. */
+#    define ANISOTROPIC_WORLD_SAMPLES 32
+vec3 anisotropic_environment(AnisotropicLobe a, vec3 n, vec3 v, float NoV)
+{
+  AnisotropicView w = anisotropic_view(a, n, v, NoV);
+#    ifdef SL_ENV_MAP
+  float suns = world_sun_specular(anisotropic_roughness(a));
+  int clamped = int(env.info.y);
+  bool split = clamped < int(env.info.x);
+  float r0 = env_level_roughness(max(clamped - 1, 0));
+  float r1 = env_level_roughness(min(clamped, int(env.info.x) - 1));
+#    endif
+  vec3 sum = vec3(0.0);
+  int i = 0;
+  do { /* tested at the end (glsl/README.md) */
+    float pdf, VoH, weight;
+    vec3 l = anisotropic_sample(a, n, w, i, ANISOTROPIC_WORLD_SAMPLES, pdf, VoH, weight);
+    /* a lobe of alpha^2 = 1 / (4 pi N pdf); a far tail's D underflows to 0 in float32: the roughest */
+    float roughness = clamp(sqrt(sqrt(1.0 / (4.0 * PI * float(ANISOTROPIC_WORLD_SAMPLES) * max(pdf, 1e-30)))),
+                            MIN_PERCEPTUAL_ROUGHNESS, 1.0);
+#    ifdef SL_ENV_MAP
+    if (split) {
+      roughness = mix(min(roughness, r0), max(roughness, r1), suns);
+    }
+#    endif
+    sum += weight > 0.0 ? env_prefiltered(l, roughness) * weight : vec3(0.0);
+  } while (++i < ANISOTROPIC_WORLD_SAMPLES);
+  return sum / float(ANISOTROPIC_WORLD_SAMPLES);
+}
+#  endif
+
 /* The lobe of a sphere light's widened stand-in (lights.glsl's size_lobe_weights: alpha_wide^2 =
  * alpha^2 + theta^2): each axis widened by the disc alike, in quadrature. */
 AnisotropicLobe anisotropic_widened(AnisotropicLobe a, float alpha, float alpha_wide)

@@ -36,14 +36,22 @@ vec3 shade_polygon_light(Surface s, LightPolygon poly, vec3 L, float form_factor
   sheen_polygon_light = s.sheen.color * L * (ltc_polygon_frame(s.sheen.ltc, s.sheen.n, poly, l, density) *
                                              factors.x);
 #  endif
+#  ifdef SL_ANISOTROPY
+  /* the anisotropic lobe by its visible normals over the polygon, in closed form (anisotropy.glsl) */
+  float lobe = anisotropic_polygon(s.aniso, s.n, s.v, s.NoV, poly);
+#  else
   float form_factor_lobe = ltc_polygon(s, poly, l, density);
+  float lobe = 0.0;
   if (form_factor_lobe > 0.0) {
-    float LoH = saturate(dot(l, half_vector(l, s.v, s.n)));
     vec3 l_lobe = l;
-#  ifdef SL_GLOSSY
+#    ifdef SL_GLOSSY
     glossy_ltc_direction(s, poly, form_factor_lobe, l_lobe, density); /* Beckmann's (closures.glsl) */
+#    endif
+    lobe = ltc_lobe_integral(form_factor_lobe, s.ltc.albedo, pbr_lobe(s, l_lobe), density);
+  }
 #  endif
-    float lobe = ltc_lobe_integral(form_factor_lobe, s.ltc.albedo, pbr_lobe(s, l_lobe), density);
+  if (lobe > 0.0) {
+    float LoH = saturate(dot(l, half_vector(l, s.v, s.n)));
     c += pbr_specular_tint(s, LoH) * L * (lobe * factors.y * specular_scale);
   }
   return c;
@@ -124,7 +132,12 @@ vec3 shade_light_surface(Surface s, LightData light, vec3 l, vec3 E, float visib
     float ltc_share = 0.0;
 #    ifdef SL_LTC
     vec3 to_light = light.position_kind.xyz - s.p;
+#      ifdef SL_ANISOTROPY
+    /* against the anisotropic lobe's narrower axis: its disc where it is wide against either */
+    float k = sphere_light_theta(light, s.p) / max(min(s.aniso.alpha_x, s.aniso.alpha_y), 1e-12);
+#      else
     float k = sphere_light_theta(light, s.p) / max(s.alpha, 1e-12);
+#      endif
     if (!sphere_far_field(light, dot(to_light, to_light))) {
       ltc_share = saturate((k - SPHERE_LTC_FROM) / (SPHERE_LTC_FULL - SPHERE_LTC_FROM));
     }

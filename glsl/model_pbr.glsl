@@ -70,6 +70,22 @@ vec3 shade_direct(Surface s, vec3 l, vec3 E, vec4 factors)
  * assumption (n = v = r): it converges to the unoccluded reference as the count grows. */
 vec3 env_sample_lobe(Surface s, sampler2D chain_map)
 {
+#  ifdef SL_ANISOTROPY
+  /* the anisotropic lobe by its visible normals (anisotropy.glsl's anisotropic_sample): f cos / pdf =
+   * F G2 / G1(v); any roughness (an axis may be long where the mean roughness is at the floor) */
+  AnisotropicView w = anisotropic_view(s.aniso, s.n, s.v, s.NoV);
+  vec3 sum = vec3(0.0);
+  int i = 0;
+  do { /* tested at the end (glsl/README.md) */
+    float pdf, VoH, weight;
+    vec3 l = anisotropic_sample(s.aniso, s.n, w, i, SL_ENV_SAMPLES, pdf, VoH, weight);
+    if (weight > 0.0) {
+      vec3 L = chain_lookup(chain_map, l, chain_lod(pdf, SL_ENV_SAMPLES, 0.0));
+      sum += L * principled_specular_tint(s, VoH) * weight;
+    }
+  } while (++i < SL_ENV_SAMPLES);
+  return sum / float(SL_ENV_SAMPLES);
+#  else
   vec3 up = abs(s.n.z) < 0.999 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0);
   vec3 tx = normalize(cross(up, s.n));
   vec3 ty = cross(s.n, tx);
@@ -122,6 +138,7 @@ vec3 env_sample_lobe(Surface s, sampler2D chain_map)
 #  else
   return sum / float(SL_ENV_SAMPLES) * specular_energy_compensation(s);
 #  endif
+#  endif
 }
 
 /* The whole world for smooth surfaces, the world without its suns (lit by them as lights) for
@@ -152,8 +169,15 @@ vec3 shade_environment_surface(Surface s, vec2 weights)
   vec3 r = reflect(-s.v, n_r);
   float ao = env_occlusion_diffuse();
   float specular_ao = env_occlusion_specular(s.n, r, s.alpha);
+#  ifdef SL_ANISOTROPY
+  /* the anisotropic lobe's albedo times the radiance it sees, sampled (anisotropy.glsl), over the round
+   * lobe's E the split sum's albedo multiplies back (the table's E >= 0.31 at every n.v and roughness:
+   * the guard keeps the division finite whatever the table) */
+  vec3 radiance = anisotropic_environment(s.aniso, s.n, s.v, s.NoV) / max(EB.x, 1e-4) * specular_ao;
+#  else
   vec3 radiance = env_prefiltered(s.roughness > MIN_PERCEPTUAL_ROUGHNESS ? env_dominant_direction(n_r, r, s.alpha) : r,
                                   s.roughness) * specular_ao;
+#  endif
   vec3 irradiance = env_irradiance(env_bent_normal(s.n)) * ao;
 #  ifdef SL_PRINCIPLED
   return principled_environment(s, EB, radiance, irradiance, weights);

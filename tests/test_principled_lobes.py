@@ -632,6 +632,7 @@ def check_extremes(case: str, lobe: dict, twin: bool = True):
     sw.material_extra = {k: v for k, v in lobe.items() if k not in ROW_INPUTS}
     sw.surface_extra = {ROW_INPUTS[k][0]: np.asarray(v, np.float64)
                         for k, v in lobe.items() if k in ROW_INPUTS}
+    sw.anisotropy = ((0.0, 0.0, 0.0), 1.0)  # the program draws ANISOTROPY: pack_material's row without one
     terms = S.Terms(principled=True)
     kinds = frozenset(ST.LIGHTS[name].kind for name in sw.lights)
     features = programs.Features("PBR", 1, kinds, terms, sphere_lights=True,

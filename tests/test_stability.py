@@ -218,6 +218,9 @@ class Sweep:
         #: twin Surface's attributes a node graph sets per fragment (its translucent lobe)
         self.material_extra = {}
         self.surface_extra = {}
+        #: (tangent, stretch) of MaterialData's anisotropy row where the program draws the anisotropic
+        #: lobe (SL_ANISOTROPY: every row's specular lobe through it, shading.with_anisotropy)
+        self.anisotropy = None
 
     def describe(self, rows) -> str:
         """The axis values of ``rows`` (the first few), for assertion messages."""
@@ -253,7 +256,7 @@ class Sweep:
         s = shading.Surface(p.astype(np.float64), n, v.astype(np.float64), mat)
         for key, value in self.surface_extra.items():
             setattr(s, key, value)
-        return s
+        return s if self.anisotropy is None else shading.with_anisotropy(s, *self.anisotropy)
 
     def twin_light(self, j: int, rows, intensity, sun_direction=None) -> S.Light:
         light = dataclasses.replace(self.twin_lights[j], intensity=intensity)

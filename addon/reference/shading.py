@@ -18,7 +18,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ..scene.snapshot import LOBES, Light, MaterialParams, Terms
-from . import environment, ltc, subsurface, thin_film, transmission
+from . import anisotropy, environment, ltc, subsurface, thin_film, transmission
 from . import multiscatter as M
 from . import sheen as sheen_table
 from .brdf import (
@@ -382,6 +382,9 @@ class Surface:
             np.clip(self.base_color, 0.0, 1.0), material.subsurface_ior)
         self.curvature = np.zeros(np.shape(self.NoV))
         self.translucent = np.zeros(3)
+        # the anisotropic GGX lobe (x, y, alpha_x, alpha_y) of a node graph's anisotropic BSDF (its tangent is
+        # per fragment: ``with_anisotropy``), None for the round lobe
+        self.aniso = None
         # transmission (glsl/transmission.glsl's transmission_at): the glass share of the non-metallic
         # part, its weight of the whole surface, IOR (floored as pack_material floors it), the tint of
         # each crossing, the dielectric reflection's tint, whether the Fresnel splits the light
@@ -584,6 +587,17 @@ class SheenLobe:
     m: np.ndarray
 
 
+def with_anisotropy(s: Surface, tangent, stretch) -> Surface:
+    """``s`` with its specular lobes anisotropic (surface.glsl's make_surface with SL_ANISOTROPY): the
+    lobe of the tangent and stretch k (MaterialData's anisotropy row) about the normal, from the
+    material's alpha; the isotropic stand-ins' roughness (alpha_x alpha_y)^(1/4), floored."""
+    a = copy.copy(s)
+    a.aniso = anisotropy.lobe(s.n, tangent, s.alpha, stretch)
+    a.roughness = np.maximum(anisotropy.roughness(a.aniso[2], a.aniso[3]), MIN_PERCEPTUAL_ROUGHNESS)
+    a.alpha = a.roughness * a.roughness
+    return a
+
+
 def coat_surface(s: Surface) -> Surface:
     """principled.glsl's coat_at and coat_surface: the coat as a black dielectric surface of its
     own roughness (floored as the base's) and IOR, the surface's normal (a node graph's own coat
@@ -600,6 +614,8 @@ def coat_surface(s: Surface) -> Surface:
     c.sheen = np.zeros(3)
     c.thin_film = s.thin_film * np.array([0.0, 1.0, 1.0, 1.0])  # the film lies on the base, under the coat
     c.reflection_tint = np.ones(3)  # no Glass BSDF's Color on the coat
+    if s.aniso is not None:  # Cycles' coat is round (principled.glsl's anisotropic_none)
+        c.aniso = anisotropy.lobe(s.n, np.zeros(3), c.alpha, 1.0)
     return c
 
 
@@ -670,9 +686,19 @@ def pbr_lobe(s: Surface, l, terms: Terms):
     terms = DEFAULT_TERMS if terms.principled else terms
     NoL, NoL_pos, NoH, NxH, LoH = _light_geometry(s, l)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        out = (pbr_distribution(NoH, _dot(NxH, NxH), s.alpha, terms)
-               * pbr_visibility(s.NoV, NoL_pos, NoH, LoH, s.alpha, terms) * NoL_pos)
+        if s.aniso is not None:  # principled.glsl's principled_DV
+            out = anisotropic_DV(s, l) * NoL_pos
+        else:
+            out = (pbr_distribution(NoH, _dot(NxH, NxH), s.alpha, terms)
+                   * pbr_visibility(s.NoV, NoL_pos, NoH, LoH, s.alpha, terms) * NoL_pos)
     return np.where(NoL > 0.0, out, 0.0)
+
+
+def anisotropic_DV(s: Surface, l):
+    """anisotropy.glsl's anisotropic_DV: the anisotropic lobe's D V towards l (meaningful where
+    n.l > 0: the callers mask the rest)."""
+    h = half_vector(l, s.v, s.n)
+    return anisotropy.D(h, s.n, *s.aniso) * anisotropy.V(s.v, l, s.n, *s.aniso, NoV=s.NoV)
 
 
 def _light_geometry(s: Surface, l):
@@ -682,12 +708,14 @@ def _light_geometry(s: Surface, l):
     return NoL, np.maximum(NoL, 0.0), saturate(_dot(s.n, h)), np.cross(s.n, h), saturate(_dot(l, h))
 
 
-def principled_direct(s: Surface, NoL, NoH, NxH2, LoH):
+def principled_direct(s: Surface, NoL, NoH, NxH2, LoH, l=None):
     """glsl/principled.glsl's principled_direct without E, NoL and the light factors: (diffuse,
-    specular) f for the Principled set."""
-    D = D_GGX(NoH, NxH2, s.alpha)
-    V = V_SmithGGXCorrelated(s.NoV, NoL, s.alpha)
-    specular = principled_specular_tint(s, LoH) * _rgb_scalar(D * V)
+    specular) f for the Principled set (towards ``l``, which the anisotropic lobe needs)."""
+    if s.aniso is not None:  # principled_DV
+        DV = anisotropic_DV(s, l)
+    else:
+        DV = D_GGX(NoH, NxH2, s.alpha) * V_SmithGGXCorrelated(s.NoV, NoL, s.alpha)
+    specular = principled_specular_tint(s, LoH) * _rgb_scalar(DV)
     layer = principled_layers(s).layer
     diffuse = s.base_color * (1.0 - s.metal3) * _rgb_scalar(np.clip(1.0 - layer, 0.0, 1.0)) * INV_PI
     diffuse = diffuse * _rgb_scalar(1.0 - s.subsurface)  # the rest scatters below (subsurface_direct)
@@ -723,7 +751,7 @@ def pbr_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
     LoV = _dot(l, s.v)
     if terms.principled:
         with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-            diffuse, specular = principled_direct(s, NoL_pos, NoH, _dot(NxH, NxH), LoH)
+            diffuse, specular = principled_direct(s, NoL_pos, NoH, _dot(NxH, NxH), LoH, l)
             out = (diffuse * factors[0] + specular * factors[1]) * E * NoL_pos[..., None]
         return np.where((NoL > 0.0)[..., None], out, 0.0)
     F = pbr_fresnel(s, LoH, terms)
@@ -754,9 +782,15 @@ def shade_uniform_environment(s: Surface, radiance, terms: Terms = DEFAULT_TERMS
     times the diffuse occlusion ``ao`` (split sum)."""
     L = np.asarray(radiance, np.float64) * _rgb_scalar(specular_ao)
     irradiance = np.pi * np.asarray(radiance, np.float64) * _rgb_scalar(ao)
-    return _under_upper_layers(s, terms, weights,
-                               lambda surface, w: shade_environment(surface, L, irradiance, terms, w),
-                               lambda n: irradiance)
+
+    def surface_light(surface, w):
+        prefiltered = L
+        if surface.aniso is not None:  # the anisotropic lobe's samples of the constant
+            levels = environment.PREFILTER_LEVELS  # (no suns split off a constant)
+            prefiltered = anisotropic_prefiltered(surface, lambda l, rough: L, levels, terms)
+        return shade_environment(surface, prefiltered, irradiance, terms, w)
+
+    return _under_upper_layers(s, terms, weights, surface_light, lambda n: irradiance)
 
 
 def shade_environment(s: Surface, prefiltered, irradiance, terms: Terms = DEFAULT_TERMS, weights=(1.0, 1.0),
@@ -868,6 +902,12 @@ def _image_environment(s: Surface, maps: environment.WorldMaps, terms: Terms, sa
     if samples:
         sampled = env_sampled_specular(s, maps.whole, maps.clamped, samples, maps.first_clamped, terms)
         return shade_environment(s, 0.0, irradiance, terms, weights, sampled * _rgb_scalar(specular_ao))
+    if "prefiltered" not in memo and s.aniso is not None:  # the anisotropic lobe's samples
+        def read(l, rough):
+            return environment.prefiltered_radiance(maps.whole, maps.clamped, l, rough, maps.first_clamped,
+                                                    prefilter_samples)
+
+        memo["prefiltered"] = anisotropic_prefiltered(s, read, maps.first_clamped, terms)
     if "prefiltered" not in memo:
         r = 2.0 * s.NoV[..., None] * s.n - s.v
         rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
@@ -878,12 +918,53 @@ def _image_environment(s: Surface, maps: environment.WorldMaps, terms: Terms, sa
     return shade_environment(s, memo["prefiltered"] * _rgb_scalar(specular_ao), irradiance, terms, weights)
 
 
+def anisotropic_environment(s: Surface, read, first_clamped: int):
+    """anisotropy.glsl's anisotropic_environment: the mean over WORLD_SAMPLES of the anisotropic lobe's
+    visible normals (``anisotropy.sample``) of G2 / G1(v) times ``read(l, roughness)``, the prefiltered
+    world at each sample's footprint roughness, kept on the side of the suns' split (levels from
+    ``first_clamped`` on made without them) that the lobe's own roughness takes."""
+    count = anisotropy.WORLD_SAMPLES
+    suns = world_sun_specular(anisotropy.roughness(s.aniso[2], s.aniso[3]), first_clamped)[..., None]
+    levels = environment.PREFILTER_LEVELS
+
+    def level_roughness(k):  # (ibl.glsl's env_level_roughness: level 0 at the roughness floor)
+        return MIN_PERCEPTUAL_ROUGHNESS if k == 0 else environment.level_roughness(k)
+
+    r0, r1 = level_roughness(max(first_clamped - 1, 0)), level_roughness(min(first_clamped, levels - 1))
+    total = np.zeros(np.shape(s.NoV) + (3,))
+    for i in range(count):
+        l, pdf, _, weight = anisotropy.sample(s.n, s.v, s.NoV, *s.aniso, i, count)
+        rough = anisotropy.sample_roughness(pdf, count)
+        if first_clamped < levels:
+            rough = np.minimum(rough, r0) + (np.maximum(rough, r1) - np.minimum(rough, r0)) * suns[..., 0]
+        total += np.where((weight > 0.0)[..., None], read(l, rough) * _rgb_scalar(weight), 0.0)
+    return total / count
+
+
+def anisotropic_prefiltered(s: Surface, read, first_clamped: int, terms: Terms):
+    """model_pbr.glsl's radiance for an anisotropic lobe: ``anisotropic_environment`` (its albedo times
+    the radiance it sees) over the round lobe's split-sum E, which the split sum's albedo multiplies
+    back."""
+    E, _ = env_split_sum(s, terms)
+    return anisotropic_environment(s, read, first_clamped) / _rgb_scalar(np.maximum(E, 1e-4))
+
+
 def env_sample_lobe(s: Surface, levels, samples: int, terms: Terms = DEFAULT_TERMS):
     """model_pbr.glsl's env_sample_lobe: the specular lobe's ``samples`` Hammersley half vectors
     about each point's normal (phi = 2 pi (i + 1/2) / N), each sample's light read from the
     chain ``levels`` at its filtered importance sampling level (``environment.chain_lod``, no
     bias), weighted by f cos / pdf = F V 4 (v.h)(n.l) / (n.h); at the roughness floor the mirror
     direction read from the chain's widest level, times F at n.v."""
+    if s.aniso is not None:  # the anisotropic lobe by its visible normals: f cos / pdf = F G2 / G1(v)
+        total = np.zeros(np.shape(s.NoV) + (3,))
+        for i in range(samples):
+            l, pdf, VoH, weight = anisotropy.sample(s.n, s.v, s.NoV, *s.aniso, i, samples)
+            on = weight > 0.0
+            lod = environment.chain_lod(np.where(on, pdf, 1.0), samples, levels[0].shape[1], 0.0)
+            L = environment.chain_lookup(levels, l, np.where(on, lod, 0.0))
+            F = principled_specular_tint(s, VoH)
+            total += np.where(on[..., None], L * F * _rgb_scalar(weight), 0.0)
+        return total / samples
     rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
     alpha = np.broadcast_to(s.alpha, np.shape(s.NoV))
     lobe_terms = DEFAULT_TERMS if terms.principled else terms
@@ -1013,8 +1094,11 @@ def shade_polygon_light(s: Surface, offsets, to_centre, L, form_factor, l, facto
     rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
     albedo = M.interpolate(M.albedo_table(*terms.lobe), s.NoV, rough)
     lobe = ltc.lobe_integral(form_factor_lobe, albedo, pbr_lobe(s, l, terms), density)
+    lobe = np.where(form_factor_lobe > 0.0, lobe, 0.0)
+    if s.aniso is not None:  # by its visible normals over the polygon (anisotropy.glsl)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lobe = anisotropy.polygon_integral(s.n, s.v, s.NoV, *s.aniso, offsets, to_centre, ltc_jitter)
     specular = pbr_specular_tint(s, LoH, terms) * L * (lobe * factors[1] * specular_scale)[..., None]
-    specular = np.where((form_factor_lobe > 0.0)[..., None], specular, 0.0)
     return np.where(lit[..., None], diffuse + specular, 0.0)
 
 
@@ -1119,17 +1203,21 @@ def shade_light_surface(model: str, s: Surface, light: Light, E, l, terms: Terms
         # lobe widened by it where small, blended between (light_shading.glsl's shade_light)
         to_light = np.asarray(light.position, np.float64) - s.p
         near = ~sphere_far_field(light, _dot(to_light, to_light))
-        k = sphere_light_theta(light, s.p) / np.maximum(s.alpha, 1e-12)
+        narrow = s.alpha if s.aniso is None else np.minimum(s.aniso[2], s.aniso[3])  # (light_shading.glsl)
+        k = sphere_light_theta(light, s.p) / np.maximum(narrow, 1e-12)
         share = np.where(near, np.clip((k - SPHERE_LTC_FROM) / (SPHERE_LTC_FULL - SPHERE_LTC_FROM), 0.0, 1.0),
                          0.0)
         if np.any(share > 0.0):
             polygon = shade_sphere_light(s, light, E, l, terms, ltc_jitter, k, memo, sheen)
             if sheen is not None:  # only where the polygon is shaded (light_shading.glsl)
                 sheen["value"] = np.where((share > 0.0)[..., None], sheen["value"], np.nan)
-        r_dir = 2.0 * _dot(s.n, s.v)[..., None] * s.n - s.v
+        n_r = s.n if s.aniso is None else anisotropy.bent_normal(s.n, s.v, *s.aniso, s.roughness)
+        r_dir = 2.0 * _dot(n_r, s.v)[..., None] * n_r - s.v
         l_specular, alpha_wide, wide_weight, point_weight = sphere_light_specular(light, s.p, r_dir, s.alpha)
         wide = copy.copy(s)
         wide.alpha = alpha_wide
+        if s.aniso is not None:  # each axis widened alike (anisotropy.glsl's anisotropic_widened)
+            wide.aniso = (*s.aniso[:2], *anisotropy.widened(s.aniso[2], s.aniso[3], s.alpha, alpha_wide))
         specular = (0.0, light.specular_factor)
         far = (direct(s, l, E, (light.diffuse_factor, 0.0), terms)
                + direct(wide, l, E * np.asarray(wide_weight)[..., None], specular, terms)
