@@ -816,7 +816,10 @@ def _principled(w: _Writer, node: FlatNode) -> dict:
                             args[0], "Subsurface IOR")
     weight = (w.arg(node, "Subsurface Weight") if "Subsurface Weight" in node.inputs
               else w.constant(0.0, "VALUE"))
-    closure = f"closure_principled({', '.join(args)}, {n}, {coat_n}, {weight}, {path})"
+    # the diffuse base's Oren-Nayar roughness (Blender 4.3 and later; before, Lambert)
+    rough = (w.arg(node, "Diffuse Roughness") if "Diffuse Roughness" in node.inputs
+             else w.constant(0.0, "VALUE"))
+    closure = f"closure_principled({', '.join(args)}, {n}, {coat_n}, {weight}, {path}, {rough})"
     return {"BSDF": _anisotropic(w, node, closure)}
 
 

@@ -14,7 +14,7 @@ import numpy as np
 from ..materials import codegen
 from ..materials.codegen import glsl_dir
 from ..materials.surface import GraphProgram
-from ..reference import subsurface
+from ..reference import closures, subsurface
 from ..reference.multiscatter import MS_SIZE, S_SIZE
 from ..reference.sheen import SIZE as SHEEN_SIZE
 from ..scene.matrices import invert
@@ -1019,13 +1019,13 @@ def pack_material(m: MaterialParams) -> bytes:
         [*m.transmission_tint, 0.0],
         [*m.reflection_tint, 0.0],
         # the closure nodes beside the Principled BSDF (a node graph's, per fragment): the sheen layered
-        # over the base, no Oren-Nayar roughness, no velvet, no toon
-        [1.0, 0.0, 0.0, 0.0],
+        # over the base, the Principled BSDF's Diffuse Roughness (Oren-Nayar), no velvet, no toon
+        [1.0, min(max(m.diffuse_roughness, 0.0), 1.0), 0.0, 0.0],
         [0.0, 0.0, 0.0, 0.0],
         [0.0, 0.0, 0.0, 0.0],
         [0.0, 0.0, 0.0, 0.0],
         [0.0, 0.0, 0.0, 0.0],
-        [0.0, 0.0, 0.0, 0.0],
+        [*closures.oren_nayar_ms(m.diffuse_roughness, m.base_color), 0.0],  # its multiple scattering
         [0.0, 0.0, 0.0, 0.0],
     ]
     return np.asarray(rows, np.float32).tobytes()
