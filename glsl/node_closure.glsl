@@ -33,12 +33,14 @@ struct ClosureLobes {
   float transmission_fresnel; /* 1: the Fresnel splits reflection and transmission (0: Refraction BSDF) */
   vec3 reflection_tint;  /* the dielectric reflection's tint, times the closure's weight (the Glass
                           * BSDF's Color, 0 for the Refraction BSDF, else white) */
+  vec4 subsurface_walk;  /* the subsurface's random walk row (node_subsurface.glsl) times its weight */
 };
 
 ClosureLobes lobes_none()
 {
   return ClosureLobes(vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0.0, 0.0, 0.0,
-                      vec3(0.0), 0.0, vec3(0.0), 0.0, vec3(0.0), 0.0, 0.0, vec3(0.0), 0.0, vec3(0.0));
+                      vec3(0.0), 0.0, vec3(0.0), 0.0, vec3(0.0), 0.0, 0.0, vec3(0.0), 0.0, vec3(0.0),
+                      vec4(0.0));
 }
 
 /* A BSDF's own lobes of weight 1: a white Specular Tint, no coat, no sheen, isotropic. */
@@ -58,7 +60,7 @@ ClosureLobes lobes_scale(ClosureLobes l, float w)
                       l.thin_film * w, l.thin_film_ior * w, l.tangent * w, l.stretch * w,
                       l.translucent * w, l.subsurface * w, l.subsurface_radius * w,
                       l.transmission * w, l.transmission_ior * w, l.transmission_tint * w,
-                      l.transmission_fresnel * w, l.reflection_tint * w);
+                      l.transmission_fresnel * w, l.reflection_tint * w, l.subsurface_walk * w);
 }
 
 ClosureLobes lobes_add(ClosureLobes a, ClosureLobes b)
@@ -71,7 +73,7 @@ ClosureLobes lobes_add(ClosureLobes a, ClosureLobes b)
                       a.subsurface_radius + b.subsurface_radius,
                       a.transmission + b.transmission, a.transmission_ior + b.transmission_ior,
                       a.transmission_tint + b.transmission_tint, a.transmission_fresnel + b.transmission_fresnel,
-                      a.reflection_tint + b.reflection_tint);
+                      a.reflection_tint + b.reflection_tint, a.subsurface_walk + b.subsurface_walk);
 }
 
 /* The closure nodes beyond the Principled BSDF's lobes (glsl/closures.glsl draws them), each input
@@ -200,7 +202,7 @@ Closure closure_principled(vec4 base_color, float metallic, float roughness, flo
                            float coat, float coat_roughness, float coat_ior, vec4 coat_tint, float sheen,
                            float sheen_roughness, vec4 sheen_tint, float thin_film, float thin_film_ior,
                            float transmission, vec3 n, vec3 coat_n, float subsurface, vec3 subsurface_path,
-                           float diffuse_roughness)
+                           float diffuse_roughness, vec4 subsurface_walk)
 {
   float r = (max(ior, 1.0) - 1.0) / (max(ior, 1.0) + 1.0);
   Closure c = closure_bsdf(base_color.rgb, metallic, roughness, min(r * r * 2.0 * max(level, 0.0), 1.0), n);
@@ -217,6 +219,7 @@ Closure closure_principled(vec4 base_color, float metallic, float roughness, flo
   c.lobes.thin_film_ior = c.lobes.thin_film * max(thin_film_ior, 1e-5);
   c.lobes.subsurface = clamp(subsurface, 0.0, 1.0);
   c.lobes.subsurface_radius = c.lobes.subsurface * subsurface_path; /* (node_subsurface.glsl) */
+  c.lobes.subsurface_walk = c.lobes.subsurface * subsurface_walk;
   /* the glass part (Cycles' Transmission component): each crossing tinted by sqrt(Base Color), the
    * base colour within [0, 1]; the IOR the Principled BSDF's, at least 1e-5 */
   c.lobes.transmission = clamp(transmission, 0.0, 1.0);

@@ -319,6 +319,11 @@ vec3 principled_environment(Surface s, vec2 EB, vec3 radiance, vec3 irradiance, 
 #    else
   vec3 rho = s.base_color;
 #    endif
+#    ifdef SL_SUBSURFACE
+  /* the subsurface's share a Lambert base (the walk leaves by one) times the walk's reflectance over it
+   * (subsurface.glsl's subsurface_walk_at) */
+  rho = rho * (1.0 - s.subsurface) + s.base_color * s.subsurface * s.subsurface_walk;
+#    endif
   vec3 diffuse = rho * (1.0 - s.metalness) * saturate(1.0 - p.layer) * irradiance * INV_PI;
 #    ifdef SL_TRANSMISSION
   diffuse *= 1.0 - s.transmission.share;

@@ -70,6 +70,18 @@ def test_diffuse_roughness_matches_cycles(case, tmp_path):
                          tmp_path, eevee=case == "graph-0-to-1", lights=lights)
 
 
+def world_lit(make, tmp_path, samples):
+    """The sphere of ``make()``'s material in a uniform world (0.5), no lights, no occlusion, a
+    transparent film: (scene, sphere, ours, Cycles' at ``samples``), RGBA."""
+    scene, sphere = _scene(make, lights=())
+    TW._world(scene, color=(0.5, 0.5, 0.5))
+    scene.shading_lab.world_occlusion = False
+    scene.render.film_transparent = True
+    ours = scenes.render(scene, tmp_path / "ours.exr").astype(np.float64)
+    ref = _cycles(scene, tmp_path / "cycles.exr", samples=samples).astype(np.float64)
+    return scene, sphere, ours, ref
+
+
 #: The world's light on it: (mean, 99th percentile) relative error against Cycles at WORLD_SAMPLES (its
 #: noise included: at 512 samples 0.35 % / 2.1 %, as Lambert's 0.34 % / 1.9 %), measured with bpy 5.0.1
 WORLD_MEASURED = (5.19e-3, 2.45e-2)
@@ -81,12 +93,7 @@ def test_world_light_on_the_diffuse_roughness(tmp_path):
     Oren-Nayar directional albedo at the view times the irradiance (exact for a uniform world), against
     Cycles; Diffuse Roughness 0 differs from it by at least 5x our error (the means: the p99 is Cycles'
     noise)."""
-    scene, _ = _scene(_swept, lights=())
-    TW._world(scene, color=(0.5, 0.5, 0.5))
-    scene.shading_lab.world_occlusion = False
-    scene.render.film_transparent = True
-    ours = scenes.render(scene, tmp_path / "ours.exr").astype(np.float64)
-    ref = _cycles(scene, tmp_path / "cycles.exr", samples=WORLD_SAMPLES).astype(np.float64)
+    scene, _, ours, ref = world_lit(_swept, tmp_path, WORLD_SAMPLES)
     inside = (ours[..., 3] > 0.999) & (ref[..., 3] > 0.999)
     lit = inside & (ref[..., :3].max(-1) > 0.02 * ref[..., :3].max())
     rel = np.abs(ours[..., :3] - ref[..., :3]).max(-1)[lit] / ref[..., :3].max(-1)[lit]

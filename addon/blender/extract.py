@@ -172,6 +172,9 @@ def _principled_lobes(node) -> dict:
                                                                                            (0.8, 0.8, 0.8)))),
             # the diffuse base's Oren-Nayar roughness (Blender 4.3 and later; 4.2's: Lambert)
             "diffuse_roughness": unit("Diffuse Roughness", 0.0),
+            # what the random walk's entry refracts through (reference/subsurface.py's walk_row)
+            "ior": float(_input(node, "IOR", 1.5)),
+            "specular_ior_level": float(_input(node, "Specular IOR Level", 0.5)),
             **_thin_film(node)}
 
 

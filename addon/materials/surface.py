@@ -464,7 +464,8 @@ LOBE_INPUTS = {"SPECULAR_TINT": ("Specular Tint",),
                "THIN_FILM": ("Thin Film Thickness", "Thin Film IOR"),
                "ANISOTROPY": ("Anisotropic", "Anisotropic Rotation", "Tangent"),
                "TRANSLUCENT": (),
-               "SUBSURFACE": ("Subsurface Weight", "Subsurface Radius", "Subsurface Scale", "Subsurface IOR"),
+               "SUBSURFACE": ("Subsurface Weight", "Subsurface Radius", "Subsurface Scale", "Subsurface IOR",
+                              "Subsurface Anisotropy"),
                "TRANSMISSION": ("Transmission Weight",),
                **{lobe: () for lobe in (*CLOSURE_LOBES, GLOSSY_LOBE)}}  # (the closure nodes': READ_INPUTS)
 LOBE_INPUTS["DIFFUSE_ROUGHNESS"] = ("Diffuse Roughness",)  # the Principled BSDF's own too (Blender 4.3+)
@@ -484,7 +485,8 @@ READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_BASE_INPUTS) |
                "ShaderNodeBsdfMetallic": {"Base Color", "Edge Tint", "IOR", "Extinction", "Roughness",
                                           "Normal"} | ANISOTROPIC_INPUTS,
                "ShaderNodeBsdfTranslucent": {"Color", "Normal"},
-               "ShaderNodeSubsurfaceScattering": {"Color", "Scale", "Radius", "IOR", "Normal"},
+               "ShaderNodeSubsurfaceScattering": {"Color", "Scale", "Radius", "IOR", "Roughness",
+                                                  "Anisotropy", "Normal"},
                "ShaderNodeBsdfGlass": {"Color", "Roughness", "IOR", "Normal"},
                "ShaderNodeBsdfRefraction": {"Color", "Roughness", "IOR", "Normal"}}
 READ_INPUTS["ShaderNodeBsdfAnisotropic"] = READ_INPUTS["ShaderNodeBsdfGlossy"]  # the Glossy BSDF's own name

@@ -337,6 +337,12 @@ class Features:
         return "THIN_FILM" in self.lobes
 
     @property
+    def uses_subsurface_table(self) -> bool:
+        """The program samples ``subsurface_table`` (the subsurface's random walk,
+        addon/reference/subsurface.py's walk_table)."""
+        return "SUBSURFACE" in self.lobes
+
+    @property
     def uses_s_table(self) -> bool:
         """The program samples ``s_table`` (the layering estimate: the Principled set, the LAYERED
         diffuse)."""
@@ -354,6 +360,12 @@ class Features:
                 out.append(("SL_CLOSURE_BSDFS", "1"))
             if self.uses_sheen_table:
                 out.append(("SL_SHEEN_SIZE", str(SHEEN_SIZE)))
+            if self.uses_subsurface_table:  # the walk table's nodes and the entry's quadrature
+                out += [("SL_WALK_ALBEDOS", str(subsurface.WALK_ALBEDO_NODES)),
+                        ("SL_WALK_GS", str(subsurface.WALK_G_NODES)),
+                        ("SL_WALK_MUS", str(subsurface.WALK_MU_NODES)),
+                        ("SL_WALK_RINGS", str(subsurface.WALK_ENTRY_RINGS)),
+                        ("SL_WALK_SPOKES", str(subsurface.WALK_ENTRY_SPOKES))]
         elif self.model == "PBR":
             out += [("SL_FRESNEL_" + t.fresnel, "1"), ("SL_NDF_" + t.ndf, "1"),
                     ("SL_VISIBILITY_" + t.visibility, "1"), ("SL_DIFFUSE_" + t.diffuse, "1")]
@@ -1027,6 +1039,9 @@ def pack_material(m: MaterialParams) -> bytes:
         [0.0, 0.0, 0.0, 0.0],
         [*closures.oren_nayar_ms(m.diffuse_roughness, m.base_color), 0.0],  # its multiple scattering
         [0.0, 0.0, 0.0, 0.0],
+        # the subsurface's random walk: Anisotropy, the entry's IOR and roughness, the diffuse entry
+        [*subsurface.walk_row(m.subsurface_method, m.ior, m.specular_ior_level, m.subsurface_ior,
+                              m.subsurface_anisotropy)],
     ]
     return np.asarray(rows, np.float32).tobytes()
 

@@ -199,6 +199,10 @@ class MaterialParams:
     #: Diffuse BSDF's Oren-Nayar of that roughness (glsl/closures.glsl, DIFFUSE_ROUGHNESS; Lambert
     #: below 1e-5)
     diffuse_roughness: float = 0.0
+    #: the Principled BSDF's IOR and Specular IOR Level as set (Cycles' Random Walk subsurface enters
+    #: through the dielectric of that IOR as the level adjusts it: reference/subsurface.py's walk_row)
+    ior: float = 1.5
+    specular_ior_level: float = 0.5
 
     @property
     def lobes(self) -> frozenset[str]:
