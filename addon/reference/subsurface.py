@@ -286,8 +286,10 @@ def walk_table() -> np.ndarray:
 #: The entry's quadrature over Cycles' VNDF sampling disk (microfacet_ggx_sample_vndf, Heitz 2018):
 #: the half t.x >= 0 (the other half mirrors the refracted rays across the plane of incidence, at the
 #: same cosine to the normal), WALK_ENTRY_RINGS rings even in area times WALK_ENTRY_SPOKES angles
+#: (against sampling the entry: 4 x 2 points 0.64 % off the factor at worst, as 4 x 4; 3 x 2 0.87 %,
+#: 2 x 2 1.3 %; tests/test_subsurface_walk.py)
 WALK_ENTRY_RINGS = 4
-WALK_ENTRY_SPOKES = 4
+WALK_ENTRY_SPOKES = 2
 
 #: The methods' codes in MaterialData's subsurface_walk row (w: the diffuse entry's share; y 0: no walk)
 SKIN_DIFFUSE_SHARE = 0.5
