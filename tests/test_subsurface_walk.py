@@ -13,6 +13,7 @@ from __future__ import annotations
 
 import math
 
+import bpy
 import numpy as np
 import pytest
 import scenes
@@ -135,10 +136,15 @@ SLAB_CASES = {
     "rough-ior-2": (0.4, "RANDOM_WALK", {"IOR": 2.0, "Roughness": 0.5, "Anisotropy": 0.5}),
     "skin": (0.15, "RANDOM_WALK_SKIN", {"IOR": 1.4, "Anisotropy": 0.0}),
 }
-#: the largest relative difference of the channels' R / albedo, twin against Cycles (64 samples at each
-#: of 256 pixels: ~0.3 % noise), measured with bpy 5.0.1
-SLAB_MEASURED = {"normal-g0": 2.0e-3, "grazing-ior-1.01": 2.7e-3, "oblique-g0.9": 1.19e-2,
-                 "rough-ior-2": 9.0e-3, "skin": 2.9e-3}
+#: Cycles' samples per pixel on the slab (256 pixels): its noise ~0.3 % (Blender 4.5's sampler: at 64,
+#: 1 % for Skin)
+SLAB_SAMPLES = 256
+#: the largest relative difference of the channels' R / albedo, twin against Cycles at SLAB_SAMPLES,
+#: measured with bpy 5.0.1
+SLAB_MEASURED = {"normal-g0": 3.6e-3, "grazing-ior-1.01": 2.6e-3, "oblique-g0.9": 5.2e-3,
+                 "rough-ior-2": 8.6e-3, "skin": 2.9e-3}
+if bpy.app.version < (5, 0, 0):  # Blender 4.2's and 4.5's Cycles: Skin's slab 0.93 % off (their sampler's
+    SLAB_MEASURED["skin"] = 9.3e-3  # noise at 256 samples, ~0.6 % from 5.0's image)
 
 
 @pytest.fixture(scope="module")
@@ -148,7 +154,7 @@ def slabs(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("slabs")
     out = {}
     for case, (cos_v, method, inputs) in SLAB_CASES.items():
-        image = _cycles(_slab(cos_v, method, inputs), tmp / f"{case}.exr", samples=64)[..., :3]
+        image = _cycles(_slab(cos_v, method, inputs), tmp / f"{case}.exr", samples=SLAB_SAMPLES)[..., :3]
         out[case] = image.reshape(-1, 3).astype(np.float64).mean(0) / (np.array(SLAB_COLOR) * cos_v / math.pi)
     return out
 
@@ -296,8 +302,11 @@ def test_walk_inputs_against_cycles(case, spheres):
 
 
 #: the world's light on it: the largest |ours / walk - 1| of the channels' means over rings of the view's
-#: cosine, and the Lambert base's, measured with bpy 5.0.1 (Cycles at WORLD_SAMPLES)
-WORLD_MEASURED = 0.024
+#: cosine, measured with bpy 5.0.1 (Cycles at WORLD_SAMPLES; 4.5 alike). Blender 4.2's Cycles draws a
+#: channel whose Radius x Scale is under a quarter of the pixel's footprint as a plain diffuse
+#: (bssrdf_setup; 4.5 no longer does): here the blue (5 mm against 10 mm), which the engine walks: ours
+#: 15 % off its blue, measured there, and not held to the Lambert base's error (docs/limits.md)
+WORLD_MEASURED = 0.024 if bpy.app.version >= (4, 5, 0) else 0.148
 WORLD_SAMPLES = 64
 #: the rings of n.v (the sphere seen from its axis: its radius)
 RINGS = ((0.7, 1.01), (0.35, 0.7), (0.1, 0.35))
@@ -331,4 +340,5 @@ def test_world_light_on_the_walk(tmp_path):
     print(f"world light on the walk: ours {error:.3f}, the Lambert base {base:.3f}; per ring ours / walk "
           f"{np.round(rows[:, 0] / rows[:, 1], 3).tolist()}")
     assert error <= 3.0 * WORLD_MEASURED, error
-    assert base >= 2.0 * error, (error, base)
+    if bpy.app.version >= (4, 5, 0):
+        assert base >= 2.0 * error, (error, base)
