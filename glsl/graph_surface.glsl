@@ -150,6 +150,7 @@ void apply_closure_lobes(inout MaterialData m, ClosureLobes l, float inv)
   m.translucent = vec4(l.translucent * inv, 0.0);
   float subsurface_inv = l.subsurface > 1e-8 ? 1.0 / l.subsurface : 0.0; /* none: its radius does not matter */
   m.subsurface = vec4(l.subsurface_radius * subsurface_inv, l.subsurface * inv);
+  m.subsurface_walk = l.subsurface_walk * subsurface_inv;
   /* no glass: its inputs do not matter (the lobe is off at share 0) */
   float glass_inv = l.transmission > 1e-8 ? 1.0 / l.transmission : 0.0;
   m.transmission = vec4(l.transmission * inv, l.transmission_fresnel * glass_inv, l.transmission_ior * glass_inv,

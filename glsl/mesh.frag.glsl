@@ -240,8 +240,14 @@ MaterialData load_material(int row)
   m.anisotropy = vec4(0.0, 0.0, 0.0, 1.0); /* isotropic: an anisotropic lobe compiles a graph */
 #endif
   /* (no program with the translucent or the subsurface lobe is shaded deferred: Features) */
-  /* the closure nodes' rows: a node graph's alone, and none is shaded deferred (its sheen layered) */
+  /* the closure nodes' rows: a node graph's alone, and none is shaded deferred (its sheen layered);
+   * but the Principled BSDF's Diffuse Roughness and its multiple scattering (programs.pack_material) */
+#ifdef SL_DIFFUSE_ROUGHNESS
+  m.closure_bsdfs = texelFetch(material_table, ivec2(21, row), 0);
+  m.diffuse_ms = texelFetch(material_table, ivec2(26, row), 0);
+#else
   m.closure_bsdfs = vec4(1.0, 0.0, 0.0, 0.0);
+#endif
   return m;
 }
 #endif

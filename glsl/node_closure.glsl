@@ -33,12 +33,14 @@ struct ClosureLobes {
   float transmission_fresnel; /* 1: the Fresnel splits reflection and transmission (0: Refraction BSDF) */
   vec3 reflection_tint;  /* the dielectric reflection's tint, times the closure's weight (the Glass
                           * BSDF's Color, 0 for the Refraction BSDF, else white) */
+  vec4 subsurface_walk;  /* the subsurface's random walk row (node_subsurface.glsl) times its weight */
 };
 
 ClosureLobes lobes_none()
 {
   return ClosureLobes(vec3(0.0), 0.0, 0.0, 0.0, vec3(0.0), vec3(0.0), vec3(0.0), 0.0, 0.0, 0.0, 0.0,
-                      vec3(0.0), 0.0, vec3(0.0), 0.0, vec3(0.0), 0.0, 0.0, vec3(0.0), 0.0, vec3(0.0));
+                      vec3(0.0), 0.0, vec3(0.0), 0.0, vec3(0.0), 0.0, 0.0, vec3(0.0), 0.0, vec3(0.0),
+                      vec4(0.0));
 }
 
 /* A BSDF's own lobes of weight 1: a white Specular Tint, no coat, no sheen, isotropic. */
@@ -58,7 +60,7 @@ ClosureLobes lobes_scale(ClosureLobes l, float w)
                       l.thin_film * w, l.thin_film_ior * w, l.tangent * w, l.stretch * w,
                       l.translucent * w, l.subsurface * w, l.subsurface_radius * w,
                       l.transmission * w, l.transmission_ior * w, l.transmission_tint * w,
-                      l.transmission_fresnel * w, l.reflection_tint * w);
+                      l.transmission_fresnel * w, l.reflection_tint * w, l.subsurface_walk * w);
 }
 
 ClosureLobes lobes_add(ClosureLobes a, ClosureLobes b)
@@ -71,7 +73,7 @@ ClosureLobes lobes_add(ClosureLobes a, ClosureLobes b)
                       a.subsurface_radius + b.subsurface_radius,
                       a.transmission + b.transmission, a.transmission_ior + b.transmission_ior,
                       a.transmission_tint + b.transmission_tint, a.transmission_fresnel + b.transmission_fresnel,
-                      a.reflection_tint + b.reflection_tint);
+                      a.reflection_tint + b.reflection_tint, a.subsurface_walk + b.subsurface_walk);
 }
 
 /* The closure nodes beyond the Principled BSDF's lobes (glsl/closures.glsl draws them), each input
@@ -172,6 +174,26 @@ Closure closure_mix(float fac, Closure a, Closure b)
   return closure_add(closure_scale(a, 1.0 - t), closure_scale(b, t));
 }
 
+/* A diffuse base's Oren-Nayar roughness (glsl/closures.glsl, where the program draws it:
+ * SL_DIFFUSE_ROUGHNESS) on closure c: sigma = roughness clamped to [0, 1] as bsdf_oren_nayar_setup
+ * clamps it (Lambert below 1e-5: Cycles' bsdf_diffuse_setup, CLOSURE_WEIGHT_CUTOFF), and its multiple
+ * scattering's colour here, per closure, as it is not linear in the colour: weight x E_ms, E_ms =
+ * rho^2 E_avg / (1 - E_avg) / (pi (1 - rho (1 - E_avg))) of rho = `color` within [0, 1]
+ * (bsdf_oren_nayar_setup; `color` the closure's weight: the Diffuse BSDF's Color, the Principled BSDF's
+ * Base Color). Twin: addon/reference/closures.py's oren_nayar_ms. */
+Closure closure_oren_nayar(Closure c, vec3 color, float roughness)
+{
+  float sigma = clamp(roughness, 0.0, 1.0);
+  c.bsdfs.diffuse_roughness = sigma;
+  c.bsdfs.diffuse_ms = vec3(0.0);
+  if (sigma >= 1e-5) {
+    float e_avg = oren_nayar_coefficients(sigma).z; /* < 1 for sigma >= 1e-5 */
+    vec3 rho = clamp(color, 0.0, 1.0);
+    c.bsdfs.diffuse_ms = color * rho * rho * (e_avg / (1.0 - e_avg)) * INV_PI / (1.0 - rho * (1.0 - e_avg));
+  }
+  return c;
+}
+
 /* The Principled BSDF's inputs the shading models read: the dielectric F0 from IOR and Specular
  * IOR Level as the constant path reads them (addon/blender/extract.py: F0(IOR) x 2 x level, at
  * most 1), Alpha as a mix with Transparent (Cycles' principled alpha), emission under it too; its
@@ -183,7 +205,8 @@ Closure closure_principled(vec4 base_color, float metallic, float roughness, flo
                            float alpha, vec4 emission_color, float emission_strength, vec4 specular_tint,
                            float coat, float coat_roughness, float coat_ior, vec4 coat_tint, float sheen,
                            float sheen_roughness, vec4 sheen_tint, float thin_film, float thin_film_ior,
-                           float transmission, vec3 n, vec3 coat_n, float subsurface, vec3 subsurface_path)
+                           float transmission, vec3 n, vec3 coat_n, float subsurface, vec3 subsurface_path,
+                           float diffuse_roughness, vec4 subsurface_walk)
 {
   float r = (max(ior, 1.0) - 1.0) / (max(ior, 1.0) + 1.0);
   Closure c = closure_bsdf(base_color.rgb, metallic, roughness, min(r * r * 2.0 * max(level, 0.0), 1.0), n);
@@ -200,6 +223,7 @@ Closure closure_principled(vec4 base_color, float metallic, float roughness, flo
   c.lobes.thin_film_ior = c.lobes.thin_film * max(thin_film_ior, 1e-5);
   c.lobes.subsurface = clamp(subsurface, 0.0, 1.0);
   c.lobes.subsurface_radius = c.lobes.subsurface * subsurface_path; /* (node_subsurface.glsl) */
+  c.lobes.subsurface_walk = c.lobes.subsurface * subsurface_walk;
   /* the glass part (Cycles' Transmission component): each crossing tinted by sqrt(Base Color), the
    * base colour within [0, 1]; the IOR the Principled BSDF's, at least 1e-5 */
   c.lobes.transmission = clamp(transmission, 0.0, 1.0);
@@ -208,6 +232,9 @@ Closure closure_principled(vec4 base_color, float metallic, float roughness, flo
   c.lobes.transmission_fresnel = c.lobes.transmission;
   c.bsdfs.diffuse_weight = 1.0;
   c.bsdfs.sheen_layered = c.lobes.sheen_weight;
+  /* the diffuse base's Diffuse Roughness (Blender 4.3 and later): Cycles 5.0's Principled BSDF sets up
+   * the Diffuse BSDF's Oren-Nayar of its Base Color (svm_node_closure_bsdf) */
+  c = closure_oren_nayar(c, max(base_color.rgb, 0.0), diffuse_roughness);
   c.emission = emission_color.rgb * emission_strength;
   float a = clamp(alpha, 0.0, 1.0);
   c = closure_scale(c, a);
@@ -244,24 +271,12 @@ Closure closure_refraction(vec4 color, float roughness, float ior, vec3 n)
   return c;
 }
 
-/* Diffuse BSDF: no specular lobe (F0 0); its Roughness Cycles' Oren-Nayar (glsl/closures.glsl,
- * where the program draws it: SL_DIFFUSE_ROUGHNESS), Lambert below 1e-5 (bsdf_diffuse_setup),
- * clamped to [0, 1] as bsdf_oren_nayar_setup clamps it, and its multiple scattering's colour here,
- * per closure, as it is not linear in the colour: Color x E_ms, E_ms = rho^2 E_avg / (1 - E_avg) /
- * (pi (1 - rho (1 - E_avg))) of rho = Color within [0, 1] (bsdf_oren_nayar_setup; the closure's
- * weight is its Color). */
+/* Diffuse BSDF: no specular lobe (F0 0); its Roughness Cycles' Oren-Nayar (closure_oren_nayar). */
 Closure closure_diffuse(vec4 color, float roughness, vec3 n)
 {
   Closure c = closure_bsdf(color.rgb, 0.0, 1.0, 0.0, n);
-  float sigma = clamp(roughness, 0.0, 1.0);
   c.bsdfs.diffuse_weight = 1.0;
-  c.bsdfs.diffuse_roughness = sigma;
-  if (sigma >= 1e-5) {
-    float e_avg = oren_nayar_coefficients(sigma).z; /* < 1 for sigma >= 1e-5 */
-    vec3 rho = clamp(color.rgb, 0.0, 1.0);
-    c.bsdfs.diffuse_ms = color.rgb * rho * rho * (e_avg / (1.0 - e_avg)) * INV_PI / (1.0 - rho * (1.0 - e_avg));
-  }
-  return c;
+  return closure_oren_nayar(c, color.rgb, roughness);
 }
 
 /* Glossy BSDF, Multiscatter GGX (Cycles 5.0: bsdf_microfacet_setup_fresnel_constant): GGX of its

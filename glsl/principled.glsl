@@ -327,6 +327,11 @@ vec3 principled_environment(Surface s, vec2 EB, vec3 radiance, vec3 irradiance, 
 #    else
   vec3 lit = s.base_color * irradiance;
 #    endif
+#    ifdef SL_SUBSURFACE
+  /* the subsurface's share a Lambert base (the walk leaves by one) times the walk's reflectance over it
+   * (subsurface.glsl's subsurface_walk_at) */
+  lit = lit * (1.0 - s.subsurface) + s.base_color * irradiance * (s.subsurface * s.subsurface_walk);
+#    endif
   vec3 diffuse = lit * ((1.0 - s.metalness) * saturate(1.0 - p.layer) * INV_PI);
 #    ifdef SL_TRANSMISSION
   diffuse *= 1.0 - s.transmission.share;

@@ -197,6 +197,7 @@ struct Surface {
   float subsurface;        /* Subsurface Weight: the share of the diffuse base that scatters below */
   vec3 subsurface_radius;  /* its mean free path per channel (m) */
   float curvature;         /* the surface's curvature (1/m) where the mesh program measures it, else 0 */
+  vec3 subsurface_walk;    /* the random walk's light over its Lambert base at the view (subsurface.glsl) */
 #endif
 #ifdef SL_TRANSMISSION
   TransmissionLobe transmission;
@@ -208,6 +209,9 @@ struct Surface {
   vec4 glossy;        /* MaterialData's glossy: the Glossy BSDFs' shares (closures.glsl) */
 #endif
 };
+#ifdef SL_SUBSURFACE
+vec3 subsurface_walk_at(vec3 n, vec3 v, vec3 albedo, vec4 walk, float roughness); /* subsurface.glsl */
+#endif
 #ifdef SL_THIN_FILM
 #  ifdef SL_LAYERS
 void thin_film_at(inout Surface s, vec4 film);
@@ -339,6 +343,8 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
   s.subsurface = saturate(m.subsurface.w);
   s.subsurface_radius = max(m.subsurface.rgb, 0.0);
   s.curvature = 0.0;
+  /* its albedo the base colour within [0, 1] (Cycles' clamped_base_color) */
+  s.subsurface_walk = subsurface_walk_at(n, v, clamp(s.base_color, 0.0, 1.0), m.subsurface_walk, m.params.x);
 #endif
   return s;
 }

@@ -98,6 +98,8 @@ struct MaterialData {
   vec4 diffuse_ms;       /* rgb: the Diffuse BSDF's Oren-Nayar multiple scattering, Color x E_ms */
   vec4 glossy;           /* the metal lobe's shares of a constant Fresnel (x) and uncompensated (y), the
                           * specular lobe's of Beckmann (z) and Ashikhmin-Shirley (w) (Glossy BSDF) */
+  vec4 subsurface_walk;  /* the subsurface's random walk (glsl/subsurface.glsl): x Anisotropy, y the entry's
+                          * IOR (0: Christensen-Burley, no walk), z its GGX alpha, w the diffuse entry's share */
 };
 
 #ifdef REFRACTION_LEVELS

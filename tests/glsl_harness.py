@@ -71,6 +71,9 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
         if film_table:
             info.sampler(slot, "FLOAT_2D", "thin_film_table")
             slot += 1
+        if "SL_SUBSURFACE" in defs:
+            info.sampler(slot, "FLOAT_2D", "subsurface_table")
+            slot += 1
         for name in arrays:
             info.sampler(slot, "FLOAT_2D", f"in_{name}")
             slot += 1
@@ -106,6 +109,8 @@ def evaluate(body: str, inputs: dict[str, np.ndarray], defines: dict[str, str] |
                     shader.uniform_sampler("sheen_table", gpu_library.sheen_table())
                 if film_table:
                     shader.uniform_sampler("thin_film_table", gpu_library.thin_film_table())
+                if "SL_SUBSURFACE" in defs:
+                    shader.uniform_sampler("subsurface_table", gpu_library.subsurface_table())
                 for name, texture in textures.items():
                     shader.uniform_sampler(f"in_{name}", texture)
                 for name, texture in bound.items():

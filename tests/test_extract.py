@@ -476,7 +476,14 @@ def test_what_is_not_read_is_said_once():
     bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
     # a Particle Info node (a particle's data: not compiled)
     tree.links.new(tree.nodes.new("ShaderNodeParticleInfo").outputs["Random"], bsdf.inputs["Base Color"])
-    tree.links.new(tree.nodes.new("ShaderNodeValue").outputs[0], bsdf.inputs["Subsurface Anisotropy"])
+    # a Specular BSDF (EEVEE's) mixed in: its Clear Coat is not drawn
+    specular = tree.nodes.new("ShaderNodeEeveeSpecular")
+    tree.links.new(tree.nodes.new("ShaderNodeValue").outputs[0], specular.inputs["Clear Coat"])
+    shader_mix = tree.nodes.new("ShaderNodeMixShader")
+    tree.links.new(bsdf.outputs["BSDF"], shader_mix.inputs[1])
+    tree.links.new(specular.outputs["BSDF"], shader_mix.inputs[2])
+    out = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeOutputMaterial")
+    tree.links.new(shader_mix.outputs["Shader"], out.inputs["Surface"])
     for i, mat in enumerate((mix, mix, ramp)):
         scenes.plane(scene, size=0.5, location=(i, 0.0, 0.0), material=mat)
     for i in range(2):
@@ -486,11 +493,11 @@ def test_what_is_not_read_is_said_once():
     said = "\n".join(snap.warnings)
     assert len(snap.warnings) == 5, snap.warnings
     assert "Material 'Haired': 1 of 1 nodes not compiled (Hair BSDF (ShaderNodeBsdfHair))" in said
-    assert ("Material 'Ramped': 1 of 3 nodes not compiled (Particle Info (ShaderNodeParticleInfo)): "
+    assert ("Material 'Ramped': 1 of 5 nodes not compiled (Particle Info (ShaderNodeParticleInfo)): "
             "baked") in said
     # (the plane has no UV map to bake on: its object says so)
     assert "material 'Ramped': Particle Info > Random not compiled and not baked (it has no UV map)" in said
-    assert "Material 'Ramped': its Subsurface Anisotropy (Principled BSDF) not drawn" in said
+    assert "Material 'Ramped': its Clear Coat (Specular BSDF) not drawn" in said
     assert "Not drawn (Shading Lab draws meshes): 2 hair curves object(s), 1 volume(s)" in said
 
 

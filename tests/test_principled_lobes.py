@@ -578,6 +578,11 @@ def _material_lines(lobe: dict) -> str:
     names = ("specular_tint", "coat", "coat_tint", "sheen", "coat_normal", "thin_film", "anisotropy",
              "translucent", "subsurface", "transmission", "transmission_tint", "reflection_tint")
     lines = {name: f"vec4({', '.join(repr(float(x)) for x in row)})" for name, row in zip(names, rows)}
+    # the subsurface's random walk, by its place in MaterialData (glsl/uniforms.glsl)
+    struct = programs.read_glsl("uniforms.glsl").split("struct MaterialData {")[1].split("};")[0]
+    fields = [line.split()[1].rstrip(";") for line in struct.splitlines() if line.strip().startswith("vec4 ")]
+    walk = rows[fields.index("subsurface_walk") - 9]
+    lines["subsurface_walk"] = f"vec4({', '.join(repr(float(x)) for x in walk)})"
     for key, value in lobe.items():
         if key in ROW_INPUTS:
             row, glsl = ROW_INPUTS[key]

@@ -337,9 +337,15 @@ def _bins(image, lambert):
 
 
 #: per case: (the largest |ours / walk - 1| over the bins and channels, ours' light past the terminator
-#: over the walk's, red channel), measured with bpy 5.0.1 (the walk at WALK_SAMPLES)
-SUBSURFACE_MEASURED = {"scale-0.05": (0.106, 0.98), "scale-0.2": (0.106, 0.67), "weight-0.5": (0.05, 0.63),
-                       "node-skin": (0.03, 0.90)}
+#: over the walk's, red channel), measured with bpy 5.0.1 (the walk at WALK_SAMPLES); the bins were
+#: 0.103-0.106, 0.048 and 0.023 before the walk's reflectance was drawn (glsl/subsurface.glsl's
+#: subsurface_walk_at: the Lambert base's own offset, printed beside)
+SUBSURFACE_MEASURED = {"scale-0.05": (0.014, 0.97), "scale-0.2": (0.023, 0.66), "weight-0.5": (0.011, 0.62),
+                       "node-skin": (0.026, 0.91)}
+if bpy.app.version < (4, 5, 0):  # Blender 4.2's Cycles draws a channel whose Radius x Scale is under a
+    # quarter of the pixel's footprint as a plain diffuse (bssrdf_setup): at Scale 0.05 the blue (5 mm
+    # against 10 mm), which the engine walks (measured with bpy 4.2.23)
+    SUBSURFACE_MEASURED["scale-0.05"] = (0.099, 0.85)
 
 
 @pytest.mark.parametrize("case", CYCLES_CASES)

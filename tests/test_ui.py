@@ -103,7 +103,13 @@ def test_material_panel_reports_the_node_graph_per_node():
     tree.links.new(tree.nodes.new("ShaderNodeParticleInfo").outputs["Random"], bsdf.inputs["Roughness"])
     ramp = tree.nodes.new("ShaderNodeValToRGB")
     tree.links.new(ramp.outputs["Color"], bsdf.inputs["Base Color"])
-    tree.links.new(tree.nodes.new("ShaderNodeValue").outputs[0], bsdf.inputs["Subsurface Anisotropy"])
+    # a Specular BSDF (EEVEE's) mixed in: its Clear Coat is not drawn
+    specular = tree.nodes.new("ShaderNodeEeveeSpecular")
+    tree.links.new(tree.nodes.new("ShaderNodeValue").outputs[0], specular.inputs["Clear Coat"])
+    mix = tree.nodes.new("ShaderNodeMixShader")
+    tree.links.new(bsdf.outputs["BSDF"], mix.inputs[1])
+    tree.links.new(specular.outputs["BSDF"], mix.inputs[2])
+    tree.links.new(mix.outputs["Shader"], out.inputs["Surface"])
     tree.links.new(tree.nodes.new("ShaderNodeDisplacement").outputs[0], out.inputs["Displacement"])
     aov = tree.nodes.new("ShaderNodeOutputAOV")
     aov.aov_name = "mask"
@@ -113,12 +119,13 @@ def test_material_panel_reports_the_node_graph_per_node():
     assert "Node graph: not read yet (render, or draw the viewport)" in before
     extract.snapshot(bpy.context.evaluated_depsgraph_get())
     labels = _draw(ui.SHADINGLAB_PT_material, SimpleNamespace(material=mat)).labels()
-    assert "Node graph: 3 of 4 nodes compiled (75%), 1 baked" in labels, labels  # Principled, Ramp, Value
+    # Principled, Ramp, Value, Specular, Mix
+    assert "Node graph: 5 of 6 nodes compiled (83%), 1 baked" in labels, labels
     assert "Particle Info (ShaderNodeParticleInfo): baked by Cycles (not compiled)" in labels
     plane = next(o for o in scene.objects if o.type == "MESH")  # no UV map: its bake cannot be made
     labels = _draw(ui.SHADINGLAB_PT_material, SimpleNamespace(material=mat, object=plane)).labels()
     assert ("Not baked on 'Plane': it has no UV map; what they feed takes its socket's value") in labels
-    assert "Subsurface Anisotropy (Principled BSDF): not drawn (the models have no such input)" in labels
+    assert "Clear Coat (Specular BSDF): not drawn (the models have no such input)" in labels
     assert "Displacement: not drawn" in labels and "AOV Outputs: mask" in labels
 
 

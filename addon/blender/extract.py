@@ -168,6 +168,11 @@ def _principled_lobes(node) -> dict:
             "transmission_ior": max(float(_input(node, "IOR", 1.5)), 1e-5),
             "transmission_tint": tuple(min(max(c, 0.0), 1.0) ** 0.5 for c in _rgb(_input(node, "Base Color",
                                                                                            (0.8, 0.8, 0.8)))),
+            # the diffuse base's Oren-Nayar roughness (Blender 4.3 and later; 4.2's: Lambert)
+            "diffuse_roughness": unit("Diffuse Roughness", 0.0),
+            # what the random walk's entry refracts through (reference/subsurface.py's walk_row)
+            "ior": float(_input(node, "IOR", 1.5)),
+            "specular_ior_level": float(_input(node, "Specular IOR Level", 0.5)),
             **_thin_film(node)}
 
 

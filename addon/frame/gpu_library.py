@@ -355,6 +355,8 @@ def _declare_shading(info, typedefs: str, features: programs.Features) -> None:
     if "TRANSMISSION" in features.lobes:  # what is behind the glass (passes.RefractionPass); a glass is
         # never shaded deferred (Features), so it takes the G-buffer's units
         samplers.update({17: "refraction_behind", 18: "refraction_back", 19: "refraction_back_depth"})
+    if features.uses_subsurface_table:  # never shaded deferred either (Features): the G-buffer's last unit
+        samplers[20] = "subsurface_table"
     samplers[8] = "env_atlas" if features.environment == "MAP" else None  # irradiance, levels
     samplers[9] = "split_table" if features.uses_split_table else None
     samplers[10] = "env_chain" if features.uses_env_chain else None
@@ -826,6 +828,19 @@ def thin_film_table() -> gpu.types.GPUTexture:
         return rgba32f_texture(np.concatenate([table, np.zeros(table.shape[:2] + (1,), np.float32)], axis=-1))
 
     return LIBRARY.table(("THIN_FILM",), build)
+
+def subsurface_table() -> gpu.types.GPUTexture:
+    """The subsurface's random walk table (addon/reference/subsurface.py's walk_table) as an RGBA32F
+    texture: texel (2 i, j) the entry nodes 0-3 of albedo node i and Anisotropy node j, (2 i + 1, j)
+    nodes 4-7 (glsl/subsurface.glsl's subsurface_walk_node)."""
+    from ..reference import subsurface
+
+    def build():
+        table = subsurface.walk_table()  # (albedo, g, 8)
+        texels = table.transpose(1, 0, 2).reshape(table.shape[1], 2 * table.shape[0], 4)
+        return rgba32f_texture(np.ascontiguousarray(texels))
+
+    return LIBRARY.table(("SUBSURFACE",), build)
 
 # Compiled programs outlive renders; free them before Blender tears its GPU module down, or it
 # reports them as leaked blocks at exit.

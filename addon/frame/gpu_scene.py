@@ -746,6 +746,8 @@ class SceneResources:
             gpu_library.bind_sampler(shader, "sheen_table", gpu_library.sheen_table())
         if features.uses_thin_film_table:
             gpu_library.bind_sampler(shader, "thin_film_table", gpu_library.thin_film_table())
+        if features.uses_subsurface_table:
+            gpu_library.bind_sampler(shader, "subsurface_table", gpu_library.subsurface_table())
         if features.uses_ltc:
             gpu_library.bind_sampler(shader, "ltc_table", gpu_library.ltc_table(features.terms))
         if features.environment:

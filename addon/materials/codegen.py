@@ -816,7 +816,12 @@ def _principled(w: _Writer, node: FlatNode) -> dict:
                             args[0], "Subsurface IOR")
     weight = (w.arg(node, "Subsurface Weight") if "Subsurface Weight" in node.inputs
               else w.constant(0.0, "VALUE"))
-    closure = f"closure_principled({', '.join(args)}, {n}, {coat_n}, {weight}, {path})"
+    # the diffuse base's Oren-Nayar roughness (Blender 4.3 and later; before, Lambert)
+    rough = (w.arg(node, "Diffuse Roughness") if "Diffuse Roughness" in node.inputs
+             else w.constant(0.0, "VALUE"))
+    walk = _subsurface_walk(w, node, "subsurface_method", "Subsurface Anisotropy", "Subsurface IOR",
+                            (args[3], args[4]))
+    closure = f"closure_principled({', '.join(args)}, {n}, {coat_n}, {weight}, {path}, {rough}, {walk})"
     return {"BSDF": _anisotropic(w, node, closure)}
 
 
@@ -884,11 +889,35 @@ def _subsurface_path(w: _Writer, node: FlatNode, method: str, radius: str, scale
     return f"{function}({r}, {s})"
 
 
+def _subsurface_walk(w: _Writer, node: FlatNode, method: str, anisotropy: str, ior: str,
+                     principled: tuple | None = None) -> str:
+    """The random walk's row of a Principled BSDF's subsurface or a Subsurface Scattering node
+    (glsl/node_subsurface.glsl's subsurface_walk_*), its method (the node's setting ``method``)
+    choosing the function: Christensen-Burley none; Random Walk the Principled BSDF's IOR, Specular
+    IOR Level (``principled``: their expressions; its Roughness the material's) or the node's IOR
+    and Roughness;
+    Skin the ``ior`` socket's. A missing input: Blender's default."""
+    def arg(socket, default):
+        return w.arg(node, socket) if socket in node.inputs else w.constant(default, "VALUE")
+
+    g = arg(anisotropy, 0.0)
+    kind = node.props.get(method, "RANDOM_WALK")
+    if kind == "BURLEY":
+        return f"subsurface_walk_burley({g})"
+    if kind == "RANDOM_WALK_SKIN":
+        return f"subsurface_walk_skin({g}, {arg(ior, 1.4)})"
+    if principled is not None:
+        return f"subsurface_walk_principled({g}, {', '.join(principled)})"
+    return f"subsurface_walk_random({g}, {arg(ior, 1.4)}, {arg('Roughness', 1.0)})"
+
+
 def _subsurface(w: _Writer, node: FlatNode) -> dict:
-    """The Subsurface Scattering node (closure_subsurface), its Falloff choosing the mean free path."""
+    """The Subsurface Scattering node (closure_subsurface), its Falloff choosing the mean free path
+    and the random walk's row."""
     color = _closure_color(w, node)
     path = _subsurface_path(w, node, "falloff", "Radius", "Scale", color, "IOR")
-    return {"BSSRDF": f"closure_subsurface({color}, {path}, {_normal_input(w, node)})"}
+    walk = _subsurface_walk(w, node, "falloff", "Anisotropy", "IOR")
+    return {"BSSRDF": f"closure_subsurface({color}, {path}, {walk}, {_normal_input(w, node)})"}
 
 
 def _closure_color(w: _Writer, node: FlatNode) -> str:

@@ -278,12 +278,13 @@ def _lobes(flat: FlatGraph) -> frozenset[str]:
             continue
         values = {}
         for socket in ("Specular Tint", "Coat Weight", "Sheen Weight", "Sheen Tint", "Thin Film Thickness",
-                       "Subsurface Weight", "Transmission Weight"):
+                       "Subsurface Weight", "Transmission Weight", "Diffuse Roughness"):
             spec = node.inputs.get(socket)
             if spec is not None and not isinstance(spec.source, Const):
                 value = {"Specular Tint": (0.0,) * 3, "Coat Weight": 1.0, "Sheen Weight": 1.0,
                          "Sheen Tint": (1.0,) * 3, "Thin Film Thickness": 1.0,
-                         "Subsurface Weight": 1.0, "Transmission Weight": 1.0}[socket]  # linked: on
+                         "Subsurface Weight": 1.0, "Transmission Weight": 1.0,
+                         "Diffuse Roughness": 1.0}[socket]  # linked: on
             elif spec is not None and spec.source.value is not None:
                 value = spec.source.value
             else:
@@ -292,7 +293,8 @@ def _lobes(flat: FlatGraph) -> frozenset[str]:
         out |= lobes_of(values["Specular Tint"], values["Coat Weight"], values["Sheen Weight"],
                         values["Sheen Tint"], values["Thin Film Thickness"],
                         subsurface_weight=values["Subsurface Weight"],
-                        transmission_weight=values["Transmission Weight"])
+                        transmission_weight=values["Transmission Weight"],
+                        diffuse_roughness=values["Diffuse Roughness"])
     return frozenset(out)
 
 
@@ -462,9 +464,11 @@ LOBE_INPUTS = {"SPECULAR_TINT": ("Specular Tint",),
                "THIN_FILM": ("Thin Film Thickness", "Thin Film IOR"),
                "ANISOTROPY": ("Anisotropic", "Anisotropic Rotation", "Tangent"),
                "TRANSLUCENT": (),
-               "SUBSURFACE": ("Subsurface Weight", "Subsurface Radius", "Subsurface Scale", "Subsurface IOR"),
+               "SUBSURFACE": ("Subsurface Weight", "Subsurface Radius", "Subsurface Scale", "Subsurface IOR",
+                              "Subsurface Anisotropy"),
                "TRANSMISSION": ("Transmission Weight",),
                **{lobe: () for lobe in (*CLOSURE_LOBES, GLOSSY_LOBE)}}  # (the closure nodes': READ_INPUTS)
+LOBE_INPUTS["DIFFUSE_ROUGHNESS"] = ("Diffuse Roughness",)  # the Principled BSDF's own too (Blender 4.3+)
 #: The Glossy and Metallic BSDFs' anisotropic inputs (``codegen.ANISOTROPIC``)
 ANISOTROPIC_INPUTS = {"Anisotropy", "Rotation", "Tangent"}
 #: The closures that transmit alone (glsl/node_closure.glsl's closure_glass, closure_refraction).
@@ -481,7 +485,8 @@ READ_INPUTS = {"ShaderNodeBsdfPrincipled": set(codegen.PRINCIPLED_BASE_INPUTS) |
                "ShaderNodeBsdfMetallic": {"Base Color", "Edge Tint", "IOR", "Extinction", "Roughness",
                                           "Normal"} | ANISOTROPIC_INPUTS,
                "ShaderNodeBsdfTranslucent": {"Color", "Normal"},
-               "ShaderNodeSubsurfaceScattering": {"Color", "Scale", "Radius", "IOR", "Normal"},
+               "ShaderNodeSubsurfaceScattering": {"Color", "Scale", "Radius", "IOR", "Roughness",
+                                                  "Anisotropy", "Normal"},
                "ShaderNodeBsdfGlass": {"Color", "Roughness", "IOR", "Normal"},
                "ShaderNodeBsdfRefraction": {"Color", "Roughness", "IOR", "Normal"}}
 READ_INPUTS["ShaderNodeBsdfAnisotropic"] = READ_INPUTS["ShaderNodeBsdfGlossy"]  # the Glossy BSDF's own name

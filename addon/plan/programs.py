@@ -14,7 +14,7 @@ import numpy as np
 from ..materials import codegen
 from ..materials.codegen import glsl_dir
 from ..materials.surface import GraphProgram
-from ..reference import subsurface, thin_film
+from ..reference import closures, subsurface, thin_film
 from ..reference.multiscatter import MS_SIZE, S_SIZE
 from ..reference.sheen import SIZE as SHEEN_SIZE
 from ..scene.matrices import invert
@@ -367,6 +367,12 @@ class Features:
         return "THIN_FILM" in self.lobes and self.thin_film_rule == "CYCLES_5"
 
     @property
+    def uses_subsurface_table(self) -> bool:
+        """The program samples ``subsurface_table`` (the subsurface's random walk,
+        addon/reference/subsurface.py's walk_table)."""
+        return "SUBSURFACE" in self.lobes
+
+    @property
     def uses_s_table(self) -> bool:
         """The program samples ``s_table`` (the layering estimate: the Principled set, the LAYERED
         diffuse)."""
@@ -386,6 +392,12 @@ class Features:
                 out.append(("SL_SHEEN_SIZE", str(SHEEN_SIZE)))
             if "THIN_FILM" in self.lobes and self.thin_film_rule == "CYCLES_4":
                 out += [("SL_THIN_FILM_CYCLES_4", "1"), ("SL_THIN_FILM_RGB", thin_film_rgb_source())]
+            if self.uses_subsurface_table:  # the walk table's nodes and the entry's quadrature
+                out += [("SL_WALK_ALBEDOS", str(subsurface.WALK_ALBEDO_NODES)),
+                        ("SL_WALK_GS", str(subsurface.WALK_G_NODES)),
+                        ("SL_WALK_MUS", str(subsurface.WALK_MU_NODES)),
+                        ("SL_WALK_RINGS", str(subsurface.WALK_ENTRY_RINGS)),
+                        ("SL_WALK_SPOKES", str(subsurface.WALK_ENTRY_SPOKES))]
         elif self.model == "PBR":
             out += [("SL_FRESNEL_" + t.fresnel, "1"), ("SL_NDF_" + t.ndf, "1"),
                     ("SL_VISIBILITY_" + t.visibility, "1"), ("SL_DIFFUSE_" + t.diffuse, "1")]
@@ -1063,14 +1075,17 @@ def pack_material(m: MaterialParams) -> bytes:
         [*m.transmission_tint, 0.0],
         [*m.reflection_tint, 0.0],
         # the closure nodes beside the Principled BSDF (a node graph's, per fragment): the sheen layered
-        # over the base, no Oren-Nayar roughness, no velvet, no toon
-        [1.0, 0.0, 0.0, 0.0],
+        # over the base, the Principled BSDF's Diffuse Roughness (Oren-Nayar), no velvet, no toon
+        [1.0, min(max(m.diffuse_roughness, 0.0), 1.0), 0.0, 0.0],
         [0.0, 0.0, 0.0, 0.0],
         [0.0, 0.0, 0.0, 0.0],
         [0.0, 0.0, 0.0, 0.0],
         [0.0, 0.0, 0.0, 0.0],
+        [*closures.oren_nayar_ms(m.diffuse_roughness, m.base_color), 0.0],  # its multiple scattering
         [0.0, 0.0, 0.0, 0.0],
-        [0.0, 0.0, 0.0, 0.0],
+        # the subsurface's random walk: Anisotropy, the entry's IOR and roughness, the diffuse entry
+        [*subsurface.walk_row(m.subsurface_method, m.ior, m.specular_ior_level, m.subsurface_ior,
+                              m.subsurface_anisotropy)],
     ]
     return np.asarray(rows, np.float32).tobytes()
 

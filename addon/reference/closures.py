@@ -40,6 +40,20 @@ def oren_nayar_setup(sigma, albedo, cos_v):
     return a, b, e_ms * (1.0 - e_v)[..., None], e_avg
 
 
+def oren_nayar_ms(sigma, color):
+    """glsl/node_closure.glsl's closure_oren_nayar: the multiple scattering's colour of a diffuse base
+    of closure weight ``color`` (rgb, at least 0) and roughness ``sigma``, color x E_ms(saturate(color))
+    (bsdf_oren_nayar_setup); 0 where sigma is below 1e-5 (Lambert)."""
+    sigma = float(np.clip(sigma, 0.0, 1.0))
+    color = np.maximum(np.asarray(color, np.float64), 0.0)
+    if sigma < 1e-5:
+        return np.zeros_like(color)
+    a = 1.0 / (np.pi + sigma * (0.5 * np.pi - 2.0 / 3.0))
+    e_avg = a * np.pi + (2.0 * np.pi - 5.6) / 3.0 * sigma * a
+    rho = np.clip(color, 0.0, 1.0)
+    return color * rho * rho * (e_avg / (1.0 - e_avg)) / (np.pi * (1.0 - rho * (1.0 - e_avg)))
+
+
 def oren_nayar_eval(sigma, albedo, cos_v, cos_l, cos_lv):
     """f (n.l) over the base colour (rgb) of Cycles' Diffuse BSDF of roughness ``sigma``
     (bsdf_oren_nayar_get_intensity; Lambert's n.l / pi where sigma < 1e-5, bsdf_diffuse_setup)."""

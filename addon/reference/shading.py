@@ -381,6 +381,15 @@ class Surface:
             material.subsurface_radius, material.subsurface_scale, material.subsurface_method,
             np.clip(self.base_color, 0.0, 1.0), material.subsurface_ior)
         self.curvature = np.zeros(np.shape(self.NoV))
+        # the random walk's light over its Lambert base at the view (subsurface.walk_factor), of the
+        # base colour within [0, 1]; 1 where no material has a subsurface (its table is not read)
+        self.subsurface_walk = np.ones(np.shape(self.NoV) + (3,))
+        if np.any(self.subsurface > 0.0):
+            walk = subsurface.walk_row(material.subsurface_method, material.ior, material.specular_ior_level,
+                                       material.subsurface_ior, material.subsurface_anisotropy)
+            self.subsurface_walk = subsurface.walk_factor(_dot(self.n, self.v),
+                                                          np.clip(self.base_color, 0.0, 1.0), walk,
+                                                          material.roughness)
         self.translucent = np.zeros(3)
         # the anisotropic GGX lobe (x, y, alpha_x, alpha_y) of a node graph's anisotropic BSDF (its tangent is
         # per fragment: ``with_anisotropy``), None for the round lobe
@@ -730,7 +739,7 @@ def subsurface_direct(s: Surface, l):
     # under what the glass's share leaves (Cycles' svm_node_closure_bsdf weighs the subsurface by
     # 1 - Transmission Weight, as the diffuse)
     weight = weight * (1.0 - s.transmission_share)
-    color = s.base_color * _rgb_scalar(weight)
+    color = s.base_color * _rgb_scalar(weight) * s.subsurface_walk  # the walk's reflectance at the view
     return color * subsurface.ramp(_dot(s.n, l), s.subsurface_radius, s.curvature)
 
 
@@ -816,7 +825,9 @@ def shade_environment(s: Surface, prefiltered, irradiance, terms: Terms = DEFAUL
         specular = (s.metal3 * metal + (1.0 - s.metal3) * p.albedo * s.reflection_tint) * prefiltered
         if sampled is not None:
             specular = np.broadcast_to(sampled, np.shape(specular))
-        diffuse = base * _rgb_scalar(np.clip(1.0 - p.layer, 0.0, 1.0)) * irradiance * INV_PI
+        # the subsurface's share: its walk's reflectance over the Lambert base (principled_environment)
+        walked = 1.0 + _rgb_scalar(s.subsurface) * (s.subsurface_walk - 1.0)
+        diffuse = base * walked * _rgb_scalar(np.clip(1.0 - p.layer, 0.0, 1.0)) * irradiance * INV_PI
         diffuse = diffuse * _rgb_scalar(1.0 - s.transmission_share)  # (principled_environment)
         return diffuse * weights[0] + specular * weights[1]
     albedo = s.f0 * _rgb_scalar(E - B) + _rgb_scalar(s.f90 * B)

@@ -5,6 +5,8 @@ IOR, and the profile pre-integrated against a light's terminator (``ramp``)."""
 from __future__ import annotations
 
 import math
+from functools import lru_cache
+from pathlib import Path
 
 import numpy as np
 
@@ -99,3 +101,316 @@ def ramp(NoL, d, curvature):
     with np.errstate(divide="ignore", invalid="ignore"):
         near = 0.25 * rho * bickley(a / rho) + 2.25 * rho * bickley(a / (3.0 * rho))
     return np.maximum(NoL, 0.0) + np.where(rho > 0.0, near, 0.0)
+
+
+# --- the random walk's reflectance (Cycles' subsurface_random_walk), tabulated ------------------------
+#
+# Cycles' Random Walk methods trace the camera's ray into the surface (refracted through a rough
+# dielectric interface of the entry's IOR and roughness: subsurface_entry_bounce), walk it through a
+# medium whose coefficients it derives from the albedo, the radius and the Anisotropy g
+# (subsurface_random_walk_remap: a single-scattering albedo fitted so that the medium reflects about
+# the albedo, an extinction 1 / (d (1 - g))), and light the point where it leaves by a Lambert BSDF
+# there (subsurface_shader_data_setup). On a surface flat against the walk's reach the light leaving
+# towards the camera is therefore the Lambert base's times R / albedo, R the medium's diffuse
+# reflectance for the ray's entry direction: less than the albedo where the ray enters steeply (a deep
+# first scattering), more where it grazes, more with a forward-scattering g. The engine multiplies the
+# subsurface's light by that factor per channel (glsl/subsurface.glsl's subsurface_walk_factor), from a
+# table of R / albedo over the albedo, g and the entry cosine (WALK_TABLE, computed by walk_reflectance
+# below, a Monte Carlo twin of Cycles' walk in a half-space) and the entry's directions (entry_weights).
+
+#: Cycles' clamps of the Anisotropy and the IOR (bssrdf_setup)
+WALK_G_MAX = 0.9
+WALK_IOR_RANGE = (1.01, 3.8)
+#: The table's nodes: albedos at (i / 16)^2 (dense where R / albedo changes fast; the first taken at
+#: albedo 1e-4, the limit the factor tends to as the albedo, which multiplies it, vanishes), g every
+#: 0.05 from 0 to WALK_G_MAX, entry cosines (k / 6)^2 and, last, a cosine-distributed (diffuse) entry
+WALK_ALBEDO_NODES = 17
+WALK_G_NODES = 19
+WALK_MU_NODES = 7
+WALK_SHIPPED = Path(__file__).with_name("subsurface_walk.npz")
+#: Cycles' BSSRDF_MAX_BOUNCES, VOLUME_THROUGHPUT_EPSILON, the similarity level and the lowest
+#: single-scattering albedo it walks with (subsurface_random_walk_coefficients' min_alpha)
+WALK_MAX_BOUNCES = 256
+WALK_THROUGHPUT_EPSILON = 1e-6
+WALK_SIMILARITY_LEVEL = 9
+WALK_MIN_ALPHA = 0.2
+
+
+def walk_albedos() -> np.ndarray:
+    """The table's albedo nodes (``WALK_ALBEDO_NODES``; the first, 0, walked at 1e-4)."""
+    return (np.arange(WALK_ALBEDO_NODES) / (WALK_ALBEDO_NODES - 1.0)) ** 2
+
+
+def walk_gs() -> np.ndarray:
+    """The table's Anisotropy nodes, 0 .. WALK_G_MAX."""
+    return np.arange(WALK_G_NODES) * (WALK_G_MAX / (WALK_G_NODES - 1.0))
+
+
+def walk_mus() -> np.ndarray:
+    """The table's entry cosines, (k / (WALK_MU_NODES - 1))^2: nodes even in sqrt(mu)."""
+    return (np.arange(WALK_MU_NODES) / (WALK_MU_NODES - 1.0)) ** 2
+
+
+def walk_remap(albedo, g):
+    """Cycles' subsurface_random_walk_remap: the medium's single-scattering albedo for a surface
+    ``albedo`` and Anisotropy ``g`` (clamped to [0, 0.999999] as Cycles does); its extinction is
+    1 / (d (1 - g)) for a mean free path d."""
+    albedo = np.asarray(albedo, np.float64)
+    g = np.asarray(g, np.float64)
+    p = [g ** k for k in range(8)]
+
+    def poly(c):
+        return sum(ck * pk for ck, pk in zip(c, p))
+
+    a = poly((1.8260523782, -1.28451056436, -1.79904629312, 9.19393289202, -22.8215585862, 32.0234874259,
+              -23.6264803333, 7.21067002658))
+    b = 4.98511194385 + 0.127355959438 * np.exp(poly((0.0, 31.1491581433, -201.847017512, 841.576016723,
+                                                       -2018.09288505, 2731.71560286, -1935.41424244,
+                                                       559.009054474)))
+    c = poly((1.09686102424, -0.394704063468, 1.05258115941, -8.83963712726, 28.8643230661, -46.8802913581,
+              38.5402837518, -12.7181042538))
+    d = poly((0.496310210422, 0.360146581622, -2.15139309747, 17.8896899217, -55.2984010333, 82.065982243,
+              -58.5106008578, 15.8478295021))
+    e = 4.23190299701 + 0.00310603949088 * np.exp(poly((0.0, 76.7316253952, -594.356773233, 2448.8834203,
+                                                         -5576.68528998, 7116.60171912, -4763.54467887,
+                                                         1303.5318055)))
+    f = poly((2.40602999408, -2.51814844609, 9.18494908356, -79.2191708682, 259.082868209, -403.613804597,
+              302.85712436, -87.4370473567))
+    blend = albedo ** 0.25
+    alpha = (1.0 - blend) * a * np.arctan(b * albedo) ** c + blend * d * np.arctan(e * albedo) ** f
+    return np.clip(alpha, 0.0, 0.999999)
+
+
+def walk_reflectance(albedo: float, g: float, mu, paths: int = 20000, seed: int = 0, spread: bool = False):
+    """R / albedo of Cycles' random walk in a half-space (its surface the plane z = 0) for rays
+    entering at cosines ``mu`` to the normal (an array: ``paths`` walks each), by Cycles' classic
+    estimator (subsurface_random_walk without its guided sampling, which changes the variance, not
+    the expectation): the distance to the next scattering exponential in the extinction, a
+    Henyey-Greenstein direction of g for the first WALK_SIMILARITY_LEVEL bounces and beyond them
+    isotropic with the similarity-reduced coefficients, the throughput times the single-scattering
+    albedo at each scattering (raised to WALK_MIN_ALPHA as Cycles raises it, the throughput scaled
+    down), a walk ended after WALK_MAX_BOUNCES (lost) or below WALK_THROUGHPUT_EPSILON; one channel
+    (Cycles samples the three channels' distances with MIS: with radii far apart it loses about 1 %
+    more of the widest channel to the bounce limit). d = 1: a half-space has no scale. ``spread``: also
+    each mean's standard error."""
+    rng = np.random.default_rng(seed)
+    g = min(max(float(g), 0.0), WALK_G_MAX)
+    albedo = float(albedo)
+    alpha = float(walk_remap(albedo, g))
+    weight = 1.0 / albedo  # the throughput over the albedo (subsurface_random_walk_coefficients)
+    if alpha < WALK_MIN_ALPHA:
+        weight *= alpha / WALK_MIN_ALPHA
+        alpha = WALK_MIN_ALPHA
+    sigma_t = 1.0 / (1.0 - g)
+    sigma_s = sigma_t * alpha
+    sigma_t_star = sigma_t - g * sigma_s  # the similarity's (sigma_s (1 - g) scatters isotropically)
+    alpha_star = sigma_s * (1.0 - g) / sigma_t_star
+    mu = np.asarray(mu, np.float64).reshape(-1)
+    m = np.repeat(mu, paths)
+    count = m.size
+    z = np.zeros(count)
+    d = np.stack([np.sqrt(np.maximum(1.0 - m * m, 0.0)), np.zeros(count), -m], -1)
+    throughput = np.full(count, weight)
+    out = np.zeros(count)
+    alive = np.arange(count)
+    for bounce in range(WALK_MAX_BOUNCES):
+        if not alive.size:
+            break
+        similar = bounce > WALK_SIMILARITY_LEVEL
+        st, al, gg = (sigma_t_star, alpha_star, 0.0) if similar else (sigma_t, alpha, g)
+        k = alive.size
+        if bounce > 0:  # scatter: Cycles' phase_henyey_greenstein_sample about the direction
+            u = rng.random((2, k))
+            if gg >= 1e-3:
+                s = (1.0 - gg * gg) / (1.0 - gg + 2.0 * gg * u[0])
+                cos = (1.0 + gg * gg - s * s) / (2.0 * gg)
+            else:
+                cos = 1.0 - 2.0 * u[0]
+            sin = np.sqrt(np.maximum(1.0 - cos * cos, 0.0))
+            phi = 2.0 * math.pi * u[1]
+            axis = d[alive]
+            other = np.zeros_like(axis)
+            other[np.abs(axis[:, 0]) > 0.9, 1] = 1.0
+            other[np.abs(axis[:, 0]) <= 0.9, 0] = 1.0
+            t1 = np.cross(axis, other)
+            t1 /= np.linalg.norm(t1, axis=1, keepdims=True)
+            t2 = np.cross(axis, t1)
+            d[alive] = (t1 * (sin * np.cos(phi))[:, None] + t2 * (sin * np.sin(phi))[:, None]
+                        + axis * cos[:, None])
+        t = -np.log1p(-rng.random(k)) / st
+        znew = z[alive] + t * d[alive, 2]
+        left = znew >= 0.0  # through the surface: the walk ends there (its transmittance over its pdf: 1)
+        out[alive[left]] = throughput[alive[left]]
+        stay = alive[~left]
+        z[stay] = znew[~left]
+        throughput[stay] *= al
+        alive = stay[throughput[stay] >= WALK_THROUGHPUT_EPSILON]
+    out = out.reshape(len(mu), paths)
+    if spread:
+        return out.mean(axis=1), out.std(axis=1) / math.sqrt(paths)
+    return out.mean(axis=1)
+
+
+def compute_walk_table(paths: int = 60000, log=None) -> np.ndarray:
+    """(WALK_ALBEDO_NODES, WALK_G_NODES, WALK_MU_NODES + 1) float32: R / albedo at each albedo, g and
+    entry cosine node (walk_reflectance, ``paths`` walks each, seeded per cell), the last the mean over
+    a cosine-distributed (diffuse) entry. Minutes per thousand paths: scripts/subsurface_walk_table.py."""
+    albedos, gs = walk_albedos(), walk_gs()
+    out = np.zeros((WALK_ALBEDO_NODES, WALK_G_NODES, WALK_MU_NODES + 1), np.float32)
+    diffuse = np.sqrt((np.arange(paths) + 0.5) / paths)  # cosines of a cosine-weighted hemisphere
+    for i, albedo in enumerate(albedos):
+        for j, g in enumerate(gs):
+            seed = 1000 * i + j
+            a = max(albedo, 1e-4)
+            out[i, j, :WALK_MU_NODES] = walk_reflectance(a, g, np.maximum(walk_mus(), 1e-6), paths, seed)
+            out[i, j, WALK_MU_NODES] = walk_reflectance(a, g, diffuse, 1, seed + 500000).mean()
+        if log is not None:
+            log(f"albedo {albedo:.4f}: {np.round(out[i, :, 3], 3)}")
+    return out
+
+
+@lru_cache(maxsize=1)
+def walk_table() -> np.ndarray:
+    """The shipped ``compute_walk_table`` (WALK_SHIPPED): (albedo, g, entry) R / albedo, float32."""
+    if not WALK_SHIPPED.exists():
+        raise FileNotFoundError(f"the random walk's table {WALK_SHIPPED.name} is missing: run "
+                                "scripts/subsurface_walk_table.py")
+    with np.load(WALK_SHIPPED) as data:
+        out = np.asarray(data["walk"], np.float32)
+    shape = (WALK_ALBEDO_NODES, WALK_G_NODES, WALK_MU_NODES + 1)
+    if out.shape != shape:
+        raise ValueError(f"{WALK_SHIPPED.name}: a table of {out.shape}, expected {shape}")
+    return out
+
+
+#: The entry's quadrature over Cycles' VNDF sampling disk (microfacet_ggx_sample_vndf, Heitz 2018):
+#: the half t.x >= 0 (the other half mirrors the refracted rays across the plane of incidence, at the
+#: same cosine to the normal), WALK_ENTRY_RINGS rings even in area times WALK_ENTRY_SPOKES angles
+#: (against sampling the entry: 4 x 2 points 0.64 % off the factor at worst, as 4 x 4; 3 x 2 0.87 %,
+#: 2 x 2 1.3 %; tests/test_subsurface_walk.py)
+WALK_ENTRY_RINGS = 4
+WALK_ENTRY_SPOKES = 2
+
+#: The methods' codes in MaterialData's subsurface_walk row (w: the diffuse entry's share; y 0: no walk)
+SKIN_DIFFUSE_SHARE = 0.5
+
+
+def entry_disk() -> np.ndarray:
+    """(WALK_ENTRY_RINGS x WALK_ENTRY_SPOKES, 2): the quadrature's points on the half disk, each of
+    equal weight."""
+    r = np.sqrt((np.arange(WALK_ENTRY_RINGS) + 0.5) / WALK_ENTRY_RINGS)
+    phi = math.pi * ((np.arange(WALK_ENTRY_SPOKES) + 0.5) / WALK_ENTRY_SPOKES - 0.5)
+    rr, pp = np.meshgrid(r, phi, indexing="ij")
+    return np.stack([rr * np.cos(pp), rr * np.sin(pp)], -1).reshape(-1, 2)
+
+
+def entry_cosines(cos_v, eta, alpha):
+    """((..., points), (..., points)): the cosine to the normal of the camera's ray refracted into the
+    surface at each of the quadrature's points (Cycles' subsurface_entry_bounce: a GGX microfacet normal
+    of roughness alpha drawn from the view's visible normals, the ray refracted through it by 1 / eta),
+    0 where it fails (a view at or below the horizon, a ray leaving above the surface), and 1 where it
+    does not (0 where it fails); the view at cosine ``cos_v``."""
+    cos_v = np.asarray(cos_v, np.float64)[..., None]
+    eta = np.asarray(eta, np.float64)[..., None]
+    alpha = np.asarray(alpha, np.float64)[..., None]
+    t = entry_disk()
+    sin_v = np.sqrt(np.maximum(1.0 - cos_v * cos_v, 0.0))
+    # the view stretched to the hemisphere's configuration (its y is 0: the plane of incidence is xz)
+    length = np.sqrt(alpha * alpha * sin_v * sin_v + cos_v * cos_v)
+    wx, wz = alpha * sin_v / np.maximum(length, 1e-30), cos_v / np.maximum(length, 1e-30)
+    tx, ty = t[:, 0], t[:, 1]
+    ty = (1.0 - 0.5 * (1.0 + wz)) * np.sqrt(np.maximum(1.0 - tx * tx, 0.0)) + 0.5 * (1.0 + wz) * ty
+    tz = np.sqrt(np.maximum(1.0 - tx * tx - ty * ty, 0.0))
+    tilted = wx * wx > 1e-7  # Cycles' frame: T1 = (0, 1, 0), T2 = wi_ x T1 = (-wz, 0, wx); else any
+    hx = np.where(tilted, -wz * ty + wx * tz, tx)
+    hy = np.where(tilted, tx, ty)
+    hz = np.where(tilted, wx * ty + wz * tz, tz)
+    hx, hy, hz = alpha * hx, alpha * hy, np.maximum(hz, 0.0)
+    norm = np.sqrt(hx * hx + hy * hy + hz * hz)
+    # a microfacet normal of no length (alpha 0 with the view below the horizon): n, as the GPU's
+    none = norm <= 0.0
+    safe = np.where(none, 1.0, norm)
+    hx, hy = np.where(none, 0.0, hx / safe), np.where(none, 0.0, hy / safe)
+    hz = np.where(none, 1.0, hz / safe)
+    cos_hi = hx * sin_v + hz * cos_v
+    neta = 1.0 / eta
+    root = np.sqrt(np.maximum(1.0 - neta * neta * (1.0 - cos_hi * cos_hi), 0.0))
+    wo_z = -neta * cos_v + (neta * cos_hi - np.maximum(root, 1e-7)) * hz
+    ok = (cos_v > 0.0) & (wo_z < 0.0)
+    return np.where(ok, -wo_z, 0.0), np.where(ok, 1.0, 0.0)
+
+
+def entry_weights(cos_v, eta, alpha, diffuse_share):
+    """(..., WALK_MU_NODES + 1) the weights of the table's entry nodes for a view at ``cos_v`` entering
+    through an interface of IOR ``eta`` (within WALK_IOR_RANGE) and GGX roughness ``alpha``: the
+    refracted rays' cosines (entry_cosines) spread linearly in sqrt(mu) over the two nearest nodes, a
+    failed ray none, times 1 - ``diffuse_share``; the last node (the diffuse entry) ``diffuse_share``
+    (Random Walk (Skin): half its rays enter diffusely)."""
+    mu, ok = entry_cosines(cos_v, eta, alpha)
+    x = np.sqrt(mu) * (WALK_MU_NODES - 1.0)
+    i = np.minimum(np.floor(x), WALK_MU_NODES - 2.0)
+    f = x - i
+    share = np.asarray(diffuse_share, np.float64)
+    each = (1.0 - share)[..., None] * ok / mu.shape[-1]
+    out = np.zeros(mu.shape[:-1] + (WALK_MU_NODES + 1,))
+    for k in range(WALK_MU_NODES):
+        out[..., k] = (each * (np.where(i == k, 1.0 - f, 0.0) + np.where(i == k - 1, f, 0.0))).sum(-1)
+    out[..., WALK_MU_NODES] = share
+    return out
+
+
+def walk_lookup(albedo, g, table=None):
+    """(..., 3, WALK_MU_NODES + 1): the table's R / albedo rows at each channel's ``albedo`` (..., 3)
+    and ``g`` (...), bilinear between the nodes in sqrt(albedo) and g, both clamped to the table."""
+    table = (walk_table() if table is None else table).astype(np.float64)
+    x = np.sqrt(np.clip(np.asarray(albedo, np.float64), 0.0, 1.0)) * (WALK_ALBEDO_NODES - 1.0)
+    y = np.clip(np.asarray(g, np.float64), 0.0, WALK_G_MAX) * ((WALK_G_NODES - 1.0) / WALK_G_MAX)
+    y = np.broadcast_to(y[..., None], x.shape)
+    i0 = np.minimum(np.floor(x).astype(int), WALK_ALBEDO_NODES - 1)
+    j0 = np.minimum(np.floor(y).astype(int), WALK_G_NODES - 1)
+    i1, j1 = np.minimum(i0 + 1, WALK_ALBEDO_NODES - 1), np.minimum(j0 + 1, WALK_G_NODES - 1)
+    fx, fy = (x - i0)[..., None], (y - j0)[..., None]
+    return ((1.0 - fy) * ((1.0 - fx) * table[i0, j0] + fx * table[i1, j0])
+            + fy * ((1.0 - fx) * table[i0, j1] + fx * table[i1, j1]))
+
+
+def walk_factor(cos_v, albedo, walk, roughness=0.5, table=None):
+    """glsl/subsurface.glsl's subsurface_walk_at: (..., 3) the subsurface's light over its Lambert
+    base, per channel of ``albedo``, for a view at ``cos_v`` and the material's ``walk`` row (walk_row:
+    g, entry IOR, entry alpha (below 0: the base's ``roughness`` squared), diffuse share); 1 where the
+    row has no walk (IOR 0: Christensen-Burley, whose disk reflects the albedo as Lambert does)."""
+    walk = np.asarray(walk, np.float64)
+    g, eta, alpha, share = walk[..., 0], walk[..., 1], walk[..., 2], walk[..., 3]
+    base = np.clip(np.asarray(roughness, np.float64), 0.0, 1.0)
+    alpha = np.where(alpha < 0.0, base * base, alpha)
+    weights = entry_weights(cos_v, np.clip(eta, *WALK_IOR_RANGE), np.clip(alpha, 0.0, 1.0),
+                            np.clip(share, 0.0, 1.0))
+    rows = walk_lookup(albedo, g, table)
+    factor = np.sum(rows * weights[..., None, :], axis=-1)
+    return np.where((eta > 0.0)[..., None], factor, 1.0)
+
+
+def walk_row(method: str, ior, level, subsurface_ior, anisotropy) -> np.ndarray:
+    """(..., 4) MaterialData's subsurface_walk row of a Principled BSDF (glsl/node_subsurface.glsl's
+    subsurface_walk_* functions, as Cycles' svm_node_closure_bsdf and bssrdf_setup set the BSSRDF up):
+    g within [0, 0.9], the entry's IOR within [1.01, 3.8] (0: Christensen-Burley, no walk), its GGX
+    alpha (-1: the base's Roughness squared, the Principled BSDF's Random Walk), the diffuse entry's
+    share. Random Walk: the IOR as the Specular IOR Level adjusts it (F0 times 2 level, the IOR of that
+    F0 within [0, 0.99], inverted where the IOR is below 1); Skin: the Subsurface IOR, alpha 1 and half
+    the rays entering diffusely."""
+    g = np.clip(np.asarray(anisotropy, np.float64), 0.0, WALK_G_MAX)
+    ior = np.asarray(ior, np.float64)
+    level = np.asarray(level, np.float64)
+    low, high = WALK_IOR_RANGE
+    if method == "BURLEY":
+        parts = (g, 0.0 * g, 0.0 * g, 0.0 * g)
+    elif method == "RANDOM_WALK_SKIN":
+        parts = (g, np.clip(np.asarray(subsurface_ior, np.float64), low, high), 1.0 + 0.0 * g,
+                 SKIN_DIFFUSE_SHARE + 0.0 * g)
+    else:
+        r = (ior - 1.0) / (ior + 1.0)
+        s = np.sqrt(np.clip(r * r * 2.0 * level, 0.0, 0.99))
+        adjusted = np.where(ior < 1.0, (1.0 - s) / (1.0 + s), (1.0 + s) / (1.0 - s))
+        eta = np.where(level != 0.5, adjusted, ior)
+        parts = (g, np.clip(eta, low, high), -1.0 + 0.0 * g, 0.0 * g)
+    return np.stack(np.broadcast_arrays(*parts), -1)

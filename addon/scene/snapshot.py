@@ -193,6 +193,14 @@ class MaterialParams:
     transmission_tint: tuple[float, float, float] = (1.0, 1.0, 1.0)
     reflection_tint: tuple[float, float, float] = (1.0, 1.0, 1.0)
     transmission_fresnel: bool = True
+    #: the Principled BSDF's Diffuse Roughness (Blender 4.3 and later): its diffuse base drawn as the
+    #: Diffuse BSDF's Oren-Nayar of that roughness (glsl/closures.glsl, DIFFUSE_ROUGHNESS; Lambert
+    #: below 1e-5)
+    diffuse_roughness: float = 0.0
+    #: the Principled BSDF's IOR and Specular IOR Level as set (Cycles' Random Walk subsurface enters
+    #: through the dielectric of that IOR as the level adjusts it: reference/subsurface.py's walk_row)
+    ior: float = 1.5
+    specular_ior_level: float = 0.5
 
     @property
     def lobes(self) -> frozenset[str]:
@@ -202,7 +210,8 @@ class MaterialParams:
             return self.graph.lobes
         return lobes_of(self.specular_tint, self.coat_weight, self.sheen_weight, self.sheen_tint,
                         self.thin_film_thickness, subsurface_weight=self.subsurface_weight,
-                        transmission_weight=self.transmission_weight)
+                        transmission_weight=self.transmission_weight,
+                        diffuse_roughness=self.diffuse_roughness)
 
 
 #: Cycles' rules for the Principled BSDF's Thin Film, by the Blender that reads the material (its
@@ -228,24 +237,27 @@ def thin_film_rule(version) -> str:
 LOBES = ("SPECULAR_TINT", "COAT", "SHEEN", "THIN_FILM", "ANISOTROPY", "TRANSLUCENT", "SUBSURFACE",
          "TRANSMISSION")
 #: The closure nodes' lobes beside the Principled BSDF's (glsl/closures.glsl): the Diffuse BSDF's
-#: Oren-Nayar roughness, the Sheen BSDF's Ashikhmin velvet, the Toon BSDF; a node graph's alone.
+#: Oren-Nayar roughness (also the Principled BSDF's Diffuse Roughness), the Sheen BSDF's Ashikhmin
+#: velvet, the Toon BSDF; a node graph's alone but that roughness.
 CLOSURE_LOBES = frozenset({"DIFFUSE_ROUGHNESS", "VELVET", "TOON"})
 #: The Glossy BSDF's own Fresnel (its colour) and distributions in the Principled set's specular lobe
 #: (glsl/closures.glsl's SL_GLOSSY; a node graph's alone; other sets draw a metal of its colour).
 GLOSSY_LOBE = "GLOSSY"
 LOBES += tuple(sorted(CLOSURE_LOBES)) + (GLOSSY_LOBE,)
-#: The lobes a node graph's closures alone draw (no Principled BSDF input turns them on).
+#: The closure nodes' lobes (tests sweep them through node graphs; of them, a Principled BSDF's
+#: Diffuse Roughness turns DIFFUSE_ROUGHNESS on too).
 NODE_LOBES = CLOSURE_LOBES | {GLOSSY_LOBE}
 
 
 def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint,
              thin_film_thickness=0.0, subsurface_weight=0.0,
-             transmission_weight=0.0) -> frozenset[str]:
+             transmission_weight=0.0, diffuse_roughness=0.0) -> frozenset[str]:
     """The lobes a Principled BSDF of these inputs draws: a Specular Tint other than white, a Coat
     Weight above 0, a Sheen Weight and Tint above 0, a Subsurface or Transmission Weight above 0
     (Cycles adds no lobe of weight 0: its CLOSURE_WEIGHT_CUTOFF is 1e-5), a Thin Film Thickness above
-    0. Scalars here; per-point arrays (the twin's) are any of them. (The translucent lobe is a node
-    graph's: its Translucent BSDF; the anisotropic lobe too.)"""
+    0, a Diffuse Roughness of at least 1e-5 (Cycles' Oren-Nayar; below it Lambert). Scalars here;
+    per-point arrays (the twin's) are any of them. (The translucent lobe is a node graph's: its
+    Translucent BSDF; the anisotropic lobe too.)"""
     tint = np.asarray(specular_tint, np.float64)
     sheen = np.asarray(sheen_weight, np.float64)[..., None] * np.asarray(sheen_tint, np.float64)
     used = {"SPECULAR_TINT": bool(np.any(tint != 1.0)),
@@ -253,7 +265,8 @@ def lobes_of(specular_tint, coat_weight, sheen_weight, sheen_tint,
             "SHEEN": bool(np.any(sheen > 1e-5)),
             "THIN_FILM": bool(np.any(np.asarray(thin_film_thickness, np.float64) > 0.0)),
             "SUBSURFACE": bool(np.any(np.asarray(subsurface_weight, np.float64) > 1e-5)),
-            "TRANSMISSION": bool(np.any(np.asarray(transmission_weight, np.float64) > 1e-5))}
+            "TRANSMISSION": bool(np.any(np.asarray(transmission_weight, np.float64) > 1e-5)),
+            "DIFFUSE_ROUGHNESS": bool(np.any(np.asarray(diffuse_roughness, np.float64) >= 1e-5))}
     return frozenset(name for name in LOBES if used.get(name))
 
 
