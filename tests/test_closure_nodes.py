@@ -20,7 +20,7 @@ import scenes
 import test_world_light as TW
 from glsl_harness import evaluate
 from test_cycles import _cycles
-from test_material_render import _against_cycles, _mix_colors, _scene, _tree, _uv, _within
+from test_material_render import _against_cycles, _mix_colors, _scene, _tree, _uv, _within, version_rules
 from test_principled_lobes import EEVEE, _eevee_error, _from
 
 from addon.materials import codegen, surface
@@ -428,24 +428,15 @@ def test_oren_nayar_follows_the_blender_that_read_the_graph():
     """A Diffuse BSDF's Oren-Nayar is the reading Blender's Cycles' (materials/surface.py's oren_nayar):
     a define of the program (4.2's Fujii alone, 4.5's and 5.0's with multiple scattering), the graph's
     source the same for every version; a graph without a Diffuse BSDF defines none."""
-    from dataclasses import replace
-
     from addon.blender import nodes as reader
 
     _scene(lambda: _closure("RoughDiffuse", "ShaderNodeBsdfDiffuse", {"Roughness": 0.5}))
-    g, groups = reader.read_material(bpy.data.materials["RoughDiffuse"])
-    assert g.version == tuple(bpy.app.version[:2])
-    versions = ((4, 2), (4, 5), (5, 0))
-    compiled = {v: surface.compile_material(replace(g, version=v), groups).program for v in versions}
-    rules = {v: {name for name in dict(programs.graph_defines(p)) if name.startswith("SL_OREN_NAYAR_")}
-             for v, p in compiled.items()}
+    rules = version_rules(bpy.data.materials["RoughDiffuse"], "SL_OREN_NAYAR_")
     assert rules == {(4, 2): {"SL_OREN_NAYAR_FUJII"}, (4, 5): {"SL_OREN_NAYAR_FUJII_MULTISCATTER"},
                      (5, 0): {"SL_OREN_NAYAR_FUJII_MULTISCATTER"}}, rules
-    assert len({p.source for p in compiled.values()}) == 1
-    assert compiled[(4, 2)].key != compiled[(5, 0)].key == compiled[(4, 5)].key
     _scene(lambda: _closure("Toon", "ShaderNodeBsdfToon", {}))
     g, groups = reader.read_material(bpy.data.materials["Toon"])
-    toon = surface.compile_material(replace(g, version=(4, 2)), groups).program
+    toon = surface.compile_material(g, groups).program
     assert not any(name.startswith("SL_OREN_NAYAR_") for name in dict(programs.graph_defines(toon)))
 
 
