@@ -1,9 +1,11 @@
 /* The closure nodes drawn beside the Principled BSDF's lobes, by the physically based model's
  * Principled set (glsl/node_closure_bsdfs.glsl gives their inputs per fragment: MaterialData's
  * closure rows), each only in programs whose materials use it:
- *   SL_DIFFUSE_ROUGHNESS  the Diffuse BSDF's Roughness: Cycles 5.0's Oren-Nayar (bsdf_oren_nayar.h),
- *                         Fujii's improved Oren-Nayar with the OpenPBR energy-preserving
- *                         multiple-scattering term, in place of the base's Lambert;
+ *   SL_DIFFUSE_ROUGHNESS  the Diffuse BSDF's Roughness: Cycles' Oren-Nayar (bsdf_oren_nayar.h) of the
+ *                         Blender that read the graph (materials/surface.py's oren_nayar: one
+ *                         SL_OREN_NAYAR_<RULE>), in place of the base's Lambert: Fujii's improved
+ *                         Oren-Nayar with the OpenPBR energy-preserving multiple-scattering term
+ *                         (FUJII_MULTISCATTER: 4.5, 5.0), or alone (FUJII: 4.2);
  *   SL_VELVET             the Sheen BSDF's Ashikhmin distribution (bsdf_ashikhmin_velvet.h);
  *   SL_TOON               the Toon BSDF's Diffuse and Glossy components (bsdf_toon.h).
  * (The Sheen BSDF's Microfiber distribution is the Principled BSDF's sheen: principled.glsl.)
@@ -120,15 +122,23 @@ ClosureBsdfLobes closure_bsdfs_at(vec3 n, vec3 v, vec3 base_color, MaterialData 
   ClosureBsdfLobes b;
 #  ifdef SL_DIFFUSE_ROUGHNESS
   float sigma = saturate(m.closure_bsdfs.y);
-  /* Cycles draws a Diffuse BSDF of roughness below 1e-5 as Lambert (bsdf_diffuse_setup) */
-  b.oren_nayar = sigma >= 1e-5;
   vec3 k = oren_nayar_coefficients(sigma);
   b.on_a = k.x;
   b.on_b = k.y;
   float e_v = k.x * PI + k.y * oren_nayar_G(max(dot(n, v), 0.0));
+#    ifdef SL_OREN_NAYAR_FUJII
+  /* Blender 4.2's Cycles: Lambert at roughness 0 only (svm_node_closure_bsdf), Fujii's single
+   * scattering alone (4.2's bsdf_oren_nayar_get_intensity: rho (A + B t) n.l), whose albedo is E(v) */
+  b.oren_nayar = sigma > 0.0;
+  b.on_ms = vec3(0.0);
+  b.on_albedo = b.oren_nayar ? base_color * e_v : base_color;
+#    else
+  /* Cycles 4.5 and 5.0 draw a Diffuse BSDF of roughness below 1e-5 as Lambert (bsdf_diffuse_setup) */
+  b.oren_nayar = sigma >= 1e-5;
   b.on_ms = b.oren_nayar ? max(m.diffuse_ms.rgb, 0.0) * (1.0 - e_v) : vec3(0.0);
   /* int f (n.l) d omega_l: E(v) of the single scattering, pi (1 - E_avg) of the multiple's 1 - E(l) */
   b.on_albedo = b.oren_nayar ? base_color * e_v + PI * b.on_ms * (1.0 - k.z) : base_color;
+#    endif
 #  endif
 #  ifdef SL_VELVET
   b.velvet = max(m.velvet.rgb, 0.0);
@@ -147,7 +157,8 @@ ClosureBsdfLobes closure_bsdfs_at(vec3 n, vec3 v, vec3 base_color, MaterialData 
 #  ifdef SL_DIFFUSE_ROUGHNESS
 /* The diffuse base of colour rho towards a light at cos_l, l.v = LoV, without n.l: Lambert's rho / pi,
  * or Oren-Nayar's (bsdf_oren_nayar_get_intensity over n.l) rho (A + B t) + E_ms (1 - E(v)) (1 - E(l)),
- * t = l.v - n.l n.v, over max(n.l, n.v) where positive. */
+ * t = l.v - n.l n.v, over max(n.l, n.v) where positive; Blender 4.2's without the multiple scattering
+ * (SL_OREN_NAYAR_FUJII: closure_bsdfs_at). */
 vec3 oren_nayar_diffuse(Surface s, vec3 rho, float NoL, float LoV)
 {
   if (!s.bsdfs.oren_nayar) {
@@ -159,8 +170,12 @@ vec3 oren_nayar_diffuse(Surface s, vec3 rho, float NoL, float LoV)
   if (t > 0.0) {
     t /= max(nl, nv) + 1.175494e-38; /* Cycles' FLT_MIN: both cosines 0 */
   }
+#    ifdef SL_OREN_NAYAR_FUJII
+  return rho * (s.bsdfs.on_a + s.bsdfs.on_b * t);
+#    else
   float e_l = s.bsdfs.on_a * PI + s.bsdfs.on_b * oren_nayar_G(nl);
   return rho * (s.bsdfs.on_a + s.bsdfs.on_b * t) + s.bsdfs.on_ms * (1.0 - e_l);
+#    endif
 }
 #  endif
 

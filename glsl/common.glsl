@@ -31,9 +31,9 @@ float acos_accurate(float x)
   return atan(sqrt(max(1.0 - x * x, 0.0)), x);
 }
 
-/* The Diffuse BSDF's Oren-Nayar of roughness sigma in [0, 1] as Cycles 5.0 sets it up
- * (bsdf_oren_nayar_setup: Fujii's improved model, OpenPBR's multiple scattering): A, B and the
- * average albedo E_avg of its single scattering. Here because both the closure (node_closure.glsl,
+/* The Diffuse BSDF's Oren-Nayar of roughness sigma in [0, 1] as Cycles sets it up
+ * (bsdf_oren_nayar_setup: Fujii's improved model; 4.2 writes A's pi / 2 - 2 / 3 as (3 pi - 4) / 6): A,
+ * B and the average albedo E_avg of its single scattering (5.0's multiple scattering reads it). Here because both the closure (node_closure.glsl,
  * in every program a node graph makes) and the lobe (closures.glsl) need it. */
 vec3 oren_nayar_coefficients(float sigma)
 {

@@ -20,10 +20,10 @@ import scenes
 import test_world_light as TW
 from glsl_harness import evaluate
 from test_cycles import _cycles
-from test_material_render import _against_cycles, _mix_colors, _scene, _tree, _uv, _within
+from test_material_render import _against_cycles, _mix_colors, _scene, _tree, _uv, _within, version_rules
 from test_principled_lobes import EEVEE, _eevee_error, _from
 
-from addon.materials import codegen
+from addon.materials import codegen, surface
 from addon.plan import programs
 from addon.reference import closures as C
 from addon.scene import snapshot as S
@@ -175,7 +175,9 @@ if bpy.app.version >= (4, 3, 0):  # the Metallic BSDF is Blender 4.3's
     CASES["conductor-edge"] = (lambda: _quarters("Conductors", CONDUCTORS, _metal_sweep), ("POINT", "BACK"),
                                "GLOSSY")
 #: (mean, 99th percentile) relative error of the lit pixels, measured with bpy 5.0.1 (the Diffuse toon's
-#: mean is its Size's hard edge where Smooth is 0: a few pixels on the other side of it, 100 % off)
+#: mean is its Size's hard edge where Smooth is 0: a few pixels on the other side of it, 100 % off). 4.2
+#: by its own Oren-Nayar (SL_OREN_NAYAR_FUJII): oren-nayar 1.86e-4 / 2.00e-3, oren-nayar-1 3.20e-4 /
+#: 3.10e-3, mixed 2.12e-4 / 1.59e-3: within these bounds
 MEASURED = {"oren-nayar": (1.77e-4, 2.01e-3), "oren-nayar-1": (3.10e-4, 2.35e-3),
             "microfiber": (5.73e-4, 5.70e-3), "ashikhmin": (4.30e-4, 3.11e-3),
             "toon-diffuse": (1.11e-3, 2.72e-3), "toon-glossy": (2.21e-4, 1.55e-3),
@@ -208,8 +210,14 @@ def _as_diffuse(scene):
             tree.nodes.remove(node)
 
 
+#: The Oren-Nayar of the Blender running the tests (materials/surface.py's oren_nayar: the reader's)
+OREN_NAYAR = surface.oren_nayar(tuple(bpy.app.version[:2]))
+
+
 @pytest.mark.parametrize("case", CASES)
 def test_closure_node_matches_cycles(case, tmp_path):
+    if case == "metallic" and not hasattr(bpy.types, "ShaderNodeBsdfMetallic"):
+        pytest.skip(f"Blender {bpy.app.version_string} has no Metallic BSDF node (Blender 4.3 added it)")
     make, lights, lobe = CASES[case]
     scene, _ = _scene(make, lights=tuple(k for k in lights if k in ("SUN", "POINT")))
     if "BACK" in lights:  # a sun from behind the sphere: its rim, where sheens show
@@ -273,7 +281,8 @@ def _swept_v(tree, node, u, v):
 
 
 #: the world's light on them: (mean, p99) relative error against Cycles (64 samples: its noise), measured
-#: with bpy 5.0.1 (the Glossy toon's world: its albedo times the share of its cone above the horizon)
+#: with bpy 5.0.1 (the Glossy toon's world: its albedo times the share of its cone above the horizon); 4.2's
+#: Oren-Nayar (its albedo E(v) alone) 5.19e-3 / 1.76e-2, within the bound
 WORLD_MEASURED = {"toon diffuse": (7.6e-3, 2.53e-2), "Oren-Nayar": (2.35e-3, 2.37e-2),
                   "toon glossy": (3.43e-2, 1.01e-1), "velvet": (2.29e-2, 7.74e-2)}
 
@@ -350,26 +359,97 @@ def _hemisphere(n_theta=256, n_phi=512):
 
 def test_oren_nayar_twin_closed_forms():
     """Fujii's single scattering integrates to E(v) = A pi + B G(n.v) over the lights (its closed form),
-    the whole lobe to oren_nayar_albedo, and a white one to 1 (the multiple scattering's purpose);
-    roughness 0 is Lambert."""
+    the whole lobe to oren_nayar_albedo, and a white one to 1 (the multiple scattering's purpose); 4.2's
+    (no multiple scattering) to E(v) whatever its colour, under 1 for a white one; roughness 0 is
+    Lambert, and 4.2's roughness 1e-6 (5.0's Lambert) Oren-Nayar."""
     l, dw = _hemisphere()
     worst_ss, worst_albedo = 0.0, 0.0
     for sigma in (0.1, 0.5, 1.0):
         for cos_v in (0.05, 0.4, 0.9, 1.0):
             v = np.array([math.sqrt(1.0 - cos_v ** 2), 0.0, cos_v])
-            a, b, ms, _ = C.oren_nayar_setup(np.float64(sigma), np.array([0.0, 0.0, 0.0]), cos_v)
-            f = C.oren_nayar_eval(sigma, np.array([0.0, 0.5, 1.0]), np.full(len(l), cos_v), l[:, 2], l @ v)
-            integral = f.sum(0) * dw
-            # with a black albedo the multiple scattering is 0: the single scattering alone
-            worst_ss = max(worst_ss, abs(integral[0] - (a * math.pi + b * float(C.oren_nayar_G(cos_v)))))
-            expected = C.oren_nayar_albedo(sigma, np.array([0.0, 0.5, 1.0]), cos_v)
-            worst_albedo = max(worst_albedo, float(np.abs(integral - expected).max()))
-            assert abs(expected[2] - 1.0) < 1e-12, expected
+            e_v = None
+            for rule in (C.MULTISCATTER, C.SINGLE):
+                a, b, ms, _ = C.oren_nayar_setup(np.float64(sigma), np.array([0.0, 0.0, 0.0]), cos_v, rule)
+                f = C.oren_nayar_eval(sigma, np.array([0.0, 0.5, 1.0]), np.full(len(l), cos_v), l[:, 2],
+                                      l @ v, rule)
+                integral = f.sum(0) * dw
+                # with a black albedo the multiple scattering is 0: the single scattering alone
+                e_v = a * math.pi + b * float(C.oren_nayar_G(cos_v))
+                worst_ss = max(worst_ss, abs(integral[0] - e_v))
+                expected = C.oren_nayar_albedo(sigma, np.array([0.0, 0.5, 1.0]), cos_v, rule)
+                worst_albedo = max(worst_albedo, float(np.abs(integral - expected).max()))
+            assert abs(C.oren_nayar_albedo(sigma, np.ones(3), cos_v)[2] - 1.0) < 1e-12
+            # 4.2's: E(v) of every colour, a white one losing what it scatters more than once
+            np.testing.assert_allclose(expected, e_v, rtol=1e-12)
+            assert e_v < 1.0 - 1e-3 * sigma, (sigma, cos_v, e_v)
     print(f"Oren-Nayar: single scattering off its closed form by {worst_ss:.2e}, "
           f"albedo by {worst_albedo:.2e}")
     assert worst_ss < 1.2e-5 and worst_albedo < 1.2e-5, (worst_ss, worst_albedo)  # measured 4.0e-6
-    lambert = C.oren_nayar_eval(0.0, np.array([0.3, 0.3, 0.3]), 0.5, 0.7, 0.1)
-    np.testing.assert_allclose(lambert, 0.7 / math.pi, rtol=1e-15)
+    for rule in (C.MULTISCATTER, C.SINGLE):
+        lambert = C.oren_nayar_eval(0.0, np.array([0.3, 0.3, 0.3]), 0.5, 0.7, 0.1, rule)
+        np.testing.assert_allclose(lambert, 0.7 / math.pi, rtol=1e-15)
+    tiny = [C.oren_nayar_eval(1e-6, np.full(3, 0.3), 0.5, 0.7, 0.9, rule)[0] for rule in (C.MULTISCATTER,
+                                                                                         C.SINGLE)]
+    assert tiny[0] == 0.7 / math.pi and tiny[1] != tiny[0], tiny
+
+
+def test_oren_nayar_gpu_matches_twin():
+    """closures.glsl's Oren-Nayar lobe (closure_bsdfs_at, oren_nayar_diffuse; its colour's multiple
+    scattering from node_closure.glsl's closure_diffuse) against the twin, by each Blender's rule
+    (SL_OREN_NAYAR_FUJII_MULTISCATTER: 4.5, 5.0; SL_OREN_NAYAR_FUJII: 4.2), over random inputs and
+    roughness 0, 1e-6 (Lambert but in 4.2) and 1: f (n.l) and the directional albedo."""
+    rng = np.random.default_rng(11)
+    count = 512
+    cos_v = np.concatenate([rng.uniform(0.0, 1.0, count - 4), [1.0, 0.5, 1e-7, 0.3]])
+    cos_l = np.concatenate([rng.uniform(0.0, 1.0, count - 4), [1.0, 0.5, 0.8, 1e-7]])
+    sigma = np.concatenate([rng.uniform(0.0, 1.0, count - 4), [0.0, 1e-6, 1.0, 1.0]])
+    color = rng.uniform(0.0, 1.0, (count, 3))
+    phi = rng.uniform(0.0, 2.0 * np.pi, count)
+    sv, sl = np.sqrt(1 - cos_v ** 2), np.sqrt(1 - cos_l ** 2)
+    cos_lv = sv * sl * np.cos(phi) + cos_v * cos_l
+    rows = {"a": np.stack([cos_v, cos_l, phi, sigma], -1),
+            "b": np.concatenate([color, 0 * sigma[:, None]], -1)}
+    body = ("vec3 n = vec3(0.0, 0.0, 1.0);"
+            "vec3 v = vec3(sqrt(1.0 - a.x * a.x), 0.0, a.x);"
+            "vec3 l = vec3(sqrt(1.0 - a.y * a.y) * vec2(cos(a.z), sin(a.z)), a.y);"
+            "Closure c = closure_diffuse(vec4(b.rgb, 1.0), a.w, n);"
+            "MaterialData m;"
+            "m.closure_bsdfs = vec4(0.0, c.bsdfs.diffuse_roughness, 0.0, 0.0);"
+            "m.diffuse_ms = vec4(c.bsdfs.diffuse_ms, 0.0);"
+            "Surface s;"
+            "s.n = n;"
+            "s.v = v;"
+            "s.bsdfs = closure_bsdfs_at(n, v, b.rgb, m);")
+    worst = {}
+    for rule in (C.MULTISCATTER, C.SINGLE):
+        defines = {"SL_CLOSURE_BSDFS": "1", "SL_DIFFUSE_ROUGHNESS": "1", f"SL_OREN_NAYAR_{rule}": "1"}
+        f = evaluate(body + "result = vec4(oren_nayar_diffuse(s, b.rgb, a.y, dot(l, v)) * a.y, 0.0);", rows,
+                     defines, extra=("node_closure.glsl",))[:, :3].astype(np.float64)
+        albedo = evaluate(body + "result = vec4(s.bsdfs.on_albedo, 0.0);", rows, defines,
+                          extra=("node_closure.glsl",))[:, :3].astype(np.float64)
+        twin_f = color * C.oren_nayar_eval(sigma, color, cos_v, cos_l, cos_lv, rule)
+        twin_albedo = color * C.oren_nayar_albedo(sigma, color, cos_v, rule)
+        assert np.isfinite(f).all() and np.isfinite(albedo).all()
+        worst[rule] = (float(np.abs(f - twin_f).max()), float(np.abs(albedo - twin_albedo).max()))
+    print("Oren-Nayar GPU against twin (absolute; f (n.l), albedo): " +
+          ", ".join(f"{rule} {e[0]:.2e}, {e[1]:.2e}" for rule, e in worst.items()))
+    assert max(max(e) for e in worst.values()) <= 2e-6, worst  # measured 6.3e-7 (4.2's albedo)
+
+
+def test_oren_nayar_follows_the_blender_that_read_the_graph():
+    """A Diffuse BSDF's Oren-Nayar is the reading Blender's Cycles' (materials/surface.py's oren_nayar):
+    a define of the program (4.2's Fujii alone, 4.5's and 5.0's with multiple scattering), the graph's
+    source the same for every version; a graph without a Diffuse BSDF defines none."""
+    from addon.blender import nodes as reader
+
+    _scene(lambda: _closure("RoughDiffuse", "ShaderNodeBsdfDiffuse", {"Roughness": 0.5}))
+    rules = version_rules(bpy.data.materials["RoughDiffuse"], "SL_OREN_NAYAR_")
+    assert rules == {(4, 2): {"SL_OREN_NAYAR_FUJII"}, (4, 5): {"SL_OREN_NAYAR_FUJII_MULTISCATTER"},
+                     (5, 0): {"SL_OREN_NAYAR_FUJII_MULTISCATTER"}}, rules
+    _scene(lambda: _closure("Toon", "ShaderNodeBsdfToon", {}))
+    g, groups = reader.read_material(bpy.data.materials["Toon"])
+    toon = surface.compile_material(g, groups).program
+    assert not any(name.startswith("SL_OREN_NAYAR_") for name in dict(programs.graph_defines(toon)))
 
 
 def test_toon_twin_closed_forms():

@@ -232,17 +232,19 @@ def test_pointiness_of_welded_duplicates():
 
 
 def test_random_per_island_is_fast_enough():
-    """The islands of a 500 x 500 grid (499,000 edges, joined one by one in Python)."""
+    """The islands of a 500 x 500 grid (499,000 edges, joined one by one in Python), in this process's
+    CPU time: the wall clock also counts the time other processes take the cores (1.26 s beside a load
+    of 10 on 2 cores)."""
     n = 500
     index = np.arange(n * n).reshape(n, n)
     edges = np.concatenate([np.stack([index[:, :-1].ravel(), index[:, 1:].ravel()], 1),
                             np.stack([index[:-1].ravel(), index[1:].ravel()], 1)])
-    start = time.perf_counter()
+    start, wall = time.process_time(), time.perf_counter()
     values = mesh_attributes.random_per_island(edges, n * n, index[:-1, :-1].ravel())
-    took = time.perf_counter() - start
-    print(f"499,000 edges: {took:.2f} s")
+    took, wall = time.process_time() - start, time.perf_counter() - wall
+    print(f"499,000 edges: {took:.2f} s of CPU time ({wall:.2f} s on the wall clock)")
     assert len(np.unique(values)) == 1
-    assert took < 1.0, f"{took:.2f} s (measured 0.25 s)"
+    assert took < 0.27, f"{took:.2f} s of CPU time (measured 0.09 s on 4.2, 4.5 and 5.0)"
 
 
 # --- Holdout -------------------------------------------------------------------------------------

@@ -296,26 +296,33 @@ def _normal_mapped():
     return mat
 
 
-def test_bent_normal_rule_follows_the_blender_that_read_the_graph():
-    """The rule for a bent normal's light is the reading Blender's Cycles' (materials/surface.py's
-    bump_shadowing): a define of the program, the graph's source the same for every version."""
+def version_rules(mat, prefix: str) -> dict:
+    """{(major, minor): the defines starting with ``prefix``} of the program compiled from ``mat``'s graph
+    as Blender 4.2, 4.5 and 5.0 read it (the reader's Graph.version replaced); asserts the graph's source
+    is the same for every version and the key 4.2's own (4.5's and 5.0's rules agree)."""
     from dataclasses import replace
 
     from addon.blender import nodes as reader
     from addon.materials import surface
     from addon.plan import programs
 
-    scenes.reset(size=8)
-    g, groups = reader.read_material(_normal_mapped())
+    g, groups = reader.read_material(mat)
     assert g.version == tuple(bpy.app.version[:2])
     versions = ((4, 2), (4, 5), (5, 0))
     compiled = {v: surface.compile_material(replace(g, version=v), groups).program for v in versions}
-    rules = {v: {name for name in dict(programs.graph_defines(p)) if name.startswith("SL_BUMP_SHADOWING_")}
-             for v, p in compiled.items()}
-    assert rules == {(4, 2): {"SL_BUMP_SHADOWING_CHIANG_2019"}, (4, 5): {"SL_BUMP_SHADOWING_CONTY_2019"},
-                     (5, 0): {"SL_BUMP_SHADOWING_CONTY_2019"}}, rules
     assert len({p.source for p in compiled.values()}) == 1
     assert compiled[(4, 2)].key != compiled[(5, 0)].key == compiled[(4, 5)].key
+    return {v: {name for name in dict(programs.graph_defines(p)) if name.startswith(prefix)}
+            for v, p in compiled.items()}
+
+
+def test_bent_normal_rule_follows_the_blender_that_read_the_graph():
+    """The rule for a bent normal's light is the reading Blender's Cycles' (materials/surface.py's
+    bump_shadowing): a define of the program, the graph's source the same for every version."""
+    scenes.reset(size=8)
+    rules = version_rules(_normal_mapped(), "SL_BUMP_SHADOWING_")
+    assert rules == {(4, 2): {"SL_BUMP_SHADOWING_CHIANG_2019"}, (4, 5): {"SL_BUMP_SHADOWING_CONTY_2019"},
+                     (5, 0): {"SL_BUMP_SHADOWING_CONTY_2019"}}, rules
 
 
 def test_bent_normal_near_the_terminator(tmp_path):

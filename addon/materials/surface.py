@@ -58,6 +58,8 @@ class GraphProgram:
     uniform_attributes: int = 0
     #: where a closure's normal is bent: Cycles' rule for the light it takes (``bump_shadowing``)
     bump_shadowing: str = ""
+    #: where a Diffuse BSDF can draw its Roughness: Cycles' Oren-Nayar (``oren_nayar``)
+    oren_nayar: str = ""
 
     def __eq__(self, other) -> bool:
         return isinstance(other, GraphProgram) and other.key == self.key
@@ -200,11 +202,30 @@ def graph_inputs_read(source: str) -> frozenset[str]:
 BUMP_SHADOWING = ("CHIANG_2019", "CONTY_2019")
 #: The first Blender (major, minor) of each rule but the first
 _BUMP_SHADOWING_FROM = ((4, 3),)
+#: Cycles' Oren-Nayar for a Diffuse BSDF's Roughness (kernel/closure/bsdf_oren_nayar.h), by the Blender
+#: that reads the graph (from each wheel's Cycles kernel: 4.2's differs, 4.5's and 5.0's agree; 4.3 and
+#: 4.4, not measured, are taken as 4.5): Fujii's improved Oren-Nayar alone, Roughness 0 exactly being
+#: Lambert (4.2), or with OpenPBR's energy-preserving multiple scattering, Lambert below 1e-5 (4.5,
+#: 5.0). glsl/closures.glsl draws each (SL_OREN_NAYAR_<RULE>).
+OREN_NAYAR = ("FUJII", "FUJII_MULTISCATTER")
+#: The first Blender (major, minor) of each rule but the first
+_OREN_NAYAR_FROM = ((4, 3),)
+
+
+def _rule(rules: tuple[str, ...], starts: tuple[tuple[int, int], ...], version: tuple[int, int]) -> str:
+    """The rule of ``rules`` Blender ``version`` follows, ``starts`` the first version of each but the
+    first."""
+    return rules[sum(tuple(version) >= start for start in starts)]
 
 
 def bump_shadowing(version: tuple[int, int]) -> str:
     """Cycles' rule for a bent normal's light in Blender ``version`` (``BUMP_SHADOWING``)."""
-    return BUMP_SHADOWING[sum(tuple(version) >= start for start in _BUMP_SHADOWING_FROM)]
+    return _rule(BUMP_SHADOWING, _BUMP_SHADOWING_FROM, version)
+
+
+def oren_nayar(version: tuple[int, int]) -> str:
+    """Cycles' Oren-Nayar in Blender ``version`` (``OREN_NAYAR``)."""
+    return _rule(OREN_NAYAR, _OREN_NAYAR_FROM, version)
 
 
 def _bent(flat: FlatGraph) -> bool:
@@ -225,11 +246,13 @@ def _node_count(flat: FlatGraph) -> int:
     return sum(1 for n in flat.nodes.values() if n.kind not in ("Convert", *codegen.SINKS))
 
 
-def _program_key(digest: str, kinds: tuple[str, ...], rule: str) -> str:
+def _program_key(digest: str, kinds: tuple[str, ...], rule: str, diffuse: str = "") -> str:
     """A graph program's key: its source's ``digest`` (``codegen.Compiled.key``), the kinds of the
     attributes it reads (a tangent is turned to world space, an island's value is not interpolated,
-    an orco becomes Generated: ``programs.graph_defines``) and its bent normal's rule."""
-    return f"{digest}{''.join(k[0] for k in kinds)}{BUMP_SHADOWING.index(rule) if rule else ''}"
+    an orco becomes Generated: ``programs.graph_defines``), its bent normal's rule and its Oren-Nayar's
+    (``diffuse``, after an "o")."""
+    return (f"{digest}{''.join(k[0] for k in kinds)}{BUMP_SHADOWING.index(rule) if rule else ''}"
+            f"{'o%d' % OREN_NAYAR.index(diffuse) if diffuse else ''}")
 
 
 def _compiled(flat: FlatGraph, targets: dict, function: str, whole: FlatGraph,
@@ -245,11 +268,15 @@ def _compiled(flat: FlatGraph, targets: dict, function: str, whole: FlatGraph,
     if _bent(flat):
         uses |= {"bent_normal"}
         rule = bump_shadowing(flat.version)
+    # a Diffuse BSDF (its Roughness a constant or per fragment): the reading Blender's Oren-Nayar
+    diffuse = ""
+    if any(node.kind == "ShaderNodeBsdfDiffuse" for node in flat.nodes.values()):
+        diffuse = oren_nayar(flat.version)
     kinds = tuple(kind for kind, _ in compiled.attributes)
-    key = _program_key(compiled.key, kinds, rule)
+    key = _program_key(compiled.key, kinds, rule, diffuse)
     program = GraphProgram(key, compiled.source,
                            len(compiled.constants), len(compiled.images), len(compiled.attributes), uses,
-                           kinds, compiled.arrays, len(compiled.uniform_attributes), rule)
+                           kinds, compiled.arrays, len(compiled.uniform_attributes), rule, diffuse)
     missing = set(compiled.missing_nodes)
     emitted = frozenset(codegen.EMITTERS) - codegen.FORCE_BAKE
     bakes = tuple(bake.target(full, node, socket, missing, emitted) for node, socket in compiled.bake_targets)
@@ -350,7 +377,7 @@ def with_orco(graph: MaterialGraph) -> MaterialGraph:
         return graph
     p = graph.program
     kinds = p.attribute_kinds + (ORCO[0],)
-    program = replace(p, key=_program_key(p.key[:16], kinds, p.bump_shadowing),
+    program = replace(p, key=_program_key(p.key[:16], kinds, p.bump_shadowing, p.oren_nayar),
                      attributes=p.attributes + 1, attribute_kinds=kinds)
     return replace(graph, program=program, attributes=graph.attributes + (ORCO,))
 

@@ -489,6 +489,8 @@ def graph_defines(g: GraphProgram) -> list[tuple[str, str]]:
         out.append(("SL_GRAPH_UNIFORM_ATTRIBUTE_COUNT", str(g.uniform_attributes)))
     if g.bump_shadowing:
         out.append(("SL_BUMP_SHADOWING_" + g.bump_shadowing, "1"))
+    if g.oren_nayar:
+        out.append(("SL_OREN_NAYAR_" + g.oren_nayar, "1"))
     if "triangle" in g.uses:  # the fragment's triangle's corners, from the draw's triangle texture
         out.append(("SL_GRAPH_TRIANGLE_ROW", str(TRIANGLE_ROW)))
     if g.attributes:

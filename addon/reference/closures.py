@@ -1,5 +1,6 @@
 """Numpy twins of glsl/closures.glsl: the closure nodes drawn beside the Principled BSDF's lobes, as
-Cycles 5.0 evaluates them (kernel/closure/bsdf_oren_nayar.h, bsdf_ashikhmin_velvet.h, bsdf_toon.h).
+Cycles 5.0 evaluates them (kernel/closure/bsdf_oren_nayar.h, bsdf_ashikhmin_velvet.h, bsdf_toon.h);
+the Oren-Nayar also as Blender 4.2's Cycles does (``rule``, materials/surface.py's ``OREN_NAYAR``).
 
 Every ``*_eval`` returns Cycles' bsdf eval, f (n.l): radiance per unit irradiance arriving along l.
 Arrays broadcast; no ``bpy``.
@@ -13,6 +14,10 @@ import numpy as np
 
 #: Cycles' FLT_MIN (Oren-Nayar's t over max(n.l, n.v) where both vanish)
 FLT_MIN = 1.175494e-38
+#: The Oren-Nayar of Blender 4.5 and 5.0 (Fujii's with OpenPBR's multiple scattering, Lambert below
+#: roughness 1e-5) and of 4.2 (Fujii's alone, Lambert at roughness 0): glsl/closures.glsl's
+#: SL_OREN_NAYAR_<RULE>, materials/surface.py's OREN_NAYAR
+MULTISCATTER, SINGLE = "FUJII_MULTISCATTER", "FUJII"
 
 
 def oren_nayar_G(cos_theta):
@@ -26,9 +31,17 @@ def oren_nayar_G(cos_theta):
     return np.where(c < 1e-6, (0.5 * np.pi - 2.0 / 3.0) - c, g)
 
 
-def oren_nayar_setup(sigma, albedo, cos_v):
+def _lambert(sigma, rule):
+    """Where Cycles draws the Diffuse BSDF as Lambert (svm_node_closure_bsdf): roughness below 1e-5,
+    4.2's at 0 only."""
+    sigma = np.asarray(sigma, np.float64)
+    return sigma <= 0.0 if rule == SINGLE else sigma < 1e-5
+
+
+def oren_nayar_setup(sigma, albedo, cos_v, rule=MULTISCATTER):
     """(A, B, E_ms (1 - E(v)) per channel, E_avg) of Cycles' bsdf_oren_nayar_setup: sigma within
-    [0, 1], the albedo (the base colour) within [0, 1]."""
+    [0, 1], the albedo (the base colour) within [0, 1]; 4.2's (``SINGLE``) has no multiple
+    scattering (its E_ms 0)."""
     sigma = np.clip(np.asarray(sigma, np.float64), 0.0, 1.0)
     a = 1.0 / (np.pi + sigma * (0.5 * np.pi - 2.0 / 3.0))
     b = sigma * a
@@ -37,6 +50,8 @@ def oren_nayar_setup(sigma, albedo, cos_v):
     ratio = (e_avg / np.maximum(1.0 - e_avg, 1e-6))[..., None]
     e_ms = rho * rho * ratio / (np.pi * (1.0 - rho * (1.0 - e_avg)[..., None]))
     e_v = a * np.pi + b * oren_nayar_G(np.maximum(cos_v, 0.0))
+    if rule == SINGLE:
+        e_ms = np.zeros_like(e_ms)
     return a, b, e_ms * (1.0 - e_v)[..., None], e_avg
 
 
@@ -54,28 +69,28 @@ def oren_nayar_ms(sigma, color):
     return color * rho * rho * (e_avg / (1.0 - e_avg)) / (np.pi * (1.0 - rho * (1.0 - e_avg)))
 
 
-def oren_nayar_eval(sigma, albedo, cos_v, cos_l, cos_lv):
+def oren_nayar_eval(sigma, albedo, cos_v, cos_l, cos_lv, rule=MULTISCATTER):
     """f (n.l) over the base colour (rgb) of Cycles' Diffuse BSDF of roughness ``sigma``
-    (bsdf_oren_nayar_get_intensity; Lambert's n.l / pi where sigma < 1e-5, bsdf_diffuse_setup)."""
-    a, b, ms, _ = oren_nayar_setup(sigma, albedo, cos_v)
+    (bsdf_oren_nayar_get_intensity; Lambert's n.l / pi where sigma < 1e-5, bsdf_diffuse_setup), by
+    ``rule`` (4.2's ``SINGLE``: no multiple scattering, Lambert at sigma 0 only)."""
+    a, b, ms, _ = oren_nayar_setup(sigma, albedo, cos_v, rule)
     nl = np.maximum(cos_l, 0.0)
     nv = np.maximum(cos_v, 0.0)
     t = cos_lv - nl * nv
     t = np.where(t > 0.0, t / (np.maximum(nl, nv) + FLT_MIN), t)
     e_l = a * np.pi + b * oren_nayar_G(nl)
     f = (a + b * t)[..., None] + ms * (1.0 - e_l)[..., None]
-    lambert = np.asarray(sigma, np.float64) < 1e-5
-    return np.where(lambert[..., None], 1.0 / np.pi, f) * nl[..., None]
+    return np.where(_lambert(sigma, rule)[..., None], 1.0 / np.pi, f) * nl[..., None]
 
 
-def oren_nayar_albedo(sigma, albedo, cos_v):
+def oren_nayar_albedo(sigma, albedo, cos_v, rule=MULTISCATTER):
     """The directional albedo at the view over the base colour (rgb): E(v) + pi E_ms (1 - E(v))
-    (1 - E_avg), the integral of oren_nayar_eval over the light's hemisphere in closed form; 1 for
-    Lambert."""
-    a, b, ms, e_avg = oren_nayar_setup(sigma, albedo, cos_v)
+    (1 - E_avg), the integral of oren_nayar_eval over the light's hemisphere in closed form (4.2's
+    E(v) alone); 1 for Lambert."""
+    a, b, ms, e_avg = oren_nayar_setup(sigma, albedo, cos_v, rule)
     e_v = a * np.pi + b * oren_nayar_G(np.maximum(cos_v, 0.0))
     out = e_v[..., None] + np.pi * ms * (1.0 - e_avg)[..., None]
-    return np.where((np.asarray(sigma, np.float64) < 1e-5)[..., None], 1.0, out)
+    return np.where(_lambert(sigma, rule)[..., None], 1.0, out)
 
 
 def velvet_eval(sigma, cos_v, cos_l, cos_nh, cos_hl):
