@@ -15,6 +15,10 @@
 #define WAVE_SIN 0
 #define WAVE_SAW 1
 #define WAVE_TRI 2
+/* the saw's and triangle's phase over 2 pi as the Blender reading the file takes it (the reader's
+ * wave_phase): Cycles 4.5 and 5.0 times the reciprocal (their kernel's fast math), 4.2 divided */
+#define WAVE_PHASE_RECIPROCAL 0
+#define WAVE_PHASE_DIVIDE 1
 
 /* The phase rounded as Cycles rounds it (PRECISE): a shader compiler may fold consecutive
  * products by literals into one (Mesa computes (x 0.999999) 20 as x 19.99998: another rounding,
@@ -94,8 +98,19 @@ float wave_sin(float x)
   return x < 0.0 ? -v : v;
 }
 
+/* n / 2 pi rounded once, as Blender 4.2's Cycles divides: a GPU's division may be a product with the
+ * reciprocal (Mesa's is), so the quotient q = n (1 / 2 pi) is corrected by its remainder n - q 2 pi,
+ * exact in one fused multiply-add (float_fma: it is representable), times the reciprocal (Markstein's
+ * correction step; "IA-64 and Elementary Functions", 2000). 2 pi and its reciprocal as float32 round
+ * them, Cycles' M_2PI_F. */
+float wave_divide_two_pi(float n)
+{
+  PRECISE float q = n * 0.15915494309189535;
+  return float_fma(float_fma(-q, 6.283185307179586, n), 0.15915494309189535, q);
+}
+
 float node_tex_wave(vec3 co, float scale, float distortion, float detail, float detail_scale, float detail_roughness,
-                    float phase, int type, int direction, int profile)
+                    float phase, int type, int direction, int profile, int phase_rule)
 {
   /* Cycles: "prevent precision issues on unit coordinates", its co x scale fused into the sum */
   PRECISE vec3 p = fma(co, vec3(scale), vec3(1.0e-6)) * 0.999999;
@@ -117,7 +132,8 @@ float node_tex_wave(vec3 co, float scale, float distortion, float detail, float 
   if (profile == WAVE_SIN) {
     return 0.5 + 0.5 * wave_sin(n - 1.5707963267948966);
   }
-  n *= 0.15915494309189535; /* Cycles' n / M_2PI_F, compiled (-ffast-math) as n x 1 / (2 pi) */
+  /* Cycles' n / M_2PI_F, compiled (-ffast-math) as n x 1 / (2 pi) by 4.5 and 5.0 */
+  n = phase_rule == WAVE_PHASE_DIVIDE ? wave_divide_two_pi(n) : n * 0.15915494309189535;
   if (profile == WAVE_SAW) {
     return n - floor(n);
   }

@@ -210,10 +210,6 @@ def _as_diffuse(scene):
             tree.nodes.remove(node)
 
 
-#: The Oren-Nayar of the Blender running the tests (materials/surface.py's oren_nayar: the reader's)
-OREN_NAYAR = surface.oren_nayar(tuple(bpy.app.version[:2]))
-
-
 @pytest.mark.parametrize("case", CASES)
 def test_closure_node_matches_cycles(case, tmp_path):
     if case == "metallic" and not hasattr(bpy.types, "ShaderNodeBsdfMetallic"):

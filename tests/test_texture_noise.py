@@ -342,8 +342,8 @@ def test_extreme_inputs_end_and_stay_finite():
     body = ("vec4 p = node_noise_coordinates(vec3(a.x, 0.5, -a.x), a.x, a.w, 0.3, 4); result = vec4("
             "node_noise_value(p, 4, NOISE_HETERO_TERRAIN, a.y, 0.5, a.z, 0.8, 1.0, 1.0), "
             "node_noise_value(p, 4, NOISE_FBM, a.y, 0.5, a.z, 0.0, 1.0, 1.0), "
-            "node_tex_wave(vec3(a.x), a.w, 2.0, a.y, a.z, 0.5, 0.0, WAVE_RINGS, WAVE_SPHERICAL, WAVE_SIN), "
-            "0.0);")
+            "node_tex_wave(vec3(a.x), a.w, 2.0, a.y, a.z, 0.5, 0.0, WAVE_RINGS, WAVE_SPHERICAL, WAVE_SIN, "
+            "WAVE_PHASE_RECIPROCAL), 0.0);")
     values = evaluate(body, {"a": rows}, extra=extra, source="vec4 graph_table(int i) { return vec4(0.0); }")
     with np.errstate(over="ignore", invalid="ignore"):  # (a coordinate x Scale beyond 3.4e38 is infinite)
         finite = np.isfinite(rows).all(axis=1) & np.isfinite(rows[:, 0] * rows[:, 3])

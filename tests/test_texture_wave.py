@@ -13,12 +13,13 @@ out (counted: none measured)."""
 
 from __future__ import annotations
 
-import bpy
 import numpy as np
 import pytest
+from glsl_harness import evaluate
 from test_material_nodes import SIZE, _aov, _plane_scene
 from test_texture_noise import COORDINATES, _coordinates, against_cycles_per_aov, assert_engine_matches_cycles
 
+from addon.blender import nodes as reader
 from addon.materials import codegen
 from addon.reference import wave
 
@@ -74,22 +75,11 @@ def _flipped(case, ours, cycles):
     return near & (np.abs(ours - cycles)[:, 0] > 0.5)
 
 
-#: Blender 4.2's Cycles divides the saw's and triangle's phase by 2 pi (4.5 and 5.0 multiply it by
-#: the reciprocal, as the compiled code does): a float step of the phase apart, measured against
-#: 4.2: 3.8e-6 on the small set, 3.9e-3 on the large (phases to 2e5); on the huge set (phases to
-#: 1e8, a float step of 8) the two renderers' saws are unrelated.
-OLD_PHASE = bpy.app.version < (4, 5, 0)
-
-
-def _old_phase(case, label) -> float | None:
-    """Blender 4.2's measured bound for a saw or triangle (None: none that tells anything)."""
-    profile = CASES[case][2]
-    if not OLD_PHASE or profile == "SIN":
-        return 0.0 if profile != "SIN" else None
-    if label == "huge":
-        pytest.skip(f"Blender {bpy.app.version_string}'s Cycles rounds a wave's phase otherwise: at phases "
-                    "to 1e8 the saws are unrelated")
-    return {"small": 3.8e-6, "large": 3.9e-3}[label]
+#: How this Blender's Cycles takes the saw's and triangle's phase over 2 pi (the reader's wave_phase:
+#: 4.2 divides, 4.5 and 5.0 multiply by the reciprocal), which the engine and the twin follow. Taken
+#: the other way, 4.2's saws were a float step of the phase apart (3.8e-6 on the small set, 3.9e-3 on
+#: the large) and unrelated on the huge one (phases to 1e8, a float step of 8).
+PHASE_RULE = reader.wave_phase()
 
 
 def _measured(case, label) -> float:
@@ -98,10 +88,9 @@ def _measured(case, label) -> float:
     Scale 2.3 and distortion carry llvmpipe's fma() as two roundings (3.8e-6 to 1.5e-5 on the
     small set)."""
     kind, direction, profile, values = CASES[case]
-    old = _old_phase(case, label)
     if label == "small" and (values.get("Distortion") or values.get("Scale")):
         return 1.5e-5 if case == "phase" else 3.8e-6
-    return 6e-8 if profile == "SIN" else old
+    return 6e-8 if profile == "SIN" else 0.0
 
 
 @pytest.mark.parametrize("case", CASES)
@@ -127,10 +116,10 @@ def test_wave_twin_matches_cycles(wave_results, case):
     kind, direction, profile, values = CASES[case]
     co = results["co"][1].astype(np.float32)
     args = {k.lower().replace(" ", "_"): x for k, x in {"Scale": 1.0, **values}.items()}
-    fac = wave.wave(co, kind=kind, direction=direction, profile=profile, **args)
+    fac = wave.wave(co, kind=kind, direction=direction, profile=profile, **args, phase_rule=PHASE_RULE)
     cycles = results[f"fac_{case}"][1][:, 0]
     worst = float(np.abs(fac - cycles).max())
-    bound = 6e-8 if profile == "SIN" else _old_phase(case, label)
+    bound = 6e-8 if profile == "SIN" else 0.0
     assert worst <= 3 * bound, f"twin {case} {label}: largest difference {worst:.3g} (measured {bound:.3g})"
 
 
@@ -149,8 +138,33 @@ def test_engine_draws_wave_as_cycles(tmp_path):
 def test_wave_compiles_the_noise_it_calls():
     """codegen.library: a graph calling the Wave Texture alone compiles the hash and noise files it
     calls, in order; one calling the Noise Texture not the wave's."""
-    wave_call = "x = node_tex_wave(co, 1.0, 0.0, 2.0, 1.0, 0.5, 0.0, WAVE_BANDS, WAVE_X, WAVE_SIN);"
+    wave_call = "x = node_tex_wave(co, 1.0, 0.0, 2.0, 1.0, 0.5, 0.0, WAVE_BANDS, WAVE_X, WAVE_SIN, 0);"
     noise_call = "x = node_noise_value(p, 3, NOISE_FBM, 2.0, 0.5, 2.0, 0.0, 1.0, 1.0);"
     noise_files = ("node_hash.glsl", "node_tex_noise.glsl")
-    assert codegen.library(wave_call) == codegen.LIBRARY + noise_files + ("node_tex_wave.glsl",)
+    # (4.2's division by 2 pi calls node_float.glsl's float_fma)
+    assert codegen.library(wave_call) == codegen.LIBRARY + ("node_hash.glsl", "node_float.glsl",
+                                                            "node_tex_noise.glsl", "node_tex_wave.glsl")
     assert codegen.library(noise_call) == codegen.LIBRARY + noise_files
+
+
+def test_divide_by_two_pi_rounds_once():
+    """Blender 4.2's phase over 2 pi (node_tex_wave.glsl's wave_divide_two_pi, a corrected product with
+    the reciprocal) against numpy's float32 division, correctly rounded as 4.2's Cycles divides, phases
+    from 1e-30 to 3e38 of either sign: every quotient equal up to |n| 1e34 (beyond 2^115 float_fma's
+    split overflows and it rounds twice: 64 of the 8192 quotients, from 5.4e35, an ulp off), the saw
+    of each (n / 2 pi less its floor: 0 for every float beyond 2^23) equal everywhere; and the
+    reciprocal's product not the quotient at many (counted: the test tells the two apart)."""
+    rng = np.random.default_rng(5)
+    magnitude = np.exp(rng.uniform(np.log(1e-30), np.log(3e38), 8192))
+    n = (magnitude * rng.choice([-1.0, 1.0], 8192)).astype(np.float32)
+    n[:4] = (0.0, 1.0, 6.2831855, 1e8)
+    gpu = evaluate("result = vec4(wave_divide_two_pi(a.x), 0.0, 0.0, 0.0);",
+                   {"a": np.stack([n, 0 * n, 0 * n, 0 * n], -1)}, extra=codegen.library("node_tex_wave();"),
+                   source="vec4 graph_table(int i) { return vec4(0.0); }")[:, 0]
+    divided = n / np.float32(2 * np.pi)
+    apart = int((n * (np.float32(1) / np.float32(2 * np.pi)) != divided).sum())
+    wrong = int((gpu != divided)[np.abs(n) < 1e34].sum())
+    saws = int(((gpu - np.floor(gpu)) != (divided - np.floor(divided))).sum())
+    print(f"divided by 2 pi: {wrong} of {int((np.abs(n) < 1e34).sum())} quotients off, {saws} saws; the "
+          f"reciprocal's product off at {apart}")
+    assert wrong == 0 and saws == 0 and apart > 100, (wrong, saws, apart)

@@ -123,6 +123,7 @@ _BAKED = {
     "ShaderNodeFloatCurve": lambda node: _curves(node, 1, False),
     "ShaderNodeWavelength": lambda node: {"xyz_to_rgb": xyz_to_rgb()},
     "ShaderNodeTexVoronoi": lambda node: {"voronoi_cells": voronoi_cells()},
+    "ShaderNodeTexWave": lambda node: {"wave_phase": wave_phase()},
 }
 
 
@@ -135,6 +136,14 @@ def voronoi_cells() -> str:
     """How this Blender's Cycles hashes a Voronoi cell in 2D-4D: 5.0 its integer index (``INT``),
     4.x its float coordinates (``FLOAT``)."""
     return "INT" if bpy.app.version >= (5, 0, 0) else "FLOAT"
+
+
+def wave_phase() -> str:
+    """How this Blender's Cycles takes a Wave Texture's saw and triangle phase over 2 pi (wave.h's
+    n /= M_2PI_F): 4.5 and 5.0 as a product with the reciprocal (``RECIPROCAL``, its kernel's fast
+    math), 4.2 as a division rounded once (``DIVIDE``); measured against each wheel's Cycles (4.3
+    and 4.4, not measured, taken as 4.5)."""
+    return "RECIPROCAL" if bpy.app.version >= (4, 3, 0) else "DIVIDE"
 
 
 def luma() -> tuple[float, float, float]:

@@ -263,7 +263,8 @@ def _wave(node, inputs, points):
     kind = props.get("wave_type", "BANDS")
     direction = props.get("bands_direction" if kind == "BANDS" else "rings_direction", "X")
     fac = wave.wave(co, kind=kind, direction=direction, profile=props.get("wave_profile", "SIN"),
-                    **{k.lower().replace(" ", "_"): v for k, v in settings.items()}).astype(F32)
+                    **{k.lower().replace(" ", "_"): v for k, v in settings.items()},
+                    phase_rule=props.get("wave_phase", "RECIPROCAL")).astype(F32)
     return {"Fac": fac, "Color": _colour(np.repeat(fac[:, None], 3, 1))}
 
 

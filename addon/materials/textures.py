@@ -176,6 +176,9 @@ WAVE_TYPES = {"BANDS": "WAVE_BANDS", "RINGS": "WAVE_RINGS"}
 WAVE_BANDS_DIRECTIONS = {"X": "WAVE_X", "Y": "WAVE_Y", "Z": "WAVE_Z", "DIAGONAL": "WAVE_DIAGONAL"}
 WAVE_RINGS_DIRECTIONS = {"X": "WAVE_X", "Y": "WAVE_Y", "Z": "WAVE_Z", "SPHERICAL": "WAVE_SPHERICAL"}
 WAVE_PROFILES = {"SIN": "WAVE_SIN", "SAW": "WAVE_SAW", "TRI": "WAVE_TRI"}
+#: How the Blender that read the file takes the phase over 2 pi (the reader's ``wave_phase``): 4.5
+#: and 5.0 times the reciprocal, 4.2 divided; 5.0's where the reader does not say.
+WAVE_PHASES = {"RECIPROCAL": "WAVE_PHASE_RECIPROCAL", "DIVIDE": "WAVE_PHASE_DIVIDE"}
 
 
 def _noise(w, node: FlatNode) -> dict | None:
@@ -201,18 +204,20 @@ def _noise(w, node: FlatNode) -> dict | None:
 
 def _wave(w, node: FlatNode) -> dict | None:
     """Wave Texture (Cycles' svm_node_tex_wave): bands or rings in every direction and profile,
-    distorted by fBM noise; Color is Fac in each channel."""
+    distorted by fBM noise, the phase over 2 pi as the reading Blender's Cycles takes it; Color is
+    Fac in each channel."""
     props = node.props
     kind = props.get("wave_type", "BANDS")
     directions = WAVE_BANDS_DIRECTIONS if kind == "BANDS" else WAVE_RINGS_DIRECTIONS
     direction = directions.get(props.get("bands_direction" if kind == "BANDS" else "rings_direction", "X"))
     profile = WAVE_PROFILES.get(props.get("wave_profile", "SIN"))
+    rule = WAVE_PHASES.get(props.get("wave_phase", "RECIPROCAL"))
     co = vector(w, node)
-    if kind not in WAVE_TYPES or direction is None or profile is None or co is None:
+    if kind not in WAVE_TYPES or direction is None or profile is None or rule is None or co is None:
         return None
     args = ", ".join(w.arg(node, socket) for socket in ("Scale", "Distortion", "Detail", "Detail Scale",
                                                           "Detail Roughness", "Phase Offset"))
-    fac = w.once("float", f"node_tex_wave({co}, {args}, {WAVE_TYPES[kind]}, {direction}, {profile})")
+    fac = w.once("float", f"node_tex_wave({co}, {args}, {WAVE_TYPES[kind]}, {direction}, {profile}, {rule})")
     return {"Fac": fac, "Color": f"vec4(vec3({fac}), 1.0)"}
 
 
