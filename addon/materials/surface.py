@@ -22,7 +22,7 @@ from functools import lru_cache
 import numpy as np
 
 from ..scene.nodes import MATERIAL_OUTPUT, Graph
-from ..scene.snapshot import CLOSURE_LOBES, GLOSSY_LOBE, LOBES, lobes_of
+from ..scene.snapshot import CLOSURE_LOBES, GLOSSY_LOBE, LOBES, lobes_of, version_rule
 from . import bake, codegen, evaluate
 from .graph import Const, FlatGraph, flatten
 
@@ -212,20 +212,14 @@ OREN_NAYAR = ("FUJII", "FUJII_MULTISCATTER")
 _OREN_NAYAR_FROM = ((4, 3),)
 
 
-def _rule(rules: tuple[str, ...], starts: tuple[tuple[int, int], ...], version: tuple[int, int]) -> str:
-    """The rule of ``rules`` Blender ``version`` follows, ``starts`` the first version of each but the
-    first."""
-    return rules[sum(tuple(version) >= start for start in starts)]
-
-
 def bump_shadowing(version: tuple[int, int]) -> str:
     """Cycles' rule for a bent normal's light in Blender ``version`` (``BUMP_SHADOWING``)."""
-    return _rule(BUMP_SHADOWING, _BUMP_SHADOWING_FROM, version)
+    return version_rule(BUMP_SHADOWING, _BUMP_SHADOWING_FROM, version)
 
 
 def oren_nayar(version: tuple[int, int]) -> str:
     """Cycles' Oren-Nayar in Blender ``version`` (``OREN_NAYAR``)."""
-    return _rule(OREN_NAYAR, _OREN_NAYAR_FROM, version)
+    return version_rule(OREN_NAYAR, _OREN_NAYAR_FROM, version)
 
 
 def _bent(flat: FlatGraph) -> bool:

@@ -225,9 +225,15 @@ THIN_FILM_RULES = ("CYCLES_4", "CYCLES_5")
 _THIN_FILM_RULE_FROM = ((5, 0),)
 
 
+def version_rule(rules: tuple[str, ...], starts: tuple[tuple[int, int], ...], version) -> str:
+    """The rule of ``rules`` Blender ``version`` (major, minor, ...) follows, ``starts`` the first
+    version (major, minor) of each rule but the first."""
+    return rules[sum(tuple(version[:2]) >= start for start in starts)]
+
+
 def thin_film_rule(version) -> str:
     """The rule of ``THIN_FILM_RULES`` the Cycles of Blender ``version`` (major, minor, ...) follows."""
-    return THIN_FILM_RULES[sum(tuple(version[:2]) >= start for start in _THIN_FILM_RULE_FROM)]
+    return version_rule(THIN_FILM_RULES, _THIN_FILM_RULE_FROM, version)
 
 
 #: The Principled BSDF's lobes beyond its base the programs draw, as their defines name them
