@@ -353,6 +353,11 @@ def _hemisphere(n_theta=256, n_phi=512):
     return l.reshape(-1, 3), 2.0 * np.pi / (n_theta * n_phi)
 
 
+def _view(cos_v):
+    """The view direction at ``cos_v`` to the normal z, in the xz plane."""
+    return np.array([math.sqrt(1.0 - cos_v ** 2), 0.0, cos_v])
+
+
 def test_oren_nayar_twin_closed_forms():
     """Fujii's single scattering integrates to E(v) = A pi + B G(n.v) over the lights (its closed form),
     the whole lobe to oren_nayar_albedo, and a white one to 1 (the multiple scattering's purpose); 4.2's
@@ -362,7 +367,7 @@ def test_oren_nayar_twin_closed_forms():
     worst_ss, worst_albedo = 0.0, 0.0
     for sigma in (0.1, 0.5, 1.0):
         for cos_v in (0.05, 0.4, 0.9, 1.0):
-            v = np.array([math.sqrt(1.0 - cos_v ** 2), 0.0, cos_v])
+            v = _view(cos_v)
             e_v = None
             for rule in (C.MULTISCATTER, C.SINGLE):
                 a, b, ms, _ = C.oren_nayar_setup(np.float64(sigma), np.array([0.0, 0.0, 0.0]), cos_v, rule)
@@ -474,7 +479,7 @@ def test_velvet_albedo_quadrature():
     worst = 0.0
     for sigma in (0.05, 0.2, 0.5, 1.0):
         for cos_v in (0.1, 0.5, 0.95):
-            v = np.array([math.sqrt(1.0 - cos_v ** 2), 0.0, cos_v])
+            v = _view(cos_v)
             fine = float(C.velvet_at(sigma, n, v, l).sum() * dw)
             coarse = float(C.velvet_albedo(sigma, cos_v))
             worst = max(worst, abs(coarse - fine) / max(fine, 0.01))
@@ -833,7 +838,7 @@ def test_ashikhmin_shirley_albedo_against_quadrature():
     worst = 0.0
     for roughness in (0.3, 0.5, 0.8, 1.0):
         for cos_v in (0.2, 0.5, 0.9):
-            v = np.array([math.sqrt(1.0 - cos_v ** 2), 0.0, cos_v])
+            v = _view(cos_v)
             h = (l + v) / np.linalg.norm(l + v, axis=-1, keepdims=True)
             f = C.D_V_AshikhminShirley(cos_v, l[:, 2], h @ n, np.abs(np.sum(l * h, -1)), roughness ** 2)
             integral = float((f * l[:, 2]).sum() * dw)
@@ -882,7 +887,7 @@ def test_cone_roughness_and_oren_nayar_world_fits():
     l, dw = _hemisphere(400, 800)
     worst_t = worst_n = 0.0
     for cos_v in np.linspace(0.01, 0.99, 15):
-        v = np.array([math.sqrt(1.0 - cos_v ** 2), 0.0, cos_v])
+        v = _view(cos_v)
         s = l @ v - l[:, 2] * cos_v
         w = np.where(s > 0.0, s / np.maximum(l[:, 2], cos_v), s) * l[:, 2]
         moment = 1.5 * (w[:, None] * l).sum(0) * dw
@@ -914,7 +919,7 @@ def test_beckmann_ratio_at_the_cosines_mean_direction():
     for roughness in (0.15, 0.3):
         at_l, at_mean = [], []
         for cos_v in (0.3, 0.7, 0.95):
-            v = np.array([math.sqrt(1.0 - cos_v ** 2), 0.0, cos_v])
+            v = _view(cos_v)
             mirror = np.array([-v[0], 0.0, cos_v])
             entries = ltc.lookup(table, cos_v, roughness)
             minv = ltc.minv_from_entries(entries)
