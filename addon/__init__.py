@@ -107,7 +107,7 @@ def unregister():
 
 
 def _unregister():
-    from .blender import engine, extract, images
+    from .blender import engine, extract, geometry, images
     from .frame import gpu_library
 
     global _registered
@@ -122,6 +122,6 @@ def _unregister():
     _undo([*classes, *modules])
     gpu_library.LIBRARY.clear()
     images.IMAGES.clear()
-    extract.GEOMETRY_MEMO.clear()
+    geometry.GEOMETRY_MEMO.clear()
     extract.FALLBACK_READS.clear()
     extract.bake.forget()

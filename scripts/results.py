@@ -64,7 +64,7 @@ def _portability_scene(args, variant):
 
 def _apply_blinn_phong(scene, spec_scale: float, shininess_scale: float, ambient: float) -> None:
     """Scale every material's Blinn-Phong specular colour and shininess (from its derived values)."""
-    from addon.blender.extract import material_params
+    from addon.blender.materials import material_params
 
     scene.shading_lab.model = "BLINN_PHONG"
     scene.shading_lab.ambient = ambient

@@ -24,6 +24,7 @@ from test_cycles import _cycles
 from test_material_nodes import _aov, _plane_scene
 
 from addon.blender import bake, engine, extract, operators
+from addon.blender import materials as material_reader
 from addon.blender.viewport import ViewportSession
 from addon.materials import bake as baking
 from addon.materials import codegen, surface
@@ -151,7 +152,7 @@ def test_the_material_panel_reports_each_bake_with_its_resolution_and_measured_e
     # largest lies on the plane's border, where the margin repeats the edge texel: 4.7e-3)
     ramp = status["Color Ramp > Color"].error
     assert ramp.p99 < 4.5e-5 and ramp.max > 10 * ramp.p99, ramp
-    report = extract.GRAPH_REPORTS[noise_scene["mat"].name_full]
+    report = material_reader.GRAPH_REPORTS[noise_scene["mat"].name_full]
     assert "Noise Texture" in report.baked, report
     assert any("baked by Cycles" in w for w in noise_scene["warnings"]), noise_scene["warnings"]
     assert not any("Noise Texture" in w and "socket's own value" in w for w in noise_scene["warnings"])

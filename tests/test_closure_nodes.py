@@ -23,6 +23,7 @@ from test_cycles import _cycles
 from test_material_render import _against_cycles, _mix_colors, _scene, _tree, _uv, _within, version_rules
 from test_principled_lobes import EEVEE, _eevee_error, _from
 
+from addon.blender import materials
 from addon.materials import codegen, surface
 from addon.plan import programs
 from addon.reference import closures as C
@@ -604,7 +605,6 @@ def test_lobes_reach_only_the_programs_that_use_them():
     program its define (and SL_CLOSURE_BSDFS for closures.glsl's lobes), the library file
     node_closure_bsdfs.glsl only where the graph calls it; the other term sets none of them, and a plain
     Diffuse BSDF no Oren-Nayar."""
-    from addon.blender import extract
 
     expect = {"Glossy": ({"GLOSSY"}, True), "Toon": ({"TOON"}, True), "Velvet": ({"VELVET"}, True),
               "Microfiber": ({"SHEEN"}, True),
@@ -617,7 +617,7 @@ def test_lobes_reach_only_the_programs_that_use_them():
               "Plain": lambda: _closure("Plain", "ShaderNodeBsdfDiffuse", {})}
     for name, (lobes, library) in expect.items():
         _scene(makers[name])
-        params = extract.material_params(bpy.data.materials[name])
+        params = materials.material_params(bpy.data.materials[name])
         assert params.lobes == lobes, (name, params.lobes)
         if params.graph is None:
             assert not lobes, name

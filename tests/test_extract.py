@@ -11,6 +11,7 @@ import pytest
 import scenes
 
 from addon.blender import extract
+from addon.blender import geometry as mesh_reader
 from addon.scene import snapshot as S
 
 SIZE = 32
@@ -555,7 +556,7 @@ def test_triangles_read_as_arrays_equal_blenders_loop_triangles():
         mesh.vertices.foreach_get("co", co)
         corner_vert = np.empty(len(mesh.loops), np.int32)
         mesh.loops.foreach_get("vertex_index", corner_vert)
-        loops, faces = extract.triangle_corners(mesh, co.reshape(-1, 3)[corner_vert])
+        loops, faces = mesh_reader.triangle_corners(mesh, co.reshape(-1, 3)[corner_vert])
         assert np.array_equal(faces, expected_faces), mesh.name
         assert np.array_equal(loops, expected_loops), (
             f"{mesh.name}: {int((loops != expected_loops).any(axis=1).sum())} triangles differ")
@@ -568,7 +569,7 @@ def test_triangles_read_as_arrays_equal_blenders_loop_triangles():
 def test_mesh_geometry_keeps_material_ranges_of_the_fast_path():
     scenes.reset()
     mesh = next(_test_meshes())
-    geometry = extract.mesh_geometry("bumpy", mesh)
+    geometry = mesh_reader.mesh_geometry("bumpy", mesh)
     loops, faces = _blenders_triangles(mesh)
     mats = np.empty(len(mesh.polygons), np.int32)
     mesh.polygons.foreach_get("material_index", mats)
@@ -587,7 +588,7 @@ def _winding_of(obj) -> int:
     evaluated = obj.evaluated_get(bpy.context.evaluated_depsgraph_get())
     mesh = evaluated.to_mesh()
     try:
-        return extract.mesh_geometry("k", mesh).winding
+        return mesh_reader.mesh_geometry("k", mesh).winding
     finally:
         evaluated.to_mesh_clear()
 
@@ -649,7 +650,7 @@ def _same_arrays(a, b) -> bool:
 
 
 def test_geometry_memo_gives_what_reading_anew_gives():
-    """``extract.GEOMETRY_MEMO``: a still scene read again takes its meshes' geometry from the memo
+    """``mesh_reader.GEOMETRY_MEMO``: a still scene read again takes its meshes' geometry from the memo
     (each mesh once), and after each kind of edit -- a vertex moved, a face's material, flat
     shading, a UV, the faces flipped, a modifier added, a normal map's tangents asked for -- every
     geometry equals the one read with the memo emptied (the edit reached it), and the edited mesh's
@@ -661,7 +662,7 @@ def test_geometry_memo_gives_what_reading_anew_gives():
     for name in ("A", "B"):
         sphere.data.materials.append(bpy.data.materials.new(name))
     cube = mesh_object(scene, "Box", CUBE_VERTS, CUBE_FACES, location=(3.0, 0.0, 0.0))
-    memo = extract.GEOMETRY_MEMO
+    memo = mesh_reader.GEOMETRY_MEMO
     memo.clear()
     before = _geometry_arrays(snap_of())
     hits = memo.hits
@@ -705,7 +706,7 @@ def test_geometry_memo_gives_what_reading_anew_gives():
 
 
 def test_geometry_memo_keeps_at_most_its_limit():
-    memo = extract.GeometryMemo(limit=100)
+    memo = mesh_reader.GeometryMemo(limit=100)
 
     def geometry(corners):
         return S.MeshGeometry("g", np.zeros((corners, 3), np.float32), np.zeros((corners, 3), np.float32), [])

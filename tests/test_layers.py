@@ -92,11 +92,18 @@ def test_a_module_imports_only_the_layers_before_its_own(package, path):
     assert outside <= LAYERS[package], f"{package}/{path.name} imports {sorted(outside - LAYERS[package])}"
 
 
+#: The Blender layer's readers of a frame's data: the snapshot and what it reads materials, meshes,
+#: lights, worlds, node trees and images with.
+READERS = ("extract", "materials", "geometry", "lights", "world", "nodes", "images")
+
+
 def test_only_extract_reads_blender_data_for_the_frame():
-    """The GPU side and the planning never import the extraction, in any import style."""
+    """The GPU side and the planning never import the extraction or its readers, in any import
+    style."""
     for package in ("scene", "reference", "plan", "frame"):
         for path in modules(package):
-            assert "addon:blender.extract" not in imports(path), path
+            found = imports(path)
+            assert not [r for r in READERS if f"addon:blender.{r}" in found], path
 
 
 def test_the_scanner_sees_every_form_of_relative_import(tmp_path, monkeypatch):

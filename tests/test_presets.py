@@ -18,6 +18,7 @@ import pytest
 import scenes
 
 from addon.blender import extract, scene_builder
+from addon.blender import materials as material_reader
 from addon.scene import presets as P
 from addon.scene import snapshot as S
 
@@ -131,9 +132,9 @@ def test_roughness_sweep_ramps_rows():
     for row, metal in (("Gold", 1.0), ("Plastic", 0.0)):
         spheres = sorted((o for o in built.objects if o.name.startswith(row)), key=lambda o: o.location.x)
         assert len(spheres) == 6
-        rough = [extract.material_params(o.active_material).roughness for o in spheres]
+        rough = [material_reader.material_params(o.active_material).roughness for o in spheres]
         assert rough == pytest.approx([0.0, 0.2, 0.4, 0.6, 0.8, 1.0], abs=1e-6)
-        assert {extract.material_params(o.active_material).metalness for o in spheres} == {metal}
+        assert {material_reader.material_params(o.active_material).metalness for o in spheres} == {metal}
         assert np.diff([o.location.x for o in spheres]) == pytest.approx([1.0] * 5)
 
 
@@ -147,7 +148,7 @@ def test_portability_variants():
         assert len(_lights(scene)) == count == len(built.lights)
         assert len(_meshes(scene)) == 6
         kinds[name] = sorted(o.data.type for o in built.lights)
-        materials = sorted(extract.material_params(o.active_material).name for o in built.objects)
+        materials = sorted(material_reader.material_params(o.active_material).name for o in built.objects)
         assert materials == sorted(["Floor", "gold", "aluminium", "plastic", "rubber", "skin"])
     assert kinds["spot"] == ["SPOT"] and kinds["sunset"] == ["SUN", "SUN"]
     with pytest.raises(P.PresetError, match="no such lighting variant.*studio, noon"):
@@ -179,7 +180,7 @@ def test_built_materials_carry_the_preset_values():
     scenes.reset()
     for name, m in P.load_material_presets().items():
         mat = scene_builder.apply_material_preset(bpy.data.materials.new(name), m)
-        got = extract.material_params(mat)
+        got = material_reader.material_params(mat)
         assert got.base_color == pytest.approx(m.base_color, abs=1e-6), name
         assert got.metalness == pytest.approx(m.metalness) and got.roughness == pytest.approx(m.roughness)
         assert got.f0 == pytest.approx(m.dielectric_f0, abs=1e-6), name
@@ -203,9 +204,9 @@ def test_a_library_preset_replaces_the_lobes_of_the_material():
     scenes.reset()
     lib = P.load_material_presets()
     mat = scene_builder.apply_material_preset(bpy.data.materials.new("Paint"), lib["car_paint"])
-    assert extract.material_params(mat).lobes == {"COAT"}
+    assert material_reader.material_params(mat).lobes == {"COAT"}
     scene_builder.apply_material_preset(mat, lib["velvet"])
-    got = extract.material_params(mat)
+    got = material_reader.material_params(mat)
     assert got.lobes == {"SHEEN"} and got.coat_weight == 0.0 and got.sheen_roughness == pytest.approx(0.3)
     preset = P.load_scene_preset("car_paint")
     torus = next(o.material for o in preset.objects if o.name == "Paint torus")
@@ -242,7 +243,7 @@ def test_apply_material_preset_sets_explicit_values_and_replaces_the_surface():
                               shininess=120.0, specular_color=(0.5, 0.6, 0.7))
     scene_builder.apply_material_preset(mat, preset)
     assert out.inputs["Surface"].links[0].from_node.bl_idname == "ShaderNodeBsdfPrincipled"
-    got = extract.material_params(mat)
+    got = material_reader.material_params(mat)
     assert got.roughness == pytest.approx(0.3) and got.f0 == pytest.approx(0.05)
     assert got.shininess == pytest.approx(120.0)
     assert got.specular_color == pytest.approx((0.5, 0.6, 0.7))
@@ -345,7 +346,7 @@ def test_readme_example_builds(tmp_path):
     assert len(built.objects) == 3 and len(built.lights) == 1
     assert scene.shading_lab.model == "BLINN_PHONG"
     glossy_object = next(o for o in built.objects if o.name == "Glossy plastic")
-    glossy = extract.material_params(glossy_object.active_material)
+    glossy = material_reader.material_params(glossy_object.active_material)
     assert glossy.shininess == pytest.approx(120.0)
     assert glossy.base_color == pytest.approx((0.6, 0.05, 0.03))
 
@@ -379,7 +380,7 @@ scale = 2
     assert len(built.objects) == 2
     appended, imported = built.objects
     assert tuple(appended.matrix_world.translation) == pytest.approx((2.0, 0.0, 1.0))  # file's z kept
-    assert extract.material_params(appended.active_material).name == "gold"
+    assert material_reader.material_params(appended.active_material).name == "gold"
     assert tuple(imported.matrix_world.to_scale()) == pytest.approx((2.0, 2.0, 2.0), abs=1e-6)
     assert tuple(imported.matrix_world.translation) == pytest.approx((0.0, 0.0, 2.0), abs=1e-6)
     assert _triangles(built.objects) == 4

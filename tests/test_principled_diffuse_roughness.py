@@ -20,6 +20,7 @@ from test_cycles import _cycles
 from test_material_render import _mix_colors, _scene, _within
 from test_principled_lobes import FURNACE_ALL, _furnace_material, _graph, _lobe_against_cycles, _principled
 
+from addon.blender import materials
 from addon.plan import programs
 from addon.scene import snapshot as S
 
@@ -115,7 +116,6 @@ def test_roughness_0_is_lambert_and_the_lobe_only_where_used(tmp_path):
     program, Lambert; one linked to 0 (a node graph's lobe, Lambert per fragment) renders the same image
     to float rounding; a value above 0 or a link turns the lobe on (SL_CLOSURE_BSDFS with it), in the
     Principled set alone; the constant path's material rows hold what the graph's closure gives."""
-    from addon.blender import extract
 
     def linked_zero():
         mat, tree, bsdf, u, v = _graph("LinkedZero")
@@ -132,7 +132,7 @@ def test_roughness_0_is_lambert_and_the_lobe_only_where_used(tmp_path):
                               ("linked-zero", linked_zero, True),
                               ("constant", lambda: _constant(0.7, "Constant"), True)):
         scene, sphere = _scene(make)
-        params = extract.material_params(sphere.data.materials[0])
+        params = materials.material_params(sphere.data.materials[0])
         assert ("DIFFUSE_ROUGHNESS" in params.lobes) == lobed, (name, params.lobes)
         images[name] = scenes.render(scene, tmp_path / f"{name}.exr")[..., :3]
         principled = programs.Features("PBR", 1, frozenset({"SUN"}), S.Terms(principled=True),

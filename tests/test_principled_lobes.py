@@ -26,6 +26,7 @@ from test_cycles import _cycles
 from test_material_render import _against_cycles, _mix_colors, _scene, _tree, _uv, _within
 from test_twin import _compare as _twin_compare
 
+from addon.blender import materials
 from addon.plan import programs
 from addon.reference import shading, subsurface, transmission
 from addon.scene import presets as P
@@ -788,7 +789,6 @@ def test_white_furnace_world_with_every_lobe(tmp_path):
     world (radiance 1): the world's split sum under the lobes, the glass's refraction of the white
     world behind (the rasteriser's, through the sphere) and the translucent half reflect at most the
     world's radiance."""
-    from addon.blender import extract
 
     scene = scenes.reset(size=64)
     scene.render.resolution_x, scene.render.resolution_y = 32 * len(FURNACE), 32
@@ -804,7 +804,7 @@ def test_white_furnace_world_with_every_lobe(tmp_path):
         TW._sphere((-len(FURNACE) + 1.0 + 2.0 * i, 0.0, 0.0), mat, radius=0.95)
     # (the closure nodes' lobes: their albedo in test_closure_nodes, Lobe.furnace_elsewhere)
     drawn = set(S.LOBES) - {"SPECULAR_TINT"} - {k for k, c in LOBE_CHECKS.items() if c.furnace_elsewhere}
-    assert extract.material_params(bpy.data.materials["Furnace0"]).lobes == drawn
+    assert materials.material_params(bpy.data.materials["Furnace0"]).lobes == drawn
     image = scenes.render(scene, tmp_path / "furnace.exr")
     inside = image[..., 3] > 0.999
     top = float(image[..., :3][inside].max())

@@ -19,6 +19,7 @@ from glsl_harness import evaluate
 from test_cycles import _cycles
 from test_material_render import _scene, _tree
 
+from addon.blender import materials
 from addon.plan import programs
 from addon.reference import subsurface as SS
 from addon.scene import snapshot as S
@@ -377,13 +378,12 @@ def test_subsurface_against_the_random_walk(case, renders):
 def test_weight_zero_is_no_subsurface_exactly(tmp_path):
     """A Principled BSDF of Subsurface Weight 0 (its radius, scale and method set) renders exactly as
     one without them, in a program without SL_SUBSURFACE; a linked weight counts as on."""
-    from addon.blender import extract
     from addon.materials import surface
 
     scene, sphere = _scene(lambda: _subsurface_material("Zero", weight=0.0, scale=0.7,
                                                         method="RANDOM_WALK_SKIN"), lights=("POINT", "SUN"))
     zero = scenes.render(scene, tmp_path / "zero.exr")
-    params = extract.material_params(sphere.data.materials[0])
+    params = materials.material_params(sphere.data.materials[0])
     assert "SUBSURFACE" not in params.lobes
     sphere.data.materials[0] = _subsurface_material("Plain", weight=0.0, scale=0.05)
     plain = scenes.render(scene, tmp_path / "plain.exr")
@@ -394,7 +394,7 @@ def test_weight_zero_is_no_subsurface_exactly(tmp_path):
     value.outputs[0].default_value = 0.0
     bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
     tree.links.new(value.outputs[0], bsdf.inputs["Subsurface Weight"])
-    assert "SUBSURFACE" in extract.material_params(mat).lobes
+    assert "SUBSURFACE" in materials.material_params(mat).lobes
     assert surface.LOBE_INPUTS["SUBSURFACE"][0] == "Subsurface Weight"
 
 

@@ -23,6 +23,7 @@ import test_principled_lobes as PL
 from glsl_harness import evaluate
 from test_material_render import _against_cycles, _scene, _within
 
+from addon.blender import materials
 from addon.materials import convert
 from addon.plan import programs
 from addon.reference import thin_film as T
@@ -395,10 +396,8 @@ def test_gpu_matches_twin_in_programs(sizes, tmp_path):
     a 30 nm blend), the program its define."""
     from test_twin import _compare
 
-    from addon.blender import extract
-
     lobes = dict(thin_film_thickness=420.0, thin_film_ior=1.7, specular_tint=(1.0, 0.8, 0.6),
-                 **extract._thin_film_version())
+                 **materials._thin_film_version())
     for seed in range(2):
         _compare("PBR", 700 + seed + (100 if sizes else 0), tmp_path / str(seed), sizes=sizes, lobes=lobes)
 
@@ -447,7 +446,7 @@ def test_reader_picks_the_rule_of_its_blender():
     scene = scenes.reset(size=8)
     scenes.ortho_camera(scene)
     scene.shading_lab.term_set = "PRINCIPLED"
-    m = extract.material_params(_film("Read", 300.0, 1.33))
+    m = materials.material_params(_film("Read", 300.0, 1.33))
     assert m.thin_film_rule == RULE and m.lobes == {"THIN_FILM"}, m.thin_film_rule
     features = programs.Features.from_snapshot(extract.snapshot(bpy.context.evaluated_depsgraph_get(), 8, 8),
                                                "PBR", material=m)

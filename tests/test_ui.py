@@ -9,7 +9,7 @@ import bpy
 import pytest
 import scenes
 
-from addon.blender import ui
+from addon.blender import materials, ui
 from addon.frame import gpu_library
 
 
@@ -114,7 +114,7 @@ def test_material_panel_reports_the_node_graph_per_node():
     aov = tree.nodes.new("ShaderNodeOutputAOV")
     aov.aov_name = "mask"
     scenes.plane(scene, material=mat)
-    extract.GRAPH_REPORTS.pop(mat.name_full, None)
+    materials.GRAPH_REPORTS.pop(mat.name_full, None)
     before = _draw(ui.SHADINGLAB_PT_material, SimpleNamespace(material=mat)).labels()
     assert "Node graph: not read yet (render, or draw the viewport)" in before
     extract.snapshot(bpy.context.evaluated_depsgraph_get())
@@ -149,9 +149,8 @@ def test_material_preset_operator_applies_measured_values():
     assert "UNDO" in op.bl_options
     with bpy.context.temp_override(material=mat, object=obj):
         assert bpy.ops.shading_lab.apply_material_preset(preset="gold") == {"FINISHED"}
-    from addon.blender import extract
 
-    params = extract.material_params(mat)
+    params = materials.material_params(mat)
     assert params.base_color == pytest.approx(gold.base_color, abs=1e-6)
     assert params.metalness == pytest.approx(gold.metalness)
     assert params.roughness == pytest.approx(gold.roughness)
@@ -161,7 +160,6 @@ def test_material_preset_operator_applies_measured_values():
 
 
 def test_conversion_operators_with_undo():
-    from addon.blender import extract
     from addon.blender.operators import SHADINGLAB_OT_convert_roughness, SHADINGLAB_OT_principled_to_explicit
 
     assert "UNDO" in SHADINGLAB_OT_convert_roughness.bl_options
@@ -179,7 +177,7 @@ def test_conversion_operators_with_undo():
         assert bpy.ops.shading_lab.principled_to_explicit() == {"FINISHED"}
     assert a.shading_lab.use_base_color and tuple(a.shading_lab.base_color) == pytest.approx((0.2, 0.3, 0.4))
     node.inputs["Base Color"].default_value = (1.0, 0.0, 0.0, 1.0)  # the explicit copy now wins
-    assert extract.material_params(a).base_color == pytest.approx((0.2, 0.3, 0.4))
+    assert materials.material_params(a).base_color == pytest.approx((0.2, 0.3, 0.4))
     with bpy.context.temp_override(material=a, object=obj_a):
         bpy.ops.shading_lab.convert_roughness(direction="TO_SHININESS")
     assert a.shading_lab.shininess == pytest.approx(30.0)  # r 0.5: 2 / 0.0625 - 2

@@ -224,7 +224,7 @@ def read_material(material, target: str = TARGET,
     """A material's tree and its node groups' trees (by ``_group_key``), nested ones too; None for
     a material without a node tree. The images its Image Texture nodes read (in groups too) are
     added to ``images`` (``images.image_key`` -> ``bpy.types.Image``), as
-    ``extract.material_params`` adds its maps'."""
+    ``materials.material_params`` adds its maps'."""
     tree = getattr(material, "node_tree", None)
     if tree is None:
         return None

@@ -95,7 +95,7 @@ class _MaterialConversion:
     scope: _SCOPE
 
     def execute(self, context):
-        from .extract import material_params
+        from .materials import material_params
 
         materials = _target_materials(context, self.scope)
         if not materials:

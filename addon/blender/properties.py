@@ -16,7 +16,7 @@ from bpy.props import (
 
 from ..reference.tonemap import TONE_MAPPER_CHOICES
 from ..scene.snapshot import MODEL_CHOICES, enum_items
-from . import extract, images
+from . import extract, geometry, images
 
 MODEL_ITEMS = enum_items(MODEL_CHOICES)
 
@@ -351,7 +351,7 @@ def _forget_all_images(*_args):
     """Main-thread handler: a file load starts with no cached pixels, nor meshes' geometry, nor
     fallback bakes."""
     images.IMAGES.clear()
-    extract.GEOMETRY_MEMO.clear()
+    geometry.GEOMETRY_MEMO.clear()
     extract.FALLBACK_READS.clear()
     extract.bake.forget()
 

@@ -290,7 +290,7 @@ class SHADINGLAB_PT_material(ShadingLabPanel, bpy.types.Panel):
 def _graph_report(layout, material, obj=None) -> None:
     """What the last render or viewport frame compiled of the material's node graph, per node:
     compiled, baked (on ``obj``: each bake's resolution and measured error) or not read."""
-    from .extract import GRAPH_REPORTS
+    from .materials import GRAPH_REPORTS
 
     report = GRAPH_REPORTS.get(material.name_full)
     box = layout.box()

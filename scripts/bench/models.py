@@ -26,7 +26,7 @@ from pathlib import Path
 
 import render as cli
 
-from addon.blender.extract import MEMO_CORNERS
+from addon.blender.geometry import MEMO_CORNERS
 from addon.scene.snapshot import LIGHT_KINDS, TERM_CHOICES
 
 from .harness import engines, page, plots, scenes, shipped_presets, size, standard, timing
@@ -310,7 +310,7 @@ def report(args, results, lights, tris, configs, peers) -> list[str]:
              f"extraction + draw + read-back (the read-back fences the GPU work) + handing pixels to "
              f"Blender; *wall* is `bpy.ops.render.render()` as a whole (a still scene rendered again: "
              f"its meshes of up to {MEMO_CORNERS:,} corners come from the geometry memo, "
-             f"`extract.GEOMETRY_MEMO`, as at any re-render). Errors are against Cycles "
+             f"`blender.geometry.GEOMETRY_MEMO`, as at any re-render). Errors are against Cycles "
              f"(direct light only, world on and occluded, lights as the file has them, shadows included, "
              f"pixel centres, "
              f"{args.reference_samples} spp, "

@@ -78,7 +78,8 @@ def run(ctx) -> None:
         "warm-up, round-robin, order rotated; a render after the other engine's follows an untimed one of "
         f"its own), errors against Cycles at {args.reference_samples} spp. *Met*: EEVEE 1 spp takes >= "
         f"{TARGET:.0f}x our Principled set's time and has the higher FLIP. Each timed render renders a "
-        "still scene again: its meshes come from the geometry memo (`extract.GEOMETRY_MEMO`) as at any "
+        "still scene again: its meshes come from the geometry memo (`blender.geometry.GEOMETRY_MEMO`) "
+        "as at any "
         "re-render or a frame where they do not deform; nothing else is kept between renders "
         "(Persistent Data off: the shadow maps are drawn each time).", "",
         *page.table(["preset", "lights", "Principled ms", "default PBR ms", "EEVEE 1 spp ms",
