@@ -29,9 +29,11 @@ MEASURED = {"noise": ("COLOR", 0.0), "ranged": ("VALUE", 1.4e-6), "ramp": ("COLO
 #: Tiling's segments equal; the rest an ulp or a few of the value (Cycles' CPU kernel fuses some
 #: products, numpy does not; Gabor's and the HSV modes' float32 cos, sin, atan2; a division's
 #: rounding: Dodge's 1.8e-6 at a value near 1, Divide's 7.7e-6 at a value of 539). Blender 4.5
-#: has no Radial Tiling: its cases are not made.
+#: has no Radial Tiling, 4.2 no Gabor (nor Vector Math's Power and Sign): their cases are not
+#: made. 4.2's Magic divides where 4.5 and 5.0 multiply by the reciprocal, as the evaluator (an ulp).
+RECIPROCAL = bpy.app.version >= (4, 5, 0)
 MEASURED.update({
-    "magic": ("COLOR", 0.0), "magic_fac": ("VALUE", 0.0), "brick": ("COLOR", 0.0),
+    "magic": ("COLOR", 0.0), "magic_fac": ("VALUE", 0.0 if RECIPROCAL else 1.2e-7), "brick": ("COLOR", 0.0),
     "brick_fac": ("VALUE", 0.0), "gabor_2d": ("VALUE", 9.0e-8), "gabor_3d_phase": ("VALUE", 5.4e-7),
     "gabor_3d_intensity": ("VALUE", 1.8e-7), "radial_coordinates": ("COLOR", 6.0e-8),
     "radial_id": ("VALUE", 0.0), "radial_width": ("VALUE", 0.0), "radial_rotation": ("VALUE", 0.0),
@@ -157,14 +159,15 @@ def _more(scene, tree, coord, noise):
                   squash_frequency=2).node
     _aov(scene, tree, "brick", brick.outputs["Color"], "COLOR")
     _aov(scene, tree, "brick_fac", brick.outputs["Fac"])
-    plane = _node(tree, "ShaderNodeTexGabor", {"Scale": 4.0, "Anisotropy": 0.5, "Orientation 2D": 0.6},
-                  "Value")
-    _aov(scene, tree, "gabor_2d", plane)
-    gabor = _node(tree, "ShaderNodeTexGabor", {"Vector": coord.outputs["Object"], "Scale": 3.0,
-                                               "Orientation 3D": (0.3, 0.5, 0.8)}, "Phase",
-                  gabor_type="3D").node
-    _aov(scene, tree, "gabor_3d_phase", gabor.outputs["Phase"])
-    _aov(scene, tree, "gabor_3d_intensity", gabor.outputs["Intensity"])
+    if hasattr(bpy.types, "ShaderNodeTexGabor"):  # (Blender 4.3 on)
+        plane = _node(tree, "ShaderNodeTexGabor", {"Scale": 4.0, "Anisotropy": 0.5, "Orientation 2D": 0.6},
+                      "Value")
+        _aov(scene, tree, "gabor_2d", plane)
+        gabor = _node(tree, "ShaderNodeTexGabor", {"Vector": coord.outputs["Object"], "Scale": 3.0,
+                                                   "Orientation 3D": (0.3, 0.5, 0.8)}, "Phase",
+                      gabor_type="3D").node
+        _aov(scene, tree, "gabor_3d_phase", gabor.outputs["Phase"])
+        _aov(scene, tree, "gabor_3d_intensity", gabor.outputs["Intensity"])
     if hasattr(bpy.types, "ShaderNodeRadialTiling"):  # (Blender 5)
         centred = _node(tree, "ShaderNodeMapping", {"Vector": coord.outputs["UV"], "Scale": (2.0, 2.0, 1.0),
                                                     "Location": (-1.0, -1.0, 0.0)}, "Vector")
@@ -236,7 +239,8 @@ def _more(scene, tree, coord, noise):
                                                                                 "Value_002": 0.7}, "Value",
                                                       operation=op))
     vector_c = _combine(tree, fac, 0.5, -0.3)
-    for op in codegen.VECTOR_MATH_OPERATIONS:
+    known = bpy.types.ShaderNodeVectorMath.bl_rna.properties["operation"].enum_items.keys()
+    for op in (op for op in codegen.VECTOR_MATH_OPERATIONS if op in known):  # (4.2: no Power, Sign)
         value = op in codegen.VECTOR_MATH_VALUES
         inputs = {"Vector": color_a, "Vector_001": color_b, "Vector_002": vector_c, "Scale": fac}
         out = _node(tree, "ShaderNodeVectorMath", inputs, "Value" if value else "Vector", operation=op)
