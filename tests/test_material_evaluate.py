@@ -44,7 +44,10 @@ MEASURED.update({
     "clamp_range": ("VALUE", 6.0e-8), "bw": ("VALUE", 9.5e-7), "separate_hsv": ("VALUE", 1.2e-7),
     "separate_hsl": ("VALUE", 7.2e-7), "combine_hsv": ("COLOR", 6.0e-8), "combine_hsl": ("COLOR", 1.8e-7),
     "rotate_axis": ("COLOR", 1.2e-7), "rotate_euler_inverse": ("COLOR", 6.0e-8),
-    "rotate_x": ("COLOR", 1.4e-7), "normal_dot": ("VALUE", 0.0),
+    "rotate_x": ("COLOR", 1.4e-7), "normal_dot": ("VALUE", 0.0), "range_stepped": ("VALUE", 0.0),
+    "range_smoothstep": ("VALUE", 1.8e-7), "range_smootherstep": ("VALUE", 1.3e-6),
+    "range_vector": ("COLOR", 0.0), "range_vector_smooth": ("COLOR", 0.0),
+    "mapping_normal": ("COLOR", 1.8e-7),
 })
 #: Every colour blend mode of the Mix node (its factor clamped, the default)
 BLEND_MODES = ("DARKEN", "MULTIPLY", "BURN", "LIGHTEN", "SCREEN", "DODGE", "ADD", "OVERLAY", "SOFT_LIGHT",
@@ -226,6 +229,22 @@ def _more(scene, tree, coord, noise):
         "rotate_x": ("ShaderNodeVectorRotate", {"Vector": color_b, "Angle": fac}, "Vector",
                      {"rotation_type": "X_AXIS"}),
         "normal_dot": ("ShaderNodeNormal", {"Normal": color_a}, "Dot", {}),
+        "range_stepped": ("ShaderNodeMapRange", {"Value": fac, "From Min": 0.1, "From Max": 0.9,
+                                                 "To Min": 0.2, "To Max": 0.8, "Steps": 4.0}, "Result",
+                          {"interpolation_type": "STEPPED"}),
+        "range_smoothstep": ("ShaderNodeMapRange", {"Value": fac, "From Min": 0.9, "From Max": 0.1}, "Result",
+                             {"interpolation_type": "SMOOTHSTEP"}),
+        "range_smootherstep": ("ShaderNodeMapRange", {"Value": fac, "From Min": 0.1, "From Max": 0.9,
+                                                      "To Min": -0.5}, "Result",
+                               {"interpolation_type": "SMOOTHERSTEP"}),
+        "range_vector": ("ShaderNodeMapRange", {"Vector": color_a, "From_Min_FLOAT3": (0.1, -0.2, 0.0),
+                                                "To_Max_FLOAT3": (2.0, 0.5, 1.0)}, "Vector",
+                         {"data_type": "FLOAT_VECTOR", "clamp": True}),
+        "range_vector_smooth": ("ShaderNodeMapRange", {"Vector": color_a}, "Vector",
+                                {"data_type": "FLOAT_VECTOR", "interpolation_type": "SMOOTHSTEP"}),
+        "mapping_normal": ("ShaderNodeMapping", {"Vector": color_a, "Rotation": (0.3, -0.5, 0.9),
+                                                 "Scale": (2.0, 0.5, 1.5)}, "Vector",
+                           {"vector_type": "NORMAL"}),
     }
     for name, (kind, inputs, output, props) in converters.items():
         _aov(scene, tree, name, _node(tree, kind, inputs, output, **props), MEASURED[name][0])
@@ -292,8 +311,8 @@ def test_evaluated_graph_matches_cycles(results, name):
 
 def test_what_cannot_be_evaluated_is_said():
     """A graph reading a node the evaluator has not (a Blackbody fed by a Noise Texture here), or
-    none that varies per point, is not evaluable: its input keeps its socket's value in the
-    prediction."""
+    none that varies per point, is not evaluable, and one reading an output it has not (Texture
+    Coordinate's Normal) has no values: its input keeps its socket's value in the prediction."""
     scene, mat, tree, _, _ = _plane_scene()
     noise = tree.nodes.new("ShaderNodeTexNoise")
     kelvin = _node(tree, "ShaderNodeMapRange", {"Value": noise.outputs["Fac"], "To Min": 1000.0,
@@ -310,6 +329,14 @@ def test_what_cannot_be_evaluated_is_said():
     assert evaluate.evaluable(flat, sources["ranged"])  # (what feeds the Blackbody is)
     assert not evaluate.evaluable(flat, sources["blackbody"])
     assert not evaluate.evaluable(flat, sources["value"])
+    # a texture at Texture Coordinate's Normal (not among the points' coordinates): no values
+    coord = tree.nodes.new("ShaderNodeTexCoord")
+    bent = _node(tree, "ShaderNodeTexNoise", {"Vector": coord.outputs["Normal"]}, "Fac")
+    _aov(scene, tree, "bent", bent)
+    flat = graph.flatten(*reader.read_material(mat, "ALL"))
+    source = next(n for n in flat.nodes.values() if n.props.get("aov_name") == "bent").inputs["Value"].source
+    points = evaluate.Points(*(np.zeros((4, 3), np.float32) for _ in range(3)))
+    assert evaluate.evaluate(flat, source, points) is None
 
 
 def test_auto_reads_the_values_of_newly_evaluable_nodes():

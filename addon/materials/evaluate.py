@@ -84,6 +84,10 @@ def _mapping(node, inputs, points):
         return {"Vector": _safe_divide(np.einsum("nji,nj->ni", rows, v - inputs["Location"]), scale)}
     if kind == "VECTOR":
         return {"Vector": np.einsum("nij,nj->ni", rows, v * scale)}
+    if kind == "NORMAL":  # (node_mapping_normal: the inverse scale, rotated, made unit)
+        n = np.einsum("nij,nj->ni", rows, _safe_divide(v, scale))
+        length = np.linalg.norm(n, axis=1, keepdims=True)
+        return {"Vector": np.where(length != 0, n / np.where(length != 0, length, F32(1)), n).astype(F32)}
     return None
 
 
@@ -227,15 +231,58 @@ def _math(node, inputs, points):
     return {"Value": np.clip(value, F32(0), F32(1)) if node.props.get("use_clamp") else value}
 
 
+def _smoothstep(e0, e1, x):
+    """node_converter.glsl's node_smoothstep (Cycles' smoothstep): 0 below e0, 1 from e1 on."""
+    t = (x - e0) / np.where(e1 != e0, e1 - e0, F32(1))
+    return np.where(x < e0, F32(0), np.where(x >= e1, F32(1), (F32(3) - F32(2) * t) * (t * t)))
+
+
+def _smootherstep(e0, e1, x):
+    """node_smootherstep (Cycles' smootherstep): the factor clamped to [0, 1], 0 where e0 = e1."""
+    t = np.clip(_safe_divide(x - e0, e1 - e0), F32(0), F32(1))
+    return t * t * t * (t * (t * F32(6) - F32(15)) + F32(10))
+
+
+def _stepped(f, steps):
+    """Map Range's Stepped factor: floor(f (steps + 1)) / steps, 0 without steps."""
+    return np.where(steps > 0, np.floor(f * (steps + F32(1))) / np.where(steps > 0, steps, F32(1)), F32(0))
+
+
+def _clamp_range(value, lo, hi):
+    """clamp_range: to [lo, hi] in either order."""
+    return np.clip(value, np.minimum(lo, hi), np.maximum(lo, hi))
+
+
 def _map_range(node, inputs, points):
-    props = node.props
-    if props.get("data_type", "FLOAT") != "FLOAT" or props.get("interpolation_type", "LINEAR") != "LINEAR":
+    """Map Range (glsl/node_converter.glsl's map_range_*, map_range_vector: Cycles' svm_node_map_range,
+    svm_node_vector_map_range): Linear, Stepped, Smooth Step, Smoother Step on a float (0 where the
+    source range is empty) or per component of a vector; Clamp after a linear or stepped mapping."""
+    kind = node.props.get("interpolation_type", "LINEAR")
+    if kind not in ("LINEAR", "STEPPED", "SMOOTHSTEP", "SMOOTHERSTEP"):
         return None
-    lo, hi, to_lo, to_hi = (inputs[s] for s in ("From Min", "From Max", "To Min", "To Max"))
-    value = to_lo + _safe_divide(inputs["Value"] - lo, hi - lo) * (to_hi - to_lo)
-    if node.props.get("clamp"):  # (in either order of the target range, as Cycles' clamp_range)
-        value = np.clip(value, np.minimum(to_lo, to_hi), np.maximum(to_lo, to_hi))
-    return {"Result": value.astype(F32)}
+    clamp = node.props.get("clamp") and kind in ("LINEAR", "STEPPED")
+    if node.props.get("data_type", "FLOAT") == "FLOAT_VECTOR":
+        names = ("Vector", "From_Min_FLOAT3", "From_Max_FLOAT3", "To_Min_FLOAT3", "To_Max_FLOAT3")
+        x, lo, hi, to_lo, to_hi = (inputs[s] for s in names)
+        f = _safe_divide(x - lo, hi - lo)
+        if kind == "STEPPED":
+            f = _stepped(f, inputs.get("Steps_FLOAT3", np.zeros_like(x)))
+        elif kind == "SMOOTHSTEP":
+            f = np.clip(f, F32(0), F32(1))
+            f = (F32(3) - F32(2) * f) * (f * f)
+        elif kind == "SMOOTHERSTEP":
+            f = _smootherstep(F32(0), F32(1), f)
+        value = to_lo + f * (to_hi - to_lo)
+        return {"Vector": (_clamp_range(value, to_lo, to_hi) if clamp else value).astype(F32)}
+    x, lo, hi, to_lo, to_hi = (inputs[s] for s in ("Value", "From Min", "From Max", "To Min", "To Max"))
+    if kind in ("LINEAR", "STEPPED"):
+        f = _safe_divide(x - lo, hi - lo)
+        f = _stepped(f, inputs.get("Steps", np.zeros_like(x))) if kind == "STEPPED" else f
+    else:
+        step = _smoothstep if kind == "SMOOTHSTEP" else _smootherstep
+        f = np.where(lo > hi, F32(1) - step(hi, lo, x), step(lo, hi, x))
+    value = np.where(hi != lo, to_lo + f * (to_hi - to_lo), F32(0))
+    return {"Result": (_clamp_range(value, to_lo, to_hi) if clamp else value).astype(F32)}
 
 
 def _mix_node(node, inputs, points):
@@ -668,7 +715,7 @@ def evaluable(flat: FlatGraph, source: Ref) -> bool:
 def evaluate(flat: FlatGraph, source: Ref, points: Points) -> np.ndarray | None:
     """``source``'s value at ``points``: (N,) for a float, (N, 3) a vector, (N, 4) a colour; None
     where a node cannot be evaluated with its settings (a setting that varies per point, a mode not
-    here)."""
+    here) or reads an output not evaluated here (Texture Coordinate's Normal ...)."""
     n = len(points)
     values: dict[tuple[str, str], np.ndarray] = {}
     for name in upstream(flat, source):
@@ -679,7 +726,9 @@ def evaluate(flat: FlatGraph, source: Ref, points: Points) -> np.ndarray | None:
                 inputs[socket] = _constant(spec.source.value, spec.type, n)
             else:
                 found = values.get((spec.source.node, spec.source.socket))
-                inputs[socket] = found if found is not None else _constant(spec.default, spec.type, n)
+                if found is None:  # an output not evaluated here (Texture Coordinate's Normal ...)
+                    return None
+                inputs[socket] = found
         with np.errstate(all="ignore"):  # (a twin's float32 arithmetic as the GPU's: Inf and NaN pass)
             out = LUMA_NODES[node.kind](node, inputs, points, flat.luma) if node.kind in LUMA_NODES else \
                 NODES[node.kind](node, inputs, points)
