@@ -29,7 +29,13 @@ vec3 shade_polygon_light(Surface s, LightPolygon poly, vec3 L, float form_factor
   vec3 c = vec3(0.0);
   if (NoL > 0.0) {
     float clipped = ltc_horizon_clip(min(form_factor, 1.0), 1.0 + NoL);
-    c = shade_direct(s, l, L * (PI * clipped / NoL), factors * vec4(1.0, 0.0, 1.0, 1.0));
+    Surface base = s;
+#  ifdef SL_DIFFUSE_ROUGHNESS
+    if (factors.x > 0.0) { /* none for a coat shaded as a surface of its own (its diffuse factor 0) */
+      base.bsdfs.on_polygon = oren_nayar_polygon(s, poly); /* its lobe over the light (closures.glsl) */
+    }
+#  endif
+    c = shade_direct(base, l, L * (PI * clipped / NoL), factors * vec4(1.0, 0.0, 1.0, 1.0));
   }
   float density;
 #  ifdef SL_SHEEN

@@ -776,7 +776,8 @@ def stand_in_renders(request, tmp_path_factory):
 #: the light (taken at its direction) and the world read about each lobe (the irradiance about n): glossy
 #: Beckmann 36.1 / 29.5 / 17.6 %, glossy Ashikhmin-Shirley 36.5 / 31.1 / 16.6 %, metallic F82 Beckmann 37.0 /
 #: 30.8 / 17.6 %, sheen Ashikhmin 4.9 / 6.1 / 30.2 %, toon diffuse 2.8 / 3.8 / 21.6 %, toon glossy 6.7 / 8.4 /
-#: 26.5 %, Oren-Nayar 0.5 / 0.7 / 6.2 %.
+#: 26.5 %, Oren-Nayar 0.5 / 0.7 / 6.2 % (under the area light 0.50 % before its lobe's t and n.l were averaged
+#: over the light's points).
 STAND_IN_MEASURED = {
     "glossy GGX": (0.0249, 0.0472, 0.0988),
     "glossy Beckmann": (0.0581, 0.0649, 0.149),
@@ -788,7 +789,7 @@ STAND_IN_MEASURED = {
     "sheen Ashikhmin": (0.0094, 0.0154, 0.125),
     "toon diffuse": (0.0054, 0.0111, 0.104),
     "toon glossy": (0.008, 0.0172, 0.147),
-    "Oren-Nayar": (0.005, 0.0071, 0.0342),
+    "Oren-Nayar": (0.0020, 0.0071, 0.0342),
     "Lambert": (0.0018, 0.0036, 0.0212),
 }
 if bpy.app.version < (4, 3, 0):  # Blender 4.2
@@ -948,6 +949,101 @@ def test_beckmann_ratio_at_the_cosines_mean_direction():
     for roughness, (mean_l, _, mean_m, _) in errors.items():
         assert mean_m < 0.75 * mean_l, (roughness, mean_l, mean_m)
     assert errors[0.15][2] < 0.14 and errors[0.3][2] < 0.12, errors  # measured 0.110, 0.091
+
+
+def _oren_nayar_over_square(cos_v, direction, half, count=120):
+    """Oren-Nayar (roughness 1, albedo 0.8, Blender 5.0's rule) over a square light facing the point
+    (``_square_light``) seen at ``cos_v``: (exact: its f (n.l) by fine quadrature, the estimate from the
+    polygon's mean factors (oren_nayar_polygon) times the exact clipped irradiance, the same at the
+    light's irradiance-weighted direction), the first channel; None where no part of it is above the
+    horizon."""
+    v = _view(cos_v)
+    corners, dirs, dw = _square_light(direction, half, count)
+    nl = dirs[:, 2]
+    lit = nl > 0.0
+    if not lit.any():
+        return None
+    f = C.oren_nayar_eval(1.0, 0.8, cos_v, nl, dirs @ v)[:, 0]
+    exact = float((f * dw).sum())
+    irradiance = float((np.maximum(nl, 0.0) * dw).sum())
+    w = np.asarray(direction, np.float64) / np.linalg.norm(direction)
+    a, b = corners[1] - corners[0], corners[3] - corners[0]
+    mean = C.oren_nayar_polygon(np.array([0.0, 0.0, 1.0]), v, w, 0.5 * a, 0.5 * b, 4)
+    polygon = float(C.oren_nayar_f(1.0, 0.8, cos_v, mean[0], mean[1])[0]) * irradiance
+    l = (dirs * dw[:, None]).sum(0)  # the vector form factor's direction (E_Area's l)
+    l /= np.linalg.norm(l)
+    at_l = 0.0
+    if l[2] > 0.0:  # shade_polygon_light: no diffuse light below the horizon
+        t = C.oren_nayar_t(l[2], cos_v, l @ v)
+        at_l = float(C.oren_nayar_f(1.0, 0.8, cos_v, t, l[2])[0]) * irradiance
+    return exact, polygon, at_l
+
+
+def test_oren_nayar_over_a_polygon_light():
+    """The Oren-Nayar base under a large square light (half-angles 0.15-0.45 rad: a 0.6 m light 0.6 m away
+    is 0.46) against fine quadrature of its f (n.l), n.v 0.05-0.95, the light from the view's side, across,
+    behind and crossing the horizon: the polygon's mean t and n.l over 16 points (closures.glsl's
+    oren_nayar_polygon) times the exact clipped irradiance, against the factors at the light's direction;
+    relative to the integral where the light's clipped cosine integral is at least 5 % of its own. Then
+    the GPU against the twin over squares and ellipses."""
+    err_polygon, err_l, grazing_polygon, grazing_l = [], [], [], []
+    for cos_v in (0.05, 0.1, 0.2, 0.4, 0.7, 0.95):
+        for half in (0.15, 0.3, 0.45):
+            for elevation in (0.0, 0.15, 0.3, 0.6, 1.0, 1.3):
+                for azimuth in (0.0, 0.8, 1.6, 2.4, 3.14):
+                    c = math.cos(elevation)
+                    d = np.array([c * math.cos(azimuth), c * math.sin(azimuth), math.sin(elevation)])
+                    out = _oren_nayar_over_square(cos_v, d, half)
+                    if out is None or out[0] <= 0.0:
+                        continue
+                    exact, polygon, at_l = out
+                    e_p, e_l = abs(polygon - exact) / exact, abs(at_l - exact) / exact
+                    err_polygon.append(e_p)
+                    err_l.append(e_l)
+                    if cos_v <= 0.2:
+                        grazing_polygon.append(e_p)
+                        grazing_l.append(e_l)
+    print(f"Oren-Nayar over square lights ({len(err_l)} cases): at the light's direction mean "
+          f"{np.mean(err_l):.2%}, worst {np.max(err_l):.2%}; over 16 points mean {np.mean(err_polygon):.2%}, "
+          f"worst {np.max(err_polygon):.2%}; n.v <= 0.2: {np.mean(grazing_l):.2%} / {np.max(grazing_l):.2%} "
+          f"against {np.mean(grazing_polygon):.2%} / {np.max(grazing_polygon):.2%}")
+    assert np.mean(err_l) >= 5.0 * np.mean(err_polygon), (np.mean(err_l), np.mean(err_polygon))
+    assert np.mean(err_polygon) < MEAN_POLYGON and np.max(err_polygon) < WORST_POLYGON, err_polygon
+    # the GPU's oren_nayar_polygon against the twin: random points, views and lights (squares, ellipses)
+    rng = np.random.default_rng(5)
+    count = 256
+    n = rng.normal(size=(count, 3))
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    v = rng.normal(size=(count, 3)) * 0.5 + n
+    v /= np.linalg.norm(v, axis=-1, keepdims=True)
+    to_centre = rng.normal(size=(count, 3)) + n
+    x_half = rng.normal(size=(count, 3)) * 0.4
+    y_half = np.cross(to_centre, x_half)
+    y_half *= (rng.uniform(0.1, 0.6, count) / np.linalg.norm(y_half, axis=-1))[:, None]
+    rows = {name: np.concatenate([x, np.zeros((count, 1))], -1)
+            for name, x in zip("abcde", (n, v, to_centre, x_half, y_half))}
+    terms = S.Terms(principled=True)
+    features = programs.Features("PBR", 1, frozenset({"AREA"}), terms, area_ellipse=True,
+                                 lobes=frozenset({"DIFFUSE_ROUGHNESS"}))
+    defines = {**dict(features.defines()), "SL_OREN_NAYAR_FUJII_MULTISCATTER": "1"}
+    worst = 0.0
+    for sides in (4, 16):
+        body = ("Surface s; s.n = a.xyz; s.v = b.xyz; s.bsdfs.oren_nayar = true;"
+                "LightPolygon poly; poly.to_centre = c.xyz; poly.x_half = d.xyz; poly.y_half = e.xyz;"
+                f"poly.sides = {sides};"
+                "result = vec4(oren_nayar_polygon(s, poly), 0.0);")
+        gpu = evaluate(body, rows, defines, terms=terms)[:, :3].astype(np.float64)
+        twin = C.oren_nayar_polygon(n, v, to_centre, x_half, y_half, sides)
+        assert np.isfinite(gpu).all() and (gpu[:, 2] == twin[:, 2]).mean() > 0.99
+        both = (gpu[:, 2] > 0.0) & (twin[:, 2] > 0.0)
+        worst = max(worst, float(np.abs(gpu[both] - twin[both]).max()))
+    print(f"oren_nayar_polygon, GPU against twin: {worst:.2e}")
+    assert worst < 1e-4, worst
+
+
+#: test_oren_nayar_over_a_polygon_light's bounds: 3x the measured mean and worst error over 16 points
+#: (0.61 %, 9.6 %; at the light's direction 17.7 % and 196 %, 22.6 % mean where n.v <= 0.2)
+MEAN_POLYGON, WORST_POLYGON = 3.0 * 0.0061, 3.0 * 0.096
 
 
 def _square_light(direction, half, count=200):
