@@ -155,42 +155,6 @@ ClosureBsdfLobes closure_bsdfs_at(vec3 n, vec3 v, vec3 base_color, MaterialData 
   return b;
 }
 
-#  if defined(SL_LTC) && (defined(SL_VELVET) || defined(SL_TOON) || defined(SL_DIFFUSE_ROUGHNESS))
-/* Point i (0 .. 15) of the quadrature over a light's polygon (lights.glsl's LightPolygon seen from the
- * point: an area light's rectangle or ellipse, a sphere light's disc; `normal` its unit normal): 4 x 4
- * midpoints of a rectangle, 16 points of Vogel's spiral over an ellipse or disc. Its unit direction from
- * the shaded point, and (w) the solid angle it stands for up to the polygon's area over 16: the
- * emitter's cosine over the squared distance; 0 where the point lies on the light (no direction). */
-vec3 polygon_point(LightPolygon poly, vec3 normal, int i, out float w)
-{
-  vec2 uv;
-  if (poly.sides == 4) {
-    uv = vec2(float(i % 4), float(i / 4)) * 0.5 - 0.75;
-  }
-  else {
-    float r = sqrt((float(i) + 0.5) / 16.0);
-    float phi = 2.3999632 * float(i); /* the golden angle */
-    uv = r * vec2(cos(phi), sin(phi));
-  }
-  vec3 d = poly.to_centre + poly.x_half * uv.x + poly.y_half * uv.y;
-  float d2 = dot(d, d);
-  if (d2 <= 0.0) {
-    w = 0.0;
-    return vec3(0.0, 0.0, 1.0);
-  }
-  vec3 l = d * inversesqrt(d2);
-  w = abs(dot(l, normal)) / d2;
-  return l;
-}
-
-/* The unit normal of a light's polygon (polygon_point's `normal`). */
-vec3 polygon_normal(LightPolygon poly)
-{
-  vec3 normal = cross(poly.x_half, poly.y_half);
-  return normal * inversesqrt(max(dot(normal, normal), 1e-38)); /* a light of no extent: any weight */
-}
-#  endif
-
 #  ifdef SL_DIFFUSE_ROUGHNESS
 /* Oren-Nayar's t towards a light at n.l = NoL, l.v = LoV (bsdf_oren_nayar_get_intensity): l.v - n.l n.v
  * over max(n.l, n.v) where positive. */
@@ -529,33 +493,52 @@ float glossy_albedo(Surface s, float E_ggx, float NoV, float roughness)
 }
 
 #    ifdef SL_LTC
-/* Where the ratio estimator (ltc.glsl's ltc_lobe_integral) takes the specular lobe towards a polygon
- * light where the Glossy BSDFs' Beckmann or Ashikhmin-Shirley lobes hold a share: the linearly
- * transformed cosine's own mean direction over the light, M F (F its vector form factor in the cosine's
- * space, mapped back by M = adj(M^-1), a positive multiple: det M^-1 > 0), and its density there, in
- * place of the light's irradiance-weighted direction `l` (GGX's: its long tails keep the ratio at `l`
- * well conditioned). A Gaussian peak narrower than the light vanishes towards the light's centre while
- * the light still holds half of it (the estimate fell to E I^2, half of E I). Against quadrature of
- * Beckmann's f (n.l) over square lights of half-angles 0.03-0.3 rad at 0-2.5 half-angles from the mirror
- * direction (n.v 0.3-0.95; relative to the larger of the integral and 1 % of the albedo;
- * tests/test_closure_nodes.py): mean / worst error 0.18 / 0.79 at roughness 0.15, 0.13 / 0.76 at 0.3
- * at `l`; 0.11 / 0.41, 0.095 / 0.22 at M F (alike from 0.5 up; Ashikhmin-Shirley's alike; Beckmann's own
- * fitted cosine, addon/reference/ltc.py's ltc_BECKMANN, no better). */
-void glossy_ltc_direction(Surface s, LightPolygon poly, float integral, inout vec3 l, inout float density)
+float pbr_lobe(Surface s, vec3 l); /* model_pbr.glsl */
+
+/* The ratio the estimator (ltc.glsl's ltc_lobe_integral) takes, f (n.l) over the linearly transformed
+ * cosine's density D, where the Glossy BSDFs' Beckmann or Ashikhmin-Shirley lobes hold a share of the
+ * specular lobe (false elsewhere: GGX's own ratio at the light's irradiance-weighted direction, its long
+ * tails keeping it well conditioned there): the D-weighted mean of f / D over the light, sum f w / sum D w
+ * over polygon_point's 16 points (w the solid angle each stands for) and the cosine's own mean direction
+ * over the light, M F (F its vector form factor in the cosine's space, mapped back by M = adj(M^-1), a
+ * positive multiple: det M^-1 > 0), weighted as one point more -- where the lobe is narrower than the
+ * points' spacing, its peak: a Gaussian peak narrower than the light vanishes towards the light's centre
+ * while the light still holds half of it. Out: the two sums, whose ratio ltc_lobe_integral takes. Against
+ * quadrature of Beckmann's f (n.l) over square lights of half-angles 0.03-0.3 rad at 0-2.5 half-angles
+ * from the mirror direction (n.v 0.3-0.95; relative to the larger of the integral and 1 % of the albedo;
+ * tests/test_closure_nodes.py), mean / worst error at roughness 0.15, 0.3, 0.5: at the light's direction
+ * 0.18 / 0.79, 0.13 / 0.76 (0.15, 0.3); at M F alone 0.11 / 0.41, 0.095 / 0.22, 0.059 / 0.26; over the
+ * points and M F 0.076 / 0.47, 0.048 / 0.23, 0.025 / 0.16 (Beckmann's own fitted cosine, addon/reference/
+ * ltc.py's ltc_BECKMANN, within 0.01 of it: not worth its table). */
+bool glossy_ltc_ratio(Surface s, LightPolygon poly, float integral, out float lobe, out float density)
 {
+  lobe = 0.0;
+  density = 0.0;
   if (s.glossy.z + s.glossy.w <= 0.0) {
-    return;
+    return false;
   }
   vec4 m = s.ltc.m;
   mat3 to_cosine = transpose(mat3(m.x * s.ltc.x_axis + m.y * s.n, s.ltc.y_axis, m.z * s.ltc.x_axis + m.w * s.n));
   vec3 F = polygon_form_factor(poly, to_cosine) * INV_PI;
   float len = length(F);
   if (len <= 0.0) {
-    return; /* nothing of the light in the cosine's space: the lobe's integral is 0 too */
+    return false; /* nothing of the light in the cosine's space: the lobe's integral is 0 too */
+  }
+  vec3 normal = polygon_normal(poly);
+  float w_sum = 0.0;
+  for (int i = 0; i < 16; i++) {
+    float w;
+    vec3 l = polygon_point(poly, normal, i, w);
+    vec3 local = vec3(dot(l, s.ltc.x_axis), dot(l, s.ltc.y_axis), dot(l, s.n));
+    lobe += w * pbr_lobe(s, l);
+    density += w * ltc_density(m, local, 0.0);
+    w_sum += w;
   }
   vec3 local = normalize(vec3(m.w * F.x - m.y * F.z, (m.x * m.w - m.y * m.z) * F.y, m.x * F.z - m.z * F.x));
-  l = local.x * s.ltc.x_axis + local.y * s.ltc.y_axis + local.z * s.n;
-  density = ltc_density(m, local, ltc_density_floor(integral, min(len, 1.0)));
+  float w_mean = w_sum / 16.0;
+  lobe += w_mean * pbr_lobe(s, local.x * s.ltc.x_axis + local.y * s.ltc.y_axis + local.z * s.n);
+  density += w_mean * ltc_density(m, local, ltc_density_floor(integral, min(len, 1.0)));
+  return true;
 }
 #    endif
 

@@ -49,11 +49,21 @@ vec3 shade_polygon_light(Surface s, LightPolygon poly, vec3 L, float form_factor
   float form_factor_lobe = ltc_polygon(s, poly, l, density);
   float lobe = 0.0;
   if (form_factor_lobe > 0.0) {
-    vec3 l_lobe = l;
+    float lobe_l;
 #    ifdef SL_GLOSSY
-    glossy_ltc_direction(s, poly, form_factor_lobe, l_lobe, density); /* Beckmann's (closures.glsl) */
+    /* Beckmann's and Ashikhmin-Shirley's ratio over the light (closures.glsl) */
+    float lobe_sum, density_sum;
+    if (glossy_ltc_ratio(s, poly, form_factor_lobe, lobe_sum, density_sum)) {
+      lobe_l = lobe_sum;
+      density = density_sum;
+    }
+    else {
+      lobe_l = pbr_lobe(s, l);
+    }
+#    else
+    lobe_l = pbr_lobe(s, l);
 #    endif
-    lobe = ltc_lobe_integral(form_factor_lobe, s.ltc.albedo, pbr_lobe(s, l_lobe), density);
+    lobe = ltc_lobe_integral(form_factor_lobe, s.ltc.albedo, lobe_l, density);
   }
 #  endif
   if (lobe > 0.0) {

@@ -95,12 +95,12 @@ def oren_nayar_f(sigma, albedo, cos_v, t, cos_l, rule=MULTISCATTER):
     return (a + b * np.asarray(t))[..., None] + ms * (1.0 - e_l)[..., None]
 
 
-#: closures.glsl's polygon_point: the points of a light's polygon its quadratures take
+#: lights.glsl's polygon_point: the points of a light's polygon the closures' quadratures take
 POLYGON_POINTS = 16
 
 
 def polygon_points(to_centre, x_half, y_half, sides):
-    """closures.glsl's polygon_point over a light's polygon (its centre ``to_centre`` from the points,
+    """lights.glsl's polygon_point over a light's polygon (its centre ``to_centre`` from the points,
     half-axes ``x_half``, ``y_half``; ``sides`` 4 a rectangle, else an ellipse or disc): ((..., 16, 3)
     unit directions, (..., 16) weights, the emitter's cosine over the squared distance; 0 on the light):
     4 x 4 midpoints of a rectangle, 16 points of Vogel's spiral over an ellipse or disc."""
