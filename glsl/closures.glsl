@@ -125,6 +125,7 @@ ClosureBsdfLobes closure_bsdfs_at(vec3 n, vec3 v, vec3 base_color, MaterialData 
   vec3 k = oren_nayar_coefficients(sigma);
   b.on_a = k.x;
   b.on_b = k.y;
+  b.on_polygon = vec3(0.0); /* at each light's direction until a polygon is shaded (shade_polygon_light) */
   float e_v = k.x * PI + k.y * oren_nayar_G(max(dot(n, v), 0.0));
 #    ifdef SL_OREN_NAYAR_FUJII
   /* Blender 4.2's Cycles: Lambert at roughness 0 only (svm_node_closure_bsdf), Fujii's single
@@ -155,28 +156,63 @@ ClosureBsdfLobes closure_bsdfs_at(vec3 n, vec3 v, vec3 base_color, MaterialData 
 }
 
 #  ifdef SL_DIFFUSE_ROUGHNESS
+/* Oren-Nayar's t towards a light at n.l = NoL, l.v = LoV (bsdf_oren_nayar_get_intensity): l.v - n.l n.v
+ * over max(n.l, n.v) where positive. */
+float oren_nayar_t(float NoL, float NoV, float LoV)
+{
+  float nl = max(NoL, 0.0);
+  float t = LoV - nl * NoV;
+  return t > 0.0 ? t / (max(nl, NoV) + 1.175494e-38) : t; /* Cycles' FLT_MIN: both cosines 0 */
+}
+
 /* The diffuse base of colour rho towards a light at cos_l, l.v = LoV, without n.l: Lambert's rho / pi,
  * or Oren-Nayar's (bsdf_oren_nayar_get_intensity over n.l) rho (A + B t) + E_ms (1 - E(v)) (1 - E(l)),
- * t = l.v - n.l n.v, over max(n.l, n.v) where positive; Blender 4.2's without the multiple scattering
- * (SL_OREN_NAYAR_FUJII: closure_bsdfs_at). */
+ * E(l) = A pi + B G(n.l) its directional albedo towards the light, t oren_nayar_t's -- or the light
+ * polygon's mean of it where one is being shaded (on_polygon: oren_nayar_polygon's) --; Blender 4.2's
+ * without the multiple scattering (SL_OREN_NAYAR_FUJII: closure_bsdfs_at). */
 vec3 oren_nayar_diffuse(Surface s, vec3 rho, float NoL, float LoV)
 {
   if (!s.bsdfs.oren_nayar) {
     return rho * INV_PI;
   }
-  float nl = max(NoL, 0.0);
-  float nv = max(dot(s.n, s.v), 0.0);
-  float t = LoV - nl * nv;
-  if (t > 0.0) {
-    t /= max(nl, nv) + 1.175494e-38; /* Cycles' FLT_MIN: both cosines 0 */
-  }
+  bool polygon = s.bsdfs.on_polygon.z > 0.0;
+  float t = polygon ? s.bsdfs.on_polygon.x : oren_nayar_t(NoL, max(dot(s.n, s.v), 0.0), LoV);
 #    ifdef SL_OREN_NAYAR_FUJII
   return rho * (s.bsdfs.on_a + s.bsdfs.on_b * t);
 #    else
-  float e_l = s.bsdfs.on_a * PI + s.bsdfs.on_b * oren_nayar_G(nl);
+  float e_l = s.bsdfs.on_a * PI + s.bsdfs.on_b * oren_nayar_G(polygon ? s.bsdfs.on_polygon.y : max(NoL, 0.0));
   return rho * (s.bsdfs.on_a + s.bsdfs.on_b * t) + s.bsdfs.on_ms * (1.0 - e_l);
 #    endif
 }
+
+#    ifdef SL_LTC
+/* Oren-Nayar's t (oren_nayar_t) over a light's polygon, each point weighted by the light's cosine n.l
+ * where above the horizon (polygon_point's 16 points, each by the solid angle it stands for): the mean
+ * that the diffuse lobe's f, linear in t, times the polygon's exact clipped irradiance then integrates;
+ * (mean t, 1), or (0, 0) where no point lies above the horizon (t at the light's direction then). Its
+ * multiple scattering's 1 - E(l), smooth in n.l, is taken at the light's direction. At the light's
+ * irradiance-weighted direction alone, Diffuse Roughness 1 under a 0.6 m square light 0.6 m from a
+ * sphere erred by up to 9.5 % at the silhouette facing it (1.8 % mean there), where the view grazes and
+ * t = (l.v - n.l n.v) / n.l changes across the light (tests/test_principled_diffuse_roughness.py). */
+vec3 oren_nayar_polygon(Surface s, LightPolygon poly)
+{
+  if (!s.bsdfs.oren_nayar) {
+    return vec3(0.0);
+  }
+  float NoV = max(dot(s.n, s.v), 0.0);
+  vec3 normal = polygon_normal(poly);
+  vec3 sum = vec3(0.0);
+  for (int i = 0; i < 16; i++) {
+    float w;
+    vec3 l = polygon_point(poly, normal, i, w);
+    float NoL = dot(s.n, l);
+    if (NoL > 0.0) {
+      sum += (w * NoL) * vec3(oren_nayar_t(NoL, NoV, dot(l, s.v)), NoL, 1.0);
+    }
+  }
+  return sum.z > 0.0 ? vec3(sum.xy / sum.z, 1.0) : vec3(0.0);
+}
+#    endif
 #  endif
 
 /* The velvet's and the toons' f (n.l) towards l per unit irradiance, each lobe times its colour:
@@ -208,36 +244,22 @@ void closure_bsdfs_direct(Surface s, vec3 l, out vec3 diffuse, out vec3 glossy)
 
 #  if defined(SL_LTC) && (defined(SL_VELVET) || defined(SL_TOON))
 /* The velvet's and the toons' f (n.l) per unit irradiance (closure_bsdfs_direct) averaged over a light's
- * polygon (lights.glsl's LightPolygon seen from the point: an area light's rectangle or ellipse, a sphere
- * light's disc), each point weighted by the solid angle it stands for (the emitter's cosine over the
- * squared distance): 4 x 4 midpoints of a rectangle, 16 points of Vogel's spiral over an ellipse or disc.
- * A narrow toon cone or a smooth velvet's grazing peak changes across a light that covers a few
- * degrees: at the light's direction alone the Toon Diffuse of Size 0.1 under a 0.5 m light 1.5 m away
- * erred by 64 %, the velvet of roughness 0.1 by 61 % (tests/test_closure_nodes.py's stand-ins). */
+ * polygon, each of polygon_point's 16 points weighted by the solid angle it stands for. A narrow toon
+ * cone or a smooth velvet's grazing peak changes across a light that covers a few degrees: at the
+ * light's direction alone the Toon Diffuse of Size 0.1 under a 0.5 m light 1.5 m away erred by 64 %,
+ * the velvet of roughness 0.1 by 61 % (tests/test_closure_nodes.py's stand-ins). */
 void closure_bsdfs_polygon(Surface s, LightPolygon poly, out vec3 diffuse, out vec3 glossy)
 {
   diffuse = vec3(0.0);
   glossy = vec3(0.0);
-  vec3 normal = cross(poly.x_half, poly.y_half);
-  normal *= inversesqrt(max(dot(normal, normal), 1e-38)); /* a light of no extent: any weight */
+  vec3 normal = polygon_normal(poly);
   float total = 0.0;
   for (int i = 0; i < 16; i++) {
-    vec2 uv;
-    if (poly.sides == 4) {
-      uv = vec2(float(i % 4), float(i / 4)) * 0.5 - 0.75;
+    float w;
+    vec3 l = polygon_point(poly, normal, i, w);
+    if (w <= 0.0) {
+      continue;
     }
-    else {
-      float r = sqrt((float(i) + 0.5) / 16.0);
-      float phi = 2.3999632 * float(i); /* the golden angle */
-      uv = r * vec2(cos(phi), sin(phi));
-    }
-    vec3 d = poly.to_centre + poly.x_half * uv.x + poly.y_half * uv.y;
-    float d2 = dot(d, d);
-    if (d2 <= 0.0) {
-      continue; /* the point lies on the light: no direction */
-    }
-    vec3 l = d * inversesqrt(d2);
-    float w = abs(dot(l, normal)) / d2;
     vec3 dd, gg;
     closure_bsdfs_direct(s, l, dd, gg);
     diffuse += w * dd;
@@ -471,33 +493,52 @@ float glossy_albedo(Surface s, float E_ggx, float NoV, float roughness)
 }
 
 #    ifdef SL_LTC
-/* Where the ratio estimator (ltc.glsl's ltc_lobe_integral) takes the specular lobe towards a polygon
- * light where the Glossy BSDFs' Beckmann or Ashikhmin-Shirley lobes hold a share: the linearly
- * transformed cosine's own mean direction over the light, M F (F its vector form factor in the cosine's
- * space, mapped back by M = adj(M^-1), a positive multiple: det M^-1 > 0), and its density there, in
- * place of the light's irradiance-weighted direction `l` (GGX's: its long tails keep the ratio at `l`
- * well conditioned). A Gaussian peak narrower than the light vanishes towards the light's centre while
- * the light still holds half of it (the estimate fell to E I^2, half of E I). Against quadrature of
- * Beckmann's f (n.l) over square lights of half-angles 0.03-0.3 rad at 0-2.5 half-angles from the mirror
- * direction (n.v 0.3-0.95; relative to the larger of the integral and 1 % of the albedo;
- * tests/test_closure_nodes.py): mean / worst error 0.18 / 0.79 at roughness 0.15, 0.13 / 0.76 at 0.3
- * at `l`; 0.11 / 0.41, 0.095 / 0.22 at M F (alike from 0.5 up; Ashikhmin-Shirley's alike; Beckmann's own
- * fitted cosine, addon/reference/ltc.py's ltc_BECKMANN, no better). */
-void glossy_ltc_direction(Surface s, LightPolygon poly, float integral, inout vec3 l, inout float density)
+float pbr_lobe(Surface s, vec3 l); /* model_pbr.glsl */
+
+/* The ratio the estimator (ltc.glsl's ltc_lobe_integral) takes, f (n.l) over the linearly transformed
+ * cosine's density D, where the Glossy BSDFs' Beckmann or Ashikhmin-Shirley lobes hold a share of the
+ * specular lobe (false elsewhere: GGX's own ratio at the light's irradiance-weighted direction, its long
+ * tails keeping it well conditioned there): the D-weighted mean of f / D over the light, sum f w / sum D w
+ * over polygon_point's 16 points (w the solid angle each stands for) and the cosine's own mean direction
+ * over the light, M F (F its vector form factor in the cosine's space, mapped back by M = adj(M^-1), a
+ * positive multiple: det M^-1 > 0), weighted as one point more -- where the lobe is narrower than the
+ * points' spacing, its peak: a Gaussian peak narrower than the light vanishes towards the light's centre
+ * while the light still holds half of it. Out: the two sums, whose ratio ltc_lobe_integral takes. Against
+ * quadrature of Beckmann's f (n.l) over square lights of half-angles 0.03-0.3 rad at 0-2.5 half-angles
+ * from the mirror direction (n.v 0.3-0.95; relative to the larger of the integral and 1 % of the albedo;
+ * tests/test_closure_nodes.py), mean / worst error at roughness 0.15, 0.3, 0.5: at the light's direction
+ * 0.18 / 0.79, 0.13 / 0.76 (0.15, 0.3); at M F alone 0.11 / 0.41, 0.095 / 0.22, 0.059 / 0.26; over the
+ * points and M F 0.076 / 0.47, 0.048 / 0.23, 0.025 / 0.16 (Beckmann's own fitted cosine, addon/reference/
+ * ltc.py's ltc_BECKMANN, within 0.01 of it: not worth its table). */
+bool glossy_ltc_ratio(Surface s, LightPolygon poly, float integral, out float lobe, out float density)
 {
+  lobe = 0.0;
+  density = 0.0;
   if (s.glossy.z + s.glossy.w <= 0.0) {
-    return;
+    return false;
   }
   vec4 m = s.ltc.m;
   mat3 to_cosine = transpose(mat3(m.x * s.ltc.x_axis + m.y * s.n, s.ltc.y_axis, m.z * s.ltc.x_axis + m.w * s.n));
   vec3 F = polygon_form_factor(poly, to_cosine) * INV_PI;
   float len = length(F);
   if (len <= 0.0) {
-    return; /* nothing of the light in the cosine's space: the lobe's integral is 0 too */
+    return false; /* nothing of the light in the cosine's space: the lobe's integral is 0 too */
+  }
+  vec3 normal = polygon_normal(poly);
+  float w_sum = 0.0;
+  for (int i = 0; i < 16; i++) {
+    float w;
+    vec3 l = polygon_point(poly, normal, i, w);
+    vec3 local = vec3(dot(l, s.ltc.x_axis), dot(l, s.ltc.y_axis), dot(l, s.n));
+    lobe += w * pbr_lobe(s, l);
+    density += w * ltc_density(m, local, 0.0);
+    w_sum += w;
   }
   vec3 local = normalize(vec3(m.w * F.x - m.y * F.z, (m.x * m.w - m.y * m.z) * F.y, m.x * F.z - m.z * F.x));
-  l = local.x * s.ltc.x_axis + local.y * s.ltc.y_axis + local.z * s.n;
-  density = ltc_density(m, local, ltc_density_floor(integral, min(len, 1.0)));
+  float w_mean = w_sum / 16.0;
+  lobe += w_mean * pbr_lobe(s, local.x * s.ltc.x_axis + local.y * s.ltc.y_axis + local.z * s.n);
+  density += w_mean * ltc_density(m, local, ltc_density_floor(integral, min(len, 1.0)));
+  return true;
 }
 #    endif
 

@@ -29,7 +29,13 @@ vec3 shade_polygon_light(Surface s, LightPolygon poly, vec3 L, float form_factor
   vec3 c = vec3(0.0);
   if (NoL > 0.0) {
     float clipped = ltc_horizon_clip(min(form_factor, 1.0), 1.0 + NoL);
-    c = shade_direct(s, l, L * (PI * clipped / NoL), factors * vec4(1.0, 0.0, 1.0, 1.0));
+    Surface base = s;
+#  ifdef SL_DIFFUSE_ROUGHNESS
+    if (factors.x > 0.0) { /* none for a coat shaded as a surface of its own (its diffuse factor 0) */
+      base.bsdfs.on_polygon = oren_nayar_polygon(s, poly); /* its lobe over the light (closures.glsl) */
+    }
+#  endif
+    c = shade_direct(base, l, L * (PI * clipped / NoL), factors * vec4(1.0, 0.0, 1.0, 1.0));
   }
   float density;
 #  ifdef SL_SHEEN
@@ -43,11 +49,21 @@ vec3 shade_polygon_light(Surface s, LightPolygon poly, vec3 L, float form_factor
   float form_factor_lobe = ltc_polygon(s, poly, l, density);
   float lobe = 0.0;
   if (form_factor_lobe > 0.0) {
-    vec3 l_lobe = l;
+    float lobe_l;
 #    ifdef SL_GLOSSY
-    glossy_ltc_direction(s, poly, form_factor_lobe, l_lobe, density); /* Beckmann's (closures.glsl) */
+    /* Beckmann's and Ashikhmin-Shirley's ratio over the light (closures.glsl) */
+    float lobe_sum, density_sum;
+    if (glossy_ltc_ratio(s, poly, form_factor_lobe, lobe_sum, density_sum)) {
+      lobe_l = lobe_sum;
+      density = density_sum;
+    }
+    else {
+      lobe_l = pbr_lobe(s, l);
+    }
+#    else
+    lobe_l = pbr_lobe(s, l);
 #    endif
-    lobe = ltc_lobe_integral(form_factor_lobe, s.ltc.albedo, pbr_lobe(s, l_lobe), density);
+    lobe = ltc_lobe_integral(form_factor_lobe, s.ltc.albedo, lobe_l, density);
   }
 #  endif
   if (lobe > 0.0) {

@@ -182,6 +182,42 @@ vec3 polygon_form_factor(LightPolygon poly, mat3 map)
   V *= 0.5;
   return dot(V, t) < 0.0 ? -V : V; /* the corners' winding as seen from the point */
 }
+
+#  ifdef SL_LTC
+/* Point i (0 .. 15) of the quadrature over a light's polygon (LightPolygon, seen from the
+ * point: an area light's rectangle or ellipse, a sphere light's disc; `normal` its unit normal): 4 x 4
+ * midpoints of a rectangle, 16 points of Vogel's spiral over an ellipse or disc. Its unit direction from
+ * the shaded point, and (w) the solid angle it stands for up to the polygon's area over 16: the
+ * emitter's cosine over the squared distance; 0 where the point lies on the light (no direction). */
+vec3 polygon_point(LightPolygon poly, vec3 normal, int i, out float w)
+{
+  vec2 uv;
+  if (poly.sides == 4) {
+    uv = vec2(float(i % 4), float(i / 4)) * 0.5 - 0.75;
+  }
+  else {
+    float r = sqrt((float(i) + 0.5) / 16.0);
+    float phi = 2.3999632 * float(i); /* the golden angle */
+    uv = r * vec2(cos(phi), sin(phi));
+  }
+  vec3 d = poly.to_centre + poly.x_half * uv.x + poly.y_half * uv.y;
+  float d2 = dot(d, d);
+  if (d2 <= 0.0) {
+    w = 0.0;
+    return vec3(0.0, 0.0, 1.0);
+  }
+  vec3 l = d * inversesqrt(d2);
+  w = abs(dot(l, normal)) / d2;
+  return l;
+}
+
+/* The unit normal of a light's polygon (polygon_point's `normal`). */
+vec3 polygon_normal(LightPolygon poly)
+{
+  vec3 normal = cross(poly.x_half, poly.y_half);
+  return normal * inversesqrt(max(dot(normal, normal), 1e-38)); /* a light of no extent: any weight */
+}
+#  endif
 #endif
 
 #ifdef SL_LTC

@@ -113,6 +113,8 @@ struct ClosureBsdfLobes {
   float on_b;
   vec3 on_ms;          /* its multiple scattering's colour x E_ms (1 - E(v)) */
   vec3 on_albedo;      /* the diffuse base's directional albedo at the view (rgb) */
+  vec3 on_polygon;     /* (mean t, mean n.l, 1) over the light polygon being shaded (closures.glsl's
+                        * oren_nayar_polygon), z 0: at each light's own direction */
 #  endif
 #  ifdef SL_VELVET
   vec3 velvet;         /* Sheen BSDF (Ashikhmin) colour */

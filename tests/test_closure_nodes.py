@@ -776,19 +776,22 @@ def stand_in_renders(request, tmp_path_factory):
 #: the light (taken at its direction) and the world read about each lobe (the irradiance about n): glossy
 #: Beckmann 36.1 / 29.5 / 17.6 %, glossy Ashikhmin-Shirley 36.5 / 31.1 / 16.6 %, metallic F82 Beckmann 37.0 /
 #: 30.8 / 17.6 %, sheen Ashikhmin 4.9 / 6.1 / 30.2 %, toon diffuse 2.8 / 3.8 / 21.6 %, toon glossy 6.7 / 8.4 /
-#: 26.5 %, Oren-Nayar 0.5 / 0.7 / 6.2 %.
+#: 26.5 %, Oren-Nayar 0.5 / 0.7 / 6.2 % (under the area light 0.50 % before its lobe's t and n.l were averaged
+#: over the light's points); with Beckmann's and Ashikhmin-Shirley's ratio at the cosine's mean direction
+#: alone (not over the light's points) under the area / sphere light: glossy Beckmann 5.8 / 6.5 %,
+#: Ashikhmin-Shirley 7.0 / 8.3 %, metallic F82 Beckmann 6.8 / 7.7 %.
 STAND_IN_MEASURED = {
     "glossy GGX": (0.0249, 0.0472, 0.0988),
-    "glossy Beckmann": (0.0581, 0.0649, 0.149),
-    "glossy Ashikhmin-Shirley": (0.0704, 0.0834, 0.145),
-    "metallic F82 Beckmann": (0.0679, 0.0773, 0.148),
+    "glossy Beckmann": (0.0476, 0.0388, 0.149),
+    "glossy Ashikhmin-Shirley": (0.0421, 0.0528, 0.145),
+    "metallic F82 Beckmann": (0.0426, 0.0458, 0.148),
     "metallic F82": (0.0136, 0.0142, 0.108),
     "physical conductor": (0.0142, 0.0231, 0.0991),
     "sheen microfiber": (0.0038, 0.0055, 0.145),
     "sheen Ashikhmin": (0.0094, 0.0154, 0.125),
     "toon diffuse": (0.0054, 0.0111, 0.104),
     "toon glossy": (0.008, 0.0172, 0.147),
-    "Oren-Nayar": (0.005, 0.0071, 0.0342),
+    "Oren-Nayar": (0.0020, 0.0071, 0.0342),
     "Lambert": (0.0018, 0.0036, 0.0212),
 }
 if bpy.app.version < (4, 3, 0):  # Blender 4.2
@@ -905,25 +908,29 @@ def test_cone_roughness_and_oren_nayar_world_fits():
     assert err < 1e-5, err
 
 
-def test_beckmann_ratio_at_the_cosines_mean_direction():
+def test_beckmann_ratio_over_the_light():
     """The ratio estimator (ltc.lobe_integral) of a Beckmann lobe over square lights with the GGX cosine
-    (the program's table), its ratio taken at the cosine's mean direction (ltc.mean_direction:
-    closures.glsl's glossy_ltc_direction) against at the light's irradiance-weighted direction, both
-    against quadrature of Beckmann's f (n.l) over the light: squares of half-angle 0.03-0.3 rad at 0-2.5
-    half-angles from the mirror direction, n.v 0.3-0.95; the error relative to the larger of the integral
-    and 1 % of the albedo."""
+    (the program's table), its ratio f / D taken at the light's irradiance-weighted direction, at the
+    cosine's mean direction alone (ltc.mean_direction), and over 16 points of the light and that direction
+    (ltc.glossy_ratio: closures.glsl's glossy_ltc_ratio), each against quadrature of Beckmann's f (n.l)
+    over the light: squares of half-angle 0.03-0.3 rad at 0-2.5 half-angles from the mirror direction,
+    n.v 0.3-0.95; the error relative to the larger of the integral and 1 % of the albedo."""
     from addon.reference import ltc, multiscatter
 
     table, albedo = ltc.ltc_table("GGX"), multiscatter.albedo_table("BECKMANN", "SMITH_CORRELATED")
     errors = {}
-    for roughness in (0.15, 0.3):
-        at_l, at_mean = [], []
+    for roughness in (0.15, 0.3, 0.5):
+        at_l, at_mean, over = [], [], []
         for cos_v in (0.3, 0.7, 0.95):
             v = _view(cos_v)
             mirror = np.array([-v[0], 0.0, cos_v])
             entries = ltc.lookup(table, cos_v, roughness)
             minv = ltc.minv_from_entries(entries)
             E = float(multiscatter.interpolate(albedo, cos_v, roughness))
+
+            def lobe(dirs, cos_v=cos_v, roughness=roughness):
+                return ltc.lobe("BECKMANN", cos_v, roughness ** 2, dirs)[0]
+
             for half in (0.03, 0.08, 0.15, 0.3):
                 for off in (0.0, 0.5, 1.0, 1.5, 2.5):
                     a = off * half
@@ -932,22 +939,119 @@ def test_beckmann_ratio_at_the_cosines_mean_direction():
                     if d[2] < 0.05:
                         continue
                     corners, dirs, dw = _square_light(d, half)
-                    exact = float((ltc.lobe("BECKMANN", cos_v, roughness ** 2, dirs)[0] * dw).sum())
+                    exact = float((lobe(dirs) * dw).sum())
                     I, length = ltc.ltc_integral(entries, corners, with_length=True)
                     F = ltc.polygon_form_factor_vector(corners)
                     mean = ltc.mean_direction(entries, corners)
                     for where, out in ((F / np.linalg.norm(F), at_l), (mean, at_mean)):
                         density = ltc.ltc_density(minv, where, ltc.density_floor(I, length))
-                        f = ltc.lobe("BECKMANN", cos_v, roughness ** 2, where[None])[0][0]
-                        estimate = float(ltc.lobe_integral(I, E, f, density))
+                        estimate = float(ltc.lobe_integral(I, E, lobe(where[None])[0], density))
                         out.append(abs(estimate - exact) / max(exact, 0.01 * E))
-        errors[roughness] = (np.mean(at_l), np.max(at_l), np.mean(at_mean), np.max(at_mean))
-        print(f"roughness {roughness}: at the light's direction mean {errors[roughness][0]:.3f} worst "
-              f"{errors[roughness][1]:.3f}; at the cosine's mean direction {errors[roughness][2]:.3f} worst "
-              f"{errors[roughness][3]:.3f}")
-    for roughness, (mean_l, _, mean_m, _) in errors.items():
-        assert mean_m < 0.75 * mean_l, (roughness, mean_l, mean_m)
-    assert errors[0.15][2] < 0.14 and errors[0.3][2] < 0.12, errors  # measured 0.110, 0.091
+                    f, D = ltc.glossy_ratio(entries, corners, lobe, I, length)
+                    over.append(abs(float(ltc.lobe_integral(I, E, f, D)) - exact) / max(exact, 0.01 * E))
+        errors[roughness] = [(np.mean(e), np.max(e)) for e in (at_l, at_mean, over)]
+        (ml, wl), (mm, wm), (mo, wo) = errors[roughness]
+        print(f"roughness {roughness}: mean / worst at the light's direction {ml:.3f} / {wl:.3f}, at the "
+              f"cosine's mean direction {mm:.3f} / {wm:.3f}, over the light and it {mo:.3f} / {wo:.3f}")
+    for roughness, ((mean_l, _), (mean_m, _), (mean_o, _)) in errors.items():
+        assert mean_o < 0.75 * mean_l and mean_o < mean_m, (roughness, mean_l, mean_m, mean_o)
+    # measured over the light: 0.076, 0.048, 0.025 mean (at the mean direction 0.111, 0.095, 0.059)
+    assert [errors[r][2][0] for r in (0.15, 0.3, 0.5)] < [0.1, 0.07, 0.04], errors
+
+
+def _oren_nayar_over_square(cos_v, direction, half, count=120):
+    """Oren-Nayar (roughness 1, albedo 0.8, Blender 5.0's rule) over a square light facing the point
+    (``_square_light``) seen at ``cos_v``: (exact: its f (n.l) by fine quadrature, the estimate from the
+    polygon's mean factors (oren_nayar_polygon) times the exact clipped irradiance, the same at the
+    light's irradiance-weighted direction), the first channel; None where no part of it is above the
+    horizon."""
+    v = _view(cos_v)
+    corners, dirs, dw = _square_light(direction, half, count)
+    nl = dirs[:, 2]
+    lit = nl > 0.0
+    if not lit.any():
+        return None
+    f = C.oren_nayar_eval(1.0, 0.8, cos_v, nl, dirs @ v)[:, 0]
+    exact = float((f * dw).sum())
+    irradiance = float((np.maximum(nl, 0.0) * dw).sum())
+    w = np.asarray(direction, np.float64) / np.linalg.norm(direction)
+    a, b = corners[1] - corners[0], corners[3] - corners[0]
+    mean = C.oren_nayar_polygon(np.array([0.0, 0.0, 1.0]), v, w, 0.5 * a, 0.5 * b, 4)
+    polygon = float(C.oren_nayar_f(1.0, 0.8, cos_v, mean[0], mean[1])[0]) * irradiance
+    l = (dirs * dw[:, None]).sum(0)  # the vector form factor's direction (E_Area's l)
+    l /= np.linalg.norm(l)
+    at_l = 0.0
+    if l[2] > 0.0:  # shade_polygon_light: no diffuse light below the horizon
+        t = C.oren_nayar_t(l[2], cos_v, l @ v)
+        at_l = float(C.oren_nayar_f(1.0, 0.8, cos_v, t, l[2])[0]) * irradiance
+    return exact, polygon, at_l
+
+
+def test_oren_nayar_over_a_polygon_light():
+    """The Oren-Nayar base under a large square light (half-angles 0.15-0.45 rad: a 0.6 m light 0.6 m away
+    is 0.46) against fine quadrature of its f (n.l), n.v 0.05-0.95, the light from the view's side, across,
+    behind and crossing the horizon: the polygon's mean t and n.l over 16 points (closures.glsl's
+    oren_nayar_polygon) times the exact clipped irradiance, against the factors at the light's direction;
+    relative to the integral where the light's clipped cosine integral is at least 5 % of its own. Then
+    the GPU against the twin over squares and ellipses."""
+    err_polygon, err_l, grazing_polygon, grazing_l = [], [], [], []
+    for cos_v in (0.05, 0.1, 0.2, 0.4, 0.7, 0.95):
+        for half in (0.15, 0.3, 0.45):
+            for elevation in (0.0, 0.15, 0.3, 0.6, 1.0, 1.3):
+                for azimuth in (0.0, 0.8, 1.6, 2.4, 3.14):
+                    c = math.cos(elevation)
+                    d = np.array([c * math.cos(azimuth), c * math.sin(azimuth), math.sin(elevation)])
+                    out = _oren_nayar_over_square(cos_v, d, half)
+                    if out is None or out[0] <= 0.0:
+                        continue
+                    exact, polygon, at_l = out
+                    e_p, e_l = abs(polygon - exact) / exact, abs(at_l - exact) / exact
+                    err_polygon.append(e_p)
+                    err_l.append(e_l)
+                    if cos_v <= 0.2:
+                        grazing_polygon.append(e_p)
+                        grazing_l.append(e_l)
+    print(f"Oren-Nayar over square lights ({len(err_l)} cases): at the light's direction mean "
+          f"{np.mean(err_l):.2%}, worst {np.max(err_l):.2%}; over 16 points mean {np.mean(err_polygon):.2%}, "
+          f"worst {np.max(err_polygon):.2%}; n.v <= 0.2: {np.mean(grazing_l):.2%} / {np.max(grazing_l):.2%} "
+          f"against {np.mean(grazing_polygon):.2%} / {np.max(grazing_polygon):.2%}")
+    assert np.mean(err_l) >= 5.0 * np.mean(err_polygon), (np.mean(err_l), np.mean(err_polygon))
+    assert np.mean(err_polygon) < MEAN_POLYGON and np.max(err_polygon) < WORST_POLYGON, err_polygon
+    # the GPU's oren_nayar_polygon against the twin: random points, views and lights (squares, ellipses)
+    rng = np.random.default_rng(5)
+    count = 256
+    n = rng.normal(size=(count, 3))
+    n /= np.linalg.norm(n, axis=-1, keepdims=True)
+    v = rng.normal(size=(count, 3)) * 0.5 + n
+    v /= np.linalg.norm(v, axis=-1, keepdims=True)
+    to_centre = rng.normal(size=(count, 3)) + n
+    x_half = rng.normal(size=(count, 3)) * 0.4
+    y_half = np.cross(to_centre, x_half)
+    y_half *= (rng.uniform(0.1, 0.6, count) / np.linalg.norm(y_half, axis=-1))[:, None]
+    rows = {name: np.concatenate([x, np.zeros((count, 1))], -1)
+            for name, x in zip("abcde", (n, v, to_centre, x_half, y_half))}
+    terms = S.Terms(principled=True)
+    features = programs.Features("PBR", 1, frozenset({"AREA"}), terms, area_ellipse=True,
+                                 lobes=frozenset({"DIFFUSE_ROUGHNESS"}))
+    defines = {**dict(features.defines()), "SL_OREN_NAYAR_FUJII_MULTISCATTER": "1"}
+    worst = 0.0
+    for sides in (4, 16):
+        body = ("Surface s; s.n = a.xyz; s.v = b.xyz; s.bsdfs.oren_nayar = true;"
+                "LightPolygon poly; poly.to_centre = c.xyz; poly.x_half = d.xyz; poly.y_half = e.xyz;"
+                f"poly.sides = {sides};"
+                "result = vec4(oren_nayar_polygon(s, poly), 0.0);")
+        gpu = evaluate(body, rows, defines, terms=terms)[:, :3].astype(np.float64)
+        twin = C.oren_nayar_polygon(n, v, to_centre, x_half, y_half, sides)
+        assert np.isfinite(gpu).all() and (gpu[:, 2] == twin[:, 2]).mean() > 0.99
+        both = (gpu[:, 2] > 0.0) & (twin[:, 2] > 0.0)
+        worst = max(worst, float(np.abs(gpu[both] - twin[both]).max()))
+    print(f"oren_nayar_polygon, GPU against twin: {worst:.2e}")
+    assert worst < 1e-4, worst
+
+
+#: test_oren_nayar_over_a_polygon_light's bounds: 3x the measured mean and worst error over 16 points
+#: (0.61 %, 9.6 %; at the light's direction 17.7 % and 196 %, 22.6 % mean where n.v <= 0.2)
+MEAN_POLYGON, WORST_POLYGON = 3.0 * 0.0061, 3.0 * 0.096
 
 
 def _square_light(direction, half, count=200):

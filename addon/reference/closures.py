@@ -73,14 +73,70 @@ def oren_nayar_eval(sigma, albedo, cos_v, cos_l, cos_lv, rule=MULTISCATTER):
     """f (n.l) over the base colour (rgb) of Cycles' Diffuse BSDF of roughness ``sigma``
     (bsdf_oren_nayar_get_intensity; Lambert's n.l / pi where sigma < 1e-5, bsdf_diffuse_setup), by
     ``rule`` (4.2's ``SINGLE``: no multiple scattering, Lambert at sigma 0 only)."""
-    a, b, ms, _ = oren_nayar_setup(sigma, albedo, cos_v, rule)
+    nl = np.maximum(cos_l, 0.0)
+    f = oren_nayar_f(sigma, albedo, cos_v, oren_nayar_t(cos_l, cos_v, cos_lv), nl, rule)
+    return np.where(_lambert(sigma, rule)[..., None], 1.0 / np.pi, f) * nl[..., None]
+
+
+def oren_nayar_t(cos_l, cos_v, cos_lv):
+    """closures.glsl's oren_nayar_t: l.v - n.l n.v over max(n.l, n.v) where positive (the cosines
+    floored at 0)."""
     nl = np.maximum(cos_l, 0.0)
     nv = np.maximum(cos_v, 0.0)
     t = cos_lv - nl * nv
-    t = np.where(t > 0.0, t / (np.maximum(nl, nv) + FLT_MIN), t)
-    e_l = a * np.pi + b * oren_nayar_G(nl)
-    f = (a + b * t)[..., None] + ms * (1.0 - e_l)[..., None]
-    return np.where(_lambert(sigma, rule)[..., None], 1.0 / np.pi, f) * nl[..., None]
+    return np.where(t > 0.0, t / (np.maximum(nl, nv) + FLT_MIN), t)
+
+
+def oren_nayar_f(sigma, albedo, cos_v, t, cos_l, rule=MULTISCATTER):
+    """Oren-Nayar's f over the base colour (rgb; Lambert not taken) of its factors towards the light,
+    t and n.l: A + B t + E_ms (1 - E(v)) (1 - E(l)), E(l) = A pi + B G(n.l)."""
+    a, b, ms, _ = oren_nayar_setup(sigma, albedo, cos_v, rule)
+    e_l = a * np.pi + b * oren_nayar_G(np.maximum(cos_l, 0.0))
+    return (a + b * np.asarray(t))[..., None] + ms * (1.0 - e_l)[..., None]
+
+
+#: lights.glsl's polygon_point: the points of a light's polygon the closures' quadratures take
+POLYGON_POINTS = 16
+
+
+def polygon_points(to_centre, x_half, y_half, sides):
+    """lights.glsl's polygon_point over a light's polygon (its centre ``to_centre`` from the points,
+    half-axes ``x_half``, ``y_half``; ``sides`` 4 a rectangle, else an ellipse or disc): ((..., 16, 3)
+    unit directions, (..., 16) weights, the emitter's cosine over the squared distance; 0 on the light):
+    4 x 4 midpoints of a rectangle, 16 points of Vogel's spiral over an ellipse or disc."""
+    i = np.arange(POLYGON_POINTS)
+    if sides == 4:
+        uv = np.stack([i % 4, i // 4], -1) * 0.5 - 0.75
+    else:
+        r = np.sqrt((i + 0.5) / POLYGON_POINTS)
+        phi = 2.3999632 * i  # the golden angle
+        uv = r[:, None] * np.stack([np.cos(phi), np.sin(phi)], -1)
+    x_half, y_half = np.asarray(x_half, np.float64), np.asarray(y_half, np.float64)
+    d = (np.asarray(to_centre, np.float64)[..., None, :] + uv[:, :1] * x_half[..., None, :]
+         + uv[:, 1:] * y_half[..., None, :])
+    normal = np.cross(x_half, y_half)
+    normal = normal / np.maximum(np.linalg.norm(normal, axis=-1, keepdims=True), 1e-19)
+    d2 = np.sum(d * d, -1)
+    on = d2 > 0.0  # a point on the light: no direction
+    l = d / np.sqrt(np.where(on, d2, 1.0))[..., None]
+    w = np.where(on, np.abs(np.sum(l * normal[..., None, :], -1)) / np.where(on, d2, 1.0), 0.0)
+    return l, w
+
+
+def oren_nayar_polygon(n, v, to_centre, x_half, y_half, sides):
+    """closures.glsl's oren_nayar_polygon: (..., 3) (mean t, mean n.l, 1) over the polygon's points
+    above the horizon, each weighted by its weight times n.l; (0, 0, 0) where none lies above."""
+    l, w = polygon_points(to_centre, x_half, y_half, sides)
+    n, v = np.asarray(n, np.float64)[..., None, :], np.asarray(v, np.float64)[..., None, :]
+    nl = np.sum(n * l, -1)
+    nv = np.maximum(np.sum(n * v, -1), 0.0)
+    weight = np.where(nl > 0.0, w * nl, 0.0)
+    total = weight.sum(-1)
+    t = (weight * oren_nayar_t(nl, nv, np.sum(l * v, -1))).sum(-1)
+    mean_nl = (weight * nl).sum(-1)
+    some = total > 0.0
+    safe = np.where(some, total, 1.0)
+    return np.stack([np.where(some, t / safe, 0.0), np.where(some, mean_nl / safe, 0.0), some * 1.0], -1)
 
 
 def oren_nayar_albedo(sigma, albedo, cos_v, rule=MULTISCATTER):

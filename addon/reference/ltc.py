@@ -610,13 +610,33 @@ def lobe_integral(form_factor, albedo, lobe_at_mean, density_at_mean):
 
 def mean_direction(minv_entries, corners_local) -> np.ndarray:
     """The LTC's own mean direction over a polygon, M F (F the vector form factor of the polygon mapped by
-    M^-1, mapped back by M; unit, local frame): where closures.glsl's glossy_ltc_direction takes a
-    Beckmann or Ashikhmin-Shirley lobe for ``lobe_integral``'s ratio, in place of the light's
-    irradiance-weighted direction."""
+    M^-1, mapped back by M; unit, local frame): where closures.glsl's glossy_ltc_ratio takes a
+    Beckmann or Ashikhmin-Shirley lobe for ``lobe_integral``'s ratio (beside 16 points of the light:
+    ``glossy_ratio``), in place of the light's irradiance-weighted direction."""
     minv = minv_from_entries(minv_entries)
     mapped = np.einsum("...ij,...kj->...ki", minv, np.asarray(corners_local, np.float64))
     d = np.linalg.solve(minv, polygon_form_factor_vector(mapped)[..., None])[..., 0]
     return d / np.linalg.norm(d, axis=-1, keepdims=True)
+
+
+def glossy_ratio(minv_entries, corners_local, lobe, integral, length):
+    """closures.glsl's glossy_ltc_ratio for a rectangle of ``corners_local`` (4, 3; corners 0-1 and 0-3 its
+    sides, local frame): (sum f w, sum D w) over the 16 points of lights.glsl's polygon_point
+    (closures.polygon_points) and the cosine's mean direction (``mean_direction``) weighted as their mean
+    w, its density floored as there (``density_floor`` of ``integral``, ``length``); ``lobe(dirs)`` gives
+    f (n.l) at unit directions (K, 3). ``lobe_integral`` takes their ratio."""
+    from . import closures
+
+    corners = np.asarray(corners_local, np.float64)
+    minv = minv_from_entries(minv_entries)
+    dirs, w = closures.polygon_points(corners.mean(0), 0.5 * (corners[1] - corners[0]),
+                                      0.5 * (corners[3] - corners[0]), 4)
+    mean = mean_direction(minv_entries, corners)
+    w_mean = float(w.mean())
+    f = float((lobe(dirs) * w).sum()) + w_mean * float(lobe(mean[None])[0])
+    floor = density_floor(integral, length)
+    D = float((ltc_density(minv, dirs) * w).sum()) + w_mean * float(ltc_density(minv, mean, floor))
+    return f, D
 
 
 def area_specular(p, n, v, corners, roughness, ndf: str = "GGX", light_normal=None) -> np.ndarray:
