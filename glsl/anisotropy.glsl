@@ -359,7 +359,7 @@ vec3 anisotropic_strip_sample(AnisotropicLobe a, vec3 n, AnisotropicView w, int 
  * Filament and the glTF viewer read once about a bent normal).
  * The albedo: the mean G2 / G1(v) over ANISOTROPIC_WORLD_ALBEDO visible normals of a Fibonacci lattice
  * (no reads: 1.4 % mean, 6.1 % worst against quadrature over 576 lobes and views; the strips' own
- * midpoints miss the disc's rim, where the light falls under the horizon, and overestimate it by 12 %).
+ * midpoints miss the disc's rim, where the light falls under the horizon, and overestimate it by 12-14 %).
  * Against Cycles, forest and city worlds, metal spheres of roughness 0.2 / 0.35 / 0.6 and Anisotropic
  * 0.5-1 (rotation 0, 0.125, 0.25), mean error over the sphere: 4.05 % (worst 7.0 %; the round lobe's
  * split sum 4.6 %, 6.5 %), where 32 visible normals over the disc, each read, erred 4.1 % (7.4 %) at

@@ -329,9 +329,10 @@ def test_world_light_lobes_against_cycles(case, tmp_path):
 
 
 #: A round lobe drawn by an anisotropic program against the round program, under the world: mean
-#: |difference| / mean, measured (float32 roundings; before the round lobe took the round split sum there,
+#: |difference| / mean, measured, the largest of a few runs (float32 roundings, 0.8-1.2e-7 and 1.6-1.7e-7 on
+#: bpy 5.0.1 and 4.5; before the round lobe took the round split sum there,
 #: the anisotropic lobe's 32 samples drew it: 4.6 % without the coat, 4.2 % with it)
-ROUND_IN_ANISOTROPIC = {0.0: 7.8e-8, 1.0: 1.74e-7}
+ROUND_IN_ANISOTROPIC = {0.0: 1.17e-7, 1.0: 1.74e-7}
 
 
 @pytest.mark.parametrize("coat", ROUND_IN_ANISOTROPIC)
