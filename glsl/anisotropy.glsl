@@ -279,25 +279,18 @@ AnisotropicView anisotropic_view(AnisotropicLobe a, vec3 n, vec3 v, float NoV)
   return w;
 }
 
-/* Sample i of `count` of the lobe's visible normals (Heitz 2018, "Sampling the GGX Distribution of
- * Visible Normals", listing 1: the hemisphere configuration's projected disc, its far half compressed
- * by (1 + v_h.z) / 2, lifted and stretched back), at the i-th point of a Fibonacci lattice on the
- * unit square ((i + 1/2) / count, i times the golden ratio's fraction of a turn: over 630 Principled
- * lobes and views its 32 points hold the lobe's albedo to 0.79 % mean, a Hammersley set's to 1.2 %;
- * tests/test_anisotropy.py's twenty: 1.4 %). Returns the light direction l the half vector reflects
- * v to; pdf: its density per steradian of l, D_v(h) / (4 v.h) = D G1(v) / (4 n.v); weight:
- * f (n.l) / pdf with F = 1, G2 / G1(v) = (1 + Lambda_v) / (1 + Lambda_v + Lambda_l), 0 where l is below
- * the horizon. */
-vec3 anisotropic_sample(AnisotropicLobe a, vec3 n, AnisotropicView w, int i, int count, out float pdf,
-                        out float VoH, out float weight)
+/* The lobe's visible normal at the point p of the unit disc (Heitz 2018, "Sampling the GGX Distribution
+ * of Visible Normals", listing 1: the hemisphere configuration's projected disc in the frame (t1, t2)
+ * about v_h, its far half compressed by (1 + v_h.z) / 2, lifted and stretched back). Returns the light
+ * direction l the half vector reflects v to; pdf: its density per steradian of l, D_v(h) / (4 v.h) =
+ * D G1(v) / (4 n.v); weight: f (n.l) / pdf with F = 1, G2 / G1(v) = (1 + Lambda_v) / (1 + Lambda_v +
+ * Lambda_l), 0 where l is below the horizon. */
+vec3 anisotropic_sample_disc(AnisotropicLobe a, vec3 n, AnisotropicView w, vec2 p, out float pdf, out float VoH,
+                             out float weight)
 {
-  float r = sqrt((float(i) + 0.5) / float(count));
-  float phi = 2.0 * PI * fract(float(i) * 0.61803399 + 0.5);
-  float p1 = r * cos(phi);
-  float p2 = r * sin(phi);
   float s = 0.5 * (1.0 + w.v_h.z);
-  p2 = (1.0 - s) * sqrt(max(1.0 - p1 * p1, 0.0)) + s * p2;
-  vec3 n_h = p1 * w.t1 + p2 * w.t2 + sqrt(max(1.0 - p1 * p1 - p2 * p2, 0.0)) * w.v_h;
+  p.y = (1.0 - s) * sqrt(max(1.0 - p.x * p.x, 0.0)) + s * p.y;
+  vec3 n_h = p.x * w.t1 + p.y * w.t2 + sqrt(max(1.0 - dot(p, p), 0.0)) * w.v_h;
   vec3 h = normalize(a.x * (a.alpha_x * n_h.x) + a.y * (a.alpha_y * n_h.y) + n * max(n_h.z, 0.0));
   VoH = dot(w.v, h);
   vec3 l = 2.0 * VoH * h - w.v;
@@ -307,23 +300,75 @@ vec3 anisotropic_sample(AnisotropicLobe a, vec3 n, AnisotropicView w, int i, int
   return l;
 }
 
+/* Sample i of `count` of the lobe's visible normals (anisotropic_sample_disc) at the i-th point of a
+ * Fibonacci lattice on the unit square ((i + 1/2) / count, i times the golden ratio's fraction of a
+ * turn) taken to the disc (radius sqrt, angle): over 630 Principled lobes and views its 32 points hold
+ * the lobe's albedo to 0.79 % mean, a Hammersley set's to 1.2 %; its 16 points over 576: 1.4 % mean,
+ * 6.1 % worst; tests/test_anisotropy.py's twenty: 2.2 % mean. */
+vec3 anisotropic_sample(AnisotropicLobe a, vec3 n, AnisotropicView w, int i, int count, out float pdf,
+                        out float VoH, out float weight)
+{
+  float r = sqrt((float(i) + 0.5) / float(count));
+  float phi = 2.0 * PI * fract(float(i) * 0.61803399 + 0.5);
+  return anisotropic_sample_disc(a, n, w, r * vec2(cos(phi), sin(phi)), pdf, VoH, weight);
+}
+
+/* The point of the unit disc's diameter with the share u of the disc's area on its one side: s = sin phi
+ * with phi + sin(2 phi) / 2 = pi (u - 1/2) (a disc segment's area), by three steps of Newton's method
+ * from phi / 2 (within 3e-4 of a strip's share for 16 strips). */
+float anisotropic_disc_quantile(float u)
+{
+  float c = PI * (u - 0.5);
+  float phi = 0.5 * c;
+  int k = 0;
+  do { /* tested at the end (glsl/README.md) */
+    /* 1 + cos(2 phi) > 0.3 for the strips' u within 1/16 .. 15/16 (|phi| < 1.0): no division by 0 */
+    phi -= (phi + 0.5 * sin(2.0 * phi) - c) / (1.0 + cos(2.0 * phi));
+  } while (++k < 3);
+  return sin(phi);
+}
+
+/* Strip i of `count` (anisotropic_environment): anisotropic_sample_disc at the point of the disc's diameter
+ * along the lobe's long axis (x where alpha_x >= alpha_y, else y, in the disc's frame (t1, t2)) at the
+ * strip's middle share. */
+vec3 anisotropic_strip_sample(AnisotropicLobe a, vec3 n, AnisotropicView w, int i, int count, out float pdf,
+                              out float VoH, out float weight)
+{
+  vec3 long_axis = a.alpha_x >= a.alpha_y ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
+  vec2 d = vec2(dot(long_axis, w.t1), dot(long_axis, w.t2));
+  float d2 = dot(d, d);
+  /* the long axis along v_h (a view grazing along it) has no part on the disc: any direction */
+  d = d2 > 1e-12 ? d * inversesqrt(d2) : vec2(1.0, 0.0);
+  float along = anisotropic_disc_quantile((float(i) + 0.5) / float(count));
+  return anisotropic_sample_disc(a, n, w, along * d, pdf, VoH, weight);
+}
+
 #  if defined(SL_ENV_UNIFORM) || defined(SL_ENV_MAP)
-/* The world's light through the lobe, in the split sum's place: ANISOTROPIC_WORLD_SAMPLES of its
- * visible normals (anisotropic_sample), each reading the prefiltered world at the roughness whose GGX
- * lobe covers the sample's share of the lobe, 1 / (N pdf) sr (Krivanek & Colbert 2008's filtered
- * importance sampling, on the prefiltered levels: a lobe of alpha covers ~4 pi alpha^2 sr at its peak):
- * the mean of G2 / G1(v) L, i.e. the lobe's own albedo (F = 1) times the mean radiance it sees. No
- * split-sum table holds an anisotropic lobe (its albedo strays 5.5 % mean, up to 57 %, from the round
- * lobe's of the same (alpha_x alpha_y)^(1/4) over 630 Principled lobes and views), and the prefiltered
- * world is round: Filament's bent normal over it erred 7.7 % mean on tests/test_anisotropy.py's sphere,
- * 20 % (to 49 %) over two worlds and seven lobes, against this one's 4.2 % and 4.1 % (7.4 %) (the
- * round lobe's split sum: 3.4 %; 4.6 % (6.5 %)). Against Cycles, forest and city worlds, metal spheres
- * of roughness 0.2 / 0.35 / 0.6 and Anisotropic 0.5-1 (rotation 0, 0.125, 0.25), mean error over the
- * sphere: 16 samples 5.1 % (8.1 %), 24 4.5 %, 32 4.1 %; each costs ~40 ns per pixel on llvmpipe (a
- * plane under the forest world: 6-6.5x the round lobe's split sum at 32, 3.9x at 16). A sample reads
- * levels on the side of the suns' split (world_sun_specular) that the lobe's own roughness takes:
- * sharper ones would see a sun the lights already draw. */
-#    define ANISOTROPIC_WORLD_SAMPLES 32
+/* The world's light through the lobe, in the split sum's place: the lobe's own albedo (F = 1) times the
+ * mean radiance it sees. No split-sum table holds an anisotropic lobe (its albedo strays 6.5 % mean, up
+ * to 57 %, from the round lobe's of the same (alpha_x alpha_y)^(1/4) over 576 Principled lobes and
+ * views), and the prefiltered world is round.
+ * The radiance: the lobe's visible normals (Heitz 2018's disc, anisotropic_sample_disc) cut across its
+ * long axis into ANISOTROPIC_WORLD_STRIPS strips of equal share at most, one per aspect alpha_long /
+ * alpha_short (rounded up), each read once at its midpoint on the disc's diameter along the long axis
+ * from the prefiltered world at the roughness whose GGX lobe covers the strip: 1 / (N pdf) sr (Krivanek
+ * & Colbert 2008's filtered importance sampling on the prefiltered levels: a lobe of alpha covers ~4 pi
+ * alpha^2 sr at its peak), at least the short axis's alpha (the strip spans the lobe's width); their mean
+ * weighted by G2 / G1(v). A strip spans the lobe's narrow width and about as much along it, so one
+ * round read covers it: the reads go along the long axis only, as many as the lobe is long (where
+ * Filament and the glTF viewer read once about a bent normal).
+ * The albedo: the mean G2 / G1(v) over ANISOTROPIC_WORLD_ALBEDO visible normals of a Fibonacci lattice
+ * (no reads: 1.4 % mean, 6.1 % worst against quadrature over 576 lobes and views; the strips' own
+ * midpoints miss the disc's rim, where the light falls under the horizon, and overestimate it by 12-14 %).
+ * Against Cycles, forest and city worlds, metal spheres of roughness 0.2 / 0.35 / 0.6 and Anisotropic
+ * 0.5-1 (rotation 0, 0.125, 0.25), mean error over the sphere: 4.05 % (worst 7.0 %; the round lobe's
+ * split sum 4.6 %, 6.5 %), where 32 visible normals over the disc, each read, erred 4.1 % (7.4 %) at
+ * 5.6-6.3x the round lobe's cost on a plane under the world; these 2.2-2.8x (Anisotropic 0.5-1). A read takes levels on the side of the
+ * suns' split (world_sun_specular) that the lobe's own roughness takes: sharper ones would see a sun
+ * the lights already draw. */
+#    define ANISOTROPIC_WORLD_STRIPS 8
+#    define ANISOTROPIC_WORLD_ALBEDO 16
+
 vec3 anisotropic_environment(AnisotropicLobe a, vec3 n, vec3 v, float NoV)
 {
   AnisotropicView w = anisotropic_view(a, n, v, NoV);
@@ -334,22 +379,35 @@ vec3 anisotropic_environment(AnisotropicLobe a, vec3 n, vec3 v, float NoV)
   float r0 = env_level_roughness(max(clamped - 1, 0));
   float r1 = env_level_roughness(min(clamped, int(env.info.x) - 1));
 #    endif
-  vec3 sum = vec3(0.0);
+  float narrow = min(a.alpha_x, a.alpha_y);
+  int strips = clamp(int(ceil(max(a.alpha_x, a.alpha_y) / narrow)), 1, ANISOTROPIC_WORLD_STRIPS);
+  vec3 radiance = vec3(0.0);
+  float weights = 0.0;
   int i = 0;
   do { /* tested at the end (glsl/README.md) */
     float pdf, VoH, weight;
-    vec3 l = anisotropic_sample(a, n, w, i, ANISOTROPIC_WORLD_SAMPLES, pdf, VoH, weight);
-    /* a lobe of alpha^2 = 1 / (4 pi N pdf); a far tail's D underflows to 0 in float32: the roughest */
-    float roughness = clamp(sqrt(sqrt(1.0 / (4.0 * PI * float(ANISOTROPIC_WORLD_SAMPLES) * max(pdf, 1e-30)))),
-                            MIN_PERCEPTUAL_ROUGHNESS, 1.0);
+    vec3 l = anisotropic_strip_sample(a, n, w, i, strips, pdf, VoH, weight);
+    /* a lobe of alpha^2 = 1 / (4 pi N pdf), at least the short axis's; a far tail's D underflows to 0 in
+     * float32: the roughest */
+    float alpha2 = max(1.0 / (4.0 * PI * float(strips) * max(pdf, 1e-30)), narrow * narrow);
+    float roughness = clamp(sqrt(sqrt(alpha2)), MIN_PERCEPTUAL_ROUGHNESS, 1.0);
 #    ifdef SL_ENV_MAP
     if (split) {
       roughness = mix(min(roughness, r0), max(roughness, r1), suns);
     }
 #    endif
-    sum += weight > 0.0 ? env_prefiltered(l, roughness) * weight : vec3(0.0);
-  } while (++i < ANISOTROPIC_WORLD_SAMPLES);
-  return sum / float(ANISOTROPIC_WORLD_SAMPLES);
+    radiance += weight > 0.0 ? env_prefiltered(l, roughness) * weight : vec3(0.0);
+    weights += weight;
+  } while (++i < strips);
+  float albedo = 0.0;
+  int k = 0;
+  do { /* tested at the end (glsl/README.md) */
+    float pdf, VoH, weight;
+    anisotropic_sample(a, n, w, k, ANISOTROPIC_WORLD_ALBEDO, pdf, VoH, weight);
+    albedo += weight;
+  } while (++k < ANISOTROPIC_WORLD_ALBEDO);
+  /* every strip's light under the horizon (a grazing view of a rough lobe): no light to weigh */
+  return weights > 0.0 ? radiance / weights * (albedo / float(ANISOTROPIC_WORLD_ALBEDO)) : vec3(0.0);
 }
 #  endif
 

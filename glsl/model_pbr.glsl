@@ -161,23 +161,31 @@ vec3 shade_environment_surface(Surface s, vec2 weights)
 {
   vec2 EB = env_split_sum(s.NoV, s.roughness);
 #  ifdef SL_ANISOTROPY
-  /* an anisotropic lobe's stand-in: the isotropic lobe about its bent normal (anisotropy.glsl) */
-  vec3 n_r = anisotropic_bent_normal(s.aniso, s.n, s.v, s.roughness);
+  /* a round lobe in an anisotropic program (a coat, anisotropic_none; a pixel whose Anisotropic is 0)
+   * takes the round split sum below, as the round program draws it (the same image to 2e-7,
+   * tests/test_anisotropy.py); an anisotropic one's reflection, for the specular occlusion: about its
+   * bent normal (anisotropy.glsl) */
+  bool anisotropic = s.aniso.alpha_x != s.aniso.alpha_y;
+  vec3 n_r = anisotropic ? anisotropic_bent_normal(s.aniso, s.n, s.v, s.roughness) : s.n;
 #  else
   vec3 n_r = s.n;
 #  endif
   vec3 r = reflect(-s.v, n_r);
   float ao = env_occlusion_diffuse();
   float specular_ao = env_occlusion_specular(s.n, r, s.alpha);
+  vec3 radiance;
 #  ifdef SL_ANISOTROPY
-  /* the anisotropic lobe's albedo times the radiance it sees, sampled (anisotropy.glsl), over the round
-   * lobe's E the split sum's albedo multiplies back (the table's E >= 0.31 at every n.v and roughness:
-   * the guard keeps the division finite whatever the table) */
-  vec3 radiance = anisotropic_environment(s.aniso, s.n, s.v, s.NoV) / max(EB.x, 1e-4) * specular_ao;
-#  else
-  vec3 radiance = env_prefiltered(s.roughness > MIN_PERCEPTUAL_ROUGHNESS ? env_dominant_direction(n_r, r, s.alpha) : r,
-                                  s.roughness) * specular_ao;
+  if (anisotropic) {
+    /* the anisotropic lobe's albedo times the radiance it sees, sampled (anisotropy.glsl), over the round
+     * lobe's E the split sum's albedo multiplies back (the table's E >= 0.31 at every n.v and roughness:
+     * the guard keeps the division finite whatever the table) */
+    radiance = anisotropic_environment(s.aniso, s.n, s.v, s.NoV) / max(EB.x, 1e-4) * specular_ao;
+  } else
 #  endif
+  {
+    radiance = env_prefiltered(s.roughness > MIN_PERCEPTUAL_ROUGHNESS ? env_dominant_direction(n_r, r, s.alpha) : r,
+                               s.roughness) * specular_ao;
+  }
   vec3 irradiance = env_irradiance(env_bent_normal(s.n)) * ao;
 #  ifdef SL_PRINCIPLED
   return principled_environment(s, EB, radiance, irradiance, weights);

@@ -261,7 +261,7 @@ def test_area_and_sphere_lights_against_cycles(kind, tmp_path):
 #: mean |ours - Cycles| / mean Cycles over the sphere: the split sum (anisotropic, isotropic) and
 #: World Specular: Sampled at 64 samples (anisotropic), bpy 5.0.1. Before the visible normals' samples
 #: (Filament's bent normal over the prefiltered world; the round lobe sampled): 7.79 % and 7.58 %
-WORLD = {"split sum": 4.39e-2, "isotropic": 3.51e-2, "sampled": 2.48e-2}
+WORLD = {"split sum": 3.87e-2, "isotropic": 3.51e-2, "sampled": 2.48e-2}
 
 
 def test_world_light_against_cycles(tmp_path):
@@ -296,10 +296,81 @@ def test_world_light_against_cycles(tmp_path):
         assert got[key] <= 3.0 * measured, f"{key}: {got[key]:.2%} (measured {measured:.2%})"
 
 
+#: More lobes under the world (roughness, Anisotropic, world), mean |ours - Cycles| / mean Cycles over the
+#: sphere, measured with bpy 5.0.1 at WORLD_LOBES_SAMPLES: a rough lobe few strips cover (2) and a narrow one
+#: at the strips' cap (aspect 10, 8 strips). (Against Cycles at 512 samples, these and twelve more,
+#: forest and city, roughness 0.2-0.6, Anisotropic 0.5-1, rotation 0-1/4: docs/shading/anisotropy.md.)
+WORLD_LOBES = {(0.6, 0.5, "forest"): 3.36e-2, (0.2, 1.0, "city"): 5.38e-2}
+WORLD_LOBES_SAMPLES = 128
+
+
+@pytest.mark.parametrize("case", WORLD_LOBES)
+def test_world_light_lobes_against_cycles(case, tmp_path):
+    """Metal spheres of WORLD_LOBES' lobes in the bundled worlds, no light: the strips' reads of the
+    prefiltered world (anisotropy.glsl's anisotropic_environment) against Cycles, within 3x of what was
+    measured and below 0.4 of the anisotropy's own effect on Cycles' image (as
+    test_world_light_against_cycles: the round lobe's own split sum errs 2-6 % here)."""
+    roughness, amount, world = case
+    scene, sphere = _scene(lambda: _brushed("BrushedLobe", anisotropic=amount, roughness=roughness),
+                           lights=())
+    scene.shading_lab.world_occlusion = False  # nothing occludes the sphere (nor in Cycles)
+    TW._world(scene, image=TW._hdri(world))
+    TW._unoccluded(sphere)
+    ours, ref, iso, _, _ = _measure(scene, tmp_path, samples=WORLD_LOBES_SAMPLES)
+    inside = ref.max(-1) > 0.0
+
+    def error(a, b):
+        return float(np.abs(a - b).mean(-1)[inside].mean() / b.mean(-1)[inside].mean())
+
+    got, effect = error(ours, ref), error(iso, ref)
+    print(f"world {case}: {got:.2%}; the anisotropy changes Cycles' image by {effect:.2%}")
+    assert got < 0.4 * effect, f"{got:.2%}: against the anisotropy's {effect:.2%}"
+    assert got <= 3.0 * WORLD_LOBES[case], f"{got:.2%} (measured {WORLD_LOBES[case]:.2%})"
+
+
+#: A round lobe drawn by an anisotropic program against the round program, under the world: mean
+#: |difference| / mean, measured, the largest of a few runs (float32 roundings, 0.8-1.2e-7 and 1.6-1.7e-7 on
+#: bpy 5.0.1 and 4.5; before the round lobe took the round split sum there,
+#: the anisotropic lobe's 32 samples drew it: 4.6 % without the coat, 4.2 % with it)
+ROUND_IN_ANISOTROPIC = {0.0: 1.17e-7, 1.0: 1.74e-7}
+
+
+@pytest.mark.parametrize("coat", ROUND_IN_ANISOTROPIC)
+def test_round_lobe_in_an_anisotropic_program_under_the_world(coat, tmp_path):
+    """A sphere whose Principled BSDF's Anisotropic comes from a Value node of 0 (its program draws the
+    anisotropic lobe: the lobe is round at every pixel), and with a coat (round, anisotropic_none), under
+    the forest world: the same image as the round program's (Roughness from a Value node instead: a node
+    graph without the anisotropic lobe), as model_pbr.glsl's round branch takes the round split sum."""
+    images = {}
+    for linked in ("Anisotropic", "Roughness"):
+        def make(linked=linked):
+            mat = _brushed(f"Round{linked}", anisotropic=0.0, roughness=0.35, coat_weight=coat)
+            tree = mat.node_tree
+            bsdf = next(n for n in tree.nodes if n.bl_idname == "ShaderNodeBsdfPrincipled")
+            value = tree.nodes.new("ShaderNodeValue")
+            value.outputs[0].default_value = bsdf.inputs[linked].default_value
+            tree.links.new(value.outputs[0], bsdf.inputs[linked])
+            return mat
+
+        scene, sphere = _scene(make, lights=())
+        scene.shading_lab.world_occlusion = False
+        TW._world(scene, image=TW._hdri("forest"))
+        snap = extract.snapshot(bpy.context.evaluated_depsgraph_get(), 32, 32)
+        lobes = set().union(*(m.lobes for m in snap.materials.values()))
+        assert ("ANISOTROPY" in lobes) == (linked == "Anisotropic"), lobes
+        images[linked] = _ours(scene, tmp_path / f"{linked}.exr")
+    round_program = images["Roughness"]
+    inside = round_program.max(-1) > 0.0
+    diff = float(np.abs(images["Anisotropic"] - round_program).mean(-1)[inside].mean()
+                 / round_program.mean(-1)[inside].mean())
+    print(f"round lobe in an anisotropic program, coat {coat}: {diff:.2e} of the round program's image")
+    assert diff <= 3.0 * ROUND_IN_ANISOTROPIC[coat], f"{diff:.3e} (measured {ROUND_IN_ANISOTROPIC[coat]:.2e})"
+
+
 #: The world's light on anisotropic spheres (Anisotropic 0.8; roughness 0.12, 0.35, 0.7), the GPU against
 #: the twin (test_world_twin.py's scene and measure): per sphere, mean |GPU - twin| / mean twin, measured,
 #: split sum (the visible normals' samples) and World Specular: Sampled (16 samples)
-WORLD_TWIN = {0: (1.36e-3, 1.81e-3, 2.21e-3), 16: (1.34e-3, 9.6e-4, 6.3e-4)}
+WORLD_TWIN = {0: (2.62e-3, 2.32e-3, 1.19e-3), 16: (1.34e-3, 9.6e-4, 6.3e-4)}
 
 
 @pytest.mark.parametrize("samples", WORLD_TWIN)
@@ -507,13 +578,13 @@ def test_polygon_integral_is_exact_for_a_small_light():
     assert worst < 1e-4, worst
 
 
-#: The lobe's albedo (F = 1) by its WORLD_SAMPLES visible normals against quadrature, mean and worst
+#: The lobe's albedo (F = 1) by its WORLD_ALBEDO visible normals against quadrature, mean and worst
 #: relative error over the views and lobes below, measured
-ALBEDO_MEASURED = (1.38e-2, 4.85e-2)
+ALBEDO_MEASURED = (2.15e-2, 4.51e-2)
 
 
 def test_world_samples_hold_the_lobe_albedo():
-    """The mean of G2 / G1(v) over anisotropy.WORLD_SAMPLES visible normals (what anisotropic_environment
+    """The mean of G2 / G1(v) over anisotropy.WORLD_ALBEDO visible normals (what anisotropic_environment
     weighs the world's light by) against the lobe's directional albedo int D G2 (v.h) / (n.v) dh by
     quadrature over slope space: Principled lobes of roughness 0.1-0.9, Anisotropic 0-1, views from
     grazing to normal along, across and between the tangent; and each sample's pdf integrates D_v."""
@@ -532,11 +603,11 @@ def test_world_samples_hold_the_lobe_albedo():
             on = (l[:, 2] > 0.0) & (h @ v > 0.0)
             integrand = A.D(h, UP, x, y, ax, ay) * g2 * (h @ v) / mu * h[:, 2] ** 3 * ds
             exact = float(np.sum(np.where(on, integrand, 0.0)))
-            count = A.WORLD_SAMPLES
+            count = A.WORLD_ALBEDO
             weights = [A.sample(UP, v, mu, x, y, ax, ay, i, count)[3] for i in range(count)]
             errors.append(abs(float(np.mean(weights)) / exact - 1.0))
     mean, worst = float(np.mean(errors)), max(errors)
-    print(f"albedo by {A.WORLD_SAMPLES} visible normals against quadrature: mean {mean:.2%}, "
+    print(f"albedo by {A.WORLD_ALBEDO} visible normals against quadrature: mean {mean:.2%}, "
           f"worst {worst:.2%}")
     assert mean <= 3.0 * ALBEDO_MEASURED[0] and worst <= 3.0 * ALBEDO_MEASURED[1], (mean, worst)
 
@@ -654,8 +725,8 @@ GPU_POLYGON_MEASURED = {"polygon": 1.44e-4, "l": 1.25e-5, "pdf": 6.07e-4, "weigh
 
 def test_gpu_polygon_and_samples_match_twin():
     """anisotropy.glsl's anisotropic_polygon over random lights and views (tiny to 4 m wide, above,
-    across and below the horizon, views below it too) and anisotropic_sample, on the GPU against the
-    twin: float32 agreement."""
+    across and below the horizon, views below it too), anisotropic_sample and the world's strips
+    (anisotropic_strip_sample), on the GPU against the twin: float32 agreement."""
     n, t, v, alpha, stretch, to_centre, x_half, y_half, sides = _random_polygons()
     f32 = [np.asarray(a, np.float32).astype(np.float64) for a in (n, t, v, alpha, stretch, to_centre, x_half,
                                                                    y_half)]
@@ -684,16 +755,22 @@ result = vec4(anisotropic_polygon(a, n.xyz, v.xyz, NoV, poly));""", inputs, defi
     errors = {"polygon": float((np.abs(gpu - twin) / np.maximum(np.abs(twin), 1e-3)).max())}
     lit = int((twin > 1e-6).sum())
     # the samples: a few of each count's lattice
-    for i, count in ((0, 32), (7, 32), (31, 32), (5, 64)):
+    # and the world's strips (anisotropic_strip_sample) of a few counts
+    seen = A.view(n, v, NoV, x, y, ax, ay)
+    for fn, i, count in (("sample", 0, 16), ("sample", 7, 16), ("sample", 15, 16), ("sample", 5, 64),
+                         ("strip_sample", 0, 1), ("strip_sample", 1, 4), ("strip_sample", 7, 8)):
         got = evaluate(head + f"""AnisotropicView w = anisotropic_view(a, n.xyz, v.xyz, NoV);
 float pdf, VoH, weight;
-vec3 l = anisotropic_sample(a, n.xyz, w, {i}, {count}, pdf, VoH, weight);
+vec3 l = anisotropic_{fn}(a, n.xyz, w, {i}, {count}, pdf, VoH, weight);
 result = vec4(l, weight);""", inputs, defines, terms=terms)
         got_pdf = evaluate(head + f"""AnisotropicView w = anisotropic_view(a, n.xyz, v.xyz, NoV);
 float pdf, VoH, weight;
-vec3 l = anisotropic_sample(a, n.xyz, w, {i}, {count}, pdf, VoH, weight);
+vec3 l = anisotropic_{fn}(a, n.xyz, w, {i}, {count}, pdf, VoH, weight);
 result = vec4(pdf, VoH, 0.0, 0.0);""", inputs, defines, terms=terms)
-        l, pdf, VoH, weight = A.sample(n, v, NoV, x, y, ax, ay, i, count)
+        if fn == "sample":
+            l, pdf, VoH, weight = A.sample(n, v, NoV, x, y, ax, ay, i, count)
+        else:
+            l, pdf, VoH, weight = A.strip_sample(n, seen, NoV, x, y, ax, ay, i, count)
         # l (unit) and the weight (0..1, steep in n.l at the horizon) absolute, the pdf relative
         for key, e in (("l", np.abs(got[:, :3] - l)), ("weight", np.abs(got[:, 3] - weight)),
                        ("pdf", np.abs(got_pdf[:, 0] - pdf) / pdf)):

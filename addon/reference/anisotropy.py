@@ -244,35 +244,42 @@ def widened(alpha_x, alpha_y, alpha, alpha_wide):
 
 # --- the world: samples of the visible normals ---------------------------------------------------------
 
-#: The world's split-sum light through the lobe takes this many of its visible normals (anisotropy.glsl's
-#: ANISOTROPIC_WORLD_SAMPLES, ``environment_samples``).
-WORLD_SAMPLES = 32
+#: The world's split-sum light through the lobe reads at most this many strips of its visible normals
+#: (anisotropy.glsl's ANISOTROPIC_WORLD_STRIPS: one per aspect, ``strips``) and weighs their light by its
+#: albedo over this many of them (ANISOTROPIC_WORLD_ALBEDO).
+WORLD_STRIPS = 8
+WORLD_ALBEDO = 16
 GOLDEN_FRACTION = 0.61803399
 
 
-def sample(n, v, NoV, x, y, alpha_x, alpha_y, i: int, count: int):
-    """(l, pdf, v.h, weight) of sample ``i`` of ``count`` of the lobe's visible normals (anisotropy.glsl's
-    anisotropic_sample: Heitz 2018's listing 1 at the i-th point of a Fibonacci lattice): the light
-    direction the half vector reflects v to, its density per steradian of l, D G1(v) / (4 n.v), and
-    f (n.l) / pdf with F = 1, G2 / G1(v) (0 below the horizon)."""
+def view(n, v, NoV, x, y, alpha_x, alpha_y):
+    """(v, v_h, t1, t2, Lambda_v): the lobe's visible normals seen from v (anisotropy.glsl's
+    anisotropic_view): the view above the horizon, stretched to the hemisphere configuration in the lobe's
+    frame (x, y, n), a frame (t1, t2) about it and Lambda(v)."""
     n, v = np.asarray(n, np.float64), np.asarray(v, np.float64)
     ve = visible_view(v, n, NoV)
     vh = _unit(np.stack([alpha_x * _dot(ve, x), alpha_y * _dot(ve, y), _dot(ve, n)], -1))
     across = np.stack([-vh[..., 1], vh[..., 0], np.zeros(np.shape(vh)[:-1])], -1)
     t1 = np.where((vh[..., 2] < 0.9999)[..., None], _unit(across), [1.0, 0.0, 0.0])
     t2 = np.cross(vh, t1)
-    r = math.sqrt((i + 0.5) / count)
-    phi = 2.0 * math.pi * ((i * GOLDEN_FRACTION + 0.5) % 1.0)
-    p1, p2 = r * math.cos(phi), r * math.sin(phi)
+    return ve, vh, t1, t2, Lambda(ve, n, x, y, alpha_x, alpha_y)
+
+
+def sample_disc(n, seen, NoV, x, y, alpha_x, alpha_y, p1, p2):
+    """(l, pdf, v.h, weight) of the visible normal at the point (p1, p2) of the unit disc (anisotropy.glsl's
+    anisotropic_sample_disc, Heitz 2018's listing 1), ``seen`` the lobe's ``view``: the light direction
+    the half vector reflects v to, its density per steradian of l, D G1(v) / (4 n.v), and f (n.l) / pdf
+    with F = 1, G2 / G1(v) (0 below the horizon)."""
+    ve, vh, t1, t2, lam_v = seen
+    p1, p2 = np.asarray(p1, np.float64), np.asarray(p2, np.float64)
     s = 0.5 * (1.0 + vh[..., 2])
-    p2 = (1.0 - s) * math.sqrt(max(1.0 - p1 * p1, 0.0)) + s * p2
+    p2 = (1.0 - s) * np.sqrt(np.maximum(1.0 - p1 * p1, 0.0)) + s * p2
     lift = np.sqrt(np.maximum(1.0 - p1 * p1 - p2 * p2, 0.0))
-    nh = p1 * t1 + p2[..., None] * t2 + lift[..., None] * vh
+    nh = p1[..., None] * t1 + p2[..., None] * t2 + lift[..., None] * vh
     h = _unit(x * (alpha_x * nh[..., 0])[..., None] + y * (alpha_y * nh[..., 1])[..., None]
               + n * np.maximum(nh[..., 2], 0.0)[..., None])
     VoH = _dot(ve, h)
     l = 2.0 * VoH[..., None] * h - ve
-    lam_v = Lambda(ve, n, x, y, alpha_x, alpha_y)
     pdf = D(h, n, x, y, alpha_x, alpha_y) / ((1.0 + lam_v) * 4.0 * NoV)
     NoL = _dot(n, l)
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -281,8 +288,52 @@ def sample(n, v, NoV, x, y, alpha_x, alpha_y, i: int, count: int):
     return l, pdf, VoH, weight
 
 
-def sample_roughness(pdf, count: int):
-    """The perceptual roughness of the GGX lobe that covers a sample's share of the lobe, 1 / (N pdf)
-    sr = 4 pi alpha^2 (anisotropy.glsl's anisotropic_environment), within the floor and 1."""
+def sample(n, v, NoV, x, y, alpha_x, alpha_y, i: int, count: int):
+    """``sample_disc`` at the i-th of ``count`` points of a Fibonacci lattice taken to the disc
+    (anisotropy.glsl's anisotropic_sample)."""
+    n = np.asarray(n, np.float64)
+    r = math.sqrt((i + 0.5) / count)
+    phi = 2.0 * math.pi * ((i * GOLDEN_FRACTION + 0.5) % 1.0)
+    seen = view(n, v, NoV, x, y, alpha_x, alpha_y)
+    shape = np.shape(seen[4])
+    return sample_disc(n, seen, NoV, x, y, alpha_x, alpha_y, np.full(shape, r * math.cos(phi)),
+                       np.full(shape, r * math.sin(phi)))
+
+
+def strips(alpha_x, alpha_y):
+    """How many strips the world's light reads (anisotropy.glsl's anisotropic_environment): the aspect
+    alpha_long / alpha_short rounded up, within 1 and WORLD_STRIPS."""
+    aspect = np.maximum(alpha_x, alpha_y) / np.minimum(alpha_x, alpha_y)
+    return np.clip(np.ceil(aspect), 1, WORLD_STRIPS).astype(int)
+
+
+def disc_quantile(u):
+    """The point of the unit disc's diameter with the share ``u`` of its area on one side (anisotropy.glsl's
+    anisotropic_disc_quantile): s = sin phi with phi + sin(2 phi) / 2 = pi (u - 1/2), three Newton steps
+    from phi / 2, as the GPU takes them."""
+    c = np.pi * (np.asarray(u, np.float64) - 0.5)
+    phi = 0.5 * c
+    for _ in range(3):
+        phi = phi - (phi + 0.5 * np.sin(2.0 * phi) - c) / (1.0 + np.cos(2.0 * phi))
+    return np.sin(phi)
+
+
+def strip_sample(n, seen, NoV, x, y, alpha_x, alpha_y, i, count):
+    """``sample_disc`` at strip ``i`` of ``count`` (arrays): the point of the disc's diameter along the lobe's
+    long axis (x where alpha_x >= alpha_y, else y) at the strip's middle share (``disc_quantile``)."""
+    _, _, t1, t2, _ = seen
+    k = np.where(np.asarray(alpha_x) >= np.asarray(alpha_y), 0, 1)[..., None]
+    d = np.stack([np.take_along_axis(t1, k, -1)[..., 0], np.take_along_axis(t2, k, -1)[..., 0]], -1)
+    d2 = np.sum(d * d, -1, keepdims=True)
+    d = np.where(d2 > 1e-12, d / np.sqrt(np.maximum(d2, 1e-300)), [1.0, 0.0])
+    along = disc_quantile((np.asarray(i) + 0.5) / np.asarray(count))
+    return sample_disc(n, seen, NoV, x, y, alpha_x, alpha_y, along * d[..., 0], along * d[..., 1])
+
+
+def sample_roughness(pdf, count, narrow=0.0):
+    """The perceptual roughness of the GGX lobe that covers a strip's share of the lobe, 1 / (N pdf)
+    sr = 4 pi alpha^2 (anisotropy.glsl's anisotropic_environment), its alpha at least ``narrow`` (the
+    lobe's short axis), within the floor and 1."""
     alpha2 = 1.0 / (4.0 * np.pi * count * np.maximum(np.asarray(pdf, np.float64), 1e-30))
+    alpha2 = np.maximum(alpha2, np.asarray(narrow, np.float64) ** 2)
     return np.clip(np.sqrt(np.sqrt(alpha2)), MIN_PERCEPTUAL_ROUGHNESS, 1.0)

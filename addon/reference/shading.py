@@ -920,44 +920,72 @@ def _image_environment(s: Surface, maps: environment.WorldMaps, terms: Terms, sa
 
         memo["prefiltered"] = anisotropic_prefiltered(s, read, maps.first_clamped, terms)
     if "prefiltered" not in memo:
-        r = 2.0 * s.NoV[..., None] * s.n - s.v
-        rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
-        d = np.where((rough > MIN_PERCEPTUAL_ROUGHNESS)[..., None],
-                     env_dominant_direction(s.n, r, np.broadcast_to(s.alpha, np.shape(s.NoV))), r)
+        d, rough = _split_sum_direction(s)
         memo["prefiltered"] = environment.prefiltered_radiance(maps.whole, maps.clamped, d, rough,
                                                                maps.first_clamped, prefilter_samples)
     return shade_environment(s, memo["prefiltered"] * _rgb_scalar(specular_ao), irradiance, terms, weights)
 
 
+def _split_sum_direction(s: Surface):
+    """Where the round split sum reads the prefiltered world (model_pbr.glsl's shade_environment_surface):
+    the lobe's dominant direction, the mirror direction at the roughness floor; and its roughness."""
+    r = 2.0 * s.NoV[..., None] * s.n - s.v
+    rough = np.broadcast_to(s.roughness, np.shape(s.NoV))
+    d = np.where((rough > MIN_PERCEPTUAL_ROUGHNESS)[..., None],
+                 env_dominant_direction(s.n, r, np.broadcast_to(s.alpha, np.shape(s.NoV))), r)
+    return d, rough
+
+
 def anisotropic_environment(s: Surface, read, first_clamped: int):
-    """anisotropy.glsl's anisotropic_environment: the mean over WORLD_SAMPLES of the anisotropic lobe's
-    visible normals (``anisotropy.sample``) of G2 / G1(v) times ``read(l, roughness)``, the prefiltered
-    world at each sample's footprint roughness, kept on the side of the suns' split (levels from
+    """anisotropy.glsl's anisotropic_environment: the lobe's albedo (the mean G2 / G1(v) over
+    ``anisotropy.WORLD_ALBEDO`` of its visible normals) times the mean radiance it sees: ``read(l,
+    roughness)``, the prefiltered world at each strip's (``anisotropy.strips``, ``strip_sample``) direction
+    and footprint roughness, weighted by G2 / G1(v), kept on the side of the suns' split (levels from
     ``first_clamped`` on made without them) that the lobe's own roughness takes."""
-    count = anisotropy.WORLD_SAMPLES
-    suns = world_sun_specular(anisotropy.roughness(s.aniso[2], s.aniso[3]), first_clamped)[..., None]
+    x, y, ax, ay = s.aniso
+    suns = world_sun_specular(anisotropy.roughness(ax, ay), first_clamped)[..., None]
     levels = environment.PREFILTER_LEVELS
 
     def level_roughness(k):  # (ibl.glsl's env_level_roughness: level 0 at the roughness floor)
         return MIN_PERCEPTUAL_ROUGHNESS if k == 0 else environment.level_roughness(k)
 
     r0, r1 = level_roughness(max(first_clamped - 1, 0)), level_roughness(min(first_clamped, levels - 1))
-    total = np.zeros(np.shape(s.NoV) + (3,))
-    for i in range(count):
-        l, pdf, _, weight = anisotropy.sample(s.n, s.v, s.NoV, *s.aniso, i, count)
-        rough = anisotropy.sample_roughness(pdf, count)
+    seen = anisotropy.view(s.n, s.v, s.NoV, x, y, ax, ay)
+    shape = np.shape(s.NoV)
+    count = np.broadcast_to(anisotropy.strips(ax, ay), shape)
+    narrow = np.broadcast_to(np.minimum(ax, ay), shape)
+    radiance = np.zeros(shape + (3,))
+    weights = np.zeros(shape)
+    for i in range(int(count.max(initial=1))):
+        on = i < count
+        l, pdf, _, weight = anisotropy.strip_sample(s.n, seen, s.NoV, x, y, ax, ay, np.minimum(i, count - 1),
+                                                    count)
+        weight = np.where(on, weight, 0.0)
+        rough = anisotropy.sample_roughness(pdf, count, narrow)
         if first_clamped < levels:
             rough = np.minimum(rough, r0) + (np.maximum(rough, r1) - np.minimum(rough, r0)) * suns[..., 0]
-        total += np.where((weight > 0.0)[..., None], read(l, rough) * _rgb_scalar(weight), 0.0)
-    return total / count
+        radiance += np.where((weight > 0.0)[..., None], read(l, rough) * _rgb_scalar(weight), 0.0)
+        weights += weight
+    albedo = sum(anisotropy.sample(s.n, s.v, s.NoV, x, y, ax, ay, k, anisotropy.WORLD_ALBEDO)[3]
+                 for k in range(anisotropy.WORLD_ALBEDO)) / anisotropy.WORLD_ALBEDO
+    # every strip's light under the horizon: none to weigh (as the GPU)
+    mean = radiance / _rgb_scalar(np.where(weights > 0.0, weights, 1.0))
+    return np.where((weights > 0.0)[..., None], mean * _rgb_scalar(albedo), 0.0)
 
 
 def anisotropic_prefiltered(s: Surface, read, first_clamped: int, terms: Terms):
     """model_pbr.glsl's radiance for an anisotropic lobe: ``anisotropic_environment`` (its albedo times
-    the radiance it sees) over the round lobe's split-sum E, which the split sum's albedo multiplies
-    back."""
+    back; where the lobe is round (alpha_x = alpha_y: a coat, a pixel whose Anisotropic is 0), the round
+    split sum's own read (``_split_sum_direction``), as model_pbr.glsl branches."""
+    round_lobe = np.broadcast_to(s.aniso[2] == s.aniso[3], np.shape(s.NoV))
+    d, rough = _split_sum_direction(s)
+    if np.all(round_lobe):
+        return np.broadcast_to(read(d, rough), np.shape(s.NoV) + (3,))
     E, _ = env_split_sum(s, terms)
-    return anisotropic_environment(s, read, first_clamped) / _rgb_scalar(np.maximum(E, 1e-4))
+    sampled = anisotropic_environment(s, read, first_clamped) / _rgb_scalar(np.maximum(E, 1e-4))
+    if not np.any(round_lobe):
+        return sampled
+    return np.where(round_lobe[..., None], read(d, rough), sampled)
 
 
 def env_sample_lobe(s: Surface, levels, samples: int, terms: Terms = DEFAULT_TERMS):
