@@ -160,6 +160,11 @@ def test_profile_twin_against_independent_forms():
     fit = float(np.abs(SS.bickley(ys) * math.pi - ki2).max())
     print(f"Bickley fit: {fit:.2e} of Ki_2(0)")
     assert fit <= 3e-4, fit
+    ki3 = np.array([integrate.quad(lambda t, y=y: math.cos(t) ** 2 * math.exp(-y / max(math.cos(t), 1e-300)),
+                                   0.0, math.pi / 2.0, limit=200)[0] for y in ys])
+    fit3 = float(np.abs(SS.bickley3(ys) * math.pi - ki3).max() / (math.pi / 4.0))
+    print(f"Ki_3 fit: {fit3:.2e} of Ki_3(0)")
+    assert fit3 <= 1.5e-4, fit3  # measured 5.5e-5
     from scipy import optimize
 
     albedo = np.linspace(0.01, 0.99, 99)
@@ -232,6 +237,40 @@ def test_gpu_matches_twin_profile_functions():
     error = float(np.abs(gpu - twin).max())
     print(f"subsurface_ramp GPU vs twin: {error:.2e}")
     assert error < 2e-6, error
+    # n.l where the walk leaves (its drift along the surface away from the viewer), through the ramp
+    # per channel: random normals, views and lights, drifts of -1 to 2 mean free paths
+    normal = rng.normal(size=(n, 3))
+    normal /= np.linalg.norm(normal, axis=1, keepdims=True)
+    view = rng.normal(size=(n, 3))
+    view[-2] = normal[-2]  # a view along the normal: no direction to drift in
+    view /= np.linalg.norm(view, axis=1, keepdims=True)
+    light = rng.normal(size=(n, 3))
+    light /= np.linalg.norm(light, axis=1, keepdims=True)
+    drift = rng.uniform(-1.0, 2.0, (n, 3))
+    inputs = {"a": np.column_stack([d, curvature]), "b": np.column_stack([normal, NoL]),
+              "c": np.column_stack([view, 0.0 * NoL]), "e": np.column_stack([light, 0.0 * NoL]),
+              "f": np.column_stack([drift, 0.0 * NoL])}
+    body = ("vec3 c3 = subsurface_drift_cosine(b.w, b.xyz, c.xyz, e.xyz, f.xyz, a.xyz, a.w);"
+            "result = vec4(subsurface_ramp(c3, a.xyz, a.w), 0.0);")
+    gpu = evaluate(body, inputs, dict(features.defines()), terms=S.Terms(principled=True))[:, :3]
+    cosines = SS.drift_cosine(NoL, normal, view, light, drift, d, curvature)
+    twin = SS.ramp_channels(cosines, d, curvature)
+    assert np.isfinite(gpu).all() and (gpu >= 0.0).all()
+    error = float(np.abs(gpu - twin).max())
+    print(f"the drifted ramp GPU vs twin: {error:.2e}")
+    assert error < 2e-6, error
+    assert np.array_equal(cosines[-2], np.full(3, NoL[-2]))  # the view along n: not moved
+    # the ramp under a sized light (sizes 0, below the point's threshold, small to the whole sky)
+    size = np.concatenate([rng.choice([0.0, 5e-5, 2e-3, 0.05, 0.3, 1.0], n - 2), [0.2, 0.2]])
+    inputs = {"a": np.column_stack([d, curvature]), "b": np.column_stack([np.clip(cosines, -2.0, 2.0), size])}
+    gpu = evaluate("result = vec4(subsurface_ramp_sized(b.xyz, a.xyz, a.w, b.w), 0.0);", inputs,
+                   dict(features.defines()), terms=S.Terms(principled=True))[:, :3]
+    twin = SS.ramp_sized(np.clip(cosines, -2.0, 2.0), d, curvature, size)
+    assert np.isfinite(gpu).all() and (gpu >= 0.0).all()
+    error = float((np.abs(gpu - twin) / np.maximum(twin, 1e-2)).max())
+    print(f"the sized ramp GPU vs twin: {error:.2e}")
+    assert error < 2e-4, error  # float32's difference quotient over the box
+
     # the mean free paths: Radius x Scale per method (the Skin's through the dipole's inversion)
     radius = rng.uniform(0.0, 2.0, (n, 3))
     scale = rng.uniform(0.0, 0.3, n)
@@ -252,6 +291,45 @@ def test_gpu_matches_twin_profile_functions():
     error = float((np.abs(gpu - twin) / np.maximum(twin, 1e-3)).max())
     print(f"Skin's mean free path GPU vs twin: {error:.2e}")
     assert error < 1.2e-2, error  # measured 4.0e-3: float32's bisection where sqrt(1 - alpha') is small
+
+
+def test_sized_ramp_is_the_box_average():
+    """The ramp under a sized light (ramp_sized) against the point's ramp (ramp_channels) averaged over
+    the box n.l +- sqrt(3) / 2 size by quadrature: the closed form's antiderivative; a size below the
+    point's threshold gives the point's ramp; the light's sine from its kind and size."""
+    rho = np.array([0.0, 0.003, 0.02, 0.3])
+    for size in (0.01, 0.16, 0.6):
+        half = 0.5 * math.sqrt(3.0) * size
+        x = np.linspace(-1.5 * half - 0.05, 1.5 * half + 0.05, 41)
+        t = (np.arange(4000) + 0.5) / 4000 * 2.0 - 1.0  # the box's points
+        for r in rho:
+            d = np.full(3, r)
+            exact = np.array([SS.ramp_channels((xi + half * t)[:, None] * np.ones(3), d,
+                                               np.ones(len(t)))[:, 0].mean() for xi in x])
+            ours = SS.ramp_sized(x[:, None] * np.ones(3), np.broadcast_to(d, (len(x), 3)), np.ones(len(x)),
+                                 np.full(len(x), size))[:, 0]
+            assert float(np.abs(ours - exact).max()) < 2e-4 * max(size, r, 0.01), (size, r)
+    point = SS.ramp_channels(x[:, None] * np.ones(3), np.full((len(x), 3), 0.02), np.ones(len(x)))
+    assert np.array_equal(SS.ramp_sized(x[:, None] * np.ones(3), np.full((len(x), 3), 0.02), np.ones(len(x)),
+                                        np.full(len(x), 5e-5)), point)
+    from addon.reference import shading
+
+    p = np.array([[0.0, 0.0, 0.0], [0.0, 0.0, 1.9]])
+    sphere = S.Light(kind="POINT", position=(0.0, 0.0, 2.0), direction=(0.0, 0.0, -1.0), intensity=(1.0,) * 3,
+                     radius=0.3)
+    assert np.allclose(shading.subsurface_light_sine(sphere, p), [0.15, 1.0])  # r / d; inside it: all
+    disc = S.Light(kind="POINT", position=(0.0, 0.0, 2.0), direction=(0.0, 0.0, -1.0), intensity=(1.0,) * 3,
+                   radius=0.3, soft_falloff=True)
+    assert np.allclose(shading.subsurface_light_sine(disc, p[:1]), [0.3 / math.sqrt(4.09)])
+    area = S.Light(kind="AREA", position=(0.0, 0.0, 2.0), direction=(0.0, 0.0, -1.0), intensity=(1.0,) * 3,
+                   half_size=(0.3, 0.3))
+    r2 = 0.36 / math.pi
+    assert np.allclose(shading.subsurface_light_sine(area, p[:1]), [math.sqrt(r2 / (4.0 + r2))])
+    behind = S.Light(kind="AREA", position=(0.0, 0.0, 2.0), direction=(0.0, 0.0, 1.0), intensity=(1.0,) * 3,
+                     half_size=(0.3, 0.3))
+    assert np.all(shading.subsurface_light_sine(behind, p[:1]) == 0.0)
+    sun = S.Light(kind="SUN", position=(0.0, 0.0, 0.0), direction=(0.0, 0.0, -1.0), intensity=(1.0,) * 3)
+    assert np.all(shading.subsurface_light_sine(sun, p) == 0.0)
 
 
 # --- the subsurface against Cycles' random walk -------------------------------------------------------
