@@ -239,7 +239,7 @@ def test_gpu_matches_twin():
 EDGE_WIDTH, EDGE_SPAN, EDGE_SCALE, EDGE_ALBEDO = 64, 0.6, 0.2, 0.8
 
 
-def _edge_scene(theta, ior, roughness):
+def _edge_scene(theta, ior, roughness, anisotropy=0.0):
     """A 8 m slab (Subsurface Scattering node, Random Walk, grey EDGE_ALBEDO, Radius 1, Scale
     EDGE_SCALE) under a sun straight down, a blocker 0.5 m above shadowing x < 0 (hidden from the camera:
     a sharp edge along y at x = 0), an orthographic camera tilted by ``theta`` about y (from +x: the
@@ -254,7 +254,8 @@ def _edge_scene(theta, ior, roughness):
     node.inputs["Color"].default_value = (EDGE_ALBEDO, EDGE_ALBEDO, EDGE_ALBEDO, 1.0)
     node.inputs["Scale"].default_value = EDGE_SCALE
     node.inputs["Radius"].default_value = (1.0, 1.0, 1.0)
-    for socket, value in (("IOR", ior), ("Roughness", roughness)):  # by identifier
+    # by identifier
+    for socket, value in (("IOR", ior), ("Roughness", roughness), ("Anisotropy", anisotropy)):
         next(s for s in node.inputs if s.identifier == socket).default_value = value
     tree.links.new(node.outputs["BSSRDF"], out.inputs["Surface"])
     scenes.plane(scene, size=8.0, material=mat)
@@ -266,13 +267,14 @@ def _edge_scene(theta, ior, roughness):
 
 
 #: name -> (the view's angle from the normal (degrees; below 0 from -x: drifting into the light), the
-#: entry's IOR and GGX alpha)
-EDGE_CASES = {"grazing-smooth": (72.5, 1.01, 0.0), "grazing-smooth-mirrored": (-72.5, 1.01, 0.0),
-              "oblique-rough-1.5": (45.0, 1.5, 0.25), "steep-rough-1.5": (20.0, 1.5, 0.25)}
+#: entry's IOR and GGX alpha, the Anisotropy)
+EDGE_CASES = {"grazing-smooth": (72.5, 1.01, 0.0, 0.0), "grazing-smooth-mirrored": (-72.5, 1.01, 0.0, 0.0),
+              "oblique-rough-1.5": (45.0, 1.5, 0.25, 0.0), "steep-rough-1.5": (20.0, 1.5, 0.25, 0.0),
+              "grazing-anisotropy-0.5": (72.5, 1.01, 0.0, 0.5)}
 #: per case |Cycles' edge shift - the twin's drift| in units of d, measured with bpy 5.0.1 (Cycles at
 #: EDGE_SAMPLES: its noise ~0.03 d)
 EDGE_MEASURED = {"grazing-smooth": 0.026, "grazing-smooth-mirrored": 0.100, "oblique-rough-1.5": 0.011,
-                 "steep-rough-1.5": 0.022}
+                 "steep-rough-1.5": 0.022, "grazing-anisotropy-0.5": 0.009}
 EDGE_SAMPLES = 256
 
 
@@ -284,16 +286,16 @@ def test_drift_against_cycles_at_a_shadow_edge(case, tmp_path):
     - the unblurred step) across the edge; within 3x what was measured, and the shift at least 5x
     that (in the grazing cases, 0.8-0.9 d). Drift linear in the entry cosine between the table's
     nodes (its moment rather than per unit sine) was 0.15 and 0.12 d off in the rough cases."""
-    degrees, ior, alpha = EDGE_CASES[case]
+    degrees, ior, alpha, anisotropy = EDGE_CASES[case]
     theta = math.radians(degrees)
-    image = _cycles(_edge_scene(theta, ior, alpha), tmp_path / "edge.exr", samples=EDGE_SAMPLES)
+    image = _cycles(_edge_scene(theta, ior, alpha, anisotropy), tmp_path / "edge.exr", samples=EDGE_SAMPLES)
     profile = image[..., 0].astype(np.float64).mean(0)
     profile /= profile[-8:].mean()  # the lit level
     cos_v = math.cos(theta)
     x = ((np.arange(EDGE_WIDTH) + 0.5) / EDGE_WIDTH - 0.5) * EDGE_SPAN / cos_v  # the pixels on the slab
     d = EDGE_SCALE / (4.0 * math.pi)
     shift = float(np.sum(profile - (x > 0.0)) * (x[1] - x[0])) / d  # towards the light (+x): > 0
-    row = np.array([0.0, ior, alpha, 0.0])
+    row = np.array([anisotropy, ior, alpha, 0.0])
     _, drift, _ = SS.walk_factor(cos_v, np.full(3, EDGE_ALBEDO), row, drift=True)
     expected = -math.copysign(float(drift[0]), degrees)
     error = abs(shift - expected)
@@ -326,11 +328,10 @@ SPHERE_CASES = {
     "principled-ior-2.0": (dict(scale=0.2, IOR=2.0), None),
     "skin-ior-2.0": (dict(scale=0.1, method="RANDOM_WALK_SKIN", **{"Subsurface IOR": 2.0}), None),
 }
-#: The cases where the walk's drift along the entering ray shows (an IOR near 1 lets the ray in at the
-#: view's grazing angle: its walk leaves the surface farther towards the unlit side, which the table's
-#: half-space does not see): the darkest bin, by the terminator, 4-6 % bright; not held to the defaults'
-#: error (docs/limits.md)
-DRIFT = ("node-ior-1.01", "principled-ior-1.01")
+#: The cases not held to the defaults' error: Anisotropy 0.5's darkest bin, by the terminator, is 3.2 %
+#: dark in red (cause not found: its drift matches Cycles' at a shadow's edge within 0.07 d)
+#: (docs/limits.md)
+DRIFT = ("anisotropy-0.5",)
 #: Cycles' random walk's samples per pixel
 SPHERE_SAMPLES = 64
 
@@ -361,11 +362,13 @@ def spheres(tmp_path_factory):
 
 
 #: per case: the largest |ours / walk - 1| over test_subsurface's brightness bins and the channels,
-#: measured with bpy 5.0.1 (the walk at SPHERE_SAMPLES)
-SPHERE_MEASURED = {"defaults": 0.018, "anisotropy-0.5": 0.029, "anisotropy-0.9": 0.020,
-                   "node-ior-1.01": 0.038, "node-ior-2.0": 0.014, "node-rough-ior-2.0": 0.023,
-                   "node-roughness-0": 0.013,
-                   "principled-ior-1.01": 0.061, "principled-ior-2.0": 0.023, "skin-ior-2.0": 0.013}
+#: measured with bpy 5.0.1 (the walk at SPHERE_SAMPLES); before the walk's drift, its convex gain and
+#: the light's curvature over its spread were drawn: 0.018, 0.029, 0.020, 0.038, 0.014, 0.023, 0.013,
+#: 0.061, 0.023, 0.013
+SPHERE_MEASURED = {"defaults": 0.013, "anisotropy-0.5": 0.032, "anisotropy-0.9": 0.017,
+                   "node-ior-1.01": 0.014, "node-ior-2.0": 0.014, "node-rough-ior-2.0": 0.014,
+                   "node-roughness-0": 0.014,
+                   "principled-ior-1.01": 0.015, "principled-ior-2.0": 0.009, "skin-ior-2.0": 0.015}
 
 
 def _bins_off(image, reference, lambert) -> float:
@@ -402,7 +405,7 @@ def test_walk_inputs_against_cycles(case, spheres):
 #: channel whose Radius x Scale is under a quarter of the pixel's footprint as a plain diffuse
 #: (bssrdf_setup; 4.5 no longer does): here the blue (5 mm against 10 mm), which the engine walks: ours
 #: 15 % off its blue, measured there, and not held to the Lambert base's error (docs/limits.md)
-WORLD_MEASURED = 0.024 if bpy.app.version >= (4, 5, 0) else 0.148
+WORLD_MEASURED = 0.025 if bpy.app.version >= (4, 5, 0) else 0.148
 WORLD_SAMPLES = 64
 #: the rings of n.v (the sphere seen from its axis: its radius)
 RINGS = ((0.7, 1.01), (0.35, 0.7), (0.1, 0.35))

@@ -142,6 +142,23 @@ def ramp_sized(NoL, d, curvature, size):
     return np.where(size > 1e-4, ramp + near, point)
 
 
+def curved_light(c, d, curvature, u):
+    """glsl/subsurface.glsl's subsurface_curved_light: (..., 3) the irradiance's own curvature over the
+    profile's spread (sigma^2 = 7 d^2 per axis), per unit irradiance, for a light at distance 1 / ``u``
+    seen at cosine ``c`` on a surface of ``curvature``: sigma^2 (-(u + k c)(3 c u + k) + (1 - c^2)
+    (7.5 c u^2 + 3 k u)), faded out within 4 widths of the terminator, widths held to 0.1."""
+    c = np.asarray(c, np.float64)[..., None]
+    k = np.maximum(np.asarray(curvature, np.float64), 0.0)[..., None]
+    u = np.asarray(u, np.float64)[..., None]
+    q = -(u + k * c) * (3.0 * c * u + k) + (1.0 - c * c) * (7.5 * c * u * u + 3.0 * k * u)
+    reach = k + u
+    rho = np.minimum(np.asarray(d, np.float64) * reach, 0.1)
+    fade = np.clip(c / np.maximum(4.0 * rho, 1e-6), 0.0, 1.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sigma2 = np.where(reach > 0.0, 7.0 * rho * rho / np.where(reach > 0.0, reach * reach, 1.0), 0.0)
+    return sigma2 * q * fade
+
+
 # --- the random walk's reflectance (Cycles' subsurface_random_walk), tabulated ------------------------
 #
 # Cycles' Random Walk methods trace the camera's ray into the surface (refracted through a rough
