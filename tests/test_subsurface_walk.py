@@ -273,8 +273,12 @@ EDGE_CASES = {"grazing-smooth": (72.5, 1.01, 0.0, 0.0), "grazing-smooth-mirrored
               "grazing-anisotropy-0.5": (72.5, 1.01, 0.0, 0.5)}
 #: per case |Cycles' edge shift - the twin's drift| in units of d, measured with bpy 5.0.1 (Cycles at
 #: EDGE_SAMPLES: its noise ~0.03 d)
-EDGE_MEASURED = {"grazing-smooth": 0.026, "grazing-smooth-mirrored": 0.100, "oblique-rough-1.5": 0.011,
-                 "steep-rough-1.5": 0.022, "grazing-anisotropy-0.5": 0.009}
+EDGE_MEASURED = {"grazing-smooth": 0.034, "grazing-smooth-mirrored": 0.107, "oblique-rough-1.5": 0.039,
+                 "steep-rough-1.5": 0.01, "grazing-anisotropy-0.5": 0.017}  # (steep: 0.000, the noise's 0.01)
+if bpy.app.version < (5, 0, 0):  # Blender 4.2's and 4.5's Cycles (their sampler): the grazing edges 0.1 d
+    # nearer the entry point, measured with bpy 4.5.15 (4.2.23 alike)
+    EDGE_MEASURED = {"grazing-smooth": 0.133, "grazing-smooth-mirrored": 0.098, "oblique-rough-1.5": 0.054,
+                     "steep-rough-1.5": 0.015, "grazing-anisotropy-0.5": 0.092}
 EDGE_SAMPLES = 256
 
 
@@ -328,8 +332,8 @@ SPHERE_CASES = {
     "principled-ior-2.0": (dict(scale=0.2, IOR=2.0), None),
     "skin-ior-2.0": (dict(scale=0.1, method="RANDOM_WALK_SKIN", **{"Subsurface IOR": 2.0}), None),
 }
-#: The cases not held to the defaults' error: Anisotropy 0.5's darkest bin, by the terminator, is 3.2 %
-#: dark in red (cause not found: its drift matches Cycles' at a shadow's edge within 0.07 d)
+#: The cases not held to the defaults' error: Anisotropy 0.5's darkest bin, by the terminator, is 2.8 %
+#: dark in red (cause not found: its drift matches Cycles' at a shadow's edge within 0.02-0.07 d)
 #: (docs/limits.md)
 DRIFT = ("anisotropy-0.5",)
 #: Cycles' random walk's samples per pixel
@@ -365,10 +369,10 @@ def spheres(tmp_path_factory):
 #: measured with bpy 5.0.1 (the walk at SPHERE_SAMPLES); before the walk's drift, its convex gain and
 #: the light's curvature over its spread were drawn: 0.018, 0.029, 0.020, 0.038, 0.014, 0.023, 0.013,
 #: 0.061, 0.023, 0.013
-SPHERE_MEASURED = {"defaults": 0.013, "anisotropy-0.5": 0.032, "anisotropy-0.9": 0.017,
+SPHERE_MEASURED = {"defaults": 0.013, "anisotropy-0.5": 0.028, "anisotropy-0.9": 0.017,
                    "node-ior-1.01": 0.014, "node-ior-2.0": 0.014, "node-rough-ior-2.0": 0.014,
                    "node-roughness-0": 0.014,
-                   "principled-ior-1.01": 0.015, "principled-ior-2.0": 0.009, "skin-ior-2.0": 0.015}
+                   "principled-ior-1.01": 0.015, "principled-ior-2.0": 0.008, "skin-ior-2.0": 0.015}
 
 
 def _bins_off(image, reference, lambert) -> float:

@@ -531,13 +531,18 @@ def entry_weights(cos_v, eta, alpha, diffuse_share, drift=False):
     return (out, along) if drift else out
 
 
-def walk_lookup(albedo, g, table=None):
+def walk_lookup(albedo, g, table=None, nearest=False):
     """(..., 3, WALK_MU_NODES + 1): the table's R / albedo rows at each channel's ``albedo`` (..., 3)
-    and ``g`` (...), bilinear between the nodes in sqrt(albedo) and g, both clamped to the table."""
+    and ``g`` (...), bilinear between the nodes in sqrt(albedo) and g, both clamped to the table;
+    ``nearest``: at the nearest node (glsl/subsurface.glsl's subsurface_walk_nearest)."""
     table = (walk_table() if table is None else table).astype(np.float64)
     x = np.sqrt(np.clip(np.asarray(albedo, np.float64), 0.0, 1.0)) * (WALK_ALBEDO_NODES - 1.0)
     y = np.clip(np.asarray(g, np.float64), 0.0, WALK_G_MAX) * ((WALK_G_NODES - 1.0) / WALK_G_MAX)
     y = np.broadcast_to(y[..., None], x.shape)
+    if nearest:
+        i = np.minimum(np.floor(x + 0.5).astype(int), WALK_ALBEDO_NODES - 1)
+        j = np.minimum(np.floor(y + 0.5).astype(int), WALK_G_NODES - 1)
+        return table[i, j]
     i0 = np.minimum(np.floor(x).astype(int), WALK_ALBEDO_NODES - 1)
     j0 = np.minimum(np.floor(y).astype(int), WALK_G_NODES - 1)
     i1, j1 = np.minimum(i0 + 1, WALK_ALBEDO_NODES - 1), np.minimum(j0 + 1, WALK_G_NODES - 1)
@@ -566,8 +571,10 @@ def walk_factor(cos_v, albedo, walk, roughness=0.5, table=None, drift=False):
     factor = np.where(walked, factor, 1.0)
     if not drift:
         return factor
-    moment = np.sum(walk_lookup(albedo, g, walk_drift_table()) * along[..., None, :WALK_MU_NODES], axis=-1)
-    gain = np.sum(walk_lookup(albedo, g, walk_gain_table()) * weights[..., None, :], axis=-1)
+    # the drift's and the gain's at the nearest node (smooth in both: a quarter of the GPU's reads)
+    moments = walk_lookup(albedo, g, walk_drift_table(), nearest=True)
+    moment = np.sum(moments * along[..., None, :WALK_MU_NODES], axis=-1)
+    gain = np.sum(walk_lookup(albedo, g, walk_gain_table(), nearest=True) * weights[..., None, :], axis=-1)
     # a factor of 0 (an albedo of 0 reflects nothing): no drift or gain to speak of
     safe = np.maximum(factor, 1e-6)
     return (factor, np.where(walked & (factor > 1e-6), moment / safe, 0.0),
