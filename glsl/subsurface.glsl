@@ -19,7 +19,11 @@
  * IOR and roughness (a steep entry: less, a grazing one: more) change. subsurface_walk_at gives that
  * factor per channel at the view, from a table of R / albedo (subsurface_table: Monte Carlo walks of
  * Cycles' medium in a half-space, addon/reference/subsurface.py's compute_walk_table) over the
- * albedo, the Anisotropy and the entry cosine, weighted by the refracted rays' cosines. */
+ * albedo, the Anisotropy and the entry cosine, weighted by the refracted rays' cosines. The same walks
+ * give the walk's drift along the entering ray (n.l taken where it leaves on average:
+ * subsurface_drift_cosine) and its gain on a convex surface (subsurface_walk_curved); a light's size
+ * smooths the terminator (subsurface_ramp_sized) and a close light's own falloff over the profile's
+ * spread is taken to second order (subsurface_curved_light). */
 
 #if defined(SL_SUBSURFACE) || defined(SL_TRANSLUCENT)
 /* Cycles' bsdf_translucent_eval: a Lambertian lobe on the far side of the normal, f (n.l) per unit
@@ -78,11 +82,11 @@ float subsurface_bickley3(float y)
 /* subsurface_ramp under a light of angular radius asin(size) (subsurface_light_shape): the light's
  * disc spreads n.l over its points (a semicircle distribution of radius size about the centre's n.l),
  * here a box of the same variance, n.l +- sqrt(3) / 2 size, whose average of the point's ramp is the
- * horizon-clipped irradiance of the light, (x + w)^2 / (4 w) across it: 1.5-2 % (size 0.05-0.3) and
- * 10 % (0.6) off the exact cap's, in units of a quarter of its size (Snyder's; the plain size as the
- * box's half-width: 13-15 %); convolved with the profile it is the box average of subsurface_ramp: the
- * ramp's part in closed form, the profile's excess by its antiderivative (the Bickley function one
- * order up, subsurface_bickley3). A size of 0 (a point, a sun): the point's. */
+ * horizon-clipped irradiance of the light, (x + w)^2 / (4 w) across it: within 1.5-2 % of the exact
+ * cap's (Snyder's) at sizes 0.05-0.3 and 10 % at 0.6, relative and floored at a quarter of the size
+ * (the plain size as the box's half-width: 13-15 %); convolved with the profile it is the box average
+ * of subsurface_ramp: the ramp's part in closed form, the profile's excess by its antiderivative (the
+ * Bickley function one order up, subsurface_bickley3). A size of 0 (a point, a sun): the point's. */
 vec3 subsurface_ramp_sized(vec3 NoL, vec3 d, float curvature, float size)
 {
   /* a light smaller than 1e-4 (or none): the point's ramp (the box's difference quotient loses

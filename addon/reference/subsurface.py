@@ -1,6 +1,8 @@
 """The twin of glsl/subsurface.glsl: the Translucent BSDF, Cycles' Christensen-Burley profile, the
 subsurface's mean free path as Cycles sets it up from Radius, Scale, the method, the albedo and the
-IOR, and the profile pre-integrated against a light's terminator (``ramp``)."""
+IOR, the profile pre-integrated against a light's terminator (``ramp``; under a sized light
+``ramp_sized``; the light's own curvature ``curved_light``), and Cycles' random walk's reflectance, drift
+and convex gain, tabulated (``walk_factor``)."""
 
 from __future__ import annotations
 
