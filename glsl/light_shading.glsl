@@ -212,8 +212,9 @@ vec3 shade_light(Surface s, LightData light, vec3 l, vec3 E, float visibility, v
 #  endif
 #endif
 #ifdef SL_SUBSURFACE
-  /* the subsurface's share of the base, at the light's direction (every kind of light as a point) */
-  c += subsurface_direct(s, l) * E * factors.x;
+  /* the subsurface's share of the base, at the light's direction, the light's size smoothing its
+   * terminator (subsurface.glsl) */
+  c += subsurface_direct(s, l, subsurface_light_shape(light, s.p)) * E * factors.x;
 #endif
 #if defined(SL_COAT) || defined(SL_SHEEN)
   c *= s.below;

@@ -200,6 +200,8 @@ struct Surface {
   vec3 subsurface_radius;  /* its mean free path per channel (m) */
   float curvature;         /* the surface's curvature (1/m) where the mesh program measures it, else 0 */
   vec3 subsurface_walk;    /* the random walk's light over its Lambert base at the view (subsurface.glsl) */
+  vec3 subsurface_drift;   /* and its mean drift away from the viewer, in units of the mean free path */
+  vec3 subsurface_gain;    /* and its gain on a convex surface per unit profile width over radius */
 #endif
 #ifdef SL_TRANSMISSION
   TransmissionLobe transmission;
@@ -212,7 +214,8 @@ struct Surface {
 #endif
 };
 #ifdef SL_SUBSURFACE
-vec3 subsurface_walk_at(vec3 n, vec3 v, vec3 albedo, vec4 walk, float roughness); /* subsurface.glsl */
+vec3 subsurface_walk_at(vec3 n, vec3 v, vec3 albedo, vec4 walk, float roughness, out vec3 drift,
+                        out vec3 gain); /* subsurface.glsl */
 #endif
 #ifdef SL_THIN_FILM
 #  ifdef SL_LAYERS
@@ -346,7 +349,8 @@ Surface make_surface(vec3 p, vec3 n, vec3 v, MaterialData m)
   s.subsurface_radius = max(m.subsurface.rgb, 0.0);
   s.curvature = 0.0;
   /* its albedo the base colour within [0, 1] (Cycles' clamped_base_color) */
-  s.subsurface_walk = subsurface_walk_at(n, v, clamp(s.base_color, 0.0, 1.0), m.subsurface_walk, m.params.x);
+  s.subsurface_walk = subsurface_walk_at(n, v, clamp(s.base_color, 0.0, 1.0), m.subsurface_walk, m.params.x,
+                                         s.subsurface_drift, s.subsurface_gain);
 #endif
   return s;
 }

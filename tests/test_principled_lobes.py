@@ -638,6 +638,12 @@ def check_extremes(case: str, lobe: dict, twin: bool = True):
     sw.material_extra = {k: v for k, v in lobe.items() if k not in ROW_INPUTS}
     sw.surface_extra = {ROW_INPUTS[k][0]: np.asarray(v, np.float64)
                         for k, v in lobe.items() if k in ROW_INPUTS}
+    # the subsurface's mean free path as the GPU's row holds it (_material_lines: pack_material's, of
+    # the material's own base colour; the sweep's grey rows would change Skin's, which a light's
+    # distance reads: subsurface.glsl's subsurface_curved_light)
+    m = S.MaterialParams(**sw.material_extra)
+    sw.surface_extra["subsurface_radius"] = np.frombuffer(programs.pack_material(m), np.float32).reshape(
+        -1, 4)[9 + 8, :3].astype(np.float64)
     sw.anisotropy = ((0.0, 0.0, 0.0), 1.0)  # the program draws ANISOTROPY: pack_material's row without one
     terms = S.Terms(principled=True)
     kinds = frozenset(ST.LIGHTS[name].kind for name in sw.lights)

@@ -35,23 +35,36 @@ RECOMPUTE_PATHS = 6000
 
 
 def test_table_reproduces_the_walk():
-    """Sample cells of the shipped table against the twin's walk recomputed with other random numbers:
-    within 4.5 standard errors of their difference (both Monte Carlo: the table's paths, these)."""
-    table = SS.walk_table()
+    """Sample cells of the shipped tables (R / albedo, the drift's moment per unit sine, the convex gain
+    per unit rho) against the twin's walk recomputed with other random numbers: within 4.5 standard
+    errors of their difference (both Monte Carlo: the table's paths, these); the drift forward and the
+    gain positive (a convex surface lets more walks out) at every node of the tables."""
+    table, drifts, gains = SS.walk_table(), SS.walk_drift_table(), SS.walk_gain_table()
     with np.load(SS.WALK_SHIPPED) as data:
-        paths = int(data["paths"])
+        paths, moment_paths = int(data["paths"]), int(data["moment_paths"])
+    mus = np.maximum(SS.walk_mus(), 1e-6)
     worst = 0.0
     for i, j in RECOMPUTED:
         albedo, g = max(SS.walk_albedos()[i], 1e-4), SS.walk_gs()[j]
-        again, error = SS.walk_reflectance(albedo, g, np.maximum(SS.walk_mus(), 1e-6), RECOMPUTE_PATHS,
-                                           seed=7 + i + j, spread=True)
+        entries = np.append(mus[:-1], SS.WALK_DRIFT_LAST_MU)
+        means, errors = SS.walk_moments(albedo, g, entries, RECOMPUTE_PATHS, seed=7 + i + j)
+        again, error = SS.walk_reflectance(albedo, g, mus, RECOMPUTE_PATHS, seed=7 + i + j, spread=True)
         sigma = error * math.sqrt(1.0 + RECOMPUTE_PATHS / paths)
         off = np.abs(again - table[i, j, :SS.WALK_MU_NODES]) / sigma
-        worst = max(worst, float(off.max()))
+        widen = math.sqrt(1.0 + RECOMPUTE_PATHS / moment_paths)
+        off_drift = np.abs(means[1] - drifts[i, j]) / (errors[1] * widen)
+        # the gain at the cosine nodes the table walks (2-5: 0 and 1 take 2's, 6 is walked at 1)
+        off_gain = (np.abs(means[2, 2:-1] - gains[i, j, 2:SS.WALK_MU_NODES - 1])
+                    / (errors[2, 2:-1] * widen))
+        worst = max(worst, float(off.max()), float(off_drift.max()), float(off_gain.max()))
         print(f"albedo {albedo:.3f}, g {g:.2f}: table {np.round(table[i, j], 3)}, "
-              f"again {np.round(again, 3)}, {off.max():.2f} standard errors apart")
+              f"again {np.round(again, 3)}, "
+              f"{off.max():.2f} standard errors apart; drift {np.round(drifts[i, j], 3)}, "
+              f"{off_drift.max():.2f} apart; gain {np.round(gains[i, j], 2)}, {off_gain.max():.2f} apart")
+        assert np.all(drifts[i, j] > 0.0) and np.all(gains[i, j] > 0.0), (drifts[i, j], gains[i, j])
     assert worst < 4.5, worst
-    assert paths >= 20000, paths
+    assert paths >= 20000 and moment_paths >= 5000, (paths, moment_paths)
+    assert np.all(drifts > 0.0) and np.all(gains > 0.0)
 
 
 def _sampled_factor(cos_v, eta, alpha, albedo, g, count=100_000, seed=3):
@@ -200,12 +213,101 @@ def test_gpu_matches_twin():
     body = ("vec3 v = vec3(sqrt(max(1.0 - a.w * a.w, 0.0)), 0.0, a.w);"
             "result = vec4(subsurface_walk_at(vec3(0.0, 0.0, 1.0), v, a.rgb, b, c.x), 0.0);")
     gpu = evaluate(body, inputs, dict(features.defines()), terms=S.Terms(principled=True))[:, :3]
-    twin = SS.walk_factor(cos_v, albedo, walk, roughness)
+    twin, twin_drift, twin_gain = SS.walk_factor(cos_v, albedo, walk, roughness, drift=True)
     assert np.isfinite(gpu).all() and (gpu >= 0.0).all()
     error = float((np.abs(gpu - twin) / np.maximum(twin, 1.0)).max())
     print(f"subsurface_walk_at GPU against twin: {error:.2e}")
     assert error < 1e-5, error
     assert np.all(gpu[walk[:, 1] <= 0.0] == 1.0)  # Christensen-Burley: no walk
+    # the walk's drift (units of the mean free path; the view in the xz plane: away from it is -x) and
+    # its gain on a convex surface per unit rho
+    for name, index, expected in (("drift", 0, twin_drift), ("gain", 1, twin_gain)):
+        body = ("vec3 v = vec3(sqrt(max(1.0 - a.w * a.w, 0.0)), 0.0, a.w); vec3 part[2];"
+                "subsurface_walk_at(vec3(0.0, 0.0, 1.0), v, a.rgb, b, c.x, part[0], part[1]);"
+                f"result = vec4(part[{index}], 0.0);")
+        gpu = evaluate(body, inputs, dict(features.defines()), terms=S.Terms(principled=True))[:, :3]
+        assert np.isfinite(gpu).all()
+        error = float(np.abs(gpu - expected).max())
+        print(f"the walk's {name} GPU against twin: {error:.2e} (largest {np.abs(expected).max():.3f})")
+        assert error < 1e-4 * max(1.0, float(np.abs(expected).max())), (name, error)
+        assert np.all(gpu[walk[:, 1] <= 0.0] == 0.0)  # Christensen-Burley: no walk, no drift, no gain
+
+
+# --- the walk's drift against Cycles: a shadow's edge on a slab --------------------------------------
+
+#: The slab's edge: its pixels across (an orthographic view 0.6 m wide), Radius x Scale (d = 15.9 mm)
+EDGE_WIDTH, EDGE_SPAN, EDGE_SCALE, EDGE_ALBEDO = 64, 0.6, 0.2, 0.8
+
+
+def _edge_scene(theta, ior, roughness, anisotropy=0.0):
+    """A 8 m slab (Subsurface Scattering node, Random Walk, grey EDGE_ALBEDO, Radius 1, Scale
+    EDGE_SCALE) under a sun straight down, a blocker 0.5 m above shadowing x < 0 (hidden from the camera:
+    a sharp edge along y at x = 0), an orthographic camera tilted by ``theta`` about y (from +x: the
+    view's direction along the surface, away from the camera, is -x: its walks drift into the shadow)."""
+    scene = scenes.reset(size=EDGE_WIDTH)
+    scene.render.resolution_y = 4
+    scenes.ortho_camera(scene, location=(3.0 * math.sin(theta), 0.0, 3.0 * math.cos(theta)),
+                        rotation=(0.0, theta, 0.0), scale=EDGE_SPAN)
+    mat, tree, out = _tree("Edge")
+    node = tree.nodes.new("ShaderNodeSubsurfaceScattering")
+    node.falloff = "RANDOM_WALK"
+    node.inputs["Color"].default_value = (EDGE_ALBEDO, EDGE_ALBEDO, EDGE_ALBEDO, 1.0)
+    node.inputs["Scale"].default_value = EDGE_SCALE
+    node.inputs["Radius"].default_value = (1.0, 1.0, 1.0)
+    # by identifier
+    for socket, value in (("IOR", ior), ("Roughness", roughness), ("Anisotropy", anisotropy)):
+        next(s for s in node.inputs if s.identifier == socket).default_value = value
+    tree.links.new(node.outputs["BSSRDF"], out.inputs["Surface"])
+    scenes.plane(scene, size=8.0, material=mat)
+    blocker = scenes.plane(scene, size=4.0, location=(-2.0, 0.0, 0.5))
+    blocker.visible_camera = False
+    scenes.light(scene, "SUN", energy=1.0, use_shadow=True)
+    scene.cycles.light_sampling_threshold = 0.0
+    return scene
+
+
+#: name -> (the view's angle from the normal (degrees; below 0 from -x: drifting into the light), the
+#: entry's IOR and GGX alpha, the Anisotropy)
+EDGE_CASES = {"grazing-smooth": (72.5, 1.01, 0.0, 0.0), "grazing-smooth-mirrored": (-72.5, 1.01, 0.0, 0.0),
+              "oblique-rough-1.5": (45.0, 1.5, 0.25, 0.0), "steep-rough-1.5": (20.0, 1.5, 0.25, 0.0),
+              "grazing-anisotropy-0.5": (72.5, 1.01, 0.0, 0.5)}
+#: per case |Cycles' edge shift - the twin's drift| in units of d, measured with bpy 5.0.1 (Cycles at
+#: EDGE_SAMPLES: its noise ~0.03 d)
+EDGE_MEASURED = {"grazing-smooth": 0.034, "grazing-smooth-mirrored": 0.107, "oblique-rough-1.5": 0.039,
+                 "steep-rough-1.5": 0.01, "grazing-anisotropy-0.5": 0.017}  # (steep: 0.000, the noise's 0.01)
+if bpy.app.version < (5, 0, 0):  # Blender 4.2's and 4.5's Cycles (their sampler): the grazing edges 0.1 d
+    # nearer the entry point, measured with bpy 4.5.15 (4.2.23 alike)
+    EDGE_MEASURED = {"grazing-smooth": 0.133, "grazing-smooth-mirrored": 0.098, "oblique-rough-1.5": 0.054,
+                     "steep-rough-1.5": 0.015, "grazing-anisotropy-0.5": 0.092}
+EDGE_SAMPLES = 256
+
+
+@pytest.mark.parametrize("case", EDGE_CASES)
+def test_drift_against_cycles_at_a_shadow_edge(case, tmp_path):
+    """The walk's mean drift away from the viewer (walk_factor's, from the table's drift moments and
+    the entry's quadrature) against Cycles' own: a sharp shadow's edge on a slab, blurred by the walk,
+    moves by the walks' mean displacement across it -- the integral of (the image over the lit level
+    - the unblurred step) across the edge; within 3x what was measured, and the shift at least 5x
+    that (in the grazing cases, 0.8-0.9 d). Drift linear in the entry cosine between the table's
+    nodes (its moment rather than per unit sine) was 0.15 and 0.12 d off in the rough cases."""
+    degrees, ior, alpha, anisotropy = EDGE_CASES[case]
+    theta = math.radians(degrees)
+    image = _cycles(_edge_scene(theta, ior, alpha, anisotropy), tmp_path / "edge.exr", samples=EDGE_SAMPLES)
+    profile = image[..., 0].astype(np.float64).mean(0)
+    profile /= profile[-8:].mean()  # the lit level
+    cos_v = math.cos(theta)
+    x = ((np.arange(EDGE_WIDTH) + 0.5) / EDGE_WIDTH - 0.5) * EDGE_SPAN / cos_v  # the pixels on the slab
+    d = EDGE_SCALE / (4.0 * math.pi)
+    shift = float(np.sum(profile - (x > 0.0)) * (x[1] - x[0])) / d  # towards the light (+x): > 0
+    row = np.array([anisotropy, ior, alpha, 0.0])
+    _, drift, _ = SS.walk_factor(cos_v, np.full(3, EDGE_ALBEDO), row, drift=True)
+    expected = -math.copysign(float(drift[0]), degrees)
+    error = abs(shift - expected)
+    print(f"{case}: Cycles' edge moved {shift:+.3f} d, the twin's drift {expected:+.3f} d: "
+          f"{error:.3f} d apart")
+    assert error <= 3.0 * EDGE_MEASURED[case], (case, shift, expected)
+    if abs(degrees) > 60.0:
+        assert abs(shift) >= 5.0 * error, (case, shift, error)
 
 
 # --- the sphere against Cycles' random walk ---------------------------------------------------------
@@ -230,11 +332,10 @@ SPHERE_CASES = {
     "principled-ior-2.0": (dict(scale=0.2, IOR=2.0), None),
     "skin-ior-2.0": (dict(scale=0.1, method="RANDOM_WALK_SKIN", **{"Subsurface IOR": 2.0}), None),
 }
-#: The cases where the walk's drift along the entering ray shows (an IOR near 1 lets the ray in at the
-#: view's grazing angle: its walk leaves the surface farther towards the unlit side, which the table's
-#: half-space does not see): the darkest bin, by the terminator, 4-6 % bright; not held to the defaults'
-#: error (docs/limits.md)
-DRIFT = ("node-ior-1.01", "principled-ior-1.01")
+#: The cases not held to the defaults' error: Anisotropy 0.5's darkest bin, by the terminator, is 2.8 %
+#: dark in red (cause not found: its drift matches Cycles' at a shadow's edge within 0.02-0.07 d)
+#: (docs/limits.md)
+DRIFT = ("anisotropy-0.5",)
 #: Cycles' random walk's samples per pixel
 SPHERE_SAMPLES = 64
 
@@ -265,11 +366,13 @@ def spheres(tmp_path_factory):
 
 
 #: per case: the largest |ours / walk - 1| over test_subsurface's brightness bins and the channels,
-#: measured with bpy 5.0.1 (the walk at SPHERE_SAMPLES)
-SPHERE_MEASURED = {"defaults": 0.018, "anisotropy-0.5": 0.029, "anisotropy-0.9": 0.020,
-                   "node-ior-1.01": 0.038, "node-ior-2.0": 0.014, "node-rough-ior-2.0": 0.023,
-                   "node-roughness-0": 0.013,
-                   "principled-ior-1.01": 0.061, "principled-ior-2.0": 0.023, "skin-ior-2.0": 0.013}
+#: measured with bpy 5.0.1 (the walk at SPHERE_SAMPLES); before the walk's drift, its convex gain and
+#: the light's curvature over its spread were drawn: 0.018, 0.029, 0.020, 0.038, 0.014, 0.023, 0.013,
+#: 0.061, 0.023, 0.013
+SPHERE_MEASURED = {"defaults": 0.013, "anisotropy-0.5": 0.028, "anisotropy-0.9": 0.017,
+                   "node-ior-1.01": 0.014, "node-ior-2.0": 0.014, "node-rough-ior-2.0": 0.014,
+                   "node-roughness-0": 0.014,
+                   "principled-ior-1.01": 0.015, "principled-ior-2.0": 0.008, "skin-ior-2.0": 0.015}
 
 
 def _bins_off(image, reference, lambert) -> float:
@@ -306,7 +409,7 @@ def test_walk_inputs_against_cycles(case, spheres):
 #: channel whose Radius x Scale is under a quarter of the pixel's footprint as a plain diffuse
 #: (bssrdf_setup; 4.5 no longer does): here the blue (5 mm against 10 mm), which the engine walks: ours
 #: 15 % off its blue, measured there, and not held to the Lambert base's error (docs/limits.md)
-WORLD_MEASURED = 0.024 if bpy.app.version >= (4, 5, 0) else 0.148
+WORLD_MEASURED = 0.025 if bpy.app.version >= (4, 5, 0) else 0.148
 WORLD_SAMPLES = 64
 #: the rings of n.v (the sphere seen from its axis: its radius)
 RINGS = ((0.7, 1.01), (0.35, 0.7), (0.1, 0.35))

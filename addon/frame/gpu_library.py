@@ -830,14 +830,20 @@ def thin_film_table() -> gpu.types.GPUTexture:
     return LIBRARY.table(("THIN_FILM",), build)
 
 def subsurface_table() -> gpu.types.GPUTexture:
-    """The subsurface's random walk table (addon/reference/subsurface.py's walk_table) as an RGBA32F
-    texture: texel (2 i, j) the entry nodes 0-3 of albedo node i and Anisotropy node j, (2 i + 1, j)
-    nodes 4-7 (glsl/subsurface.glsl's subsurface_walk_node)."""
+    """The subsurface's random walk tables (addon/reference/subsurface.py's walk_table,
+    walk_drift_table, walk_gain_table) as an RGBA32F texture: per albedo node i and Anisotropy node j,
+    texels (6 i, j) and (6 i + 1, j) R / albedo at entry nodes 0-3 and 4-7, (6 i + 2, j) and
+    (6 i + 3, j) the drift's moments at nodes 0-6 and a 0, (6 i + 4, j) and (6 i + 5, j) the convex
+    gain at nodes 0-7 (glsl/subsurface.glsl's subsurface_walk_node)."""
     from ..reference import subsurface
 
     def build():
-        table = subsurface.walk_table()  # (albedo, g, 8)
-        texels = table.transpose(1, 0, 2).reshape(table.shape[1], 2 * table.shape[0], 4)
+        reflectance = subsurface.walk_table()  # (albedo, g, 8)
+        drift = subsurface.walk_drift_table()  # (albedo, g, 7)
+        gain = subsurface.walk_gain_table()  # (albedo, g, 8)
+        pad = np.zeros(drift.shape[:2] + (1,), np.float32)
+        table = np.concatenate([reflectance, drift, pad, gain], axis=-1)
+        texels = table.transpose(1, 0, 2).reshape(table.shape[1], 6 * table.shape[0], 4)
         return rgba32f_texture(np.ascontiguousarray(texels))
 
     return LIBRARY.table(("SUBSURFACE",), build)

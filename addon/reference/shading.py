@@ -384,12 +384,16 @@ class Surface:
         # the random walk's light over its Lambert base at the view (subsurface.walk_factor), of the
         # base colour within [0, 1]; 1 where no material has a subsurface (its table is not read)
         self.subsurface_walk = np.ones(np.shape(self.NoV) + (3,))
+        # and its mean drift away from the viewer (units of the mean free path) and gain on a convex
+        # surface per unit rho (walk_factor's)
+        self.subsurface_drift = np.zeros(np.shape(self.NoV) + (3,))
+        self.subsurface_gain = np.zeros(np.shape(self.NoV) + (3,))
         if np.any(self.subsurface > 0.0):
             walk = subsurface.walk_row(material.subsurface_method, material.ior, material.specular_ior_level,
                                        material.subsurface_ior, material.subsurface_anisotropy)
-            self.subsurface_walk = subsurface.walk_factor(_dot(self.n, self.v),
-                                                          np.clip(self.base_color, 0.0, 1.0), walk,
-                                                          material.roughness)
+            self.subsurface_walk, self.subsurface_drift, self.subsurface_gain = subsurface.walk_factor(
+                _dot(self.n, self.v), np.clip(self.base_color, 0.0, 1.0), walk, material.roughness,
+                drift=True)
         self.translucent = np.zeros(3)
         # the anisotropic GGX lobe (x, y, alpha_x, alpha_y) of a node graph's anisotropic BSDF (its tangent is
         # per fragment: ``with_anisotropy``), None for the round lobe
@@ -732,15 +736,52 @@ def principled_direct(s: Surface, NoL, NoH, NxH2, LoH, l=None):
     return diffuse, specular
 
 
-def subsurface_direct(s: Surface, l):
-    """glsl/subsurface.glsl's subsurface_direct: the subsurface's f (n.l) towards l per unit irradiance."""
+def subsurface_walk_curved(s: Surface):
+    """glsl/subsurface.glsl's subsurface_walk_curved: the walk's factor at the view, raised by the
+    surface's convexity (subsurface.convex_gain)."""
+    return s.subsurface_walk * subsurface.convex_gain(s.subsurface_gain, s.subsurface_radius, s.curvature)
+
+
+def subsurface_light_shape(light: Light, p):
+    """glsl/subsurface.glsl's subsurface_light_shape: ((...), (...)) the sine of the angular radius of
+    the sphere the light is seen as from ``p`` (a point or spot's radius r over d (a sphere) or
+    sqrt(d^2 + r^2) (soft falloff: a disc); an area light's disc of its area times the cosine at the
+    light over pi; 0 for a sun and a true point) and 1 / its distance (a sun's 0)."""
+    to_light = np.asarray(light.position, np.float64) - np.asarray(p, np.float64)
+    d2 = _dot(to_light, to_light)
+    if light.kind == "SUN":
+        return np.zeros_like(d2), np.zeros_like(d2)
+    disc = 1.0 if light.soft_falloff else 0.0
+    with np.errstate(invalid="ignore", divide="ignore"):
+        if light.kind == "AREA":
+            facing = np.where(d2 > 0.0, np.maximum(_dot(np.asarray(light.direction, np.float64), -to_light)
+                                                   / np.sqrt(d2), 0.0), 0.0)
+            r2 = area_light_area(light) * facing / np.pi
+            disc = 1.0
+        else:
+            r2 = np.full_like(d2, light.sphere_radius ** 2)
+        sine = np.where(r2 > 0.0, np.sqrt(np.minimum(r2 / np.maximum(d2 + disc * r2, 1e-30), 1.0)), 0.0)
+        return sine, np.where(d2 > 0.0, 1.0 / np.sqrt(d2), 0.0)
+
+
+def subsurface_direct(s: Surface, l, size=0.0, inverse_distance=0.0):
+    """glsl/subsurface.glsl's subsurface_direct: the subsurface's f (n.l) towards l per unit irradiance,
+    under a light of angular radius asin(``size``) at 1 / ``inverse_distance`` (subsurface_light_shape;
+    a sun: 0)."""
     layer = principled_layers(s).layer
     weight = (1.0 - s.metalness) * np.clip(1.0 - layer, 0.0, 1.0) * s.subsurface * INV_PI
     # under what the glass's share leaves (Cycles' svm_node_closure_bsdf weighs the subsurface by
     # 1 - Transmission Weight, as the diffuse)
     weight = weight * (1.0 - s.transmission_share)
-    color = s.base_color * _rgb_scalar(weight) * s.subsurface_walk  # the walk's reflectance at the view
-    return color * subsurface.ramp(_dot(s.n, l), s.subsurface_radius, s.curvature)
+    color = s.base_color * _rgb_scalar(weight) * subsurface_walk_curved(s)  # the walk's reflectance
+    # n.l where the walk leaves on average, per channel (its drift away from the viewer)
+    NoL = subsurface.drift_cosine(_dot(s.n, l), s.n, s.v, l, s.subsurface_drift, s.subsurface_radius,
+                                  s.curvature)
+    size = np.broadcast_to(size, np.shape(s.NoV))
+    falloff = (subsurface.ramp_sized(NoL, s.subsurface_radius, s.curvature, size)
+               + subsurface.curved_light(_dot(s.n, l), s.subsurface_radius, s.curvature,
+                                         np.broadcast_to(inverse_distance, np.shape(s.NoV))))
+    return color * np.maximum(falloff, 0.0)
 
 
 def transmission_light(s: Surface, l, E, factors):
@@ -1210,7 +1251,7 @@ def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAU
         # the subsurface's share of the base at the light's direction; the translucent lobe beside the
         # layers, lit from behind (light_shading.glsl)
         with np.errstate(invalid="ignore"):
-            c = c + subsurface_direct(s, l) * E * light.diffuse_factor
+            c = c + subsurface_direct(s, l, *subsurface_light_shape(light, s.p)) * E * light.diffuse_factor
         c = c + transmission_light(s, l, E, (light.diffuse_factor, light.specular_factor))
         translucent = subsurface.translucent_direct(s.translucent, s.n, l) * E * light.diffuse_factor
         if upper is None:

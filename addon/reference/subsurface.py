@@ -1,6 +1,8 @@
 """The twin of glsl/subsurface.glsl: the Translucent BSDF, Cycles' Christensen-Burley profile, the
 subsurface's mean free path as Cycles sets it up from Radius, Scale, the method, the albedo and the
-IOR, and the profile pre-integrated against a light's terminator (``ramp``)."""
+IOR, the profile pre-integrated against a light's terminator (``ramp``; under a sized light
+``ramp_sized``; the light's own curvature ``curved_light``), and Cycles' random walk's reflectance, drift
+and convex gain, tabulated (``walk_factor``)."""
 
 from __future__ import annotations
 
@@ -94,13 +96,69 @@ def bickley(y):
 
 def ramp(NoL, d, curvature):
     """glsl/subsurface.glsl's subsurface_ramp: max(n.l, 0) convolved with the profile of width d
-    (m; (..., 3) per channel) on a surface of curvature ``curvature`` (1/m), (..., 3)."""
-    NoL = np.asarray(NoL, np.float64)[..., None]
+    (m; (..., 3) per channel) on a surface of curvature ``curvature`` (1/m), (..., 3); n.l (...)."""
+    return ramp_channels(np.asarray(NoL, np.float64)[..., None], d, curvature)
+
+
+def ramp_channels(NoL, d, curvature):
+    """``ramp`` of an n.l per channel (..., 3) (the walk's drift moves each channel's: drift_cosine)."""
+    NoL = np.asarray(NoL, np.float64)
     rho = np.minimum(np.asarray(d, np.float64) * np.asarray(curvature, np.float64)[..., None], 1.0)
     a = np.abs(NoL)
     with np.errstate(divide="ignore", invalid="ignore"):
         near = 0.25 * rho * bickley(a / rho) + 2.25 * rho * bickley(a / (3.0 * rho))
     return np.maximum(NoL, 0.0) + np.where(rho > 0.0, near, 0.0)
+
+
+#: subsurface_bickley3's rational fit of Ki_3 (exp(-y) (pi / 4 + a y + b y^2) / (1 + c y + e y^2), a =
+#: pi / 4 (1 + c) - 1: Ki_3'(0) = -Ki_2(0) = -1)
+BICKLEY3_FIT = (1.28824763, 0.10408297, 1.91348736, 0.45483162)
+
+
+def bickley3(y):
+    """glsl/subsurface.glsl's subsurface_bickley3: Ki_3(y) / pi by the fit."""
+    y = np.minimum(np.asarray(y, np.float64), 80.0)  # far past the profile: as the GPU's guard
+    a, b, c, e = BICKLEY3_FIT
+    return np.exp(-y) * (0.25 * math.pi + y * (a + b * y)) / (math.pi * (1.0 + y * (c + e * y)))
+
+
+def ramp_sized(NoL, d, curvature, size):
+    """glsl/subsurface.glsl's subsurface_ramp_sized: ``ramp_channels`` averaged over n.l +- sqrt(3) / 2
+    ``size`` (a light of angular radius asin(size): the box of its disc's variance), (..., 3); a size of
+    at most 1e-4: the point's."""
+    NoL = np.asarray(NoL, np.float64)
+    size = np.asarray(size, np.float64)[..., None]
+    point = ramp_channels(NoL, d, curvature)
+    rho = np.minimum(np.asarray(d, np.float64) * np.asarray(curvature, np.float64)[..., None], 1.0)
+    box = np.maximum(size, 1e-4) * (0.5 * math.sqrt(3.0))
+    ramp = np.where(NoL >= box, NoL, np.where(NoL <= -box, 0.0, (NoL + box) ** 2 / (4.0 * box)))
+
+    def antiderivative(x):
+        a = np.abs(x)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            part = (0.25 * rho * rho * (0.25 - bickley3(a / rho))
+                    + 6.75 * rho * rho * (0.25 - bickley3(a / (3.0 * rho))))
+        return np.where(rho > 0.0, np.where(x < 0.0, -part, part), 0.0)
+
+    near = (antiderivative(NoL + box) - antiderivative(NoL - box)) / (2.0 * box)
+    return np.where(size > 1e-4, ramp + near, point)
+
+
+def curved_light(c, d, curvature, u):
+    """glsl/subsurface.glsl's subsurface_curved_light: (..., 3) the irradiance's own curvature over the
+    profile's spread (sigma^2 = 7 d^2 per axis), per unit irradiance, for a light at distance 1 / ``u``
+    seen at cosine ``c`` on a surface of ``curvature``: sigma^2 (-(u + k c)(3 c u + k) + (1 - c^2)
+    (7.5 c u^2 + 3 k u)), faded out within 4 widths of the terminator, widths held to 0.1."""
+    c = np.asarray(c, np.float64)[..., None]
+    k = np.maximum(np.asarray(curvature, np.float64), 0.0)[..., None]
+    u = np.asarray(u, np.float64)[..., None]
+    q = -(u + k * c) * (3.0 * c * u + k) + (1.0 - c * c) * (7.5 * c * u * u + 3.0 * k * u)
+    reach = k + u
+    rho = np.minimum(np.asarray(d, np.float64) * reach, 0.1)
+    fade = np.clip(c / np.maximum(4.0 * rho, 1e-6), 0.0, 1.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sigma2 = np.where(reach > 0.0, 7.0 * rho * rho / np.where(reach > 0.0, reach * reach, 1.0), 0.0)
+    return sigma2 * q * fade
 
 
 # --- the random walk's reflectance (Cycles' subsurface_random_walk), tabulated ------------------------
@@ -114,7 +172,7 @@ def ramp(NoL, d, curvature):
 # towards the camera is therefore the Lambert base's times R / albedo, R the medium's diffuse
 # reflectance for the ray's entry direction: less than the albedo where the ray enters steeply (a deep
 # first scattering), more where it grazes, more with a forward-scattering g. The engine multiplies the
-# subsurface's light by that factor per channel (glsl/subsurface.glsl's subsurface_walk_factor), from a
+# subsurface's light by that factor per channel (glsl/subsurface.glsl's subsurface_walk_lookup), from a
 # table of R / albedo over the albedo, g and the entry cosine (WALK_TABLE, computed by walk_reflectance
 # below, a Monte Carlo twin of Cycles' walk in a half-space) and the entry's directions (entry_weights).
 
@@ -181,18 +239,28 @@ def walk_remap(albedo, g):
     return np.clip(alpha, 0.0, 0.999999)
 
 
-def walk_reflectance(albedo: float, g: float, mu, paths: int = 20000, seed: int = 0, spread: bool = False):
-    """R / albedo of Cycles' random walk in a half-space (its surface the plane z = 0) for rays
-    entering at cosines ``mu`` to the normal (an array: ``paths`` walks each), by Cycles' classic
-    estimator (subsurface_random_walk without its guided sampling, which changes the variance, not
-    the expectation): the distance to the next scattering exponential in the extinction, a
-    Henyey-Greenstein direction of g for the first WALK_SIMILARITY_LEVEL bounces and beyond them
-    isotropic with the similarity-reduced coefficients, the throughput times the single-scattering
-    albedo at each scattering (raised to WALK_MIN_ALPHA as Cycles raises it, the throughput scaled
-    down), a walk ended after WALK_MAX_BOUNCES (lost) or below WALK_THROUGHPUT_EPSILON; one channel
-    (Cycles samples the three channels' distances with MIS: with radii far apart it loses about 1 %
-    more of the widest channel to the bounce limit). d = 1: a half-space has no scale. ``spread``: also
-    each mean's standard error."""
+#: The ball the table's curvature slope is walked in: radius WALK_CONVEX_RADIUS d (rho = d / R = 1/28,
+#: where the gain is still linear in rho: 1/113, 1/56 and 1/28 gave the same slope within the noise)
+WALK_CONVEX_RADIUS = 28.0
+#: The entry cosine the drift's last node (1: straight down, where the drift vanishes as its sine) is
+#: walked at: the drift per unit sine is smooth there
+WALK_DRIFT_LAST_MU = 0.98
+
+
+def _walk(albedo: float, g: float, mu, paths: int, seed: int, convex_radius: float = 0.0):
+    """Cycles' random walk (subsurface_random_walk without its guided sampling, which changes the
+    variance, not the expectation) in a half-space (its surface the plane z = 0, d = 1: a half-space has
+    no scale) for rays entering at cosines ``mu`` to the normal (an array: ``paths`` walks each) along
+    +x: the distance to the next scattering exponential in the extinction, a Henyey-Greenstein
+    direction of g for the first WALK_SIMILARITY_LEVEL bounces and beyond them isotropic with the
+    similarity-reduced coefficients, the throughput times the single-scattering albedo at each
+    scattering (raised to WALK_MIN_ALPHA as Cycles raises it, the throughput scaled down), a walk ended
+    after WALK_MAX_BOUNCES (lost) or below WALK_THROUGHPUT_EPSILON; one channel (Cycles samples the
+    three channels' distances with MIS: with radii far apart it loses about 1 % more of the widest
+    channel to the bounce limit). (len(mu), paths) arrays: the throughput over the albedo where each
+    walk leaves the half-space (0: lost), the x where it leaves, and (``convex_radius`` > 0) the
+    throughput where it leaves the ball of that radius touching the plane at the entry (inside the
+    half-space: every walk leaves it first, on the same random numbers)."""
     rng = np.random.default_rng(seed)
     g = min(max(float(g), 0.0), WALK_G_MAX)
     albedo = float(albedo)
@@ -208,10 +276,14 @@ def walk_reflectance(albedo: float, g: float, mu, paths: int = 20000, seed: int 
     mu = np.asarray(mu, np.float64).reshape(-1)
     m = np.repeat(mu, paths)
     count = m.size
-    z = np.zeros(count)
+    p = np.zeros((count, 3))
     d = np.stack([np.sqrt(np.maximum(1.0 - m * m, 0.0)), np.zeros(count), -m], -1)
     throughput = np.full(count, weight)
     out = np.zeros(count)
+    exit_x = np.zeros(count)
+    ball = np.zeros(count)
+    inside = np.full(count, convex_radius > 0.0)  # not yet out of the ball
+    centre = np.array([0.0, 0.0, -convex_radius])
     alive = np.arange(count)
     for bounce in range(WALK_MAX_BOUNCES):
         if not alive.size:
@@ -238,35 +310,101 @@ def walk_reflectance(albedo: float, g: float, mu, paths: int = 20000, seed: int 
             d[alive] = (t1 * (sin * np.cos(phi))[:, None] + t2 * (sin * np.sin(phi))[:, None]
                         + axis * cos[:, None])
         t = -np.log1p(-rng.random(k)) / st
-        znew = z[alive] + t * d[alive, 2]
+        if convex_radius > 0.0:  # out of the ball along this step: its far crossing of the sphere
+            walking = alive[inside[alive]]
+            o = p[walking] - centre
+            b = np.sum(o * d[walking], axis=1)
+            c = np.sum(o * o, axis=1) - convex_radius * convex_radius
+            # inside (c <= 0 up to rounding): the root is real
+            reach = -b + np.sqrt(np.maximum(b * b - c, 0.0))
+            through = walking[t[inside[alive]] >= reach]
+            ball[through] = throughput[through]
+            inside[through] = False
+        znew = p[alive, 2] + t * d[alive, 2]
         left = znew >= 0.0  # through the surface: the walk ends there (its transmittance over its pdf: 1)
-        out[alive[left]] = throughput[alive[left]]
+        gone = alive[left]
+        out[gone] = throughput[gone]
+        # where the step crosses z = 0 (its direction points up there: d_z > 0)
+        exit_x[gone] = p[gone, 0] + (-p[gone, 2] / d[gone, 2]) * d[gone, 0]
         stay = alive[~left]
-        z[stay] = znew[~left]
+        p[stay] += t[~left, None] * d[stay]
         throughput[stay] *= al
         alive = stay[throughput[stay] >= WALK_THROUGHPUT_EPSILON]
-    out = out.reshape(len(mu), paths)
+    shape = (len(mu), paths)
+    return out.reshape(shape), exit_x.reshape(shape), ball.reshape(shape)
+
+
+def walk_reflectance(albedo: float, g: float, mu, paths: int = 20000, seed: int = 0, spread: bool = False):
+    """R / albedo of Cycles' random walk in a half-space for rays entering at cosines ``mu`` (``_walk``,
+    ``paths`` walks each); ``spread``: also each mean's standard error."""
+    out = _walk(albedo, g, mu, paths, seed)[0]
     if spread:
         return out.mean(axis=1), out.std(axis=1) / math.sqrt(paths)
     return out.mean(axis=1)
 
 
-def compute_walk_table(paths: int = 60000, log=None) -> np.ndarray:
-    """(WALK_ALBEDO_NODES, WALK_G_NODES, WALK_MU_NODES + 1) float32: R / albedo at each albedo, g and
-    entry cosine node (walk_reflectance, ``paths`` walks each, seeded per cell), the last the mean over
-    a cosine-distributed (diffuse) entry. Minutes per thousand paths: scripts/subsurface_walk_table.py."""
+def walk_moments(albedo: float, g: float, mu, paths: int = 20000, seed: int = 0,
+                 convex_radius: float = WALK_CONVEX_RADIUS):
+    """(3, len(mu)) means and (3, len(mu)) standard errors, on the same walks as walk_reflectance's of
+    the same seed (R unchanged): R / albedo; its first moment of the exit point along the entering
+    ray's direction on the surface, R times the walk's mean drift in units of d, over the ray's sine
+    sqrt(1 - mu^2) (the drift vanishes as the sine where the ray goes straight down: per unit sine
+    it is smooth there); and the gain of R on a convex surface per unit rho = d / radius (the ball of
+    radius ``convex_radius`` d: its R less the half-space's, times that radius; a convex surface's
+    nearer boundary lets more walks out: 1-1.5 R per unit rho)."""
+    mu = np.asarray(mu, np.float64).reshape(-1)
+    out, exit_x, ball = _walk(albedo, g, mu, paths, seed, convex_radius)
+    sine = np.sqrt(np.maximum(1.0 - mu * mu, 0.0))[:, None]
+    # (mu = 1: no drift; WALK_DRIFT_LAST_MU walks the table's last node)
+    drift = out * exit_x / np.maximum(sine, 1e-6)
+    gain = (ball - out) * convex_radius
+    parts = np.stack([out, drift, gain])
+    return parts.mean(axis=2), parts.std(axis=2) / math.sqrt(paths)
+
+
+#: Walks per node of the drift's and the convex gain's tables (their noise: ~0.1 % of the factor on a
+#: surface whose rho is 0.02)
+WALK_MOMENT_PATHS = 10000
+
+
+def compute_walk_table(paths: int = 60000, log=None, moment_paths: int = WALK_MOMENT_PATHS,
+                       reflectance: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Three float32 tables over the albedo, g and entry nodes (seeded per cell), the last entry node a
+    cosine-distributed (diffuse) entry: (WALK_ALBEDO_NODES, WALK_G_NODES, WALK_MU_NODES + 1) R / albedo
+    (walk_reflectance, ``paths`` walks each; ``reflectance``: that table given, as computed before);
+    (.., WALK_MU_NODES) the drift's moment per unit sine (walk_moments, ``moment_paths`` walks each;
+    its last node walked at WALK_DRIFT_LAST_MU; a diffuse entry's rays come from every azimuth: none);
+    (.., WALK_MU_NODES + 1) the convex surface's gain per unit rho (walk_moments; entries grazing within
+    the first free flight of a ball's surface leave through it nonlinearly in rho: the two first cosine
+    nodes, 0 and 1/36, take the third's, 1/9). Minutes per thousand paths:
+    scripts/subsurface_walk_table.py."""
     albedos, gs = walk_albedos(), walk_gs()
     out = np.zeros((WALK_ALBEDO_NODES, WALK_G_NODES, WALK_MU_NODES + 1), np.float32)
+    drift = np.zeros((WALK_ALBEDO_NODES, WALK_G_NODES, WALK_MU_NODES), np.float32)
+    gain = np.zeros((WALK_ALBEDO_NODES, WALK_G_NODES, WALK_MU_NODES + 1), np.float32)
     diffuse = np.sqrt((np.arange(paths) + 0.5) / paths)  # cosines of a cosine-weighted hemisphere
+    diffuse_moments = np.sqrt((np.arange(moment_paths) + 0.5) / moment_paths)
+    mus = np.maximum(walk_mus(), 1e-6)
     for i, albedo in enumerate(albedos):
         for j, g in enumerate(gs):
             seed = 1000 * i + j
             a = max(albedo, 1e-4)
-            out[i, j, :WALK_MU_NODES] = walk_reflectance(a, g, np.maximum(walk_mus(), 1e-6), paths, seed)
-            out[i, j, WALK_MU_NODES] = walk_reflectance(a, g, diffuse, 1, seed + 500000).mean()
+            if reflectance is None:
+                out[i, j, :WALK_MU_NODES] = walk_reflectance(a, g, mus, paths, seed)
+                out[i, j, WALK_MU_NODES] = walk_reflectance(a, g, diffuse, 1, seed + 500000).mean()
+            else:
+                out[i, j] = reflectance[i, j]
+            entries = np.append(mus[:-1], WALK_DRIFT_LAST_MU)
+            means = walk_moments(a, g, entries, moment_paths, seed + 700000)[0]
+            drift[i, j] = means[1]
+            gain[i, j, 2:WALK_MU_NODES - 1] = means[2, 2:-1]
+            gain[i, j, :2] = gain[i, j, 2]
+            gain[i, j, WALK_MU_NODES - 1] = walk_moments(a, g, mus[-1:], moment_paths, seed + 800000)[0][2, 0]
+            gain[i, j, WALK_MU_NODES] = walk_moments(a, g, diffuse_moments, 1, seed + 900000)[0][2].mean()
         if log is not None:
-            log(f"albedo {albedo:.4f}: {np.round(out[i, :, 3], 3)}")
-    return out
+            log(f"albedo {albedo:.4f}: {np.round(out[i, :, 3], 3)}, drift {np.round(drift[i, 0], 3)}, "
+                f"gain {np.round(gain[i, 0], 2)}")
+    return out, drift, gain
 
 
 @lru_cache(maxsize=1)
@@ -281,6 +419,31 @@ def walk_table() -> np.ndarray:
     if out.shape != shape:
         raise ValueError(f"{WALK_SHIPPED.name}: a table of {out.shape}, expected {shape}")
     return out
+
+
+def _walk_part(name: str, entries: int) -> np.ndarray:
+    """One of the shipped ``compute_walk_table``'s other tables (WALK_SHIPPED), float32."""
+    with np.load(WALK_SHIPPED) as data:
+        if name not in data.files:
+            raise FileNotFoundError(f"the random walk's table {WALK_SHIPPED.name} has no {name}: run "
+                                    "scripts/subsurface_walk_table.py")
+        out = np.asarray(data[name], np.float32)
+    shape = (WALK_ALBEDO_NODES, WALK_G_NODES, entries)
+    if out.shape != shape:
+        raise ValueError(f"{WALK_SHIPPED.name}: a {name} table of {out.shape}, expected {shape}")
+    return out
+
+
+@lru_cache(maxsize=1)
+def walk_drift_table() -> np.ndarray:
+    """The shipped drift's moment per unit sine (albedo, g, entry cosine): compute_walk_table's."""
+    return _walk_part("drift", WALK_MU_NODES)
+
+
+@lru_cache(maxsize=1)
+def walk_gain_table() -> np.ndarray:
+    """The shipped convex gain per unit rho (albedo, g, entry): compute_walk_table's."""
+    return _walk_part("gain", WALK_MU_NODES + 1)
 
 
 #: The entry's quadrature over Cycles' VNDF sampling disk (microfacet_ggx_sample_vndf, Heitz 2018):
@@ -305,11 +468,14 @@ def entry_disk() -> np.ndarray:
 
 
 def entry_cosines(cos_v, eta, alpha):
-    """((..., points), (..., points)): the cosine to the normal of the camera's ray refracted into the
-    surface at each of the quadrature's points (Cycles' subsurface_entry_bounce: a GGX microfacet normal
-    of roughness alpha drawn from the view's visible normals, the ray refracted through it by 1 / eta),
-    0 where it fails (a view at or below the horizon, a ray leaving above the surface), and 1 where it
-    does not (0 where it fails); the view at cosine ``cos_v``."""
+    """((..., points) x 3): the cosine to the normal of the camera's ray refracted into the surface at
+    each of the quadrature's points (Cycles' subsurface_entry_bounce: a GGX microfacet normal of
+    roughness alpha drawn from the view's visible normals, the ray refracted through it by 1 / eta),
+    0 where it fails (a view at or below the horizon, a ray leaving above the surface); 1 where it
+    does not (0 where it fails); and the cosine of its direction along the surface to the view's
+    away from the viewer (its mirror image across the plane of incidence has the same: their
+    sideways parts cancel) times its sine to the normal (-x: the ray's own component along the surface
+    away from the viewer), 0 where it fails; the view at cosine ``cos_v``."""
     cos_v = np.asarray(cos_v, np.float64)[..., None]
     eta = np.asarray(eta, np.float64)[..., None]
     alpha = np.asarray(alpha, np.float64)[..., None]
@@ -335,37 +501,50 @@ def entry_cosines(cos_v, eta, alpha):
     cos_hi = hx * sin_v + hz * cos_v
     neta = 1.0 / eta
     root = np.sqrt(np.maximum(1.0 - neta * neta * (1.0 - cos_hi * cos_hi), 0.0))
-    wo_z = -neta * cos_v + (neta * cos_hi - np.maximum(root, 1e-7)) * hz
+    nk = neta * cos_hi - np.maximum(root, 1e-7)
+    wo_z = -neta * cos_v + nk * hz
     ok = (cos_v > 0.0) & (wo_z < 0.0)
-    return np.where(ok, -wo_z, 0.0), np.where(ok, 1.0, 0.0)
+    # along the surface: the view is (sin_v, 0, cos_v), away from the viewer is -x
+    along = -(-neta * sin_v + nk * hx)
+    return np.where(ok, -wo_z, 0.0), np.where(ok, 1.0, 0.0), np.where(ok, along, 0.0)
 
 
-def entry_weights(cos_v, eta, alpha, diffuse_share):
+def entry_weights(cos_v, eta, alpha, diffuse_share, drift=False):
     """(..., WALK_MU_NODES + 1) the weights of the table's entry nodes for a view at ``cos_v`` entering
     through an interface of IOR ``eta`` (within WALK_IOR_RANGE) and GGX roughness ``alpha``: the
     refracted rays' cosines (entry_cosines) spread linearly in sqrt(mu) over the two nearest nodes, a
     failed ray none, times 1 - ``diffuse_share``; the last node (the diffuse entry) ``diffuse_share``
-    (Random Walk (Skin): half its rays enter diffusely)."""
-    mu, ok = entry_cosines(cos_v, eta, alpha)
+    (Random Walk (Skin): half its rays enter diffusely). ``drift``: also the drift's weights, each
+    ray's times its component along the surface away from the viewer (the table holds the drift per
+    unit sine; the diffuse entry's 0: its rays come from every azimuth)."""
+    mu, ok, forward = entry_cosines(cos_v, eta, alpha)
     x = np.sqrt(mu) * (WALK_MU_NODES - 1.0)
     i = np.minimum(np.floor(x), WALK_MU_NODES - 2.0)
     f = x - i
     share = np.asarray(diffuse_share, np.float64)
     each = (1.0 - share)[..., None] * ok / mu.shape[-1]
     out = np.zeros(mu.shape[:-1] + (WALK_MU_NODES + 1,))
+    along = np.zeros(mu.shape[:-1] + (WALK_MU_NODES + 1,))
     for k in range(WALK_MU_NODES):
-        out[..., k] = (each * (np.where(i == k, 1.0 - f, 0.0) + np.where(i == k - 1, f, 0.0))).sum(-1)
+        spread = each * (np.where(i == k, 1.0 - f, 0.0) + np.where(i == k - 1, f, 0.0))
+        out[..., k] = spread.sum(-1)
+        along[..., k] = (spread * forward).sum(-1)
     out[..., WALK_MU_NODES] = share
-    return out
+    return (out, along) if drift else out
 
 
-def walk_lookup(albedo, g, table=None):
+def walk_lookup(albedo, g, table=None, nearest=False):
     """(..., 3, WALK_MU_NODES + 1): the table's R / albedo rows at each channel's ``albedo`` (..., 3)
-    and ``g`` (...), bilinear between the nodes in sqrt(albedo) and g, both clamped to the table."""
+    and ``g`` (...), bilinear between the nodes in sqrt(albedo) and g, both clamped to the table;
+    ``nearest``: at the nearest node (glsl/subsurface.glsl's subsurface_walk_nearest)."""
     table = (walk_table() if table is None else table).astype(np.float64)
     x = np.sqrt(np.clip(np.asarray(albedo, np.float64), 0.0, 1.0)) * (WALK_ALBEDO_NODES - 1.0)
     y = np.clip(np.asarray(g, np.float64), 0.0, WALK_G_MAX) * ((WALK_G_NODES - 1.0) / WALK_G_MAX)
     y = np.broadcast_to(y[..., None], x.shape)
+    if nearest:
+        i = np.minimum(np.floor(x + 0.5).astype(int), WALK_ALBEDO_NODES - 1)
+        j = np.minimum(np.floor(y + 0.5).astype(int), WALK_G_NODES - 1)
+        return table[i, j]
     i0 = np.minimum(np.floor(x).astype(int), WALK_ALBEDO_NODES - 1)
     j0 = np.minimum(np.floor(y).astype(int), WALK_G_NODES - 1)
     i1, j1 = np.minimum(i0 + 1, WALK_ALBEDO_NODES - 1), np.minimum(j0 + 1, WALK_G_NODES - 1)
@@ -374,20 +553,63 @@ def walk_lookup(albedo, g, table=None):
             + fy * ((1.0 - fx) * table[i0, j1] + fx * table[i1, j1]))
 
 
-def walk_factor(cos_v, albedo, walk, roughness=0.5, table=None):
+def walk_factor(cos_v, albedo, walk, roughness=0.5, table=None, drift=False):
     """glsl/subsurface.glsl's subsurface_walk_at: (..., 3) the subsurface's light over its Lambert
     base, per channel of ``albedo``, for a view at ``cos_v`` and the material's ``walk`` row (walk_row:
     g, entry IOR, entry alpha (below 0: the base's ``roughness`` squared), diffuse share); 1 where the
-    row has no walk (IOR 0: Christensen-Burley, whose disk reflects the albedo as Lambert does)."""
+    row has no walk (IOR 0: Christensen-Burley, whose disk reflects the albedo as Lambert does).
+    ``drift``: also (..., 3) the walk's mean drift away from the viewer along the surface, in units of
+    the mean free path d (the exit points' first moment over R: walk_drift_table) and (..., 3) its gain
+    on a convex surface per unit rho over the factor (walk_gain_table); 0 without a walk."""
     walk = np.asarray(walk, np.float64)
     g, eta, alpha, share = walk[..., 0], walk[..., 1], walk[..., 2], walk[..., 3]
     base = np.clip(np.asarray(roughness, np.float64), 0.0, 1.0)
     alpha = np.where(alpha < 0.0, base * base, alpha)
-    weights = entry_weights(cos_v, np.clip(eta, *WALK_IOR_RANGE), np.clip(alpha, 0.0, 1.0),
-                            np.clip(share, 0.0, 1.0))
+    weights, along = entry_weights(cos_v, np.clip(eta, *WALK_IOR_RANGE), np.clip(alpha, 0.0, 1.0),
+                                   np.clip(share, 0.0, 1.0), drift=True)
     rows = walk_lookup(albedo, g, table)
     factor = np.sum(rows * weights[..., None, :], axis=-1)
-    return np.where((eta > 0.0)[..., None], factor, 1.0)
+    walked = (eta > 0.0)[..., None]
+    factor = np.where(walked, factor, 1.0)
+    if not drift:
+        return factor
+    # the drift's and the gain's at the nearest node (smooth in both: a quarter of the GPU's reads)
+    moments = walk_lookup(albedo, g, walk_drift_table(), nearest=True)
+    moment = np.sum(moments * along[..., None, :WALK_MU_NODES], axis=-1)
+    gain = np.sum(walk_lookup(albedo, g, walk_gain_table(), nearest=True) * weights[..., None, :], axis=-1)
+    # a factor of 0 (an albedo of 0 reflects nothing): no drift or gain to speak of
+    safe = np.maximum(factor, 1e-6)
+    return (factor, np.where(walked & (factor > 1e-6), moment / safe, 0.0),
+            np.where(walked & (factor > 1e-6), gain / safe, 0.0))
+
+
+#: The rho = d / radius up to which the convex gain grows linearly (walk_moments: at rho 0.1 the ball's
+#: gain is 0.97 of the linear one, at 0.2 0.72, at 1 0.17); beyond, it is held
+WALK_GAIN_RHO = 0.1
+
+
+def convex_gain(gain, d, curvature):
+    """glsl/subsurface.glsl's subsurface_convex: (..., 3) the factor by which a convex surface of
+    ``curvature`` (1/m) raises the walk's light, 1 + gain x rho, rho = d x curvature per channel held at
+    WALK_GAIN_RHO."""
+    rho = np.minimum(np.asarray(d, np.float64) * np.asarray(curvature, np.float64)[..., None], WALK_GAIN_RHO)
+    return 1.0 + np.asarray(gain, np.float64) * rho
+
+
+def drift_cosine(NoL, n, v, l, drift, d, curvature):
+    """glsl/subsurface.glsl's subsurface_drift_cosine: (..., 3) n.l per channel where the walk leaves on
+    average, ``drift`` (walk_factor's, units of d) times the mean free path ``d`` (m, (..., 3)) away from
+    the viewer along the surface: n turns by the curvature times the distance, n.l by that times the
+    light's cosine to the drift's direction (first order; the view along n: no direction, no drift)."""
+    n, v, l = (np.asarray(x, np.float64) for x in (n, v, l))
+    tangent = -(v - n * np.sum(n * v, axis=-1, keepdims=True))
+    length = np.linalg.norm(tangent, axis=-1, keepdims=True)
+    toward = np.sum(tangent * l, axis=-1, keepdims=True) / np.maximum(length, 1e-12)
+    toward = np.where(length > 1e-6, toward, 0.0)
+    # the profile's width over the radius of curvature, clamped as the ramp clamps it
+    rho = np.minimum(np.asarray(d, np.float64) * np.asarray(curvature, np.float64)[..., None], 1.0)
+    shift = np.asarray(drift, np.float64) * rho
+    return np.asarray(NoL, np.float64)[..., None] + shift * toward
 
 
 def walk_row(method: str, ior, level, subsurface_ior, anisotropy) -> np.ndarray:
