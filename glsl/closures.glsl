@@ -227,9 +227,7 @@ void closure_bsdfs_polygon(Surface s, LightPolygon poly, out vec3 diffuse, out v
       uv = vec2(float(i % 4), float(i / 4)) * 0.5 - 0.75;
     }
     else {
-      float r = sqrt((float(i) + 0.5) / 16.0);
-      float phi = 2.3999632 * float(i); /* the golden angle */
-      uv = r * vec2(cos(phi), sin(phi));
+      uv = vogel_disc(i, 16);
     }
     vec3 d = poly.to_centre + poly.x_half * uv.x + poly.y_half * uv.y;
     float d2 = dot(d, d);
@@ -495,7 +493,7 @@ void glossy_ltc_direction(Surface s, LightPolygon poly, float integral, inout ve
   if (len <= 0.0) {
     return; /* nothing of the light in the cosine's space: the lobe's integral is 0 too */
   }
-  vec3 local = normalize(vec3(m.w * F.x - m.y * F.z, (m.x * m.w - m.y * m.z) * F.y, m.x * F.z - m.z * F.x));
+  vec3 local = ltc_direction(m, F);
   l = local.x * s.ltc.x_axis + local.y * s.ltc.y_axis + local.z * s.n;
   density = ltc_density(m, local, ltc_density_floor(integral, min(len, 1.0)));
 }

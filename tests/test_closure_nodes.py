@@ -784,7 +784,7 @@ STAND_IN_MEASURED = {
     "metallic F82 Beckmann": (0.0679, 0.0773, 0.148),
     "metallic F82": (0.0136, 0.0142, 0.108),
     "physical conductor": (0.0142, 0.0231, 0.0991),
-    "sheen microfiber": (0.0038, 0.0055, 0.145),
+    "sheen microfiber": (0.0038, 0.0055, 0.0651),  # world 14.5 % at the irradiance about n
     "sheen Ashikhmin": (0.0094, 0.0154, 0.125),
     "toon diffuse": (0.0054, 0.0111, 0.104),
     "toon glossy": (0.008, 0.0172, 0.147),
@@ -794,7 +794,7 @@ STAND_IN_MEASURED = {
 if bpy.app.version < (4, 3, 0):  # Blender 4.2
     # Blender 4.2's Cycles draws the Microfiber sheen under the sphere light 3.49 % off ours (4.5 and 5.0:
     # 0.55 %), the area light and the world as 4.5's; the cause is not found yet (bpy 4.2.23)
-    STAND_IN_MEASURED["sheen microfiber"] = (0.0038, 0.0349, 0.145)
+    STAND_IN_MEASURED["sheen microfiber"] = (0.0038, 0.0349, 0.0651)
 
 
 def test_stand_ins_against_cycles(stand_in_renders):
