@@ -311,40 +311,31 @@ float cone_roughness(float c)
   return min(sqrt(tan(t * 0.35355339)) * (1.0583 + t * (0.5579 * t - 0.2543)), 1.0);
 }
 
-#  if defined(SL_ENV_UNIFORM) || defined(SL_ENV_MAP)
-#    ifdef SL_DIFFUSE_ROUGHNESS
-/* The diffuse base's light from the world, times pi (principled_environment's rho x irradiance): Lambert's
- * colour times the irradiance about n; Oren-Nayar's A term and multiple scattering likewise (their light
- * is the cosine's), its B term B times the integral of its weight w(l) = (n.l) t, t = l.v - (n.l)(n.v)
- * over max(n.l, n.v) where positive (negative where the light is on the far side: it darkens forward
- * scattering), against the world's light taken as linear in the direction, L0 + L1.l, read from the
- * irradiance about n and about the view's tangent t_v either way (E(d) = pi L0 + 2 pi / 3 L1.d):
+#  ifdef SL_DIFFUSE_ROUGHNESS
+/* The diffuse base's light from the world, times pi (principled_environment's rho x irradiance), from the
+ * irradiance about n and about the view's tangent t_v either way (`e_towards`, `e_away`; all three
+ * `irradiance` where the view lies along n): Lambert's colour times the irradiance about n; Oren-Nayar's A
+ * term and multiple scattering likewise (their light is the cosine's), its B term B times the integral of
+ * its weight w(l) = (n.l) t, t = l.v - (n.l)(n.v) over max(n.l, n.v) where positive (negative where the
+ * light is on the far side: it darkens forward scattering), against the world's light taken as linear in
+ * the direction, L0 + L1.l, read from the three irradiances (E(d) = pi L0 + 2 pi / 3 L1.d):
  * int w L = G L0 + 2/3 L1.(int w l), int w l in the plane of n and t_v, G(n.v) = int w (its uniform
  * world's value: exact there). Fits of 3/2 int w l (quadrature, n.v 0.01-0.99, within 0.036):
  * 2.133 (1 - n.v)^0.6 along t_v, 0.450 (1 - n.v)^0.89 along n. Against Cycles in the forest world, the
  * irradiance about n alone drew roughness 1 14.7 % too dark (the light behind the viewer it reflects
- * back; tests/test_closure_nodes.py). */
-vec3 oren_nayar_environment(Surface s, vec3 irradiance)
+ * back; tests/test_closure_nodes.py). Twin: reference/closures.py's oren_nayar_world. */
+vec3 oren_nayar_world(Surface s, vec3 irradiance, vec3 e_towards, vec3 e_away)
 {
   if (!s.bsdfs.oren_nayar) {
     return s.base_color * irradiance;
   }
   float NoV = max(dot(s.n, s.v), 0.0);
-  vec3 tangent = s.v - s.n * NoV;
-  float t_len2 = dot(tangent, tangent);
   float G = oren_nayar_G(NoV);
-  vec3 b_light = G * irradiance; /* the view along n: no tangent, the B term's weight is symmetric */
-  if (t_len2 > 1e-12) {
-    tangent *= inversesqrt(t_len2);
-    float occlusion = env_occlusion_diffuse();
-    vec3 e_towards = env_irradiance(env_bent_normal(tangent)) * occlusion;
-    vec3 e_away = env_irradiance(env_bent_normal(-tangent)) * occlusion;
-    float along_t = 2.133 * pow(1.0 - NoV, 0.6);
-    float along_n = 0.450 * pow(1.0 - NoV, 0.89);
-    /* pi L0 from the two tangents' mean; pi (2/3) L1.d = E(d) - pi L0 */
-    vec3 mean = 0.5 * (e_towards + e_away);
-    b_light = G * mean + along_n * (irradiance - mean) + along_t * 0.5 * (e_towards - e_away);
-  }
+  float along_t = 2.133 * pow(1.0 - NoV, 0.6);
+  float along_n = 0.450 * pow(1.0 - NoV, 0.89);
+  /* pi L0 from the two tangents' mean; pi (2/3) L1.d = E(d) - pi L0 */
+  vec3 mean = 0.5 * (e_towards + e_away);
+  vec3 b_light = G * mean + along_n * (irradiance - mean) + along_t * 0.5 * (e_towards - e_away);
   /* the multiple scattering's albedo: on_albedo's rest beside the single scattering's A pi + B G */
   vec3 multiple = s.bsdfs.on_albedo - s.base_color * (s.bsdfs.on_a * PI + s.bsdfs.on_b * G);
   /* a world far from linear (a small bright source on the far side) can take the B term below 0: no
@@ -352,13 +343,53 @@ vec3 oren_nayar_environment(Surface s, vec3 irradiance)
   b_light = max(b_light, 0.0);
   return s.base_color * (s.bsdfs.on_a * PI * irradiance + s.bsdfs.on_b * b_light) + multiple * irradiance;
 }
+#  endif
+
+#  ifdef SL_VELVET
+/* Point i of the 6 x 8 the velvet's world light is read at (velvet_world_radiance): its direction in the
+ * frame (the tangent towards v, n x it, n) at t = sqrt(cos theta) midpoints (as velvet_albedo's) and 8
+ * azimuths over the whole circle (the world is not symmetric about the view's plane), and its weight, the
+ * velvet's f (n.l) there times t (d cos theta = 2 t dt). Twin: reference/closures.py's velvet_world_points. */
+float velvet_world_point(float NoV, float inv_sigma2, int i, out vec3 local)
+{
+  float t = (float(i / 8) + 0.5) / 6.0;
+  float cos_l = t * t;
+  float sin_l = sqrt(1.0 - cos_l * cos_l);
+  float phi = PI * (float(i % 8) + 0.5) / 4.0;
+  local = vec3(sin_l * cos(phi), sin_l * sin(phi), cos_l);
+  vec3 v = vec3(sqrt(max(1.0 - NoV * NoV, 0.0)), 0.0, NoV);
+  vec3 h = normalize(local + v);
+  return t * velvet_eval(NoV, cos_l, h.z, abs(dot(local, h)), inv_sigma2);
+}
+#  endif
+
+#  if defined(SL_ENV_UNIFORM) || defined(SL_ENV_MAP)
+#    ifdef SL_DIFFUSE_ROUGHNESS
+/* The diffuse base's light from the world, times pi: oren_nayar_world of the irradiance about n and the
+ * irradiance about the view's tangent either way. */
+vec3 oren_nayar_environment(Surface s, vec3 irradiance)
+{
+  if (!s.bsdfs.oren_nayar) {
+    return s.base_color * irradiance;
+  }
+  vec3 tangent = s.v - s.n * max(dot(s.n, s.v), 0.0);
+  float t_len2 = dot(tangent, tangent);
+  vec3 e_towards = irradiance; /* the view along n: no tangent, the B term's weight is symmetric */
+  vec3 e_away = irradiance;
+  if (t_len2 > 1e-12) {
+    tangent *= inversesqrt(t_len2);
+    float occlusion = env_occlusion_diffuse();
+    e_towards = env_irradiance(env_bent_normal(tangent)) * occlusion;
+    e_away = env_irradiance(env_bent_normal(-tangent)) * occlusion;
+  }
+  return oren_nayar_world(s, irradiance, e_towards, e_away);
+}
 #    endif
 
 #    ifdef SL_VELVET
 /* The world's radiance as the velvet weights it, over its own weight: its f (n.l) at 6 x 8 points over the
- * whole hemisphere (t = sqrt(cos theta) midpoints, as velvet_albedo's, and 8 azimuths: the world is not
- * symmetric about the view's plane), the world read at each prefiltered at roughness 0.5 (a lobe about as
- * wide as a cell; the world without its suns, which light the velvet as lights). The velvet's light lies
+ * whole hemisphere (velvet_world_point), the world read at each prefiltered at roughness 0.5 (a lobe about
+ * as wide as a cell; the world without its suns, which light the velvet as lights). The velvet's light lies
  * towards the horizon at grazing views (its sine's peak), where the irradiance about n, weighted by the
  * cosine, looks away: in the forest world that drew it 26 % too dark (tests/test_closure_nodes.py). */
 vec3 velvet_world_radiance(Surface s)
@@ -368,21 +399,13 @@ vec3 velvet_world_radiance(Surface s)
   vec3 other = abs(s.n.x) < 0.9 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
   x_axis = dot(x_axis, x_axis) > 1e-12 ? normalize(x_axis) : normalize(cross(other, s.n)); /* v along n */
   vec3 y_axis = cross(s.n, x_axis);
-  vec3 v = vec3(sqrt(max(1.0 - NoV * NoV, 0.0)), 0.0, NoV);
   vec3 sum = vec3(0.0);
   float weight = 0.0;
-  for (int i = 0; i < 6; i++) {
-    float t = (float(i) + 0.5) / 6.0;
-    float cos_l = t * t;
-    float sin_l = sqrt(1.0 - cos_l * cos_l);
-    for (int j = 0; j < 8; j++) {
-      float phi = PI * (float(j) + 0.5) / 4.0;
-      vec3 l = vec3(sin_l * cos(phi), sin_l * sin(phi), cos_l);
-      vec3 h = normalize(l + v);
-      float f = t * velvet_eval(NoV, cos_l, h.z, abs(dot(l, h)), s.bsdfs.velvet_inv_sigma2);
-      sum += f * env_prefiltered(l.x * x_axis + l.y * y_axis + l.z * s.n, 0.5);
-      weight += f;
-    }
+  for (int i = 0; i < 48; i++) {
+    vec3 l;
+    float f = velvet_world_point(NoV, s.bsdfs.velvet_inv_sigma2, i, l);
+    sum += f * env_prefiltered(l.x * x_axis + l.y * y_axis + l.z * s.n, 0.5);
+    weight += f;
   }
   return weight > 0.0 ? sum / weight : env_irradiance(s.n) * INV_PI; /* no velvet: its colour is 0 too */
 }

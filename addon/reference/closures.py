@@ -8,6 +8,7 @@ Arrays broadcast; no ``bpy``.
 
 from __future__ import annotations
 
+import math
 from functools import lru_cache
 
 import numpy as np
@@ -242,3 +243,72 @@ def oren_nayar_b_moments(cos_v):
     along n: 2.133 (1 - n.v)^0.6, 0.450 (1 - n.v)^0.89."""
     one_minus = 1.0 - np.clip(np.asarray(cos_v, np.float64), 0.0, 1.0)
     return 2.133 * one_minus ** 0.6, 0.450 * one_minus ** 0.89
+
+
+def oren_nayar_world(sigma, color, cos_v, irradiance, e_towards, e_away, rule=MULTISCATTER):
+    """closures.glsl's oren_nayar_world: the Diffuse BSDF's light from the world times pi (rgb), its
+    colour ``color`` (within [0, 1]), from the irradiance about n and about the view's tangent towards
+    and away from the view (rgb each; all three alike where the view lies along n): Lambert's colour
+    times the irradiance; Oren-Nayar's A term and multiple scattering times it, its B term times G(n.v)
+    L0 + 2/3 L1.(int w l) of the world taken as linear (``oren_nayar_b_moments``), at least 0."""
+    color = np.asarray(color, np.float64)
+    nv = np.clip(np.asarray(cos_v, np.float64), 0.0, 1.0)
+    a, b, ms, e_avg = oren_nayar_setup(sigma, color, nv, rule)
+    G = oren_nayar_G(nv)[..., None]
+    along_t, along_n = (m[..., None] for m in oren_nayar_b_moments(nv))
+    e, up, down = (np.asarray(x, np.float64) for x in (irradiance, e_towards, e_away))
+    mean = 0.5 * (up + down)
+    b_light = np.maximum(G * mean + along_n * (e - mean) + along_t * 0.5 * (up - down), 0.0)
+    multiple = color * np.pi * ms * (1.0 - e_avg)[..., None]  # (ms is per unit colour, as oren_nayar_eval's)
+    out = color * (a[..., None] * np.pi * e + b[..., None] * b_light) + multiple * e
+    return np.where(_lambert(sigma, rule)[..., None], color * e, out)
+
+
+def velvet_world_points(sigma, cos_v):
+    """closures.glsl's velvet_world_point for its 6 x 8 points: (directions (..., 48, 3) in the frame (the
+    tangent towards v, n x it, n), weights (..., 48): the velvet's f (n.l) there times t = sqrt(cos))."""
+    i = np.arange(48)
+    t = (i // 8 + 0.5) / 6.0
+    c = t * t
+    s = np.sqrt(1.0 - c * c)
+    phi = np.pi * (i % 8 + 0.5) / 4.0
+    local = np.stack([s * np.cos(phi), s * np.sin(phi), c], -1)
+    cos_v = np.asarray(cos_v, np.float64)[..., None]
+    v = np.stack(np.broadcast_arrays(np.sqrt(np.maximum(1.0 - cos_v * cos_v, 0.0)), 0.0 * cos_v, cos_v), -1)
+    f = velvet_at(np.asarray(sigma, np.float64)[..., None], np.array([0.0, 0.0, 1.0]), v, local)
+    return np.broadcast_to(local, f.shape + (3,)), f * t
+
+
+def velvet_world_radiance(sigma, cos_v, read):
+    """closures.glsl's velvet_world_radiance in the frame: the mean of ``read(directions (..., 48, 3))``
+    (rgb) weighted by velvet_world_points' weights."""
+    local, w = velvet_world_points(sigma, np.maximum(np.asarray(cos_v, np.float64), 1e-4))
+    return np.einsum("...k,...kc->...c", w, read(local)) / w.sum(-1)[..., None]
+
+
+def polygon_points(to_centre, x_half, y_half, sides: int, count: int = 16):
+    """closures.glsl's closure_bsdfs_polygon's points of a light's polygon (..., count, 3), relative to the
+    shaded point: 4 x 4 midpoints of a rectangle (sides 4), Vogel's spiral over an ellipse or disc."""
+    i = np.arange(count)
+    if sides == 4:
+        k = int(round(math.sqrt(count)))
+        uv = np.stack([(i % k + 0.5) / k * 2.0 - 1.0, (i // k + 0.5) / k * 2.0 - 1.0], -1)
+    else:
+        r = np.sqrt((i + 0.5) / count)
+        phi = 2.3999632 * i
+        uv = np.stack([r * np.cos(phi), r * np.sin(phi)], -1)
+    c, x, y = (np.asarray(a, np.float64)[..., None, :] for a in (to_centre, x_half, y_half))
+    return c + x * uv[:, :1] + y * uv[:, 1:]
+
+
+def polygon_average(direct, to_centre, x_half, y_half, sides: int, count: int = 16):
+    """closures.glsl's closure_bsdfs_polygon: ``direct(l)`` (..., count, k; l unit, (..., count, 3))
+    averaged over the polygon's points (``polygon_points``), each weighted by the solid angle it stands
+    for (the emitter's cosine over the squared distance)."""
+    d = polygon_points(to_centre, x_half, y_half, sides, count)
+    d2 = np.sum(d * d, -1)
+    l = d / np.sqrt(d2)[..., None]
+    normal = np.cross(np.asarray(x_half, np.float64), np.asarray(y_half, np.float64))
+    normal = normal / np.linalg.norm(normal, axis=-1, keepdims=True)
+    w = np.abs(np.sum(l * normal[..., None, :], -1)) / d2
+    return np.einsum("...k,...kc->...c", w, direct(l)) / w.sum(-1)[..., None]
