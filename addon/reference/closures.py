@@ -312,3 +312,23 @@ def polygon_average(direct, to_centre, x_half, y_half, sides: int, count: int = 
     normal = normal / np.linalg.norm(normal, axis=-1, keepdims=True)
     w = np.abs(np.sum(l * normal[..., None, :], -1)) / d2
     return np.einsum("...k,...kc->...c", w, direct(l)) / w.sum(-1)[..., None]
+
+
+#: closures.glsl's TOON_WORLD_SAMPLES: the points of a toon's cone the world is read at.
+TOON_WORLD_SAMPLES = 16
+
+
+def toon_world_points(size, smooth, count: int = TOON_WORLD_SAMPLES):
+    """closures.glsl's toon_world_point for its points of the cone (Size and Smooth in radians): directions
+    (..., count, 3) in the cone's frame (z its axis), spread by solid angle (Vogel's disc mapped to the cap
+    by area), and the toon's intensity there (..., count)."""
+    i = np.arange(count)
+    r = np.sqrt((i + 0.5) / count)
+    phi = 2.3999632 * i
+    half_cap = np.sin(0.5 * np.minimum(np.asarray(size, np.float64) + smooth, 0.5 * np.pi))[..., None]
+    one_minus_cos = 2.0 * r * r * half_cap * half_cap
+    sin_t = np.sqrt(np.maximum(one_minus_cos * (2.0 - one_minus_cos), 0.0))
+    local = np.stack([sin_t * np.cos(phi), sin_t * np.sin(phi), 1.0 - one_minus_cos], -1)
+    angle = 2.0 * np.arcsin(r * half_cap)
+    size, smooth = (np.asarray(x, np.float64)[..., None] for x in (size, smooth))
+    return local, toon_intensity(size, smooth, angle)
