@@ -335,40 +335,31 @@ float cone_roughness(float c)
   return min(sqrt(tan(t * 0.35355339)) * (1.0583 + t * (0.5579 * t - 0.2543)), 1.0);
 }
 
-#  if defined(SL_ENV_UNIFORM) || defined(SL_ENV_MAP)
-#    ifdef SL_DIFFUSE_ROUGHNESS
-/* The diffuse base's light from the world, times pi (principled_environment's rho x irradiance): Lambert's
- * colour times the irradiance about n; Oren-Nayar's A term and multiple scattering likewise (their light
- * is the cosine's), its B term B times the integral of its weight w(l) = (n.l) t, t = l.v - (n.l)(n.v)
- * over max(n.l, n.v) where positive (negative where the light is on the far side: it darkens forward
- * scattering), against the world's light taken as linear in the direction, L0 + L1.l, read from the
- * irradiance about n and about the view's tangent t_v either way (E(d) = pi L0 + 2 pi / 3 L1.d):
+#  ifdef SL_DIFFUSE_ROUGHNESS
+/* The diffuse base's light from the world, times pi (principled_environment's rho x irradiance), from the
+ * irradiance about n and about the view's tangent t_v either way (`e_towards`, `e_away`; all three
+ * `irradiance` where the view lies along n): Lambert's colour times the irradiance about n; Oren-Nayar's A
+ * term and multiple scattering likewise (their light is the cosine's), its B term B times the integral of
+ * its weight w(l) = (n.l) t, t = l.v - (n.l)(n.v) over max(n.l, n.v) where positive (negative where the
+ * light is on the far side: it darkens forward scattering), against the world's light taken as linear in
+ * the direction, L0 + L1.l, read from the three irradiances (E(d) = pi L0 + 2 pi / 3 L1.d):
  * int w L = G L0 + 2/3 L1.(int w l), int w l in the plane of n and t_v, G(n.v) = int w (its uniform
  * world's value: exact there). Fits of 3/2 int w l (quadrature, n.v 0.01-0.99, within 0.036):
  * 2.133 (1 - n.v)^0.6 along t_v, 0.450 (1 - n.v)^0.89 along n. Against Cycles in the forest world, the
  * irradiance about n alone drew roughness 1 14.7 % too dark (the light behind the viewer it reflects
- * back; tests/test_closure_nodes.py). */
-vec3 oren_nayar_environment(Surface s, vec3 irradiance)
+ * back; tests/test_closure_nodes.py). Twin: reference/closures.py's oren_nayar_world. */
+vec3 oren_nayar_world(Surface s, vec3 irradiance, vec3 e_towards, vec3 e_away)
 {
   if (!s.bsdfs.oren_nayar) {
     return s.base_color * irradiance;
   }
   float NoV = max(dot(s.n, s.v), 0.0);
-  vec3 tangent = s.v - s.n * NoV;
-  float t_len2 = dot(tangent, tangent);
   float G = oren_nayar_G(NoV);
-  vec3 b_light = G * irradiance; /* the view along n: no tangent, the B term's weight is symmetric */
-  if (t_len2 > 1e-12) {
-    tangent *= inversesqrt(t_len2);
-    float occlusion = env_occlusion_diffuse();
-    vec3 e_towards = env_irradiance(env_bent_normal(tangent)) * occlusion;
-    vec3 e_away = env_irradiance(env_bent_normal(-tangent)) * occlusion;
-    float along_t = 2.133 * pow(1.0 - NoV, 0.6);
-    float along_n = 0.450 * pow(1.0 - NoV, 0.89);
-    /* pi L0 from the two tangents' mean; pi (2/3) L1.d = E(d) - pi L0 */
-    vec3 mean = 0.5 * (e_towards + e_away);
-    b_light = G * mean + along_n * (irradiance - mean) + along_t * 0.5 * (e_towards - e_away);
-  }
+  float along_t = 2.133 * pow(1.0 - NoV, 0.6);
+  float along_n = 0.450 * pow(1.0 - NoV, 0.89);
+  /* pi L0 from the two tangents' mean; pi (2/3) L1.d = E(d) - pi L0 */
+  vec3 mean = 0.5 * (e_towards + e_away);
+  vec3 b_light = G * mean + along_n * (irradiance - mean) + along_t * 0.5 * (e_towards - e_away);
   /* the multiple scattering's albedo: on_albedo's rest beside the single scattering's A pi + B G */
   vec3 multiple = s.bsdfs.on_albedo - s.base_color * (s.bsdfs.on_a * PI + s.bsdfs.on_b * G);
   /* a world far from linear (a small bright source on the far side) can take the B term below 0: no
@@ -376,13 +367,74 @@ vec3 oren_nayar_environment(Surface s, vec3 irradiance)
   b_light = max(b_light, 0.0);
   return s.base_color * (s.bsdfs.on_a * PI * irradiance + s.bsdfs.on_b * b_light) + multiple * irradiance;
 }
+#  endif
+
+#  ifdef SL_VELVET
+/* Point i of the 6 x 8 the velvet's world light is read at (velvet_world_radiance): its direction in the
+ * frame (the tangent towards v, n x it, n) at t = sqrt(cos theta) midpoints (as velvet_albedo's) and 8
+ * azimuths over the whole circle (the world is not symmetric about the view's plane), and its weight, the
+ * velvet's f (n.l) there times t (d cos theta = 2 t dt). Twin: reference/closures.py's velvet_world_points. */
+float velvet_world_point(float NoV, float inv_sigma2, int i, out vec3 local)
+{
+  float t = (float(i / 8) + 0.5) / 6.0;
+  float cos_l = t * t;
+  float sin_l = sqrt(1.0 - cos_l * cos_l);
+  float phi = PI * (float(i % 8) + 0.5) / 4.0;
+  local = vec3(sin_l * cos(phi), sin_l * sin(phi), cos_l);
+  vec3 v = vec3(sqrt(max(1.0 - NoV * NoV, 0.0)), 0.0, NoV);
+  vec3 h = normalize(local + v);
+  return t * velvet_eval(NoV, cos_l, h.z, abs(dot(local, h)), inv_sigma2);
+}
+#  endif
+
+#  ifdef SL_TOON
+/* Point i of the TOON_WORLD_SAMPLES a toon's cone (Size and Smooth `shape`, radians) reads the world at
+ * (toon_world_radiance): spread over the cone by solid angle (Vogel's disc mapped to the cap by area,
+ * 1 - cos theta = r^2 (1 - cos c)), its direction in the cone's frame (z its axis); returns the toon's
+ * intensity there. Twin: reference/closures.py's toon_world_points. */
+#    define TOON_WORLD_SAMPLES 16
+float toon_world_point(vec2 shape, int i, out vec3 local)
+{
+  float half_cap = sin(0.5 * min(shape.x + shape.y, 0.5 * PI));
+  vec2 d = vogel_disc(i, TOON_WORLD_SAMPLES);
+  float r = length(d); /* >= sqrt(1/2 / N): never 0 */
+  float one_minus_cos = 2.0 * r * r * half_cap * half_cap;
+  float sin_t = sqrt(max(one_minus_cos * (2.0 - one_minus_cos), 0.0));
+  local = vec3(d * (sin_t / r), 1.0 - one_minus_cos);
+  /* its angle by atan (llvmpipe's asin strays by 4e-4 rad, which a ramp of Smooth 0.03 makes 1.6e-2) */
+  return toon_intensity(shape.x, shape.y, atan(sin_t, local.z));
+}
+#  endif
+
+#  if defined(SL_ENV_UNIFORM) || defined(SL_ENV_MAP)
+#    ifdef SL_DIFFUSE_ROUGHNESS
+/* The diffuse base's light from the world, times pi: oren_nayar_world of the irradiance about n and the
+ * irradiance about the view's tangent either way. */
+vec3 oren_nayar_environment(Surface s, vec3 irradiance)
+{
+  if (!s.bsdfs.oren_nayar) {
+    return s.base_color * irradiance;
+  }
+  vec3 tangent = s.v - s.n * max(dot(s.n, s.v), 0.0);
+  float t_len2 = dot(tangent, tangent);
+  vec3 e_towards = irradiance; /* the view along n: no tangent, the B term's weight is symmetric */
+  vec3 e_away = irradiance;
+  if (t_len2 > 1e-12) {
+    tangent *= inversesqrt(t_len2);
+    float occlusion = env_occlusion_diffuse();
+    e_towards = env_irradiance(env_bent_normal(tangent)) * occlusion;
+    e_away = env_irradiance(env_bent_normal(-tangent)) * occlusion;
+  }
+  return oren_nayar_world(s, irradiance, e_towards, e_away);
+}
 #    endif
 
 #    ifdef SL_VELVET
 /* The world's radiance as the velvet weights it, over its own weight: its f (n.l) at 6 x 8 points over the
- * whole hemisphere (t = sqrt(cos theta) midpoints, as velvet_albedo's, and 8 azimuths: the world is not
- * symmetric about the view's plane), the world read at each prefiltered at roughness 0.5 (a lobe about as
- * wide as a cell; the world without its suns, which light the velvet as lights). The velvet's light lies
+ * whole hemisphere (velvet_world_point), the world read at each prefiltered at the roughness whose lobe
+ * covers its cell (env_footprint_roughness; never a level holding the suns, which light the velvet as lights:
+ * at roughness 0.5 for every cell, the horizon's cells read the ground below it, 5 % too dark in the forest
+ * world). The velvet's light lies
  * towards the horizon at grazing views (its sine's peak), where the irradiance about n, weighted by the
  * cosine, looks away: in the forest world that drew it 26 % too dark (tests/test_closure_nodes.py). */
 vec3 velvet_world_radiance(Surface s)
@@ -392,50 +444,82 @@ vec3 velvet_world_radiance(Surface s)
   vec3 other = abs(s.n.x) < 0.9 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
   x_axis = dot(x_axis, x_axis) > 1e-12 ? normalize(x_axis) : normalize(cross(other, s.n)); /* v along n */
   vec3 y_axis = cross(s.n, x_axis);
-  vec3 v = vec3(sqrt(max(1.0 - NoV * NoV, 0.0)), 0.0, NoV);
+  float floor_roughness = env_sunless_roughness();
   vec3 sum = vec3(0.0);
   float weight = 0.0;
-  for (int i = 0; i < 6; i++) {
-    float t = (float(i) + 0.5) / 6.0;
-    float cos_l = t * t;
-    float sin_l = sqrt(1.0 - cos_l * cos_l);
-    for (int j = 0; j < 8; j++) {
-      float phi = PI * (float(j) + 0.5) / 4.0;
-      vec3 l = vec3(sin_l * cos(phi), sin_l * sin(phi), cos_l);
-      vec3 h = normalize(l + v);
-      float f = t * velvet_eval(NoV, cos_l, h.z, abs(dot(l, h)), s.bsdfs.velvet_inv_sigma2);
-      sum += f * env_prefiltered(l.x * x_axis + l.y * y_axis + l.z * s.n, 0.5);
-      weight += f;
-    }
+  for (int i = 0; i < 48; i++) {
+    vec3 l;
+    float f = velvet_world_point(NoV, s.bsdfs.velvet_inv_sigma2, i, l);
+    /* the cell's solid angle 2 t dt dphi, t = sqrt(l.z): the share 1 / (48 pdf) of the footprint */
+    float cell = 2.0 * sqrt(l.z) * (1.0 / 6.0) * (PI / 4.0);
+    sum += f * env_prefiltered(l.x * x_axis + l.y * y_axis + l.z * s.n,
+                               env_footprint_roughness(1.0 / (48.0 * cell), 48, floor_roughness));
+    weight += f;
   }
   return weight > 0.0 ? sum / weight : env_irradiance(s.n) * INV_PI; /* no velvet: its colour is 0 too */
 }
 #    endif
 
+#    ifdef SL_TOON
+/* The world's radiance through a toon's cone (Size and Smooth `shape`, radians) about `axis`, weighted by its
+ * intensity (its ramp) and, above n's horizon only (Cycles' eval: n.l > 0), over its weight: its
+ * TOON_WORLD_SAMPLES points (toon_world_point), each reading the prefiltered world at its share of the cone
+ * (env_footprint_roughness), no smoother than `floor_roughness`; where no point carries weight (a cone below
+ * the horizon, which reflects nothing then) the world at the axis. The world prefiltered at the GGX lobe of
+ * the cone's median angle alone (cone_roughness), a lobe peaked where the cone is flat, drew the toons 7 %
+ * too dark in the forest world (tests/test_closure_nodes.py). */
+vec3 toon_world_radiance(vec3 n, vec3 axis, vec2 shape, float floor_roughness)
+{
+  float half_cap = sin(0.5 * min(shape.x + shape.y, 0.5 * PI));
+  float cap = 2.0 * half_cap * half_cap; /* the cone's 1 - cos, free of cancellation */
+  float roughness = env_footprint_roughness(1.0 / (2.0 * PI * cap), TOON_WORLD_SAMPLES, floor_roughness);
+  vec3 other = abs(axis.x) < 0.9 ? vec3(1.0, 0.0, 0.0) : vec3(0.0, 1.0, 0.0);
+  vec3 x = normalize(cross(other, axis));
+  vec3 y = cross(axis, x);
+  vec3 sum = vec3(0.0);
+  float weight = 0.0;
+  for (int i = 0; i < TOON_WORLD_SAMPLES; i++) {
+    vec3 local;
+    float w = toon_world_point(shape, i, local);
+    vec3 l = x * local.x + y * local.y + axis * local.z;
+    w = dot(n, l) > 0.0 ? w : 0.0;
+    sum += w * env_prefiltered(l, roughness);
+    weight += w;
+  }
+  return weight > 0.0 ? sum / weight : env_prefiltered(axis, roughness);
+}
+#    endif
+
 /* The world's light on the velvet and the toons: each lobe's directional albedo times the world's
- * light around its axis, the diffuse lobes' the irradiance about n over pi (exact for a uniform world),
- * the Glossy toon's the prefiltered radiance about the view's reflection at the roughness whose
- * GGX lobe is about as wide as its cone (alpha = tan of the cone's half-angle, at most 1), times the
- * share of its cone above the horizon (its solid angle's, the ramp taken as flat). */
+ * light it sees (velvet_world_radiance, toon_world_radiance), the Glossy toon's times the share of its
+ * cone above the horizon (its solid angle's, the ramp taken as flat). The diffuse lobes take the suns split
+ * off the world as lights (their levels hold none); the Glossy toon as the specular lobe does
+ * (world_sun_specular of the surface's roughness). */
 vec3 closure_bsdfs_environment(Surface s, vec2 weights)
 {
   vec3 c = vec3(0.0);
-  vec3 irradiance = env_irradiance(env_bent_normal(s.n)) * (env_occlusion_diffuse() * INV_PI);
 #    ifdef SL_VELVET
   c += s.bsdfs.velvet * velvet_albedo(s) * velvet_world_radiance(s) * (env_occlusion_diffuse() * weights.x);
 #    endif
 #    ifdef SL_TOON
-  float cone_d = min(s.bsdfs.toon_diffuse_shape.x + s.bsdfs.toon_diffuse_shape.y, 0.5 * PI);
-  float roughness_d = cone_roughness(cone_d);
-  c += s.bsdfs.toon_diffuse * toon_albedo(s.bsdfs.toon_diffuse_shape) * env_prefiltered(s.n, roughness_d) *
-       (env_occlusion_specular(s.n, s.n, roughness_d * roughness_d) * weights.x);
-  vec3 r = reflect(-s.v, s.n);
-  float cone = min(s.bsdfs.toon_glossy_shape.x + s.bsdfs.toon_glossy_shape.y, 0.5 * PI);
-  float roughness = cone_roughness(cone);
-  /* the cone's part below the horizon reflects nothing (Cycles' eval: n.l > 0) */
-  float above = cone_above_horizon(dot(s.n, r), cone);
-  c += s.bsdfs.toon_glossy * toon_albedo(s.bsdfs.toon_glossy_shape) * env_prefiltered(r, roughness) *
-       (above * env_occlusion_specular(s.n, r, roughness * roughness) * weights.y);
+  float sunless = env_sunless_roughness();
+  if (max(s.bsdfs.toon_diffuse.r, max(s.bsdfs.toon_diffuse.g, s.bsdfs.toon_diffuse.b)) > 0.0) {
+    vec2 shape_d = s.bsdfs.toon_diffuse_shape;
+    float roughness_d = cone_roughness(min(shape_d.x + shape_d.y, 0.5 * PI)); /* its occlusion's cone */
+    c += s.bsdfs.toon_diffuse * toon_albedo(shape_d) * toon_world_radiance(s.n, s.n, shape_d, sunless) *
+         (env_occlusion_specular(s.n, s.n, roughness_d * roughness_d) * weights.x);
+  }
+  if (max(s.bsdfs.toon_glossy.r, max(s.bsdfs.toon_glossy.g, s.bsdfs.toon_glossy.b)) > 0.0) {
+    vec2 shape_g = s.bsdfs.toon_glossy_shape;
+    vec3 r = reflect(-s.v, s.n);
+    float cone = min(shape_g.x + shape_g.y, 0.5 * PI);
+    float roughness = cone_roughness(cone);
+    /* the cone's part below the horizon reflects nothing (Cycles' eval: n.l > 0) */
+    float above = cone_above_horizon(dot(s.n, r), cone);
+    float floor_g = world_sun_specular(s.roughness) > 0.5 ? sunless : MIN_PERCEPTUAL_ROUGHNESS;
+    c += s.bsdfs.toon_glossy * toon_albedo(shape_g) * toon_world_radiance(s.n, r, shape_g, floor_g) *
+         (above * env_occlusion_specular(s.n, r, roughness * roughness) * weights.y);
+  }
 #    endif
   return c;
 }
@@ -534,7 +618,7 @@ bool glossy_ltc_ratio(Surface s, LightPolygon poly, float integral, out float lo
     density += w * ltc_density(m, local, 0.0);
     w_sum += w;
   }
-  vec3 local = normalize(vec3(m.w * F.x - m.y * F.z, (m.x * m.w - m.y * m.z) * F.y, m.x * F.z - m.z * F.x));
+  vec3 local = ltc_direction(m, F);
   float w_mean = w_sum / 16.0;
   lobe += w_mean * pbr_lobe(s, local.x * s.ltc.x_axis + local.y * s.ltc.y_axis + local.z * s.n);
   density += w_mean * ltc_density(m, local, ltc_density_floor(integral, min(len, 1.0)));

@@ -31,6 +31,15 @@ float acos_accurate(float x)
   return atan(sqrt(max(1.0 - x * x, 0.0)), x);
 }
 
+/* Point i of `count` spread evenly over the unit disc (Vogel's spiral: radius sqrt((i + 1/2) / count),
+ * each turned from the last by the golden angle). */
+vec2 vogel_disc(int i, int count)
+{
+  float r = sqrt((float(i) + 0.5) / float(count));
+  float phi = 2.3999632 * float(i); /* the golden angle */
+  return r * vec2(cos(phi), sin(phi));
+}
+
 /* The Diffuse BSDF's Oren-Nayar of roughness sigma in [0, 1] as Cycles sets it up
  * (bsdf_oren_nayar_setup: Fujii's improved model; 4.2 writes A's pi / 2 - 2 / 3 as (3 pi - 4) / 6): A,
  * B and the average albedo E_avg of its single scattering (5.0's multiple scattering reads it). Here because both the closure (node_closure.glsl,

@@ -126,6 +126,28 @@ vec3 env_irradiance(vec3 n)
 }
 #  endif
 
+/* The perceptual roughness of the prefiltered world whose GGX lobe covers one sample's share of a lobe
+ * sampled `count` times, 1 / (count pdf) sr (Krivanek & Colbert 2008's filtered importance sampling, on the
+ * prefiltered levels: a lobe of alpha covers ~4 pi alpha^2 sr about its peak), within [floor_roughness, 1]
+ * (a far tail's pdf underflowing to 0 in float32 takes the roughest). */
+float env_footprint_roughness(float pdf, int count, float floor_roughness)
+{
+  return clamp(sqrt(sqrt(1.0 / (4.0 * PI * float(count) * max(pdf, 1e-30)))), floor_roughness, 1.0);
+}
+
+/* The smoothest perceptual roughness whose prefiltered world holds none of the suns split off it (a lobe
+ * the suns light as lights, at full weight, reads no smoother): the first level made from the clamped
+ * world, the floor where the world has no suns. */
+float env_sunless_roughness()
+{
+#  ifdef SL_ENV_MAP
+  int clamped = int(env.info.y);
+  return clamped < int(env.info.x) ? env_level_roughness(clamped) : MIN_PERCEPTUAL_ROUGHNESS;
+#  else
+  return MIN_PERCEPTUAL_ROUGHNESS;
+#  endif
+}
+
 /* Where a GGX lobe's reflected energy peaks: off the mirror direction towards the normal as the
  * surface roughens (Lagarde & de Rousiers 2014, "Moving Frostbite to PBR", listing 22). */
 vec3 env_dominant_direction(vec3 n, vec3 r, float alpha)

@@ -196,9 +196,7 @@ vec3 polygon_point(LightPolygon poly, vec3 normal, int i, out float w)
     uv = vec2(float(i % 4), float(i / 4)) * 0.5 - 0.75;
   }
   else {
-    float r = sqrt((float(i) + 0.5) / 16.0);
-    float phi = 2.3999632 * float(i); /* the golden angle */
-    uv = r * vec2(cos(phi), sin(phi));
+    uv = vogel_disc(i, 16); /* common.glsl */
   }
   vec3 d = poly.to_centre + poly.x_half * uv.x + poly.y_half * uv.y;
   float d2 = dot(d, d);

@@ -31,6 +31,14 @@ float ltc_density(vec4 m, vec3 w, float floor_cosine)
   float cosine = max(y.z * inversesqrt(len2), floor_cosine);
   return cosine * abs(m.x * m.w - m.y * m.z) / (PI * len2 * sqrt(len2));
 }
+
+/* The unit direction M w / |M w| a direction w of the clamped cosine's space maps to under the LTC with
+ * entries m: M = adj(M^-1) = [[m22, 0, -m02], [0, det, 0], [-m20, 0, m00]], a positive multiple of the
+ * inverse (det M^-1 > 0). Maps cosine-distributed directions to the lobe's (Heitz et al. 2016, sec. 3). */
+vec3 ltc_direction(vec4 m, vec3 w)
+{
+  return normalize(vec3(m.w * w.x - m.y * w.z, (m.x * m.w - m.y * m.z) * w.y, m.x * w.z - m.z * w.x));
+}
 #endif
 
 #ifdef SL_LTC

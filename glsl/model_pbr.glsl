@@ -216,8 +216,8 @@ vec3 shade_environment_surface(Surface s, vec2 weights)
 
 /* The world's light: the surface's, under the Principled BSDF's upper layers where the program draws
  * them (as light_shading.glsl's shade_light: the base times what they leave it at the view, the
- * coat's split sum of its own lobe, and the sheen's albedo times the irradiance around its normal:
- * exact for a uniform world, a cosine-weighted mean of the world where the lobe is narrower). */
+ * coat's split sum of its own lobe, and the sheen's albedo times the world through its own lobe,
+ * sampled: principled.glsl's sheen_environment). */
 vec3 shade_environment(Surface s, vec2 weights)
 {
   vec3 c = shade_environment_surface(s, weights);
@@ -228,7 +228,7 @@ vec3 shade_environment(Surface s, vec2 weights)
   c += s.coat.weight * shade_environment_surface(coat_surface(s), weights * vec2(0.0, 1.0));
 #  endif
 #  ifdef SL_SHEEN
-  c += s.sheen.color * env_irradiance(env_bent_normal(s.sheen.n)) * (env_occlusion_diffuse() * INV_PI * weights.x);
+  c += s.sheen.color * sheen_environment(s) * (env_occlusion_diffuse() * weights.x);
 #  endif
 #  ifdef SL_CLOSURE_BSDFS
   c += closure_bsdfs_environment(s, weights); /* the velvet's and the toons' (closures.glsl) */

@@ -8,6 +8,7 @@ Arrays broadcast; no ``bpy``.
 
 from __future__ import annotations
 
+import math
 from functools import lru_cache
 
 import numpy as np
@@ -99,16 +100,19 @@ def oren_nayar_f(sigma, albedo, cos_v, t, cos_l, rule=MULTISCATTER):
 POLYGON_POINTS = 16
 
 
-def polygon_points(to_centre, x_half, y_half, sides):
+def polygon_points(to_centre, x_half, y_half, sides, count: int = POLYGON_POINTS):
     """lights.glsl's polygon_point over a light's polygon (its centre ``to_centre`` from the points,
-    half-axes ``x_half``, ``y_half``; ``sides`` 4 a rectangle, else an ellipse or disc): ((..., 16, 3)
-    unit directions, (..., 16) weights, the emitter's cosine over the squared distance; 0 on the light):
-    4 x 4 midpoints of a rectangle, 16 points of Vogel's spiral over an ellipse or disc."""
-    i = np.arange(POLYGON_POINTS)
+    half-axes ``x_half``, ``y_half``; ``sides`` 4 a rectangle, else an ellipse or disc): ((..., count, 3)
+    unit directions, (..., count) weights, the emitter's cosine over the squared distance; 0 on the
+    light): k x k midpoints of a rectangle (k = sqrt(count); the program's 4 x 4), ``count`` points of
+    Vogel's spiral over an ellipse or disc (common.glsl's vogel_disc). A count above 16 is the tests'
+    fine average."""
+    i = np.arange(count)
     if sides == 4:
-        uv = np.stack([i % 4, i // 4], -1) * 0.5 - 0.75
+        k = int(round(math.sqrt(count)))
+        uv = np.stack([(i % k + 0.5) / k, (i // k + 0.5) / k], -1) * 2.0 - 1.0
     else:
-        r = np.sqrt((i + 0.5) / POLYGON_POINTS)
+        r = np.sqrt((i + 0.5) / count)
         phi = 2.3999632 * i  # the golden angle
         uv = r[:, None] * np.stack([np.cos(phi), np.sin(phi)], -1)
     x_half, y_half = np.asarray(x_half, np.float64), np.asarray(y_half, np.float64)
@@ -298,3 +302,72 @@ def oren_nayar_b_moments(cos_v):
     along n: 2.133 (1 - n.v)^0.6, 0.450 (1 - n.v)^0.89."""
     one_minus = 1.0 - np.clip(np.asarray(cos_v, np.float64), 0.0, 1.0)
     return 2.133 * one_minus ** 0.6, 0.450 * one_minus ** 0.89
+
+
+def oren_nayar_world(sigma, color, cos_v, irradiance, e_towards, e_away, rule=MULTISCATTER):
+    """closures.glsl's oren_nayar_world: the Diffuse BSDF's light from the world times pi (rgb), its
+    colour ``color`` (within [0, 1]), from the irradiance about n and about the view's tangent towards
+    and away from the view (rgb each; all three alike where the view lies along n): Lambert's colour
+    times the irradiance; Oren-Nayar's A term and multiple scattering times it, its B term times G(n.v)
+    L0 + 2/3 L1.(int w l) of the world taken as linear (``oren_nayar_b_moments``), at least 0."""
+    color = np.asarray(color, np.float64)
+    nv = np.clip(np.asarray(cos_v, np.float64), 0.0, 1.0)
+    a, b, ms, e_avg = oren_nayar_setup(sigma, color, nv, rule)
+    G = oren_nayar_G(nv)[..., None]
+    along_t, along_n = (m[..., None] for m in oren_nayar_b_moments(nv))
+    e, up, down = (np.asarray(x, np.float64) for x in (irradiance, e_towards, e_away))
+    mean = 0.5 * (up + down)
+    b_light = np.maximum(G * mean + along_n * (e - mean) + along_t * 0.5 * (up - down), 0.0)
+    multiple = color * np.pi * ms * (1.0 - e_avg)[..., None]  # (ms is per unit colour, as oren_nayar_eval's)
+    out = color * (a[..., None] * np.pi * e + b[..., None] * b_light) + multiple * e
+    return np.where(_lambert(sigma, rule)[..., None], color * e, out)
+
+
+def velvet_world_points(sigma, cos_v):
+    """closures.glsl's velvet_world_point for its 6 x 8 points: (directions (..., 48, 3) in the frame (the
+    tangent towards v, n x it, n), weights (..., 48): the velvet's f (n.l) there times t = sqrt(cos))."""
+    i = np.arange(48)
+    t = (i // 8 + 0.5) / 6.0
+    c = t * t
+    s = np.sqrt(1.0 - c * c)
+    phi = np.pi * (i % 8 + 0.5) / 4.0
+    local = np.stack([s * np.cos(phi), s * np.sin(phi), c], -1)
+    cos_v = np.asarray(cos_v, np.float64)[..., None]
+    v = np.stack(np.broadcast_arrays(np.sqrt(np.maximum(1.0 - cos_v * cos_v, 0.0)), 0.0 * cos_v, cos_v), -1)
+    f = velvet_at(np.asarray(sigma, np.float64)[..., None], np.array([0.0, 0.0, 1.0]), v, local)
+    return np.broadcast_to(local, f.shape + (3,)), f * t
+
+
+def velvet_world_radiance(sigma, cos_v, read):
+    """closures.glsl's velvet_world_radiance in the frame: the mean of ``read(directions (..., 48, 3))``
+    (rgb) weighted by velvet_world_points' weights."""
+    local, w = velvet_world_points(sigma, np.maximum(np.asarray(cos_v, np.float64), 1e-4))
+    return np.einsum("...k,...kc->...c", w, read(local)) / w.sum(-1)[..., None]
+
+
+def polygon_average(direct, to_centre, x_half, y_half, sides: int, count: int = POLYGON_POINTS):
+    """closures.glsl's closure_bsdfs_polygon: ``direct(l)`` (..., count, k; l unit, (..., count, 3))
+    averaged over the polygon's points (``polygon_points``), each weighted by the solid angle it stands
+    for (the emitter's cosine over the squared distance)."""
+    l, w = polygon_points(to_centre, x_half, y_half, sides, count)
+    return np.einsum("...k,...kc->...c", w, direct(l)) / w.sum(-1)[..., None]
+
+
+#: closures.glsl's TOON_WORLD_SAMPLES: the points of a toon's cone the world is read at.
+TOON_WORLD_SAMPLES = 16
+
+
+def toon_world_points(size, smooth, count: int = TOON_WORLD_SAMPLES):
+    """closures.glsl's toon_world_point for its points of the cone (Size and Smooth in radians): directions
+    (..., count, 3) in the cone's frame (z its axis), spread by solid angle (Vogel's disc mapped to the cap
+    by area), and the toon's intensity there (..., count)."""
+    i = np.arange(count)
+    r = np.sqrt((i + 0.5) / count)
+    phi = 2.3999632 * i
+    half_cap = np.sin(0.5 * np.minimum(np.asarray(size, np.float64) + smooth, 0.5 * np.pi))[..., None]
+    one_minus_cos = 2.0 * r * r * half_cap * half_cap
+    sin_t = np.sqrt(np.maximum(one_minus_cos * (2.0 - one_minus_cos), 0.0))
+    local = np.stack([sin_t * np.cos(phi), sin_t * np.sin(phi), 1.0 - one_minus_cos], -1)
+    angle = 2.0 * np.arcsin(r * half_cap)
+    size, smooth = (np.asarray(x, np.float64)[..., None] for x in (size, smooth))
+    return local, toon_intensity(size, smooth, angle)

@@ -231,6 +231,18 @@ def minv_from_entries(entries) -> np.ndarray:
     return minv
 
 
+def ltc_direction(entries, w) -> np.ndarray:
+    """ltc.glsl's ltc_direction: M w / |M w| (..., 3) for the LTC of stored entries (a, b, d, e) at
+    directions ``w`` of the clamped cosine's space, M = adj(M^-1) = [[e, 0, -b], [0, ae - bd, 0],
+    [-d, 0, a]]."""
+    e = np.asarray(entries, np.float64)
+    w = np.asarray(w, np.float64)
+    a, b, d, f = e[..., 0], e[..., 1], e[..., 2], e[..., 3]
+    x, y, z = w[..., 0], w[..., 1], w[..., 2]
+    out = np.stack([f * x - b * z, (a * f - b * d) * y, a * z - d * x], -1)
+    return out / np.linalg.norm(out, axis=-1, keepdims=True)
+
+
 def ltc_density(minv: np.ndarray, w: np.ndarray, floor=0.0) -> np.ndarray:
     """D(w) = D_o(M^-1 w / |M^-1 w|) |det M^-1| / |M^-1 w|^3, D_o = max(z, floor) / pi; w (..., 3)
     unit, minv (3, 3) or broadcastable (..., 3, 3) (any scale: D does not depend on it). ``floor``

@@ -687,6 +687,43 @@ def sheen_direct(sheen: SheenLobe, l):
     return sheen.color * _rgb_scalar(ltc.ltc_density(ltc.minv_from_entries(sheen.m), local))
 
 
+#: principled.glsl's SHEEN_WORLD_SAMPLES: directions of the sheen's lobe the world is read in.
+SHEEN_WORLD_SAMPLES = 16
+
+
+def vogel_disc(i: int, count: int) -> np.ndarray:
+    """common.glsl's vogel_disc: point i of ``count`` on the unit disc (radius sqrt((i + 1/2) / count),
+    turned by the golden angle per point)."""
+    r = math.sqrt((i + 0.5) / count)
+    phi = 2.3999632 * i
+    return np.array([r * math.cos(phi), r * math.sin(phi)])
+
+
+def sunless_roughness(first_clamped: int) -> float:
+    """ibl.glsl's env_sunless_roughness: the first level's roughness made without the suns (levels from
+    ``first_clamped`` on), the floor where the world has none."""
+    if first_clamped >= environment.PREFILTER_LEVELS:
+        return MIN_PERCEPTUAL_ROUGHNESS
+    return MIN_PERCEPTUAL_ROUGHNESS if first_clamped == 0 else environment.level_roughness(first_clamped)
+
+
+def sheen_environment(sheen: SheenLobe, read, floor_roughness: float, count: int = SHEEN_WORLD_SAMPLES):
+    """principled.glsl's sheen_environment: the mean over ``count`` directions of the sheen's LTC (Vogel's
+    disc lifted to the clamped cosine, mapped by M) of ``read(l, roughness)``, the prefiltered world at
+    each sample's footprint roughness (``anisotropy.sample_roughness``), no smoother than
+    ``floor_roughness``."""
+    minv = ltc.minv_from_entries(sheen.m)
+    total = 0.0
+    for i in range(count):
+        d = vogel_disc(i, count)
+        w = np.array([d[0], d[1], math.sqrt(max(1.0 - d @ d, 0.0))])
+        local = ltc.ltc_direction(sheen.m, w)
+        rough = np.maximum(anisotropy.sample_roughness(ltc.ltc_density(minv, local), count), floor_roughness)
+        l = local[..., :1] * sheen.x_axis + local[..., 1:2] * sheen.y_axis + local[..., 2:] * sheen.n
+        total = total + read(l, rough)
+    return total / count
+
+
 def pbr_specular_tint(s: Surface, LoH, terms: Terms):
     """model_pbr.glsl's pbr_specular_tint: F with the energy compensation, or the Principled set's."""
     if terms.principled:
@@ -840,7 +877,7 @@ def shade_uniform_environment(s: Surface, radiance, terms: Terms = DEFAULT_TERMS
             prefiltered = anisotropic_prefiltered(surface, lambda l, rough: L, levels, terms)
         return shade_environment(surface, prefiltered, irradiance, terms, w)
 
-    return _under_upper_layers(s, terms, weights, surface_light, lambda n: irradiance)
+    return _under_upper_layers(s, terms, weights, surface_light, lambda sheen: irradiance * INV_PI)
 
 
 def shade_environment(s: Surface, prefiltered, irradiance, terms: Terms = DEFAULT_TERMS, weights=(1.0, 1.0),
@@ -888,11 +925,11 @@ def shade_environment(s: Surface, prefiltered, irradiance, terms: Terms = DEFAUL
     return diffuse * weights[0] + specular * weights[1]
 
 
-def _under_upper_layers(s: Surface, terms: Terms, weights, surface_light, irradiance_at):
+def _under_upper_layers(s: Surface, terms: Terms, weights, surface_light, sheen_light):
     """model_pbr.glsl's shade_environment: ``surface_light(surface, weights)``, the world's light
     from a surface's own lobes, and in the Principled set under its upper layers (``upper_layers``:
-    the base times what they leave it, the coat's own lobe, the sheen's albedo times
-    ``irradiance_at(its normal)`` / pi)."""
+    the base times what they leave it, the coat's own lobe, the sheen's colour times
+    ``sheen_light(its lobe)``, the radiance it sees)."""
     c = surface_light(s, weights)
     upper = upper_layers(s) if terms.principled else None
     if upper is None:
@@ -901,7 +938,7 @@ def _under_upper_layers(s: Surface, terms: Terms, weights, surface_light, irradi
     if upper.coat is not None:
         c = c + _rgb_scalar(upper.coat_weight) * surface_light(upper.coat, (0.0, weights[1]))
     if upper.sheen is not None:
-        c = c + upper.sheen.color * irradiance_at(upper.sheen.n) * (INV_PI * weights[0])
+        c = c + upper.sheen.color * sheen_light(upper.sheen) * weights[0]
     return c
 
 
@@ -928,17 +965,19 @@ def shade_image_environment(s: Surface, maps: environment.WorldMaps, terms: Term
     of each prefiltered level (``environment.PREFILTER_SAMPLES`` if None)."""
     memo = {} if memo is None else memo
 
-    def irradiance_at(n):
-        if diffuse == "SH9":
-            return environment.sh9_irradiance(maps.sh, n) * _rgb_scalar(ao)
-        return environment.irradiance(maps.level(environment.IRRADIANCE_WIDTH), n) * _rgb_scalar(ao)
-
     def surface_light(surface, w):  # the coat's own split sum or samples: a memo of its own
         own = memo if surface is s else memo.setdefault(("coat",), {})
         return _image_environment(surface, maps, terms, samples, diffuse, w, ao, specular_ao, own,
                                   prefilter_samples)
 
-    return _under_upper_layers(s, terms, weights, surface_light, irradiance_at)
+    def sheen_light(sheen):
+        def read(l, rough):
+            return environment.prefiltered_radiance(maps.whole, maps.clamped, l, rough, maps.first_clamped,
+                                                    prefilter_samples)
+
+        return sheen_environment(sheen, read, sunless_roughness(maps.first_clamped)) * _rgb_scalar(ao)
+
+    return _under_upper_layers(s, terms, weights, surface_light, sheen_light)
 
 
 def _image_environment(s: Surface, maps: environment.WorldMaps, terms: Terms, samples: int, diffuse: str,
