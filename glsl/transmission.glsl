@@ -70,6 +70,59 @@ float transmission_exit_fraction(float cos_i, float eta, float roughness, float 
   return 0.25 * sum;
 }
 
+/* Rough glass's single-scattering albedo (E, Eavg) for light arriving at n.v = mu on glass of
+ * relative IOR eta and perceptual `roughness`: Cycles' ggx_glass_E and ggx_glass_Eavg tables (their
+ * _inv tables at 1 / eta for eta < 1), read as its microfacet_ggx_preserve_energy reads them
+ * (trilinear on the grid i / (N - 1) over roughness, mu and z = sqrt(|eta - 1| / (eta + 1))). Our
+ * tables (addon/reference/transmission.py's compute_glass_albedo_tables, scripts/glass_albedo_table.py)
+ * are rows of s_table after the S table (gpu_library.s_table): E at rows N^2 (1 + inverse) + mu + N z,
+ * Eavg at rows 3 N^2 + N inverse + z, the roughness along x. */
+float glass_texel(int row, int r)
+{
+  return texelFetch(s_table, ivec2(r, row), 0).r;
+}
+
+vec2 glass_albedo(float roughness, float mu, float eta)
+{
+  int inverse = eta < 1.0 ? 1 : 0;
+  float ior = eta < 1.0 ? 1.0 / eta : eta;
+  int n = SL_S_SIZE;
+  vec3 x = clamp(vec3(roughness, mu, sqrt(abs(ior - 1.0) / (ior + 1.0))), 0.0, 1.0) * float(n - 1);
+  ivec3 i0 = min(ivec3(floor(x)), ivec3(n - 2));
+  vec3 f = x - vec3(i0);
+  int e_rows = n * n * (1 + inverse) + i0.y + n * i0.z;
+  int avg_rows = 3 * n * n + n * inverse + i0.z;
+  vec2 r = vec2(0.0);
+  for (int k = 0; k < 2; k++) {
+    float wz = k == 0 ? 1.0 - f.z : f.z;
+    float e0 = mix(glass_texel(e_rows + n * k, i0.x), glass_texel(e_rows + n * k, i0.x + 1), f.x);
+    float e1 = mix(glass_texel(e_rows + n * k + 1, i0.x), glass_texel(e_rows + n * k + 1, i0.x + 1), f.x);
+    r.x += wz * mix(e0, e1, f.y);
+    r.y += wz * mix(glass_texel(avg_rows + k, i0.x), glass_texel(avg_rows + k, i0.x + 1), f.x);
+  }
+  return r;
+}
+
+/* What Cycles' microfacet_ggx_preserve_energy multiplies a Multiscatter GGX glass closure by (its
+ * reflection and transmission alike): its energy_scale 1 / E times the darkening of a tinted glass,
+ * together 1 + Fms (1 - E) / E, Fms = Fss Eavg / (1 - Fss (1 - Eavg)) (Kulla & Conty 2017, "Revisiting
+ * Physically Based Shading at Imageworks", appendix), Fss the transmission's tint as
+ * bsdf_microfacet_setup_fresnel_generalized_schlick takes it. Per channel; light arriving at n.v =
+ * mu. (The Refraction BSDF has none: 1.) */
+vec3 glass_compensation(TransmissionLobe t, float roughness, float mu, float eta)
+{
+  if (!t.fresnel) {
+    return vec3(1.0);
+  }
+  vec2 e = glass_albedo(roughness, mu, eta);
+  /* E -> 0 only at grazing mu on the roughest glass leaving it (0.3 there): floored as Cycles' table
+   * never is, against a division by 0 */
+  float E = max(e.x, 1e-3);
+  vec3 Fss = t.tint;
+  vec3 Fms = Fss * e.y / (1.0 - Fss * (1.0 - e.y));
+  return 1.0 + Fms * ((1.0 - E) / E);
+}
+
 /* The direction light travelling along unit d takes through an interface of unit normal n (facing
  * against d) into a medium of relative IOR eta (Snell's law, Walter et al. 2007 eq. 40); 0 under
  * total internal reflection. */
@@ -118,8 +171,8 @@ float transmission_ggx(vec3 n, vec3 v, vec3 l, float eta, float alpha, out float
 /* A light's radiance through the surface from behind it (n.l < 0): the glass share times its tint,
  * the transmission's Fresnel at h.v and the GGX lobe, per unit irradiance E (Cycles evaluates the
  * glass closure's transmission for lights behind the surface, the light's shadow through the rest of
- * the object not looked up: a closed object's far side does not dim it). Single scattering: the
- * lobe's multiple-scattering compensation (Cycles' glass tables) is not applied. */
+ * the object not looked up: a closed object's far side does not dim it), times the lobe's
+ * compensation for what single scattering loses (glass_compensation at the view). */
 vec3 transmission_light(Surface s, vec3 l, vec3 E, vec4 factors)
 {
   if (s.transmission.weight <= 0.0 || dot(s.n, l) >= 0.0 || s.transmission.exit) {
@@ -131,7 +184,8 @@ vec3 transmission_light(Surface s, vec3 l, vec3 E, vec4 factors)
     return vec3(0.0);
   }
   float crossing = transmission_fraction(HoV, s.transmission.eta, s.transmission.fresnel);
-  return s.transmission.tint * (s.transmission.weight * crossing * lobe * factors.y) * E;
+  vec3 compensation = glass_compensation(s.transmission, s.roughness, s.NoV, s.transmission.eta);
+  return s.transmission.tint * compensation * (s.transmission.weight * crossing * lobe * factors.y) * E;
 }
 
 /* A light's radiance reaching the viewer through a closed object's far face (s.transmission.exit),
@@ -149,7 +203,10 @@ vec3 transmission_light(Surface s, vec3 l, vec3 E, vec4 factors)
  * their sum, median ratio 0.96. A light on the inside's side is reflected by the far face (GGX at the
  * same sqrt(3) alpha, the Fresnel from inside: all of it beyond the critical angle; a shadow-casting
  * light reaches there only through the object, which its shadow map shades). Times what crossed in
- * (s.transmission). */
+ * (s.transmission). Each rough lobe times its face's compensation for what single scattering loses
+ * (glass_compensation: the far face's seen from inside along the view ray, 1 / eta; the near face's
+ * at the view), as Cycles' glass closure at each face carries its own; the first crossing's fraction
+ * (s.transmission.inside: 1 - the reflection's albedo) loses nothing already. */
 vec3 transmission_exit_light(Surface s, vec3 l, vec3 E, vec4 factors, float alpha_factor, float spread)
 {
   TransmissionLobe t = s.transmission;
@@ -160,7 +217,10 @@ vec3 transmission_exit_light(Surface s, vec3 l, vec3 E, vec4 factors, float alph
     /* the far face's lobe, seen from inside along the view ray */
     float HoV;
     float lobe = transmission_ggx(n, -t.inner, l, 1.0 / t.eta, alpha, HoV);
-    vec3 far = t.inside * (lobe > 0.0 ? transmission_fraction(HoV, 1.0 / t.eta, t.fresnel) * lobe : 0.0);
+    float cos2 = -dot(t.inner, n);
+    vec3 far_compensation = glass_compensation(t, s.roughness, cos2, 1.0 / t.eta);
+    vec3 far = t.inside * far_compensation *
+               (lobe > 0.0 ? transmission_fraction(HoV, 1.0 / t.eta, t.fresnel) * lobe : 0.0);
     /* the near face's lobe towards the light's ray refracted in at the far face (which faces it: -n) */
     vec3 u = transmission_direction(-l, -n, t.eta);
     float cos_in = dot(u, n);
@@ -171,13 +231,13 @@ vec3 transmission_exit_light(Surface s, vec3 l, vec3 E, vec4 factors, float alph
       if (lobe2 > 0.0) {
         float crossings = transmission_fraction(HoV2, t.eta, t.fresnel) *
                           transmission_fraction(-NoL, t.eta, t.fresnel);
-        near = t.tint * (t.weight * crossings * lobe2 * (-NoL) / (t.eta * t.eta * cos_in));
+        near = t.tint * glass_compensation(t, s.roughness, s.NoV, t.eta) *
+               (t.weight * crossings * lobe2 * (-NoL) / (t.eta * t.eta * cos_in));
       }
     }
     /* what the spread loses at the far face beyond its smooth fraction (on a sphere, rays turned
      * towards its rim meet the far face more obliquely: 54 -> 38 % mean, a point light behind a
      * sphere of roughness 0.6) */
-    float cos2 = -dot(t.inner, n);
     float smooth_fraction = transmission_fraction(cos2, 1.0 / t.eta, t.fresnel);
     float rough_fraction = transmission_exit_fraction(cos2, t.eta, s.roughness, spread, t.fresnel);
     /* (a loss only: the spread can raise the fraction a little, angles turned towards the normal;
@@ -193,7 +253,8 @@ vec3 transmission_exit_light(Surface s, vec3 l, vec3 E, vec4 factors, float alph
   vec3 h = half_vector(l, v, n);
   vec3 NxH = cross(n, h);
   float lobe = D_GGX(dot(n, h), dot(NxH, NxH), alpha) * V_SmithGGXCorrelated(NoV, max(NoL, MIN_COS), alpha) * NoL;
-  return t.inside * t.reflection_tint * (F_Dielectric(1.0 / t.eta, dot(h, v)) * lobe * factors.y) * E;
+  vec3 compensation = glass_compensation(t, s.roughness, NoV, 1.0 / t.eta);
+  return t.inside * t.reflection_tint * compensation * (F_Dielectric(1.0 / t.eta, dot(h, v)) * lobe * factors.y) * E;
 }
 
 /* --- what lies behind, in screen space (passes.RefractionPass) ------------------------------ */

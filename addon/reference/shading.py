@@ -745,14 +745,18 @@ def subsurface_direct(s: Surface, l):
 
 def transmission_light(s: Surface, l, E, factors):
     """glsl/transmission.glsl's transmission_light: a light's radiance through the surface from behind
-    it (n.l < 0) per unit irradiance E: the glass's weight, tint, Fresnel at h.v and GGX lobe."""
+    it (n.l < 0) per unit irradiance E: the glass's weight, tint, Fresnel at h.v and GGX lobe, times
+    the lobe's compensation (transmission.glass_compensation at the view)."""
     eta = np.broadcast_to(s.transmission_eta, np.shape(s.NoV))
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         lobe, HoV = transmission.transmission_ggx(s.n, s.v, l, eta, s.alpha)
         crossing = transmission.transmission_fraction(HoV, eta, s.transmission_fresnel)
     weight = np.where((s.transmission_weight > 0.0) & (_dot(s.n, l) < 0.0) & (lobe > 0.0),
                       s.transmission_weight * crossing * lobe * factors[1], 0.0)
-    return s.transmission_tint * _rgb_scalar(weight) * E
+    tint = s.transmission_tint * np.ones(np.shape(s.NoV) + (3,))
+    compensation = transmission.glass_compensation(s.roughness, s.NoV, eta, tint,
+                                                   np.asarray(s.transmission_fresnel)[..., None])
+    return tint * compensation * _rgb_scalar(weight) * E
 
 
 def pbr_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):

@@ -5,6 +5,9 @@ Rows of vectors (..., 3), float64."""
 
 from __future__ import annotations
 
+from functools import lru_cache
+from pathlib import Path
+
 import numpy as np
 
 from .brdf import D_GGX, F_Dielectric, V_SmithGGXCorrelated
@@ -92,8 +95,9 @@ def transmission_exit_light(n, v, inner, exit_n, l, eta, alpha, roughness, alpha
     face's normal ``n`` and view ``v``): beyond that face, the mean of the far face's transmission
     lobe seen from inside along ``inner`` and the near face's towards the light's ray refracted in at
     the far face (Snell's law, irradiance crossing by cos_out / cos_in, the adjoint lobe's eta^2
-    undone), each at ``alpha_factor`` x alpha, times the spread's extra loss at the far face; on the
-    inside's side, the GGX reflection with the Fresnel from inside. ``first``: the first crossing's
+    undone), each at ``alpha_factor`` x alpha and times its face's glass_compensation, times the
+    spread's extra loss at the far face; on the inside's side, the GGX reflection with the Fresnel from
+    inside (times the far face's compensation). ``first``: the first crossing's
     fraction (what of the glass enters: inside = weight x tint x first)."""
     n, v, inner, exit_n, l = (np.asarray(x, np.float64) for x in (n, v, inner, exit_n, l))
     eta = np.asarray(eta, np.float64)
@@ -101,7 +105,10 @@ def transmission_exit_light(n, v, inner, exit_n, l, eta, alpha, roughness, alpha
     inside = weight * tint * np.asarray(first, np.float64)
     NoL = _dot(exit_n, l)
     lobe, HoV = transmission_ggx(exit_n, -inner, l, 1.0 / eta, a)
-    far = inside * np.where(lobe > 0.0, transmission_fraction(HoV, 1.0 / eta, fresnel) * lobe, 0.0)
+    cos2 = -_dot(inner, exit_n)
+    far_compensation = glass_compensation(roughness, cos2, 1.0 / eta, tint, fresnel)
+    crossing = np.where(lobe > 0.0, transmission_fraction(HoV, 1.0 / eta, fresnel) * lobe, 0.0)
+    far = inside * far_compensation * crossing
     u = transmission_direction(-l, -exit_n, eta)
     cos_in = _dot(u, exit_n)
     lobe2, HoV2 = transmission_ggx(n, v, -u, eta, a)
@@ -109,13 +116,168 @@ def transmission_exit_light(n, v, inner, exit_n, l, eta, alpha, roughness, alpha
     with np.errstate(divide="ignore", invalid="ignore"):
         near = np.where((cos_in > 0.0) & (lobe2 > 0.0),
                         tint * weight * crossings * lobe2 * (-NoL) / (eta * eta * cos_in), 0.0)
-    cos2 = -_dot(inner, exit_n)
+    near = near * glass_compensation(roughness, _dot(n, v), eta, tint, fresnel)
     smooth = transmission_fraction(cos2, 1.0 / eta, fresnel)
     rough = transmission_exit_fraction(cos2, eta, roughness, spread, fresnel)
     with np.errstate(divide="ignore", invalid="ignore"):
         loss = np.where(smooth > 0.0, np.minimum(rough / smooth, 1.0), 1.0)
     through = tint * 0.5 * loss * (far + near)
     reflected, HoV_r = _reflect_ggx(exit_n, -inner, l, a)
-    reflected = inside * reflection_tint * np.asarray(F_Dielectric(1.0 / eta, HoV_r), np.float64) * reflected
+    reflected = inside * reflection_tint * far_compensation * np.asarray(F_Dielectric(1.0 / eta, HoV_r),
+                                                                          np.float64) * reflected
     reflected = np.where(fresnel, reflected, 0.0)
     return np.where(NoL < 0.0, through, reflected)
+
+
+# --- rough glass's lost energy (Cycles' glass albedo tables) --------------------------------------
+
+#: Side of the glass albedo tables (roughness, n.v, IOR), as Cycles' ggx_glass_E (16^3)
+GLASS_SIZE = 16
+GLASS_SHIPPED = Path(__file__).with_name("glass_albedo.npz")
+
+
+def glass_z(eta):
+    """The IOR axis of the glass tables: sqrt(|eta - 1| / (eta + 1)), F0^(1/4), for eta >= 1 (Cycles'
+    microfacet_ggx_preserve_energy parametrises its tables so, covering every IOR, most finely 1-2)."""
+    eta = np.asarray(eta, np.float64)
+    return np.sqrt(np.abs(eta - 1.0) / (eta + 1.0))
+
+
+def _vndf(alpha, wi, u1, u2):
+    """GGX's visible normals for the view wi (..., 3) in the frame of normal z, at uniform (u1, u2)
+    (Heitz 2018, "Sampling the GGX Distribution of Visible Normals", listing 1)."""
+    vh = np.stack([alpha * wi[..., 0], alpha * wi[..., 1], wi[..., 2]], axis=-1)
+    vh /= np.linalg.norm(vh, axis=-1, keepdims=True)
+    lensq = vh[..., 0] ** 2 + vh[..., 1] ** 2
+    # (the view along the normal: any tangent)
+    inv = np.where(lensq > 0.0, 1.0 / np.sqrt(np.maximum(lensq, 1e-300)), 0.0)
+    t1 = np.stack([np.where(lensq > 0.0, -vh[..., 1] * inv, 1.0), vh[..., 0] * inv, 0.0 * inv], axis=-1)
+    t2 = np.cross(vh, t1)
+    r = np.sqrt(u1)
+    phi = 2.0 * np.pi * u2
+    p1 = r * np.cos(phi)
+    s = 0.5 * (1.0 + vh[..., 2])
+    p2 = (1.0 - s) * np.sqrt(np.maximum(1.0 - p1 * p1, 0.0)) + s * r * np.sin(phi)
+    p3 = np.sqrt(np.maximum(1.0 - p1 * p1 - p2 * p2, 0.0))
+    nh = p1[..., None] * t1 + p2[..., None] * t2 + p3[..., None] * vh
+    m = np.stack([alpha * nh[..., 0], alpha * nh[..., 1], np.maximum(nh[..., 2], 0.0)], axis=-1)
+    return m / np.linalg.norm(m, axis=-1, keepdims=True)
+
+
+def _lambda_ggx(cos_n, alpha):
+    """Smith's Lambda for GGX at |cos_n| to the normal (Heitz 2014 eq. 72)."""
+    c2 = np.maximum(cos_n * cos_n, 1e-300)
+    return 0.5 * (np.sqrt(1.0 + alpha * alpha * np.maximum(1.0 / c2 - 1.0, 0.0)) - 1.0)
+
+
+def glass_albedo_samples(roughness: float, mu, eta: float, strata: int = 64) -> np.ndarray:
+    """The single-scattering GGX glass lobe's albedo (reflection and transmission, the exact
+    dielectric Fresnel at each microfacet, Smith's height-correlated masking) for light arriving at
+    n.v = ``mu`` (an array) on glass of relative IOR ``eta``, perceptual ``roughness``: what Cycles'
+    cycles_precompute integrates for ggx_glass_E (eval / pdf of bsdf_microfacet_ggx_sample: G2 / G1
+    for the Fresnel-chosen side, 0 where the direction leaves on the wrong side). A deterministic
+    quadrature: visible normals at the midpoints of a ``strata`` x ``strata`` grid."""
+    alpha = roughness * roughness
+    mu = np.atleast_1d(np.asarray(mu, np.float64))
+    u = (np.arange(strata) + 0.5) / strata
+    u1, u2 = (x.ravel() for x in np.meshgrid(u, u, indexing="ij"))
+    wi = np.stack([np.sqrt(1.0 - mu * mu), 0.0 * mu, mu], axis=-1)[:, None, :]  # (M, 1, 3)
+    m = _vndf(alpha, np.broadcast_to(wi, (len(mu), len(u1), 3)), u1[None], u2[None])
+    c = np.sum(wi * m, axis=-1)  # h.v > 0 for a visible normal
+    F = F_Dielectric(eta, np.maximum(c, 0.0))
+    g1 = 1.0 / (1.0 + _lambda_ggx(mu, alpha))[:, None]
+    wr = 2.0 * c[..., None] * m - wi
+    # the refracted direction (Snell's law at the microfacet; where F = 1 none)
+    k = np.maximum(1.0 - (1.0 - c * c) / (eta * eta), 0.0)
+    wt = -wi / eta + (c / eta - np.sqrt(k))[..., None] * m
+    lam_i = _lambda_ggx(mu, alpha)[:, None]
+    out = 0.0
+    for w, share, below in ((wr, F, False), (wt, 1.0 - F, True)):
+        cos_o = w[..., 2]
+        valid = (cos_o < 0.0) if below else (cos_o > 0.0)
+        g2 = 1.0 / (1.0 + lam_i + _lambda_ggx(cos_o, alpha))
+        out = out + np.where(valid, share * g2 / g1, 0.0)
+    return out.mean(axis=1)
+
+
+def compute_glass_albedo_tables(size: int = GLASS_SIZE, strata: int = 128,
+                                 log=None) -> dict[str, np.ndarray]:
+    """Cycles' four glass tables on its grid (roughness, n.v, z = i / (size - 1), each clamped as
+    cycles_precompute clamps them: roughness and n.v >= 1e-4, z in [1e-4, 0.99], the IOR
+    (1 + z^2) / (1 - z^2)): ``E`` and ``E_inv`` (size, size, size) indexed [z, mu, roughness], the
+    albedo entering glass of that IOR and leaving it (1 / IOR); ``Eavg`` and ``Eavg_inv`` (size, size)
+    indexed [z, roughness], 2 int mu E(mu) dmu (Gauss-Legendre over mu, 24 nodes)."""
+    grid = np.arange(size) / (size - 1)
+    nodes, weights = np.polynomial.legendre.leggauss(24)
+    mus = 0.5 * (nodes + 1.0)
+    out = {"E": np.zeros((size, size, size)), "E_inv": np.zeros((size, size, size)),
+           "Eavg": np.zeros((size, size)), "Eavg_inv": np.zeros((size, size))}
+    for iz, z in enumerate(np.clip(grid, 1e-4, 0.99)):
+        ior = (1.0 + z * z) / (1.0 - z * z)
+        for ir, r in enumerate(np.clip(grid, 1e-4, 1.0)):
+            for suffix, eta in (("", ior), ("_inv", 1.0 / ior)):
+                out["E" + suffix][iz, :, ir] = glass_albedo_samples(r, np.clip(grid, 1e-4, 1.0), eta, strata)
+                e = glass_albedo_samples(r, mus, eta, strata)
+                # 2 int_0^1 mu E dmu = sum w mu E (the nodes on [-1, 1] halved onto [0, 1])
+                out["Eavg" + suffix][iz, ir] = np.sum(weights * mus * e)
+        if log is not None:
+            log(f"IOR node {iz + 1}/{size} (IOR {ior:.4g})")
+    return {name: np.clip(t, 0.0, 1.0).astype(np.float32) for name, t in out.items()}
+
+
+@lru_cache(maxsize=1)
+def glass_albedo_tables() -> dict[str, np.ndarray]:
+    """The shipped glass tables (scripts/glass_albedo_table.py), computed where the file is missing."""
+    try:
+        with np.load(GLASS_SHIPPED, allow_pickle=False) as data:
+            return {name: data[name] for name in data.files}
+    except (OSError, ValueError):
+        return compute_glass_albedo_tables()
+
+
+def _lerp_grid(x, size):
+    """Index and fraction of x in [0, 1] on the grid i / (size - 1) (Cycles' lookup_table_read)."""
+    t = np.clip(np.asarray(x, np.float64), 0.0, 1.0) * (size - 1)
+    i0 = np.minimum(np.floor(t).astype(int), size - 2)
+    return i0, t - i0
+
+
+def glass_albedo(roughness, mu, eta):
+    """(E, Eavg): glsl/transmission.glsl's glass_albedo, the tables read trilinearly (bilinearly for
+    Eavg) as Cycles' microfacet_ggx_preserve_energy reads them: eta < 1 (leaving) from the inverse
+    tables at 1 / eta."""
+    tables = glass_albedo_tables()
+    roughness, mu, eta = np.broadcast_arrays(*(np.asarray(x, np.float64) for x in (roughness, mu, eta)))
+    inv = eta < 1.0
+    z = glass_z(np.where(inv, 1.0 / eta, eta))
+    size = tables["E"].shape[0]
+    (r0, fr), (m0, fm), (z0, fz) = (_lerp_grid(x, size) for x in (roughness, mu, z))
+    E = 0.0
+    Eavg = 0.0
+    for dz in (0, 1):
+        wz = fz if dz else 1.0 - fz
+        for dr in (0, 1):
+            wr = fr if dr else 1.0 - fr
+            avg = np.where(inv, tables["Eavg_inv"][z0 + dz, r0 + dr], tables["Eavg"][z0 + dz, r0 + dr])
+            Eavg = Eavg + wz * wr * avg
+            for dm in (0, 1):
+                wm = fm if dm else 1.0 - fm
+                at = (z0 + dz, m0 + dm, r0 + dr)
+                e = np.where(inv, tables["E_inv"][at], tables["E"][at])
+                E = E + wz * wr * wm * e
+    return E, Eavg
+
+
+def glass_compensation(roughness, mu, eta, tint=1.0, fresnel=True):
+    """glsl/transmission.glsl's glass_compensation: what Cycles' microfacet_ggx_preserve_energy
+    multiplies a Multiscatter GGX glass closure by, 1 + Fms (1 - E) / E (its energy_scale 1 / E times
+    the darkening), Fms = Fss Eavg / (1 - Fss (1 - Eavg)) (Kulla & Conty 2017) with Fss the
+    transmission tint (bsdf_microfacet_setup_fresnel_generalized_schlick); per channel where ``tint``
+    is (..., 3); 1 without Fresnel (the Refraction BSDF)."""
+    E, Eavg = glass_albedo(roughness, mu, eta)
+    E = np.maximum(E, 1e-3)
+    Fss = np.asarray(tint, np.float64)
+    if Fss.ndim:
+        E, Eavg = E[..., None], Eavg[..., None]
+    Fms = Fss * Eavg / (1.0 - Fss * (1.0 - Eavg))
+    return np.where(fresnel, 1.0 + Fms * (1.0 - E) / E, 1.0)
