@@ -43,64 +43,70 @@ float transmission_fraction(float cos_i, float eta, bool fresnel)
   return fresnel ? 1.0 - F : (F >= 1.0 ? 0.0 : 1.0);
 }
 
-/* The fraction of the light crossing a closed object's far face from inside (relative IOR 1 / eta)
- * along the view ray refracted in, at cos_i to that face's normal, for glass of perceptual
- * `roughness`: the smooth fraction (transmission_fraction) averaged over the spread of incidence
- * angles that the two rough crossings give the ray (the first crossing's lobe turns it, the far
- * face's microfacets tilt under it), as four angles theta +- s / sqrt(3), +- sqrt(3) s (the quartiles
- * of a Student-t of 2 degrees, GGX's slopes; s = `spread` x roughness radians: the programs'
- * REFRACTION_EXIT_SPREAD); total internal reflection takes what passes the critical angle. Against a
- * Monte-Carlo integration of Cycles' two rough crossings of a slab (its glass lobe normalised by its
- * albedo, as Cycles' energy compensation does; IOR 1.33 and 1.5, roughness 0.1-0.77, views 0-73
- * degrees): 0.041 mean absolute difference (0.15 largest, near the critical angle), the smooth
- * fraction 0.137 (0.44). Exact at roughness 0. */
-float transmission_exit_fraction(float cos_i, float eta, float roughness, float spread, bool fresnel)
-{
-  float c = clamp(cos_i, 0.0, 1.0);
-  float sin_i = sqrt(1.0 - c * c);
-  float s = spread * roughness;
-  float sum = 0.0;
-  for (int k = 0; k < 4; k++) {
-    float offset = s * (k < 2 ? 0.57735027 : 1.7320508) * ((k & 1) == 0 ? 1.0 : -1.0);
-    /* cos(theta + offset) (an angle past the normal is that angle on the other side, cos being even;
-     * one past grazing is grazing: cos 0) */
-    float cos_k = max(c * cos(offset) - sin_i * sin(offset), 0.0);
-    sum += transmission_fraction(cos_k, 1.0 / eta, fresnel);
-  }
-  return 0.25 * sum;
-}
-
-/* Rough glass's single-scattering albedo (E, Eavg) for light arriving at n.v = mu on glass of
- * relative IOR eta and perceptual `roughness`: Cycles' ggx_glass_E and ggx_glass_Eavg tables (their
- * _inv tables at 1 / eta for eta < 1), read as its microfacet_ggx_preserve_energy reads them
- * (trilinear on the grid i / (N - 1) over roughness, mu and z = sqrt(|eta - 1| / (eta + 1))). Our
- * tables (addon/reference/transmission.py's compute_glass_albedo_tables, scripts/glass_albedo_table.py)
- * are rows of s_table after the S table (gpu_library.s_table): E at rows N^2 (1 + inverse) + mu + N z,
- * Eavg at rows 3 N^2 + N inverse + z, the roughness along x. */
+/* Rough glass's single-scattering albedo for light arriving at n.v = mu on glass of relative IOR eta
+ * and perceptual `roughness`: Cycles' ggx_glass_E and ggx_glass_Eavg tables (their _inv tables at
+ * 1 / eta for eta < 1), read as its microfacet_ggx_preserve_energy reads them (trilinear on the grid
+ * i / (N - 1) over roughness, mu and z = sqrt(|eta - 1| / (eta + 1))), and the transmitted part of E
+ * alone, T. Our tables (addon/reference/transmission.py's compute_glass_albedo_tables,
+ * scripts/glass_albedo_table.py) are rows of s_table after the S table (gpu_library.s_table), the
+ * roughness along x: E at rows N^2 (1 + inverse) + mu + N z, Eavg at rows 3 N^2 + N inverse + z, T at
+ * rows 3 N^2 + 2 N + N^2 inverse + mu + N z. */
 float glass_texel(int row, int r)
 {
   return texelFetch(s_table, ivec2(r, row), 0).r;
 }
 
-vec2 glass_albedo(float roughness, float mu, float eta)
+/* The tables' coordinates (texels) of roughness, mu and eta's z, and whether eta < 1 (z.w). */
+vec4 glass_coordinates(float roughness, float mu, float eta)
 {
-  int inverse = eta < 1.0 ? 1 : 0;
   float ior = eta < 1.0 ? 1.0 / eta : eta;
+  vec3 x = clamp(vec3(roughness, mu, sqrt(abs(ior - 1.0) / (ior + 1.0))), 0.0, 1.0) * float(SL_S_SIZE - 1);
+  return vec4(x, eta < 1.0 ? 1.0 : 0.0);
+}
+
+/* Trilinear in the 3D table whose rows start at `first`. */
+float glass_table(int first, vec3 x)
+{
   int n = SL_S_SIZE;
-  vec3 x = clamp(vec3(roughness, mu, sqrt(abs(ior - 1.0) / (ior + 1.0))), 0.0, 1.0) * float(n - 1);
   ivec3 i0 = min(ivec3(floor(x)), ivec3(n - 2));
   vec3 f = x - vec3(i0);
-  int e_rows = n * n * (1 + inverse) + i0.y + n * i0.z;
-  int avg_rows = 3 * n * n + n * inverse + i0.z;
-  vec2 r = vec2(0.0);
+  float r = 0.0;
   for (int k = 0; k < 2; k++) {
-    float wz = k == 0 ? 1.0 - f.z : f.z;
-    float e0 = mix(glass_texel(e_rows + n * k, i0.x), glass_texel(e_rows + n * k, i0.x + 1), f.x);
-    float e1 = mix(glass_texel(e_rows + n * k + 1, i0.x), glass_texel(e_rows + n * k + 1, i0.x + 1), f.x);
-    r.x += wz * mix(e0, e1, f.y);
-    r.y += wz * mix(glass_texel(avg_rows + k, i0.x), glass_texel(avg_rows + k, i0.x + 1), f.x);
+    int row = first + i0.y + n * (i0.z + k);
+    float e0 = mix(glass_texel(row, i0.x), glass_texel(row, i0.x + 1), f.x);
+    float e1 = mix(glass_texel(row + 1, i0.x), glass_texel(row + 1, i0.x + 1), f.x);
+    r += (k == 0 ? 1.0 - f.z : f.z) * mix(e0, e1, f.y);
   }
   return r;
+}
+
+/* (E, Eavg) */
+vec2 glass_albedo(float roughness, float mu, float eta)
+{
+  int n = SL_S_SIZE;
+  vec4 x = glass_coordinates(roughness, mu, eta);
+  int inverse = int(x.w);
+  ivec2 i0 = min(ivec2(floor(x.xz)), ivec2(n - 2));
+  vec2 f = x.xz - vec2(i0);
+  int row = 3 * n * n + n * inverse + i0.y;
+  float a0 = mix(glass_texel(row, i0.x), glass_texel(row, i0.x + 1), f.x);
+  float a1 = mix(glass_texel(row + 1, i0.x), glass_texel(row + 1, i0.x + 1), f.x);
+  return vec2(glass_table(n * n * (1 + inverse), x.xyz), mix(a0, a1, f.y));
+}
+
+/* What of the light crossing rough glass at n.v = mu passes through: T / E, the share of its
+ * transmission in what the compensated glass closure scatters (Cycles' microfacet_ggx_preserve_energy
+ * scales both by 1 / E); beyond the critical angle some still passes (the microfacets tilted towards
+ * the ray). */
+float glass_transmitted(float roughness, float mu, float eta)
+{
+  int n = SL_S_SIZE;
+  vec4 x = glass_coordinates(roughness, mu, eta);
+  int inverse = int(x.w);
+  float E = glass_table(n * n * (1 + inverse), x.xyz);
+  /* E >= 0.3 in the tables but at grazing mu (the mu = 0 node: 0.024 at IOR 1.01, roughness 1): the
+   * floor guards a division by 0 */
+  return glass_table(3 * n * n + 2 * n + n * n * inverse, x.xyz) / max(E, 1e-3);
 }
 
 /* What Cycles' microfacet_ggx_preserve_energy multiplies a Multiscatter GGX glass closure by (its
@@ -121,6 +127,45 @@ vec3 glass_compensation(TransmissionLobe t, float roughness, float mu, float eta
   vec3 Fss = t.tint;
   vec3 Fms = Fss * e.y / (1.0 - Fss * (1.0 - e.y));
   return 1.0 + Fms * ((1.0 - E) / E);
+}
+
+/* How far (radians) the first crossing's rough lobe turns the view ray refracted into glass of
+ * relative IOR eta: a microfacet tilted by delta turns it by delta (1 - cos_v / (eta cos_t))
+ * (d theta_t / d theta_i = cos_i / (eta cos_t)), cos_v the view's cosine and cos_t the refracted
+ * ray's to the surface's normal, times `spread` alpha (the programs' REFRACTION_EXIT_SPREAD: GGX's
+ * slopes scale with alpha). */
+float transmission_inner_spread(float cos_v, float cos_t, float eta, float alpha, float spread)
+{
+  /* cos_t -> 0 only for a ray refracted along the surface (eta < 1 near its critical angle): no turn */
+  return cos_t > 1e-4 ? spread * alpha * max(1.0 - cos_v / (eta * cos_t), 0.0) : 0.0;
+}
+
+/* The fraction of the light crossing a closed object's far face from inside (relative IOR 1 / eta)
+ * along the view ray refracted in, at cos_i to that face's normal, for glass of perceptual
+ * `roughness`: what the far face's compensated rough closure passes (glass_transmitted: its
+ * microfacets' Fresnel, total internal reflection included) averaged over the incidence angles the
+ * first crossing's lobe turns the ray to, four angles theta +- s / sqrt(3), +- sqrt(3) s (the
+ * quartiles of a Student-t of 2 degrees, GGX's slopes; s = `spread` radians:
+ * transmission_inner_spread). Against a Monte-Carlo integration of Cycles' two compensated rough
+ * crossings of a slab (IOR 1.33 and 1.5, roughness 0.1-0.8, views 0-70 degrees; times the first
+ * crossing's 1 - F): 0.013 mean absolute difference, 0.0055 at views up to 50 degrees (0.11 largest,
+ * at 70 degrees); the smooth Fresnel averaged over a spread of 0.25 roughness radians (the engine
+ * before) 0.034 (0.16). Smooth glass (roughness at most the floor) and the Refraction BSDF (no
+ * Fresnel, no compensation in Cycles) pass the smooth fraction, exact at roughness 0. */
+float transmission_exit_fraction(float cos_i, float eta, float roughness, float spread, bool fresnel)
+{
+  float c = clamp(cos_i, 0.0, 1.0);
+  float sin_i = sqrt(1.0 - c * c);
+  bool rough = fresnel && roughness > MIN_PERCEPTUAL_ROUGHNESS;
+  float sum = 0.0;
+  for (int k = 0; k < 4; k++) {
+    float offset = spread * (k < 2 ? 0.57735027 : 1.7320508) * ((k & 1) == 0 ? 1.0 : -1.0);
+    /* cos(theta + offset) (an angle past the normal is that angle on the other side, cos being even;
+     * one past grazing is grazing: cos 0) */
+    float cos_k = max(c * cos(offset) - sin_i * sin(offset), 0.0);
+    sum += rough ? glass_transmitted(roughness, cos_k, 1.0 / eta) : transmission_fraction(cos_k, 1.0 / eta, fresnel);
+  }
+  return 0.25 * sum;
 }
 
 /* The direction light travelling along unit d takes through an interface of unit normal n (facing
@@ -197,8 +242,9 @@ vec3 transmission_light(Surface s, vec3 l, vec3 E, vec4 factors)
  * alpha): the far face's lobe seen from inside along the view ray refracted in, and the near face's
  * lobe towards the light's ray refracted in at the far face (smooth, by Snell's law, so that the far
  * face's bending of wide angles is exact: the light's irradiance crosses by cos_out / cos_in, the
- * adjoint lobe's eta^2 undone); times what the spread loses at the far face beyond its smooth
- * fraction (transmission_exit_fraction). Against a Monte-Carlo integration of the two crossings'
+ * adjoint lobe's eta^2 undone); times what the first crossing's spread loses at the far face beyond
+ * the central ray's fraction (transmission_exit_fraction; `spread` the programs'
+ * REFRACTION_EXIT_SPREAD). Against a Monte-Carlo integration of the two crossings'
  * single-scattering lobes (156 slabs and tilted far faces, IOR 1.33-1.8, alpha 0.03-0.5): 2.3 % of
  * their sum, median ratio 0.96. A light on the inside's side is reflected by the far face (GGX at the
  * same sqrt(3) alpha, the Fresnel from inside: all of it beyond the critical angle; a shadow-casting
@@ -235,14 +281,15 @@ vec3 transmission_exit_light(Surface s, vec3 l, vec3 E, vec4 factors, float alph
                (t.weight * crossings * lobe2 * (-NoL) / (t.eta * t.eta * cos_in));
       }
     }
-    /* what the spread loses at the far face beyond its smooth fraction (on a sphere, rays turned
-     * towards its rim meet the far face more obliquely: 54 -> 38 % mean, a point light behind a
-     * sphere of roughness 0.6) */
-    float smooth_fraction = transmission_fraction(cos2, 1.0 / t.eta, t.fresnel);
-    float rough_fraction = transmission_exit_fraction(cos2, t.eta, s.roughness, spread, t.fresnel);
+    /* what the first crossing's spread loses at the far face beyond the central ray's fraction (on
+     * a sphere, rays turned towards its rim meet the far face more obliquely: 54 -> 38 % mean, a
+     * point light behind a sphere of roughness 0.6) */
+    float inner_spread = transmission_inner_spread(s.NoV, -dot(t.inner, s.n), t.eta, s.alpha, spread);
+    float central = transmission_exit_fraction(cos2, t.eta, s.roughness, 0.0, t.fresnel);
+    float spread_fraction = transmission_exit_fraction(cos2, t.eta, s.roughness, inner_spread, t.fresnel);
     /* (a loss only: the spread can raise the fraction a little, angles turned towards the normal;
-     * where the central ray reflects totally, the lobes above are all there is) */
-    float loss = smooth_fraction > 0.0 ? min(rough_fraction / smooth_fraction, 1.0) : 1.0;
+     * where the central ray passes nothing, the lobes above are all there is) */
+    float loss = central > 0.0 ? min(spread_fraction / central, 1.0) : 1.0;
     return t.tint * (0.5 * loss * factors.y) * (far + near) * E;
   }
   if (!t.fresnel) {
@@ -255,6 +302,24 @@ vec3 transmission_exit_light(Surface s, vec3 l, vec3 E, vec4 factors, float alph
   float lobe = D_GGX(dot(n, h), dot(NxH, NxH), alpha) * V_SmithGGXCorrelated(NoV, max(NoL, MIN_COS), alpha) * NoL;
   vec3 compensation = glass_compensation(t, s.roughness, NoV, 1.0 / t.eta);
   return t.inside * t.reflection_tint * compensation * (F_Dielectric(1.0 / t.eta, dot(h, v)) * lobe * factors.y) * E;
+}
+
+/* The direction the view ray inside, along unit d, leaves through the far face (unit normal n facing
+ * the inside, against d) into the outside (relative IOR 1 / eta): Snell's; where that reflects
+ * totally, rough glass of `alpha` > 0 still passes some (glass_transmitted: the microfacets tilted
+ * towards the ray refract it out near their own grazing angle), taken along the face turned
+ * outwards by alpha radians (a microfacet's typical tilt); smooth glass passes none (0). */
+vec3 transmission_exit_direction(vec3 d, vec3 n, float eta, float alpha)
+{
+  vec3 out_d = transmission_direction(d, n, 1.0 / eta);
+  if (dot(out_d, out_d) > 0.0 || alpha <= 0.0) {
+    return out_d;
+  }
+  vec3 along = d - dot(d, n) * n;
+  float len2 = dot(along, along);
+  /* (d along the normal never reflects totally: the guard is for rounding alone) */
+  along = len2 > 1e-20 ? along * inversesqrt(len2) : vec3(0.0);
+  return along * cos(alpha) - n * sin(alpha);
 }
 
 /* --- what lies behind, in screen space (passes.RefractionPass) ------------------------------ */
@@ -493,9 +558,9 @@ void transmission_trace(inout Surface s, bool entering)
       s.transmission.exit_p = hit.xyz;
       s.transmission.exit = true;
       start = hit.xyz;
-      d = transmission_direction(d, n2, 1.0 / eta);
+      d = transmission_exit_direction(d, n2, eta, s.roughness > MIN_PERCEPTUAL_ROUGHNESS ? s.alpha : 0.0);
       if (dot(d, d) <= 0.0) {
-        break; /* totally reflected inside: nothing behind is seen (transmission_behind) */
+        break; /* smooth glass totally reflecting inside: nothing behind is seen (transmission_behind) */
       }
     }
   }
@@ -514,9 +579,10 @@ vec3 transmission_exit_lookup(Surface s)
 }
 
 /* The radiance reaching the viewer through the surface from what lies behind it, along the way
- * transmission_trace found: out through a closed object's far face (times that crossing's Fresnel,
- * transmission_exit_fraction, and tint; 0 where the ray reflects totally inside: Cycles' internal
- * reflections are glossy bounces, which its transmission tests turn off) to the opaque scene behind
+ * transmission_trace found: out through a closed object's far face (times what that crossing passes,
+ * transmission_exit_fraction, and tint; for smooth glass 0 where the ray reflects totally inside:
+ * Cycles' internal reflections are glossy bounces, which its transmission tests turn off; rough glass
+ * passes some there, along transmission_exit_direction) to the opaque scene behind
  * (or where it leaves the view). Rough glass reads a blurred level: the refracted lobe's spread,
  * alpha (1 - 1 / eta) radians entering and alpha (eta - 1) leaving (a microfacet tilted by alpha
  * turns the ray by that much), over the length it then travels, in pixels (with one level, the
@@ -537,11 +603,12 @@ vec3 transmission_behind(Surface s, bool entering)
   float spread_out = 0.0;
   if (t.exit) {
     float cos2 = -dot(t.inner, t.exit_n);
-    vec3 out_d = transmission_direction(t.inner, t.exit_n, 1.0 / eta);
+    vec3 out_d = transmission_exit_direction(t.inner, t.exit_n, eta, alpha);
     if (dot(out_d, out_d) <= 0.0) {
-      return vec3(0.0); /* totally reflected inside */
+      return vec3(0.0); /* smooth glass totally reflecting inside */
     }
-    throughput *= t.tint * transmission_exit_fraction(cos2, eta, s.roughness, REFRACTION_EXIT_SPREAD,
+    float spread = transmission_inner_spread(s.NoV, -dot(t.inner, s.n), eta, alpha, REFRACTION_EXIT_SPREAD);
+    throughput *= t.tint * transmission_exit_fraction(cos2, eta, alpha > 0.0 ? s.roughness : 0.0, spread,
                                                       t.fresnel);
     inside = distance(t.exit_p, s.p);
     start = t.exit_p;

@@ -189,9 +189,11 @@ CASES = {
 #: measured with bpy 5.0.1 (most of it the checker's edges, a pixel off where the copy's texels are
 #: magnified, and the rim: docs/limits.md; on the smooth spheres the sun's one-pixel highlight
 #: reflected inside their far face, which Cycles' sun of no size cannot show). Before the far face
-#: was lit and rough glass's far face spread: rough-0.3 17.6 % / 93 %, sphere-1.33 5.7 % / 51 %.
+#: was lit and rough glass's far face spread: rough-0.3 17.6 % / 93 %, sphere-1.33 5.7 % / 51 %; with
+#: the far face's smooth Fresnel averaged over a spread (before its compensated closure's share):
+#: rough-0.3 9.05 % / 36 %.
 MEASURED = {"sphere-1.5": (7.14e-2, 0.454), "sphere-1.33": (8.86e-2, 0.381), "slab-1.5": (8.35e-2, 0.504),
-            "rough-0.3": (9.05e-2, 0.360), "weight-0.5": (0.1281, 0.299), "tinted": (7.99e-2, 0.513),
+            "rough-0.3": (7.16e-2, 0.359), "weight-0.5": (0.1281, 0.299), "tinted": (7.99e-2, 0.513),
             "glass-node": (6.53e-2, 0.376), "refraction-node": (1.15e-2, 0.116)}
 
 

@@ -10,7 +10,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .brdf import D_GGX, F_Dielectric, V_SmithGGXCorrelated
+from .brdf import D_GGX, MIN_PERCEPTUAL_ROUGHNESS, F_Dielectric, V_SmithGGXCorrelated
 
 #: brdf.glsl's MIN_COS
 MIN_COS = 1e-4
@@ -62,18 +62,31 @@ def transmission_ggx(n, v, l, eta, alpha):
     return np.where(valid, lobe, 0.0), np.where(valid, HoV, 0.0)
 
 
+def transmission_inner_spread(cos_v, cos_t, eta, alpha, spread):
+    """transmission_inner_spread: how far (radians) the first crossing's rough lobe turns the view ray
+    refracted in, ``spread`` alpha (1 - cos_v / (eta cos_t)), 0 where cos_t vanishes."""
+    cos_v, cos_t, eta, alpha = (np.asarray(x, np.float64) for x in (cos_v, cos_t, eta, alpha))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        turn = np.maximum(1.0 - cos_v / (eta * cos_t), 0.0)
+    return np.where(cos_t > 1e-4, spread * alpha * turn, 0.0)
+
+
 def transmission_exit_fraction(cos_i, eta, roughness, spread, fresnel=True):
-    """transmission_exit_fraction: the smooth fraction crossing a closed object's far face from inside
-    (relative IOR 1 / eta) averaged over incidence angles theta +- s / sqrt(3), +- sqrt(3) s with
-    s = ``spread`` x ``roughness`` (each angle folded at the normal and capped at grazing)."""
-    cos_i, eta, roughness = (np.asarray(x, np.float64) for x in (cos_i, eta, roughness))
+    """transmission_exit_fraction: what crossing a closed object's far face from inside (relative IOR
+    1 / eta) passes -- rough glass's glass_transmitted, smooth glass's (roughness at most the floor)
+    and the Refraction BSDF's smooth fraction -- averaged over incidence angles theta +- s / sqrt(3),
+    +- sqrt(3) s with s = ``spread`` radians (each angle folded at the normal and capped at grazing)."""
+    cos_i, eta, roughness = np.broadcast_arrays(*(np.asarray(x, np.float64)
+                                                  for x in (cos_i, eta, roughness)))
     c = np.clip(cos_i, 0.0, 1.0)
     sin_i = np.sqrt(1.0 - c * c)
-    s = spread * roughness
+    s = np.asarray(spread, np.float64)
+    rough = np.asarray(fresnel) & (roughness > MIN_PERCEPTUAL_ROUGHNESS)
     total = 0.0
     for offset in (1.0 / np.sqrt(3.0), -1.0 / np.sqrt(3.0), np.sqrt(3.0), -np.sqrt(3.0)):
         cos_k = np.maximum(c * np.cos(s * offset) - sin_i * np.sin(s * offset), 0.0)
-        total = total + transmission_fraction(cos_k, 1.0 / eta, fresnel)
+        smooth = transmission_fraction(cos_k, 1.0 / eta, fresnel)
+        total = total + np.where(rough, glass_transmitted(roughness, cos_k, 1.0 / eta), smooth)
     return 0.25 * total
 
 
@@ -96,8 +109,9 @@ def transmission_exit_light(n, v, inner, exit_n, l, eta, alpha, roughness, alpha
     lobe seen from inside along ``inner`` and the near face's towards the light's ray refracted in at
     the far face (Snell's law, irradiance crossing by cos_out / cos_in, the adjoint lobe's eta^2
     undone), each at ``alpha_factor`` x alpha and times its face's glass_compensation, times the
-    spread's extra loss at the far face; on the inside's side, the GGX reflection with the Fresnel from
-    inside (times the far face's compensation). ``first``: the first crossing's
+    first crossing's spread's loss at the far face beyond the central ray's (``spread``: the programs'
+    REFRACTION_EXIT_SPREAD, transmission_inner_spread); on the inside's side, the GGX reflection with
+    the Fresnel from inside (times the far face's compensation). ``first``: the first crossing's
     fraction (what of the glass enters: inside = weight x tint x first)."""
     n, v, inner, exit_n, l = (np.asarray(x, np.float64) for x in (n, v, inner, exit_n, l))
     eta = np.asarray(eta, np.float64)
@@ -117,10 +131,11 @@ def transmission_exit_light(n, v, inner, exit_n, l, eta, alpha, roughness, alpha
         near = np.where((cos_in > 0.0) & (lobe2 > 0.0),
                         tint * weight * crossings * lobe2 * (-NoL) / (eta * eta * cos_in), 0.0)
     near = near * glass_compensation(roughness, _dot(n, v), eta, tint, fresnel)
-    smooth = transmission_fraction(cos2, 1.0 / eta, fresnel)
-    rough = transmission_exit_fraction(cos2, eta, roughness, spread, fresnel)
+    inner_spread = transmission_inner_spread(_dot(n, v), -_dot(inner, n), eta, alpha, spread)
+    central = transmission_exit_fraction(cos2, eta, roughness, 0.0, fresnel)
+    spread_fraction = transmission_exit_fraction(cos2, eta, roughness, inner_spread, fresnel)
     with np.errstate(divide="ignore", invalid="ignore"):
-        loss = np.where(smooth > 0.0, np.minimum(rough / smooth, 1.0), 1.0)
+        loss = np.where(central > 0.0, np.minimum(spread_fraction / central, 1.0), 1.0)
     through = tint * 0.5 * loss * (far + near)
     reflected, HoV_r = _reflect_ggx(exit_n, -inner, l, a)
     reflected = inside * reflection_tint * far_compensation * np.asarray(F_Dielectric(1.0 / eta, HoV_r),
@@ -170,13 +185,15 @@ def _lambda_ggx(cos_n, alpha):
     return 0.5 * (np.sqrt(1.0 + alpha * alpha * np.maximum(1.0 / c2 - 1.0, 0.0)) - 1.0)
 
 
-def glass_albedo_samples(roughness: float, mu, eta: float, strata: int = 64) -> np.ndarray:
+def glass_albedo_samples(roughness: float, mu, eta: float, strata: int = 64,
+                         transmitted: bool = False) -> np.ndarray:
     """The single-scattering GGX glass lobe's albedo (reflection and transmission, the exact
     dielectric Fresnel at each microfacet, Smith's height-correlated masking) for light arriving at
     n.v = ``mu`` (an array) on glass of relative IOR ``eta``, perceptual ``roughness``: what Cycles'
     cycles_precompute integrates for ggx_glass_E (eval / pdf of bsdf_microfacet_ggx_sample: G2 / G1
     for the Fresnel-chosen side, 0 where the direction leaves on the wrong side). A deterministic
-    quadrature: visible normals at the midpoints of a ``strata`` x ``strata`` grid."""
+    quadrature: visible normals at the midpoints of a ``strata`` x ``strata`` grid. ``transmitted``:
+    the transmitted part alone."""
     alpha = roughness * roughness
     mu = np.atleast_1d(np.asarray(mu, np.float64))
     u = (np.arange(strata) + 0.5) / strata
@@ -192,7 +209,8 @@ def glass_albedo_samples(roughness: float, mu, eta: float, strata: int = 64) -> 
     wt = -wi / eta + (c / eta - np.sqrt(k))[..., None] * m
     lam_i = _lambda_ggx(mu, alpha)[:, None]
     out = 0.0
-    for w, share, below in ((wr, F, False), (wt, 1.0 - F, True)):
+    sides = ((wt, 1.0 - F, True),) if transmitted else ((wr, F, False), (wt, 1.0 - F, True))
+    for w, share, below in sides:
         cos_o = w[..., 2]
         valid = (cos_o < 0.0) if below else (cos_o > 0.0)
         g2 = 1.0 / (1.0 + lam_i + _lambda_ggx(cos_o, alpha))
@@ -206,23 +224,37 @@ def compute_glass_albedo_tables(size: int = GLASS_SIZE, strata: int = 128,
     cycles_precompute clamps them: roughness and n.v >= 1e-4, z in [1e-4, 0.99], the IOR
     (1 + z^2) / (1 - z^2)): ``E`` and ``E_inv`` (size, size, size) indexed [z, mu, roughness], the
     albedo entering glass of that IOR and leaving it (1 / IOR); ``Eavg`` and ``Eavg_inv`` (size, size)
-    indexed [z, roughness], 2 int mu E(mu) dmu (Gauss-Legendre over mu, 24 nodes)."""
+    indexed [z, roughness], 2 int mu E(mu) dmu (Gauss-Legendre over mu, 24 nodes); ``T`` and ``T_inv``
+    as ``E`` and ``E_inv``, the transmitted part of the albedo alone."""
     grid = np.arange(size) / (size - 1)
     nodes, weights = np.polynomial.legendre.leggauss(24)
     mus = 0.5 * (nodes + 1.0)
     out = {"E": np.zeros((size, size, size)), "E_inv": np.zeros((size, size, size)),
-           "Eavg": np.zeros((size, size)), "Eavg_inv": np.zeros((size, size))}
+           "Eavg": np.zeros((size, size)), "Eavg_inv": np.zeros((size, size)),
+           "T": np.zeros((size, size, size)), "T_inv": np.zeros((size, size, size))}
     for iz, z in enumerate(np.clip(grid, 1e-4, 0.99)):
         ior = (1.0 + z * z) / (1.0 - z * z)
         for ir, r in enumerate(np.clip(grid, 1e-4, 1.0)):
             for suffix, eta in (("", ior), ("_inv", 1.0 / ior)):
-                out["E" + suffix][iz, :, ir] = glass_albedo_samples(r, np.clip(grid, 1e-4, 1.0), eta, strata)
+                mu = np.clip(grid, 1e-4, 1.0)
+                out["E" + suffix][iz, :, ir] = glass_albedo_samples(r, mu, eta, strata)
+                out["T" + suffix][iz, :, ir] = glass_albedo_samples(r, mu, eta, strata, transmitted=True)
                 e = glass_albedo_samples(r, mus, eta, strata)
                 # 2 int_0^1 mu E dmu = sum w mu E (the nodes on [-1, 1] halved onto [0, 1])
                 out["Eavg" + suffix][iz, ir] = np.sum(weights * mus * e)
         if log is not None:
             log(f"IOR node {iz + 1}/{size} (IOR {ior:.4g})")
     return {name: np.clip(t, 0.0, 1.0).astype(np.float32) for name, t in out.items()}
+
+
+def write_glass_albedo_tables(path: Path, strata: int = 128, log=None) -> tuple[str, ...]:
+    """compute_glass_albedo_tables written to ``path`` (a .npz, replaced whole once complete); the
+    tables' names."""
+    tables = compute_glass_albedo_tables(strata=strata, log=log)
+    partial = path.with_name(f".{path.stem}.partial.npz")
+    np.savez_compressed(partial, strata=np.int64(strata), **tables)
+    partial.replace(path)
+    return tuple(tables)
 
 
 @lru_cache(maxsize=1)
@@ -242,6 +274,23 @@ def _lerp_grid(x, size):
     return i0, t - i0
 
 
+def _glass_lookup(name, roughness, mu, eta):
+    """Table ``name`` (E or T; its _inv table for eta < 1) read trilinearly at (roughness, mu, eta)
+    as Cycles' lookup_table_read_3D reads its glass tables."""
+    tables = glass_albedo_tables()
+    roughness, mu, eta = np.broadcast_arrays(*(np.asarray(x, np.float64) for x in (roughness, mu, eta)))
+    inv = eta < 1.0
+    z = glass_z(np.where(inv, 1.0 / eta, eta))
+    size = tables["E"].shape[0]
+    (r0, fr), (m0, fm), (z0, fz) = (_lerp_grid(x, size) for x in (roughness, mu, z))
+    out = 0.0
+    for dz, dm, dr in np.ndindex(2, 2, 2):
+        w = (fz if dz else 1.0 - fz) * (fm if dm else 1.0 - fm) * (fr if dr else 1.0 - fr)
+        at = (z0 + dz, m0 + dm, r0 + dr)
+        out = out + w * np.where(inv, tables[name + "_inv"][at], tables[name][at])
+    return out
+
+
 def glass_albedo(roughness, mu, eta):
     """(E, Eavg): glsl/transmission.glsl's glass_albedo, the tables read trilinearly (bilinearly for
     Eavg) as Cycles' microfacet_ggx_preserve_energy reads them: eta < 1 (leaving) from the inverse
@@ -249,23 +298,20 @@ def glass_albedo(roughness, mu, eta):
     tables = glass_albedo_tables()
     roughness, mu, eta = np.broadcast_arrays(*(np.asarray(x, np.float64) for x in (roughness, mu, eta)))
     inv = eta < 1.0
-    z = glass_z(np.where(inv, 1.0 / eta, eta))
     size = tables["E"].shape[0]
-    (r0, fr), (m0, fm), (z0, fz) = (_lerp_grid(x, size) for x in (roughness, mu, z))
-    E = 0.0
+    (r0, fr), (z0, fz) = (_lerp_grid(x, size) for x in (roughness, glass_z(np.where(inv, 1.0 / eta, eta))))
     Eavg = 0.0
-    for dz in (0, 1):
-        wz = fz if dz else 1.0 - fz
-        for dr in (0, 1):
-            wr = fr if dr else 1.0 - fr
-            avg = np.where(inv, tables["Eavg_inv"][z0 + dz, r0 + dr], tables["Eavg"][z0 + dz, r0 + dr])
-            Eavg = Eavg + wz * wr * avg
-            for dm in (0, 1):
-                wm = fm if dm else 1.0 - fm
-                at = (z0 + dz, m0 + dm, r0 + dr)
-                e = np.where(inv, tables["E_inv"][at], tables["E"][at])
-                E = E + wz * wr * wm * e
-    return E, Eavg
+    for dz, dr in np.ndindex(2, 2):
+        w = (fz if dz else 1.0 - fz) * (fr if dr else 1.0 - fr)
+        at = (z0 + dz, r0 + dr)
+        Eavg = Eavg + w * np.where(inv, tables["Eavg_inv"][at], tables["Eavg"][at])
+    return _glass_lookup("E", roughness, mu, eta), Eavg
+
+
+def glass_transmitted(roughness, mu, eta):
+    """glsl/transmission.glsl's glass_transmitted: T / E, the transmitted share of what the compensated
+    rough glass closure scatters for light arriving at n.v = mu."""
+    return _glass_lookup("T", roughness, mu, eta) / np.maximum(_glass_lookup("E", roughness, mu, eta), 1e-3)
 
 
 def glass_compensation(roughness, mu, eta, tint=1.0, fresnel=True):
