@@ -213,24 +213,71 @@ float transmission_ggx(vec3 n, vec3 v, vec3 l, float eta, float alpha, out float
   return 4.0 * D * V * (-NoL) * eta * eta * HoV * (-HoL) / max(denominator * denominator, 1e-12);
 }
 
+/* The GGX transmission lobe towards l at `alpha` times the transmission's Fresnel at h.v
+ * (transmission_ggx, transmission_fraction), per unit irradiance. */
+float transmission_crossing(Surface s, vec3 l, float alpha)
+{
+  float HoV;
+  float lobe = transmission_ggx(s.n, s.v, l, s.transmission.eta, alpha, HoV);
+  return lobe > 0.0 ? transmission_fraction(HoV, s.transmission.eta, s.transmission.fresnel) * lobe : 0.0;
+}
+
+#if defined(SL_SPHERE_LIGHTS) && (defined(SL_HAS_POINT) || defined(SL_HAS_SPOT))
+#  define SL_TRANSMISSION_SPHERE_LIGHTS
+/* A sphere light's angular radius (a point or spot light of radius r) in the half-vector space of a
+ * transmission lobe of relative IOR eta seen along v, the light along l, from p: its angular radius
+ * r / d' (2 sphere_light_theta) times eta / |v + eta l|, how far h = -(v + eta l) normalised turns as
+ * l turns (where the reflection's half vector turns by 1/2). */
+float transmission_light_theta(LightData light, vec3 p, vec3 v, vec3 l, float eta)
+{
+  vec3 h = v + eta * l;
+  /* |v + eta l| -> 0 only for eta -> 1 straight through, where there is no lobe (transmission_ggx) */
+  return 2.0 * sphere_light_theta(light, p) * eta * inversesqrt(max(dot(h, h), 1e-8));
+}
+
+/* Whether `light` is a sphere light (a point or spot light with a radius). */
+bool transmission_sphere_light(LightData light)
+{
+  int kind = int(light.position_kind.w);
+  return light.shape.x > 0.0 && (kind == LIGHT_POINT || kind == LIGHT_SPOT);
+}
+#endif
+
 /* A light's radiance through the surface from behind it (n.l < 0): the glass share times its tint,
  * the transmission's Fresnel at h.v and the GGX lobe, per unit irradiance E (Cycles evaluates the
  * glass closure's transmission for lights behind the surface, the light's shadow through the rest of
  * the object not looked up: a closed object's far side does not dim it), times the lobe's
- * compensation for what single scattering loses (glass_compensation at the view). */
-vec3 transmission_light(Surface s, vec3 l, vec3 E, vec4 factors)
+ * compensation for what single scattering loses (glass_compensation at the view). A sphere light is
+ * seen through the lobe as lights.glsl's sphere_light_specular sees it reflected (Karis 2013): the
+ * lobe widened by its angular radius in the lobe's half-vector space (transmission_light_theta), and
+ * its point nearest the view ray refracted in under a narrow lobe, mixed by size_lobe_weights. */
+vec3 transmission_light(Surface s, LightData light, vec3 l, vec3 E, vec4 factors)
 {
   if (s.transmission.weight <= 0.0 || dot(s.n, l) >= 0.0 || s.transmission.exit) {
     return vec3(0.0); /* (through a closed object: at its far face, transmission_exit_light) */
   }
-  float HoV;
-  float lobe = transmission_ggx(s.n, s.v, l, s.transmission.eta, s.alpha, HoV);
+  float lobe;
+#ifdef SL_TRANSMISSION_SPHERE_LIGHTS
+  if (transmission_sphere_light(light)) {
+    float alpha_wide, wide_weight, point_weight;
+    size_lobe_weights(transmission_light_theta(light, s.p, s.v, l, s.transmission.eta), s.alpha, alpha_wide,
+                      wide_weight, point_weight);
+    lobe = wide_weight * transmission_crossing(s, l, alpha_wide);
+    vec3 refracted = transmission_direction(-s.v, s.n, s.transmission.eta);
+    if (point_weight > 0.0 && dot(refracted, refracted) > 0.0) {
+      lobe += point_weight * transmission_crossing(s, sphere_light_nearest(light, s.p, normalize(refracted)), s.alpha);
+    }
+  }
+  else
+#endif
+  {
+    lobe = transmission_crossing(s, l, s.alpha);
+  }
   if (lobe <= 0.0) {
     return vec3(0.0);
   }
-  float crossing = transmission_fraction(HoV, s.transmission.eta, s.transmission.fresnel);
   vec3 compensation = glass_compensation(s.transmission, s.roughness, s.NoV, s.transmission.eta);
-  return s.transmission.tint * compensation * (s.transmission.weight * crossing * lobe * factors.y) * E;
+  return s.transmission.tint * compensation * (s.transmission.weight * lobe * factors.y) * E;
 }
 
 /* A light's radiance reaching the viewer through a closed object's far face (s.transmission.exit),
@@ -253,11 +300,20 @@ vec3 transmission_light(Surface s, vec3 l, vec3 E, vec4 factors)
  * (glass_compensation: the far face's seen from inside along the view ray, 1 / eta; the near face's
  * at the view), as Cycles' glass closure at each face carries its own; the first crossing's fraction
  * (s.transmission.inside: 1 - the reflection's albedo) loses nothing already. */
-vec3 transmission_exit_light(Surface s, vec3 l, vec3 E, vec4 factors, float alpha_factor, float spread)
+vec3 transmission_exit_light(Surface s, LightData light, vec3 l, vec3 E, vec4 factors, float alpha_factor,
+                             float spread)
 {
   TransmissionLobe t = s.transmission;
   vec3 n = t.exit_n;
   float alpha = s.alpha * alpha_factor;
+#ifdef SL_TRANSMISSION_SPHERE_LIGHTS
+  if (transmission_sphere_light(light)) {
+    /* a sphere light widens both lobes by its angular radius in the far face's half-vector space
+     * (lobe widths convolved add in quadrature, as size_lobe_weights' wide lobe; capped as there) */
+    float theta = min(transmission_light_theta(light, t.exit_p, -t.inner, l, 1.0 / t.eta), 0.78539816);
+    alpha = sqrt(alpha * alpha + theta * theta);
+  }
+#endif
   float NoL = dot(n, l);
   if (NoL < 0.0) {
     /* the far face's lobe, seen from inside along the view ray */
