@@ -11,6 +11,17 @@
  * Twin: addon/reference/transmission.py. */
 
 #ifdef SL_TRANSMISSION
+/* The first crossing's rays through a curved far face (transmission_exit_rays, used by
+ * transmission_exit_light): see transmission_exit_quadrature. */
+#define EXIT_RAYS 8
+vec3 exit_ray_dir[EXIT_RAYS];    /* each ray's direction inside */
+vec3 exit_ray_point[EXIT_RAYS];  /* where it meets the far face */
+vec3 exit_ray_normal[EXIT_RAYS]; /* the far face's normal there, facing the inside */
+float exit_ray_weight[EXIT_RAYS]; /* what of the view crosses in along it, times the far face's
+                                   * compensation (white) */
+float exit_curved;               /* 0: the lobes' mean (a flat far face) .. 1: the quadrature */
+
+
 /* The glass at the shading point (surface.glsl's TransmissionLobe) from MaterialData's rows: its
  * share of the whole surface (the glass share of the non-metallic part times 1 - metalness, as
  * Cycles' svm_node_closure_bsdf weighs its Transmission component), IOR, tints. */
@@ -30,6 +41,7 @@ TransmissionLobe transmission_at(MaterialData m, float metalness)
   t.exit_n = vec3(0.0);
   t.exit = false;
   t.behind = vec3(0.0);
+  exit_curved = 0.0; /* (no quadrature until transmission_exit_rays) */
   return t;
 }
 
@@ -280,6 +292,92 @@ vec3 transmission_light(Surface s, LightData light, vec3 l, vec3 E, vec4 factors
   return s.transmission.tint * compensation * (s.transmission.weight * lobe * factors.y) * E;
 }
 
+/* --- the first crossing's rays through a curved far face ------------------------------------ */
+
+/* On a curved far face (a sphere) the far face's normal turns across the first crossing's lobe, which
+ * the two lobes' mean (transmission_exit_light) cannot see: there the light through the far face is
+ * a quadrature of EXIT_RAYS rays of the first crossing (transmission_exit_ray, at visible normals of
+ * a fixed 2 x 4 grid), each meeting the far face where the far faces' depth map has it
+ * (transmission_exit_rays, in the programs drawn by the refraction pass) and crossing it by the far
+ * face's own lobe and compensation towards the light. A flat far face (a slab) keeps the lobes' mean,
+ * exact there, where the quadrature's eight narrow lobes would show apart; between them by how much
+ * the far face's normal turns against the rays (exit_curved). */
+/* Smith's Lambda for isotropic GGX at cos_n to the normal (Heitz 2014 eq. 72, Cycles' bsdf_lambda). */
+float transmission_lambda(float cos_n, float alpha)
+{
+  float c2 = max(cos_n * cos_n, 1e-12);
+  return 0.5 * (sqrt(1.0 + alpha * alpha * max(1.0 / c2 - 1.0, 0.0)) - 1.0);
+}
+
+/* Visible normal k of EXIT_RAYS of isotropic GGX seen from (sin_v, 0, cos_v), in the frame (x the
+ * view's direction along the surface, y, n): Heitz 2018, "Sampling the GGX Distribution of Visible
+ * Normals", listing 1, with the view in the xz plane (its stretched view vh = (alpha sin_v, 0, cos_v)
+ * normalised, the disc's axes y and vh x y), at (u1, u2) = ((k / 4 + 1/2) / 2, (k % 4 + 1/2) / 4). */
+vec3 transmission_exit_normal(float sin_v, float cos_v, float alpha, int k)
+{
+  vec3 vh = normalize(vec3(alpha * sin_v, 0.0, cos_v));
+  float r = sqrt((float(k / 4) + 0.5) * 0.5);
+  float phi = 2.0 * PI * (float(k % 4) + 0.5) * 0.25;
+  float a = r * cos(phi);
+  float b = mix(sqrt(max(1.0 - a * a, 0.0)), r * sin(phi), 0.5 * (1.0 + vh.z));
+  float c = sqrt(max(1.0 - a * a - b * b, 0.0));
+  vec3 nh = vec3(c * vh.x - b * vh.z, a, b * vh.x + c * vh.z);
+  return normalize(vec3(alpha * nh.xy, max(nh.z, 0.0)));
+}
+
+/* Ray k of the first crossing (entering glass of relative IOR eta along the view): its direction
+ * inside, refracted by visible normal k (transmission_exit_normal), and its weight as Cycles samples
+ * it (bsdf_microfacet_ggx_sample: the Fresnel's transmitted share, G2 / G1(v)); 0 where none crosses. */
+float transmission_exit_ray(Surface s, float eta, int k, out vec3 d)
+{
+  vec3 x = s.v - s.n * s.NoV;
+  float len2 = dot(x, x);
+  /* the view along the normal: any direction along the surface */
+  x = len2 > 1e-12 ? x * inversesqrt(len2) : normalize(cross(s.n, abs(s.n.z) < 0.9 ? vec3(0.0, 0.0, 1.0) : vec3(1.0, 0.0, 0.0)));
+  vec3 m_local = transmission_exit_normal(sqrt(max(1.0 - s.NoV * s.NoV, 0.0)), s.NoV, s.alpha, k);
+  vec3 m = x * m_local.x + cross(s.n, x) * m_local.y + s.n * m_local.z;
+  d = transmission_direction(-s.v, m, eta);
+  float cos_d = -dot(d, s.n);
+  if (dot(d, d) <= 0.0 || cos_d <= 0.0) {
+    return 0.0; /* reflected totally, or refracted back out across the surface */
+  }
+  float lambda_v = transmission_lambda(s.NoV, s.alpha);
+  return transmission_fraction(dot(s.v, m), eta, s.transmission.fresnel) * (1.0 + lambda_v) /
+         (1.0 + lambda_v + transmission_lambda(cos_d, s.alpha));
+}
+
+/* The quadrature's light through the far face from `light` arriving along l with irradiance E at the
+ * exit point (transmission_exit_light's E), its lobes at `alpha`: each ray's far lobe towards the
+ * light from where it meets the far face (a light with a position: its own direction, the irradiance
+ * by the inverse square of its own distance; a sun: l), per unit E, averaged; without the near
+ * face's compensation, weight and tints. */
+float transmission_exit_quadrature(Surface s, LightData light, vec3 l, float alpha)
+{
+  float sum = 0.0;
+  bool positioned = int(light.position_kind.w) != LIGHT_SUN;
+  vec3 to_exit = light.position_kind.xyz - s.transmission.exit_p;
+  for (int k = 0; k < EXIT_RAYS; k++) {
+    if (exit_ray_weight[k] <= 0.0) {
+      continue;
+    }
+    vec3 lk = l;
+    float scale = 1.0;
+    if (positioned) {
+      vec3 to_light = light.position_kind.xyz - exit_ray_point[k];
+      float d2 = max(dot(to_light, to_light), MIN_DIST2);
+      lk = to_light * inversesqrt(d2);
+      scale = max(dot(to_exit, to_exit), MIN_DIST2) / d2;
+    }
+    float HoV;
+    float lobe = transmission_ggx(exit_ray_normal[k], -exit_ray_dir[k], lk, 1.0 / s.transmission.eta, alpha, HoV);
+    if (lobe > 0.0) {
+      sum += exit_ray_weight[k] * scale * transmission_fraction(HoV, 1.0 / s.transmission.eta, s.transmission.fresnel) *
+             lobe;
+    }
+  }
+  return sum / float(EXIT_RAYS);
+}
+
 /* A light's radiance reaching the viewer through a closed object's far face (s.transmission.exit),
  * l and E taken at the exit point -- Cycles' light sampled at the second crossing of a path through
  * the object, after a first crossing sampled from the view's lobe. A light beyond that face shines
@@ -346,7 +444,15 @@ vec3 transmission_exit_light(Surface s, LightData light, vec3 l, vec3 E, vec4 fa
     /* (a loss only: the spread can raise the fraction a little, angles turned towards the normal;
      * where the central ray passes nothing, the lobes above are all there is) */
     float loss = central > 0.0 ? min(spread_fraction / central, 1.0) : 1.0;
-    return t.tint * (0.5 * loss * factors.y) * (far + near) * E;
+    vec3 lobes = t.tint * (0.5 * loss) * (far + near);
+    if (exit_curved > 0.0) {
+      /* the quadrature's far lobes at the surface's own alpha (widened by a sphere light as above) */
+      float alpha_q = sqrt(max(alpha * alpha - (alpha_factor * alpha_factor - 1.0) * s.alpha * s.alpha, 0.0));
+      vec3 quadrature = t.tint * t.tint * glass_compensation(t, s.roughness, s.NoV, t.eta) *
+                        (t.weight * transmission_exit_quadrature(s, light, l, alpha_q));
+      lobes = mix(lobes, quadrature, exit_curved);
+    }
+    return lobes * (factors.y * E);
   }
   if (!t.fresnel) {
     return vec3(0.0); /* the Refraction BSDF reflects nothing */
@@ -566,6 +672,56 @@ float refraction_pixels(vec3 p, float r)
   return length(b.xy - a.xy);
 }
 
+/* The quadrature's rays (transmission_exit_ray) through the far face transmission_trace found, for
+ * rough glass entering a closed object: each taken as far as the central ray went and moved onto the
+ * far faces' depth at the pixel it reaches (the ray's length where its depth is that texel's:
+ * refraction_depth_crossing), the far faces' normal read there (refraction_back_normal; where no far
+ * face covers that pixel, the central ray's point and normal); its weight times the far face's
+ * compensation for light leaving along it (white: 1 / E). exit_curved: the rays' mean turn of the far
+ * normal over their mean turn from the central ray, at most 1 (a sphere's 1.6-2, a slab's 0). */
+void transmission_exit_rays(Surface s)
+{
+  exit_curved = 0.0;
+  TransmissionLobe t = s.transmission;
+  if (!t.exit || s.roughness <= MIN_PERCEPTUAL_ROUGHNESS) {
+    return;
+  }
+  float reach = distance(t.exit_p, s.p);
+  vec4 c0 = refraction_clip(s.p);
+  float turn = 0.0;
+  float turn_normal = 0.0;
+  for (int k = 0; k < EXIT_RAYS; k++) {
+    vec3 d;
+    float w = transmission_exit_ray(s, t.eta, k, d);
+    vec3 q = t.exit_p;
+    vec3 n2 = t.exit_n;
+    if (w > 0.0) {
+      vec4 cd = frame.view_proj * vec4(d, 0.0);
+      q = s.p + reach * d;
+      ivec2 texel = clamp(ivec2(refraction_pixel(c0 + reach * cd).xy), ivec2(0), ivec2(frame.viewport.xy) - 1);
+      float depth = texelFetch(refraction_back_depth, texel, 0).r;
+      if (depth < 1.0) {
+        float onto = refraction_depth_crossing(c0, cd, depth);
+        q = onto > 0.0 ? s.p + onto * d : q;
+        n2 = refraction_back_normal(refraction_pixel(refraction_clip(q)).xy);
+        n2 = dot(n2, d) < 0.0 ? n2 : -n2;
+      }
+      else {
+        q = t.exit_p;
+      }
+      /* (E >= 0.3 but at grazing: floored against a division by 0, as glass_compensation's) */
+      w *= t.fresnel ? 1.0 / max(glass_albedo(s.roughness, max(-dot(d, n2), 0.0), 1.0 / t.eta).x, 1e-3) : 1.0;
+      turn += w * acos(clamp(dot(d, t.inner), -1.0, 1.0));
+      turn_normal += w * acos(clamp(dot(n2, t.exit_n), -1.0, 1.0));
+    }
+    exit_ray_dir[k] = d;
+    exit_ray_point[k] = q;
+    exit_ray_normal[k] = n2;
+    exit_ray_weight[k] = w;
+  }
+  exit_curved = turn > 0.0 ? min(turn_normal / turn, 1.0) : 0.0;
+}
+
 /* The view ray's way into the glass and through it (s.transmission's inside, inner, exit_p, exit_n,
  * exit, behind), before the lights, which shine through it too: refracted into the surface
  * (entering: from the outside; else the viewer is inside, relative IOR 1 / eta), times the first
@@ -620,6 +776,7 @@ void transmission_trace(inout Surface s, bool entering)
       }
     }
   }
+  transmission_exit_rays(s);
 }
 
 /* Where a light's shadow is looked up for the far face: the exit point (on the depth map's

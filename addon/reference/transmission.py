@@ -327,3 +327,76 @@ def glass_compensation(roughness, mu, eta, tint=1.0, fresnel=True):
         E, Eavg = E[..., None], Eavg[..., None]
     Fms = Fss * Eavg / (1.0 - Fss * (1.0 - Eavg))
     return np.where(fresnel, 1.0 + Fms * (1.0 - E) / E, 1.0)
+
+
+# --- the first crossing's rays through a curved far face -------------------------------------------
+
+#: glsl/transmission.glsl's EXIT_RAYS
+EXIT_RAYS = 8
+
+
+def transmission_lambda(cos_n, alpha):
+    """transmission_lambda: Smith's Lambda for isotropic GGX (Heitz 2014 eq. 72)."""
+    return _lambda_ggx(np.asarray(cos_n, np.float64), alpha)
+
+
+def transmission_exit_normal(sin_v, cos_v, alpha, k):
+    """transmission_exit_normal: visible normal ``k`` of EXIT_RAYS (Heitz 2018, listing 1, the view in
+    the xz plane) in the frame (x the view along the surface, y, n), rows (..., 3)."""
+    sin_v, cos_v, alpha = (np.asarray(x, np.float64) for x in (sin_v, cos_v, alpha))
+    vh = np.stack([alpha * sin_v, 0.0 * sin_v, cos_v], axis=-1)
+    vh = vh / np.linalg.norm(vh, axis=-1, keepdims=True)
+    r = np.sqrt((k // 4 + 0.5) * 0.5)
+    phi = 2.0 * np.pi * (k % 4 + 0.5) * 0.25
+    a = r * np.cos(phi)
+    s = 0.5 * (1.0 + vh[..., 2])
+    b = (1.0 - s) * np.sqrt(max(1.0 - a * a, 0.0)) + s * r * np.sin(phi)
+    c = np.sqrt(np.maximum(1.0 - a * a - b * b, 0.0))
+    nh = np.stack([c * vh[..., 0] - b * vh[..., 2], a + 0.0 * b, b * vh[..., 0] + c * vh[..., 2]], axis=-1)
+    m = np.stack([alpha * nh[..., 0], alpha * nh[..., 1], np.maximum(nh[..., 2], 0.0)], axis=-1)
+    return m / np.linalg.norm(m, axis=-1, keepdims=True)
+
+
+def transmission_exit_ray(n, v, eta, alpha, k, fresnel=True):
+    """transmission_exit_ray: (direction inside, weight) of ray ``k`` of the first crossing into glass of
+    relative IOR eta, rows (..., 3)."""
+    n, v = np.asarray(n, np.float64), np.asarray(v, np.float64)
+    eta, alpha = np.asarray(eta, np.float64), np.asarray(alpha, np.float64)
+    NoV = _dot(n, v)
+    x = v - n * NoV[..., None]
+    len2 = _dot(x, x)
+    other = np.where((np.abs(n[..., 2]) < 0.9)[..., None], [0.0, 0.0, 1.0], [1.0, 0.0, 0.0])
+    any_x = np.cross(n, other)
+    any_x = any_x / np.linalg.norm(any_x, axis=-1, keepdims=True)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        x = np.where((len2 > 1e-12)[..., None], x / np.sqrt(np.maximum(len2, 1e-300))[..., None], any_x)
+    ml = transmission_exit_normal(np.sqrt(np.maximum(1.0 - NoV * NoV, 0.0)), NoV, alpha, k)
+    m = x * ml[..., :1] + np.cross(n, x) * ml[..., 1:2] + n * ml[..., 2:]
+    d = transmission_direction(-v, m, eta)
+    cos_d = -_dot(d, n)
+    lambda_v = transmission_lambda(NoV, alpha)
+    weight = transmission_fraction(_dot(v, m), eta, fresnel) * (1.0 + lambda_v) / (
+        1.0 + lambda_v + transmission_lambda(cos_d, alpha))
+    return d, np.where((_dot(d, d) > 0.0) & (cos_d > 0.0), weight, 0.0)
+
+
+def transmission_exit_quadrature(dirs, points, normals, weights, exit_p, l, eta, alpha, light_position=None,
+                                 fresnel=True):
+    """transmission_exit_quadrature: the rays' far lobes towards the light (``light_position`` (..., 3)
+    for a light with a position, else the sun's direction ``l``), averaged; ``dirs``, ``points``,
+    ``normals`` (EXIT_RAYS, ..., 3) and ``weights`` (EXIT_RAYS, ...) as transmission_exit_rays leaves
+    them."""
+    total = 0.0
+    eta = np.asarray(eta, np.float64)
+    for d, q, n2, w in zip(dirs, points, normals, weights):
+        lk, scale = np.asarray(l, np.float64), 1.0
+        if light_position is not None:
+            to_light = light_position - q
+            d2 = np.maximum(_dot(to_light, to_light), 1e-4)
+            lk = to_light / np.sqrt(d2)[..., None]
+            to_exit = light_position - exit_p
+            scale = np.maximum(_dot(to_exit, to_exit), 1e-4) / d2
+        lobe, HoV = transmission_ggx(n2, -d, lk, 1.0 / eta, alpha)
+        value = w * scale * transmission_fraction(HoV, 1.0 / eta, fresnel) * lobe
+        total = total + np.where((w > 0.0) & (lobe > 0.0), value, 0.0)
+    return total / EXIT_RAYS
