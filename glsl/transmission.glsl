@@ -20,6 +20,13 @@ vec3 exit_ray_normal[EXIT_RAYS]; /* the far face's normal there, facing the insi
 float exit_ray_weight[EXIT_RAYS]; /* what of the view crosses in along it, times the far face's
                                    * compensation (white) */
 float exit_curved;               /* 0: the lobes' mean (a flat far face) .. 1: the quadrature */
+/* What the lights through the glass share, light for light (transmission_prepare_lights: once per
+ * shading point, not per light -- on the CPU rasteriser every light's code runs at every pixel): the
+ * near face's compensation at the view, the far face's along the view ray refracted in, and what the
+ * first crossing's spread loses at the far face. */
+vec3 glass_near_compensation;
+vec3 glass_far_compensation;
+float exit_loss;
 
 
 /* The glass at the shading point (surface.glsl's TransmissionLobe) from MaterialData's rows: its
@@ -42,6 +49,9 @@ TransmissionLobe transmission_at(MaterialData m, float metalness)
   t.exit = false;
   t.behind = vec3(0.0);
   exit_curved = 0.0; /* (no quadrature until transmission_exit_rays) */
+  glass_near_compensation = vec3(1.0); /* (until transmission_prepare_lights) */
+  glass_far_compensation = vec3(1.0);
+  exit_loss = 1.0;
   return t;
 }
 
@@ -288,8 +298,7 @@ vec3 transmission_light(Surface s, LightData light, vec3 l, vec3 E, vec4 factors
   if (lobe <= 0.0) {
     return vec3(0.0);
   }
-  vec3 compensation = glass_compensation(s.transmission, s.roughness, s.NoV, s.transmission.eta);
-  return s.transmission.tint * compensation * (s.transmission.weight * lobe * factors.y) * E;
+  return s.transmission.tint * glass_near_compensation * (s.transmission.weight * lobe * factors.y) * E;
 }
 
 /* --- the first crossing's rays through a curved far face ------------------------------------ */
@@ -356,7 +365,9 @@ float transmission_exit_quadrature(Surface s, LightData light, vec3 l, float alp
   float sum = 0.0;
   bool positioned = int(light.position_kind.w) != LIGHT_SUN;
   vec3 to_exit = light.position_kind.xyz - s.transmission.exit_p;
-  for (int k = 0; k < EXIT_RAYS; k++) {
+  /* (no turns on a flat far face: see transmission_exit_rays) */
+  int rays = exit_curved > 0.0 ? EXIT_RAYS : 0;
+  for (int k = 0; k < rays; k++) {
     if (exit_ray_weight[k] <= 0.0) {
       continue;
     }
@@ -376,6 +387,32 @@ float transmission_exit_quadrature(Surface s, LightData light, vec3 l, float alp
     }
   }
   return sum / float(EXIT_RAYS);
+}
+
+/* What the lights through the glass share (the globals above), for the surface's view and the way
+ * transmission_trace found: the compensations (glass_compensation) and the far face's spread loss,
+ * what the first crossing's spread loses at the far face beyond the central ray's fraction (on a
+ * sphere, rays turned towards its rim meet the far face more obliquely; a loss only: the spread can
+ * raise the fraction a little, angles turned towards the normal; where the central ray passes
+ * nothing, the lobes are all there is). `spread`: the programs' REFRACTION_EXIT_SPREAD. */
+void transmission_prepare_lights(Surface s, float spread)
+{
+  TransmissionLobe t = s.transmission;
+  glass_near_compensation = glass_compensation(t, s.roughness, s.NoV, t.eta);
+  float cos2 = max(-dot(t.inner, t.exit_n), 0.0);
+  glass_far_compensation = vec3(1.0);
+  exit_loss = 1.0;
+  /* (a loop of one turn or none, not an `if`: see transmission_exit_rays) */
+  for (int once = 0; once < (t.exit ? 1 : 0); once++) {
+    glass_far_compensation = glass_compensation(t, s.roughness, max(cos2, MIN_COS), 1.0 / t.eta);
+    float inner_spread = transmission_inner_spread(s.NoV, -dot(t.inner, s.n), t.eta, s.alpha, spread);
+    /* (the central ray's own fraction: transmission_exit_fraction at no spread) */
+    bool rough = t.fresnel && s.roughness > MIN_PERCEPTUAL_ROUGHNESS;
+    float central = rough ? glass_transmitted(s.roughness, cos2, 1.0 / t.eta)
+                          : transmission_fraction(cos2, 1.0 / t.eta, t.fresnel);
+    float spread_fraction = transmission_exit_fraction(cos2, t.eta, s.roughness, inner_spread, t.fresnel);
+    exit_loss = central > 0.0 ? min(spread_fraction / central, 1.0) : 1.0;
+  }
 }
 
 /* A light's radiance reaching the viewer through a closed object's far face (s.transmission.exit),
@@ -398,8 +435,7 @@ float transmission_exit_quadrature(Surface s, LightData light, vec3 l, float alp
  * (glass_compensation: the far face's seen from inside along the view ray, 1 / eta; the near face's
  * at the view), as Cycles' glass closure at each face carries its own; the first crossing's fraction
  * (s.transmission.inside: 1 - the reflection's albedo) loses nothing already. */
-vec3 transmission_exit_light(Surface s, LightData light, vec3 l, vec3 E, vec4 factors, float alpha_factor,
-                             float spread)
+vec3 transmission_exit_light(Surface s, LightData light, vec3 l, vec3 E, vec4 factors, float alpha_factor)
 {
   TransmissionLobe t = s.transmission;
   vec3 n = t.exit_n;
@@ -417,9 +453,7 @@ vec3 transmission_exit_light(Surface s, LightData light, vec3 l, vec3 E, vec4 fa
     /* the far face's lobe, seen from inside along the view ray */
     float HoV;
     float lobe = transmission_ggx(n, -t.inner, l, 1.0 / t.eta, alpha, HoV);
-    float cos2 = -dot(t.inner, n);
-    vec3 far_compensation = glass_compensation(t, s.roughness, cos2, 1.0 / t.eta);
-    vec3 far = t.inside * far_compensation *
+    vec3 far = t.inside * glass_far_compensation *
                (lobe > 0.0 ? transmission_fraction(HoV, 1.0 / t.eta, t.fresnel) * lobe : 0.0);
     /* the near face's lobe towards the light's ray refracted in at the far face (which faces it: -n) */
     vec3 u = transmission_direction(-l, -n, t.eta);
@@ -431,24 +465,16 @@ vec3 transmission_exit_light(Surface s, LightData light, vec3 l, vec3 E, vec4 fa
       if (lobe2 > 0.0) {
         float crossings = transmission_fraction(HoV2, t.eta, t.fresnel) *
                           transmission_fraction(-NoL, t.eta, t.fresnel);
-        near = t.tint * glass_compensation(t, s.roughness, s.NoV, t.eta) *
+        near = t.tint * glass_near_compensation *
                (t.weight * crossings * lobe2 * (-NoL) / (t.eta * t.eta * cos_in));
       }
     }
-    /* what the first crossing's spread loses at the far face beyond the central ray's fraction (on
-     * a sphere, rays turned towards its rim meet the far face more obliquely: 54 -> 38 % mean, a
-     * point light behind a sphere of roughness 0.6) */
-    float inner_spread = transmission_inner_spread(s.NoV, -dot(t.inner, s.n), t.eta, s.alpha, spread);
-    float central = transmission_exit_fraction(cos2, t.eta, s.roughness, 0.0, t.fresnel);
-    float spread_fraction = transmission_exit_fraction(cos2, t.eta, s.roughness, inner_spread, t.fresnel);
-    /* (a loss only: the spread can raise the fraction a little, angles turned towards the normal;
-     * where the central ray passes nothing, the lobes above are all there is) */
-    float loss = central > 0.0 ? min(spread_fraction / central, 1.0) : 1.0;
-    vec3 lobes = t.tint * (0.5 * loss) * (far + near);
+    /* times what the first crossing's spread loses at the far face (transmission_prepare_lights) */
+    vec3 lobes = t.tint * (0.5 * exit_loss) * (far + near);
     if (exit_curved > 0.0) {
       /* the quadrature's far lobes at the surface's own alpha (widened by a sphere light as above) */
       float alpha_q = sqrt(max(alpha * alpha - (alpha_factor * alpha_factor - 1.0) * s.alpha * s.alpha, 0.0));
-      vec3 quadrature = t.tint * t.tint * glass_compensation(t, s.roughness, s.NoV, t.eta) *
+      vec3 quadrature = t.tint * t.tint * glass_near_compensation *
                         (t.weight * transmission_exit_quadrature(s, light, l, alpha_q));
       lobes = mix(lobes, quadrature, exit_curved);
     }
@@ -462,8 +488,7 @@ vec3 transmission_exit_light(Surface s, LightData light, vec3 l, vec3 E, vec4 fa
   vec3 h = half_vector(l, v, n);
   vec3 NxH = cross(n, h);
   float lobe = D_GGX(dot(n, h), dot(NxH, NxH), alpha) * V_SmithGGXCorrelated(NoV, max(NoL, MIN_COS), alpha) * NoL;
-  vec3 compensation = glass_compensation(t, s.roughness, NoV, 1.0 / t.eta);
-  return t.inside * t.reflection_tint * compensation * (F_Dielectric(1.0 / t.eta, dot(h, v)) * lobe * factors.y) * E;
+  return t.inside * t.reflection_tint * glass_far_compensation * (F_Dielectric(1.0 / t.eta, dot(h, v)) * lobe * factors.y) * E;
 }
 
 /* The direction the view ray inside, along unit d, leaves through the far face (unit normal n facing
@@ -683,14 +708,15 @@ void transmission_exit_rays(Surface s)
 {
   exit_curved = 0.0;
   TransmissionLobe t = s.transmission;
-  if (!t.exit || s.roughness <= MIN_PERCEPTUAL_ROUGHNESS) {
-    return;
-  }
+  /* (no rays but for rough glass leaving through a far face: a loop of no turns, where an `if` around
+   * it would still be run at every pixel by the CPU rasteriser, which runs both sides of a branch
+   * but leaves a loop no pixel is in) */
+  int rays = t.exit && s.roughness > MIN_PERCEPTUAL_ROUGHNESS ? EXIT_RAYS : 0;
   float reach = distance(t.exit_p, s.p);
   vec4 c0 = refraction_clip(s.p);
   float turn = 0.0;
   float turn_normal = 0.0;
-  for (int k = 0; k < EXIT_RAYS; k++) {
+  for (int k = 0; k < rays; k++) {
     vec3 d;
     float w = transmission_exit_ray(s, t.eta, k, d);
     vec3 q = t.exit_p;
@@ -732,7 +758,7 @@ void transmission_exit_rays(Surface s)
  * crosses where the ray reflects totally (the viewer inside at a grazing angle, or inside at the far
  * face: then only the far face is found). The two marches are one loop (one copy of the march in the
  * program: on the CPU rasteriser every branch of it runs, and its size costs as much). */
-void transmission_trace(inout Surface s, bool entering)
+void transmission_trace_ray(inout Surface s, bool entering)
 {
   TransmissionLobe t = s.transmission;
   if (t.weight <= 0.0) {
@@ -776,7 +802,16 @@ void transmission_trace(inout Surface s, bool entering)
       }
     }
   }
+}
+
+/* transmission_trace_ray, then what the lights through the glass need of the way it found: the
+ * curved far face's rays (transmission_exit_rays) and what every light shares
+ * (transmission_prepare_lights). */
+void transmission_trace(inout Surface s, bool entering)
+{
+  transmission_trace_ray(s, entering);
   transmission_exit_rays(s);
+  transmission_prepare_lights(s, REFRACTION_EXIT_SPREAD);
 }
 
 /* Where a light's shadow is looked up for the far face: the exit point (on the depth map's
@@ -814,7 +849,8 @@ vec3 transmission_behind(Surface s, bool entering)
   float alpha = s.roughness > MIN_PERCEPTUAL_ROUGHNESS ? s.alpha : 0.0;
   float spread_in = alpha * abs(1.0 - 1.0 / eta);
   float spread_out = 0.0;
-  if (t.exit) {
+  /* (a loop of one turn or none, not an `if`: see transmission_exit_rays) */
+  for (int once = 0; once < (t.exit ? 1 : 0); once++) {
     float cos2 = -dot(t.inner, t.exit_n);
     vec3 out_d = transmission_exit_direction(t.inner, t.exit_n, eta, alpha);
     if (dot(out_d, out_d) <= 0.0) {

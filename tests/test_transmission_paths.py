@@ -389,9 +389,9 @@ def test_gpu_far_face_matches_the_twin():
             "s.transmission.inside = vec3(1.0); s.transmission.inner = vi.xyz;\n"
             "s.transmission.exit_n = ve.xyz;\n"
             "LightData light; light.position_kind = vec4(0.0); light.shape = vec4(0.0);\n"
-            "exit_curved = 0.0;\n"
-            "vec3 c = transmission_exit_light(s, light, vl.xyz, vec3(1.0), vec4(1.0),"
-            f" {factor!r}, {spread!r});\n"
+            "s.transmission.exit = true; exit_curved = 0.0;\n"
+            f"transmission_prepare_lights(s, {spread!r});\n"
+            f"vec3 c = transmission_exit_light(s, light, vl.xyz, vec3(1.0), vec4(1.0), {factor!r});\n"
             "float cos2 = -dot(vi.xyz, ve.xyz);\n"
             "result = vec4(c.x, transmission_exit_fraction(cos2, vn.w, vi.w, 0.3 * vi.w, true), 0.0, 0.0);")
     gpu = evaluate(body, inputs, GPU_DEFINES, terms=GPU_TERMS)
@@ -480,7 +480,7 @@ def test_gpu_exit_rays_and_quadrature_match_the_twin():
               "vl": np.c_[light, np.zeros(count)]}
     body = ("Surface s; s.n = vn.xyz; s.v = vv.xyz; s.NoV = dot(vn.xyz, vv.xyz); s.alpha = vv.w;\n"
             "s.roughness = ve.w; s.transmission.eta = vn.w; s.transmission.fresnel = true;\n"
-            "s.transmission.exit_p = vec3(0.0);\n"
+            "s.transmission.exit_p = vec3(0.0); exit_curved = 1.0;\n"
             "float total = 0.0;\n"
             "for (int k = 0; k < EXIT_RAYS; k++) {\n"
             "  vec3 d; float w = transmission_exit_ray(s, vn.w, k, d);\n"
