@@ -75,12 +75,12 @@ float sphere_light_theta(LightData light, vec3 p)
 #define SPHERE_FINE_K 2.0
 #define SPHERE_COARSE_SIDES 8
 
-/* The unit direction from p to the sphere light's point nearest the ray from p along unit r_dir (on
- * the ray where it meets the sphere): Karis 2013's representative point. */
-vec3 sphere_light_nearest(LightData light, vec3 p, vec3 r_dir)
+vec3 sphere_light_specular(LightData light, vec3 p, vec3 r_dir, float alpha, out float alpha_wide,
+                           out float wide_weight, out float point_weight)
 {
   vec3 to_light = light.position_kind.xyz - p;
   float radius = light.shape.x;
+  size_lobe_weights(sphere_light_theta(light, p), alpha, alpha_wide, wide_weight, point_weight);
   vec3 centre_to_ray = dot(to_light, r_dir) * r_dir - to_light;
   float gap = length(centre_to_ray);
   /* a ray that meets the sphere: the point is on the ray itself, taken as such -- as to_light +
@@ -88,13 +88,6 @@ vec3 sphere_light_nearest(LightData light, vec3 p, vec3 r_dir)
   vec3 closest = gap > radius ? to_light + centre_to_ray * (radius / gap) : dot(to_light, r_dir) * r_dir;
   float len2 = dot(closest, closest);
   return len2 > 1e-30 ? closest * inversesqrt(len2) : r_dir;
-}
-
-vec3 sphere_light_specular(LightData light, vec3 p, vec3 r_dir, float alpha, out float alpha_wide,
-                           out float wide_weight, out float point_weight)
-{
-  size_lobe_weights(sphere_light_theta(light, p), alpha, alpha_wide, wide_weight, point_weight);
-  return sphere_light_nearest(light, p, r_dir);
 }
 #endif
 

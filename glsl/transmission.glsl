@@ -146,7 +146,9 @@ vec3 glass_compensation(TransmissionLobe t, float roughness, float mu, float eta
   /* E -> 0 only at grazing mu on the roughest glass leaving it (0.3 there): floored as Cycles' table
    * never is, against a division by 0 */
   float E = max(e.x, 1e-3);
-  vec3 Fss = t.tint;
+  /* a tint above 1 (a Glass BSDF's Color) is no average Fresnel: at 1 the darkening is none, and the
+   * formula's denominator stays positive */
+  vec3 Fss = clamp(t.tint, 0.0, 1.0);
   vec3 Fms = Fss * e.y / (1.0 - Fss * (1.0 - e.y));
   return 1.0 + Fms * ((1.0 - E) / E);
 }
@@ -269,10 +271,9 @@ bool transmission_sphere_light(LightData light)
  * the transmission's Fresnel at h.v and the GGX lobe, per unit irradiance E (Cycles evaluates the
  * glass closure's transmission for lights behind the surface, the light's shadow through the rest of
  * the object not looked up: a closed object's far side does not dim it), times the lobe's
- * compensation for what single scattering loses (glass_compensation at the view). A sphere light is
- * seen through the lobe as lights.glsl's sphere_light_specular sees it reflected (Karis 2013): the
- * lobe widened by its angular radius in the lobe's half-vector space (transmission_light_theta), and
- * its point nearest the view ray refracted in under a narrow lobe, mixed by size_lobe_weights. */
+ * compensation for what single scattering loses (glass_compensation at the view). A sphere light
+ * widens the lobe by its angular radius in the lobe's half-vector space (transmission_light_theta),
+ * as the wide part of lights.glsl's sphere_light_specular widens a reflection's. */
 vec3 transmission_light(Surface s, LightData light, vec3 l, vec3 E, vec4 factors)
 {
   if (s.transmission.weight <= 0.0 || dot(s.n, l) >= 0.0 || s.transmission.exit) {
@@ -281,14 +282,11 @@ vec3 transmission_light(Surface s, LightData light, vec3 l, vec3 E, vec4 factors
   float lobe;
 #ifdef SL_TRANSMISSION_SPHERE_LIGHTS
   if (transmission_sphere_light(light)) {
-    float alpha_wide, wide_weight, point_weight;
-    size_lobe_weights(transmission_light_theta(light, s.p, s.v, l, s.transmission.eta), s.alpha, alpha_wide,
-                      wide_weight, point_weight);
-    lobe = wide_weight * transmission_crossing(s, l, alpha_wide);
-    vec3 refracted = transmission_direction(-s.v, s.n, s.transmission.eta);
-    if (point_weight > 0.0 && dot(refracted, refracted) > 0.0) {
-      lobe += point_weight * transmission_crossing(s, sphere_light_nearest(light, s.p, normalize(refracted)), s.alpha);
-    }
+    /* the lobe widened by the light's angular radius in its half-vector space (lobe widths convolved
+     * add in quadrature, as size_lobe_weights' wide lobe; capped as there), at most 1, as Cycles'
+     * bsdf_microfacet_ggx_setup saturates a lobe's alpha */
+    float theta = min(transmission_light_theta(light, s.p, s.v, l, s.transmission.eta), 0.78539816);
+    lobe = transmission_crossing(s, l, min(sqrt(s.alpha * s.alpha + theta * theta), 1.0));
   }
   else
 #endif

@@ -322,7 +322,9 @@ def glass_compensation(roughness, mu, eta, tint=1.0, fresnel=True):
     is (..., 3); 1 without Fresnel (the Refraction BSDF)."""
     E, Eavg = glass_albedo(roughness, mu, eta)
     E = np.maximum(E, 1e-3)
-    Fss = np.asarray(tint, np.float64)
+    # a tint above 1 (a Glass BSDF's Color) is no average Fresnel: at 1 the darkening is none, and the
+    # formula's denominator stays positive
+    Fss = np.clip(np.asarray(tint, np.float64), 0.0, 1.0)
     if Fss.ndim:
         E, Eavg = E[..., None], Eavg[..., None]
     Fms = Fss * Eavg / (1.0 - Fss * (1.0 - Eavg))
