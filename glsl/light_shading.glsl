@@ -202,7 +202,7 @@ vec3 shade_light(Surface s, LightData light, vec3 l, vec3 E, float visibility, v
 #endif
   vec3 c = shade_light_surface(s, light, l, E, visibility, factors);
 #ifdef SL_TRANSMISSION
-  c += transmission_light(s, l, E, factors); /* from behind the surface, through it */
+  c += transmission_light(s, light, l, E, factors); /* from behind the surface, through it */
 #endif
 #ifdef SL_SHEEN
 #  ifdef SL_LTC

@@ -142,7 +142,7 @@ vec3 light_share(Surface s, vec3 ng, LightData light, bool shadowed)
       E_exit *= light_visibility(light, transmission_exit_lookup(s), -s.transmission.exit_n);
     }
 #  endif
-    c = transmission_exit_light(s, l_exit, E_exit, factors, REFRACTION_EXIT_ALPHA, REFRACTION_EXIT_SPREAD);
+    c = transmission_exit_light(s, light, l_exit, E_exit, factors, REFRACTION_EXIT_ALPHA);
 #  if defined(SL_COAT) || defined(SL_SHEEN)
     c *= s.below; /* under the upper layers, as the rest of the glass */
 #  endif

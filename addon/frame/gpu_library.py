@@ -794,13 +794,22 @@ def ltc_table(terms) -> gpu.types.GPUTexture:
 
 
 def s_table() -> gpu.types.GPUTexture:
-    """The Principled set's S(r, mu, z) table as a 16 x 256 R32F atlas (rows: mu + 16 z)."""
-    from ..reference import multiscatter
+    """The Principled set's S(r, mu, z) table as a 16 x 1312 R32F atlas (rows: mu + 16 z), and after
+    it rough glass's albedo tables (addon/reference/transmission.py's glass_albedo_tables, the
+    roughness along x): E entering glass at rows 256 + mu + 16 z, leaving it at 512 + mu + 16 z, their
+    averages at rows 768 + z and 784 + z, the transmitted part T at rows 800 + mu + 16 z and
+    1056 + mu + 16 z (glsl/transmission.glsl's glass_albedo, glass_transmitted)."""
+    from ..reference import multiscatter, transmission
 
     def build():
         table = multiscatter.principled_s_table()
         n = table.shape[0]
-        return r32f_texture(table.reshape(n * n, n))
+        glass = transmission.glass_albedo_tables()
+        if glass["E"].shape[0] != n:
+            raise ValueError(f"the glass tables' side {glass['E'].shape[0]} is not the S table's {n}")
+        names = ("E", "E_inv", "Eavg", "Eavg_inv", "T", "T_inv")
+        rows = [table.reshape(n * n, n)] + [glass[name].reshape(-1, n) for name in names]
+        return r32f_texture(np.concatenate(rows))
 
     return LIBRARY.table(("S",), build)
 

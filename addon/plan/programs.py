@@ -81,9 +81,11 @@ REFRACTION_BLUR = 1.0
 #: surface's: the two rough crossings' spreads together (two GGX slopes summed peak as one of
 #: sqrt(3) alpha: glsl/transmission.glsl's transmission_exit_light).
 REFRACTION_EXIT_ALPHA = 1.7320508
-#: The spread (radians per unit of perceptual roughness) of the incidence angles at which rough glass's
-#: far face is crossed from inside (glsl/transmission.glsl's transmission_exit_fraction).
-REFRACTION_EXIT_SPREAD = 0.25
+#: The spread of the incidence angles at which rough glass's far face is crossed from inside, radians
+#: per unit of alpha and of the turn a microfacet's tilt gives the refracted ray
+#: (glsl/transmission.glsl's transmission_inner_spread; fitted to a Monte-Carlo integration of Cycles'
+#: two compensated rough crossings of a slab, tests/test_transmission_paths.py).
+REFRACTION_EXIT_SPREAD = 1.25
 #: The Roughness up to which a glass is smooth: the refraction reads what is behind it unblurred
 #: (the shading's roughness floor, glsl/common.glsl's MIN_PERCEPTUAL_ROUGHNESS), and a frame whose
 #: glass is all smooth makes no blurred levels.

@@ -108,15 +108,20 @@ def sphere_light_specular(light: Light, p, r_dir, alpha):
     """(direction, alpha_wide, wide_weight, point_weight): a sphere light's specular lobe as
     glsl/lights.glsl's sphere_light_specular mixes it -- the representative point (Karis 2013)
     renormalised by 1 + (pi/2) k + k^2, and the lobe widened in quadrature, k = theta / alpha."""
+    return sphere_light_nearest(light, p, r_dir), *size_lobe_weights(sphere_light_theta(light, p), alpha)
+
+
+def sphere_light_nearest(light: Light, p, r_dir):
+    """lights.glsl's sphere_light_nearest: the unit direction from ``p`` to the sphere light's point
+    nearest the ray along ``r_dir`` (Karis 2013's representative point)."""
     to_light = np.asarray(light.position) - p
     radius = light.sphere_radius
-    theta = sphere_light_theta(light, p)
     centre_to_ray = _dot(to_light, r_dir)[..., None] * r_dir - to_light
     gap = np.sqrt(_dot(centre_to_ray, centre_to_ray))
     with np.errstate(divide="ignore", invalid="ignore"):
         edge = to_light + centre_to_ray * (radius / gap)[..., None]
     closest = np.where((gap > radius)[..., None], edge, _dot(to_light, r_dir)[..., None] * r_dir)
-    return (_unit_or(closest, r_dir), *size_lobe_weights(theta, alpha))
+    return _unit_or(closest, r_dir)
 
 
 def E_Spot(light: Light, p):
@@ -821,16 +826,36 @@ def subsurface_direct(s: Surface, l, size=0.0, inverse_distance=0.0):
     return color * np.maximum(falloff, 0.0)
 
 
-def transmission_light(s: Surface, l, E, factors):
-    """glsl/transmission.glsl's transmission_light: a light's radiance through the surface from behind
-    it (n.l < 0) per unit irradiance E: the glass's weight, tint, Fresnel at h.v and GGX lobe."""
-    eta = np.broadcast_to(s.transmission_eta, np.shape(s.NoV))
+def _transmission_crossing(s: Surface, l, eta, alpha):
+    """transmission.glsl's transmission_crossing: the GGX transmission lobe times its Fresnel."""
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        lobe, HoV = transmission.transmission_ggx(s.n, s.v, l, eta, s.alpha)
+        lobe, HoV = transmission.transmission_ggx(s.n, s.v, l, eta, alpha)
         crossing = transmission.transmission_fraction(HoV, eta, s.transmission_fresnel)
+    return np.where(lobe > 0.0, crossing * lobe, 0.0)
+
+
+def transmission_light(s: Surface, l, E, factors, light: Light | None = None):
+    """glsl/transmission.glsl's transmission_light: a light's radiance through the surface from behind
+    it (n.l < 0) per unit irradiance E: the glass's weight, tint, Fresnel at h.v and GGX lobe, times
+    the lobe's compensation (transmission.glass_compensation at the view); a sphere light (``light``
+    a point or spot light with a radius) widens the lobe by its angular radius in the transmission
+    lobe's half-vector space."""
+    eta = np.broadcast_to(s.transmission_eta, np.shape(s.NoV))
+    alpha = np.broadcast_to(s.alpha, np.shape(s.NoV))
+    if light is not None and light.sphere_radius > 0.0:
+        h = s.v + eta[..., None] * l
+        theta = 2.0 * sphere_light_theta(light, s.p) * eta / np.sqrt(np.maximum(_dot(h, h), 1e-8))
+        theta = np.minimum(theta, 0.25 * np.pi)  # (size_lobe_weights' cap)
+        # the lobe widened in quadrature, at most 1 (Cycles' bsdf_microfacet_ggx_setup)
+        lobe = _transmission_crossing(s, l, eta, np.minimum(np.sqrt(alpha * alpha + theta * theta), 1.0))
+    else:
+        lobe = _transmission_crossing(s, l, eta, alpha)
     weight = np.where((s.transmission_weight > 0.0) & (_dot(s.n, l) < 0.0) & (lobe > 0.0),
-                      s.transmission_weight * crossing * lobe * factors[1], 0.0)
-    return s.transmission_tint * _rgb_scalar(weight) * E
+                      s.transmission_weight * lobe * factors[1], 0.0)
+    tint = s.transmission_tint * np.ones(np.shape(s.NoV) + (3,))
+    compensation = transmission.glass_compensation(s.roughness, s.NoV, eta, tint,
+                                                   np.asarray(s.transmission_fresnel)[..., None])
+    return tint * compensation * _rgb_scalar(weight) * E
 
 
 def pbr_direct(s: Surface, l, E, factors, terms: Terms = DEFAULT_TERMS):
@@ -1291,7 +1316,7 @@ def shade_light(model: str, s: Surface, light: Light, E, l, terms: Terms = DEFAU
         # layers, lit from behind (light_shading.glsl)
         with np.errstate(invalid="ignore"):
             c = c + subsurface_direct(s, l, *subsurface_light_shape(light, s.p)) * E * light.diffuse_factor
-        c = c + transmission_light(s, l, E, (light.diffuse_factor, light.specular_factor))
+        c = c + transmission_light(s, l, E, (light.diffuse_factor, light.specular_factor), light)
         translucent = subsurface.translucent_direct(s.translucent, s.n, l) * E * light.diffuse_factor
         if upper is None:
             return c + translucent
