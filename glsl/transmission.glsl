@@ -246,7 +246,8 @@ float transmission_crossing(Surface s, vec3 l, float alpha)
   return lobe > 0.0 ? transmission_fraction(HoV, s.transmission.eta, s.transmission.fresnel) * lobe : 0.0;
 }
 
-#if defined(SL_SPHERE_LIGHTS) && (defined(SL_HAS_POINT) || defined(SL_HAS_SPOT))
+#if defined(SL_SPHERE_LIGHTS)
+#  if defined(SL_HAS_POINT) || defined(SL_HAS_SPOT)
 #  define SL_TRANSMISSION_SPHERE_LIGHTS
 /* A sphere light's angular radius (a point or spot light of radius r) in the half-vector space of a
  * transmission lobe of relative IOR eta seen along v, the light along l, from p: its angular radius
@@ -265,6 +266,7 @@ bool transmission_sphere_light(LightData light)
   int kind = int(light.position_kind.w);
   return light.shape.x > 0.0 && (kind == LIGHT_POINT || kind == LIGHT_SPOT);
 }
+#  endif
 #endif
 
 /* A light's radiance through the surface from behind it (n.l < 0): the glass share times its tint,
