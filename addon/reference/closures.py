@@ -96,6 +96,15 @@ def oren_nayar_f(sigma, albedo, cos_v, t, cos_l, rule=MULTISCATTER):
     return (a + b * np.asarray(t))[..., None] + ms * (1.0 - e_l)[..., None]
 
 
+def vogel_disc(i, count: int) -> np.ndarray:
+    """common.glsl's vogel_disc: point(s) ``i`` (an int or an array) of ``count`` on the unit disc, (..., 2):
+    radius sqrt((i + 1/2) / count), turned by the golden angle per point."""
+    i = np.asarray(i, np.float64)
+    r = np.sqrt((i + 0.5) / count)
+    phi = 2.3999632 * i  # the golden angle
+    return np.stack([r * np.cos(phi), r * np.sin(phi)], -1)
+
+
 #: lights.glsl's polygon_point: the points of a light's polygon the closures' quadratures take
 POLYGON_POINTS = 16
 
@@ -112,9 +121,7 @@ def polygon_points(to_centre, x_half, y_half, sides, count: int = POLYGON_POINTS
         k = int(round(math.sqrt(count)))
         uv = np.stack([(i % k + 0.5) / k, (i // k + 0.5) / k], -1) * 2.0 - 1.0
     else:
-        r = np.sqrt((i + 0.5) / count)
-        phi = 2.3999632 * i  # the golden angle
-        uv = r[:, None] * np.stack([np.cos(phi), np.sin(phi)], -1)
+        uv = vogel_disc(i, count)
     x_half, y_half = np.asarray(x_half, np.float64), np.asarray(y_half, np.float64)
     d = (np.asarray(to_centre, np.float64)[..., None, :] + uv[:, :1] * x_half[..., None, :]
          + uv[:, 1:] * y_half[..., None, :])

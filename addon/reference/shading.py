@@ -48,6 +48,7 @@ from .brdf import (
     pow5,
     saturate,
 )
+from .closures import vogel_disc
 
 DEFAULT_TERMS = Terms()
 PRINCIPLED_TERMS = Terms(principled=True)
@@ -694,14 +695,6 @@ def sheen_direct(sheen: SheenLobe, l):
 
 #: principled.glsl's SHEEN_WORLD_SAMPLES: directions of the sheen's lobe the world is read in.
 SHEEN_WORLD_SAMPLES = 16
-
-
-def vogel_disc(i: int, count: int) -> np.ndarray:
-    """common.glsl's vogel_disc: point i of ``count`` on the unit disc (radius sqrt((i + 1/2) / count),
-    turned by the golden angle per point)."""
-    r = math.sqrt((i + 0.5) / count)
-    phi = 2.3999632 * i
-    return np.array([r * math.cos(phi), r * math.sin(phi)])
 
 
 def sunless_roughness(first_clamped: int) -> float:
